@@ -1,0 +1,44 @@
+# Small helpers that keep the per-directory CMakeLists short.
+
+# Warnings for our own targets; generated protobuf code is compiled without them.
+function(faultline_warnings target)
+  target_compile_options(${target} PRIVATE -Wall -Wextra -Wpedantic -Wshadow)
+  if(FAULTLINE_WERROR)
+    target_compile_options(${target} PRIVATE -Werror)
+  endif()
+  if(FAULTLINE_SANITIZE)
+    target_compile_options(${target} PRIVATE -fsanitize=${FAULTLINE_SANITIZE} -fno-omit-frame-pointer)
+    target_link_options(${target} PRIVATE -fsanitize=${FAULTLINE_SANITIZE})
+  endif()
+endfunction()
+
+# faultline_add_library(<concern> SOURCES ... LIBS ...): static library faultline_<concern>, include root lib/.
+function(faultline_add_library concern)
+  cmake_parse_arguments(ARG "" "" "SOURCES;LIBS" ${ARGN})
+  add_library(faultline_${concern} STATIC ${ARG_SOURCES})
+  target_include_directories(faultline_${concern} PUBLIC ${PROJECT_SOURCE_DIR}/lib)
+  target_compile_features(faultline_${concern} PUBLIC cxx_std_17)
+  target_link_libraries(faultline_${concern} PUBLIC ${ARG_LIBS})
+  faultline_warnings(faultline_${concern})
+endfunction()
+
+# faultline_add_test(<name> SOURCES ... LIBS ... [LABELS ...]): one GoogleTest executable, discovered by CTest.
+function(faultline_add_test name)
+  cmake_parse_arguments(ARG "" "" "SOURCES;LIBS;LABELS" ${ARGN})
+  add_executable(${name} ${ARG_SOURCES})
+  target_link_libraries(${name} PRIVATE ${ARG_LIBS} GTest::gtest GTest::gmock GTest::gtest_main)
+  target_compile_definitions(${name} PRIVATE
+    FAULTLINE_SOURCE_DIR="${PROJECT_SOURCE_DIR}"
+    FAULTLINE_SHARED_DIR="${PROJECT_SOURCE_DIR}/../shared"
+    FAULTLINE_BIN_DIR="${CMAKE_RUNTIME_OUTPUT_DIRECTORY}")
+  faultline_warnings(${name})
+  gtest_discover_tests(${name} DISCOVERY_TIMEOUT 60 PROPERTIES LABELS "${ARG_LABELS}")
+endfunction()
+
+# faultline_add_node(<name> LIBS ...): nodes/<name>/main.cpp -> bin/<name>.
+function(faultline_add_node name)
+  cmake_parse_arguments(ARG "" "" "LIBS" ${ARGN})
+  add_executable(${name} ${CMAKE_CURRENT_SOURCE_DIR}/${name}/main.cpp)
+  target_link_libraries(${name} PRIVATE ${ARG_LIBS})
+  faultline_warnings(${name})
+endfunction()

@@ -1,0 +1,148 @@
+#include "common/config.hpp"
+
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <sstream>
+
+namespace faultline::config {
+
+std::string yaml_to_string(const YAML::Node& node) {
+  YAML::Emitter e;
+  e.SetSeqFormat(YAML::Flow);
+  e.SetMapFormat(YAML::Flow);
+  e << node;
+  return e.c_str();
+}
+
+void ParamSource::merge(const YAML::Node& mapping, const std::string& origin) {
+  if (!mapping || mapping.IsNull()) return;
+  if (!mapping.IsMap()) throw ConfigError(origin + ": expected a mapping of parameters");
+  for (const auto& kv : mapping) {
+    const auto key = kv.first.as<std::string>();
+    root_[key] = kv.second;
+    origins_[key] = origin;
+  }
+}
+
+void ParamSource::apply_override(const std::string& assignment) {
+  const auto pos = assignment.find(":=");
+  if (pos == std::string::npos || pos == 0) {
+    throw ConfigError("-p " + assignment + ": expected key:=value");
+  }
+  const std::string key = assignment.substr(0, pos);
+  const std::string text = assignment.substr(pos + 2);
+  YAML::Node value;
+  try {
+    value = text.empty() ? YAML::Node(std::string()) : YAML::Load(text);
+  } catch (const YAML::Exception& e) {
+    throw ConfigError("-p " + key + " = " + text + ": not a YAML value (" + e.msg + ")");
+  }
+  // Nested keys (a.b.c) address mappings inside the parameter tree.
+  std::vector<std::string> parts;
+  std::stringstream ss(key);
+  for (std::string part; std::getline(ss, part, '.');) parts.push_back(part);
+  if (parts.size() == 1) {
+    root_[key] = value;
+  } else {
+    YAML::Node top = root_[parts[0]];
+    if (!top.IsDefined() || !top.IsMap()) top = YAML::Node(YAML::NodeType::Map);
+    YAML::Node cur = top;
+    for (size_t i = 1; i + 1 < parts.size(); ++i) {
+      YAML::Node next = cur[parts[i]];
+      if (!next.IsDefined() || !next.IsMap()) {
+        cur[parts[i]] = YAML::Node(YAML::NodeType::Map);
+      }
+      cur.reset(cur[parts[i]]);
+    }
+    cur[parts.back()] = value;
+    root_[parts[0]] = top;
+  }
+  origins_[parts[0]] = "-p";
+}
+
+std::string ParamSource::origin_of(const std::string& key) const {
+  auto it = origins_.find(key);
+  return it == origins_.end() ? std::string("parameters") : it->second;
+}
+
+void Loader::finish() const {
+  for (const auto& kv : source_.root()) {
+    const auto key = kv.first.as<std::string>();
+    if (!used_.count(key)) {
+      std::string known;
+      for (const auto& k : used_) known += (known.empty() ? "" : ", ") + k;
+      throw ConfigError(source_.origin_of(key) + ": " + key + " = " + yaml_to_string(kv.second) +
+                        ": unknown parameter (known: " + known + ")");
+    }
+  }
+}
+
+void Loader::fail(const std::string& key, const YAML::Node& value, const std::string& why) const {
+  throw ConfigError(source_.origin_of(key) + ": " + key + " = " + yaml_to_string(value) + ": " + why);
+}
+
+void HelpPrinter::add(const std::string& key, const std::string& type, const std::string& def,
+                      const std::string& help) {
+  char line[512];
+  std::snprintf(line, sizeof(line), "  %-22s %-18s default %-22s %s\n", key.c_str(), type.c_str(),
+                def.c_str(), help.c_str());
+  out_ += line;
+}
+
+void print_node_help(const std::string& name, const std::string& summary, const std::string& params) {
+  std::printf(
+      "%s: %s\n\n"
+      "Usage: %s [--params FILE.yaml]... [-p key:=value]... [--name NAME] [--log-level LEVEL]\n"
+      "          [--log-file FILE]\n\n"
+      "A params file is a flat mapping or a launch file whose top-level key is the node name.\n"
+      "SPDLOG_LEVEL (e.g. info,%s=debug) also sets levels.\n\nParameters:\n%s",
+      name.c_str(), summary.c_str(), name.c_str(), name.c_str(), params.c_str());
+}
+
+NodeOptions parse_node_args(int argc, char** argv, const std::string& default_name) {
+  NodeOptions o;
+  o.name = default_name;
+  auto need = [&](int& i, const std::string& flag) -> std::string {
+    if (i + 1 >= argc) throw ConfigError("command line: " + flag + " needs a value");
+    return argv[++i];
+  };
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    if (a == "-h" || a == "--help") o.help = true;
+    else if (a == "--params" || a == "--params-file") o.params_files.push_back(need(i, a));
+    else if (a == "-p") o.overrides.push_back(need(i, a));
+    else if (a.rfind("-p", 0) == 0 && a.size() > 2 && a.find(":=") != std::string::npos) o.overrides.push_back(a.substr(2));
+    else if (a == "--name") o.name = need(i, a);
+    else if (a == "--log-level") o.log_level = need(i, a);
+    else if (a == "--log-file") o.log_file = need(i, a);
+    else throw ConfigError("command line: unknown argument '" + a + "' (see --help)");
+  }
+  return o;
+}
+
+ParamSource build_source(const NodeOptions& options) {
+  ParamSource source;
+  for (const auto& file : options.params_files) {
+    YAML::Node doc;
+    try {
+      doc = YAML::LoadFile(file);
+    } catch (const YAML::BadFile&) {
+      throw ConfigError(file + ": cannot open parameters file");
+    } catch (const YAML::Exception& e) {
+      throw ConfigError(file + ":" + std::to_string(e.mark.line + 1) + ": " + e.msg);
+    }
+    if (doc.IsMap() && doc[options.name].IsDefined() && doc[options.name].IsMap()) {
+      YAML::Node node = doc[options.name];
+      // Launch-file form: parameters sit under `params`.
+      if (node["params"].IsDefined()) node = node["params"];
+      source.merge(node, file + ": " + options.name);
+    } else {
+      source.merge(doc, file);
+    }
+  }
+  for (const auto& o : options.overrides) source.apply_override(o);
+  return source;
+}
+
+}  // namespace faultline::config

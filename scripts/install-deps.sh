@@ -1,0 +1,35 @@
+#!/usr/bin/env bash
+# Installs Faultline's build and test dependencies from Debian packages (idempotent: only what is missing).
+# Usage: scripts/install-deps.sh [--with-browser]   (--with-browser adds chromium for the report render test)
+set -euo pipefail
+
+packages=(
+  build-essential cmake pkg-config git
+  libzmq3-dev cppzmq-dev                 # transport
+  libprotobuf-dev protobuf-compiler      # messages
+  libopencv-dev libturbojpeg0-dev        # images
+  libspdlog-dev libfmt-dev               # logging
+  libyaml-cpp-dev                        # node parameters and launch files
+  rapidjson-dev                          # JSON: SAX streaming for big tables, NaN literals like the devkit
+  libcli11-dev                           # command line
+  libzstd-dev liblz4-dev zlib1g-dev      # MCAP chunk compression and CRC
+  libv4l-dev                             # V4L2 capture
+  libgtest-dev libgmock-dev libbenchmark-dev
+  python3-zmq python3-protobuf python3-numpy python3-opencv
+)
+if [[ "${1:-}" == "--with-browser" ]]; then packages+=(chromium); fi
+
+missing=()
+for p in "${packages[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if ((${#missing[@]} == 0)); then
+  echo "install-deps: all ${#packages[@]} packages present"
+  exit 0
+fi
+echo "install-deps: installing ${missing[*]}"
+SUDO=""
+if [[ $(id -u) -ne 0 ]]; then SUDO="sudo"; fi
+export DEBIAN_FRONTEND=noninteractive
+$SUDO apt-get update -qq
+$SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"

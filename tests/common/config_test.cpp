@@ -1,0 +1,109 @@
+#include "common/config.hpp"
+
+#include <gtest/gtest.h>
+
+#include <fstream>
+
+namespace faultline::config {
+namespace {
+
+struct DemoConfig {
+  double rate = 1.0;
+  int hwm = 2;
+  std::string endpoint = "tcp://127.0.0.1:5600";
+  bool loop = false;
+  template <class V>
+  void visit(V& v) {
+    v("rate", rate, "replay speed factor");
+    v("hwm", hwm, "messages");
+    v("endpoint", endpoint, "address");
+    v("loop", loop, "repeat");
+  }
+};
+
+DemoConfig Load(const ParamSource& source) {
+  DemoConfig cfg;
+  Loader loader(source);
+  cfg.visit(loader);
+  loader.finish();
+  return cfg;
+}
+
+std::string ErrorOf(const ParamSource& source) {
+  try {
+    Load(source);
+  } catch (const ConfigError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(ConfigTest, DefaultsSurviveAnEmptySource) {
+  const DemoConfig cfg = Load(ParamSource{});
+  EXPECT_EQ(cfg.rate, 1.0);
+  EXPECT_EQ(cfg.hwm, 2);
+}
+
+TEST(ConfigTest, OverridesParseAsYamlValues) {
+  ParamSource s;
+  s.apply_override("rate:=2.5");
+  s.apply_override("loop:=true");
+  s.apply_override("endpoint:=ipc:///tmp/x");
+  const DemoConfig cfg = Load(s);
+  EXPECT_EQ(cfg.rate, 2.5);
+  EXPECT_TRUE(cfg.loop);
+  EXPECT_EQ(cfg.endpoint, "ipc:///tmp/x");
+}
+
+TEST(ConfigTest, UnknownKeyNamesSourceKeyAndValue) {
+  ParamSource s;
+  s.merge(YAML::Load("{rate: 2, colour: blue}"), "launch/demo.yaml: player");
+  const std::string error = ErrorOf(s);
+  EXPECT_NE(error.find("launch/demo.yaml: player"), std::string::npos) << error;
+  EXPECT_NE(error.find("colour = blue"), std::string::npos) << error;
+  EXPECT_NE(error.find("unknown parameter"), std::string::npos) << error;
+}
+
+TEST(ConfigTest, WrongTypeNamesKeyValueAndExpectedType) {
+  ParamSource s;
+  s.apply_override("hwm:=lots");
+  const std::string error = ErrorOf(s);
+  EXPECT_NE(error.find("-p: hwm = lots: expected integer"), std::string::npos) << error;
+}
+
+TEST(ConfigTest, MalformedOverrideIsAnError) {
+  ParamSource s;
+  EXPECT_THROW(s.apply_override("rate=2"), ConfigError);
+}
+
+TEST(ConfigTest, LaunchFileSectionIsSelectedByNodeName) {
+  const std::string path = ::testing::TempDir() + "/params.yaml";
+  std::ofstream(path) << "player:\n  params:\n    rate: 4\nother:\n  params:\n    rate: 9\n";
+  NodeOptions options;
+  options.name = "player";
+  options.params_files = {path};
+  options.overrides = {"hwm:=7"};
+  const DemoConfig cfg = Load(build_source(options));
+  EXPECT_EQ(cfg.rate, 4.0);
+  EXPECT_EQ(cfg.hwm, 7);
+}
+
+TEST(ConfigTest, MissingParamsFileNamesTheFile) {
+  NodeOptions options;
+  options.params_files = {"/nonexistent/params.yaml"};
+  try {
+    build_source(options);
+    FAIL() << "expected ConfigError";
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("/nonexistent/params.yaml"), std::string::npos);
+  }
+}
+
+TEST(ConfigTest, DescribeListsResolvedValues) {
+  DemoConfig cfg;
+  cfg.rate = 3;
+  EXPECT_NE(describe(cfg).find("rate=3"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace faultline::config
