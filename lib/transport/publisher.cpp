@@ -1,0 +1,146 @@
+#include "transport/publisher.hpp"
+
+#include <spdlog/spdlog.h>
+
+#include <chrono>
+
+#include "common/config.hpp"
+#include "transport/context.hpp"
+#include "transport/endpoint.hpp"
+
+namespace faultline::transport {
+
+namespace {
+
+// libzmq calls this from its I/O thread once the frame is sent; the hint is a heap shared_ptr.
+void release_owner(void* /*data*/, void* hint) { delete static_cast<std::shared_ptr<const void>*>(hint); }
+
+Status from_error(const zmq::error_t& e, std::string_view what) {
+  if (e.num() == ETERM) return {StatusCode::kCancelled, "context terminated"};
+  return {StatusCode::kIoError, std::string(what) + ": " + e.what()};
+}
+
+}  // namespace
+
+Publisher::Publisher(const PublisherConfig& config)
+    : config_(config),
+      socket_(shared_context(), config.pattern == Pattern::PubSub ? zmq::socket_type::xpub
+                                                                   : zmq::socket_type::push) {
+  socket_.set(zmq::sockopt::linger, 0);
+  socket_.set(zmq::sockopt::sndhwm, config.snd_hwm);
+  if (config.pattern == Pattern::PubSub) {
+    // Every subscribe and unsubscribe reaches us, so subscriber counts are live.
+    socket_.set(zmq::sockopt::xpub_verboser, 1);
+  } else {
+    socket_.set(zmq::sockopt::immediate, 1);
+    if (config.send_timeout_ns >= 0) {
+      socket_.set(zmq::sockopt::sndtimeo, static_cast<int>(config.send_timeout_ns / kNsPerMs));
+    }
+  }
+  try {
+    if (config.bind) {
+      socket_.bind(config.endpoint);
+      endpoint_ = socket_.get(zmq::sockopt::last_endpoint);
+      if (!is_loopback_endpoint(endpoint_)) {
+        spdlog::warn("publisher bound to non-loopback endpoint {}: streams are exposed without "
+                     "authentication", endpoint_);
+      }
+    } else {
+      socket_.connect(config.endpoint);
+      endpoint_ = config.endpoint;
+    }
+  } catch (const zmq::error_t& e) {
+    throw ConfigError("endpoint = " + config.endpoint + ": cannot " +
+                      (config.bind ? "bind" : "connect") + " (" + e.what() + ")");
+  }
+}
+
+Status Publisher::send_parts(std::string_view topic, const std::string_view* middle,
+                             const Payload* payload) {
+  try {
+    zmq::message_t topic_frame(topic.data(), topic.size());
+    if (!socket_.send(topic_frame, zmq::send_flags::sndmore)) {
+      ++would_block_;
+      return {StatusCode::kWouldBlock, "send timed out (peer queue full)"};
+    }
+    zmq::message_t body(middle->data(), middle->size());
+    if (!payload) {
+      (void)socket_.send(body, zmq::send_flags::none);
+      return Status::ok();
+    }
+    (void)socket_.send(body, zmq::send_flags::sndmore);
+    if (config_.zero_copy && payload->owner && payload->size_bytes > 0) {
+      auto* hint = new std::shared_ptr<const void>(payload->owner);
+      zmq::message_t data(const_cast<std::uint8_t*>(payload->data), payload->size_bytes,
+                          &release_owner, hint);
+      (void)socket_.send(data, zmq::send_flags::none);
+    } else {
+      zmq::message_t data(payload->data, payload->size_bytes);
+      (void)socket_.send(data, zmq::send_flags::none);
+    }
+    return Status::ok();
+  } catch (const zmq::error_t& e) {
+    return from_error(e, "send");
+  }
+}
+
+Status Publisher::send(std::string_view topic, std::string_view header, const Payload& payload) {
+  return send_parts(topic, &header, &payload);
+}
+
+Status Publisher::send(std::string_view topic, std::string_view body) {
+  return send_parts(topic, &body, nullptr);
+}
+
+void Publisher::drain_subscriptions(int timeout_ms) {
+  zmq::pollitem_t item{socket_.handle(), 0, ZMQ_POLLIN, 0};
+  int wait_ms = timeout_ms;
+  while (zmq::poll(&item, 1, std::chrono::milliseconds(wait_ms)) > 0) {
+    zmq::message_t msg;
+    if (!socket_.recv(msg, zmq::recv_flags::dontwait)) break;
+    const auto* bytes = static_cast<const char*>(msg.data());
+    if (msg.size() >= 1 && (bytes[0] == 0 || bytes[0] == 1)) {
+      std::string prefix(bytes + 1, msg.size() - 1);
+      subscriptions_[prefix] += bytes[0] == 1 ? 1 : -1;
+    }
+    wait_ms = 0;  // drain what is queued, then return
+  }
+}
+
+int Publisher::subscriber_count(std::string_view topic) {
+  if (config_.pattern != Pattern::PubSub) return 0;
+  try {
+    drain_subscriptions(0);
+  } catch (const zmq::error_t&) {
+    return 0;
+  }
+  int count = 0;
+  for (const auto& [prefix, n] : subscriptions_) {
+    if (topic.substr(0, prefix.size()) == prefix) count += n;
+  }
+  return count;
+}
+
+Status Publisher::wait_for_subscribers(std::string_view topic, int count, DurationNs timeout_ns,
+                                       const std::atomic<bool>* stop) {
+  if (config_.pattern != Pattern::PubSub) {
+    return {StatusCode::kUnsupported, "wait_for_subscribers needs a PubSub publisher"};
+  }
+  const StampNs deadline = monotonic_now_ns() + timeout_ns;
+  for (;;) {
+    if (subscriber_count(topic) >= count) return Status::ok();
+    if (stop && stop->load()) return {StatusCode::kCancelled, "shutdown requested"};
+    const StampNs now = monotonic_now_ns();
+    if (timeout_ns >= 0 && now >= deadline) {
+      return {StatusCode::kWouldBlock, "timed out waiting for " + std::to_string(count) +
+                                           " subscriber(s) of " + std::string(topic)};
+    }
+    try {
+      drain_subscriptions(50);  // bounded so `stop` is checked regularly
+    } catch (const zmq::error_t& e) {
+      return from_error(e, "wait_for_subscribers");
+    }
+  }
+}
+
+}  // namespace faultline::transport

@@ -1,0 +1,81 @@
+// Sending side of the byte transport: one ZeroMQ socket that carries one or more topics.
+//
+// Pattern::PubSub (default) is an XPUB socket: fan-out to every subscriber; when a subscriber's queue
+// is full (HWM) libzmq drops for that subscriber only, visible downstream as seq gaps. The XPUB side
+// sees subscriptions, so wait_for_subscribers() replaces sleeps against the slow-joiner problem.
+// Pattern::PushPull is a PUSH socket: send() blocks while the peer's queue is full, nothing is lost;
+// several PULL peers are load balanced, not fanned out. ZMQ_IMMEDIATE is set when connecting.
+//
+// Framing: image topics [topic][header][payload], other topics [topic][body]. LINGER is 0.
+// A Publisher belongs to one thread.
+#pragma once
+
+#include <zmq.hpp>
+
+#include <atomic>
+#include <cstdint>
+#include <map>
+#include <string>
+#include <string_view>
+
+#include "common/clock.hpp"
+#include "common/status.hpp"
+#include "transport/payload.hpp"
+
+namespace faultline::transport {
+
+enum class Pattern {
+  PubSub,    // fan-out; drops for a slow subscriber at HWM (counted downstream from seq gaps)
+  PushPull,  // lossless; the sender blocks at HWM
+};
+
+struct PublisherConfig {
+  std::string endpoint = "tcp://127.0.0.1:*";  // tcp/ipc/inproc; "*" port = OS-chosen (see endpoint())
+  Pattern pattern = Pattern::PubSub;
+  bool bind = true;          // false: connect to a binding receiver (e.g. detector PUSH -> sink PULL)
+  int snd_hwm = 4;           // messages per peer; 1-8 for image topics, ~64 for lockstep replay
+  bool zero_copy = true;     // payload frames by reference (zmq_msg_init_data); false copies them
+  DurationNs send_timeout_ns = -1;  // PushPull only: -1 blocks forever, else kWouldBlock after this
+};
+
+class Publisher {
+ public:
+  // Throws ConfigError naming the endpoint when the socket cannot bind/connect. Logs a warning on a
+  // non-loopback bind.
+  explicit Publisher(const PublisherConfig& config);
+  Publisher(Publisher&&) noexcept = default;
+  Publisher& operator=(Publisher&&) noexcept = default;
+
+  // The endpoint actually bound (ZMQ_LAST_ENDPOINT), e.g. "tcp://127.0.0.1:40123"; for a
+  // connecting socket the configured endpoint.
+  const std::string& endpoint() const { return endpoint_; }
+  const PublisherConfig& config() const { return config_; }
+
+  // [topic][header][payload]. kWouldBlock when a PushPull send timed out; kCancelled on context
+  // termination; never throws.
+  Status send(std::string_view topic, std::string_view header, const Payload& payload);
+  // [topic][body].
+  Status send(std::string_view topic, std::string_view body);
+
+  // PubSub only: blocks until at least `count` live subscriptions match `topic` (a SUB socket counts
+  // once per subscribed prefix that is a prefix of `topic`), `timeout_ns` passed (kWouldBlock; -1 =
+  // no limit), or `stop` turned true (kCancelled).
+  Status wait_for_subscribers(std::string_view topic, int count, DurationNs timeout_ns,
+                              const std::atomic<bool>* stop = nullptr);
+  // Subscriptions currently matching `topic` (drains pending subscription messages first).
+  int subscriber_count(std::string_view topic);
+
+  std::uint64_t would_block_count() const { return would_block_; }
+
+ private:
+  void drain_subscriptions(int timeout_ms);
+  Status send_parts(std::string_view topic, const std::string_view* middle, const Payload* payload);
+
+  PublisherConfig config_;
+  std::string endpoint_;
+  zmq::socket_t socket_;
+  std::map<std::string, int> subscriptions_;  // prefix -> live subscriptions (XPUB_VERBOSE)
+  std::uint64_t would_block_ = 0;
+};
+
+}  // namespace faultline::transport

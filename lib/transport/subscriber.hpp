@@ -1,0 +1,94 @@
+// Receiving side of the byte transport: RawSubscriber connects (or binds) one socket, filters by
+// topic prefix and hands back whole multipart messages without copying the payload.
+//
+// Slow-consumer policy per edge: a bounded queue of rcv_hwm messages (default), or latest-only:
+// on each receive every message already queued is drained with DONTWAIT and, per topic, only the
+// newest image message ([topic][header][payload]) is kept; the skipped ones are counted as
+// `superseded` (they arrived and were discarded by policy, so they are not seq-gap drops).
+// Two-part messages ([topic][body], e.g. /sync/sample) are never superseded.
+//
+// ZMQ_MAXMSGSIZE is set (16 MiB default): a peer sending a larger frame is disconnected by libzmq.
+// Messages with a wrong frame count are counted as malformed and skipped (receive() returns the
+// next good one). A RawSubscriber belongs to one thread.
+#pragma once
+
+#include <zmq.hpp>
+
+#include <cstdint>
+#include <deque>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "common/clock.hpp"
+#include "common/status.hpp"
+#include "transport/publisher.hpp"
+
+namespace faultline::transport {
+
+struct SubscriberConfig {
+  std::vector<std::string> endpoints{"tcp://127.0.0.1:5600"};  // publishers to connect to (or bind)
+  std::vector<std::string> topics{""};  // prefixes (PubSub only); end a prefix with '/' or give the full topic
+  Pattern pattern = Pattern::PubSub;    // PushPull: a PULL socket (lossless edge)
+  bool bind = false;                    // true: bind endpoints[0..] (e.g. the sink's PULL)
+  int rcv_hwm = 4;                      // messages; 1-8 for image topics, ~64 for lockstep
+  bool latest_only = false;             // see above
+  std::int64_t max_msg_bytes = 16 << 20;  // ZMQ_MAXMSGSIZE; -1 = unlimited
+};
+
+// One received multipart message, owning its zmq frames: the views stay valid while it lives.
+class ReceivedMessage {
+ public:
+  std::string_view topic() const { return view(0); }
+  // The protobuf bytes: the header of an image message, or the body of a two-part message.
+  std::string_view header() const { return view(1); }
+  bool has_payload() const { return parts_.size() == 3; }
+  const std::uint8_t* payload_data() const {
+    return has_payload() ? static_cast<const std::uint8_t*>(parts_[2].data()) : nullptr;
+  }
+  std::size_t payload_size() const { return has_payload() ? parts_[2].size() : 0; }
+  std::size_t size_bytes() const;          // all frames
+  StampNs receive_mono_ns() const { return receive_mono_ns_; }
+  StampNs receive_realtime_ns() const { return receive_realtime_ns_; }
+
+ private:
+  friend class RawSubscriber;
+  std::string_view view(std::size_t i) const {
+    return {static_cast<const char*>(parts_[i].data()), parts_[i].size()};
+  }
+  std::vector<zmq::message_t> parts_;
+  StampNs receive_mono_ns_ = 0;
+  StampNs receive_realtime_ns_ = 0;
+};
+
+class RawSubscriber {
+ public:
+  // Throws ConfigError naming the endpoint when it cannot connect/bind.
+  explicit RawSubscriber(const SubscriberConfig& config);
+  RawSubscriber(RawSubscriber&&) noexcept = default;
+  RawSubscriber& operator=(RawSubscriber&&) noexcept = default;
+
+  // Waits up to `timeout_ns` (0 = poll once, -1 = forever) for a well-formed message.
+  // kWouldBlock on timeout, kCancelled when the context terminates; never throws.
+  Result<ReceivedMessage> receive(DurationNs timeout_ns);
+
+  // Bound endpoints (ZMQ_LAST_ENDPOINT) when bind=true, else the configured ones.
+  const std::vector<std::string>& endpoints() const { return endpoints_; }
+  std::uint64_t superseded() const { return superseded_; }
+  std::uint64_t malformed() const { return malformed_; }
+  // Counts a message the caller found malformed (e.g. header did not parse), for one place of truth.
+  void count_malformed() { ++malformed_; }
+
+ private:
+  Result<ReceivedMessage> read_one(bool wait);  // kWouldBlock when nothing is queued
+  void drain_latest();
+
+  SubscriberConfig config_;
+  std::vector<std::string> endpoints_;
+  zmq::socket_t socket_;
+  std::deque<ReceivedMessage> pending_;  // latest-only: drained, newest per image topic
+  std::uint64_t superseded_ = 0;
+  std::uint64_t malformed_ = 0;
+};
+
+}  // namespace faultline::transport

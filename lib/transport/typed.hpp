@@ -1,0 +1,41 @@
+// Protobuf helpers on top of the byte transport: serialise a message into the header/body frame and
+// parse and validate received ones. The byte core (publisher.hpp, subscriber.hpp) never sees protobuf.
+#pragma once
+
+#include <google/protobuf/message_lite.h>
+
+#include <string>
+#include <string_view>
+
+#include "camera_frame.pb.h"
+#include "common/status.hpp"
+#include "transport/payload.hpp"
+#include "transport/publisher.hpp"
+#include "transport/subscriber.hpp"
+
+namespace faultline::transport {
+
+// A validated image message: the parsed header plus the payload still inside the zmq frame.
+struct CameraFrameView {
+  msgs::CameraFrame header;
+  const std::uint8_t* payload = nullptr;  // valid while the ReceivedMessage lives
+  std::size_t payload_size = 0;
+};
+
+// Checks frame count (3), header parse, payload_size == header.payload_bytes and, for raw
+// encodings, step * height == payload_size (step >= width * channels). kCorruptData naming the check.
+Result<CameraFrameView> parse_camera_frame(const ReceivedMessage& message);
+
+// Parses a two-part [topic][body] message into `out`; kCorruptData on a wrong frame count or bad bytes.
+Status parse_message(const ReceivedMessage& message, google::protobuf::MessageLite* out);
+
+// Sets header.payload_bytes, serialises the header and sends [topic][header][payload].
+Status send_camera_frame(Publisher& publisher, std::string_view topic, msgs::CameraFrame& header,
+                         const Payload& payload);
+Status send_message(Publisher& publisher, std::string_view topic,
+                    const google::protobuf::MessageLite& message);
+
+// Bytes per pixel of a raw encoding ("bgr8" 3, "mono8" 1, ...); 0 for "jpeg" or unknown.
+int bytes_per_pixel(const std::string& encoding);
+
+}  // namespace faultline::transport
