@@ -26,7 +26,7 @@ Publisher::Publisher(const PublisherConfig& config)
     : config_(config),
       socket_(shared_context(), config.pattern == Pattern::PubSub ? zmq::socket_type::xpub
                                                                    : zmq::socket_type::push) {
-  socket_.set(zmq::sockopt::linger, 0);
+  socket_.set(zmq::sockopt::linger, config.linger_ms);
   socket_.set(zmq::sockopt::sndhwm, config.snd_hwm);
   if (config.pattern == Pattern::PubSub) {
     // Every subscribe and unsubscribe reaches us, so subscriber counts are live.

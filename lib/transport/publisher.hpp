@@ -36,6 +36,8 @@ struct PublisherConfig {
   int snd_hwm = 4;           // messages per peer; 1-8 for image topics, ~64 for lockstep replay
   bool zero_copy = true;     // payload frames by reference (zmq_msg_init_data); false copies them
   DurationNs send_timeout_ns = -1;  // PushPull only: -1 blocks forever, else kWouldBlock after this
+  int linger_ms = 0;         // ZMQ_LINGER: 0 discards unsent messages at close; a lossless edge
+                             // whose sender may exit right after its last send wants ~200
 };
 
 class Publisher {

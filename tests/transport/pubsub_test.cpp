@@ -1,5 +1,6 @@
 #include <gtest/gtest.h>
 
+#include <atomic>
 #include <thread>
 
 #include "transport/publisher.hpp"
@@ -144,6 +145,7 @@ TEST(PubSubTest, PushPullIsLosslessWithSmallHwm) {
   sc.rcv_hwm = 1;
   RawSubscriber pull(sc);
   constexpr int kCount = 200;
+  std::atomic<bool> consumed{false};
   std::thread producer([&] {
     PublisherConfig pc;
     pc.endpoint = ep;
@@ -154,6 +156,8 @@ TEST(PubSubTest, PushPullIsLosslessWithSmallHwm) {
     for (int i = 0; i < kCount; ++i) {
       if (!push.send("/d", std::to_string(i), BytesPayload(64 * 1024, 0)).is_ok()) return;
     }
+    // LINGER 0 discards what is still queued at close, so stay open until the consumer is done.
+    (void)testing::eventually([&] { return consumed.load(); });
   });
   int received = 0;
   for (; received < kCount; ++received) {
@@ -161,6 +165,7 @@ TEST(PubSubTest, PushPullIsLosslessWithSmallHwm) {
     if (!r.is_ok()) break;
     EXPECT_EQ(r->header(), std::to_string(received));
   }
+  consumed = true;
   producer.join();
   EXPECT_EQ(received, kCount);
 }
