@@ -1,0 +1,203 @@
+// Supervisor tests with small /bin/sh children. Synchronisation is by the children's own output
+// ("ready" lines) and exit callbacks, never by sleeping in the test.
+#include "launch/supervisor.hpp"
+
+#include <gtest/gtest.h>
+
+#include <csignal>
+#include <tuple>
+
+namespace faultline::launch {
+namespace {
+
+struct Line {
+  std::string node;
+  std::string text;
+  OutputStream stream;
+};
+
+class SupervisorTest : public ::testing::Test {
+ protected:
+  SupervisorTest() {
+    options_.grace_ns = 300 * kNsPerMs;
+    options_.sink = [this](const std::string& node, std::string_view line, OutputStream stream) {
+      lines_.push_back({node, std::string(line), stream});
+      if (node == stop_when_node_ && line == stop_when_line_) stop_.store(true);
+    };
+  }
+
+  void Add(const std::string& name, const std::string& script, bool required = true) {
+    children_.push_back({name, {"/bin/sh", "-c", script}, required});
+  }
+  // Requests a stop once `node` prints `line`.
+  void StopWhen(const std::string& node, const std::string& line) {
+    stop_when_node_ = node;
+    stop_when_line_ = line;
+  }
+  LaunchResult Run() { return Supervisor(children_, options_).run(stop_); }
+  static const ChildOutcome& Of(const LaunchResult& r, const std::string& name) {
+    for (const auto& c : r.children) {
+      if (c.name == name) return c;
+    }
+    throw std::runtime_error("no child " + name);
+  }
+  std::vector<std::string> LinesOf(const std::string& node, OutputStream stream = OutputStream::Stdout) const {
+    std::vector<std::string> out;
+    for (const auto& l : lines_) {
+      if (l.node == node && l.stream == stream) out.push_back(l.text);
+    }
+    return out;
+  }
+
+  std::vector<ChildSpec> children_;
+  SupervisorOptions options_;
+  std::atomic<bool> stop_{false};
+  std::vector<Line> lines_;
+  std::string stop_when_node_, stop_when_line_;
+};
+
+TEST_F(SupervisorTest, RequiredNodeExitingCleanlyStopsOthersWithExitCodeZero) {
+  Add("quick", "exit 0");
+  Add("server", "echo ready; exec sleep 30");
+  const auto r = Run();
+  EXPECT_EQ(r.exit_code, 0);
+  EXPECT_EQ(r.cause, StopCause::RequiredExited);
+  EXPECT_EQ(r.cause_node, "quick");
+  EXPECT_EQ(Of(r, "quick").exit_code, 0);
+  EXPECT_EQ(Of(r, "server").term_signal, SIGTERM);
+  EXPECT_TRUE(Of(r, "server").signalled_by_us);
+  EXPECT_FALSE(Of(r, "server").failed());
+  EXPECT_FALSE(Of(r, "server").killed_after_grace);
+}
+
+TEST_F(SupervisorTest, FailingRequiredNodeGivesItsExitCode) {
+  Add("server", "echo ready; exec sleep 30");
+  Add("broken", "exit 3");
+  const auto r = Run();
+  EXPECT_EQ(r.exit_code, 3);
+  EXPECT_EQ(r.cause_node, "broken");
+  EXPECT_TRUE(Of(r, "broken").failed());
+  EXPECT_FALSE(Of(r, "server").failed());
+}
+
+TEST_F(SupervisorTest, NodeIgnoringSigtermIsKilledAfterGrace) {
+  Add("stubborn", "trap '' TERM; echo ready; exec sleep 30");  // sleep inherits the ignored TERM
+  StopWhen("stubborn", "ready");
+  const auto r = Run();
+  const auto& s = Of(r, "stubborn");
+  EXPECT_EQ(r.cause, StopCause::StopRequested);
+  EXPECT_TRUE(s.killed_after_grace);
+  EXPECT_EQ(s.term_signal, SIGKILL);
+  EXPECT_FALSE(s.failed());  // we sent the KILL
+  EXPECT_EQ(r.exit_code, 0);
+}
+
+TEST_F(SupervisorTest, NonRequiredNodeExitDoesNotStopTheLaunch) {
+  Add("helper", "exit 5", /*required=*/false);
+  Add("server", "echo ready; exec sleep 30");
+  options_.on_exit = [this](const ChildOutcome& o) {
+    if (o.name == "helper") stop_.store(true);
+  };
+  const auto r = Run();
+  EXPECT_EQ(r.cause, StopCause::StopRequested);  // not RequiredExited: the helper's exit was ignored
+  EXPECT_TRUE(Of(r, "helper").failed());
+  EXPECT_EQ(Of(r, "helper").exit_code, 5);
+  EXPECT_EQ(Of(r, "server").term_signal, SIGTERM);
+  EXPECT_EQ(r.exit_code, 0);  // non-required nodes never set the exit code
+}
+
+TEST_F(SupervisorTest, OnlyNonRequiredNodesEndWhenAllExited) {
+  Add("a", "exit 0", false);
+  Add("b", "exit 0", false);
+  const auto r = Run();
+  EXPECT_EQ(r.cause, StopCause::AllExited);
+  EXPECT_EQ(r.exit_code, 0);
+}
+
+TEST_F(SupervisorTest, ForwardsStopSignalToChildren) {
+  options_.stop_signal = [] { return SIGINT; };
+  Add("node", "trap 'echo got INT; exit 0' INT; echo ready; while :; do sleep 0.05; done");
+  StopWhen("node", "ready");
+  const auto r = Run();
+  EXPECT_EQ(LinesOf("node"), (std::vector<std::string>{"ready", "got INT"}));
+  EXPECT_EQ(Of(r, "node").exit_code, 0);
+  EXPECT_FALSE(Of(r, "node").killed_after_grace);
+  EXPECT_EQ(r.exit_code, 0);
+}
+
+TEST_F(SupervisorTest, ExitingNonZeroAfterOurStopSignalStillFails) {
+  Add("node", "trap 'exit 4' TERM; echo ready; while :; do sleep 0.05; done");
+  StopWhen("node", "ready");
+  const auto r = Run();
+  EXPECT_EQ(r.exit_code, 4);
+}
+
+TEST_F(SupervisorTest, SignalWeDidNotSendCountsAsFailure) {
+  Add("victim", "kill -KILL $$");
+  const auto r = Run();
+  EXPECT_EQ(Of(r, "victim").term_signal, SIGKILL);
+  EXPECT_FALSE(Of(r, "victim").signalled_by_us);
+  EXPECT_TRUE(Of(r, "victim").failed());
+  EXPECT_EQ(r.exit_code, 1);
+}
+
+TEST_F(SupervisorTest, ExecFailureIsAFailedStart) {
+  children_.push_back({"ghost", {"/nonexistent/faultline_node"}, true});
+  Add("server", "echo ready; exec sleep 30");
+  const auto r = Run();
+  EXPECT_FALSE(Of(r, "ghost").started);
+  EXPECT_NE(Of(r, "ghost").start_error.find("No such file"), std::string::npos);
+  EXPECT_EQ(r.cause, StopCause::StartFailed);
+  EXPECT_EQ(r.exit_code, 127);
+}
+
+TEST_F(SupervisorTest, SplitsOutputIntoLinesPerStream) {
+  Add("talker", "printf 'one\\ntwo\\n'; echo oops >&2; printf 'tail without newline'");
+  const auto r = Run();
+  EXPECT_EQ(r.exit_code, 0);
+  EXPECT_EQ(LinesOf("talker"), (std::vector<std::string>{"one", "two", "tail without newline"}));
+  EXPECT_EQ(LinesOf("talker", OutputStream::Stderr), (std::vector<std::string>{"oops"}));
+}
+
+TEST_F(SupervisorTest, OutputOfExitingNodeComesBeforeItsExitNote) {
+  Add("talker", "echo last words");
+  const auto r = Run();
+  ASSERT_EQ(r.exit_code, 0);
+  std::size_t words = lines_.size(), note = lines_.size();
+  for (std::size_t i = 0; i < lines_.size(); ++i) {
+    if (lines_[i].text == "last words") words = i;
+    if (lines_[i].node == "launch" && lines_[i].text.rfind("talker exited", 0) == 0) note = i;
+  }
+  EXPECT_LT(words, note);
+  EXPECT_LT(note, lines_.size());
+}
+
+TEST_F(SupervisorTest, PassesExtraEnvironment) {
+  options_.env["FAULTLINE_LAUNCH_TEST_VAR"] = "hello";
+  Add("env", "echo \"$FAULTLINE_LAUNCH_TEST_VAR\"");
+  Run();
+  EXPECT_EQ(LinesOf("env"), (std::vector<std::string>{"hello"}));
+}
+
+TEST_F(SupervisorTest, ChildrenRunInTheirOwnProcessGroup) {
+  Add("pg", "echo $$ $(ps -o pgid= -p $$)");
+  Run();
+  const auto lines = LinesOf("pg");
+  ASSERT_EQ(lines.size(), 1u);
+  const auto space = lines[0].find(' ');
+  EXPECT_EQ(std::stoi(lines[0].substr(0, space)), std::stoi(lines[0].substr(space + 1)));
+}
+
+TEST(PrefixSinkTest, PrefixesWithNodeName) {
+  testing::internal::CaptureStdout();
+  make_prefix_sink(false)("cam_front", "hello", OutputStream::Stdout);
+  EXPECT_EQ(testing::internal::GetCapturedStdout(), "[cam_front] hello\n");
+  testing::internal::CaptureStdout();
+  make_prefix_sink(true)("cam_front", "hello", OutputStream::Stdout);
+  const std::string colored = testing::internal::GetCapturedStdout();
+  EXPECT_NE(colored.find("\033["), std::string::npos);
+  EXPECT_NE(colored.find("[cam_front]\033[0m hello\n"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace faultline::launch
