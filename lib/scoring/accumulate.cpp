@@ -1,0 +1,211 @@
+// The devkit's accumulate(): score-ordered greedy matching, cumulative curves, numpy resampling.
+#include "scoring/accumulate.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numeric>
+
+#include "scoring/geometry.hpp"
+
+namespace faultline::scoring {
+namespace {
+
+double pairwise(const double* a, std::size_t n) {
+  if (n < 8) {
+    double res = 0.;
+    for (std::size_t i = 0; i < n; ++i) res += a[i];
+    return res;
+  }
+  if (n <= 128) {
+    double r[8];
+    for (std::size_t j = 0; j < 8; ++j) r[j] = a[j];
+    std::size_t i = 8;
+    for (; i < n - (n % 8); i += 8) {
+      for (std::size_t j = 0; j < 8; ++j) r[j] += a[i + j];
+    }
+    double res = ((r[0] + r[1]) + (r[2] + r[3])) + ((r[4] + r[5]) + (r[6] + r[7]));
+    for (; i < n; ++i) res += a[i];
+    return res;
+  }
+  std::size_t n2 = n / 2;
+  n2 -= n2 % 8;
+  return pairwise(a, n2) + pairwise(a + n2, n - n2);
+}
+
+// NaN-aware cumulative mean; all ones when every value is NaN.
+std::vector<double> cummean(const std::vector<double>& x) {
+  std::vector<double> out(x.size(), 0.0);
+  std::size_t nan_count = 0;
+  for (double v : x) nan_count += std::isnan(v) ? 1 : 0;
+  if (nan_count == x.size()) {
+    std::fill(out.begin(), out.end(), 1.0);
+    return out;
+  }
+  double sum = 0;
+  std::size_t count = 0;
+  for (std::size_t i = 0; i < x.size(); ++i) {
+    if (!std::isnan(x[i])) {
+      sum += x[i];
+      ++count;
+    }
+    out[i] = count ? sum / static_cast<double>(count) : 0.0;
+  }
+  return out;
+}
+
+}  // namespace
+
+double np_sum(const double* v, std::size_t n) {
+  if (n == 0) return 0.0;
+  return v[0] + pairwise(v + 1, n - 1);
+}
+
+double np_mean(const double* v, std::size_t n) { return np_sum(v, n) / static_cast<double>(n); }
+
+double recall_grid(int i) { return i == kCurvePoints - 1 ? 1.0 : static_cast<double>(i) * (1.0 / 100); }
+
+double np_interp(double x, const std::vector<double>& xs, const std::vector<double>& ys, double left,
+                 double right) {
+  const std::size_t n = xs.size();
+  if (std::isnan(x)) return x;
+  if (x > xs[n - 1]) return right;
+  if (x < xs[0]) return left;
+  // last index with xs[j] <= x
+  const auto j = static_cast<std::size_t>(std::upper_bound(xs.begin(), xs.end(), x) - xs.begin()) - 1;
+  if (j == n - 1 || xs[j] == x) return ys[j];
+  const double slope = (ys[j + 1] - ys[j]) / (xs[j + 1] - xs[j]);
+  double r = slope * (x - xs[j]) + ys[j];
+  if (std::isnan(r)) {
+    r = slope * (x - xs[j + 1]) + ys[j + 1];
+    if (std::isnan(r) && ys[j] == ys[j + 1]) r = ys[j];
+  }
+  return r;
+}
+
+int MetricData::max_recall_ind() const {
+  for (int i = kCurvePoints - 1; i >= 0; --i) {
+    if (confidence[static_cast<std::size_t>(i)] != 0.0) return i;
+  }
+  return 0;
+}
+
+MetricData MetricData::no_predictions() {
+  MetricData md;
+  for (int i = 0; i < kCurvePoints; ++i) md.recall[static_cast<std::size_t>(i)] = recall_grid(i);
+  for (auto& c : md.tp) c.fill(1.0);
+  return md;
+}
+
+Result<MetricData> accumulate(const EvalBoxes& gt, const EvalBoxes& pred, int cls, double dist_th) {
+  // GT of this class per sample, in list order (other classes are skipped by the devkit anyway).
+  std::vector<std::vector<int>> gt_of_class(gt.boxes.size());
+  std::size_t npos = 0;
+  for (std::size_t s = 0; s < gt.boxes.size(); ++s) {
+    for (std::size_t i = 0; i < gt.boxes[s].size(); ++i) {
+      if (gt.boxes[s][i].cls == cls) {
+        gt_of_class[s].push_back(static_cast<int>(i));
+        ++npos;
+      }
+    }
+  }
+  if (npos == 0) return MetricData::no_predictions();
+
+  std::vector<const EvalBox*> preds;
+  for (const auto& list : pred.boxes) {
+    for (const EvalBox& b : list) {
+      if (b.cls == cls) preds.push_back(&b);
+    }
+  }
+  // (score, index) descending: equal scores are processed last-in-file first.
+  std::vector<std::size_t> order(preds.size());
+  std::iota(order.begin(), order.end(), 0);
+  std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+    const double sa = preds[a]->score, sb = preds[b]->score;
+    return sa > sb || (sa == sb && a > b);
+  });
+
+  std::vector<std::vector<char>> taken(gt.boxes.size());
+  for (std::size_t s = 0; s < gt.boxes.size(); ++s) taken[s].assign(gt.boxes[s].size(), 0);
+  std::vector<double> tp_cum, fp_cum, conf;
+  tp_cum.reserve(order.size());
+  fp_cum.reserve(order.size());
+  conf.reserve(order.size());
+  std::array<std::vector<double>, kNumTpMetrics> errs;
+  std::vector<double> match_conf;
+  const double period = cls == kClassBarrier ? M_PI : 2 * M_PI;
+  double tp = 0, fp = 0;
+  for (std::size_t oi : order) {
+    const EvalBox& p = *preds[oi];
+    double min_dist = std::numeric_limits<double>::infinity();
+    int match = -1;
+    if (p.match_sample >= 0) {
+      const auto s = static_cast<std::size_t>(p.match_sample);
+      for (int gi : gt_of_class[s]) {
+        if (taken[s][static_cast<std::size_t>(gi)]) continue;
+        const EvalBox& g = gt.boxes[s][static_cast<std::size_t>(gi)];
+        const double dx = p.translation[0] - g.translation[0], dy = p.translation[1] - g.translation[1];
+        const double d = std::sqrt(dx * dx + dy * dy);
+        if (d < min_dist) {
+          min_dist = d;
+          match = gi;
+        }
+      }
+    }
+    if (match >= 0 && min_dist < dist_th) {
+      const auto s = static_cast<std::size_t>(p.match_sample);
+      taken[s][static_cast<std::size_t>(match)] = 1;
+      tp += 1;
+      const EvalBox& g = gt.boxes[s][static_cast<std::size_t>(match)];
+      errs[kTrans].push_back(min_dist);
+      const double vx = p.velocity[0] - g.velocity[0], vy = p.velocity[1] - g.velocity[1];
+      errs[kVel].push_back(std::sqrt(vx * vx + vy * vy));
+      for (int k = 0; k < 3; ++k) {
+        if (!(g.size[static_cast<std::size_t>(k)] > 0) || !(p.size[static_cast<std::size_t>(k)] > 0)) {
+          return Status(StatusCode::kInvalidArgument,
+                        std::string("a matched ") + kClassNames[static_cast<std::size_t>(cls)] +
+                            " box has a size <= 0 (score " + std::to_string(p.score) +
+                            "); the scale error needs positive sizes (the devkit asserts here)");
+        }
+      }
+      errs[kScale].push_back(1.0 - scale_iou(g.size, p.size));
+      errs[kOrient].push_back(angle_diff(quaternion_yaw(g.rotation), quaternion_yaw(p.rotation), period));
+      errs[kAttr].push_back(g.attr < 0 ? std::numeric_limits<double>::quiet_NaN()
+                                       : 1.0 - (g.attr == p.attr ? 1.0 : 0.0));
+      match_conf.push_back(p.score);
+    } else {
+      fp += 1;
+    }
+    tp_cum.push_back(tp);
+    fp_cum.push_back(fp);
+    conf.push_back(p.score);
+  }
+  if (match_conf.empty()) return MetricData::no_predictions();
+
+  const std::size_t n = tp_cum.size();
+  std::vector<double> prec(n), rec(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    prec[i] = tp_cum[i] / (fp_cum[i] + tp_cum[i]);
+    rec[i] = tp_cum[i] / static_cast<double>(npos);
+  }
+  MetricData md;
+  for (int i = 0; i < kCurvePoints; ++i) {
+    const auto ui = static_cast<std::size_t>(i);
+    const double r = recall_grid(i);
+    md.recall[ui] = r;
+    md.precision[ui] = np_interp(r, rec, prec, prec[0], 0.0);
+    md.confidence[ui] = np_interp(r, rec, conf, conf[0], 0.0);
+  }
+  // TP errors: cumulative mean resampled at the interpolated confidences (match scores ascending).
+  std::vector<double> xs(match_conf.rbegin(), match_conf.rend());
+  for (int m = 0; m < kNumTpMetrics; ++m) {
+    const std::vector<double> cm = cummean(errs[static_cast<std::size_t>(m)]);
+    std::vector<double> ys(cm.rbegin(), cm.rend());
+    for (std::size_t i = 0; i < kCurvePoints; ++i) {
+      md.tp[static_cast<std::size_t>(m)][i] = np_interp(md.confidence[i], xs, ys, ys.front(), ys.back());
+    }
+  }
+  return md;
+}
+
+}  // namespace faultline::scoring

@@ -1,0 +1,148 @@
+// Orchestration of one evaluation run.
+#include "scoring/evaluate.hpp"
+
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <unordered_set>
+
+#include "scoring/ground_truth.hpp"
+#include "scoring/splits.hpp"
+#include "scoring/submission.hpp"
+
+namespace faultline::scoring {
+namespace {
+
+void logf(std::FILE* log, const std::string& line) {
+  if (log) std::fprintf(log, "%s\n", line.c_str());
+}
+
+void log_counts(std::FILE* log, const FilterCounts& c) {
+  logf(log, "=> Original number of boxes: " + std::to_string(c.original));
+  logf(log, "=> After distance based filtering: " + std::to_string(c.after_distance));
+  logf(log, "=> After LIDAR and RADAR points based filtering: " + std::to_string(c.after_points));
+  logf(log, "=> After bike rack filtering: " + std::to_string(c.after_bike_rack));
+}
+
+Status write_file(const std::string& path, const std::string& text) {
+  std::ofstream out(path, std::ios::binary);
+  if (!out) return Status(StatusCode::kIoError, path + ": cannot open for writing");
+  out << text;
+  out.close();
+  if (!out) return Status(StatusCode::kIoError, path + ": write failed");
+  return Status::ok();
+}
+
+}  // namespace
+
+Result<EvalOutcome> evaluate_detection(const EvalOptions& opts, std::FILE* log) {
+  const auto t0 = std::chrono::steady_clock::now();
+  const bool predefined = is_predefined_split(opts.eval_set);
+  SubmissionScope scope;
+  std::vector<std::string> scenes;
+  if (!predefined) {
+    auto names = custom_split_scenes(opts.eval_set, opts.dataroot, opts.version);
+    if (!names) return names.status();
+    scenes = std::move(*names);
+    auto tokens = split_sample_tokens(opts.dataroot, opts.version, scenes);
+    if (!tokens) return tokens.status();
+    scope.predefined = false;
+    scope.samples = std::move(*tokens);
+  }
+  logf(log, "Initializing nuScenes detection evaluation");
+  auto sub = read_submission(opts.results_path, scope);
+  if (!sub) return sub.status();
+  logf(log, "Loaded results from " + opts.results_path + ". Found detections for " +
+                std::to_string(sub->boxes.sample_tokens.size()) + " samples.");
+  if (predefined) {
+    auto names = predefined_split_scenes(opts.eval_set, opts.version);
+    if (!names) return names.status();
+    scenes = std::move(*names);
+  }
+  logf(log, "Loading annotations for " + opts.eval_set + " split from nuScenes version: " + opts.version);
+  auto gt = load_ground_truth(opts.dataroot, opts.version, scenes);
+  if (!gt) return gt.status();
+  logf(log, "Loaded ground truth annotations for " + std::to_string(gt->boxes.sample_tokens.size()) +
+                " samples.");
+
+  // Key set must equal the split (predefined); custom splits are equal by construction.
+  std::vector<int> pred_to_gt(sub->boxes.sample_tokens.size(), -1);
+  std::size_t missing = 0, extra = 0;
+  std::string first_extra, first_missing;
+  std::unordered_set<std::string> in_results;
+  for (std::size_t i = 0; i < sub->boxes.sample_tokens.size(); ++i) {
+    const auto& tok = sub->boxes.sample_tokens[i];
+    in_results.insert(tok);
+    auto it = gt->sample_index.find(tok);
+    if (it == gt->sample_index.end()) {
+      if (extra++ == 0) first_extra = tok;
+    } else {
+      pred_to_gt[i] = it->second;
+    }
+  }
+  for (const auto& tok : gt->boxes.sample_tokens) {
+    if (!in_results.count(tok) && missing++ == 0) first_missing = tok;
+  }
+  if (missing || extra) {
+    std::string msg = "Samples in split doesn't match samples in predictions. " + opts.results_path + ": ";
+    msg += std::to_string(missing) + " sample(s) of split " + opts.eval_set + " missing from results";
+    if (missing) msg += " (first: " + first_missing + ")";
+    msg += ", " + std::to_string(extra) + " sample(s) not in the split";
+    if (extra) msg += " (first: " + first_extra + ")";
+    return Status(StatusCode::kInvalidArgument, msg);
+  }
+  // Matching looks GT up by each box's sample_token field.
+  for (std::size_t i = 0; i < sub->boxes.boxes.size(); ++i) {
+    for (EvalBox& b : sub->boxes.boxes[i]) {
+      if (b.match_sample == kMatchSampleIsKey) {
+        b.match_sample = pred_to_gt[i];
+      } else {
+        auto it = gt->sample_index.find(sub->odd_sample_fields[static_cast<std::size_t>(b.match_sample)]);
+        b.match_sample = it == gt->sample_index.end() ? -1 : it->second;
+      }
+    }
+  }
+  if (sub->boxes.total() == 0) {
+    logf(log, "Warning: the submission holds no box at all; every class scores AP 0 (the devkit crashes "
+              "here with 'Error: Invalid box type: None').");
+  }
+  EvalOutcome out;
+  out.samples = gt->boxes.sample_tokens.size();
+  out.meta = sub->meta;
+  logf(log, "Filtering predictions");
+  out.pred_counts = filter_boxes(sub->boxes, pred_to_gt, *gt);
+  log_counts(log, out.pred_counts);
+  logf(log, "Filtering ground truth annotations");
+  std::vector<int> identity(gt->boxes.sample_tokens.size());
+  for (std::size_t i = 0; i < identity.size(); ++i) identity[i] = static_cast<int>(i);
+  out.gt_counts = filter_boxes(gt->boxes, identity, *gt);
+  log_counts(log, out.gt_counts);
+
+  logf(log, "Accumulating metric data...");
+  for (int c = 0; c < kNumClasses; ++c) {
+    for (int t = 0; t < kNumDistThs; ++t) {
+      auto md = accumulate(gt->boxes, sub->boxes, c, kDistThs[static_cast<std::size_t>(t)]);
+      if (!md) return Status(md.status().code(), opts.results_path + ": " + md.status().message());
+      out.curves[static_cast<std::size_t>(c)][static_cast<std::size_t>(t)] = std::move(*md);
+    }
+  }
+  logf(log, "Calculating metrics...");
+  out.metrics = compute_metrics(out.curves);
+  out.metrics.eval_time_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return out;
+}
+
+Status write_eval_outputs(const EvalOutcome& outcome, const std::string& dir) {
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  if (ec) return Status(StatusCode::kIoError, dir + ": cannot create output folder: " + ec.message());
+  if (Status s = write_file(dir + "/metrics_summary.json",
+                            summary_json(outcome.metrics, outcome.meta.get()));
+      !s) {
+    return s;
+  }
+  return write_file(dir + "/metrics_details.json", details_json(outcome.curves));
+}
+
+}  // namespace faultline::scoring

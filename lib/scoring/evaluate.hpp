@@ -1,0 +1,43 @@
+// The whole nuScenes detection evaluation (devkit DetectionEval.main): split resolution, submission
+// validation, GT loading, filtering, 40 accumulations, metrics and the two output files.
+//
+// Where the devkit crashes, Faultline defines the outcome:
+//  * a submission with no box at all is scored (every class with GT gets AP 0 and TP errors 1, NDS 0)
+//    and a warning is logged; the devkit raises "Error: Invalid box type: None";
+//  * a negative or missing detection_score is rejected with an error naming the sample and box; the
+//    devkit may abort on an internal assertion.
+#pragma once
+
+#include <cstdio>
+#include <memory>
+#include <string>
+
+#include "common/status.hpp"
+#include "scoring/filter.hpp"
+#include "scoring/metrics.hpp"
+
+namespace faultline::scoring {
+
+struct EvalOptions {
+  std::string results_path;  // submission JSON
+  std::string dataroot;      // folder holding <version>/*.json
+  std::string version = "v1.0-trainval";
+  std::string eval_set = "val";  // predefined split name or a key of <dataroot>/<version>/splits.json
+  std::string output_dir;        // metrics_summary.json / metrics_details.json; empty = do not write
+};
+
+struct EvalOutcome {
+  DetectionMetrics metrics;
+  MetricDataList curves;
+  FilterCounts pred_counts, gt_counts;
+  std::size_t samples = 0;
+  std::shared_ptr<rapidjson::Document> meta;
+};
+
+// Progress lines in the devkit's wording go to `log` (may be null). Nothing is written on failure.
+Result<EvalOutcome> evaluate_detection(const EvalOptions& opts, std::FILE* log);
+
+// Writes metrics_summary.json and metrics_details.json into dir (created if needed).
+Status write_eval_outputs(const EvalOutcome& outcome, const std::string& dir);
+
+}  // namespace faultline::scoring

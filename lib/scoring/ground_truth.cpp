@@ -1,0 +1,292 @@
+// Ground-truth loading: the devkit's load_gt + box_velocity + add_center_dist inputs.
+#include "scoring/ground_truth.hpp"
+
+#include <cmath>
+#include <limits>
+#include <unordered_set>
+
+#include "scoring/detection_config.hpp"
+#include "scoring/table_stream.hpp"
+
+namespace faultline::scoring {
+namespace {
+
+struct SampleRec {
+  std::string token;
+  double timestamp_us = 0;
+};
+
+struct AnnRec {
+  std::string token, prev, next, instance;
+  int sample = -1;
+  std::vector<std::string> attrs;
+  std::array<double, 3> translation{}, size{};
+  std::array<double, 4> rotation{};
+  double num_pts = 0;
+};
+
+std::string table_path(const std::string& dataroot, const std::string& version, const char* table) {
+  return dataroot + "/" + version + "/" + table + ".json";
+}
+
+Status need(const TableRecord& r, std::size_t i, const std::string& path, std::size_t index,
+            const char* name) {
+  if (!r.fields[i].present) {
+    return Status(StatusCode::kCorruptData,
+                  path + ": record " + std::to_string(index) + " has no field '" + name + "'");
+  }
+  return Status::ok();
+}
+
+template <std::size_t N>
+Status copy_vec(const TableField& f, std::array<double, N>& out, const std::string& where) {
+  if (f.nums.size() != N) {
+    return Status(StatusCode::kCorruptData, where + ": expected " + std::to_string(N) + " numbers");
+  }
+  for (std::size_t i = 0; i < N; ++i) out[i] = f.nums[i];
+  return Status::ok();
+}
+
+// scene names -> tokens, then the split's samples in sample.json order.
+Status load_samples(const std::string& dataroot, const std::string& version,
+                    const std::vector<std::string>& scenes, std::vector<SampleRec>& samples) {
+  const std::unordered_set<std::string> wanted(scenes.begin(), scenes.end());
+  std::unordered_set<std::string> scene_tokens;
+  const std::string scene_path = table_path(dataroot, version, "scene");
+  Status s = stream_table(scene_path, {"token", "name"}, [&](const TableRecord& r, std::size_t i) {
+    if (Status e = need(r, 0, scene_path, i, "token"); !e) return e;
+    if (Status e = need(r, 1, scene_path, i, "name"); !e) return e;
+    if (wanted.count(r.fields[1].str)) scene_tokens.insert(r.fields[0].str);
+    return Status::ok();
+  });
+  if (!s) return s;
+  const std::string sample_path = table_path(dataroot, version, "sample");
+  return stream_table(sample_path, {"token", "timestamp", "scene_token"},
+                      [&](const TableRecord& r, std::size_t i) {
+                        for (std::size_t k = 0; k < 3; ++k) {
+                          const char* names[] = {"token", "timestamp", "scene_token"};
+                          if (Status e = need(r, k, sample_path, i, names[k]); !e) return e;
+                        }
+                        if (scene_tokens.count(r.fields[2].str)) {
+                          samples.push_back({r.fields[0].str, r.fields[1].num});
+                        }
+                        return Status::ok();
+                      });
+}
+
+}  // namespace
+
+Result<std::vector<std::string>> split_sample_tokens(const std::string& dataroot, const std::string& version,
+                                                     const std::vector<std::string>& scenes) {
+  std::vector<SampleRec> samples;
+  if (Status s = load_samples(dataroot, version, scenes, samples); !s) return s;
+  std::vector<std::string> tokens;
+  tokens.reserve(samples.size());
+  for (auto& s : samples) tokens.push_back(std::move(s.token));
+  return tokens;
+}
+
+Result<GroundTruth> load_ground_truth(const std::string& dataroot, const std::string& version,
+                                      const std::vector<std::string>& scenes) {
+  std::vector<SampleRec> samples;
+  if (Status s = load_samples(dataroot, version, scenes, samples); !s) return s;
+  GroundTruth gt;
+  for (std::size_t i = 0; i < samples.size(); ++i) {
+    gt.sample_index.emplace(samples[i].token, static_cast<int>(i));
+    gt.boxes.sample_tokens.push_back(samples[i].token);
+  }
+  const std::size_t n = samples.size();
+  gt.boxes.boxes.resize(n);
+  gt.racks.resize(n);
+  gt.ego_translation.assign(n, {0, 0, 0});
+
+  // Categories, attributes, instances (small tables).
+  std::unordered_map<std::string, std::string> category_name, attribute_name, instance_category;
+  const std::string cat_path = table_path(dataroot, version, "category");
+  Status s = stream_table(cat_path, {"token", "name"}, [&](const TableRecord& r, std::size_t) {
+    category_name[r.fields[0].str] = r.fields[1].str;
+    return Status::ok();
+  });
+  if (!s) return s;
+  const std::string attr_path = table_path(dataroot, version, "attribute");
+  s = stream_table(attr_path, {"token", "name"}, [&](const TableRecord& r, std::size_t) {
+    attribute_name[r.fields[0].str] = r.fields[1].str;
+    return Status::ok();
+  });
+  if (!s) return s;
+  const std::string inst_path = table_path(dataroot, version, "instance");
+  s = stream_table(inst_path, {"token", "category_token"}, [&](const TableRecord& r, std::size_t) {
+    instance_category[r.fields[0].str] = r.fields[1].str;
+    return Status::ok();
+  });
+  if (!s) return s;
+
+  // LIDAR_TOP calibrations -> key-frame sample_data -> ego pose.
+  std::unordered_set<std::string> lidar_sensors, lidar_calibs;
+  const std::string sensor_path = table_path(dataroot, version, "sensor");
+  s = stream_table(sensor_path, {"token", "channel"}, [&](const TableRecord& r, std::size_t) {
+    if (r.fields[1].str == "LIDAR_TOP") lidar_sensors.insert(r.fields[0].str);
+    return Status::ok();
+  });
+  if (!s) return s;
+  const std::string calib_path = table_path(dataroot, version, "calibrated_sensor");
+  s = stream_table(calib_path, {"token", "sensor_token"}, [&](const TableRecord& r, std::size_t) {
+    if (lidar_sensors.count(r.fields[1].str)) lidar_calibs.insert(r.fields[0].str);
+    return Status::ok();
+  });
+  if (!s) return s;
+  std::vector<std::string> pose_token(n);
+  const std::string sd_path = table_path(dataroot, version, "sample_data");
+  s = stream_table(sd_path, {"sample_token", "ego_pose_token", "calibrated_sensor_token", "is_key_frame"},
+                   [&](const TableRecord& r, std::size_t) {
+                     if (!r.fields[3].boolean) return Status::ok();
+                     auto it = gt.sample_index.find(r.fields[0].str);
+                     if (it == gt.sample_index.end() || !lidar_calibs.count(r.fields[2].str)) {
+                       return Status::ok();
+                     }
+                     pose_token[static_cast<std::size_t>(it->second)] = r.fields[1].str;  // last wins
+                     return Status::ok();
+                   });
+  if (!s) return s;
+  std::unordered_map<std::string, std::vector<int>> pose_users;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (pose_token[i].empty()) {
+      return Status(StatusCode::kNotFound, sd_path + ": sample " + samples[i].token +
+                                               " has no LIDAR_TOP key-frame sample_data record");
+    }
+    pose_users[pose_token[i]].push_back(static_cast<int>(i));
+  }
+  std::size_t poses_found = 0;
+  const std::string pose_path = table_path(dataroot, version, "ego_pose");
+  s = stream_table(pose_path, {"token", "translation"}, [&](const TableRecord& r, std::size_t i) {
+    auto it = pose_users.find(r.fields[0].str);
+    if (it == pose_users.end()) return Status::ok();
+    std::array<double, 3> t{};
+    if (Status e = copy_vec(r.fields[1], t, pose_path + " record " + std::to_string(i) + " translation"); !e) {
+      return e;
+    }
+    for (int u : it->second) gt.ego_translation[static_cast<std::size_t>(u)] = t;
+    poses_found += it->second.size();
+    pose_users.erase(it);  // a duplicated pose token counts once
+    return Status::ok();
+  });
+  if (!s) return s;
+  if (poses_found < n) {
+    return Status(StatusCode::kNotFound, pose_path + ": " + std::to_string(n - poses_found) +
+                                             " LIDAR_TOP ego poses of the split's samples are missing");
+  }
+
+  // Annotations of the split's samples, in file order.
+  std::vector<AnnRec> anns;
+  std::unordered_map<std::string, int> ann_index;
+  const std::string ann_path = table_path(dataroot, version, "sample_annotation");
+  const std::vector<std::string> ann_fields = {"token",       "sample_token", "instance_token",
+                                               "attribute_tokens", "translation", "size",
+                                               "rotation",    "num_lidar_pts", "num_radar_pts",
+                                               "prev",        "next"};
+  s = stream_table(ann_path, ann_fields, [&](const TableRecord& r, std::size_t i) {
+    auto it = gt.sample_index.find(r.fields[1].str);
+    if (it == gt.sample_index.end()) return Status::ok();
+    for (std::size_t k = 0; k < ann_fields.size(); ++k) {
+      if (Status e = need(r, k, ann_path, i, ann_fields[k].c_str()); !e) return e;
+    }
+    AnnRec a;
+    a.token = r.fields[0].str;
+    a.sample = it->second;
+    a.instance = r.fields[2].str;
+    a.attrs = r.fields[3].strs;
+    const std::string where = ann_path + " record " + std::to_string(i) + " (" + a.token + ")";
+    if (Status e = copy_vec(r.fields[4], a.translation, where + " translation"); !e) return e;
+    if (Status e = copy_vec(r.fields[5], a.size, where + " size"); !e) return e;
+    if (Status e = copy_vec(r.fields[6], a.rotation, where + " rotation"); !e) return e;
+    a.num_pts = r.fields[7].num + r.fields[8].num;
+    a.prev = r.fields[9].str;
+    a.next = r.fields[10].str;
+    ann_index.emplace(a.token, static_cast<int>(anns.size()));
+    anns.push_back(std::move(a));
+    return Status::ok();
+  });
+  if (!s) return s;
+
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  auto find_ann = [&](const std::string& token, const AnnRec& from) -> Result<const AnnRec*> {
+    auto it = ann_index.find(token);
+    if (it == ann_index.end()) {
+      return Status(StatusCode::kNotFound, ann_path + ": annotation " + from.token + " links to " + token +
+                                               ", which is not an annotation of the split's samples");
+    }
+    return &anns[static_cast<std::size_t>(it->second)];
+  };
+  for (const AnnRec& a : anns) {
+    auto inst = instance_category.find(a.instance);
+    if (inst == instance_category.end()) {
+      return Status(StatusCode::kNotFound, inst_path + ": instance " + a.instance + " of annotation " +
+                                               a.token + " not found");
+    }
+    auto cat = category_name.find(inst->second);
+    if (cat == category_name.end()) {
+      return Status(StatusCode::kNotFound, cat_path + ": category " + inst->second + " not found");
+    }
+    const auto si = static_cast<std::size_t>(a.sample);
+    if (cat->second == kBicycleRackCategory) {
+      gt.racks[si].push_back({a.translation, a.size, a.rotation});
+      continue;
+    }
+    auto cls = category_to_class(cat->second);
+    if (!cls) continue;
+    EvalBox box;
+    box.cls = static_cast<std::int8_t>(*cls);
+    if (a.attrs.size() > 1) {
+      return Status(StatusCode::kCorruptData, ann_path + ": annotation " + a.token +
+                                                  ": Error: GT annotations must not have more than one attribute!");
+    }
+    if (a.attrs.size() == 1) {
+      auto an = attribute_name.find(a.attrs[0]);
+      if (an == attribute_name.end()) {
+        return Status(StatusCode::kNotFound, attr_path + ": attribute " + a.attrs[0] + " not found");
+      }
+      auto ai = attribute_index(an->second);
+      if (!ai) {
+        return Status(StatusCode::kCorruptData, attr_path + ": unknown attribute name " + an->second);
+      }
+      box.attr = static_cast<std::int8_t>(*ai);
+    }
+    box.translation = a.translation;
+    box.size = a.size;
+    box.rotation = a.rotation;
+    box.num_pts = static_cast<std::int32_t>(a.num_pts);
+    box.score = -1.0;
+    // Velocity (devkit box_velocity, max_time_diff 1.5 s, doubled for a centred difference).
+    const bool has_prev = !a.prev.empty(), has_next = !a.next.empty();
+    if (!has_prev && !has_next) {
+      box.velocity = {nan, nan};
+    } else {
+      const AnnRec* first = &a;
+      const AnnRec* last = &a;
+      if (has_prev) {
+        auto r = find_ann(a.prev, a);
+        if (!r) return r.status();
+        first = *r;
+      }
+      if (has_next) {
+        auto r = find_ann(a.next, a);
+        if (!r) return r.status();
+        last = *r;
+      }
+      const double t_last = 1e-6 * samples[static_cast<std::size_t>(last->sample)].timestamp_us;
+      const double t_first = 1e-6 * samples[static_cast<std::size_t>(first->sample)].timestamp_us;
+      const double dt = t_last - t_first;
+      const double limit = (has_prev && has_next) ? 3.0 : 1.5;
+      if (dt > limit) {
+        box.velocity = {nan, nan};
+      } else {
+        box.velocity = {(last->translation[0] - first->translation[0]) / dt,
+                        (last->translation[1] - first->translation[1]) / dt};
+      }
+    }
+    gt.boxes.boxes[si].push_back(box);
+  }
+  return gt;
+}
+
+}  // namespace faultline::scoring

@@ -1,0 +1,33 @@
+// Streams a nuScenes table (a JSON array of flat records) with RapidJSON's SAX reader, keeping only the
+// named fields, so GB-sized tables (sample_data, ego_pose, sample_annotation) never sit in memory.
+#pragma once
+
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "common/status.hpp"
+
+namespace faultline::scoring {
+
+struct TableField {
+  bool present = false;
+  bool boolean = false;
+  bool is_null = false;
+  double num = 0.0;
+  std::string str;
+  std::vector<double> nums;       // list values (nested lists flattened)
+  std::vector<std::string> strs;  // list of strings
+};
+
+// One record; fields[i] corresponds to the i-th wanted name.
+struct TableRecord {
+  std::vector<TableField> fields;
+};
+
+// Calls `on_record(record, index)` for every record of the array in file order. A non-ok Status from
+// the callback stops the scan and is returned. Errors name the file and the byte offset.
+Status stream_table(const std::string& path, const std::vector<std::string>& wanted,
+                    const std::function<Status(const TableRecord&, std::size_t)>& on_record);
+
+}  // namespace faultline::scoring
