@@ -88,6 +88,13 @@ Status Publisher::send(std::string_view topic, std::string_view header, const Pa
   return send_parts(topic, &header, &payload);
 }
 
+void Publisher::set_linger(int linger_ms) {
+  try {
+    socket_.set(zmq::sockopt::linger, linger_ms);
+  } catch (const zmq::error_t&) {
+  }
+}
+
 Status Publisher::send(std::string_view topic, std::string_view body) {
   return send_parts(topic, &body, nullptr);
 }

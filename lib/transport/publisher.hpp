@@ -68,6 +68,8 @@ class Publisher {
   int subscriber_count(std::string_view topic);
 
   std::uint64_t would_block_count() const { return would_block_; }
+  // Changes ZMQ_LINGER, e.g. to 0 before closing on shutdown so exit stays prompt.
+  void set_linger(int linger_ms);
 
  private:
   void drain_subscriptions(int timeout_ms);

@@ -142,4 +142,22 @@ Result<ReceivedMessage> RawSubscriber::receive(DurationNs timeout_ns) {
   }
 }
 
+int wait_readable(const std::vector<RawSubscriber*>& subscribers, DurationNs timeout_ns) {
+  std::vector<zmq::pollitem_t> items;
+  for (std::size_t i = 0; i < subscribers.size(); ++i) {
+    if (!subscribers[i]->pending_.empty()) return static_cast<int>(i);
+    items.push_back({subscribers[i]->socket_.handle(), 0, ZMQ_POLLIN, 0});
+  }
+  const long wait_ms = timeout_ns < 0 ? -1 : static_cast<long>((timeout_ns + kNsPerMs - 1) / kNsPerMs);
+  try {
+    if (zmq::poll(items.data(), items.size(), std::chrono::milliseconds(wait_ms)) <= 0) return -1;
+  } catch (const zmq::error_t&) {
+    return -1;
+  }
+  for (std::size_t i = 0; i < items.size(); ++i) {
+    if (items[i].revents & ZMQ_POLLIN) return static_cast<int>(i);
+  }
+  return -1;
+}
+
 }  // namespace faultline::transport

@@ -80,6 +80,7 @@ class RawSubscriber {
   void count_malformed() { ++malformed_; }
 
  private:
+  friend int wait_readable(const std::vector<RawSubscriber*>& subscribers, DurationNs timeout_ns);
   Result<ReceivedMessage> read_one(bool wait);  // kWouldBlock when nothing is queued
   void drain_latest();
 
@@ -90,5 +91,9 @@ class RawSubscriber {
   std::uint64_t superseded_ = 0;
   std::uint64_t malformed_ = 0;
 };
+
+// Waits up to `timeout_ns` (-1 = forever) until one of `subscribers` has a message; returns its
+// index, or -1 on timeout/interruption. For loops that serve several sockets from one thread.
+int wait_readable(const std::vector<RawSubscriber*>& subscribers, DurationNs timeout_ns);
 
 }  // namespace faultline::transport
