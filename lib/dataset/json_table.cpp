@@ -6,6 +6,7 @@
 #include <rapidjson/reader.h>
 
 #include <cstdio>
+#include <limits>
 #include <memory>
 #include <sys/stat.h>
 
@@ -121,7 +122,12 @@ class RecordHandler : public rapidjson::BaseReaderHandler<rapidjson::UTF8<>, Rec
   bool Int(int i) { return integer(i); }
   bool Uint(unsigned u) { return integer(u); }
   bool Int64(std::int64_t i) { return integer(i); }
-  bool Uint64(std::uint64_t u) { return number(static_cast<double>(u), false, 0); }
+  bool Uint64(std::uint64_t u) {  // RapidJSON reports every non-negative integer above 2^32 here
+    if (u <= static_cast<std::uint64_t>(std::numeric_limits<std::int64_t>::max())) {
+      return integer(static_cast<std::int64_t>(u));
+    }
+    return number(static_cast<double>(u), false, 0);
+  }
   bool Double(double d) { return number(d, false, 0); }
 
   const Status& status() const { return status_; }

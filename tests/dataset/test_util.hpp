@@ -1,0 +1,58 @@
+// Helpers for the dataset tests: scratch folders, whole-table DOM loads and file comparisons.
+#pragma once
+
+#include <gtest/gtest.h>
+#include <rapidjson/document.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include "dataset/json_table.hpp"
+
+namespace faultline::dataset::testing_util {
+
+namespace fs = std::filesystem;
+
+inline fs::path golden_dataroot() { return fs::path(FAULTLINE_SHARED_DIR) / "golden" / "nusc_eval" / "dataset"; }
+
+// A fresh folder under the system temp dir, unique per process and name.
+inline fs::path scratch_dir(const std::string& name) {
+  const fs::path dir = fs::temp_directory_path() / ("faultline_dataset_" + std::to_string(::getpid()) + "_" + name);
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  return dir;
+}
+
+// Copies a dataroot's table folder (not blobs) and makes the copies writable.
+inline void copy_tables(const fs::path& from_root, const fs::path& to_root, const std::string& version) {
+  fs::create_directories(to_root / version);
+  for (const auto& e : fs::directory_iterator(from_root / version)) {
+    const fs::path dst = to_root / version / e.path().filename();
+    fs::copy_file(e.path(), dst, fs::copy_options::overwrite_existing);
+    fs::permissions(dst, fs::perms::owner_read | fs::perms::owner_write);
+  }
+}
+
+inline rapidjson::Document load_table(const fs::path& root, const std::string& version, const std::string& table) {
+  rapidjson::Document doc;
+  const Status s = parse_document((root / version / (table + ".json")).string(), &doc);
+  EXPECT_TRUE(s.is_ok()) << s.message();
+  return doc;
+}
+
+inline std::string file_text(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+inline void write_text(const fs::path& p, const std::string& text) {
+  std::ofstream out(p, std::ios::binary | std::ios::trunc);
+  out << text;
+}
+
+}  // namespace faultline::dataset::testing_util
