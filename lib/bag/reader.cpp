@@ -319,6 +319,9 @@ Result<LinearScan> Reader::read_linear(const ReadOptions& options, const Message
       break;
     }
   }
+  if (scan.footer_found && !scan.data_end_offset) {
+    report({scan.valid_end, StatusCode::kCorruptData, "no DataEnd record before the Footer"});
+  }
   return scan;
 }
 
@@ -423,14 +426,20 @@ Status Reader::load_summary() {
                                                 ": summary record overruns the summary section");
   }
   if (!status) return status;
+  // Like @mcap/core: the DataEnd record sits directly before the summary.
   std::string data_end;
   const std::uint64_t data_end_offset = footer.summary_start - kDataEndRecordBytes;
-  if (source_->read(data_end_offset, kDataEndRecordBytes, data_end) &&
-      static_cast<std::uint8_t>(data_end[0]) == static_cast<std::uint8_t>(Opcode::kDataEnd)) {
-    ByteReader r(std::string_view(data_end).substr(kRecordPrefixBytes));
-    std::uint32_t crc = 0;
-    if (r.u32(crc)) out.data_crc_stored = crc;
+  if (Status s = source_->read(data_end_offset, kDataEndRecordBytes, data_end); !s) return s;
+  ByteReader der(data_end);
+  std::uint8_t de_op = 0;
+  std::uint64_t de_len = 0;
+  std::uint32_t de_crc = 0;
+  if (!der.u8(de_op) || !der.u64(de_len) || !der.u32(de_crc) ||
+      de_op != static_cast<std::uint8_t>(Opcode::kDataEnd) || de_len != 4) {
+    return Status(StatusCode::kCorruptData, "offset " + std::to_string(data_end_offset) +
+                                                ": no DataEnd record directly before the summary");
   }
+  out.data_crc_stored = de_crc;
   summary_ = std::move(out);
   summary_loaded_ = true;
   return Status::ok();

@@ -215,7 +215,10 @@ Status Writer::flush_chunk() {
       failed_ = s;
       return s;
     }
-    if (compressed_.size() >= chunk_.size()) used = Compression::kNone;  // e.g. JPEG payloads
+    const double limit = static_cast<double>(chunk_.size()) * (1.0 - options_.min_compression_saving);
+    if (compressed_.size() >= chunk_.size() || static_cast<double>(compressed_.size()) > limit) {
+      used = Compression::kNone;  // e.g. JPEG payloads
+    }
   }
   const std::string_view stored = used == Compression::kNone ? std::string_view(chunk_)
                                                              : std::string_view(compressed_);

@@ -31,6 +31,9 @@ struct WriterOptions {
   Compression compression = Compression::kZstd;  // chunks that do not shrink are stored as ""
   int compression_level = 1;                     // zstd level (1 = fast); LZ4 frame level (0 = default)
   std::uint64_t chunk_size_bytes = 1 << 20;      // uncompressed bytes before a chunk is closed
+  // A chunk is stored uncompressed unless compression saves at least this fraction: JPEG chunks
+  // shrink by ~1% (record headers), not worth decompressing on every read. 0 = any saving.
+  double min_compression_saving = 0.02;
   std::uint64_t split_bytes = 0;                 // start a new file past this size; 0 = never
   StampNs split_ns = 0;                          // start a new file after this log-time span; 0 = never
   bool sync_chunks = false;                      // fdatasync after each chunk (power-loss safety; slow)
