@@ -1,0 +1,154 @@
+// Bad submissions and datasets: each gives a clear error naming the place, writes no metrics, and the
+// CLI exits non-zero. Also the defined behaviour where the devkit crashes (no box at all).
+#include <gtest/gtest.h>
+#include <rapidjson/document.h>
+#include <rapidjson/stringbuffer.h>
+#include <rapidjson/writer.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <limits>
+
+#include "scoring/evaluate.hpp"
+#include "test_util.hpp"
+
+namespace faultline::scoring {
+namespace {
+
+using testing::golden_dir;
+using testing::read_text;
+using testing::TempDir;
+using testing::write_text;
+
+class BadInputTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    const std::string text = read_text(golden_dir() + "/predictions/perfect.json");
+    doc_.Parse<rapidjson::kParseNanAndInfFlag | rapidjson::kParseFullPrecisionFlag>(text.c_str(), text.size());
+    ASSERT_FALSE(doc_.HasParseError());
+    first_token_ = doc_["results"].MemberBegin()->name.GetString();
+  }
+  rapidjson::Value& FirstBox() { return doc_["results"].MemberBegin()->value[0]; }
+
+  std::string Write(const std::string& name) {
+    rapidjson::StringBuffer buf;
+    rapidjson::Writer<rapidjson::StringBuffer, rapidjson::UTF8<>, rapidjson::UTF8<>, rapidjson::CrtAllocator,
+                      rapidjson::kWriteNanAndInfFlag>
+        w(buf);
+    doc_.Accept(w);
+    const std::string path = dir_.file(name);
+    write_text(path, buf.GetString());
+    return path;
+  }
+
+  // Expects a failure whose message contains every fragment, and no metrics file.
+  void ExpectRejected(const std::string& results, std::vector<std::string> fragments,
+                      const std::string& dataroot = golden_dir() + "/dataset") {
+    EvalOptions opts;
+    opts.results_path = results;
+    opts.dataroot = dataroot;
+    opts.version = "v1.0-mini";
+    opts.eval_set = "mini_val";
+    opts.output_dir = dir_.file("out");
+    auto r = evaluate_detection(opts, nullptr);
+    ASSERT_FALSE(r.is_ok());
+    for (const auto& f : fragments) {
+      EXPECT_NE(r.status().message().find(f), std::string::npos)
+          << "'" << f << "' not in: " << r.status().message();
+    }
+    EXPECT_FALSE(std::filesystem::exists(opts.output_dir));
+  }
+
+  TempDir dir_{"bad_input"};
+  rapidjson::Document doc_;
+  std::string first_token_;
+};
+
+TEST_F(BadInputTest, MalformedJsonNamesFileAndOffset) {
+  std::string text = read_text(golden_dir() + "/predictions/perfect.json");
+  text.resize(5000);
+  const std::string path = dir_.file("truncated.json");
+  write_text(path, text);
+  ExpectRejected(path, {path, "offset 5000"});
+}
+
+TEST_F(BadInputTest, NanTranslationNamesSampleAndBox) {
+  FirstBox()["translation"][1].SetDouble(std::numeric_limits<double>::quiet_NaN());
+  ExpectRejected(Write("nan.json"), {first_token_, "[0]", "'translation' contains NaN"});
+}
+
+TEST_F(BadInputTest, UnknownClassIsRejected) {
+  FirstBox()["detection_name"].SetString("Car");
+  ExpectRejected(Write("car.json"), {first_token_, "Unknown detection_name Car"});
+}
+
+TEST_F(BadInputTest, UnknownAttributeIsRejected) {
+  FirstBox()["attribute_name"].SetString("vehicle.flying");
+  ExpectRejected(Write("attr.json"), {first_token_, "Unknown attribute_name vehicle.flying"});
+}
+
+TEST_F(BadInputTest, MoreThan500BoxesIsRejected) {
+  auto& list = doc_["results"].MemberBegin()->value;
+  rapidjson::Value box(list[0], doc_.GetAllocator());
+  while (list.Size() <= 500) list.PushBack(rapidjson::Value(box, doc_.GetAllocator()), doc_.GetAllocator());
+  ExpectRejected(Write("many.json"), {first_token_, "Only <= 500 boxes per sample allowed", "501"});
+}
+
+TEST_F(BadInputTest, MissingSampleOfPredefinedSplitIsRejected) {
+  doc_["results"].RemoveMember(first_token_.c_str());
+  ExpectRejected(Write("missing.json"), {"Samples in split doesn't match", "missing", first_token_});
+}
+
+TEST_F(BadInputTest, ExtraSampleOfPredefinedSplitIsRejected) {
+  doc_["results"].AddMember("0000000000000000000000000000beef", rapidjson::Value(rapidjson::kArrayType),
+                            doc_.GetAllocator());
+  ExpectRejected(Write("extra.json"), {"Samples in split doesn't match", "0000000000000000000000000000beef"});
+}
+
+TEST_F(BadInputTest, NegativeScoreIsRejected) {
+  FirstBox()["detection_score"].SetDouble(-0.2);
+  ExpectRejected(Write("neg.json"), {first_token_, "negative 'detection_score'"});
+}
+
+TEST_F(BadInputTest, MissingTableNamesTheFile) {
+  const std::string root = dir_.file("dataset");
+  std::filesystem::copy(golden_dir() + "/dataset", root, std::filesystem::copy_options::recursive);
+  std::filesystem::permissions(root + "/v1.0-mini", std::filesystem::perms::owner_all,
+                               std::filesystem::perm_options::add);
+  std::filesystem::remove(root + "/v1.0-mini/ego_pose.json");
+  ExpectRejected(golden_dir() + "/predictions/perfect.json", {"ego_pose.json", "not found"}, root);
+}
+
+TEST_F(BadInputTest, NoBoxAtAllIsScoredAsZero) {
+  for (auto& m : doc_["results"].GetObject()) m.value.Clear();
+  EvalOptions opts;
+  opts.results_path = Write("empty.json");
+  opts.dataroot = golden_dir() + "/dataset";
+  opts.version = "v1.0-mini";
+  opts.eval_set = "mini_val";
+  auto r = evaluate_detection(opts, nullptr);
+  ASSERT_TRUE(r.is_ok()) << r.status().message();
+  EXPECT_EQ(r->metrics.mean_ap, 0.0);
+  EXPECT_EQ(r->metrics.nd_score, 0.0);
+  EXPECT_EQ(r->metrics.tp_errors[kTrans], 1.0);
+}
+
+TEST_F(BadInputTest, CliExitsNonZeroAndNamesTheFile) {
+  const std::string bin = std::string(FAULTLINE_BIN_DIR) + "/faultline";
+  ASSERT_TRUE(std::filesystem::exists(bin)) << bin << " not built";
+  std::string text = read_text(golden_dir() + "/predictions/perfect.json");
+  text.resize(100);
+  const std::string path = dir_.file("cli_bad.json");
+  write_text(path, text);
+  const std::string err = dir_.file("stderr.txt");
+  const std::string cmd = bin + " score --results " + path + " --dataroot " + golden_dir() +
+                          "/dataset --version v1.0-mini --eval_set mini_val --output_dir " + dir_.file("o") +
+                          " > /dev/null 2> " + err;
+  const int rc = std::system(cmd.c_str());
+  EXPECT_NE(rc, 0);
+  EXPECT_NE(read_text(err).find("cli_bad.json: malformed JSON at offset 100"), std::string::npos)
+      << read_text(err);
+}
+
+}  // namespace
+}  // namespace faultline::scoring
