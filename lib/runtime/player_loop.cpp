@@ -1,0 +1,284 @@
+#include "runtime/player_loop.hpp"
+
+#include <algorithm>
+#include <cctype>
+#include <set>
+
+#include "common/config.hpp"
+#include "detection.pb.h"
+#include "runtime/stats_reporter.hpp"
+#include "transport/log_limiter.hpp"
+#include "transport/registry.hpp"
+#include "transport/typed.hpp"
+
+namespace faultline::runtime {
+
+void PlayerConfig::validate() const {
+  auto fail = [](const std::string& key, const std::string& value, const std::string& why) {
+    throw ConfigError("nusc_player: " + key + " = " + value + ": " + why);
+  };
+  if (rate < 0) fail("rate", std::to_string(rate), "expected >= 0 (0 = as fast as possible)");
+  if (start_offset_s < 0) fail("start_offset_s", std::to_string(start_offset_s), "expected >= 0");
+  if (hwm < 1) fail("hwm", std::to_string(hwm), "expected >= 1");
+  if (stats_window_s <= 0) fail("stats_window_s", std::to_string(stats_window_s), "expected > 0");
+  if (endpoint.empty()) fail("endpoint", "''", "expected an endpoint");
+}
+
+std::string camera_topic(const std::string& channel) {
+  std::string lower = channel;
+  std::transform(lower.begin(), lower.end(), lower.begin(), [](unsigned char c) { return std::tolower(c); });
+  return "/" + lower + "/image_rect_compressed";
+}
+
+namespace {
+
+void set_transform(msgs::Transform* out, const dataset::Pose& p) {
+  out->mutable_translation()->set_x(p.translation[0]);
+  out->mutable_translation()->set_y(p.translation[1]);
+  out->mutable_translation()->set_z(p.translation[2]);
+  out->mutable_rotation()->set_w(p.rotation[0]);
+  out->mutable_rotation()->set_x(p.rotation[1]);
+  out->mutable_rotation()->set_y(p.rotation[2]);
+  out->mutable_rotation()->set_z(p.rotation[3]);
+}
+
+std::string lower(std::string s) {
+  std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return std::tolower(c); });
+  return s;
+}
+
+}  // namespace
+
+struct PlayerLoop::Impl {
+  PlayerConfig cfg;
+  std::string node;
+  std::unique_ptr<FrameSource> source;
+  Clock& clock;
+  std::shared_ptr<spdlog::logger> log;
+  transport::Publisher pub;
+  std::unique_ptr<transport::RawSubscriber> acks;
+  StatsReporter stats;
+  transport::TopicRegistry registry;
+  std::map<std::string, std::uint64_t> seq;  // per topic
+  transport::LogLimiter missing_limiter;
+  std::string sync_topic;
+
+  Impl(PlayerConfig c, std::string n, std::unique_ptr<FrameSource> s, Clock& cl, std::shared_ptr<spdlog::logger> l)
+      : cfg(std::move(c)),
+        node(std::move(n)),
+        source(std::move(s)),
+        clock(cl),
+        log(std::move(l)),
+        pub([&] {
+          transport::PublisherConfig pc;
+          pc.endpoint = cfg.endpoint;
+          pc.snd_hwm = cfg.hwm;
+          pc.linger_ms = cfg.linger_ms;
+          return pc;
+        }()),
+        stats(node, log, static_cast<DurationNs>(cfg.stats_window_s * 1e9),
+              static_cast<DurationNs>(cfg.stats_log_period_s * 1e9)),
+        registry(node),
+        sync_topic(remap_topic(cfg.remap, cfg.sync_topic)) {
+    if (cfg.lockstep) {
+      transport::SubscriberConfig sc;
+      sc.endpoints = {cfg.ack_endpoint};
+      sc.pattern = transport::Pattern::PushPull;
+      sc.bind = true;
+      sc.rcv_hwm = 1000;
+      acks = std::make_unique<transport::RawSubscriber>(sc);
+    }
+  }
+
+  std::uint64_t next_seq(const std::string& topic) { return ++seq[topic]; }
+
+  void stamp(msgs::Header* h, const std::string& topic) {
+    h->set_seq(next_seq(topic));
+    h->set_publisher(node);
+    h->set_publish_stamp_ns(realtime_now_ns());
+    h->set_publish_mono_ns(monotonic_now_ns());
+  }
+
+  // Sleeps until `deadline` (clock time) in short slices so shutdown stays prompt.
+  bool sleep_until(StampNs deadline, const std::atomic<bool>& stop) {
+    for (;;) {
+      if (stop.load()) return false;
+      const StampNs now = clock.now_ns();
+      if (now >= deadline) return true;
+      clock.sleep_until_ns(std::min(deadline, now + 50 * kNsPerMs));
+    }
+  }
+
+  // Lockstep: waits for the SampleAck of `token`; false on shutdown.
+  bool wait_ack(const std::string& token, const std::atomic<bool>& stop, PlayerCounts& counts) {
+    const StampNs deadline = monotonic_now_ns() + static_cast<DurationNs>(cfg.ack_timeout_ms) * kNsPerMs;
+    for (;;) {
+      if (stop.load()) return false;
+      if (cfg.ack_timeout_ms > 0 && monotonic_now_ns() >= deadline) {
+        ++counts.ack_timeouts;
+        log->warn("lockstep: no SampleAck for sample {} within {} ms, continuing", token, cfg.ack_timeout_ms);
+        return true;
+      }
+      auto r = acks->receive(50 * kNsPerMs);
+      if (!r.is_ok()) continue;
+      msgs::SampleAck ack;
+      if (!transport::parse_message(*r, &ack).is_ok()) {
+        acks->count_malformed();
+        continue;
+      }
+      if (ack.sample_token() == token) return true;
+      log->debug("lockstep: ignoring ack for {} while waiting for {}", ack.sample_token(), token);
+    }
+  }
+};
+
+PlayerLoop::PlayerLoop(PlayerConfig config, std::string node, std::unique_ptr<FrameSource> source,
+                       Clock& clock, std::shared_ptr<spdlog::logger> log)
+    : impl_(std::make_unique<Impl>(std::move(config), std::move(node), std::move(source), clock, std::move(log))) {}
+
+PlayerLoop::~PlayerLoop() = default;
+
+std::string PlayerLoop::endpoint() const { return impl_->pub.endpoint(); }
+std::string PlayerLoop::ack_endpoint() const { return impl_->acks ? impl_->acks->endpoints().front() : ""; }
+
+int PlayerLoop::run(const std::atomic<bool>& stop) {
+  Impl& m = *impl_;
+  const auto& frames = m.source->frames();
+  if (frames.empty()) {
+    m.log->warn("no camera frames to play");
+    return 0;
+  }
+  // A boundary follows the last key frame of each sample; its stamp is the sample's time.
+  std::vector<bool> boundary_after(frames.size(), false);
+  std::map<std::string, std::size_t> last_key_index;
+  std::map<std::string, std::int64_t> sample_time = m.source->sample_timestamps_us();
+  std::set<std::string> topics;
+  for (std::size_t i = 0; i < frames.size(); ++i) {
+    topics.insert(remap_topic(m.cfg.remap, camera_topic(frames[i].channel)));
+    if (!frames[i].is_key_frame) continue;
+    last_key_index[frames[i].sample_token] = i;
+    sample_time.emplace(frames[i].sample_token, frames[i].timestamp_us);  // earliest key frame if unknown
+  }
+  std::size_t last_boundary = frames.size();
+  for (const auto& [token, index] : last_key_index) {
+    boundary_after[index] = true;
+    if (last_boundary == frames.size() || index > last_boundary) last_boundary = index;
+  }
+  for (const auto& t : topics) (void)m.registry.advertise(t, "faultline.msgs.CameraFrame", m.pub.endpoint());
+  (void)m.registry.advertise(m.sync_topic, "faultline.msgs.SampleBoundary", m.pub.endpoint());
+  (void)m.registry.advertise(m.stats.stats_topic(), "faultline.msgs.TopicStats", m.pub.endpoint());
+
+  if (m.cfg.wait_subscribers > 0) {
+    for (const std::string& t : {*topics.begin(), m.sync_topic}) {
+      const Status s = m.pub.wait_for_subscribers(t, m.cfg.wait_subscribers,
+                                                  static_cast<DurationNs>(m.cfg.wait_timeout_ms) * kNsPerMs, &stop);
+      if (s.code() == StatusCode::kCancelled) return 0;
+      if (!s.is_ok()) m.log->warn("{}; starting anyway", s.message());
+    }
+  }
+
+  const std::int64_t start_us = frames.front().timestamp_us + static_cast<std::int64_t>(m.cfg.start_offset_s * 1e6);
+  std::map<std::string, std::uint32_t> keys_sent;
+  bool stopped = false;
+  do {
+    bool anchored = false;
+    StampNs anchor_ns = 0;
+    std::int64_t anchor_us = 0;
+    keys_sent.clear();
+    for (std::size_t i = 0; i < frames.size() && !stopped; ++i) {
+      const auto& f = frames[i];
+      if (f.timestamp_us < start_us) continue;
+      if (stop.load()) {
+        stopped = true;
+        break;
+      }
+      if (m.cfg.rate > 0) {
+        if (!anchored) {
+          anchored = true;
+          anchor_ns = m.clock.now_ns();
+          anchor_us = f.timestamp_us;
+        }
+        const auto offset_ns = static_cast<StampNs>(static_cast<double>(f.timestamp_us - anchor_us) * 1e3 / m.cfg.rate);
+        if (!m.sleep_until(anchor_ns + offset_ns, stop)) {
+          stopped = true;
+          break;
+        }
+      }
+      auto image = m.source->read_image(f);
+      if (!image) {
+        ++counts_.missing_images;
+        if (m.missing_limiter.allow()) {
+          m.log->warn("skipping frame {} ({}): {} ({} missing so far)", f.sample_data_token, f.channel,
+                      image.status().message(), counts_.missing_images);
+        }
+      } else {
+        const std::string topic = remap_topic(m.cfg.remap, camera_topic(f.channel));
+        msgs::CameraFrame h;
+        h.set_camera(f.channel);
+        h.set_encoding("jpeg");
+        h.set_width(static_cast<std::uint32_t>(f.width));
+        h.set_height(static_cast<std::uint32_t>(f.height));
+        h.set_sample_data_token(f.sample_data_token);
+        h.set_sample_token(f.sample_token);
+        h.set_is_key_frame(f.is_key_frame);
+        for (double k : f.intrinsics) h.add_intrinsics(k);
+        set_transform(h.mutable_sensor_to_ego(), f.sensor_to_ego);
+        set_transform(h.mutable_ego_pose(), f.ego_pose);
+        h.set_scene_token(f.scene_token);
+        h.set_scene_name(f.scene_name);
+        h.mutable_header()->set_capture_stamp_ns(f.timestamp_us * 1000);
+        h.mutable_header()->set_frame_id(lower(f.channel));
+        m.stamp(h.mutable_header(), topic);
+        h.set_source_seq(h.header().seq());
+        const Status s = transport::send_camera_frame(m.pub, topic, h, transport::Payload::of(*image));
+        if (s.code() == StatusCode::kCancelled) return 0;
+        if (!s.is_ok()) {
+          ++counts_.send_failures;
+          m.log->error("send on {} failed: {}", topic, s.message());
+          return 1;
+        }
+        ++counts_.frames_sent;
+        if (f.is_key_frame) ++keys_sent[f.sample_token];
+        stats::Sample sample;
+        sample.receive_mono_ns = h.header().publish_mono_ns();
+        sample.receive_realtime_ns = h.header().publish_stamp_ns();
+        sample.size_bytes = (*image)->size();
+        m.stats.collector().record(topic, m.node, sample);
+        m.log->trace("sent {} seq={} sample_data={}", topic, h.header().seq(), f.sample_data_token);
+      }
+      if (boundary_after[i]) {
+        msgs::SampleBoundary b;
+        b.set_sample_token(f.sample_token);
+        b.set_scene_token(f.scene_token);
+        b.set_scene_name(f.scene_name);
+        b.set_timestamp_us(sample_time[f.sample_token]);
+        b.set_frames_sent(keys_sent[f.sample_token]);
+        b.set_last_in_run(!m.cfg.loop && i == last_boundary);
+        b.mutable_header()->set_capture_stamp_ns(sample_time[f.sample_token] * 1000);
+        b.mutable_header()->set_frame_id("base_link");
+        m.stamp(b.mutable_header(), m.sync_topic);
+        const Status s = transport::send_message(m.pub, m.sync_topic, b);
+        if (s.code() == StatusCode::kCancelled) return 0;
+        ++counts_.boundaries_sent;
+        m.log->debug("boundary sample={} frames_sent={} last={}", b.sample_token(), b.frames_sent(), b.last_in_run());
+        if (m.cfg.lockstep) {
+          if (!m.wait_ack(f.sample_token, stop, counts_)) {
+            stopped = true;
+            break;
+          }
+          anchored = false;  // re-anchor pacing after waiting
+        }
+      }
+      m.stats.tick(monotonic_now_ns(), &m.pub);
+    }
+  } while (m.cfg.loop && !stopped && !stop.load());
+  m.stats.tick(monotonic_now_ns() + static_cast<DurationNs>(m.cfg.stats_window_s * 1e9), &m.pub);
+  m.stats.log_totals(monotonic_now_ns());
+  if (stopped || stop.load()) m.pub.set_linger(0);  // shutdown: exit promptly, do not flush
+  m.log->info("player done: {} frames, {} boundaries, {} missing images, {} ack timeouts{}", counts_.frames_sent,
+              counts_.boundaries_sent, counts_.missing_images, counts_.ack_timeouts,
+              stopped ? " (stopped)" : "");
+  return 0;
+}
+
+}  // namespace faultline::runtime

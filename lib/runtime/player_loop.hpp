@@ -1,0 +1,100 @@
+// The nuScenes camera player: publishes every camera frame (sweeps and key frames) of the chosen
+// scenes in timestamp order as [topic][CameraFrame][JPEG bytes as stored], plus a SampleBoundary on
+// /sync/sample right after the last key frame of each sample.
+//
+// Pacing: real time scaled by `rate` (2 = twice as fast), or unpaced with rate 0. In lockstep the
+// player waits after each boundary for the sink's SampleAck of that sample (PULL socket bound at
+// ack_endpoint) before sending more frames, so a slow detector loses nothing; give every hop an HWM
+// of ~64 (one sample's frames). Memory: one image at a time (the frame list of the chosen scenes is
+// held in memory). Missing images are counted, logged (rate-limited) and skipped.
+#pragma once
+
+#include <spdlog/logger.h>
+
+#include <atomic>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "common/clock.hpp"
+#include "runtime/frame_source.hpp"
+#include "runtime/remap.hpp"
+
+namespace faultline::runtime {
+
+struct PlayerConfig {
+  std::string dataroot = "data/nuscenes";           // nuScenes root (holds <version>/, samples/, sweeps/)
+  std::string version = "v1.0-mini";                // table folder
+  std::vector<std::string> scenes;                  // scene names; empty = all
+  double rate = 1.0;                                // replay speed factor; 0 = as fast as possible
+  bool loop = false;                                // start over at the end (last_in_run never sent)
+  double start_offset_s = 0.0;                      // skip this much of the run's start (s)
+  std::string endpoint = "tcp://127.0.0.1:5600";    // PUB bind address
+  int hwm = 8;                                      // send queue per subscriber (messages); ~64 in lockstep
+  std::string sync_topic = "/sync/sample";          // SampleBoundary topic
+  bool lockstep = false;                            // wait for a SampleAck per sample
+  std::string ack_endpoint = "tcp://127.0.0.1:5603";  // PULL bind address for SampleAck (lockstep)
+  int ack_timeout_ms = 30000;                       // lockstep: give up waiting (warn) after this; 0 = never
+  int wait_subscribers = 0;                         // before the first frame, wait for this many subscribers
+  int wait_timeout_ms = 10000;                      // ... at most this long (then start anyway, warn)
+  int linger_ms = 1000;                             // at the end of a run, deliver queued messages for up to this
+  double stats_window_s = 1.0;                      // statistics window (s)
+  double stats_log_period_s = 5.0;                  // info log of statistics every this many s
+  std::map<std::string, std::string> remap;         // topic remaps (from -> to)
+
+  template <class V>
+  void visit(V& v) {
+    v("dataroot", dataroot, "nuScenes root directory");
+    v("version", version, "table folder, e.g. v1.0-mini");
+    v("scenes", scenes, "scene names; empty = all");
+    v("rate", rate, "replay speed factor; 0 = as fast as possible");
+    v("loop", loop, "start over at the end");
+    v("start_offset_s", start_offset_s, "skip the first seconds of the run");
+    v("endpoint", endpoint, "PUB bind address");
+    v("hwm", hwm, "send queue per subscriber (messages)");
+    v("sync_topic", sync_topic, "SampleBoundary topic");
+    v("lockstep", lockstep, "wait for the sink's SampleAck per sample");
+    v("ack_endpoint", ack_endpoint, "PULL bind address for SampleAck");
+    v("ack_timeout_ms", ack_timeout_ms, "lockstep ack timeout (ms); 0 = wait forever");
+    v("wait_subscribers", wait_subscribers, "subscribers to wait for before publishing");
+    v("wait_timeout_ms", wait_timeout_ms, "how long to wait for them (ms)");
+    v("linger_ms", linger_ms, "end of run: time to deliver queued messages (ms)");
+    v("stats_window_s", stats_window_s, "statistics window (s)");
+    v("stats_log_period_s", stats_log_period_s, "info log period of statistics (s)");
+    v("remap", remap, "topic remaps from -> to");
+  }
+  void validate() const;  // throws ConfigError
+};
+
+// "/cam_front/image_rect_compressed" for "CAM_FRONT".
+std::string camera_topic(const std::string& channel);
+
+struct PlayerCounts {
+  std::uint64_t frames_sent = 0;
+  std::uint64_t boundaries_sent = 0;
+  std::uint64_t missing_images = 0;
+  std::uint64_t send_failures = 0;
+  std::uint64_t ack_timeouts = 0;
+};
+
+class PlayerLoop {
+ public:
+  PlayerLoop(PlayerConfig config, std::string node, std::unique_ptr<FrameSource> source, Clock& clock,
+             std::shared_ptr<spdlog::logger> log);
+  ~PlayerLoop();
+  // Endpoints actually bound (for tcp://127.0.0.1:* in tests) once the sockets exist, i.e. after
+  // construction.
+  std::string endpoint() const;
+  std::string ack_endpoint() const;
+  // Publishes until the end of the run (0), `stop` turns true (0) or a fatal socket error (1).
+  int run(const std::atomic<bool>& stop);
+  const PlayerCounts& counts() const { return counts_; }
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+  PlayerCounts counts_;
+};
+
+}  // namespace faultline::runtime

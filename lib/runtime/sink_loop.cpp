@@ -1,0 +1,193 @@
+#include "runtime/sink_loop.hpp"
+
+#include <rapidjson/stringbuffer.h>
+#include <rapidjson/writer.h>
+
+#include "common/config.hpp"
+#include "runtime/results_store.hpp"
+#include "runtime/stats_reporter.hpp"
+#include "transport/log_limiter.hpp"
+#include "transport/typed.hpp"
+
+namespace faultline::runtime {
+
+void SinkConfig::validate() const {
+  auto fail = [](const std::string& key, const std::string& value, const std::string& why) {
+    throw ConfigError("detection_sink: " + key + " = " + value + ": " + why);
+  };
+  if (output.empty()) fail("output", "''", "expected a file path");
+  if (detections_hwm < 1) fail("detections_hwm", std::to_string(detections_hwm), "expected >= 1");
+  if (finalize_grace_ms < 0) fail("finalize_grace_ms", std::to_string(finalize_grace_ms), "expected >= 0");
+  if (stats_window_s <= 0) fail("stats_window_s", std::to_string(stats_window_s), "expected > 0");
+}
+
+struct SinkLoop::Impl {
+  SinkConfig cfg;
+  std::string node;
+  std::shared_ptr<spdlog::logger> log;
+  transport::RawSubscriber detections;
+  std::unique_ptr<transport::RawSubscriber> sync;
+  std::unique_ptr<transport::Publisher> acks;
+  ResultsStore store;
+  StatsReporter stats;
+  transport::LogLimiter bad_limiter;
+  std::string detections_topic, sync_topic;
+  std::uint64_t ack_seq = 0;
+
+  Impl(SinkConfig c, std::string n, std::shared_ptr<spdlog::logger> l)
+      : cfg(std::move(c)),
+        node(std::move(n)),
+        log(std::move(l)),
+        detections([&] {
+          transport::SubscriberConfig sc;
+          sc.endpoints = {cfg.detections_endpoint};
+          sc.pattern = transport::Pattern::PushPull;
+          sc.bind = true;
+          sc.rcv_hwm = cfg.detections_hwm;
+          return sc;
+        }()),
+        store(cfg.output, cfg.journal.empty() ? cfg.output + ".journal" : cfg.journal),
+        stats(node, log, static_cast<DurationNs>(cfg.stats_window_s * 1e9),
+              static_cast<DurationNs>(cfg.stats_log_period_s * 1e9)),
+        detections_topic(remap_topic(cfg.remap, cfg.detections_topic)),
+        sync_topic(remap_topic(cfg.remap, cfg.sync_topic)) {
+    if (!cfg.sync_endpoints.empty()) {
+      transport::SubscriberConfig sc;
+      sc.endpoints = cfg.sync_endpoints;
+      sc.topics = {sync_topic};
+      sc.rcv_hwm = 1000;
+      sync = std::make_unique<transport::RawSubscriber>(sc);
+    }
+    if (cfg.lockstep) {
+      transport::PublisherConfig pc;
+      pc.endpoint = cfg.ack_endpoint;
+      pc.bind = false;
+      pc.pattern = transport::Pattern::PushPull;
+      pc.snd_hwm = 1000;
+      pc.send_timeout_ns = 100 * kNsPerMs;
+      acks = std::make_unique<transport::Publisher>(pc);
+    }
+  }
+
+  std::string meta_json() const {
+    rapidjson::StringBuffer buf;
+    rapidjson::Writer<rapidjson::StringBuffer> w(buf);
+    w.StartObject();
+    for (const auto& [k, v] : cfg.meta) {
+      w.Key(k.c_str());
+      w.String(v.c_str());
+    }
+    w.Key("faultline_detector");
+    w.String(store.detector().c_str());
+    w.Key("faultline_sink");
+    w.String(config::describe(cfg).c_str());
+    w.EndObject();
+    return buf.GetString();
+  }
+
+  void finalize(const char* why) {
+    const Status s = store.finalize(meta_json());
+    if (s.is_ok()) {
+      log->info("results written to {} ({} samples, {} with detections; {})", cfg.output, store.sample_count(),
+                store.detection_count(), why);
+    } else {
+      log->error("cannot write results: {}", s.message());
+    }
+  }
+};
+
+SinkLoop::SinkLoop(SinkConfig config, std::string node, std::shared_ptr<spdlog::logger> log)
+    : impl_(std::make_unique<Impl>(std::move(config), std::move(node), std::move(log))) {}
+
+SinkLoop::~SinkLoop() = default;
+
+std::string SinkLoop::detections_endpoint() const { return impl_->detections.endpoints().front(); }
+
+int SinkLoop::run(const std::atomic<bool>& stop) {
+  Impl& m = *impl_;
+  if (m.cfg.resume) {
+    auto r = m.store.recover();
+    if (r.is_ok() && *r > 0) {
+      counts_.recovered_lines = *r;
+      m.log->info("recovered {} journal lines ({} samples)", *r, m.store.sample_count());
+    }
+  }
+  std::vector<transport::RawSubscriber*> inputs{&m.detections};
+  if (m.sync) inputs.push_back(m.sync.get());
+  bool last_seen = false;
+  bool complete = false;
+  StampNs finalize_deadline = 0;
+  while (!stop.load()) {
+    const int ready = transport::wait_readable(inputs, 50 * kNsPerMs);
+    m.stats.tick(monotonic_now_ns(), nullptr);
+    if (ready >= 0) {
+      auto r = inputs[static_cast<std::size_t>(ready)]->receive(0);
+      if (r.is_ok()) {
+        const std::string topic(r->topic());
+        stats::Sample sample;
+        sample.receive_mono_ns = r->receive_mono_ns();
+        sample.receive_realtime_ns = r->receive_realtime_ns();
+        sample.size_bytes = r->size_bytes();
+        if (topic == m.detections_topic) {
+          msgs::DetectionArray d;
+          if (!transport::parse_message(*r, &d).is_ok()) {
+            ++counts_.malformed;
+            m.stats.collector().add_malformed(topic, 1);
+            if (m.bad_limiter.allow()) m.log->warn("malformed DetectionArray dropped ({} so far)", counts_.malformed);
+            continue;
+          }
+          sample.capture_stamp_ns = d.first_frame_capture_ns();
+          sample.publish_mono_ns = d.header().publish_mono_ns();
+          m.stats.collector().record(topic, d.header().publisher(), sample);
+          if (Status s = m.store.add_detections(d); !s.is_ok()) m.log->error("journal: {}", s.message());
+          ++counts_.detection_arrays;
+          counts_.boxes += static_cast<std::uint64_t>(d.detections_size());
+          m.log->debug("detections sample={} boxes={}", d.sample_token(), d.detections_size());
+          if (m.acks) {
+            msgs::SampleAck ack;
+            ack.set_sample_token(d.sample_token());
+            auto* h = ack.mutable_header();
+            h->set_seq(++m.ack_seq);
+            h->set_publisher(m.node);
+            h->set_publish_stamp_ns(realtime_now_ns());
+            h->set_publish_mono_ns(monotonic_now_ns());
+            if (transport::send_message(*m.acks, "/sync/ack", ack).is_ok()) ++counts_.acks_sent;
+          }
+        } else if (topic == m.sync_topic) {
+          msgs::SampleBoundary b;
+          if (!transport::parse_message(*r, &b).is_ok()) {
+            ++counts_.malformed;
+            m.stats.collector().add_malformed(topic, 1);
+            continue;
+          }
+          sample.capture_stamp_ns = b.header().capture_stamp_ns();
+          sample.publish_mono_ns = b.header().publish_mono_ns();
+          m.stats.collector().record(topic, b.header().publisher(), sample);
+          ++counts_.boundaries;
+          if (Status s = m.store.add_sample(b.sample_token()); !s.is_ok()) m.log->error("journal: {}", s.message());
+          if (b.last_in_run() && !last_seen) {
+            last_seen = true;
+            finalize_deadline = monotonic_now_ns() + static_cast<DurationNs>(m.cfg.finalize_grace_ms) * kNsPerMs;
+          }
+        }
+      }
+    }
+    if (last_seen && !complete) {
+      bool all = true;
+      for (const auto& t : m.store.boundary_samples()) all = all && m.store.has_detections(t);
+      if (all || monotonic_now_ns() >= finalize_deadline) {
+        m.finalize(all ? "run complete" : "run complete, grace period over");
+        (void)m.store.remove_journal();
+        complete = true;
+        if (m.cfg.exit_on_last) break;
+      }
+    }
+  }
+  if (!complete) m.finalize(stop.load() ? "shutdown" : "end");
+  m.stats.log_totals(monotonic_now_ns());
+  m.log->info("sink done: {} detection arrays, {} boxes, {} boundaries, {} acks, {} malformed", counts_.detection_arrays,
+              counts_.boxes, counts_.boundaries, counts_.acks_sent, counts_.malformed);
+  return 0;
+}
+
+}  // namespace faultline::runtime
