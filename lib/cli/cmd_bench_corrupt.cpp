@@ -1,0 +1,309 @@
+// `faultline bench corrupt`: single-threaded median ms of every corruption x level in fast and numpy modes on a
+// synthetic 1600x900 frame, the TurboJPEG decode ms of the same frame measured in the same run, and fidelity
+// (PSNR, max abs diff) of fast mode against numpy mode.
+#include <CLI/CLI.hpp>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "cli/command.hpp"
+#include "codec/jpeg.hpp"
+#include "corruption/corrupt.hpp"
+#include "corruption/dark.hpp"
+#include "corruption/fog.hpp"
+#include "corruption/motion_blur.hpp"
+#include "corruption/snow.hpp"
+
+namespace faultline::cli {
+namespace {
+
+using corruption::Corruption;
+using corruption::Level;
+
+// A road scene: sky gradient, buildings with windows (edges), road with lane marks, textured noise.
+cv::Mat synthetic_frame(int width, int height) {
+  cv::Mat img(height, width, CV_8UC3);
+  for (int y = 0; y < height; ++y) {
+    auto* row = img.ptr<cv::Vec3b>(y);
+    for (int x = 0; x < width; ++x) {
+      const double t = static_cast<double>(y) / height;
+      row[x] = cv::Vec3b(static_cast<uchar>(230 - 80 * t), static_cast<uchar>(200 - 60 * t),
+                         static_cast<uchar>(150 + 40 * t * (x % 400) / 400.0));
+    }
+  }
+  rng::FastRng rng(7);
+  for (int b = 0; b < 14; ++b) {
+    const int x0 = b * width / 14, w = width / 14 - 8;
+    const int h = 150 + static_cast<int>(rng.next_u32() % 250);
+    const cv::Scalar c(60 + rng.next_u32() % 120, 60 + rng.next_u32() % 120, 60 + rng.next_u32() % 120);
+    cv::rectangle(img, cv::Rect(x0, height / 2 - h, w, h), c, cv::FILLED);
+    for (int wy = height / 2 - h + 10; wy < height / 2 - 20; wy += 30) {
+      for (int wx = x0 + 8; wx < x0 + w - 16; wx += 24) {
+        cv::rectangle(img, cv::Rect(wx, wy, 12, 16), cv::Scalar(40, 200, 240), cv::FILLED);
+      }
+    }
+  }
+  cv::rectangle(img, cv::Rect(0, height / 2, width, height / 2), cv::Scalar(70, 72, 75), cv::FILLED);
+  for (int i = 0; i < 8; ++i) {
+    cv::line(img, cv::Point(width / 2 + (i - 4) * 40, height / 2), cv::Point(width / 2 + (i - 4) * 260, height),
+             cv::Scalar(235, 235, 235), 6, cv::LINE_AA);
+  }
+  cv::circle(img, cv::Point(width / 3, height * 3 / 4), 60, cv::Scalar(20, 20, 200), cv::FILLED, cv::LINE_AA);
+  cv::putText(img, "FAULTLINE 1600x900", cv::Point(80, 120), cv::FONT_HERSHEY_SIMPLEX, 3.0,
+              cv::Scalar(255, 0, 255), 6, cv::LINE_AA);
+  cv::Mat noise(img.size(), CV_8UC3);
+  for (int y = 0; y < height; ++y) {
+    auto* p = noise.ptr<uchar>(y);
+    for (int x = 0; x < width * 3; ++x) p[x] = static_cast<uchar>(rng.next_u32() % 13);
+  }
+  cv::add(img, noise, img);
+  cv::subtract(img, cv::Scalar::all(6), img);
+  return img;
+}
+
+double median_ms(int reps, const std::function<void()>& fn) {
+  fn();  // warm-up
+  std::vector<double> ms;
+  for (int i = 0; i < reps; ++i) {
+    const auto t0 = std::chrono::steady_clock::now();
+    fn();
+    const auto t1 = std::chrono::steady_clock::now();
+    ms.push_back(std::chrono::duration<double, std::milli>(t1 - t0).count());
+  }
+  std::sort(ms.begin(), ms.end());
+  return ms[ms.size() / 2];
+}
+
+double psnr(const cv::Mat& a, const cv::Mat& b) {
+  const double mse = cv::norm(a, b, cv::NORM_L2SQR) / static_cast<double>(a.total() * a.channels());
+  return mse == 0.0 ? INFINITY : 10.0 * std::log10(255.0 * 255.0 / mse);
+}
+
+// Per-channel 256-bin histogram L1 distance, averaged over channels (seed_to_seed_stats.json's definition).
+double hist_l1(const cv::Mat& a, const cv::Mat& b) {
+  double total = 0.0;
+  for (int c = 0; c < 3; ++c) {
+    std::vector<double> ha(256, 0.0), hb(256, 0.0);
+    for (int y = 0; y < a.rows; ++y) {
+      const auto* pa = a.ptr<cv::Vec3b>(y);
+      const auto* pb = b.ptr<cv::Vec3b>(y);
+      for (int x = 0; x < a.cols; ++x) {
+        ha[pa[x][c]] += 1;
+        hb[pb[x][c]] += 1;
+      }
+    }
+    for (int v = 0; v < 256; ++v) total += std::fabs(ha[static_cast<std::size_t>(v)] - hb[static_cast<std::size_t>(v)]);
+  }
+  return total / 3.0 / static_cast<double>(a.total());
+}
+
+struct Row {
+  std::string type, level, mode;
+  double ms = 0;
+  std::optional<double> psnr_db;       // against numpy mode (same seed / injected field)
+  std::optional<double> max_abs_diff;  // against numpy mode
+  std::string fidelity;                // exact | injected | statistical | reference
+  std::optional<double> psnr_seed_to_seed_db, hist_l1_value, mean_diff;
+  double reference_ms = 0;
+};
+
+Row make_row(Corruption c, Level l, const char* mode) {
+  Row r;
+  r.type = corruption::to_string(c);
+  r.level = corruption::to_string(l);
+  r.mode = mode;
+  return r;
+}
+
+double reference_ms(Corruption c, Level l) {
+  const int i = static_cast<int>(l);
+  switch (c) {
+    case Corruption::Brightness: return std::vector<double>{380, 421, 376}[static_cast<std::size_t>(i)];
+    case Corruption::Dark: return std::vector<double>{338, 309, 282}[static_cast<std::size_t>(i)];
+    case Corruption::Fog: return std::vector<double>{98, 96, 103}[static_cast<std::size_t>(i)];
+    case Corruption::Snow: return std::vector<double>{171, 177, 178}[static_cast<std::size_t>(i)];
+    case Corruption::MotionBlur: return std::vector<double>{211, 192, 267}[static_cast<std::size_t>(i)];
+    case Corruption::ColorQuant: return 2.4;
+  }
+  return 0;
+}
+
+// Fast mode fed with numpy mode's random quantities, where the fast pipeline can take them.
+std::optional<cv::Mat> fast_with_injected_field(const cv::Mat& img, Corruption c, int sev, std::uint32_t seed) {
+  rng::NumpyRandomState rng(seed);
+  switch (c) {
+    case Corruption::MotionBlur: return corruption::motion_blur_fast(img, sev, rng.uniform(-45.0, 45.0));
+    case Corruption::Fog: {
+      const auto p = corruption::fog_params(sev);
+      const cv::Mat fractal = corruption::plasma_fractal(corruption::fog_map_size(img.rows, img.cols), p.decay, rng);
+      cv::Mat field;
+      fractal(cv::Rect(0, 0, img.cols, img.rows)).convertTo(field, CV_32F);
+      return corruption::fog_blend_fast(img, field, p.strength);
+    }
+    case Corruption::Snow: {
+      const auto p = corruption::snow_params(sev);
+      cv::Mat normals(img.rows, img.cols, CV_64F);
+      for (int y = 0; y < img.rows; ++y) {
+        for (int x = 0; x < img.cols; ++x) normals.at<double>(y, x) = rng.normal(p.loc, p.scale);
+      }
+      const double angle = rng.uniform(-135.0, -45.0);
+      const int cr = static_cast<int>(std::ceil(img.rows / p.zoom)), cc = static_cast<int>(std::ceil(img.cols / p.zoom));
+      cv::Mat crop;
+      normals(cv::Rect((img.cols - cc) / 2, (img.rows - cr) / 2, cc, cr)).convertTo(crop, CV_32F);
+      const cv::Mat layer = corruption::snow_layer_fast(crop, img.rows, img.cols, sev, angle);
+      return corruption::snow_blend_fast(img, layer, sev);
+    }
+    default: return std::nullopt;
+  }
+}
+
+std::string num(std::optional<double> v, int prec = 4) {
+  if (!v || !std::isfinite(*v)) return "null";
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.*f", prec, *v);
+  return buf;
+}
+
+int run(int argc, char** argv) {
+  CLI::App app("Benchmark the corruptions (single-threaded) against a TurboJPEG decode of the same frame.", argv[0]);
+  int reps = 9, width = 1600, height = 900;
+  std::uint32_t seed = 130;
+  bool json = false, fidelity = false;
+  std::string out_path;
+  std::vector<std::string> only;
+  app.add_option("--reps", reps, "timed repetitions per case (median reported; one warm-up run first)");
+  app.add_option("--width", width, "frame width");
+  app.add_option("--height", height, "frame height");
+  app.add_option("--seed", seed, "seed for the random corruptions");
+  app.add_option("--only", only, "restrict to these corruption types");
+  app.add_flag("--json", json, "print a JSON array");
+  app.add_flag("--fidelity", fidelity, "also compute PSNR / max abs diff of fast mode against numpy mode");
+  app.add_option("--out", out_path, "also write the JSON array (with fidelity) to this file");
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e);
+  }
+  if (reps < 1 || width < 1 || height < 1) {
+    std::fprintf(stderr, "faultline bench corrupt: --reps, --width and --height must be >= 1\n");
+    return 2;
+  }
+  if (!out_path.empty()) fidelity = true;
+  cv::setNumThreads(0);
+  const cv::Mat frame = synthetic_frame(width, height);
+  auto jpeg = codec::encode_jpeg(frame, 95);
+  if (!jpeg) {
+    std::fprintf(stderr, "faultline bench corrupt: %s\n", jpeg.status().to_string().c_str());
+    return 1;
+  }
+  const double jpeg_ms = median_ms(reps, [&] { (void)codec::decode_jpeg(jpeg->data(), jpeg->size()); });
+
+  std::vector<Row> rows;
+  for (Corruption c : corruption::kAllCorruptions) {
+    if (!only.empty() && std::find(only.begin(), only.end(), corruption::to_string(c)) == only.end()) continue;
+    for (Level l : corruption::kAllLevels) {
+      const int sev = corruption::severity_for(c, l);
+      cv::Mat numpy_out, numpy_other, fast_out;
+      Row fast_row = make_row(c, l, "fast");
+      fast_row.ms = median_ms(reps, [&] {
+        rng::FastRng rng(seed);
+        fast_out = *corruption::corrupt(frame, c, sev, rng);
+      });
+      Row numpy_row = make_row(c, l, "numpy");
+      numpy_row.ms = median_ms(reps, [&] {
+        rng::NumpyRandomState rng(seed);
+        numpy_out = *corruption::corrupt(frame, c, sev, rng);
+      });
+      fast_row.reference_ms = numpy_row.reference_ms = reference_ms(c, l);
+      if (fidelity) {
+        numpy_row.fidelity = "reference";
+        numpy_row.max_abs_diff = 0.0;
+        if (corruption::is_random(c)) {
+          rng::NumpyRandomState other(seed + 1000);
+          numpy_other = *corruption::corrupt(frame, c, sev, other);
+          numpy_row.psnr_seed_to_seed_db = psnr(numpy_out, numpy_other);
+          fast_row.psnr_seed_to_seed_db = numpy_row.psnr_seed_to_seed_db;
+        }
+        if (!corruption::is_random(c)) {
+          fast_row.fidelity = "exact";
+          fast_row.psnr_db = psnr(fast_out, numpy_out);
+          fast_row.max_abs_diff = cv::norm(fast_out, numpy_out, cv::NORM_INF);
+        } else if (auto injected = fast_with_injected_field(frame, c, sev, seed)) {
+          fast_row.fidelity = "injected";
+          fast_row.psnr_db = psnr(*injected, numpy_out);
+          fast_row.max_abs_diff = cv::norm(*injected, numpy_out, cv::NORM_INF);
+        } else {
+          fast_row.fidelity = "statistical";
+          fast_row.psnr_db = psnr(fast_out, numpy_out);
+          fast_row.max_abs_diff = cv::norm(fast_out, numpy_out, cv::NORM_INF);
+        }
+        if (corruption::is_random(c)) {
+          fast_row.hist_l1_value = hist_l1(fast_out, numpy_out);
+          fast_row.mean_diff = cv::mean(fast_out.reshape(1))[0] - cv::mean(numpy_out.reshape(1))[0];
+        }
+      }
+      rows.push_back(fast_row);
+      rows.push_back(numpy_row);
+    }
+  }
+
+  auto to_json = [&]() {
+    std::string s = "[\n";
+    for (const Row& r : rows) {
+      s += "  {\"type\": \"" + r.type + "\", \"level\": \"" + r.level + "\", \"mode\": \"" + r.mode +
+           "\", \"ms\": " + num(r.ms, 3) + ", \"reference_ms\": " + num(r.reference_ms, 1) +
+           ", \"speedup_vs_reference\": " + num(r.reference_ms / r.ms, 1);
+      if (fidelity) {
+        s += ", \"fidelity\": \"" + r.fidelity + "\", \"psnr_db\": " + num(r.psnr_db, 2) +
+             ", \"max_abs_diff\": " + num(r.max_abs_diff, 0) +
+             ", \"psnr_seed_to_seed_db\": " + num(r.psnr_seed_to_seed_db, 2) +
+             ", \"hist_l1\": " + num(r.hist_l1_value, 4) + ", \"mean_diff\": " + num(r.mean_diff, 3);
+      }
+      s += "},\n";
+    }
+    s += "  {\"type\": \"jpeg_decode\", \"ms\": " + num(jpeg_ms, 3) + ", \"width\": " + std::to_string(width) +
+         ", \"height\": " + std::to_string(height) + ", \"jpeg_bytes\": " + std::to_string(jpeg->size()) +
+         ", \"reps\": " + std::to_string(reps) + ", \"threads\": 1}\n]\n";
+    return s;
+  };
+  if (!out_path.empty()) {
+    std::ofstream f(out_path);
+    if (!f) {
+      std::fprintf(stderr, "faultline bench corrupt: cannot write '%s'\n", out_path.c_str());
+      return 1;
+    }
+    f << to_json();
+  }
+  if (json) {
+    std::printf("%s", to_json().c_str());
+    return 0;
+  }
+  std::printf("frame %dx%d, single-threaded, median of %d runs; TurboJPEG decode (q95 4:2:0): %.3f ms\n", width,
+              height, reps, jpeg_ms);
+  std::printf("%-12s %-5s %-6s %10s %9s %9s %10s", "type", "level", "mode", "ms", "xJPEG", "ref_ms", "speedup");
+  if (fidelity) std::printf(" %-11s %9s %7s", "fidelity", "psnr_db", "maxdiff");
+  std::printf("\n");
+  for (const Row& r : rows) {
+    std::printf("%-12s %-5s %-6s %10.3f %9.2f %9.1f %9.1fx", r.type.c_str(), r.level.c_str(), r.mode.c_str(), r.ms,
+                r.ms / jpeg_ms, r.reference_ms, r.reference_ms / r.ms);
+    if (fidelity) {
+      std::printf(" %-11s %9s %7s", r.fidelity.c_str(), num(r.psnr_db, 2).c_str(), num(r.max_abs_diff, 0).c_str());
+    }
+    std::printf("\n");
+  }
+  return 0;
+}
+
+}  // namespace
+FAULTLINE_COMMAND(bench_corrupt, "bench corrupt", "benchmark corruptions vs a JPEG decode (single-threaded)", &run);
+}  // namespace faultline::cli

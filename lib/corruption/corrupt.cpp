@@ -1,0 +1,66 @@
+// Dispatch from (type, severity, mode) to the corruption stages.
+#include "corruption/corrupt.hpp"
+
+#include "corruption/brightness.hpp"
+#include "corruption/color_quant.hpp"
+#include "corruption/dark.hpp"
+#include "corruption/fog.hpp"
+#include "corruption/motion_blur.hpp"
+#include "corruption/snow.hpp"
+
+namespace faultline::corruption {
+
+Status validate_input(const cv::Mat& bgr, int severity) {
+  if (bgr.empty()) return {StatusCode::kInvalidArgument, "empty image"};
+  if (bgr.type() != CV_8UC3) {
+    return {StatusCode::kUnsupported, "image type must be 8-bit 3-channel (CV_8UC3), got " +
+                                          std::to_string(bgr.channels()) + " channel(s) of depth " +
+                                          std::to_string(bgr.depth())};
+  }
+  return validate_severity(severity);
+}
+
+Result<cv::Mat> corrupt(const cv::Mat& bgr, Corruption type, int severity, rng::NumpyRandomState& rng,
+                        const CorruptOptions& options) {
+  if (Status s = validate_input(bgr, severity); !s) return s;
+  if (severity == 0) return bgr.clone();
+  switch (type) {
+    case Corruption::Brightness: return brightness_exact(bgr, severity);
+    case Corruption::ColorQuant: return color_quant(bgr, severity);
+    case Corruption::MotionBlur: {
+      const double angle = options.angle_deg ? *options.angle_deg : rng.uniform(-45.0, 45.0);
+      return motion_blur_exact(bgr, severity, angle);
+    }
+    case Corruption::Fog: {
+      const FogParams p = fog_params(severity);
+      const cv::Mat fractal = plasma_fractal(fog_map_size(bgr.rows, bgr.cols), p.decay, rng);
+      return fog_blend_exact(bgr, fractal, p.strength);
+    }
+    case Corruption::Snow: return snow_exact(bgr, severity, rng);
+    case Corruption::Dark: return dark_exact(bgr, severity, rng);
+  }
+  return Status(StatusCode::kInvalidArgument, "unknown corruption");
+}
+
+Result<cv::Mat> corrupt(const cv::Mat& bgr, Corruption type, int severity, rng::FastRng& rng,
+                        const CorruptOptions& options) {
+  if (Status s = validate_input(bgr, severity); !s) return s;
+  if (severity == 0) return bgr.clone();
+  switch (type) {
+    case Corruption::Brightness: return brightness_fast(bgr, severity);
+    case Corruption::ColorQuant: return color_quant(bgr, severity);
+    case Corruption::MotionBlur: {
+      const double angle = options.angle_deg ? *options.angle_deg : rng.uniform(-45.0, 45.0);
+      return motion_blur_fast(bgr, severity, angle);
+    }
+    case Corruption::Fog: {
+      const FogParams p = fog_params(severity);
+      return fog_blend_fast(bgr, fog_field_fast(bgr.rows, bgr.cols, p.decay, rng), p.strength);
+    }
+    case Corruption::Snow: return snow_fast(bgr, severity, rng);
+    case Corruption::Dark: return dark_fast(bgr, severity, rng);
+  }
+  return Status(StatusCode::kInvalidArgument, "unknown corruption");
+}
+
+}  // namespace faultline::corruption

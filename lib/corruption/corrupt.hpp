@@ -1,0 +1,34 @@
+// One entry point per RNG mode for the six image corruptions. Pure: no I/O, no clocks, no globals.
+// Input: CV_8UC3 in OpenCV's BGR order (what cv::imread returns), any size >= 1x1. Output: same size and type.
+// Severity 0 is "off" and returns a copy without drawing; 1..5 follow the reference (spec corruptions.md).
+#pragma once
+
+#include <optional>
+
+#include <opencv2/core.hpp>
+
+#include "common/status.hpp"
+#include "corruption/types.hpp"
+#include "rng/fast_rng.hpp"
+#include "rng/numpy_legacy.hpp"
+
+namespace faultline::corruption {
+
+struct CorruptOptions {
+  std::optional<double> angle_deg;  // Motion Blur: use this angle (degrees) instead of drawing it; no draw then
+};
+
+// numpy mode: bit-exact with the reference called right after np.random.seed(seed) when `rng` is a fresh
+// NumpyRandomState(seed); consumes exactly the reference's draws.
+Result<cv::Mat> corrupt(const cv::Mat& bgr, Corruption type, int severity, rng::NumpyRandomState& rng,
+                        const CorruptOptions& options = {});
+
+// fast mode: statistically equivalent; Bright, Color Quant and angle-injected Motion Blur (up to float32
+// accumulation) equal numpy mode.
+Result<cv::Mat> corrupt(const cv::Mat& bgr, Corruption type, int severity, rng::FastRng& rng,
+                        const CorruptOptions& options = {});
+
+// Checks the input image and severity; the error names what is wrong.
+Status validate_input(const cv::Mat& bgr, int severity);
+
+}  // namespace faultline::corruption

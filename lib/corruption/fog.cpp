@@ -1,0 +1,206 @@
+// Diamond-square on a torus with the reference's pass order and bracketing, and the fog blend.
+#include "corruption/fog.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <vector>
+
+#include <opencv2/imgproc.hpp>
+
+namespace faultline::corruption {
+namespace {
+
+template <typename Rng>
+cv::Mat plasma_impl(int mapsize, double decay, Rng& rng) {
+  const int n_map = mapsize;
+  std::vector<double> m(static_cast<std::size_t>(n_map) * static_cast<std::size_t>(n_map), 0.0);
+  auto at = [&](int r, int c) -> double& {
+    return m[static_cast<std::size_t>(r) * static_cast<std::size_t>(n_map) + static_cast<std::size_t>(c)];
+  };
+  m[0] = 0.0;
+  int step = n_map;
+  double w = 100.0;
+  std::vector<double> corner, centre;
+  while (step >= 2) {
+    const int h = step / 2;
+    const int n = n_map / step;
+    corner.assign(static_cast<std::size_t>(n * n), 0.0);
+    centre.assign(static_cast<std::size_t>(n * n), 0.0);
+    for (int i = 0; i < n; ++i) {
+      for (int j = 0; j < n; ++j) corner[static_cast<std::size_t>(i * n + j)] = at(i * step, j * step);
+    }
+    const double lo = -w, span = w - (-w);
+    auto next = [n](int i) { return i + 1 == n ? 0 : i + 1; };
+    auto prev = [n](int i) { return i == 0 ? n - 1 : i - 1; };
+    const double* cg = corner.data();
+    double* dg = centre.data();
+    // Squares: centres from the four corners.
+    for (int i = 0; i < n; ++i) {
+      const double* c0 = cg + static_cast<std::size_t>(i) * n;
+      const double* c1 = cg + static_cast<std::size_t>(next(i)) * n;
+      double* drow = dg + static_cast<std::size_t>(i) * n;
+      double* mrow = &at(i * step + h, 0);
+      for (int j = 0; j < n; ++j) {
+        const int j1 = next(j);
+        const double sum = (c0[j] + c1[j]) + (c0[j1] + c1[j1]);
+        const double v = sum / 4 + w * (lo + span * rng.random_sample());
+        drow[j] = v;
+        mrow[j * step + h] = v;
+      }
+    }
+    // Diamonds, horizontal-edge points (use the new centres).
+    for (int i = 0; i < n; ++i) {
+      const double* d0 = dg + static_cast<std::size_t>(i) * n;
+      const double* dp = dg + static_cast<std::size_t>(prev(i)) * n;
+      const double* c0 = cg + static_cast<std::size_t>(i) * n;
+      double* mrow = &at(i * step, 0);
+      for (int j = 0; j < n; ++j) {
+        const double sum = (d0[j] + dp[j]) + (c0[j] + c0[next(j)]);
+        mrow[j * step + h] = sum / 4 + w * (lo + span * rng.random_sample());
+      }
+    }
+    // Diamonds, vertical-edge points (do not read the horizontal-edge points).
+    for (int i = 0; i < n; ++i) {
+      const double* d0 = dg + static_cast<std::size_t>(i) * n;
+      const double* c0 = cg + static_cast<std::size_t>(i) * n;
+      const double* c1 = cg + static_cast<std::size_t>(next(i)) * n;
+      double* mrow = &at(i * step + h, 0);
+      for (int j = 0; j < n; ++j) {
+        const double sum = (d0[j] + d0[prev(j)]) + (c0[j] + c1[j]);
+        mrow[j * step] = sum / 4 + w * (lo + span * rng.random_sample());
+      }
+    }
+    step /= 2;
+    w /= decay;
+  }
+  const auto [mn_it, mx_it] = std::minmax_element(m.begin(), m.end());
+  const double mn = *mn_it;
+  const double range = *mx_it - mn;  // == max(M - min) exactly: subtraction is monotone
+  cv::Mat out(n_map, n_map, CV_64F);
+  double* dst = out.ptr<double>(0);
+  for (std::size_t k = 0; k < m.size(); ++k) dst[k] = (m[k] - mn) / range;
+  return out;
+}
+
+}  // namespace
+
+FogParams fog_params(int severity) {
+  static constexpr FogParams kTable[] = {{1.5, 2.0}, {2.0, 2.0}, {2.5, 1.7}, {2.5, 1.5}, {3.0, 1.4}};
+  return kTable[std::clamp(severity, 1, 5) - 1];
+}
+
+int fog_map_size(int rows, int cols) {
+  const int side = std::max({rows, cols, 3});
+  int n = 1;
+  while (n < side) n *= 2;
+  return n;
+}
+
+cv::Mat plasma_fractal(int mapsize, double decay, rng::NumpyRandomState& rng) {
+  return plasma_impl(mapsize, decay, rng);
+}
+cv::Mat plasma_fractal(int mapsize, double decay, rng::FastRng& rng) { return plasma_impl(mapsize, decay, rng); }
+
+cv::Mat fog_blend_exact(const cv::Mat& bgr, const cv::Mat& fractal, double strength) {
+  double max_u8 = 0.0;
+  cv::minMaxLoc(bgr.reshape(1), nullptr, &max_u8);
+  const double m = max_u8 / 255.0;
+  const double denom = m + strength;
+  cv::Mat out(bgr.size(), bgr.type());
+  for (int y = 0; y < bgr.rows; ++y) {
+    const std::uint8_t* src = bgr.ptr<std::uint8_t>(y);
+    const double* f = fractal.ptr<double>(y);
+    std::uint8_t* dst = out.ptr<std::uint8_t>(y);
+    for (int x = 0; x < bgr.cols; ++x) {
+      const double add = strength * f[x];
+      for (int c = 0; c < 3; ++c) {
+        const double v = src[3 * x + c] / 255.0 + add;
+        const double r = (v * m) / denom;
+        dst[3 * x + c] = static_cast<std::uint8_t>(std::min(std::max(r, 0.0), 1.0) * 255.0);
+      }
+    }
+  }
+  return out;
+}
+
+cv::Mat fog_blend_fast(const cv::Mat& bgr, const cv::Mat& field, double strength) {
+  double max_u8 = 0.0;
+  cv::minMaxLoc(bgr.reshape(1), nullptr, &max_u8);
+  const float m = static_cast<float>(max_u8 / 255.0);
+  const float scale = m / (m + static_cast<float>(strength));  // applied in the 0..255 domain
+  const float add_scale = static_cast<float>(strength) * 255.0f * scale;
+  cv::Mat out(bgr.size(), bgr.type());
+  std::vector<float> row_add(static_cast<std::size_t>(bgr.cols) * 3);
+  for (int y = 0; y < bgr.rows; ++y) {
+    const std::uint8_t* src = bgr.ptr<std::uint8_t>(y);
+    const float* f = field.ptr<float>(y);
+    std::uint8_t* dst = out.ptr<std::uint8_t>(y);
+    for (int x = 0; x < bgr.cols; ++x) {
+      const float a = add_scale * f[x];
+      row_add[3 * static_cast<std::size_t>(x)] = a;
+      row_add[3 * static_cast<std::size_t>(x) + 1] = a;
+      row_add[3 * static_cast<std::size_t>(x) + 2] = a;
+    }
+    const int n = bgr.cols * 3;
+    for (int j = 0; j < n; ++j) {
+      const float v = static_cast<float>(src[j]) * scale + row_add[static_cast<std::size_t>(j)];
+      dst[j] = static_cast<std::uint8_t>(std::min(std::max(v, 0.0f), 255.0f));
+    }
+  }
+  return out;
+}
+
+cv::Mat upsample_torus_window(const cv::Mat& low, int factor, double row0, double col0, int rows, int cols) {
+  cv::Mat low32;
+  low.convertTo(low32, CV_32F);
+  const int n_r = low32.rows, n_c = low32.cols;
+  // Separable bilinear with wrap: build per-axis source coordinates, then remap over a wrapped border.
+  cv::Mat padded;
+  const int pad = 2;
+  cv::copyMakeBorder(low32, padded, pad, pad, pad, pad, cv::BORDER_WRAP);
+  cv::Mat xs(rows, cols, CV_32F), ys(rows, cols, CV_32F);
+  std::vector<float> cx(static_cast<std::size_t>(cols));
+  for (int x = 0; x < cols; ++x) {
+    double s = std::fmod((col0 + x) / factor, static_cast<double>(n_c));
+    if (s < 0) s += n_c;
+    cx[static_cast<std::size_t>(x)] = static_cast<float>(s + pad);
+  }
+  for (int y = 0; y < rows; ++y) {
+    double s = std::fmod((row0 + y) / factor, static_cast<double>(n_r));
+    if (s < 0) s += n_r;
+    const float sy = static_cast<float>(s + pad);
+    float* px = xs.ptr<float>(y);
+    float* py = ys.ptr<float>(y);
+    for (int x = 0; x < cols; ++x) {
+      px[x] = cx[static_cast<std::size_t>(x)];
+      py[x] = sy;
+    }
+  }
+  cv::Mat out;
+  cv::remap(padded, out, xs, ys, cv::INTER_LINEAR, cv::BORDER_REPLICATE);
+  return out;
+}
+
+cv::Mat fog_field_fast(int rows, int cols, double decay, rng::FastRng& rng) {
+  const int n = fog_map_size(rows, cols);
+  const int factor = n >= 64 ? 4 : 1;
+  const cv::Mat low = plasma_impl(n / factor, decay, rng);
+  if (factor == 1) {
+    cv::Mat out;
+    low(cv::Rect(0, 0, cols, rows)).convertTo(out, CV_32F);
+    return out;
+  }
+  // Coarse grid row i sits at full-resolution row factor * i, as in the full map.
+  const int lr = std::min(low.rows, rows / factor + 2), lc = std::min(low.cols, cols / factor + 2);
+  cv::Mat crop;
+  low(cv::Rect(0, 0, lc, lr)).convertTo(crop, CV_32F);
+  cv::Mat up;
+  cv::resize(crop, up, cv::Size(lc * factor, lr * factor), 0, 0, cv::INTER_LINEAR);
+  if (up.rows < rows || up.cols < cols) {
+    return upsample_torus_window(low, factor, 0.0, 0.0, rows, cols);
+  }
+  return up(cv::Rect(0, 0, cols, rows)).clone();
+}
+
+}  // namespace faultline::corruption

@@ -1,0 +1,73 @@
+// Name and level tables for the corruptions.
+#include "corruption/types.hpp"
+
+namespace faultline::corruption {
+
+const char* to_string(Corruption c) {
+  switch (c) {
+    case Corruption::Brightness: return "brightness";
+    case Corruption::Dark: return "dark";
+    case Corruption::Fog: return "fog";
+    case Corruption::Snow: return "snow";
+    case Corruption::MotionBlur: return "motion_blur";
+    case Corruption::ColorQuant: return "color_quant";
+  }
+  return "unknown";
+}
+
+std::optional<Corruption> corruption_from_string(std::string_view name) {
+  for (Corruption c : kAllCorruptions) {
+    if (name == to_string(c)) return c;
+  }
+  if (name == "low_light") return Corruption::Dark;
+  if (name == "bright") return Corruption::Brightness;
+  return std::nullopt;
+}
+
+const char* to_string(Level level) {
+  switch (level) {
+    case Level::Easy: return "easy";
+    case Level::Mid: return "mid";
+    case Level::Hard: return "hard";
+  }
+  return "unknown";
+}
+
+std::optional<Level> level_from_string(std::string_view name) {
+  for (Level l : kAllLevels) {
+    if (name == to_string(l)) return l;
+  }
+  return std::nullopt;
+}
+
+const char* to_string(RngMode mode) { return mode == RngMode::Numpy ? "numpy" : "fast"; }
+
+std::optional<RngMode> rng_mode_from_string(std::string_view name) {
+  if (name == "numpy") return RngMode::Numpy;
+  if (name == "fast") return RngMode::Fast;
+  return std::nullopt;
+}
+
+int severity_for(Corruption c, Level level) {
+  const int index = static_cast<int>(level);
+  switch (c) {
+    case Corruption::ColorQuant:
+    case Corruption::Snow: return 1 + index;
+    case Corruption::Dark: return 2 + index;
+    case Corruption::Brightness:
+    case Corruption::Fog:
+    case Corruption::MotionBlur: return index == 0 ? 2 : (index == 1 ? 4 : 5);
+  }
+  return 1;
+}
+
+Status validate_severity(int severity) {
+  if (severity < 0 || severity > 5) {
+    return {StatusCode::kInvalidArgument, "severity " + std::to_string(severity) + " out of range: expected 1..5"};
+  }
+  return Status::ok();
+}
+
+bool is_random(Corruption c) { return c != Corruption::Brightness && c != Corruption::ColorQuant; }
+
+}  // namespace faultline::corruption

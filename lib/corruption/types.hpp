@@ -1,0 +1,44 @@
+// Corruption names, severities and nuScenes-C levels (spec corruptions.md §0, golden README "Severity").
+#pragma once
+
+#include <optional>
+#include <string>
+#include <string_view>
+
+#include "common/status.hpp"
+
+namespace faultline::corruption {
+
+// The six image corruptions. to_string/from_string use the imagecorruptions names ("motion_blur").
+enum class Corruption { Brightness, Dark, Fog, Snow, MotionBlur, ColorQuant };
+
+inline constexpr Corruption kAllCorruptions[] = {Corruption::Brightness, Corruption::Dark, Corruption::Fog,
+                                                 Corruption::Snow, Corruption::MotionBlur, Corruption::ColorQuant};
+
+// The paper's three levels; each corruption maps them to its own severities.
+enum class Level { Easy, Mid, Hard };
+inline constexpr Level kAllLevels[] = {Level::Easy, Level::Mid, Level::Hard};
+
+// numpy: bit-exact with the Python reference seeded by np.random.seed. fast: statistically equivalent.
+enum class RngMode { Numpy, Fast };
+
+const char* to_string(Corruption c);
+// Accepts the imagecorruptions names plus the manifest's RoboBEV aliases ("low_light" -> Dark).
+std::optional<Corruption> corruption_from_string(std::string_view name);
+
+const char* to_string(Level level);
+std::optional<Level> level_from_string(std::string_view name);
+
+const char* to_string(RngMode mode);
+std::optional<RngMode> rng_mode_from_string(std::string_view name);
+
+// Severity used by nuScenes-C for a level: Bright/Fog/MotionBlur 2/4/5, ColorQuant/Snow 1/2/3, Dark 2/3/4.
+int severity_for(Corruption c, Level level);
+
+// Severity 0 means "off" (identity); 1..5 are the reference's numbers. Anything else is kInvalidArgument.
+Status validate_severity(int severity);
+
+// Whether the corruption draws random numbers (Bright and Color Quant do not).
+bool is_random(Corruption c);
+
+}  // namespace faultline::corruption

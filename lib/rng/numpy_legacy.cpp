@@ -1,0 +1,92 @@
+// NumPy legacy transforms: polar normal, Poisson (multiplication and PTRS), loggam. Compiled without FP contraction.
+#include "rng/numpy_legacy.hpp"
+
+#include <cmath>
+
+namespace faultline::rng {
+
+double NumpyRandomState::standard_normal() {
+  if (has_gauss_) {
+    has_gauss_ = false;
+    return gauss_;
+  }
+  double x1 = 0.0, x2 = 0.0, r2 = 0.0;
+  do {
+    x1 = 2.0 * random_sample() - 1.0;
+    x2 = 2.0 * random_sample() - 1.0;
+    r2 = x1 * x1 + x2 * x2;
+  } while (r2 >= 1.0 || r2 == 0.0);
+  const double f = std::sqrt(-2.0 * std::log(r2) / r2);
+  gauss_ = f * x1;
+  has_gauss_ = true;
+  return f * x2;
+}
+
+std::int64_t NumpyRandomState::poisson(double lam) {
+  if (lam >= 10.0) return poisson_ptrs(lam);
+  if (lam == 0.0) return 0;
+  return poisson_mult(lam);
+}
+
+std::int64_t NumpyRandomState::poisson_mult(double lam) {
+  const double enlam = std::exp(-lam);
+  std::int64_t x = 0;
+  double prod = 1.0;
+  for (;;) {
+    prod *= random_sample();
+    if (prod > enlam) {
+      x += 1;
+    } else {
+      return x;
+    }
+  }
+}
+
+std::int64_t NumpyRandomState::poisson_ptrs(double lam) {
+  const double slam = std::sqrt(lam);
+  const double loglam = std::log(lam);
+  const double b = 0.931 + 2.53 * slam;
+  const double a = -0.059 + 0.02483 * b;
+  const double invalpha = 1.1239 + 1.1328 / (b - 3.4);
+  const double vr = 0.9277 - 3.6224 / (b - 2);
+  for (;;) {
+    const double u = random_sample() - 0.5;
+    const double v = random_sample();
+    const double us = 0.5 - std::fabs(u);
+    const auto k = static_cast<std::int64_t>(std::floor((2 * a / us + b) * u + lam + 0.43));
+    if (us >= 0.07 && v <= vr) return k;
+    if (k < 0 || (us < 0.013 && v > us)) continue;
+    if ((std::log(v) + std::log(invalpha) - std::log(a / (us * us) + b)) <=
+        (-lam + static_cast<double>(k) * loglam - numpy_loggam(static_cast<double>(k + 1)))) {
+      return k;
+    }
+  }
+}
+
+double numpy_loggam(double x) {
+  static constexpr double kA[10] = {8.333333333333333e-02, -2.777777777777778e-03, 7.936507936507937e-04,
+                                    -5.952380952380952e-04, 8.417508417508418e-04, -1.917526917526918e-03,
+                                    6.410256410256410e-03, -2.955065359477124e-02, 1.796443723688307e-01,
+                                    -1.39243221690590e+00};
+  if (x == 1.0 || x == 2.0) return 0.0;
+  std::int64_t n = 0;
+  if (x < 7.0) n = static_cast<std::int64_t>(7 - x);
+  double x0 = x + static_cast<double>(n);
+  const double x2 = (1.0 / x0) * (1.0 / x0);
+  const double lg2pi = 1.8378770664093453e+00;
+  double gl0 = kA[9];
+  for (int k = 8; k >= 0; --k) {
+    gl0 *= x2;
+    gl0 += kA[k];
+  }
+  double gl = gl0 / x0 + 0.5 * lg2pi + (x0 - 0.5) * std::log(x0) - x0;
+  if (x < 7.0) {
+    for (std::int64_t k = 1; k <= n; ++k) {
+      gl -= std::log(x0 - 1.0);
+      x0 -= 1.0;
+    }
+  }
+  return gl;
+}
+
+}  // namespace faultline::rng

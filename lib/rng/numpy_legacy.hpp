@@ -1,0 +1,64 @@
+// NumPy's legacy RandomState (np.random.*) on std::mt19937, bit-exact (spec corruptions.md §10).
+// Used by numpy mode so a corruption seeded with np.random.seed(s) reproduces the Python reference draw for draw.
+#pragma once
+
+#include <cstdint>
+#include <random>
+
+namespace faultline::rng {
+
+// Not thread-safe; one instance per image (numpy mode) or per sequence (temporal draws).
+class NumpyRandomState {
+ public:
+  explicit NumpyRandomState(std::uint32_t seed) : mt_(seed) {}
+
+  // np.random.seed(s): re-initialises the engine and clears the cached normal.
+  void seed(std::uint32_t seed) {
+    mt_.seed(seed);
+    has_gauss_ = false;
+  }
+
+  std::uint32_t next_u32() { return static_cast<std::uint32_t>(mt_()); }
+
+  // random_sample(): 53-bit double in [0, 1) from two consecutive outputs.
+  double random_sample() {
+    const std::uint32_t a = next_u32() >> 5;
+    const std::uint32_t b = next_u32() >> 6;
+    return (a * 67108864.0 + b) / 9007199254740992.0;
+  }
+
+  // uniform(lo, hi) = lo + (hi - lo) * u.
+  double uniform(double lo, double hi) { return lo + (hi - lo) * random_sample(); }
+
+  // standard_normal(): legacy polar method with its one-value cache.
+  double standard_normal();
+
+  // normal(loc, scale) = loc + scale * standard_normal().
+  double normal(double loc, double scale) { return loc + scale * standard_normal(); }
+
+  // poisson(lam): 0 consumes nothing; lam < 10 multiplication method; lam >= 10 PTRS (Hormann).
+  std::int64_t poisson(double lam);
+
+  // choice(6) with replacement: masked rejection on 32-bit outputs.
+  int choice6() {
+    for (;;) {
+      const std::uint32_t v = next_u32() & 7u;
+      if (v <= 5u) return static_cast<int>(v);
+    }
+  }
+
+  bool gauss_cache_pending() const { return has_gauss_; }
+
+ private:
+  std::int64_t poisson_mult(double lam);
+  std::int64_t poisson_ptrs(double lam);
+
+  std::mt19937 mt_;
+  bool has_gauss_ = false;
+  double gauss_ = 0.0;
+};
+
+// NumPy's random_loggam (log-gamma used by PTRS).
+double numpy_loggam(double x);
+
+}  // namespace faultline::rng

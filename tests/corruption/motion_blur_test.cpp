@@ -1,0 +1,85 @@
+// Motion blur with the manifest's exact angle injected: exact in numpy mode, float32 within the spec's bound.
+#include <gtest/gtest.h>
+
+#include "corruption/corrupt.hpp"
+#include "corruption/golden_cases.hpp"
+#include "corruption/motion_blur.hpp"
+#include "corruption/motion_kernel.hpp"
+#include "rng/golden_json.hpp"
+
+namespace faultline::testing {
+namespace {
+
+std::vector<GoldenCase> motion_cases() {
+  std::vector<GoldenCase> out;
+  for (const auto& c : load_golden_cases()) {
+    if (c.type == corruption::Corruption::MotionBlur) out.push_back(c);
+  }
+  return out;
+}
+
+TEST(MotionBlurAngleTest, InjectedAngleIsExactAndDrawsNothing) {
+  const auto cases = motion_cases();
+  ASSERT_EQ(cases.size(), 15u);
+  for (const auto& c : cases) {
+    const cv::Mat in = read_golden_png(c.input_file);
+    const cv::Mat ref = read_golden_png(c.file);
+    rng::NumpyRandomState rng(c.seed.value_or(0));
+    corruption::CorruptOptions opt;
+    opt.angle_deg = c.angle_deg;
+    auto out = corruption::corrupt(in, c.type, c.severity, rng, opt);
+    ASSERT_TRUE(out.is_ok());
+    EXPECT_EQ(max_abs_diff(*out, ref), 0.0) << c.name;
+    rng::NumpyRandomState fresh(c.seed.value_or(0));
+    EXPECT_EQ(rng.random_sample(), fresh.random_sample()) << "an injected angle must not draw";
+  }
+}
+
+TEST(MotionBlurAngleTest, FastModeWithInjectedAngleIsWithinFloat32Bound) {
+  for (const auto& c : motion_cases()) {
+    const cv::Mat in = read_golden_png(c.input_file);
+    const cv::Mat ref = read_golden_png(c.file);
+    rng::FastRng rng(1);
+    corruption::CorruptOptions opt;
+    opt.angle_deg = c.angle_deg;
+    auto out = corruption::corrupt(in, c.type, c.severity, rng, opt);
+    ASSERT_TRUE(out.is_ok());
+    EXPECT_LE(max_abs_diff(*out, ref), 1.0) << c.name;
+    EXPECT_LE(fraction_different(*out, ref), 0.002) << c.name;
+  }
+}
+
+TEST(MotionBlurAngleTest, OffsetsMatchManifest) {
+  const auto doc = load_golden_json("manifest.json");
+  int checked = 0;
+  for (const auto& o : doc["outputs"].GetArray()) {
+    if (std::string(o["corruption"].GetString()) != "motion_blur") continue;
+    const double angle = exact_double(o["rng_derived"]["angle_deg"]["hex"]);
+    const int width = o["constants"]["kernel_width"].GetInt();
+    const auto offsets = corruption::motion_offsets(angle, width);
+    const auto& expected = o["rng_derived"]["offsets_dy_dx"];
+    ASSERT_EQ(offsets.size(), expected.Size());
+    for (rapidjson::SizeType i = 0; i < expected.Size(); ++i) {
+      EXPECT_EQ(offsets[i].dy, expected[i][0].GetInt());
+      EXPECT_EQ(offsets[i].dx, expected[i][1].GetInt());
+    }
+    ++checked;
+  }
+  EXPECT_EQ(checked, 15);
+}
+
+TEST(MotionBlurKernelTest, TablesExistForEveryUsedPairAndSumToOne) {
+  const int pairs[][2] = {{10, 3}, {15, 5}, {15, 8}, {15, 12}, {20, 15}, {10, 4}, {12, 4}, {12, 8}, {12, 12}};
+  for (const auto& p : pairs) {
+    const auto* k = corruption::find_tabulated_kernel(p[0], p[1]);
+    ASSERT_NE(k, nullptr);
+    EXPECT_EQ(k->width, 2 * p[0] + 1);
+    double sum = 0;
+    for (int i = 0; i < k->width; ++i) sum += k->weights[i];
+    EXPECT_NEAR(sum, 1.0, 1e-12);
+  }
+  EXPECT_EQ(corruption::find_tabulated_kernel(3, 3), nullptr);
+}
+
+}  // namespace
+}  // namespace faultline::testing

@@ -1,0 +1,92 @@
+// NumpyRandomState against numpy_rng_vectors.json: raw MT19937, random_sample, polar normals with their cache,
+// Poisson on both sides of the lambda = 10 switch (with the uniforms consumed), choice(6).
+#include <gtest/gtest.h>
+
+#include "rng/golden_json.hpp"
+#include "rng/numpy_legacy.hpp"
+
+namespace faultline::rng {
+namespace {
+
+using faultline::testing::exact_double;
+using faultline::testing::load_golden_json;
+
+class NumpyRngVectorsTest : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() { doc_ = new rapidjson::Document(load_golden_json("numpy_rng_vectors.json")); }
+  static void TearDownTestSuite() {
+    delete doc_;
+    doc_ = nullptr;
+  }
+  static const rapidjson::Value& seeds() { return (*doc_)["per_seed"]; }
+  static rapidjson::Document* doc_;
+};
+rapidjson::Document* NumpyRngVectorsTest::doc_ = nullptr;
+
+TEST_F(NumpyRngVectorsTest, RawMt19937OutputsMatch) {
+  for (const auto& s : seeds().GetArray()) {
+    NumpyRandomState rng(s["seed"].GetUint());
+    for (const auto& v : s["mt19937_uint32"].GetArray()) EXPECT_EQ(rng.next_u32(), v.GetUint());
+  }
+}
+
+TEST_F(NumpyRngVectorsTest, RandomSampleMatchesBitForBit) {
+  for (const auto& s : seeds().GetArray()) {
+    NumpyRandomState rng(s["seed"].GetUint());
+    for (const auto& v : s["random_sample"]["hex"].GetArray()) EXPECT_EQ(rng.random_sample(), exact_double(v));
+  }
+}
+
+TEST_F(NumpyRngVectorsTest, StandardNormalsIncludingCachedValues) {
+  for (const auto& s : seeds().GetArray()) {
+    NumpyRandomState rng(s["seed"].GetUint());
+    int i = 0;
+    for (const auto& v : s["standard_normal"]["hex"].GetArray()) {
+      EXPECT_EQ(rng.standard_normal(), exact_double(v)) << "seed " << s["seed"].GetUint() << " normal " << i;
+      ++i;
+    }
+    EXPECT_EQ(i, 21);
+    EXPECT_TRUE(rng.gauss_cache_pending());  // the 21st value opened a new pair
+  }
+}
+
+TEST_F(NumpyRngVectorsTest, PoissonValuesAndConsumption) {
+  for (const auto& s : seeds().GetArray()) {
+    for (const auto& lam : s["poisson"].GetObject()) {
+      NumpyRandomState rng(s["seed"].GetUint());
+      const double lambda = std::strtod(lam.name.GetString(), nullptr);
+      int i = 0;
+      for (const auto& v : lam.value["values"].GetArray()) {
+        EXPECT_EQ(rng.poisson(lambda), v.GetInt64()) << "lambda " << lambda << " draw " << i;
+        ++i;
+      }
+      EXPECT_EQ(rng.random_sample(), exact_double(lam.value["next_random_sample"])) << "lambda " << lambda;
+    }
+  }
+}
+
+TEST_F(NumpyRngVectorsTest, ChoiceOfSix) {
+  for (const auto& s : seeds().GetArray()) {
+    NumpyRandomState rng(s["seed"].GetUint());
+    for (const auto& v : s["choice6"].GetArray()) EXPECT_EQ(rng.choice6(), v.GetInt());
+  }
+}
+
+TEST(NumpyRandomStateTest, SeedingClearsTheNormalCache) {
+  NumpyRandomState a(7);
+  (void)a.standard_normal();
+  ASSERT_TRUE(a.gauss_cache_pending());
+  a.seed(7);
+  EXPECT_FALSE(a.gauss_cache_pending());
+  NumpyRandomState b(7);
+  EXPECT_EQ(a.standard_normal(), b.standard_normal());
+}
+
+TEST(NumpyLoggamTest, MatchesLgammaAtIntegers) {
+  EXPECT_EQ(numpy_loggam(1.0), 0.0);
+  EXPECT_EQ(numpy_loggam(2.0), 0.0);
+  for (int k = 3; k < 300; ++k) EXPECT_NEAR(numpy_loggam(k), std::lgamma(static_cast<double>(k)), 1e-10) << k;
+}
+
+}  // namespace
+}  // namespace faultline::rng
