@@ -169,12 +169,11 @@ int PlayerLoop::run(const std::atomic<bool>& stop) {
   (void)m.registry.advertise(m.stats.stats_topic(), "faultline.msgs.TopicStats", m.pub.endpoint());
 
   if (m.cfg.wait_subscribers > 0) {
-    for (const std::string& t : {*topics.begin(), m.sync_topic}) {
-      const Status s = m.pub.wait_for_subscribers(t, m.cfg.wait_subscribers,
-                                                  static_cast<DurationNs>(m.cfg.wait_timeout_ms) * kNsPerMs, &stop);
-      if (s.code() == StatusCode::kCancelled) return 0;
-      if (!s.is_ok()) m.log->warn("{}; starting anyway", s.message());
-    }
+    // Every consumer that matters (injector, sink, detectors) subscribes to the boundaries.
+    const Status s = m.pub.wait_for_subscribers(m.sync_topic, m.cfg.wait_subscribers,
+                                                static_cast<DurationNs>(m.cfg.wait_timeout_ms) * kNsPerMs, &stop);
+    if (s.code() == StatusCode::kCancelled) return 0;
+    if (!s.is_ok()) m.log->warn("{}; starting anyway", s.message());
   }
 
   const std::int64_t start_us = frames.front().timestamp_us + static_cast<std::int64_t>(m.cfg.start_offset_s * 1e6);

@@ -36,9 +36,9 @@ struct PlayerConfig {
   bool lockstep = false;                            // wait for a SampleAck per sample
   std::string ack_endpoint = "tcp://127.0.0.1:5603";  // PULL bind address for SampleAck (lockstep)
   int ack_timeout_ms = 30000;                       // lockstep: give up waiting (warn) after this; 0 = never
-  int wait_subscribers = 0;                         // before the first frame, wait for this many subscribers
+  int wait_subscribers = 0;                         // before the first frame, wait for this many subscribers of sync_topic
   int wait_timeout_ms = 10000;                      // ... at most this long (then start anyway, warn)
-  int linger_ms = 1000;                             // at the end of a run, deliver queued messages for up to this
+  int linger_ms = 1000;                             // end of run: deliver queued messages for up to this (ms)
   double stats_window_s = 1.0;                      // statistics window (s)
   double stats_log_period_s = 5.0;                  // info log of statistics every this many s
   std::map<std::string, std::string> remap;         // topic remaps (from -> to)
