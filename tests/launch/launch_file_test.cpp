@@ -64,6 +64,41 @@ TEST_F(LaunchFileTest, ParamsDocumentAddsRemapOnlyWhenGiven) {
   EXPECT_FALSE(node_params_document(lf.nodes[1])["remap"].IsDefined());
 }
 
+// What a node sees: the params document goes through YAML text and the node-side Loader.
+struct PlayerLikeConfig {
+  double rate = 1.0;
+  int hwm = 2;
+  std::string dataroot;
+  std::map<std::string, std::string> remap;
+  template <class V>
+  void visit(V& v) {
+    v("rate", rate, "");
+    v("hwm", hwm, "");
+    v("dataroot", dataroot, "");
+    v("remap", remap, "");
+  }
+};
+
+TEST_F(LaunchFileTest, ParamsFileRoundTripsThroughTheNodeLoader) {
+  env_["RATE"] = "2.5";
+  const auto lf = Parse(
+      "nodes:\n  - name: p\n    exec: sh\n"
+      "    params: {rate: '${RATE}', hwm: '${HWM:-4}', dataroot: data/synth}\n"
+      "    remap: {/cam_front/image_rect_compressed: /camera/front}\n");
+  YAML::Emitter e;
+  e << node_params_document(lf.nodes[0]);
+  config::ParamSource source;
+  source.merge(YAML::Load(e.c_str()), "params file");
+  PlayerLikeConfig cfg;
+  config::Loader loader(source);
+  cfg.visit(loader);
+  loader.finish();
+  EXPECT_DOUBLE_EQ(cfg.rate, 2.5);
+  EXPECT_EQ(cfg.hwm, 4);
+  EXPECT_EQ(cfg.dataroot, "data/synth");
+  EXPECT_EQ(cfg.remap.at("/cam_front/image_rect_compressed"), "/camera/front");
+}
+
 TEST_F(LaunchFileTest, UnknownTopLevelKeyNamesIt) {
   const auto err = ErrorOf("nodez: []\n");
   EXPECT_NE(err.find("launch/t.yaml"), std::string::npos) << err;
