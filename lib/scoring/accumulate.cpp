@@ -97,34 +97,50 @@ MetricData MetricData::no_predictions() {
   return md;
 }
 
-Result<MetricData> accumulate(const EvalBoxes& gt, const EvalBoxes& pred, int cls, double dist_th) {
-  // GT of this class per sample, in list order (other classes are skipped by the devkit anyway).
-  std::vector<std::vector<int>> gt_of_class(gt.boxes.size());
+namespace {
+
+// Per-class inputs shared by the four thresholds.
+struct ClassInputs {
+  std::vector<std::vector<int>> gt_of_class;  // per GT sample, list order
   std::size_t npos = 0;
+  std::vector<const EvalBox*> preds;  // results key order, in-sample file order
+  std::vector<std::size_t> order;     // processing order
+};
+
+ClassInputs prepare(const EvalBoxes& gt, const EvalBoxes& pred, int cls) {
+  ClassInputs in;
+  in.gt_of_class.resize(gt.boxes.size());
   for (std::size_t s = 0; s < gt.boxes.size(); ++s) {
     for (std::size_t i = 0; i < gt.boxes[s].size(); ++i) {
       if (gt.boxes[s][i].cls == cls) {
-        gt_of_class[s].push_back(static_cast<int>(i));
-        ++npos;
+        in.gt_of_class[s].push_back(static_cast<int>(i));
+        ++in.npos;
       }
     }
   }
-  if (npos == 0) return MetricData::no_predictions();
-
-  std::vector<const EvalBox*> preds;
+  if (in.npos == 0) return in;
   for (const auto& list : pred.boxes) {
     for (const EvalBox& b : list) {
-      if (b.cls == cls) preds.push_back(&b);
+      if (b.cls == cls) in.preds.push_back(&b);
     }
   }
   // (score, index) descending: equal scores are processed last-in-file first.
-  std::vector<std::size_t> order(preds.size());
-  std::iota(order.begin(), order.end(), 0);
-  std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+  in.order.resize(in.preds.size());
+  std::iota(in.order.begin(), in.order.end(), 0);
+  const auto& preds = in.preds;
+  std::sort(in.order.begin(), in.order.end(), [&](std::size_t a, std::size_t b) {
     const double sa = preds[a]->score, sb = preds[b]->score;
     return sa > sb || (sa == sb && a > b);
   });
+  return in;
+}
 
+Result<MetricData> match_and_curves(const EvalBoxes& gt, const ClassInputs& in, int cls, double dist_th) {
+  if (in.npos == 0) return MetricData::no_predictions();
+  const auto& gt_of_class = in.gt_of_class;
+  const auto& preds = in.preds;
+  const auto& order = in.order;
+  const std::size_t npos = in.npos;
   std::vector<std::vector<char>> taken(gt.boxes.size());
   for (std::size_t s = 0; s < gt.boxes.size(); ++s) taken[s].assign(gt.boxes[s].size(), 0);
   std::vector<double> tp_cum, fp_cum, conf;
@@ -206,6 +222,23 @@ Result<MetricData> accumulate(const EvalBoxes& gt, const EvalBoxes& pred, int cl
     }
   }
   return md;
+}
+
+}  // namespace
+
+Result<MetricData> accumulate(const EvalBoxes& gt, const EvalBoxes& pred, int cls, double dist_th) {
+  return match_and_curves(gt, prepare(gt, pred, cls), cls, dist_th);
+}
+
+Result<std::array<MetricData, kNumDistThs>> accumulate_class(const EvalBoxes& gt, const EvalBoxes& pred, int cls) {
+  const ClassInputs in = prepare(gt, pred, cls);
+  std::array<MetricData, kNumDistThs> out;
+  for (std::size_t t = 0; t < kNumDistThs; ++t) {
+    auto md = match_and_curves(gt, in, cls, kDistThs[t]);
+    if (!md) return md.status();
+    out[t] = std::move(*md);
+  }
+  return out;
 }
 
 }  // namespace faultline::scoring

@@ -34,5 +34,7 @@ double np_mean(const double* v, std::size_t n);
 // Filtered GT indexed by GT sample, predictions whose match_sample is a GT sample index or -1.
 // Fails only when a matched box has a size <= 0 (the devkit asserts there).
 Result<MetricData> accumulate(const EvalBoxes& gt, const EvalBoxes& pred, int cls, double dist_th);
+// All four thresholds of one class; sorts and indexes once (same results as four accumulate() calls).
+Result<std::array<MetricData, kNumDistThs>> accumulate_class(const EvalBoxes& gt, const EvalBoxes& pred, int cls);
 
 }  // namespace faultline::scoring

@@ -120,11 +120,9 @@ Result<EvalOutcome> evaluate_detection(const EvalOptions& opts, std::FILE* log) 
 
   logf(log, "Accumulating metric data...");
   for (int c = 0; c < kNumClasses; ++c) {
-    for (int t = 0; t < kNumDistThs; ++t) {
-      auto md = accumulate(gt->boxes, sub->boxes, c, kDistThs[static_cast<std::size_t>(t)]);
-      if (!md) return Status(md.status().code(), opts.results_path + ": " + md.status().message());
-      out.curves[static_cast<std::size_t>(c)][static_cast<std::size_t>(t)] = std::move(*md);
-    }
+    auto mds = accumulate_class(gt->boxes, sub->boxes, c);
+    if (!mds) return Status(mds.status().code(), opts.results_path + ": " + mds.status().message());
+    out.curves[static_cast<std::size_t>(c)] = std::move(*mds);
   }
   logf(log, "Calculating metrics...");
   out.metrics = compute_metrics(out.curves);

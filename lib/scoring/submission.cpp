@@ -1,9 +1,19 @@
 // Submission parsing and the devkit's box checks (EvalBox/DetectionBox asserts, 500-box limit).
+// The file is streamed through RapidJSON's SAX reader: boxes go straight into EvalBox records (a
+// val-sized submission never exists as a DOM); only "meta" is rebuilt as a small document.
 #include "scoring/submission.hpp"
 
 #include <rapidjson/error/en.h>
+#include <rapidjson/filereadstream.h>
+#include <rapidjson/memorystream.h>
+#include <rapidjson/reader.h>
+#include <rapidjson/stringbuffer.h>
+#include <rapidjson/writer.h>
 
 #include <cmath>
+#include <cstdio>
+#include <memory>
+#include <unordered_set>
 #include <fstream>
 #include <sstream>
 #include <unordered_map>
@@ -19,108 +29,448 @@ Status bad(const std::string& where, const std::string& what) {
   return Status(StatusCode::kInvalidArgument, where + ": " + what);
 }
 
+// One field of a box as it appeared in the file.
+struct FieldVal {
+  enum Kind { kAbsent, kNumber, kString, kArray, kOther } kind = kAbsent;
+  double num = 0;
+  bool is_int = false;
+  std::string str;
+  std::vector<double> arr;
+  int arr_bad = -1;  // index of the first non-number element
+};
+
+enum Field { kSampleToken, kTranslation, kSize, kRotation, kVelocity, kEgo, kNumPts, kName, kScore, kAttrName, kNumFields };
+constexpr const char* kFieldNames[kNumFields] = {"sample_token", "translation", "size", "rotation", "velocity",
+                                                 "ego_translation", "num_pts", "detection_name",
+                                                 "detection_score", "attribute_name"};
+
 template <std::size_t N>
-Status read_vec(const rapidjson::Value& box, const char* field, const std::string& where, bool allow_nan,
+Status read_vec(const FieldVal& f, const char* field, const std::string& where, bool allow_nan,
                 std::array<double, N>& out) {
-  auto it = box.FindMember(field);
-  if (it == box.MemberEnd()) return bad(where, std::string("missing field '") + field + "'");
-  if (!it->value.IsArray() || it->value.Size() != N) {
+  if (f.kind == FieldVal::kAbsent) return bad(where, std::string("missing field '") + field + "'");
+  if (f.kind != FieldVal::kArray || f.arr_bad >= 0 || f.arr.size() != N) {
+    if (f.kind == FieldVal::kArray && f.arr_bad >= 0) {
+      return bad(where, std::string("'") + field + "'[" + std::to_string(f.arr_bad) + "] is not a number");
+    }
     return bad(where, std::string("'") + field + "' must be a list of " + std::to_string(N) + " numbers");
   }
-  for (rapidjson::SizeType i = 0; i < N; ++i) {
-    const auto& v = it->value[i];
-    if (!v.IsNumber()) {
-      return bad(where, std::string("'") + field + "'[" + std::to_string(i) + "] is not a number");
-    }
-    out[i] = v.GetDouble();
-    if (!allow_nan && std::isnan(out[i])) {
-      return bad(where, std::string("'") + field + "' contains NaN");
-    }
+  for (std::size_t i = 0; i < N; ++i) {
+    out[i] = f.arr[i];
+    if (!allow_nan && std::isnan(out[i])) return bad(where, std::string("'") + field + "' contains NaN");
   }
   return Status::ok();
 }
 
-Status read_box(const rapidjson::Value& v, const std::string& key, const std::string& where, EvalBox& box,
-                std::string& sample_field) {
-  if (!v.IsObject()) return bad(where, "a box must be an object");
-  auto st = v.FindMember("sample_token");
-  if (st == v.MemberEnd()) return bad(where, "missing field 'sample_token'");
-  if (!st->value.IsString()) return bad(where, "'sample_token' must be a string");
-  sample_field.assign(st->value.GetString(), st->value.GetStringLength());
-  (void)key;
-  if (Status s = read_vec(v, "translation", where, false, box.translation); !s) return s;
-  if (Status s = read_vec(v, "size", where, false, box.size); !s) return s;
-  if (Status s = read_vec(v, "rotation", where, false, box.rotation); !s) return s;
-  if (Status s = read_vec(v, "velocity", where, true, box.velocity); !s) return s;
-  if (v.HasMember("ego_translation")) {
-    std::array<double, 3> ego{};  // read and checked like the devkit, then recomputed from the ego pose
-    if (Status s = read_vec(v, "ego_translation", where, false, ego); !s) return s;
+// The devkit's DetectionBox.deserialize + constructor asserts, plus Faultline's score rule.
+Status check_box(const std::array<FieldVal, kNumFields>& f, const std::string& where, EvalBox& box) {
+  if (f[kSampleToken].kind == FieldVal::kAbsent) return bad(where, "missing field 'sample_token'");
+  if (f[kSampleToken].kind != FieldVal::kString) return bad(where, "'sample_token' must be a string");
+  if (Status s = read_vec(f[kTranslation], "translation", where, false, box.translation); !s) return s;
+  if (Status s = read_vec(f[kSize], "size", where, false, box.size); !s) return s;
+  if (Status s = read_vec(f[kRotation], "rotation", where, false, box.rotation); !s) return s;
+  if (Status s = read_vec(f[kVelocity], "velocity", where, true, box.velocity); !s) return s;
+  if (f[kEgo].kind != FieldVal::kAbsent) {
+    std::array<double, 3> ego{};  // checked like the devkit, then recomputed from the ego pose
+    if (Status s = read_vec(f[kEgo], "ego_translation", where, false, ego); !s) return s;
   }
   box.num_pts = -1;
-  if (auto np = v.FindMember("num_pts"); np != v.MemberEnd()) {
-    if (!np->value.IsNumber() || !std::isfinite(np->value.GetDouble())) {
+  if (f[kNumPts].kind != FieldVal::kAbsent) {
+    if (f[kNumPts].kind != FieldVal::kNumber || !std::isfinite(f[kNumPts].num)) {
       return bad(where, "'num_pts' must be a finite number");
     }
-    box.num_pts = static_cast<std::int32_t>(np->value.IsInt() ? np->value.GetInt()
-                                                               : std::trunc(np->value.GetDouble()));
+    box.num_pts = static_cast<std::int32_t>(std::trunc(f[kNumPts].num));
   }
-  auto dn = v.FindMember("detection_name");
-  if (dn == v.MemberEnd()) return bad(where, "missing field 'detection_name'");
-  if (!dn->value.IsString()) return bad(where, "'detection_name' must be a string");
-  const std::string name(dn->value.GetString(), dn->value.GetStringLength());
-  auto cls = class_index(name);
+  if (f[kName].kind == FieldVal::kAbsent) return bad(where, "missing field 'detection_name'");
+  if (f[kName].kind != FieldVal::kString) return bad(where, "'detection_name' must be a string");
+  auto cls = class_index(f[kName].str);
   if (!cls) {
-    return bad(where, "Error: Unknown detection_name " + name +
+    return bad(where, "Error: Unknown detection_name " + f[kName].str +
                           " (expected one of the 10 nuScenes detection classes, case-sensitive)");
   }
   box.cls = static_cast<std::int8_t>(*cls);
-  auto ds = v.FindMember("detection_score");
-  if (ds == v.MemberEnd()) {
-    box.score = -1.0;  // devkit default; rejected below as negative
-  } else {
-    if (!ds->value.IsNumber()) return bad(where, "'detection_score' must be a number");
-    box.score = ds->value.GetDouble();
-  }
+  const bool has_score = f[kScore].kind != FieldVal::kAbsent;
+  if (has_score && f[kScore].kind != FieldVal::kNumber) return bad(where, "'detection_score' must be a number");
+  box.score = has_score ? f[kScore].num : -1.0;  // devkit default -1; rejected below
   if (std::isnan(box.score)) return bad(where, "'detection_score' is NaN");
-  auto an = v.FindMember("attribute_name");
-  if (an == v.MemberEnd()) return bad(where, "missing field 'attribute_name'");
-  if (!an->value.IsString()) return bad(where, "'attribute_name' must be a string");
-  const std::string attr(an->value.GetString(), an->value.GetStringLength());
-  auto ai = attribute_index(attr);
-  if (!ai) return bad(where, "Error: Unknown attribute_name " + attr + " (expected \"\" or one of the 8 attributes)");
+  if (f[kAttrName].kind == FieldVal::kAbsent) return bad(where, "missing field 'attribute_name'");
+  if (f[kAttrName].kind != FieldVal::kString) return bad(where, "'attribute_name' must be a string");
+  auto ai = attribute_index(f[kAttrName].str);
+  if (!ai) {
+    return bad(where, "Error: Unknown attribute_name " + f[kAttrName].str + " (expected \"\" or one of the 8 attributes)");
+  }
   box.attr = static_cast<std::int8_t>(*ai);
   // Faultline rule (the devkit can crash on these, spec §1): scores must be >= 0.
   if (box.score < 0.0) {
-    return bad(where, ds == v.MemberEnd()
-                          ? "missing 'detection_score' (the devkit would use -1, which can crash it)"
-                          : "negative 'detection_score' " + std::to_string(box.score) +
-                                " (scores must be >= 0; the devkit can crash on negative scores)");
+    return bad(where, has_score ? "negative 'detection_score' " + std::to_string(box.score) +
+                                      " (scores must be >= 0; the devkit can crash on negative scores)"
+                                : "missing 'detection_score' (the devkit would use -1, which can crash it)");
   }
   return Status::ok();
 }
 
-Status read_sample(const rapidjson::Value& list, const std::string& name, const std::string& key,
-                   Submission& sub) {
-  const std::string where0 = name + ": results['" + key + "']";
-  if (!list.IsArray()) return bad(where0, "must be a list of boxes");
-  std::vector<EvalBox> boxes;
-  boxes.reserve(list.Size());
-  std::string field;
-  for (rapidjson::SizeType i = 0; i < list.Size(); ++i) {
+using MetaWriter = rapidjson::Writer<rapidjson::StringBuffer, rapidjson::UTF8<>, rapidjson::UTF8<>,
+                                     rapidjson::CrtAllocator, rapidjson::kWriteNanAndInfFlag>;
+
+// SAX handler: top object -> "results" {token: [box...]} and "meta" (re-serialised), others skipped.
+class SubmissionHandler : public rapidjson::BaseReaderHandler<rapidjson::UTF8<>, SubmissionHandler> {
+ public:
+  SubmissionHandler(const std::string& name, const SubmissionScope& scope, Submission& sub)
+      : name_(name), scope_(scope), sub_(sub), meta_writer_(meta_buf_) {
+    if (!scope.predefined) wanted_.insert(scope.samples.begin(), scope.samples.end());
+  }
+
+  bool StartObject() { return open(true); }
+  bool EndObject(rapidjson::SizeType) { return close(true); }
+  bool StartArray() { return open(false); }
+  bool EndArray(rapidjson::SizeType) { return close(false); }
+  bool Key(const char* s, rapidjson::SizeType len, bool copy) {
+    if (meta_depth_ > 0) return meta_writer_.Key(s, len, copy);
+    if (skip_ > 0) return true;
+    const std::string_view k(s, len);
+    if (depth_ == 1) {
+      top_key_ = k == "results" ? kResults : (k == "meta" ? kMeta : kOtherTop);
+    } else if (depth_ == 2 && in_results_) {
+      sample_.assign(s, len);
+    } else if (depth_ == 4 && in_box_) {
+      field_ = -1;
+      for (int i = 0; i < kNumFields; ++i) {
+        if (k == kFieldNames[i]) field_ = i;
+      }
+    }
+    return true;
+  }
+  bool String(const char* s, rapidjson::SizeType len, bool copy) {
+    if (to_meta()) return meta_writer_.String(s, len, copy);
+    if (FieldVal* f = scalar_target()) {
+      if (depth_ == 4) {
+        f->kind = FieldVal::kString;
+        f->str.assign(s, len);
+      } else {
+        array_bad(*f);
+      }
+    }
+    return scalar_other();
+  }
+  bool Double(double v) { return number(v, false, [&](MetaWriter& w) { return w.Double(v); }); }
+  bool Int(int v) { return number(v, true, [&](MetaWriter& w) { return w.Int(v); }); }
+  bool Uint(unsigned v) { return number(v, true, [&](MetaWriter& w) { return w.Uint(v); }); }
+  bool Int64(std::int64_t v) {
+    return number(static_cast<double>(v), true, [&](MetaWriter& w) { return w.Int64(v); });
+  }
+  bool Uint64(std::uint64_t v) {
+    return number(static_cast<double>(v), true, [&](MetaWriter& w) { return w.Uint64(v); });
+  }
+  bool Bool(bool b) {
+    if (to_meta()) return meta_writer_.Bool(b);
+    other_scalar();
+    return scalar_other();
+  }
+  bool Null() {
+    if (to_meta()) return meta_writer_.Null();
+    other_scalar();
+    return scalar_other();
+  }
+
+  const Status& status() const { return status_; }
+  bool saw_results() const { return saw_results_; }
+  bool saw_meta() const { return saw_meta_; }
+  std::string meta_text() const { return meta_buf_.GetString(); }
+  // Custom split: per wanted sample, its boxes or its first error.
+  std::unordered_map<std::string, std::pair<std::vector<EvalBox>, Status>>& custom_samples() { return custom_; }
+  std::unordered_map<std::string, std::vector<std::string>>& custom_odd() { return custom_odd_; }
+
+ private:
+  enum TopKey { kNone, kResults, kMeta, kOtherTop };
+
+  bool fail(Status s) {
+    status_ = std::move(s);
+    return false;
+  }
+
+  bool open(bool object) {
+    if (meta_depth_ > 0 || (depth_ == 1 && top_key_ == kMeta && skip_ == 0)) {
+      if (meta_depth_ == 0) saw_meta_ = true;
+      ++meta_depth_;
+      ++depth_;
+      return object ? meta_writer_.StartObject() : meta_writer_.StartArray();
+    }
+    if (skip_ > 0) {
+      ++skip_;
+      return true;
+    }
+    switch (depth_) {
+      case 0:
+        if (!object) return fail(bad(name_, "the top level must be an object"));
+        break;
+      case 1:
+        if (top_key_ == kResults) {
+          saw_results_ = true;
+          if (!object) return fail(bad(name_, "'results' must be an object {sample_token: [boxes]}"));
+          in_results_ = true;
+        } else {
+          skip_ = 1;
+          return true;
+        }
+        break;
+      case 2:
+        if (!in_results_) break;
+        if (object) {
+          if (!sample_type_error()) return false;
+          skip_ = 1;
+          return true;
+        }
+        begin_sample();
+        break;
+      case 3:
+        if (!object) {
+          if (!box_type_error()) return false;
+          skip_ = 1;
+          return true;
+        }
+        begin_box();
+        break;
+      case 4:
+        if (in_box_ && field_ >= 0 && !object) {
+          FieldVal& f = fields_[static_cast<std::size_t>(field_)];
+          f.kind = FieldVal::kArray;
+          f.arr.clear();
+          f.arr_bad = -1;
+          ++depth_;
+          return true;
+        }
+        skip_ = 1;
+        if (in_box_ && field_ >= 0) fields_[static_cast<std::size_t>(field_)].kind = FieldVal::kOther;
+        return true;
+      default:  // nested container inside an array field
+        if (in_box_ && field_ >= 0) array_bad(fields_[static_cast<std::size_t>(field_)]);
+        skip_ = 1;
+        return true;
+    }
+    ++depth_;
+    return true;
+  }
+
+  bool close(bool object) {
+    if (meta_depth_ > 0) {
+      --meta_depth_;
+      --depth_;
+      return object ? meta_writer_.EndObject() : meta_writer_.EndArray();
+    }
+    if (skip_ > 0) {
+      --skip_;
+      return true;
+    }
+    --depth_;
+    if (depth_ == 3 && in_box_) return end_box();
+    if (depth_ == 2 && in_results_) return end_sample();
+    if (depth_ == 1 && in_results_) in_results_ = false;
+    return true;
+  }
+
+  template <typename F>
+  bool number(double v, bool is_int, F&& forward) {
+    if (to_meta()) return forward(meta_writer_);
+    if (FieldVal* f = scalar_target()) {
+      if (depth_ == 4) {
+        f->kind = FieldVal::kNumber;
+        f->num = v;
+        f->is_int = is_int;
+      } else {
+        f->arr.push_back(v);
+      }
+    }
+    return scalar_other();
+  }
+
+  // Events inside "meta", or a scalar "meta" value, go to the meta writer.
+  bool to_meta() {
+    if (meta_depth_ > 0) return true;
+    if (depth_ == 1 && top_key_ == kMeta && skip_ == 0) {
+      saw_meta_ = true;
+      return true;
+    }
+    return false;
+  }
+
+  void other_scalar() {
+    if (FieldVal* f = scalar_target()) {
+      if (depth_ == 4) {
+        f->kind = FieldVal::kOther;
+      } else {
+        array_bad(*f);
+      }
+    }
+  }
+
+  // Scalars where a container is required.
+  bool scalar_other() {
+    if (skip_ > 0) return true;
+    if (depth_ == 1 && top_key_ == kResults) {
+      saw_results_ = true;
+      return fail(bad(name_, "'results' must be an object {sample_token: [boxes]}"));
+    }
+    if (depth_ == 2 && in_results_) return sample_type_error();
+    if (depth_ == 3 && in_results_) return box_type_error();
+    return true;
+  }
+
+  FieldVal* scalar_target() {
+    if (skip_ > 0 || !in_box_ || field_ < 0) return nullptr;
+    if (depth_ != 4 && depth_ != 5) return nullptr;
+    return &fields_[static_cast<std::size_t>(field_)];
+  }
+  void array_bad(FieldVal& f) {
+    if (f.arr_bad < 0) f.arr_bad = static_cast<int>(f.arr.size());
+    f.arr.push_back(0);
+  }
+
+  bool keep_sample() const { return scope_.predefined || wanted_.count(sample_) > 0; }
+
+  bool sample_type_error() {
+    if (!keep_sample()) return true;
+    Status s = bad(name_ + ": results['" + sample_ + "']", "must be a list of boxes");
+    if (scope_.predefined) return fail(s);
+    custom_[sample_].second = s;
+    return true;
+  }
+  bool box_type_error() {
+    if (!keep_sample()) {
+      ++box_index_;
+      return true;
+    }
+    Status s = bad(name_ + ": results['" + sample_ + "'][" + std::to_string(box_index_++) + "]",
+                   "a box must be an object");
+    if (scope_.predefined) return fail(s);
+    auto& slot = custom_[sample_];
+    if (slot.second.is_ok()) slot.second = s;
+    return true;
+  }
+
+  void begin_sample() {
+    box_index_ = 0;
+    boxes_.clear();
+    odd_.clear();
+    sample_error_ = Status::ok();
+    if (scope_.predefined && !seen_.insert(sample_).second) {
+      status_ = bad(name_, "results: duplicate sample token '" + sample_ + "'");
+    }
+  }
+  bool end_sample() {
+    if (!status_.is_ok()) return false;
+    if (scope_.predefined) {
+      sub_.boxes.sample_tokens.push_back(sample_);
+      sub_.boxes.boxes.push_back(std::move(boxes_));
+      for (auto& o : odd_) sub_.odd_sample_fields.push_back(std::move(o));
+    } else if (wanted_.count(sample_)) {
+      auto& slot = custom_[sample_];
+      if (slot.second.is_ok()) slot.second = sample_error_;
+      slot.first = std::move(boxes_);
+      custom_odd_[sample_] = std::move(odd_);
+    }
+    boxes_ = {};
+    odd_ = {};
+    return true;
+  }
+  void begin_box() {
+    in_box_ = true;
+    field_ = -1;
+    for (auto& f : fields_) f.kind = FieldVal::kAbsent;
+  }
+  bool end_box() {
+    in_box_ = false;
+    const int index = box_index_++;
+    if (!keep_sample() || !sample_error_.is_ok()) return true;
     EvalBox box;
-    const std::string where = where0 + "[" + std::to_string(i) + "]";
-    if (Status s = read_box(list[i], key, where, box, field); !s) return s;
-    if (field == key) {
+    Status s = check_box(fields_, name_ + ": results['" + sample_ + "'][" + std::to_string(index) + "]", box);
+    if (!s) {
+      if (scope_.predefined) return fail(s);
+      sample_error_ = s;
+      return true;
+    }
+    const std::string& field = fields_[kSampleToken].str;
+    if (field == sample_) {
       box.match_sample = kMatchSampleIsKey;
     } else {
-      box.match_sample = static_cast<std::int32_t>(sub.odd_sample_fields.size());
-      sub.odd_sample_fields.push_back(field);
+      // Index into the per-sample odd list; rebased when the sample is appended.
+      box.match_sample = static_cast<std::int32_t>(sub_.odd_sample_fields.size() + odd_.size());
+      odd_.push_back(field);
     }
-    boxes.push_back(box);
+    boxes_.push_back(box);
+    return true;
   }
-  sub.boxes.sample_tokens.push_back(key);
-  sub.boxes.boxes.push_back(std::move(boxes));
-  return Status::ok();
+
+  const std::string& name_;
+  const SubmissionScope& scope_;
+  Submission& sub_;
+  std::unordered_set<std::string> wanted_, seen_;
+  rapidjson::StringBuffer meta_buf_;
+  MetaWriter meta_writer_;
+  int meta_depth_ = 0;
+  int depth_ = 0;
+  int skip_ = 0;
+  TopKey top_key_ = kNone;
+  bool in_results_ = false, in_box_ = false, saw_results_ = false, saw_meta_ = false;
+  std::string sample_;
+  int field_ = -1;
+  int box_index_ = 0;
+  std::array<FieldVal, kNumFields> fields_;
+  std::vector<EvalBox> boxes_;
+  std::vector<std::string> odd_;
+  Status sample_error_;
+  Status status_;
+  std::unordered_map<std::string, std::pair<std::vector<EvalBox>, Status>> custom_;
+  std::unordered_map<std::string, std::vector<std::string>> custom_odd_;
+};
+
+template <typename Stream>
+Result<Submission> parse_stream(Stream& stream, const std::string& name, const SubmissionScope& scope,
+                                const std::string* text) {
+  Submission sub;
+  SubmissionHandler handler(name, scope, sub);
+  rapidjson::Reader reader;
+  auto res = reader.Parse<kParseFlags>(stream, handler);
+  if (!handler.status().is_ok()) return handler.status();
+  if (res.IsError()) {
+    const std::string where = text ? describe_offset(*text, res.Offset()) : "offset " + std::to_string(res.Offset());
+    return Status(StatusCode::kCorruptData,
+                  name + ": malformed JSON at " + where + ": " + rapidjson::GetParseError_En(res.Code()));
+  }
+  if (!handler.saw_results()) return bad(name, "Error: No field `results` in result file");
+  if (!scope.predefined) {
+    for (const auto& token : scope.samples) {
+      auto it = handler.custom_samples().find(token);
+      if (it == handler.custom_samples().end()) {
+        return bad(name, "results: sample " + token + " of the split is missing (devkit: KeyError)");
+      }
+      if (!it->second.second.is_ok()) return it->second.second;
+      auto& boxes = it->second.first;
+      auto& odd = handler.custom_odd()[token];
+      // Rebase odd-field indices onto the global list.
+      std::size_t local = 0;
+      for (EvalBox& b : boxes) {
+        if (b.match_sample != kMatchSampleIsKey) {
+          b.match_sample = static_cast<std::int32_t>(sub.odd_sample_fields.size());
+          sub.odd_sample_fields.push_back(odd[local++]);
+        }
+      }
+      sub.boxes.sample_tokens.push_back(token);
+      sub.boxes.boxes.push_back(std::move(boxes));
+    }
+  }
+  sub.samples_in_file = scope.predefined ? sub.boxes.sample_tokens.size() : handler.custom_samples().size();
+  if (!handler.saw_meta()) return bad(name, "missing field 'meta' (devkit: KeyError 'meta')");
+  sub.meta = std::make_shared<rapidjson::Document>();
+  const std::string meta = handler.meta_text();
+  sub.meta->Parse<kParseFlags>(meta.c_str(), meta.size());
+  if (sub.meta->HasParseError()) return bad(name, "'meta' could not be copied");
+  for (std::size_t i = 0; i < sub.boxes.sample_tokens.size(); ++i) {
+    if (sub.boxes.boxes[i].size() > static_cast<std::size_t>(kMaxBoxesPerSample)) {
+      return bad(name + ": results['" + sub.boxes.sample_tokens[i] + "']",
+                 "Error: Only <= 500 boxes per sample allowed! (found " +
+                     std::to_string(sub.boxes.boxes[i].size()) + ")");
+    }
+  }
+  return sub;
 }
 
 }  // namespace
@@ -141,58 +491,27 @@ std::string describe_offset(const std::string& text, std::size_t offset) {
 
 Result<Submission> parse_submission(const std::string& text, const std::string& name,
                                     const SubmissionScope& scope) {
-  rapidjson::Document doc;
-  doc.Parse<kParseFlags>(text.c_str(), text.size());
-  if (doc.HasParseError()) {
-    return Status(StatusCode::kCorruptData,
-                  name + ": malformed JSON at " + describe_offset(text, doc.GetErrorOffset()) + ": " +
-                      rapidjson::GetParseError_En(doc.GetParseError()));
-  }
-  if (!doc.IsObject()) return bad(name, "the top level must be an object");
-  auto res = doc.FindMember("results");
-  if (res == doc.MemberEnd()) return bad(name, "Error: No field `results` in result file");
-  if (!res->value.IsObject()) return bad(name, "'results' must be an object {sample_token: [boxes]}");
-  Submission sub;
-  sub.samples_in_file = res->value.MemberCount();
-  if (scope.predefined) {
-    std::unordered_map<std::string, int> seen;
-    for (const auto& m : res->value.GetObject()) {
-      const std::string key(m.name.GetString(), m.name.GetStringLength());
-      if (!seen.emplace(key, 0).second) return bad(name, "results: duplicate sample token '" + key + "'");
-      if (Status s = read_sample(m.value, name, key, sub); !s) return s;
-    }
-  } else {
-    for (const auto& token : scope.samples) {
-      auto it = res->value.FindMember(rapidjson::StringRef(token.c_str(), token.size()));
-      if (it == res->value.MemberEnd()) {
-        return bad(name, "results: sample " + token + " of the split is missing (devkit: KeyError)");
-      }
-      if (Status s = read_sample(it->value, name, token, sub); !s) return s;
-    }
-  }
-  auto meta = doc.FindMember("meta");
-  if (meta == doc.MemberEnd()) return bad(name, "missing field 'meta' (devkit: KeyError 'meta')");
-  sub.meta = std::make_shared<rapidjson::Document>();
-  sub.meta->CopyFrom(meta->value, sub.meta->GetAllocator());
-  for (std::size_t i = 0; i < sub.boxes.sample_tokens.size(); ++i) {
-    if (sub.boxes.boxes[i].size() > static_cast<std::size_t>(kMaxBoxesPerSample)) {
-      return bad(name + ": results['" + sub.boxes.sample_tokens[i] + "']",
-                 "Error: Only <= 500 boxes per sample allowed! (found " +
-                     std::to_string(sub.boxes.boxes[i].size()) + ")");
-    }
-  }
-  return sub;
+  rapidjson::MemoryStream ms(text.data(), text.size());
+  return parse_stream(ms, name, scope, &text);
 }
 
 Result<Submission> read_submission(const std::string& path, const SubmissionScope& scope) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) return Status(StatusCode::kNotFound, path + ": cannot open results file");
-  std::string text;
-  in.seekg(0, std::ios::end);
-  text.resize(static_cast<std::size_t>(in.tellg()));
-  in.seekg(0);
-  in.read(text.data(), static_cast<std::streamsize>(text.size()));
-  return parse_submission(text, path, scope);
+  std::unique_ptr<std::FILE, int (*)(std::FILE*)> fp(std::fopen(path.c_str(), "rb"), &std::fclose);
+  if (!fp) return Status(StatusCode::kNotFound, path + ": cannot open results file");
+  std::vector<char> buf(1 << 16);
+  rapidjson::FileReadStream fs(fp.get(), buf.data(), buf.size());
+  auto r = parse_stream(fs, path, scope, nullptr);
+  if (!r && r.status().code() == StatusCode::kCorruptData &&
+      r.status().message().find("malformed JSON") != std::string::npos) {
+    // Re-read to give line and column of the syntax error.
+    std::rewind(fp.get());
+    std::string text;
+    char chunk[1 << 16];
+    std::size_t n;
+    while ((n = std::fread(chunk, 1, sizeof chunk, fp.get())) > 0) text.append(chunk, n);
+    return parse_submission(text, path, scope);
+  }
+  return r;
 }
 
 }  // namespace faultline::scoring

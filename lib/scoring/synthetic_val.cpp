@@ -1,0 +1,288 @@
+// Synthetic val-sized tables and submission, written with stdio for speed.
+#include "scoring/synthetic_val.hpp"
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+#include <random>
+#include <vector>
+
+#include "scoring/detection_config.hpp"
+#include "scoring/splits.hpp"
+
+namespace faultline::scoring {
+namespace {
+
+using File = std::unique_ptr<std::FILE, int (*)(std::FILE*)>;
+
+class Tokens {
+ public:
+  explicit Tokens(std::uint64_t seed) : state_(seed) {}
+  std::string next() {
+    char b[40];
+    std::snprintf(b, sizeof b, "%016llx%016llx", static_cast<unsigned long long>(mix()),
+                  static_cast<unsigned long long>(mix()));
+    return b;
+  }
+
+ private:
+  std::uint64_t mix() {
+    std::uint64_t z = (state_ += 0x9e3779b97f4a7c15ULL);
+    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
+    z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
+    return z ^ (z >> 31);
+  }
+  std::uint64_t state_;
+};
+
+// Writes a JSON array record by record ("[", ",\n", "]").
+class ArrayWriter {
+ public:
+  ArrayWriter(const std::string& path) : f_(std::fopen(path.c_str(), "wb"), &std::fclose) {
+    if (f_) std::fputs("[\n", f_.get());
+  }
+  bool ok() const { return static_cast<bool>(f_); }
+  std::FILE* next() {
+    if (count_++) std::fputs(",\n", f_.get());
+    return f_.get();
+  }
+  ~ArrayWriter() {
+    if (f_) std::fputs("\n]\n", f_.get());
+  }
+
+ private:
+  File f_;
+  std::size_t count_ = 0;
+};
+
+struct Category {
+  const char* name;
+  int cls;  // -1 for non-detection categories
+  double w, l, h;
+};
+
+const Category kCategories[] = {
+    {"vehicle.car", 0, 1.9, 4.6, 1.7},          {"vehicle.truck", 1, 2.5, 7.5, 3.0},
+    {"vehicle.bus.rigid", 2, 2.9, 11.0, 3.4},   {"vehicle.trailer", 3, 2.8, 10.0, 3.8},
+    {"vehicle.construction", 4, 2.8, 6.5, 3.2}, {"human.pedestrian.adult", 5, 0.7, 0.7, 1.75},
+    {"vehicle.motorcycle", 6, 0.8, 2.1, 1.5},   {"vehicle.bicycle", 7, 0.6, 1.7, 1.3},
+    {"movable_object.trafficcone", 8, 0.4, 0.4, 1.0}, {"movable_object.barrier", 9, 2.1, 0.5, 1.0},
+    {"static_object.bicycle_rack", -1, 2.0, 6.0, 1.2}, {"animal", -1, 0.4, 0.8, 0.6}};
+// Relative frequency of each category among the objects.
+const double kWeights[] = {30, 6, 2, 2, 2, 20, 3, 3, 14, 14, 1, 1};
+
+int attribute_for(int cls, std::mt19937_64& rng) {
+  std::uniform_int_distribution<int> pick(0, 2);
+  if (cls <= 4) return 5 + pick(rng);                  // vehicle.*
+  if (cls == 5) return pick(rng);                      // pedestrian.*
+  if (cls == 6 || cls == 7) return 3 + pick(rng) % 2;  // cycle.*
+  return -1;
+}
+
+}  // namespace
+
+Result<SyntheticValStats> write_synthetic_val(const std::string& dir, const SyntheticValConfig& cfg) {
+  auto scenes_r = predefined_split_scenes("val", "v1.0-trainval");
+  if (!scenes_r) return scenes_r.status();
+  const auto& scene_names = *scenes_r;
+  const std::string tdir = dir + "/v1.0-trainval";
+  std::error_code ec;
+  std::filesystem::create_directories(tdir, ec);
+  if (ec) return Status(StatusCode::kIoError, tdir + ": " + ec.message());
+  std::mt19937_64 rng(cfg.seed);
+  Tokens tok(cfg.seed * 31 + 7);
+  std::normal_distribution<double> gauss(0.0, 1.0);
+  std::uniform_real_distribution<double> unif(0.0, 1.0);
+  std::discrete_distribution<int> pick_cat(std::begin(kWeights), std::end(kWeights));
+
+  // Small tables.
+  std::vector<std::string> cat_tokens, attr_tokens;
+  {
+    ArrayWriter w(tdir + "/category.json");
+    if (!w.ok()) return Status(StatusCode::kIoError, tdir + "/category.json: cannot write");
+    for (const auto& c : kCategories) {
+      cat_tokens.push_back(tok.next());
+      std::fprintf(w.next(), "{\"token\": \"%s\", \"name\": \"%s\", \"description\": \"synthetic\"}",
+                   cat_tokens.back().c_str(), c.name);
+    }
+  }
+  {
+    ArrayWriter w(tdir + "/attribute.json");
+    for (const char* a : kAttributeNames) {
+      attr_tokens.push_back(tok.next());
+      std::fprintf(w.next(), "{\"token\": \"%s\", \"name\": \"%s\", \"description\": \"synthetic\"}",
+                   attr_tokens.back().c_str(), a);
+    }
+  }
+  {
+    ArrayWriter w(tdir + "/visibility.json");
+    for (int v = 1; v <= 4; ++v) {
+      std::fprintf(w.next(), "{\"token\": \"%d\", \"level\": \"v%d\", \"description\": \"synthetic\"}", v, v);
+    }
+  }
+  const char* channels[] = {"CAM_FRONT", "CAM_FRONT_RIGHT", "CAM_FRONT_LEFT", "CAM_BACK", "CAM_BACK_LEFT",
+                            "CAM_BACK_RIGHT", "LIDAR_TOP", "RADAR_FRONT", "RADAR_FRONT_LEFT",
+                            "RADAR_FRONT_RIGHT", "RADAR_BACK_LEFT", "RADAR_BACK_RIGHT"};
+  std::string lidar_sensor;
+  {
+    ArrayWriter w(tdir + "/sensor.json");
+    for (const char* ch : channels) {
+      const std::string t = tok.next();
+      if (std::string(ch) == "LIDAR_TOP") lidar_sensor = t;
+      const char* mod = ch[0] == 'C' ? "camera" : (ch[0] == 'L' ? "lidar" : "radar");
+      std::fprintf(w.next(), "{\"token\": \"%s\", \"channel\": \"%s\", \"modality\": \"%s\"}", t.c_str(), ch, mod);
+    }
+  }
+  const int n_scenes = static_cast<int>(scene_names.size());
+  SyntheticValStats stats;
+  stats.scenes = n_scenes;
+
+  ArrayWriter scene_w(tdir + "/scene.json"), log_w(tdir + "/log.json"), calib_w(tdir + "/calibrated_sensor.json"),
+      sample_w(tdir + "/sample.json"), sd_w(tdir + "/sample_data.json"), pose_w(tdir + "/ego_pose.json"),
+      inst_w(tdir + "/instance.json"), ann_w(tdir + "/sample_annotation.json");
+  File res(std::fopen((dir + "/results.json").c_str(), "wb"), &std::fclose);
+  if (!ann_w.ok() || !res) return Status(StatusCode::kIoError, dir + ": cannot write the tables");
+  std::fputs("{\"meta\": {\"use_camera\": true, \"use_lidar\": false, \"use_radar\": false, \"use_map\": false, "
+             "\"use_external\": false}, \"results\": {\n", res.get());
+  std::vector<std::string> log_tokens;
+  std::size_t results_written = 0;
+  for (int s = 0; s < n_scenes; ++s) {
+    const int n_samples = cfg.samples / n_scenes + (s < cfg.samples % n_scenes ? 1 : 0);
+    const std::string scene_tok = tok.next(), log_tok = tok.next(), calib_tok = tok.next();
+    log_tokens.push_back(log_tok);
+    std::vector<std::string> sample_toks(static_cast<std::size_t>(n_samples));
+    for (auto& t : sample_toks) t = tok.next();
+    std::fprintf(log_w.next(),
+                 "{\"token\": \"%s\", \"logfile\": \"n000-synthetic-%03d\", \"vehicle\": \"n000\", "
+                 "\"date_captured\": \"2018-08-01\", \"location\": \"boston-seaport\"}",
+                 log_tok.c_str(), s);
+    std::fprintf(scene_w.next(),
+                 "{\"token\": \"%s\", \"log_token\": \"%s\", \"nbr_samples\": %d, \"first_sample_token\": \"%s\", "
+                 "\"last_sample_token\": \"%s\", \"name\": \"%s\", \"description\": \"synthetic val scene\"}",
+                 scene_tok.c_str(), log_tok.c_str(), n_samples, sample_toks.front().c_str(),
+                 sample_toks.back().c_str(), scene_names[static_cast<std::size_t>(s)].c_str());
+    std::fprintf(calib_w.next(),
+                 "{\"token\": \"%s\", \"sensor_token\": \"%s\", \"translation\": [0.94, 0.0, 1.84], "
+                 "\"rotation\": [0.7071, 0.0, 0.0, -0.7071], \"camera_intrinsic\": []}",
+                 calib_tok.c_str(), lidar_sensor.c_str());
+    // Ego drives straight along a random heading at a random speed.
+    const double ex0 = 300 + 2000 * unif(rng), ey0 = 300 + 2000 * unif(rng), heading = 2 * M_PI * unif(rng);
+    const double speed = 8 * unif(rng);
+    const long long t0 = 1533000000000000LL + static_cast<long long>(s) * 100000000LL;
+    std::vector<long long> ts(static_cast<std::size_t>(n_samples));
+    std::vector<std::array<double, 2>> ego(static_cast<std::size_t>(n_samples));
+    for (int k = 0; k < n_samples; ++k) {
+      const auto uk = static_cast<std::size_t>(k);
+      ts[uk] = t0 + static_cast<long long>(k) * 500000LL + static_cast<long long>(unif(rng) * 4000);
+      const double d = speed * 0.5 * k;
+      ego[uk] = {ex0 + d * std::cos(heading), ey0 + d * std::sin(heading)};
+      const std::string sd = tok.next(), pose = tok.next();
+      std::fprintf(sample_w.next(),
+                   "{\"token\": \"%s\", \"timestamp\": %lld, \"prev\": \"%s\", \"next\": \"%s\", \"scene_token\": \"%s\"}",
+                   sample_toks[uk].c_str(), ts[uk], k ? sample_toks[uk - 1].c_str() : "",
+                   k + 1 < n_samples ? sample_toks[uk + 1].c_str() : "", scene_tok.c_str());
+      std::fprintf(pose_w.next(),
+                   "{\"token\": \"%s\", \"timestamp\": %lld, \"rotation\": [%.9f, 0.0, 0.0, %.9f], "
+                   "\"translation\": [%.6f, %.6f, 0.0]}",
+                   pose.c_str(), ts[uk], std::cos(heading / 2), std::sin(heading / 2), ego[uk][0], ego[uk][1]);
+      std::fprintf(sd_w.next(),
+                   "{\"token\": \"%s\", \"sample_token\": \"%s\", \"ego_pose_token\": \"%s\", "
+                   "\"calibrated_sensor_token\": \"%s\", \"timestamp\": %lld, \"fileformat\": \"pcd\", "
+                   "\"is_key_frame\": true, \"height\": 0, \"width\": 0, \"filename\": "
+                   "\"samples/LIDAR_TOP/n000-synthetic-%03d__LIDAR_TOP__%lld.pcd.bin\", \"prev\": \"\", \"next\": \"\"}",
+                   sd.c_str(), sample_toks[uk].c_str(), pose.c_str(), calib_tok.c_str(), ts[uk], s, ts[uk]);
+    }
+    // Objects: each is annotated in every sample of the scene.
+    struct Obj {
+      int cat;
+      double x0, y0, vx, vy, yaw, w, l, h;
+      int attr;
+      std::string inst;
+      std::vector<std::string> anns;
+    };
+    std::vector<Obj> objs(static_cast<std::size_t>(cfg.objects_per_scene));
+    const double mid = speed * 0.5 * (n_samples - 1) / 2;
+    for (auto& o : objs) {
+      o.cat = pick_cat(rng);
+      const Category& c = kCategories[o.cat];
+      const double r = 5 + 40 * std::sqrt(unif(rng)), a = 2 * M_PI * unif(rng);
+      o.x0 = ex0 + mid * std::cos(heading) + r * std::cos(a);
+      o.y0 = ey0 + mid * std::sin(heading) + r * std::sin(a);
+      const bool moving = c.cls >= 0 && c.cls <= 7 && unif(rng) < 0.4;
+      o.yaw = 2 * M_PI * unif(rng) - M_PI;
+      const double v = moving ? (c.cls == 5 ? 1.4 : 6.0) * unif(rng) : 0.0;
+      o.vx = v * std::cos(o.yaw);
+      o.vy = v * std::sin(o.yaw);
+      o.w = c.w * (0.9 + 0.2 * unif(rng));
+      o.l = c.l * (0.9 + 0.2 * unif(rng));
+      o.h = c.h * (0.9 + 0.2 * unif(rng));
+      o.attr = c.cls >= 0 ? attribute_for(c.cls, rng) : -1;
+      o.anns.resize(static_cast<std::size_t>(n_samples));
+      for (auto& t : o.anns) t = tok.next();
+      o.inst = tok.next();
+      std::fprintf(inst_w.next(),
+                   "{\"token\": \"%s\", \"category_token\": \"%s\", \"nbr_annotations\": %d, "
+                   "\"first_annotation_token\": \"%s\", \"last_annotation_token\": \"%s\"}",
+                   o.inst.c_str(), cat_tokens[static_cast<std::size_t>(o.cat)].c_str(), n_samples,
+                   o.anns.front().c_str(), o.anns.back().c_str());
+    }
+    for (int k = 0; k < n_samples; ++k) {
+      const auto uk = static_cast<std::size_t>(k);
+      std::fprintf(res.get(), "%s\"%s\": [", results_written++ ? ",\n" : "", sample_toks[uk].c_str());
+      int boxes_in_sample = 0;
+      auto emit_pred = [&](int cls, double x, double y, double z, double w, double l, double h, double yaw,
+                           double vx, double vy, int attr, double score) {
+        std::fprintf(res.get(),
+                     "%s{\"sample_token\": \"%s\", \"translation\": [%.4f, %.4f, %.4f], \"size\": [%.3f, %.3f, %.3f], "
+                     "\"rotation\": [%.6f, 0.0, 0.0, %.6f], \"velocity\": [%.3f, %.3f], \"detection_name\": \"%s\", "
+                     "\"detection_score\": %.5f, \"attribute_name\": \"%s\"}",
+                     boxes_in_sample++ ? ", " : "", sample_toks[uk].c_str(), x, y, z, w, l, h, std::cos(yaw / 2),
+                     std::sin(yaw / 2), vx, vy, kClassNames[static_cast<std::size_t>(cls)], score,
+                     attr >= 0 ? kAttributeNames[static_cast<std::size_t>(attr)] : "");
+        ++stats.predictions;
+      };
+      for (auto& o : objs) {
+        const Category& c = kCategories[o.cat];
+        const double t = 0.5 * k;
+        const double x = o.x0 + o.vx * t, y = o.y0 + o.vy * t, z = o.h / 2;
+        const int lidar = unif(rng) < 0.04 ? 0 : 1 + static_cast<int>(200 * unif(rng));
+        std::fprintf(ann_w.next(),
+                     "{\"token\": \"%s\", \"sample_token\": \"%s\", \"instance_token\": \"%s\", "
+                     "\"visibility_token\": \"4\", \"attribute_tokens\": [%s%s%s], \"translation\": [%.6f, %.6f, %.6f], "
+                     "\"size\": [%.3f, %.3f, %.3f], \"rotation\": [%.9f, 0.0, 0.0, %.9f], \"prev\": \"%s\", "
+                     "\"next\": \"%s\", \"num_lidar_pts\": %d, \"num_radar_pts\": %d}",
+                     o.anns[uk].c_str(), sample_toks[uk].c_str(), o.inst.c_str(), o.attr >= 0 ? "\"" : "",
+                     o.attr >= 0 ? attr_tokens[static_cast<std::size_t>(o.attr)].c_str() : "", o.attr >= 0 ? "\"" : "",
+                     x, y, z, o.w, o.l, o.h, std::cos(o.yaw / 2), std::sin(o.yaw / 2), k ? o.anns[uk - 1].c_str() : "",
+                     k + 1 < n_samples ? o.anns[uk + 1].c_str() : "", lidar, static_cast<int>(5 * unif(rng)));
+        ++stats.annotations;
+        if (c.cls < 0 || unif(rng) > cfg.detection_rate) continue;
+        const double noise = 0.3 + 0.5 * unif(rng);
+        emit_pred(c.cls, x + noise * gauss(rng), y + noise * gauss(rng), z + 0.1 * gauss(rng),
+                  o.w * (1 + 0.05 * gauss(rng)), o.l * (1 + 0.05 * gauss(rng)), o.h * (1 + 0.05 * gauss(rng)),
+                  o.yaw + 0.15 * gauss(rng), o.vx + 0.5 * gauss(rng), o.vy + 0.5 * gauss(rng),
+                  unif(rng) < 0.9 ? o.attr : attribute_for(c.cls, rng), 0.3 + 0.7 * unif(rng) / (1 + noise));
+      }
+      for (int f = 0; f < cfg.false_positives; ++f) {
+        const int cls = static_cast<int>(unif(rng) * kNumClasses) % kNumClasses;
+        const double r = 45 * std::sqrt(unif(rng)), a = 2 * M_PI * unif(rng);
+        emit_pred(cls, ego[uk][0] + r * std::cos(a), ego[uk][1] + r * std::sin(a), 1.0, 2, 4, 1.6, a, 0, 0,
+                  attribute_for(cls, rng), 0.4 * unif(rng));
+      }
+      std::fputs("]", res.get());
+    }
+    stats.samples += n_samples;
+  }
+  std::fputs("\n}}\n", res.get());
+  {
+    ArrayWriter w(tdir + "/map.json");
+    std::string logs;
+    for (std::size_t i = 0; i < log_tokens.size(); ++i) logs += (i ? ", \"" : "\"") + log_tokens[i] + "\"";
+    std::fprintf(w.next(), "{\"token\": \"%s\", \"log_tokens\": [%s], \"category\": \"semantic_prior\", "
+                           "\"filename\": \"maps/synthetic.png\"}", tok.next().c_str(), logs.c_str());
+  }
+  return stats;
+}
+
+}  // namespace faultline::scoring
