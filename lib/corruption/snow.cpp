@@ -7,6 +7,8 @@
 #include <cstdint>
 #include <vector>
 
+#include <opencv2/core.hpp>
+
 #include "corruption/motion_blur.hpp"
 
 namespace faultline::corruption {
@@ -163,6 +165,12 @@ cv::Mat snow_layer_fast(const cv::Mat& crop_field, int rows, int cols, int sever
 }
 
 cv::Mat snow_blend_fast(const cv::Mat& bgr, const cv::Mat& layer_u8, int severity) {
+  cv::Mat rot;
+  cv::flip(layer_u8, rot, -1);
+  return snow_blend_fast(bgr, layer_u8, rot, severity);
+}
+
+cv::Mat snow_blend_fast(const cv::Mat& bgr, const cv::Mat& layer_u8, const cv::Mat& layer_rot_u8, int severity) {
   const SnowParams p = snow_params(severity);
   const float b = static_cast<float>(p.blend);
   const float one_minus_b = static_cast<float>(1.0 - p.blend);
@@ -172,12 +180,12 @@ cv::Mat snow_blend_fast(const cv::Mat& bgr, const cv::Mat& layer_u8, int severit
   for (int y = 0; y < rows; ++y) {
     const std::uint8_t* src = bgr.ptr<std::uint8_t>(y);
     const std::uint8_t* l = layer_u8.ptr<std::uint8_t>(y);
-    const std::uint8_t* lr = layer_u8.ptr<std::uint8_t>(rows - 1 - y);
+    const std::uint8_t* lr = layer_rot_u8.ptr<std::uint8_t>(y);
     std::uint8_t* dst = out.ptr<std::uint8_t>(y);
     for (int x = 0; x < cols; ++x) {
       const float c0 = src[3 * x], c1 = src[3 * x + 1], c2 = src[3 * x + 2];
       const float bright = (0.299f * c0 + 0.587f * c1 + 0.114f * c2) * 1.5f + 127.5f;
-      const float snow = static_cast<float>(l[x] + lr[cols - 1 - x]);
+      const float snow = static_cast<float>(l[x] + lr[x]);
       const float ch[3] = {c0, c1, c2};
       for (int k = 0; k < 3; ++k) {
         const float v = b * ch[k] + one_minus_b * std::max(ch[k], bright) + snow;

@@ -38,5 +38,7 @@ cv::Mat snow_fast(const cv::Mat& bgr, int severity, rng::FastRng& rng);
 // Fast layer from a crop-sized CV_32F field (rows x cols is the image size).
 cv::Mat snow_layer_fast(const cv::Mat& crop_field, int rows, int cols, int severity, double blur_angle_deg);
 cv::Mat snow_blend_fast(const cv::Mat& bgr, const cv::Mat& layer_u8, int severity);
+// Same with the second, 180°-rotated copy given explicitly (so a moving layer can move both copies together).
+cv::Mat snow_blend_fast(const cv::Mat& bgr, const cv::Mat& layer_u8, const cv::Mat& layer_rot_u8, int severity);
 
 }  // namespace faultline::corruption

@@ -1,0 +1,55 @@
+// Temporal coherence for streaming (none of the references has it): one small stateful object per camera keeps a
+// fault consistent across that camera's frames instead of redrawing it every frame.
+// - Fog: one toroidal plasma field per camera (quarter resolution), drifting by `fog_drift_px` per frame in a
+//   direction drawn once.
+// - Snow: one snow layer per camera, falling along its streak direction by `snow_fall_px` per frame (wrapping).
+// - Motion Blur: the angle follows a mean-reverting random walk (step sd `angle_step_deg`) kept in [-45°, 45°].
+// - Dark: the tone curve is fixed by the severity; the sensor noise is redrawn each frame (it is temporally white).
+// - Bright, Color Quant: deterministic, identical every frame.
+// Fast-mode generators throughout. Same config + same frames -> same outputs. Not thread-safe; one per camera.
+#pragma once
+
+#include <cstdint>
+
+#include <opencv2/core.hpp>
+
+#include "common/status.hpp"
+#include "corruption/types.hpp"
+#include "rng/fast_rng.hpp"
+
+namespace faultline::corruption {
+
+struct CoherentConfig {
+  Corruption type = Corruption::Fog;
+  int severity = 1;            // 0 = off, 1..5
+  std::uint64_t seed = 0;      // per camera: derive distinct seeds for distinct cameras
+  double fog_drift_px = 1.5;   // pixels per frame the fog field moves
+  double snow_fall_px = 8.0;   // pixels per frame the snow layer moves along its streak
+  double angle_step_deg = 1.0; // sd of the per-frame motion-blur angle change
+};
+
+class CoherentCorruptor {
+ public:
+  explicit CoherentCorruptor(const CoherentConfig& config);
+
+  // Corrupts the next frame of this camera (CV_8UC3 BGR). A change of frame size restarts the persistent state.
+  Result<cv::Mat> apply(const cv::Mat& bgr);
+
+  std::int64_t frames() const { return frames_; }
+  double angle_deg() const { return angle_deg_; }  // Motion Blur's current angle (or Snow's streak angle)
+
+ private:
+  void reset_state(cv::Size size);
+
+  CoherentConfig config_;
+  rng::FastRng rng_;
+  std::int64_t frames_ = 0;
+  cv::Size size_;
+  cv::Mat fog_low_;      // CV_64F toroidal plasma map (quarter resolution)
+  int fog_factor_ = 1;   // upsampling factor of fog_low_
+  double fog_dir_y_ = 0, fog_dir_x_ = 0;
+  cv::Mat snow_layer_;   // CV_8U H x W
+  double angle_deg_ = 0;
+};
+
+}  // namespace faultline::corruption

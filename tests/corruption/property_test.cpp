@@ -1,0 +1,207 @@
+// Invariant battery over every corruption x severity 0..5 x mode: shape/type kept, deterministic per seed,
+// severity 0 is the identity and draws nothing, bounds per corruption; plus degenerate frames.
+#include <gtest/gtest.h>
+
+#include <string>
+#include <tuple>
+
+#include "corruption/color_quant.hpp"
+#include "corruption/corrupt.hpp"
+#include "corruption/test_images.hpp"
+
+namespace faultline::corruption {
+namespace {
+
+using Param = std::tuple<Corruption, int, RngMode>;
+
+cv::Mat run(const cv::Mat& in, Corruption c, int sev, RngMode mode, std::uint32_t seed) {
+  if (mode == RngMode::Numpy) {
+    rng::NumpyRandomState rng(seed);
+    auto r = corrupt(in, c, sev, rng);
+    EXPECT_TRUE(r.is_ok()) << r.status().to_string();
+    return r.is_ok() ? *r : cv::Mat();
+  }
+  rng::FastRng rng(seed);
+  auto r = corrupt(in, c, sev, rng);
+  EXPECT_TRUE(r.is_ok()) << r.status().to_string();
+  return r.is_ok() ? *r : cv::Mat();
+}
+
+class CorruptionPropertyTest : public ::testing::TestWithParam<Param> {
+ protected:
+  Corruption type() const { return std::get<0>(GetParam()); }
+  int severity() const { return std::get<1>(GetParam()); }
+  RngMode mode() const { return std::get<2>(GetParam()); }
+};
+
+TEST_P(CorruptionPropertyTest, KeepsShapeAndTypeAndIsDeterministicPerSeed) {
+  const cv::Mat in = faultline::testing::scene(64, 96);
+  const cv::Mat a = run(in, type(), severity(), mode(), 11);
+  const cv::Mat b = run(in, type(), severity(), mode(), 11);
+  ASSERT_EQ(a.size(), in.size());
+  ASSERT_EQ(a.type(), CV_8UC3);
+  EXPECT_EQ(cv::norm(a, b, cv::NORM_INF), 0.0);
+}
+
+TEST_P(CorruptionPropertyTest, SeedMattersOnlyForRandomCorruptions) {
+  const cv::Mat in = faultline::testing::scene(64, 96);
+  const cv::Mat a = run(in, type(), severity(), mode(), 11);
+  const cv::Mat b = run(in, type(), severity(), mode(), 12);
+  if (severity() == 0) {
+    EXPECT_EQ(cv::norm(a, in, cv::NORM_INF), 0.0);
+    EXPECT_EQ(cv::norm(b, in, cv::NORM_INF), 0.0);
+  } else if (is_random(type())) {
+    EXPECT_GT(cv::norm(a, b, cv::NORM_INF), 0.0);
+  } else {
+    EXPECT_EQ(cv::norm(a, b, cv::NORM_INF), 0.0);
+  }
+}
+
+TEST_P(CorruptionPropertyTest, SeverityZeroIsIdentityAndDrawsNothing) {
+  const cv::Mat in = faultline::testing::scene(33, 17);
+  rng::NumpyRandomState rng(5), fresh(5);
+  auto out = corrupt(in, type(), 0, rng);
+  ASSERT_TRUE(out.is_ok());
+  EXPECT_EQ(cv::norm(*out, in, cv::NORM_INF), 0.0);
+  EXPECT_EQ(rng.next_u32(), fresh.next_u32());
+}
+
+TEST_P(CorruptionPropertyTest, StaysWithinTheCorruptionsBounds) {
+  const cv::Mat in = faultline::testing::scene(64, 96);
+  const cv::Mat out = run(in, type(), severity(), mode(), 3);
+  const double mean_in = cv::mean(in.reshape(1))[0], mean_out = cv::mean(out.reshape(1))[0];
+  if (severity() == 0) {
+    EXPECT_EQ(cv::norm(out, in, cv::NORM_INF), 0.0);
+    return;
+  }
+  switch (type()) {
+    case Corruption::Brightness: {
+      cv::Mat lower;
+      cv::subtract(in, cv::Scalar::all(1), lower);
+      cv::Mat below;
+      cv::compare(out.reshape(1), lower.reshape(1), below, cv::CMP_LT);
+      EXPECT_EQ(cv::countNonZero(below), 0) << "brightening never darkens";
+      EXPECT_GT(mean_out, mean_in);
+      break;
+    }
+    case Corruption::ColorQuant: {
+      cv::Mat expected;
+      cv::bitwise_and(in, cv::Scalar::all(color_quant_mask(severity())), expected);
+      EXPECT_EQ(cv::norm(out, expected, cv::NORM_INF), 0.0);
+      break;
+    }
+    case Corruption::Dark: EXPECT_LT(mean_out, 0.75 * mean_in); break;
+    case Corruption::Snow: EXPECT_GT(mean_out, mean_in); break;
+    case Corruption::Fog:
+    case Corruption::MotionBlur: EXPECT_NEAR(mean_out, mean_in, 0.5 * mean_in); break;
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(AllTypes, CorruptionPropertyTest,
+                         ::testing::Combine(::testing::ValuesIn(kAllCorruptions), ::testing::Range(0, 6),
+                                            ::testing::Values(RngMode::Numpy, RngMode::Fast)),
+                         [](const ::testing::TestParamInfo<Param>& p) {
+                           std::string name;
+                           bool up = true;
+                           for (char ch : std::string(to_string(std::get<0>(p.param)))) {
+                             if (ch == '_') {
+                               up = true;
+                               continue;
+                             }
+                             name += up ? static_cast<char>(std::toupper(static_cast<unsigned char>(ch))) : ch;
+                             up = false;
+                           }
+                           return name + "Sev" + std::to_string(std::get<1>(p.param)) +
+                                  (std::get<2>(p.param) == RngMode::Numpy ? "Numpy" : "Fast");
+                         });
+
+// Degenerate frames: tiny, odd-sized, smaller than any blur kernel, constant, all black, all white.
+class DegenerateFrameTest : public ::testing::TestWithParam<std::tuple<Corruption, RngMode>> {};
+
+TEST_P(DegenerateFrameTest, EverySeverityWorksOnTinyAndConstantFrames) {
+  const auto [type, mode] = GetParam();
+  const cv::Mat frames[] = {
+      faultline::testing::scene(1, 1), faultline::testing::scene(2, 3), faultline::testing::scene(7, 5),
+      faultline::testing::scene(40, 3), cv::Mat(20, 30, CV_8UC3, cv::Scalar::all(0)),
+      cv::Mat(20, 30, CV_8UC3, cv::Scalar::all(255)), cv::Mat(9, 11, CV_8UC3, cv::Scalar(80, 120, 160))};
+  for (const cv::Mat& f : frames) {
+    for (int sev = 1; sev <= 5; ++sev) {
+      const cv::Mat out = run(f, type, sev, mode, 21);
+      ASSERT_EQ(out.size(), f.size()) << to_string(type) << " sev " << sev << " " << f.rows << "x" << f.cols;
+      ASSERT_EQ(out.type(), CV_8UC3);
+    }
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(AllTypes, DegenerateFrameTest,
+                         ::testing::Combine(::testing::ValuesIn(kAllCorruptions),
+                                            ::testing::Values(RngMode::Numpy, RngMode::Fast)));
+
+TEST(DegenerateBehaviourTest, DarkOnConstantFrameIsPureReadNoise) {
+  for (const int v : {0, 128, 255}) {
+    const cv::Mat flat(40, 50, CV_8UC3, cv::Scalar::all(v));
+    rng::NumpyRandomState rng(4);
+    auto out = corrupt(flat, Corruption::Dark, 4, rng);
+    ASSERT_TRUE(out.is_ok());
+    // trunc(255 * max(0, N(0, 0.038))): mean about 3.6 (spec §3), never large.
+    const double mean = cv::mean(out->reshape(1))[0];
+    EXPECT_GT(mean, 2.0);
+    EXPECT_LT(mean, 6.0);
+  }
+}
+
+TEST(DegenerateBehaviourTest, DarkSeverityFiveIsDarkerThanFour) {
+  const cv::Mat in = faultline::testing::scene(64, 96);
+  rng::NumpyRandomState a(1), b(1);
+  const double m4 = cv::mean(corrupt(in, Corruption::Dark, 4, a)->reshape(1))[0];
+  const double m5 = cv::mean(corrupt(in, Corruption::Dark, 5, b)->reshape(1))[0];
+  EXPECT_LT(m5, m4);
+}
+
+TEST(DegenerateBehaviourTest, BrightnessTurnsBlackIntoGreyAndKeepsWhite) {
+  rng::NumpyRandomState rng(0);
+  auto black = corrupt(cv::Mat(4, 4, CV_8UC3, cv::Scalar::all(0)), Corruption::Brightness, 5, rng);
+  auto white = corrupt(cv::Mat(4, 4, CV_8UC3, cv::Scalar::all(255)), Corruption::Brightness, 5, rng);
+  EXPECT_EQ(black->at<cv::Vec3b>(0, 0), cv::Vec3b(127, 127, 127));
+  EXPECT_EQ(white->at<cv::Vec3b>(3, 3), cv::Vec3b(255, 255, 255));
+}
+
+TEST(DegenerateBehaviourTest, FastMotionBlurKeepsTinyImagesBrightness) {
+  const cv::Mat one(1, 1, CV_8UC3, cv::Scalar(10, 100, 200));
+  rng::FastRng rng(0);
+  auto out = corrupt(one, Corruption::MotionBlur, 5, rng);
+  ASSERT_TRUE(out.is_ok());
+  EXPECT_LE(cv::norm(*out, one, cv::NORM_INF), 1.0);
+}
+
+TEST(DegenerateBehaviourTest, FogOnBlackStaysBlack) {
+  rng::FastRng rng(0);
+  auto out = corrupt(cv::Mat(16, 16, CV_8UC3, cv::Scalar::all(0)), Corruption::Fog, 3, rng);
+  EXPECT_EQ(cv::countNonZero(out->reshape(1)), 0);
+}
+
+TEST(InputValidationTest, RejectsEmptyWrongTypeAndBadSeverity) {
+  rng::FastRng rng(0);
+  EXPECT_EQ(corrupt(cv::Mat(), Corruption::Fog, 1, rng).status().code(), StatusCode::kInvalidArgument);
+  EXPECT_EQ(corrupt(cv::Mat(4, 4, CV_8UC1), Corruption::Fog, 1, rng).status().code(), StatusCode::kUnsupported);
+  EXPECT_EQ(corrupt(cv::Mat(4, 4, CV_8UC3), Corruption::Fog, 6, rng).status().code(),
+            StatusCode::kInvalidArgument);
+  EXPECT_EQ(corrupt(cv::Mat(4, 4, CV_8UC3), Corruption::Fog, -1, rng).status().code(),
+            StatusCode::kInvalidArgument);
+}
+
+TEST(NamesTest, RoundTripAndLevelMapping) {
+  for (Corruption c : kAllCorruptions) EXPECT_EQ(corruption_from_string(to_string(c)), c);
+  EXPECT_FALSE(corruption_from_string("rain").has_value());
+  EXPECT_EQ(corruption_from_string("low_light"), Corruption::Dark);
+  EXPECT_EQ(severity_for(Corruption::Brightness, Level::Easy), 2);
+  EXPECT_EQ(severity_for(Corruption::Fog, Level::Mid), 4);
+  EXPECT_EQ(severity_for(Corruption::MotionBlur, Level::Hard), 5);
+  EXPECT_EQ(severity_for(Corruption::ColorQuant, Level::Hard), 3);
+  EXPECT_EQ(severity_for(Corruption::Snow, Level::Easy), 1);
+  EXPECT_EQ(severity_for(Corruption::Dark, Level::Easy), 2);
+  EXPECT_EQ(severity_for(Corruption::Dark, Level::Hard), 4);
+}
+
+}  // namespace
+}  // namespace faultline::corruption
