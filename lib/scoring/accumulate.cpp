@@ -105,15 +105,19 @@ struct ClassInputs {
   std::size_t npos = 0;
   std::vector<const EvalBox*> preds;  // results key order, in-sample file order
   std::vector<std::size_t> order;     // processing order
+  std::vector<double> pred_yaw;       // per pred, computed once for the four thresholds
+  std::vector<std::vector<double>> gt_yaw;  // parallel to gt_of_class
 };
 
 ClassInputs prepare(const EvalBoxes& gt, const EvalBoxes& pred, int cls) {
   ClassInputs in;
   in.gt_of_class.resize(gt.boxes.size());
+  in.gt_yaw.resize(gt.boxes.size());
   for (std::size_t s = 0; s < gt.boxes.size(); ++s) {
     for (std::size_t i = 0; i < gt.boxes[s].size(); ++i) {
       if (gt.boxes[s][i].cls == cls) {
         in.gt_of_class[s].push_back(static_cast<int>(i));
+        in.gt_yaw[s].push_back(quaternion_yaw(gt.boxes[s][i].rotation));
         ++in.npos;
       }
     }
@@ -121,7 +125,10 @@ ClassInputs prepare(const EvalBoxes& gt, const EvalBoxes& pred, int cls) {
   if (in.npos == 0) return in;
   for (const auto& list : pred.boxes) {
     for (const EvalBox& b : list) {
-      if (b.cls == cls) in.preds.push_back(&b);
+      if (b.cls == cls) {
+        in.preds.push_back(&b);
+        in.pred_yaw.push_back(quaternion_yaw(b.rotation));
+      }
     }
   }
   // (score, index) descending: equal scores are processed last-in-file first.
@@ -155,9 +162,12 @@ Result<MetricData> match_and_curves(const EvalBoxes& gt, const ClassInputs& in, 
     const EvalBox& p = *preds[oi];
     double min_dist = std::numeric_limits<double>::infinity();
     int match = -1;
+    std::size_t match_pos = 0;
     if (p.match_sample >= 0) {
       const auto s = static_cast<std::size_t>(p.match_sample);
-      for (int gi : gt_of_class[s]) {
+      const auto& cands = gt_of_class[s];
+      for (std::size_t ci = 0; ci < cands.size(); ++ci) {
+        const int gi = cands[ci];
         if (taken[s][static_cast<std::size_t>(gi)]) continue;
         const EvalBox& g = gt.boxes[s][static_cast<std::size_t>(gi)];
         const double dx = p.translation[0] - g.translation[0], dy = p.translation[1] - g.translation[1];
@@ -165,6 +175,7 @@ Result<MetricData> match_and_curves(const EvalBoxes& gt, const ClassInputs& in, 
         if (d < min_dist) {
           min_dist = d;
           match = gi;
+          match_pos = ci;
         }
       }
     }
@@ -185,7 +196,7 @@ Result<MetricData> match_and_curves(const EvalBoxes& gt, const ClassInputs& in, 
         }
       }
       errs[kScale].push_back(1.0 - scale_iou(g.size, p.size));
-      errs[kOrient].push_back(angle_diff(quaternion_yaw(g.rotation), quaternion_yaw(p.rotation), period));
+      errs[kOrient].push_back(angle_diff(in.gt_yaw[s][match_pos], in.pred_yaw[oi], period));
       errs[kAttr].push_back(g.attr < 0 ? std::numeric_limits<double>::quiet_NaN()
                                        : 1.0 - (g.attr == p.attr ? 1.0 : 0.0));
       match_conf.push_back(p.score);
