@@ -2,8 +2,11 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <filesystem>
 
 #include "scoring/robustness.hpp"
+#include "scoring/run_manifest.hpp"
+#include "test_util.hpp"
 
 namespace faultline::scoring {
 namespace {
@@ -72,6 +75,48 @@ TEST(RobustnessTest, JsonRoundTripsAndTablesCarryThePercentages) {
   EXPECT_EQ(back->corruptions.size(), 8u);
   EXPECT_NE(robustness_markdown(*r).find("mRR 70.77 %"), std::string::npos);
   EXPECT_NE(robustness_csv(*r).find("DETR3D,snow,hard,0.1616"), std::string::npos);
+}
+
+// Scored run folders of the DETR3D table + a YAML manifest reproduce the paper's figures end to end.
+TEST(RunManifestTest, ManifestOfScoredRunsGivesPaperFigures) {
+  testing::TempDir dir("manifest");
+  const DetectorScores table = detr3d_baseline();
+  std::string yaml = "detector: detr3d-runs\nlatency_ms: 120\nruns:\n  clean: clean\n";
+  auto write_run = [&](const std::string& sub, double nds) {
+    std::filesystem::create_directories(dir.file(sub));
+    testing::write_text(dir.file(sub) + "/metrics_summary.json",
+                        "{\"mean_ap\": 0.3, \"nd_score\": " + std::to_string(nds) + ", \"x\": NaN}");
+  };
+  write_run("clean", table.clean_nds);
+  for (const auto& c : table.corruptions) {
+    for (std::size_t l = 0; l < 3; ++l) {
+      const std::string sub = c.name + "_" + kSeverityLevels[l];
+      write_run(sub, c.nds_by_level[l]);
+      yaml += "  " + c.name + "/" + kSeverityLevels[l] + ": " + sub + "\n";
+    }
+  }
+  testing::write_text(dir.file("runs.yaml"), yaml);
+  std::string name;
+  double latency = -1;
+  auto runs = read_run_manifest(dir.file("runs.yaml"), &name, &latency);
+  ASSERT_TRUE(runs.is_ok()) << runs.status().message();
+  EXPECT_EQ(name, "detr3d-runs");
+  EXPECT_EQ(latency, 120);
+  auto scores = collect_detector_scores(name, *runs);
+  ASSERT_TRUE(scores.is_ok()) << scores.status().message();
+  auto r = compute_robustness(*scores, detr3d_baseline());
+  ASSERT_TRUE(r.is_ok());
+  EXPECT_DOUBLE_EQ(round2(r->mce), 100.00);
+  EXPECT_DOUBLE_EQ(round2(r->mrr), 70.77);
+}
+
+TEST(RunManifestTest, ConditionsFromFolderNamesAndMissingRuns) {
+  EXPECT_EQ(condition_from_path("/x/runs/fog_easy"), "fog/easy");
+  EXPECT_EQ(condition_from_path("/x/runs/MotionBlur/hard/"), "MotionBlur/hard");
+  EXPECT_EQ(condition_from_path("/x/runs/clean"), "clean");
+  auto missing = collect_detector_scores("d", {{"clean", "/nonexistent/run"}});
+  ASSERT_FALSE(missing.is_ok());
+  EXPECT_NE(missing.status().message().find("/nonexistent/run/metrics_summary.json"), std::string::npos);
 }
 
 }  // namespace
