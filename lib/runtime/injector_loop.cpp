@@ -338,4 +338,8 @@ int InjectorLoop::run(const std::atomic<bool>& stop) {
   return rc;
 }
 
+std::vector<stats::TopicWindow> InjectorLoop::stats_totals() const {
+  return impl_->stats.collector().totals(monotonic_now_ns());
+}
+
 }  // namespace faultline::runtime

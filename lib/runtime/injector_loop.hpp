@@ -16,6 +16,7 @@
 
 #include "runtime/frame_policy.hpp"
 #include "runtime/remap.hpp"
+#include "stats/topic_stats.hpp"
 
 namespace faultline::runtime {
 
@@ -89,6 +90,8 @@ class InjectorLoop {
   // socket error (1).
   int run(const std::atomic<bool>& stop);
   const InjectorCounts& counts() const { return counts_; }
+  // Whole-run statistics per topic (inputs: hop latency; injector outputs: receive -> publish).
+  std::vector<stats::TopicWindow> stats_totals() const;
 
  private:
   struct Impl;

@@ -280,4 +280,8 @@ int PlayerLoop::run(const std::atomic<bool>& stop) {
   return 0;
 }
 
+std::vector<stats::TopicWindow> PlayerLoop::stats_totals() const {
+  return impl_->stats.collector().totals(monotonic_now_ns());
+}
+
 }  // namespace faultline::runtime

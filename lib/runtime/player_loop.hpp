@@ -20,6 +20,7 @@
 #include "common/clock.hpp"
 #include "runtime/frame_source.hpp"
 #include "runtime/remap.hpp"
+#include "stats/topic_stats.hpp"
 
 namespace faultline::runtime {
 
@@ -90,6 +91,8 @@ class PlayerLoop {
   // Publishes until the end of the run (0), `stop` turns true (0) or a fatal socket error (1).
   int run(const std::atomic<bool>& stop);
   const PlayerCounts& counts() const { return counts_; }
+  // Whole-run statistics per topic (inputs: hop latency; injector outputs: receive -> publish).
+  std::vector<stats::TopicWindow> stats_totals() const;
 
  private:
   struct Impl;

@@ -190,4 +190,8 @@ int SinkLoop::run(const std::atomic<bool>& stop) {
   return 0;
 }
 
+std::vector<stats::TopicWindow> SinkLoop::stats_totals() const {
+  return impl_->stats.collector().totals(monotonic_now_ns());
+}
+
 }  // namespace faultline::runtime

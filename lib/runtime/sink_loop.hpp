@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "runtime/remap.hpp"
+#include "stats/topic_stats.hpp"
 
 namespace faultline::runtime {
 
@@ -75,6 +76,8 @@ class SinkLoop {
   // Runs until `stop` (finalize, 0), a completed run with exit_on_last (0) or a fatal error (1).
   int run(const std::atomic<bool>& stop);
   const SinkCounts& counts() const { return counts_; }
+  // Whole-run statistics per topic (inputs: hop latency; injector outputs: receive -> publish).
+  std::vector<stats::TopicWindow> stats_totals() const;
 
  private:
   struct Impl;

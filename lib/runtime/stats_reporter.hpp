@@ -22,6 +22,7 @@ class StatsReporter {
                 DurationNs log_period_ns, std::string stats_topic = "/statistics");
 
   stats::TopicStatsCollector& collector() { return collector_; }
+  const stats::TopicStatsCollector& collector() const { return collector_; }
   // When a window is due: publishes one TopicStats per active topic on `publisher` (may be null) and
   // logs them (info when the log period passed, else debug).
   void tick(StampNs now_mono_ns, transport::Publisher* publisher);
