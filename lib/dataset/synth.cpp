@@ -15,6 +15,9 @@
 #include <set>
 #include <thread>
 
+#ifdef FAULTLINE_DATASET_HAVE_CODEC
+#include "codec/jpeg.hpp"
+#endif
 #include "dataset/geometry.hpp"
 #include "dataset/synth_render.hpp"
 #include "dataset/synth_world.hpp"
@@ -179,11 +182,21 @@ Status render_images(Shared& sh, const SynthWorld& world, const std::vector<Came
   Status first_error;
   std::int64_t bytes = 0;
   const auto work = [&] {
-    std::vector<unsigned char> jpeg;
+    std::vector<std::uint8_t> jpeg;
     for (std::size_t i = next++; i < jobs.size(); i = next++) {
       const ImageJob& job = jobs[i];
       const cv::Mat img = render_camera(world, job.t_s, cameras[static_cast<std::size_t>(job.camera)]);
+#ifdef FAULTLINE_DATASET_HAVE_CODEC
+      auto encoded = codec::encode_jpeg(img, sh.opt.jpeg_quality);
+      if (!encoded) {
+        std::lock_guard<std::mutex> lock(mu);
+        if (first_error.is_ok()) first_error = Status(encoded.status().code(), job.path + ": " + encoded.status().message());
+        continue;
+      }
+      jpeg = std::move(encoded).value();
+#else
       cv::imencode(".jpg", img, jpeg, {cv::IMWRITE_JPEG_QUALITY, sh.opt.jpeg_quality});
+#endif
       std::int64_t written = 0;
       Status s = write_bytes(job.path, jpeg, &written);
       std::lock_guard<std::mutex> lock(mu);

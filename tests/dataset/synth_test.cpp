@@ -335,7 +335,9 @@ TEST_F(SynthTest, AnnotatedBoxInFrontProjectsIntoCamFrontWithItsColour) {
     const double own = ColourFraction(img, roi, style->body_bgr);
     EXPECT_GT(own, 0.5) << category << " at u=" << u << " v=" << v;
     for (const auto& other : kSynthPalette) {  // every other class colour matches the window less
-      if (&other != style) EXPECT_LT(ColourFraction(img, roi, other.body_bgr), own) << other.detection_name;
+      if (&other != style) {
+        EXPECT_LT(ColourFraction(img, roi, other.body_bgr), own) << other.detection_name;
+      }
     }
     ++checked;
   }
