@@ -25,7 +25,8 @@ Result<cv::Mat> corrupt(const cv::Mat& bgr, Corruption type, int severity, rng::
   if (Status s = validate_input(bgr, severity); !s) return s;
   if (severity == 0) return bgr.clone();
   switch (type) {
-    case Corruption::Brightness: return brightness_exact(bgr, severity);
+    // The table path is bit-identical to the HSV mirror (it falls back to it near truncation ties).
+    case Corruption::Brightness: return brightness_fast(bgr, severity);
     case Corruption::ColorQuant: return color_quant(bgr, severity);
     case Corruption::MotionBlur: {
       const double angle = options.angle_deg ? *options.angle_deg : rng.uniform(-45.0, 45.0);
@@ -33,7 +34,7 @@ Result<cv::Mat> corrupt(const cv::Mat& bgr, Corruption type, int severity, rng::
     }
     case Corruption::Fog: {
       const FogParams p = fog_params(severity);
-      const cv::Mat fractal = plasma_fractal(fog_map_size(bgr.rows, bgr.cols), p.decay, rng);
+      const cv::Mat fractal = plasma_fractal_crop(fog_map_size(bgr.rows, bgr.cols), p.decay, rng, bgr.rows, bgr.cols);
       return fog_blend_exact(bgr, fractal, p.strength);
     }
     case Corruption::Snow: return snow_exact(bgr, severity, rng);

@@ -37,13 +37,22 @@ cv::Mat dark_exact(const cv::Mat& bgr, int severity, rng::NumpyRandomState& rng)
   const DarkParams p = dark_params(severity);
   double lam[256];
   dark_lambdas(bgr, severity, lam);
+  rng::PoissonParams prepared[256];
+  for (int v = 0; v < 256; ++v) prepared[v] = rng::prepare_poisson(lam[v]);
+  // y as a function of the count k, with the reference's arithmetic, for the counts that occur in practice.
+  constexpr std::int64_t kTable = 1024;
+  std::vector<double> y_of_k(kTable);
+  auto y_for = [&](std::int64_t k) {
+    return (std::min(std::max(static_cast<double>(k) / p.poisson_scale, 0.0), 1.0) * 255.0) / 255.0;
+  };
+  for (std::int64_t k = 0; k < kTable; ++k) y_of_k[static_cast<std::size_t>(k)] = y_for(k);
   const cv::Mat in = bgr.isContinuous() ? bgr : bgr.clone();
   const std::size_t n = in.total() * 3;
   std::vector<double> y(n);
   const std::uint8_t* src = in.data;
   for (std::size_t i = 0; i < n; ++i) {
-    const auto k = static_cast<double>(rng.poisson(lam[src[i]]));
-    y[i] = (std::min(std::max(k / p.poisson_scale, 0.0), 1.0) * 255.0) / 255.0;
+    const std::int64_t k = rng.poisson(prepared[src[i]]);
+    y[i] = k < kTable ? y_of_k[static_cast<std::size_t>(k)] : y_for(k);
   }
   cv::Mat out(in.size(), in.type());
   std::uint8_t* dst = out.data;

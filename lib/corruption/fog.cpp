@@ -11,8 +11,10 @@
 namespace faultline::corruption {
 namespace {
 
+// Returns the normalised top-left rows x cols crop of the plasma map (the full map when rows = cols = mapsize);
+// normalising only the crop gives the same doubles as normalising the full map and cropping.
 template <typename Rng>
-cv::Mat plasma_impl(int mapsize, double decay, Rng& rng) {
+cv::Mat plasma_impl(int mapsize, double decay, Rng& rng, int crop_rows, int crop_cols) {
   const int n_map = mapsize;
   std::vector<double> m(static_cast<std::size_t>(n_map) * static_cast<std::size_t>(n_map), 0.0);
   auto at = [&](int r, int c) -> double& {
@@ -77,9 +79,12 @@ cv::Mat plasma_impl(int mapsize, double decay, Rng& rng) {
   const auto [mn_it, mx_it] = std::minmax_element(m.begin(), m.end());
   const double mn = *mn_it;
   const double range = *mx_it - mn;  // == max(M - min) exactly: subtraction is monotone
-  cv::Mat out(n_map, n_map, CV_64F);
-  double* dst = out.ptr<double>(0);
-  for (std::size_t k = 0; k < m.size(); ++k) dst[k] = (m[k] - mn) / range;
+  cv::Mat out(crop_rows, crop_cols, CV_64F);
+  for (int r = 0; r < crop_rows; ++r) {
+    const double* src = &at(r, 0);
+    double* dst = out.ptr<double>(r);
+    for (int c = 0; c < crop_cols; ++c) dst[c] = (src[c] - mn) / range;
+  }
   return out;
 }
 
@@ -98,9 +103,14 @@ int fog_map_size(int rows, int cols) {
 }
 
 cv::Mat plasma_fractal(int mapsize, double decay, rng::NumpyRandomState& rng) {
-  return plasma_impl(mapsize, decay, rng);
+  return plasma_impl(mapsize, decay, rng, mapsize, mapsize);
 }
-cv::Mat plasma_fractal(int mapsize, double decay, rng::FastRng& rng) { return plasma_impl(mapsize, decay, rng); }
+cv::Mat plasma_fractal(int mapsize, double decay, rng::FastRng& rng) {
+  return plasma_impl(mapsize, decay, rng, mapsize, mapsize);
+}
+cv::Mat plasma_fractal_crop(int mapsize, double decay, rng::NumpyRandomState& rng, int rows, int cols) {
+  return plasma_impl(mapsize, decay, rng, rows, cols);
+}
 
 cv::Mat fog_blend_exact(const cv::Mat& bgr, const cv::Mat& fractal, double strength) {
   double max_u8 = 0.0;
@@ -185,7 +195,7 @@ cv::Mat upsample_torus_window(const cv::Mat& low, int factor, double row0, doubl
 cv::Mat fog_field_fast(int rows, int cols, double decay, rng::FastRng& rng) {
   const int n = fog_map_size(rows, cols);
   const int factor = n >= 64 ? 4 : 1;
-  const cv::Mat low = plasma_impl(n / factor, decay, rng);
+  const cv::Mat low = plasma_impl(n / factor, decay, rng, n / factor, n / factor);
   if (factor == 1) {
     cv::Mat out;
     low(cv::Rect(0, 0, cols, rows)).convertTo(out, CV_32F);

@@ -25,6 +25,8 @@ int fog_map_size(int rows, int cols);
 // With NumpyRandomState it consumes exactly mapsize^2 - 1 uniforms, as the reference does.
 cv::Mat plasma_fractal(int mapsize, double decay, rng::NumpyRandomState& rng);
 cv::Mat plasma_fractal(int mapsize, double decay, rng::FastRng& rng);
+// The same map's normalised top-left rows x cols crop, without materialising the normalised full map.
+cv::Mat plasma_fractal_crop(int mapsize, double decay, rng::NumpyRandomState& rng, int rows, int cols);
 
 // Exact blend: out = trunc(clip((x + a*F) * m / (m + a), 0, 1) * 255), x = u8/255. fractal: CV_64F, at least
 // as large as the image (top-left crop is used).

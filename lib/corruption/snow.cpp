@@ -115,6 +115,38 @@ cv::Mat snow_layer_exact(const cv::Mat& normals, int severity, double blur_angle
   return quantise_crop<double>(blurred, rows, cols);
 }
 
+namespace {
+
+#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__)
+#define FAULTLINE_FMA_CLONES __attribute__((target_clones("fma", "default")))
+#else
+#define FAULTLINE_FMA_CLONES
+#endif
+
+// One row of the exact blend. The FMA clone turns std::fma into one instruction (same result as the library
+// call); contraction stays off, so nothing else is fused.
+FAULTLINE_FMA_CLONES void snow_blend_row(const std::uint8_t* src, const std::uint8_t* l, const std::uint8_t* lr,
+                                         std::uint8_t* dst, int cols, float b, float one_minus_b) {
+  for (int x = 0; x < cols; ++x) {
+    const float c0 = static_cast<float>(src[3 * x]) / 255.0f;
+    const float c1 = static_cast<float>(src[3 * x + 1]) / 255.0f;
+    const float c2 = static_cast<float>(src[3 * x + 2]) / 255.0f;
+    // OpenCV's AVX2 RGB2GRAY: fma(ch2, 0.114, fma(ch1, 0.587, ch0 * 0.299)) in float32.
+    const float grey = std::fma(c2, 0.114f, std::fma(c1, 0.587f, c0 * 0.299f));
+    const float bright = grey * 1.5f + 0.5f;
+    const double snow = l[x] / 255.0;
+    const double snow_rot = lr[cols - 1 - x] / 255.0;
+    const float ch[3] = {c0, c1, c2};
+    for (int k = 0; k < 3; ++k) {
+      const float whitened = b * ch[k] + one_minus_b * std::max(ch[k], bright);
+      const double v = (static_cast<double>(whitened) + snow) + snow_rot;
+      dst[3 * x + k] = static_cast<std::uint8_t>(std::min(std::max(v, 0.0), 1.0) * 255.0);
+    }
+  }
+}
+
+}  // namespace
+
 cv::Mat snow_blend_exact(const cv::Mat& bgr, const cv::Mat& layer_u8, int severity) {
   const SnowParams p = snow_params(severity);
   const float b = static_cast<float>(p.blend);
@@ -122,26 +154,8 @@ cv::Mat snow_blend_exact(const cv::Mat& bgr, const cv::Mat& layer_u8, int severi
   const int rows = bgr.rows, cols = bgr.cols;
   cv::Mat out(bgr.size(), bgr.type());
   for (int y = 0; y < rows; ++y) {
-    const std::uint8_t* src = bgr.ptr<std::uint8_t>(y);
-    const std::uint8_t* l = layer_u8.ptr<std::uint8_t>(y);
-    const std::uint8_t* lr = layer_u8.ptr<std::uint8_t>(rows - 1 - y);
-    std::uint8_t* dst = out.ptr<std::uint8_t>(y);
-    for (int x = 0; x < cols; ++x) {
-      const float c0 = static_cast<float>(src[3 * x]) / 255.0f;
-      const float c1 = static_cast<float>(src[3 * x + 1]) / 255.0f;
-      const float c2 = static_cast<float>(src[3 * x + 2]) / 255.0f;
-      // OpenCV's AVX2 RGB2GRAY: fma(ch2, 0.114, fma(ch1, 0.587, ch0 * 0.299)) in float32.
-      const float grey = std::fma(c2, 0.114f, std::fma(c1, 0.587f, c0 * 0.299f));
-      const float bright = grey * 1.5f + 0.5f;
-      const double snow = l[x] / 255.0;
-      const double snow_rot = lr[cols - 1 - x] / 255.0;
-      const float ch[3] = {c0, c1, c2};
-      for (int k = 0; k < 3; ++k) {
-        const float whitened = b * ch[k] + one_minus_b * std::max(ch[k], bright);
-        const double v = (static_cast<double>(whitened) + snow) + snow_rot;
-        dst[3 * x + k] = static_cast<std::uint8_t>(std::min(std::max(v, 0.0), 1.0) * 255.0);
-      }
-    }
+    snow_blend_row(bgr.ptr<std::uint8_t>(y), layer_u8.ptr<std::uint8_t>(y), layer_u8.ptr<std::uint8_t>(rows - 1 - y),
+                   out.ptr<std::uint8_t>(y), cols, b, one_minus_b);
   }
   return out;
 }

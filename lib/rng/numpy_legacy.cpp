@@ -22,14 +22,63 @@ double NumpyRandomState::standard_normal() {
   return f * x2;
 }
 
-std::int64_t NumpyRandomState::poisson(double lam) {
-  if (lam >= 10.0) return poisson_ptrs(lam);
-  if (lam == 0.0) return 0;
-  return poisson_mult(lam);
+void Mt19937::seed(std::uint32_t seed) {
+  state_[0] = seed;
+  for (int i = 1; i < kN; ++i) {
+    state_[i] = 1812433253u * (state_[i - 1] ^ (state_[i - 1] >> 30)) + static_cast<std::uint32_t>(i);
+  }
+  index_ = kN;
 }
 
-std::int64_t NumpyRandomState::poisson_mult(double lam) {
-  const double enlam = std::exp(-lam);
+void Mt19937::refill() {
+  constexpr std::uint32_t kUpper = 0x80000000u, kLower = 0x7fffffffu, kMatrix = 0x9908b0dfu;
+  int i = 0;
+  for (; i < kN - 397; ++i) {
+    const std::uint32_t y = (state_[i] & kUpper) | (state_[i + 1] & kLower);
+    state_[i] = state_[i + 397] ^ (y >> 1) ^ ((0u - (y & 1u)) & kMatrix);
+  }
+  for (; i < kN - 1; ++i) {
+    const std::uint32_t y = (state_[i] & kUpper) | (state_[i + 1] & kLower);
+    state_[i] = state_[i - (kN - 397)] ^ (y >> 1) ^ ((0u - (y & 1u)) & kMatrix);
+  }
+  const std::uint32_t y = (state_[kN - 1] & kUpper) | (state_[0] & kLower);
+  state_[kN - 1] = state_[396] ^ (y >> 1) ^ ((0u - (y & 1u)) & kMatrix);
+  for (int k = 0; k < kN; ++k) {
+    std::uint32_t t = state_[k];
+    t ^= t >> 11;
+    t ^= (t << 7) & 0x9d2c5680u;
+    t ^= (t << 15) & 0xefc60000u;
+    t ^= t >> 18;
+    out_[k] = t;
+  }
+  index_ = 0;
+}
+
+PoissonParams prepare_poisson(double lam) {
+  PoissonParams p;
+  p.lam = lam;
+  if (lam >= 10.0) {
+    p.slam = std::sqrt(lam);
+    p.loglam = std::log(lam);
+    p.b = 0.931 + 2.53 * p.slam;
+    p.a = -0.059 + 0.02483 * p.b;
+    p.invalpha = 1.1239 + 1.1328 / (p.b - 3.4);
+    p.vr = 0.9277 - 3.6224 / (p.b - 2);
+  } else if (lam > 0.0) {
+    p.enlam = std::exp(-lam);
+  }
+  return p;
+}
+
+std::int64_t NumpyRandomState::poisson(double lam) { return poisson(prepare_poisson(lam)); }
+
+std::int64_t NumpyRandomState::poisson(const PoissonParams& p) {
+  if (p.lam >= 10.0) return poisson_ptrs(p);
+  if (p.lam == 0.0) return 0;
+  return poisson_mult(p.enlam);
+}
+
+std::int64_t NumpyRandomState::poisson_mult(double enlam) {
   std::int64_t x = 0;
   double prod = 1.0;
   for (;;) {
@@ -42,22 +91,16 @@ std::int64_t NumpyRandomState::poisson_mult(double lam) {
   }
 }
 
-std::int64_t NumpyRandomState::poisson_ptrs(double lam) {
-  const double slam = std::sqrt(lam);
-  const double loglam = std::log(lam);
-  const double b = 0.931 + 2.53 * slam;
-  const double a = -0.059 + 0.02483 * b;
-  const double invalpha = 1.1239 + 1.1328 / (b - 3.4);
-  const double vr = 0.9277 - 3.6224 / (b - 2);
+std::int64_t NumpyRandomState::poisson_ptrs(const PoissonParams& p) {
   for (;;) {
     const double u = random_sample() - 0.5;
     const double v = random_sample();
     const double us = 0.5 - std::fabs(u);
-    const auto k = static_cast<std::int64_t>(std::floor((2 * a / us + b) * u + lam + 0.43));
-    if (us >= 0.07 && v <= vr) return k;
+    const auto k = static_cast<std::int64_t>(std::floor((2 * p.a / us + p.b) * u + p.lam + 0.43));
+    if (us >= 0.07 && v <= p.vr) return k;
     if (k < 0 || (us < 0.013 && v > us)) continue;
-    if ((std::log(v) + std::log(invalpha) - std::log(a / (us * us) + b)) <=
-        (-lam + static_cast<double>(k) * loglam - numpy_loggam(static_cast<double>(k + 1)))) {
+    if ((std::log(v) + std::log(p.invalpha) - std::log(p.a / (us * us) + p.b)) <=
+        (-p.lam + static_cast<double>(k) * p.loglam - numpy_loggam(static_cast<double>(k + 1)))) {
       return k;
     }
   }

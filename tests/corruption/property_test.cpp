@@ -5,6 +5,7 @@
 #include <string>
 #include <tuple>
 
+#include "corruption/brightness.hpp"
 #include "corruption/color_quant.hpp"
 #include "corruption/corrupt.hpp"
 #include "corruption/test_images.hpp"
@@ -178,6 +179,27 @@ TEST(DegenerateBehaviourTest, FogOnBlackStaysBlack) {
   rng::FastRng rng(0);
   auto out = corrupt(cv::Mat(16, 16, CV_8UC3, cv::Scalar::all(0)), Corruption::Fog, 3, rng);
   EXPECT_EQ(cv::countNonZero(out->reshape(1)), 0);
+}
+
+TEST(BrightnessPathsTest, TablePathEqualsHsvMirrorOnEveryColourClass) {
+  // Random colours plus every tie pattern (two or three equal channels), at every severity.
+  cv::Mat img(128, 128, CV_8UC3);
+  std::uint32_t s = 99;
+  for (int y = 0; y < img.rows; ++y) {
+    for (int x = 0; x < img.cols; ++x) {
+      s = s * 1664525u + 1013904223u;
+      const auto a = static_cast<uchar>(s >> 24), b = static_cast<uchar>(s >> 16), c = static_cast<uchar>(s >> 8);
+      switch (x % 4) {
+        case 0: img.at<cv::Vec3b>(y, x) = cv::Vec3b(a, b, c); break;
+        case 1: img.at<cv::Vec3b>(y, x) = cv::Vec3b(a, a, c); break;
+        case 2: img.at<cv::Vec3b>(y, x) = cv::Vec3b(b, c, b); break;
+        default: img.at<cv::Vec3b>(y, x) = cv::Vec3b(a, a, a); break;
+      }
+    }
+  }
+  for (int sev = 1; sev <= 5; ++sev) {
+    EXPECT_EQ(cv::norm(brightness_fast(img, sev), brightness_exact(img, sev), cv::NORM_INF), 0.0) << sev;
+  }
 }
 
 TEST(InputValidationTest, RejectsEmptyWrongTypeAndBadSeverity) {

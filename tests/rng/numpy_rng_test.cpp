@@ -2,6 +2,8 @@
 // Poisson on both sides of the lambda = 10 switch (with the uniforms consumed), choice(6).
 #include <gtest/gtest.h>
 
+#include <random>
+
 #include "rng/golden_json.hpp"
 #include "rng/numpy_legacy.hpp"
 
@@ -69,6 +71,22 @@ TEST_F(NumpyRngVectorsTest, ChoiceOfSix) {
   for (const auto& s : seeds().GetArray()) {
     NumpyRandomState rng(s["seed"].GetUint());
     for (const auto& v : s["choice6"].GetArray()) EXPECT_EQ(rng.choice6(), v.GetInt());
+  }
+}
+
+TEST(Mt19937Test, BlockGeneratorEqualsStdMt19937) {
+  for (std::uint32_t seed : {0u, 1u, 5489u, 4294967295u}) {
+    Mt19937 mine(seed);
+    std::mt19937 ref(seed);
+    for (int i = 0; i < 5000; ++i) ASSERT_EQ(mine(), ref()) << "seed " << seed << " output " << i;
+  }
+}
+
+TEST(NumpyRandomStateTest, PreparedPoissonEqualsPlainPoisson) {
+  for (double lam : {0.0, 0.3, 4.0, 9.99, 10.0, 47.5, 125.0}) {
+    NumpyRandomState a(3), b(3);
+    const PoissonParams p = prepare_poisson(lam);
+    for (int i = 0; i < 200; ++i) ASSERT_EQ(a.poisson(p), b.poisson(lam)) << lam;
   }
 }
 
