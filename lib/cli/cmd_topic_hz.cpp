@@ -22,6 +22,7 @@ int run_probe_command(int argc, char** argv, ProbeKind kind) {
   double window_s = 1.0, every_s = 1.0, duration_s = 0;
   std::uint64_t max_messages = 0;
   int hwm = 8;
+  std::string stamp = "capture";
   app.add_option("topic", topic_name, "topic name")->required();
   app.add_option("--endpoint", endpoints, "bypass the registry: connect here");
   app.add_option("--window", window_s, "sliding window of the periodic lines, seconds")->check(CLI::PositiveNumber);
@@ -30,6 +31,10 @@ int run_probe_command(int argc, char** argv, ProbeKind kind) {
   app.add_option("--duration", duration_s, "exit after S seconds")->check(CLI::NonNegativeNumber);
   app.add_option("-n,--count", max_messages, "exit after N messages");
   app.add_option("--hwm", hwm, "receive queue depth (messages)")->check(CLI::Range(1, 1000));
+  if (kind == ProbeKind::Delay) {
+    app.add_option("--stamp", stamp, "header stamp to age against: capture (dataset time on replays) or publish")
+        ->check(CLI::IsMember({"capture", "publish"}));
+  }
   app.footer("Ends on Ctrl-C, --duration or -n and prints one `summary key=value ...` line.");
   CLI11_PARSE(app, argc, argv);
 
@@ -49,9 +54,9 @@ int run_probe_command(int argc, char** argv, ProbeKind kind) {
     stats::ProbeSample s{r->receive_mono_ns(), r->size_bytes(), stats::kNoDelay};
     if (kind == ProbeKind::Delay) {
       msgs::Header h;
-      if (extract_header(r->header(), &h) && h.capture_stamp_ns() > 0) {
-        s.delay_ns = r->receive_realtime_ns() - h.capture_stamp_ns();
-      }
+      const bool ok = extract_header(r->header(), &h);
+      const StampNs sent = stamp == "publish" ? h.publish_stamp_ns() : h.capture_stamp_ns();
+      if (ok && sent > 0) s.delay_ns = r->receive_realtime_ns() - sent;
     }
     return s;
   };
@@ -72,7 +77,7 @@ int run_probe_command(int argc, char** argv, ProbeKind kind) {
   std::printf("%s malformed=%llu end=\"%s\"\n", stats::format_summary(target.topic, result.total).c_str(),
               static_cast<unsigned long long>(sub.malformed()), stats::to_string(result.end));
   if (kind == ProbeKind::Delay && result.total.count > 0 && result.total.delay_ms.count == 0) {
-    std::fprintf(stderr, "no message carried header.capture_stamp_ns\n");
+    std::fprintf(stderr, "no message carried header.%s_stamp_ns\n", stamp.c_str());
   }
   return result.total.count > 0 && result.end != stats::ProbeEnd::ReceiveError ? 0 : 1;
 }
