@@ -1,0 +1,209 @@
+"""Wire protocol of Faultline (docs/protocol.md) for Python perception stacks.
+
+Frames arrive on a SUB socket as [topic][CameraFrame][payload]; after the last frame of a key-frame
+sample the source sends [/sync/sample][SampleBoundary] on the same socket, so frames and boundaries
+arrive in order. Detections go to the sink on a PUSH socket as [/detections][DetectionArray]. In
+lockstep replays the sink acknowledges each sample to the player: sending the DetectionArray is the
+detector's acknowledgement.
+"""
+import dataclasses
+import glob
+import importlib
+import os
+import sys
+import time
+from typing import Dict, Iterator, List, Optional
+
+import numpy as np
+import zmq
+
+CAMERAS = ("CAM_FRONT", "CAM_FRONT_RIGHT", "CAM_FRONT_LEFT", "CAM_BACK", "CAM_BACK_LEFT", "CAM_BACK_RIGHT")
+_RAW_CHANNELS = {"bgr8": 3, "rgb8": 3, "mono8": 1}
+
+
+def load_messages(msgs_dir: Optional[str] = None):
+    """Imports the generated *_pb2 modules; returns a namespace with CameraFrame, SampleBoundary, ...
+
+    Looks in msgs_dir, $FAULTLINE_PYTHON_MSGS, then build*/python/faultline_msgs next to the repo.
+    """
+    candidates = [msgs_dir, os.environ.get("FAULTLINE_PYTHON_MSGS")]
+    repo = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", "..", ".."))
+    candidates += sorted(glob.glob(os.path.join(repo, "build*", "python", "faultline_msgs")))
+    for path in candidates:
+        if path and os.path.isfile(os.path.join(path, "camera_frame_pb2.py")):
+            if path not in sys.path:
+                sys.path.insert(0, path)  # generated modules import each other by bare name
+            ns = type("Messages", (), {})()
+            for module, names in (("camera_frame_pb2", ("CameraFrame", "SampleBoundary")),
+                                  ("detection_pb2", ("Detection", "DetectionArray", "SampleAck")),
+                                  ("fault_pb2", ("FaultEvent", "FaultState")),
+                                  ("header_pb2", ("Header",))):
+                mod = importlib.import_module(module)
+                for name in names:
+                    setattr(ns, name, getattr(mod, name))
+            return ns
+    raise ImportError("Faultline protobuf modules not found: build the project (cmake --build build) or set "
+                      "FAULTLINE_PYTHON_MSGS to build/python/faultline_msgs")
+
+
+@dataclasses.dataclass
+class Frame:
+    camera: str
+    image: Optional[np.ndarray]      # H x W x 3 BGR (or H x W mono); None when a JPEG could not be decoded
+    encoding: str                    # encoding on the wire ("jpeg", "bgr8", ...)
+    intrinsics: np.ndarray           # 3 x 3
+    sensor_to_ego: np.ndarray        # 4 x 4
+    ego_to_global: np.ndarray        # 4 x 4
+    capture_stamp_ns: int
+    source_seq: int
+    sample_token: str
+    is_key_frame: bool
+    fault: object                    # faultline.msgs.FaultState (what the injector did)
+
+
+@dataclasses.dataclass
+class Sample:
+    token: str
+    scene_name: str
+    timestamp_us: int
+    frames: Dict[str, Frame]          # latest frame per camera for this sample (missing when dropped)
+    last_in_run: bool
+
+
+def _quat_to_matrix(q) -> np.ndarray:
+    w, x, y, z = q.w, q.x, q.y, q.z
+    n = np.sqrt(w * w + x * x + y * y + z * z) or 1.0
+    w, x, y, z = w / n, x / n, y / n, z / n
+    return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+                     [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+                     [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)]])
+
+
+def _transform(t) -> np.ndarray:
+    m = np.eye(4)
+    m[:3, :3] = _quat_to_matrix(t.rotation)
+    m[:3, 3] = (t.translation.x, t.translation.y, t.translation.z)
+    return m
+
+
+def decode_payload(header, payload: memoryview) -> Optional[np.ndarray]:
+    """Pixels of a frame as numpy (BGR order for colour); JPEG is decoded with OpenCV."""
+    if header.encoding == "jpeg":
+        import cv2  # python3-opencv
+        return cv2.imdecode(np.frombuffer(payload, np.uint8), cv2.IMREAD_COLOR)
+    channels = _RAW_CHANNELS.get(header.encoding)
+    if channels is None:
+        raise ValueError(f"unsupported encoding {header.encoding!r}")
+    rows = np.frombuffer(payload, np.uint8).reshape(header.height, header.step)
+    img = rows[:, : header.width * channels].reshape(header.height, header.width, channels)
+    if header.encoding == "rgb8":
+        img = img[:, :, ::-1]
+    return img if channels == 3 else img[:, :, 0]
+
+
+class FaultlineClient:
+    """Subscribes to faulted frames and publishes detections.
+
+    frames_endpoint / detections_endpoint default to $FAULTLINE_FRAMES and $FAULTLINE_DETECTIONS
+    (set by `faultline benchmark --detector-cmd`), else tcp://127.0.0.1:5601 and :5602.
+    """
+
+    def __init__(self, frames_endpoint: Optional[str] = None, detections_endpoint: Optional[str] = None,
+                 frame_prefix: Optional[str] = None, sync_topic: str = "/sync/sample",
+                 detector_name: str = "python", rcv_hwm: int = 64, msgs_dir: Optional[str] = None):
+        self.msgs = load_messages(msgs_dir)
+        self.frames_endpoint = frames_endpoint or os.environ.get("FAULTLINE_FRAMES", "tcp://127.0.0.1:5601")
+        self.detections_endpoint = detections_endpoint or os.environ.get("FAULTLINE_DETECTIONS",
+                                                                         "tcp://127.0.0.1:5602")
+        self.frame_prefix = (frame_prefix or os.environ.get("FAULTLINE_FRAME_PREFIX", "/faulty/")).encode()
+        self.sync_topic = sync_topic.encode()
+        self.detector_name = detector_name
+        self.ctx = zmq.Context.instance()
+        self.sub = self.ctx.socket(zmq.SUB)
+        self.sub.setsockopt(zmq.RCVHWM, rcv_hwm)
+        self.sub.setsockopt(zmq.LINGER, 0)
+        self.sub.setsockopt(zmq.MAXMSGSIZE, 64 << 20)
+        self.sub.setsockopt(zmq.SUBSCRIBE, self.frame_prefix)
+        self.sub.setsockopt(zmq.SUBSCRIBE, self.sync_topic)
+        self.sub.connect(self.frames_endpoint)
+        self.push = self.ctx.socket(zmq.PUSH)
+        self.push.setsockopt(zmq.LINGER, 2000)
+        self.push.setsockopt(zmq.IMMEDIATE, 1)
+        self.push.connect(self.detections_endpoint)
+        self.seq = 0
+        self.malformed = 0
+        self.frames_received = 0
+        self.transport_drops = 0
+        self._last_seq: Dict[bytes, int] = {}
+
+    def close(self):
+        self.sub.close(0)
+        self.push.close()
+
+    def _count_gap(self, topic: bytes, header) -> None:
+        key = topic + b"|" + header.publisher.encode()
+        last = self._last_seq.get(key)
+        if last is not None and header.seq > last + 1:
+            self.transport_drops += header.seq - last - 1
+        self._last_seq[key] = header.seq
+
+    def samples(self, timeout_s: Optional[float] = None, decode: bool = True) -> Iterator[Sample]:
+        """Yields one Sample per SampleBoundary; stops after last_in_run or timeout_s without traffic."""
+        pending: Dict[str, Frame] = {}
+        poller = zmq.Poller()
+        poller.register(self.sub, zmq.POLLIN)
+        while True:
+            events = dict(poller.poll(None if timeout_s is None else int(timeout_s * 1000)))
+            if self.sub not in events:
+                return
+            parts = self.sub.recv_multipart(copy=False)
+            topic = parts[0].bytes
+            try:
+                if topic == self.sync_topic and len(parts) == 2:
+                    b = self.msgs.SampleBoundary.FromString(parts[1].bytes)
+                    frames = {c: f for c, f in pending.items() if f.sample_token == b.sample_token}
+                    pending = {c: f for c, f in pending.items() if f.sample_token != b.sample_token}
+                    yield Sample(b.sample_token, b.scene_name, b.timestamp_us, frames, b.last_in_run)
+                    if b.last_in_run:
+                        return
+                elif len(parts) == 3:
+                    h = self.msgs.CameraFrame.FromString(parts[1].bytes)
+                    payload = parts[2].buffer
+                    if h.payload_bytes and h.payload_bytes != len(payload):
+                        raise ValueError("payload size mismatch")
+                    self._count_gap(topic, h.header)
+                    self.frames_received += 1
+                    if not h.is_key_frame:
+                        continue  # sweeps: a temporal model would consume them here
+                    image = decode_payload(h, payload) if decode else None
+                    pending[h.camera] = Frame(
+                        h.camera, image, h.encoding, np.array(h.intrinsics, float).reshape(3, 3),
+                        _transform(h.sensor_to_ego), _transform(h.ego_pose), h.header.capture_stamp_ns,
+                        h.source_seq, h.sample_token, h.is_key_frame, h.fault)
+                else:
+                    raise ValueError(f"{len(parts)} frames")
+            except Exception:  # a malformed message is counted and skipped, never fatal
+                self.malformed += 1
+
+    def publish(self, sample_token: str, boxes: List[dict], processing_ns: int = 0) -> None:
+        """Sends nuScenes boxes (dicts with translation, size, rotation, velocity, detection_name,
+        detection_score, attribute_name) for one sample to the sink."""
+        arr = self.msgs.DetectionArray()
+        self.seq += 1
+        arr.header.seq = self.seq
+        arr.header.publish_stamp_ns = time.time_ns()
+        arr.header.publish_mono_ns = time.monotonic_ns()
+        arr.header.publisher = self.detector_name
+        arr.sample_token = sample_token
+        arr.detector = self.detector_name
+        arr.processing_ns = processing_ns
+        for b in boxes:
+            d = arr.detections.add()
+            d.translation.extend(float(v) for v in b["translation"])
+            d.size.extend(float(v) for v in b["size"])
+            d.rotation.extend(float(v) for v in b["rotation"])
+            d.velocity.extend(float(v) for v in b.get("velocity", (0.0, 0.0)))
+            d.detection_name = b["detection_name"]
+            d.detection_score = float(b["detection_score"])
+            d.attribute_name = b.get("attribute_name", "")
+        self.push.send_multipart([b"/detections", arr.SerializeToString()])
