@@ -84,6 +84,9 @@ Result<RecoverReport> recover_bag(const std::string& in, const std::string& out,
   report.chunks = scan->chunks;
   report.bad_chunks = scan->bad_chunks;
   report.had_footer = scan->footer_found;
+  if ((*reader)->load_summary() && (*reader)->summary().statistics) {
+    report.summary_messages = (*reader)->summary().statistics->message_count;
+  }
   report.valid_bytes = scan->valid_end;
   report.lost_tail_bytes = scan->footer_found ? 0 : report.input_bytes - scan->valid_end;
   return report;

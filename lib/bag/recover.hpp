@@ -23,6 +23,7 @@ struct RecoverReport {
   std::uint64_t valid_bytes = 0;     // input prefix made of complete records
   std::uint64_t lost_tail_bytes = 0; // input bytes after it (an incomplete record)
   bool had_footer = false;
+  std::optional<std::uint64_t> summary_messages;  // the input's Statistics count, if its summary is intact
   std::vector<Problem> problems;
 };
 

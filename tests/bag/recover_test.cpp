@@ -1,6 +1,7 @@
 // Recovery of bags cut short (SIGKILL leaves no footer): the output is indexed and intact, and
 // holds exactly the messages of the complete chunks.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <filesystem>
 #include <fstream>
@@ -125,6 +126,15 @@ TEST_F(RecoverTest, InspectNamesTheOffsetOfABrokenChunk) {
   for (const auto& p : info->problems) named |= p.offset == ci.chunk_start_offset;
   EXPECT_TRUE(named);
   EXPECT_EQ(info->data_crc_status, "MISMATCH");
+
+  // Recovery skips the damaged chunk and counts the loss against the summary's statistics.
+  auto report = recover_bag((dir_ / "broken.mcap").string(), (dir_ / "fixed.mcap").string());
+  ASSERT_TRUE(report.is_ok());
+  EXPECT_EQ(report->bad_chunks, 1u);
+  ASSERT_TRUE(report->summary_messages.has_value());
+  EXPECT_EQ(*report->summary_messages, 30u);
+  EXPECT_LT(report->messages, 30u);
+  EXPECT_GT(report->messages, 0u);
 }
 
 }  // namespace

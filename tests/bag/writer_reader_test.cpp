@@ -1,6 +1,7 @@
 // Round trips through the MCAP writer and reader: every compression, indexes, metadata, split.
 #include <google/protobuf/descriptor.pb.h>
 #include <gtest/gtest.h>
+#include <unistd.h>
 #include <zlib.h>
 
 #include <filesystem>

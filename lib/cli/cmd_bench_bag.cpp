@@ -1,0 +1,201 @@
+// `faultline bench bag`: write/read throughput of a 6-camera recording and compressed size per
+// compression, measured on synthetic 1600x900 frames (JPEG ~400 KB and raw bgr8).
+#include <CLI/CLI.hpp>
+
+#include <time.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+#include <string>
+#include <vector>
+
+#include "bag/foxglove.hpp"
+#include "bag/reader.hpp"
+#include "bag/writer.hpp"
+#include "cli/command.hpp"
+
+namespace faultline::cli {
+namespace {
+
+const char* const kCameras[] = {"CAM_FRONT", "CAM_FRONT_LEFT", "CAM_FRONT_RIGHT",
+                                "CAM_BACK", "CAM_BACK_LEFT", "CAM_BACK_RIGHT"};
+
+double cpu_seconds() {
+  timespec ts{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+  return static_cast<double>(ts.tv_sec) + static_cast<double>(ts.tv_nsec) * 1e-9;
+}
+
+double wall_seconds() {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
+}
+
+double median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  return v.empty() ? 0.0 : v[v.size() / 2];
+}
+
+// A street-like synthetic frame: smooth gradients, blocks of texture and sensor noise.
+cv::Mat synthetic_frame(int seed) {
+  cv::Mat img(900, 1600, CV_8UC3);
+  for (int y = 0; y < img.rows; ++y) {
+    for (int x = 0; x < img.cols; ++x) {
+      img.at<cv::Vec3b>(y, x) = cv::Vec3b(static_cast<uchar>((x / 7 + seed * 20) % 256),
+                                          static_cast<uchar>((y / 4 + 60) % 256),
+                                          static_cast<uchar>((x + y) / 10 % 256));
+    }
+  }
+  cv::RNG rng(static_cast<std::uint64_t>(seed) + 1);
+  for (int i = 0; i < 120; ++i) {
+    const cv::Point p(rng.uniform(0, 1600), rng.uniform(0, 900));
+    cv::rectangle(img, p, p + cv::Point(rng.uniform(20, 200), rng.uniform(20, 150)),
+                  cv::Scalar(rng.uniform(0, 255), rng.uniform(0, 255), rng.uniform(0, 255)), cv::FILLED);
+  }
+  cv::Mat noise(img.size(), CV_16SC3);
+  rng.fill(noise, cv::RNG::NORMAL, 0, 6);
+  cv::Mat out;
+  img.convertTo(out, CV_16SC3);
+  out += noise;
+  out.convertTo(img, CV_8UC3);
+  return img;
+}
+
+// JPEG whose size is closest to target_bytes over a few qualities.
+std::string jpeg_near(const cv::Mat& img, std::size_t target_bytes) {
+  std::vector<uchar> best;
+  for (int q = 70; q <= 98; q += 4) {
+    std::vector<uchar> buf;
+    cv::imencode(".jpg", img, buf, {cv::IMWRITE_JPEG_QUALITY, q});
+    const auto dist = [&](const std::vector<uchar>& b) {
+      return b.size() > target_bytes ? b.size() - target_bytes : target_bytes - b.size();
+    };
+    if (best.empty() || dist(buf) < dist(best)) best = buf;
+  }
+  return {best.begin(), best.end()};
+}
+
+struct RunFigures {
+  double cpu_s = 0, wall_s = 0, read_wall_s = 0, read_cpu_s = 0;
+  std::uint64_t raw_bytes = 0, file_bytes = 0, chunks = 0, chunks_stored_raw = 0, messages = 0;
+};
+
+// Writes frames_per_camera x 6 images round-robin at 12 Hz, as fast as possible; then reads back.
+RunFigures run_once(const std::string& path, bag::Compression compression, int frames_per_camera,
+                    const std::vector<std::string>& payloads, bool raw) {
+  RunFigures f;
+  bag::WriterOptions opts;
+  opts.compression = compression;
+  const double cpu0 = cpu_seconds(), wall0 = wall_seconds();
+  {
+    auto w = bag::Writer::open(path, opts);
+    if (!w) return f;
+    std::vector<std::uint16_t> channels;
+    for (const char* cam : kCameras) {
+      channels.push_back(raw ? *(*w)->channel_for<foxglove::RawImage>("/" + bag::camera_frame_id(cam) + "/image_raw")
+                             : *(*w)->channel_for<foxglove::CompressedImage>(bag::image_topic(cam)));
+    }
+    msgs::CameraFrame frame;
+    frame.set_width(1600);
+    frame.set_height(900);
+    frame.set_step(1600 * 3);
+    frame.set_encoding(raw ? "bgr8" : "jpeg");
+    const StampNs t0 = 1'533'151'603'000'000'000;
+    for (int i = 0; i < frames_per_camera; ++i) {
+      for (std::size_t c = 0; c < 6; ++c) {
+        const StampNs t = t0 + i * 83'333'333LL + static_cast<StampNs>(c) * 1'000'000;
+        frame.set_camera(kCameras[c]);
+        frame.mutable_header()->set_capture_stamp_ns(t);
+        const std::string& payload = payloads[(static_cast<std::size_t>(i) * 6 + c) % payloads.size()];
+        const Status s = raw ? (*w)->write_proto(channels[c], static_cast<std::uint64_t>(i), t, t,
+                                                 bag::to_raw_image(frame, payload))
+                             : (*w)->write_proto(channels[c], static_cast<std::uint64_t>(i), t, t,
+                                                 bag::to_compressed_image(frame, payload));
+        if (!s) return f;
+      }
+    }
+    if (!(*w)->close()) return f;
+    f.raw_bytes = (*w)->stats().message_bytes;
+    f.file_bytes = (*w)->stats().file_bytes;
+    f.chunks = (*w)->stats().chunks;
+    f.chunks_stored_raw = (*w)->stats().chunks_stored_raw;
+    f.messages = (*w)->stats().messages;
+  }
+  f.cpu_s = cpu_seconds() - cpu0;
+  f.wall_s = wall_seconds() - wall0;
+  const double rcpu0 = cpu_seconds(), rwall0 = wall_seconds();
+  auto reader = bag::Reader::open(path);
+  if (reader) {
+    std::uint64_t n = 0;
+    (void)(*reader)->read_linear({}, [&](const bag::MessageView&) { return ++n > 0; });
+  }
+  f.read_cpu_s = cpu_seconds() - rcpu0;
+  f.read_wall_s = wall_seconds() - rwall0;
+  std::filesystem::remove(path);
+  return f;
+}
+
+int run(int argc, char** argv) {
+  CLI::App app{"Bag throughput: 6 cameras x 12 Hz of ~400 KB JPEGs written as fast as possible "
+               "(CPU per second of data), linear read speed (x real time), and stored vs raw size "
+               "for JPEG and raw bgr8 frames with each compression. Medians over --repeats runs."};
+  int seconds = 60, repeats = 3, raw_seconds = 1;
+  std::string dir = std::filesystem::temp_directory_path().string();
+  app.add_option("--seconds", seconds, "seconds of JPEG data per run")->check(CLI::Range(1, 3600));
+  app.add_option("--raw-seconds", raw_seconds, "seconds of raw bgr8 data per run")->check(CLI::Range(1, 600));
+  app.add_option("--repeats", repeats, "runs per configuration (median reported)")->check(CLI::Range(1, 50));
+  app.add_option("--dir", dir, "scratch directory for the bags (deleted after each run)");
+  CLI11_PARSE(app, argc, argv);
+
+  std::vector<cv::Mat> frames;
+  std::vector<std::string> jpegs, raws;
+  for (int s = 0; s < 12; ++s) {
+    frames.push_back(synthetic_frame(s));
+    jpegs.push_back(jpeg_near(frames.back(), 400 * 1024));
+    raws.emplace_back(reinterpret_cast<const char*>(frames.back().data), frames.back().total() * 3);
+  }
+  double jpeg_mean = 0;
+  for (const auto& j : jpegs) jpeg_mean += static_cast<double>(j.size()) / jpegs.size();
+  std::printf("payloads: 12 synthetic 1600x900 frames; JPEG mean %.0f KB; raw bgr8 %zu KB\n",
+              jpeg_mean / 1024, raws[0].size() / 1024);
+  std::printf("%-6s %-5s %8s %10s %12s %11s %12s %10s %9s\n", "data", "comp", "msgs", "cpu ms/s",
+              "core %", "write MB/s", "read x real", "stored/raw", "raw chunks");
+  for (const bool raw : {false, true}) {
+    const int data_s = raw ? raw_seconds : seconds;
+    for (const bag::Compression c : {bag::Compression::kNone, bag::Compression::kZstd, bag::Compression::kLz4}) {
+      std::vector<double> cpu, wall, read_x, ratio;
+      RunFigures last;
+      for (int r = 0; r < repeats; ++r) {
+        const std::string path = dir + "/faultline_bench_bag_" + std::to_string(::getpid()) + ".mcap";
+        last = run_once(path, c, data_s * 12, raw ? raws : jpegs, raw);
+        if (last.messages == 0) {
+          std::fprintf(stderr, "bench bag: writing %s failed\n", path.c_str());
+          return 1;
+        }
+        cpu.push_back(last.cpu_s);
+        wall.push_back(last.wall_s);
+        read_x.push_back(static_cast<double>(data_s) / last.read_wall_s);
+        ratio.push_back(static_cast<double>(last.file_bytes) / static_cast<double>(last.raw_bytes));
+      }
+      const double cpu_med = median(cpu);
+      std::printf("%-6s %-5s %8llu %10.1f %11.1f%% %11.0f %11.1fx %10.3f %5llu/%llu\n", raw ? "bgr8" : "jpeg",
+                  bag::display_name(c), static_cast<unsigned long long>(last.messages),
+                  1000.0 * cpu_med / data_s, 100.0 * cpu_med / data_s,
+                  static_cast<double>(last.raw_bytes) / 1e6 / median(wall), median(read_x), median(ratio),
+                  static_cast<unsigned long long>(last.chunks_stored_raw),
+                  static_cast<unsigned long long>(last.chunks));
+    }
+  }
+  std::printf("cpu ms/s = process CPU per second of recorded data (incl. protobuf wrapping, CRC, "
+              "compression, write syscalls); read = linear read with decompression and chunk CRCs.\n");
+  return 0;
+}
+
+}  // namespace
+FAULTLINE_COMMAND(bench_bag, "bench bag", "bag write/read throughput and compressed size", &run);
+}  // namespace faultline::cli
