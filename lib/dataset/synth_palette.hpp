@@ -8,8 +8,8 @@
 // | car                  | vehicle.car                 | ( 30,  30, 220) | 0     | 1.9 x 4.6 x 1.7            |
 // | truck                | vehicle.truck               | (  0, 140, 255) | 33    | 2.5 x 7.5 x 3.2            |
 // | bus                  | vehicle.bus.rigid           | (  0, 220, 240) | 55    | 2.9 x 11.5 x 3.4           |
-// | trailer              | vehicle.trailer             | (  0, 230, 128) | 90    | (not generated)            |
-// | construction_vehicle | vehicle.construction        | ( 60, 180,   0) | 130   | (not generated)            |
+// | trailer              | vehicle.trailer             | (  0, 230, 128) | 90    | 2.6 x 10.5 x 3.75 (parked) |
+// | construction_vehicle | vehicle.construction        | ( 60, 180,   0) | 130   | 2.8 x 6.8 x 3.2 (parked)   |
 // | pedestrian           | human.pedestrian.adult      | (255,   0, 255) | 300   | 0.65 x 0.7 x 1.75          |
 // | motorcycle           | vehicle.motorcycle          | (255,  90,   0) | 219   | 0.8 x 2.1 x 1.5            |
 // | bicycle              | vehicle.bicycle             | (230, 230,   0) | 180   | 0.6 x 1.75 x 1.3           |

@@ -28,7 +28,8 @@ Actor sized(SynthClass cls, std::mt19937_64& rng) {
     case SynthClass::kBicycle: a.width = 0.6; a.length = uniform(rng, 1.7, 1.8); a.height = 1.3; break;
     case SynthClass::kTrafficCone: a.width = 0.4; a.length = 0.4; a.height = uniform(rng, 0.7, 0.8); break;
     case SynthClass::kBarrier: a.width = uniform(rng, 2.2, 2.5); a.length = 0.5; a.height = 1.0; break;
-    default: a.width = 2.5; a.length = 6; a.height = 3; break;
+    case SynthClass::kTrailer: a.width = 2.6; a.length = uniform(rng, 9, 12); a.height = uniform(rng, 3.5, 4.0); break;
+    case SynthClass::kConstructionVehicle: a.width = 2.8; a.length = uniform(rng, 6, 7.5); a.height = 3.2; break;
   }
   return a;
 }
@@ -118,10 +119,12 @@ SynthWorld make_world(std::mt19937_64& rng, double duration_s) {
     fill_lane(rng, &a, d, v, s_lo, s_hi - v * duration_s);
   }
 
-  // Parked cars on the left parking strip.
+  // Parked vehicles on the left parking strip: mostly cars, some trucks, trailers and construction vehicles.
   for (double s = s_lo; s < s_hi; s += uniform(rng, 6.5, 9)) {
     if (!chance(rng, 0.55)) continue;
-    Actor p = sized(chance(rng, 0.9) ? SynthClass::kCar : SynthClass::kTruck, rng);
+    const double r = uniform(rng, 0, 1);
+    Actor p = sized(r < 0.76 ? SynthClass::kCar : r < 0.84 ? SynthClass::kTruck
+                    : r < 0.92 ? SynthClass::kTrailer : SynthClass::kConstructionVehicle, rng);
     p.motion = Motion::kParked;
     p.d = 8.5;
     p.s0 = s;

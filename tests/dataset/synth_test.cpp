@@ -152,6 +152,16 @@ TEST_F(SynthTest, SampleTimestampEqualsLidarKeyFrame) {
   }
 }
 
+TEST_F(SynthTest, CountFramesAgreesWithLoadedFrames) {
+  auto counts = reader_->count_frames();
+  ASSERT_TRUE(counts.is_ok()) << counts.status().message();
+  ASSERT_EQ(counts->size(), 1u);
+  const SceneFrameCounts& c = counts->begin()->second;
+  EXPECT_EQ(c.camera_frames, static_cast<std::int64_t>(frames_->size()));
+  EXPECT_EQ(c.camera_key_frames, 4 * 6);
+  EXPECT_EQ(c.camera_frames + c.other_frames, summary_->sample_data);
+}
+
 TEST_F(SynthTest, FramesAreSortedByTimeThenChannel) {
   const auto& ch = camera_channels();
   const auto rank = [&](const std::string& c) { return std::find(ch.begin(), ch.end(), c) - ch.begin(); };
