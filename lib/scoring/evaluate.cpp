@@ -4,6 +4,7 @@
 #include <chrono>
 #include <filesystem>
 #include <fstream>
+#include <future>
 #include <unordered_set>
 
 #include "scoring/ground_truth.hpp"
@@ -50,17 +51,35 @@ Result<EvalOutcome> evaluate_detection(const EvalOptions& opts, std::FILE* log) 
     scope.samples = std::move(*tokens);
   }
   logf(log, "Initializing nuScenes detection evaluation");
-  auto sub = read_submission(opts.results_path, scope);
-  if (!sub) return sub.status();
-  logf(log, "Loaded results from " + opts.results_path + ". Found detections for " +
-                std::to_string(sub->boxes.sample_tokens.size()) + " samples.");
+  // The GT depends only on the split, so it loads on a second thread while the submission is parsed.
+  // A predefined split's version check still comes after the submission checks, as in the devkit.
+  std::vector<std::string> predefined_scenes;
+  Status split_status;
   if (predefined) {
     auto names = predefined_split_scenes(opts.eval_set, opts.version);
-    if (!names) return names.status();
-    scenes = std::move(*names);
+    if (names) {
+      predefined_scenes = std::move(*names);
+    } else {
+      split_status = names.status();
+    }
   }
+  const std::vector<std::string>& gt_scenes = predefined ? predefined_scenes : scenes;
+  std::future<Result<GroundTruth>> gt_future;
+  if (split_status.is_ok()) {
+    gt_future = std::async(std::launch::async, [&opts, &gt_scenes] {
+      return load_ground_truth(opts.dataroot, opts.version, gt_scenes);
+    });
+  }
+  auto sub = read_submission(opts.results_path, scope);
+  if (!sub) {
+    if (gt_future.valid()) gt_future.wait();
+    return sub.status();
+  }
+  logf(log, "Loaded results from " + opts.results_path + ". Found detections for " +
+                std::to_string(sub->boxes.sample_tokens.size()) + " samples.");
+  if (!split_status.is_ok()) return split_status;
   logf(log, "Loading annotations for " + opts.eval_set + " split from nuScenes version: " + opts.version);
-  auto gt = load_ground_truth(opts.dataroot, opts.version, scenes);
+  auto gt = gt_future.get();
   if (!gt) return gt.status();
   logf(log, "Loaded ground truth annotations for " + std::to_string(gt->boxes.sample_tokens.size()) +
                 " samples.");
@@ -119,10 +138,23 @@ Result<EvalOutcome> evaluate_detection(const EvalOptions& opts, std::FILE* log) 
   log_counts(log, out.gt_counts);
 
   logf(log, "Accumulating metric data...");
-  for (int c = 0; c < kNumClasses; ++c) {
-    auto mds = accumulate_class(gt->boxes, sub->boxes, c);
-    if (!mds) return Status(mds.status().code(), opts.results_path + ": " + mds.status().message());
-    out.curves[static_cast<std::size_t>(c)] = std::move(*mds);
+  // Classes are independent: odd classes on a second thread (read-only shared inputs).
+  std::array<Status, kNumClasses> class_status;
+  auto run_classes = [&](int first) {
+    for (int c = first; c < kNumClasses; c += 2) {
+      auto mds = accumulate_class(gt->boxes, sub->boxes, c);
+      if (mds) {
+        out.curves[static_cast<std::size_t>(c)] = std::move(*mds);
+      } else {
+        class_status[static_cast<std::size_t>(c)] = mds.status();
+      }
+    }
+  };
+  auto odd = std::async(std::launch::async, run_classes, 1);
+  run_classes(0);
+  odd.get();
+  for (const Status& st : class_status) {
+    if (!st) return Status(st.code(), opts.results_path + ": " + st.message());
   }
   logf(log, "Calculating metrics...");
   out.metrics = compute_metrics(out.curves);
