@@ -6,8 +6,8 @@
 // | class                | nuScenes category           | BGR             | hue   | typical size w x l x h (m) |
 // |----------------------|-----------------------------|-----------------|-------|----------------------------|
 // | car                  | vehicle.car                 | ( 30,  30, 220) | 0     | 1.9 x 4.6 x 1.7            |
-// | truck                | vehicle.truck               | (  0, 140, 255) | 33    | 2.5 x 7.5 x 3.2            |
-// | bus                  | vehicle.bus.rigid           | (  0, 220, 240) | 55    | 2.9 x 11.5 x 3.4           |
+// | truck                | vehicle.truck               | (  0, 120, 255) | 28    | 2.5 x 7.5 x 3.2            |
+// | bus                  | vehicle.bus.rigid           | (  0, 230, 230) | 60    | 2.9 x 11.5 x 3.4           |
 // | trailer              | vehicle.trailer             | (  0, 230, 128) | 90    | 2.6 x 10.5 x 3.75 (parked) |
 // | construction_vehicle | vehicle.construction        | ( 60, 180,   0) | 130   | 2.8 x 6.8 x 3.2 (parked)   |
 // | pedestrian           | human.pedestrian.adult      | (255,   0, 255) | 300   | 0.65 x 0.7 x 1.75          |
@@ -40,8 +40,8 @@ struct SynthClassStyle {
 // Indexed by SynthClass; order = the devkit's detection class order.
 constexpr std::array<SynthClassStyle, kSynthClassCount> kSynthPalette = {{
     {"car", "vehicle.car", {30, 30, 220}},
-    {"truck", "vehicle.truck", {0, 140, 255}},
-    {"bus", "vehicle.bus.rigid", {0, 220, 240}},
+    {"truck", "vehicle.truck", {0, 120, 255}},
+    {"bus", "vehicle.bus.rigid", {0, 230, 230}},
     {"trailer", "vehicle.trailer", {0, 230, 128}},
     {"construction_vehicle", "vehicle.construction", {60, 180, 0}},
     {"pedestrian", "human.pedestrian.adult", {255, 0, 255}},

@@ -279,7 +279,8 @@ TEST_F(SynthTest, AnnotationTracksAreChainedWithPointsAndClassAttributes) {
   for (const char* c : {"vehicle.car", "human.pedestrian.adult"}) EXPECT_TRUE(classes.count(c)) << c;
 }
 
-// Fraction of pixels in `roi` whose colour is a shaded version of `body` (p ~ k * body for some k).
+// Fraction of pixels in `roi` whose colour is a shaded version of `body`: p ~ k * body, i.e. the colour direction is
+// within ~6 degrees of the body colour's (shading scales brightness only).
 double ColourFraction(const cv::Mat& img, const cv::Rect& roi, const Bgr& body) {
   int match = 0;
   const double bb = body[0] * body[0] + body[1] * body[1] + body[2] * body[2];
@@ -289,7 +290,8 @@ double ColourFraction(const cv::Mat& img, const cv::Rect& roi, const Bgr& body) 
       const double k = (p[0] * body[0] + p[1] * body[1] + p[2] * body[2]) / bb;
       double err = 0;
       for (int c = 0; c < 3; ++c) err += std::pow(p[c] - k * body[static_cast<std::size_t>(c)], 2);
-      match += k > 0.3 && std::sqrt(err) < 30 ? 1 : 0;
+      const double norm = std::sqrt(static_cast<double>(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]));
+      match += k > 0.3 && std::sqrt(err) < 0.1 * norm ? 1 : 0;
     }
   }
   return static_cast<double>(match) / std::max(1, roi.area());
