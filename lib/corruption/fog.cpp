@@ -11,79 +11,82 @@
 namespace faultline::corruption {
 namespace {
 
-// Returns the normalised top-left rows x cols crop of the plasma map (the full map when rows = cols = mapsize);
-// normalising only the crop gives the same doubles as normalising the full map and cropping.
+// Returns the normalised top-left rows x cols crop of the plasma map (the full map when rows = cols = mapsize).
+// Level by level: the corner grid of step s (n x n) plus the three passes' points form the corner grid of step
+// s/2 (2n x 2n), written sequentially instead of strided into an N x N map. The last level only tracks min/max
+// and keeps the crop. Same draws, same sums, same doubles as the reference's in-place map.
 template <typename Rng>
 cv::Mat plasma_impl(int mapsize, double decay, Rng& rng, int crop_rows, int crop_cols) {
-  const int n_map = mapsize;
-  std::vector<double> m(static_cast<std::size_t>(n_map) * static_cast<std::size_t>(n_map), 0.0);
-  auto at = [&](int r, int c) -> double& {
-    return m[static_cast<std::size_t>(r) * static_cast<std::size_t>(n_map) + static_cast<std::size_t>(c)];
-  };
-  m[0] = 0.0;
-  int step = n_map;
+  std::vector<double> corner(1, 0.0), centre, next;
+  cv::Mat out(crop_rows, crop_cols, CV_64F, cv::Scalar(0.0));
+  double mn = 0.0, mx = 0.0;  // M[0,0] = 0 is part of the map
+  int n = 1;
   double w = 100.0;
-  std::vector<double> corner, centre;
-  while (step >= 2) {
-    const int h = step / 2;
-    const int n = n_map / step;
-    corner.assign(static_cast<std::size_t>(n * n), 0.0);
-    centre.assign(static_cast<std::size_t>(n * n), 0.0);
-    for (int i = 0; i < n; ++i) {
-      for (int j = 0; j < n; ++j) corner[static_cast<std::size_t>(i * n + j)] = at(i * step, j * step);
-    }
+  if (mapsize == 1) return out;
+  auto idx = [](int r, int c, int stride) {
+    return static_cast<std::size_t>(r) * static_cast<std::size_t>(stride) + static_cast<std::size_t>(c);
+  };
+  while (n < mapsize) {
+    const int n2 = 2 * n;
+    const bool last = n2 == mapsize;
     const double lo = -w, span = w - (-w);
-    auto next = [n](int i) { return i + 1 == n ? 0 : i + 1; };
-    auto prev = [n](int i) { return i == 0 ? n - 1 : i - 1; };
-    const double* cg = corner.data();
-    double* dg = centre.data();
+    auto next_i = [n](int i) { return i + 1 == n ? 0 : i + 1; };
+    auto prev_i = [n](int i) { return i == 0 ? n - 1 : i - 1; };
+    auto put = [&](int r, int c, double v) {
+      if (last) {
+        mn = std::min(mn, v);
+        mx = std::max(mx, v);
+        if (r < crop_rows && c < crop_cols) out.at<double>(r, c) = v;
+      } else {
+        next[idx(r, c, n2)] = v;
+      }
+    };
+    if (!last) next.assign(static_cast<std::size_t>(n2) * static_cast<std::size_t>(n2), 0.0);
     // Squares: centres from the four corners.
+    centre.resize(static_cast<std::size_t>(n) * static_cast<std::size_t>(n));
     for (int i = 0; i < n; ++i) {
-      const double* c0 = cg + static_cast<std::size_t>(i) * n;
-      const double* c1 = cg + static_cast<std::size_t>(next(i)) * n;
-      double* drow = dg + static_cast<std::size_t>(i) * n;
-      double* mrow = &at(i * step + h, 0);
+      const double* c0 = &corner[idx(i, 0, n)];
+      const double* c1 = &corner[idx(next_i(i), 0, n)];
+      double* d = &centre[idx(i, 0, n)];
       for (int j = 0; j < n; ++j) {
-        const int j1 = next(j);
-        const double sum = (c0[j] + c1[j]) + (c0[j1] + c1[j1]);
-        const double v = sum / 4 + w * (lo + span * rng.random_sample());
-        drow[j] = v;
-        mrow[j * step + h] = v;
+        const int j1 = next_i(j);
+        d[j] = ((c0[j] + c1[j]) + (c0[j1] + c1[j1])) / 4 + w * (lo + span * rng.random_sample());
+      }
+    }
+    for (int i = 0; i < n; ++i) {
+      for (int j = 0; j < n; ++j) {
+        put(2 * i, 2 * j, corner[idx(i, j, n)]);
+        put(2 * i + 1, 2 * j + 1, centre[idx(i, j, n)]);
       }
     }
     // Diamonds, horizontal-edge points (use the new centres).
     for (int i = 0; i < n; ++i) {
-      const double* d0 = dg + static_cast<std::size_t>(i) * n;
-      const double* dp = dg + static_cast<std::size_t>(prev(i)) * n;
-      const double* c0 = cg + static_cast<std::size_t>(i) * n;
-      double* mrow = &at(i * step, 0);
+      const double* d0 = &centre[idx(i, 0, n)];
+      const double* dp = &centre[idx(prev_i(i), 0, n)];
+      const double* c0 = &corner[idx(i, 0, n)];
       for (int j = 0; j < n; ++j) {
-        const double sum = (d0[j] + dp[j]) + (c0[j] + c0[next(j)]);
-        mrow[j * step + h] = sum / 4 + w * (lo + span * rng.random_sample());
+        const double sum = (d0[j] + dp[j]) + (c0[j] + c0[next_i(j)]);
+        put(2 * i, 2 * j + 1, sum / 4 + w * (lo + span * rng.random_sample()));
       }
     }
     // Diamonds, vertical-edge points (do not read the horizontal-edge points).
     for (int i = 0; i < n; ++i) {
-      const double* d0 = dg + static_cast<std::size_t>(i) * n;
-      const double* c0 = cg + static_cast<std::size_t>(i) * n;
-      const double* c1 = cg + static_cast<std::size_t>(next(i)) * n;
-      double* mrow = &at(i * step + h, 0);
+      const double* d0 = &centre[idx(i, 0, n)];
+      const double* c0 = &corner[idx(i, 0, n)];
+      const double* c1 = &corner[idx(next_i(i), 0, n)];
       for (int j = 0; j < n; ++j) {
-        const double sum = (d0[j] + d0[prev(j)]) + (c0[j] + c1[j]);
-        mrow[j * step] = sum / 4 + w * (lo + span * rng.random_sample());
+        const double sum = (d0[j] + d0[prev_i(j)]) + (c0[j] + c1[j]);
+        put(2 * i + 1, 2 * j, sum / 4 + w * (lo + span * rng.random_sample()));
       }
     }
-    step /= 2;
+    if (!last) corner.swap(next);
+    n = n2;
     w /= decay;
   }
-  const auto [mn_it, mx_it] = std::minmax_element(m.begin(), m.end());
-  const double mn = *mn_it;
-  const double range = *mx_it - mn;  // == max(M - min) exactly: subtraction is monotone
-  cv::Mat out(crop_rows, crop_cols, CV_64F);
+  const double range = mx - mn;  // == max(M - min) exactly: subtraction is monotone
   for (int r = 0; r < crop_rows; ++r) {
-    const double* src = &at(r, 0);
-    double* dst = out.ptr<double>(r);
-    for (int c = 0; c < crop_cols; ++c) dst[c] = (src[c] - mn) / range;
+    double* p = out.ptr<double>(r);
+    for (int c = 0; c < crop_cols; ++c) p[c] = (p[c] - mn) / range;
   }
   return out;
 }

@@ -7,6 +7,7 @@
 
 #include "corruption/brightness.hpp"
 #include "corruption/color_quant.hpp"
+#include "corruption/fog.hpp"
 #include "corruption/corrupt.hpp"
 #include "corruption/test_images.hpp"
 
@@ -199,6 +200,20 @@ TEST(BrightnessPathsTest, TablePathEqualsHsvMirrorOnEveryColourClass) {
   }
   for (int sev = 1; sev <= 5; ++sev) {
     EXPECT_EQ(cv::norm(brightness_fast(img, sev), brightness_exact(img, sev), cv::NORM_INF), 0.0) << sev;
+  }
+}
+
+TEST(FogFractalTest, CropEqualsFullMapCropAndConsumesTheSameDraws) {
+  for (int n : {4, 64, 256}) {
+    rng::NumpyRandomState a(8), b(8);
+    const cv::Mat full = plasma_fractal(n, 1.7, a);
+    const cv::Mat crop = plasma_fractal_crop(n, 1.7, b, n / 2 + 1, n - 1);
+    EXPECT_EQ(cv::norm(full(cv::Rect(0, 0, n - 1, n / 2 + 1)), crop, cv::NORM_INF), 0.0) << n;
+    EXPECT_EQ(a.random_sample(), b.random_sample());
+    double lo = 0, hi = 0;
+    cv::minMaxLoc(full, &lo, &hi);
+    EXPECT_EQ(lo, 0.0);
+    EXPECT_EQ(hi, 1.0);
   }
 }
 
