@@ -596,6 +596,9 @@ Result<SynthSummary> write_synthetic_dataset(const SynthOptions& opt, const Synt
       progress("scenes", i + 1, opt.scenes);
     }
   }
+  if (progress && sh.summary.images_written > 0) {  // the per-scene total above is an estimate; end on the real count
+    progress("images", sh.summary.images_written, sh.summary.images_written);
+  }
   auto& map = sh.tables["map"];
   std::vector<unsigned char> png;
   cv::imencode(".png", cv::Mat(2, 2, CV_8UC1, cv::Scalar(0)), png);
