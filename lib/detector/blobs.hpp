@@ -1,0 +1,29 @@
+// Connected components of the class-label image: one Blob per same-class region, in full-resolution pixels.
+#pragma once
+
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "detector/color_lut.hpp"
+
+namespace faultline::detector {
+
+struct Blob {
+  int cls = 0;                        // dataset::SynthClass index
+  double x0 = 0, y0 = 0, x1 = 0, y1 = 0;  // bounding box, full-resolution pixels (x1, y1 exclusive)
+  double area_px = 0;                 // full-resolution pixel count
+  bool touches_left = false, touches_right = false, touches_top = false, touches_bottom = false;
+  bool bottom_occluded = false;       // most of the bottom edge sits on another class (an occluder in front)
+  double u_centre() const { return 0.5 * (x0 + x1); }
+};
+
+struct BlobConfig {
+  double min_area_px = 60;   // full-resolution pixels; scaled with the input scale
+  int min_side_px = 3;       // at the processed scale
+};
+
+// `labels` is a CV_8UC1 class-label image at `scale` of the full `full_width` x `full_height` image.
+std::vector<Blob> find_blobs(const cv::Mat& labels, double scale, const BlobConfig& config = {});
+
+}  // namespace faultline::detector

@@ -1,0 +1,196 @@
+#include "detector/detector_loop.hpp"
+
+#include <chrono>
+#include <map>
+#include <utility>
+
+#include "codec/jpeg.hpp"
+#include "common/config.hpp"
+#include "detection.pb.h"
+#include "detector/detector.hpp"
+#include "detector/results_json.hpp"
+#include "transport/log_limiter.hpp"
+#include "transport/publisher.hpp"
+#include "transport/subscriber.hpp"
+#include "transport/typed.hpp"
+
+namespace faultline::detector {
+namespace {
+
+dataset::Rigid to_rigid(const msgs::Transform& t) {
+  const auto& q = t.rotation();
+  return dataset::make_rigid({q.w(), q.x(), q.y(), q.z()}, {t.translation().x(), t.translation().y(), t.translation().z()});
+}
+
+// Header + pixels of one received frame -> detector input; kCorruptData when it cannot be decoded.
+Result<CameraInput> to_input(const msgs::CameraFrame& h, const std::uint8_t* data, std::size_t size) {
+  CameraInput in;
+  in.camera = h.camera();
+  if (h.encoding() == "jpeg") {
+    auto img = codec::decode_jpeg(data, size);
+    if (!img) return img.status();
+    in.bgr = *img;
+  } else if (h.encoding() == "bgr8") {
+    in.bgr = cv::Mat(static_cast<int>(h.height()), static_cast<int>(h.width()), CV_8UC3,
+                     const_cast<std::uint8_t*>(data), h.step()).clone();
+  } else {
+    return Status(StatusCode::kCorruptData, "unsupported encoding '" + h.encoding() + "'");
+  }
+  if (h.intrinsics_size() != 9) return Status(StatusCode::kCorruptData, "intrinsics must have 9 values");
+  for (int i = 0; i < 9; ++i) in.geometry.intrinsics[static_cast<std::size_t>(i)] = h.intrinsics(i);
+  in.geometry.sensor_to_ego = to_rigid(h.sensor_to_ego());
+  in.geometry.ego_to_world = to_rigid(h.ego_pose());
+  in.geometry.width = h.width() > 0 ? static_cast<int>(h.width()) : in.bgr.cols;
+  in.geometry.height = h.height() > 0 ? static_cast<int>(h.height()) : in.bgr.rows;
+  in.timestamp_us = h.header().capture_stamp_ns() / 1000;
+  return in;
+}
+
+}  // namespace
+
+void DetectorLoopConfig::validate() const {
+  if (scale != 1.0 && scale != 0.5 && scale != 0.25)
+    throw ConfigError("detector.scale = " + std::to_string(scale) + ": expected 1.0, 0.5 or 0.25");
+  if (input_endpoints.empty()) throw ConfigError("detector.input_endpoints: at least one endpoint needed");
+  if (input_hwm < 1) throw ConfigError("detector.input_hwm = " + std::to_string(input_hwm) + ": expected >= 1");
+}
+
+struct DetectorLoop::Impl {
+  DetectorLoopConfig cfg;
+  std::string node;
+  std::shared_ptr<spdlog::logger> log;
+  transport::RawSubscriber sub;
+  transport::Publisher push;
+  Detector detector;
+  transport::LogLimiter bad_limiter;
+  // Single-frame mode: per camera, the latest frame of the current sample (key frames preferred), still encoded.
+  struct Pending {
+    msgs::CameraFrame header;
+    std::vector<std::uint8_t> payload;
+  };
+  std::map<std::string, Pending> pending;
+  std::int64_t sample_processing_ns = 0;
+  std::int64_t first_capture_ns = 0;
+
+  Impl(DetectorLoopConfig c, std::string n, std::shared_ptr<spdlog::logger> l)
+      : cfg(std::move(c)), node(std::move(n)), log(std::move(l)),
+        sub([&] {
+          transport::SubscriberConfig s;
+          s.endpoints = cfg.input_endpoints;
+          s.topics = {cfg.input_prefix, cfg.sync_topic};
+          s.rcv_hwm = cfg.input_hwm;
+          return s;
+        }()),
+        push([&] {
+          transport::PublisherConfig p;
+          p.endpoint = cfg.sink_endpoint;
+          p.bind = false;
+          p.pattern = transport::Pattern::PushPull;
+          p.linger_ms = cfg.linger_ms;
+          return p;
+        }()),
+        detector([&] {
+          DetectorConfig d;
+          d.scale = cfg.scale;
+          d.temporal = cfg.temporal;
+          return d;
+        }()) {}
+};
+
+DetectorLoop::DetectorLoop(DetectorLoopConfig config, std::string node, std::shared_ptr<spdlog::logger> log) {
+  config.validate();
+  impl_ = std::make_unique<Impl>(std::move(config), std::move(node), std::move(log));
+}
+
+DetectorLoop::~DetectorLoop() = default;
+
+int DetectorLoop::run(const std::atomic<bool>& stop) {
+  Impl& m = *impl_;
+  std::uint64_t seq = 0;
+  using Clock = std::chrono::steady_clock;
+  while (!stop.load()) {
+    auto r = m.sub.receive(50 * kNsPerMs);
+    if (!r.is_ok()) {
+      if (r.status().code() == StatusCode::kCancelled) return 0;
+      continue;
+    }
+    const std::string topic(r->topic());
+    if (topic == m.cfg.sync_topic) {
+      msgs::SampleBoundary b;
+      if (!transport::parse_message(*r, &b).is_ok()) {
+        ++counts_.malformed;
+        continue;
+      }
+      ++counts_.boundaries;
+      const auto t0 = Clock::now();
+      if (!m.cfg.temporal) {
+        for (auto& [camera, p] : m.pending) {
+          if (p.header.sample_token() != b.sample_token()) continue;
+          auto in = to_input(p.header, p.payload.data(), p.payload.size());
+          if (!in) {
+            ++counts_.undecodable;
+            continue;
+          }
+          m.detector.add_frame(*in);
+          const std::int64_t cap = p.header.header().capture_stamp_ns();
+          if (m.first_capture_ns == 0 || cap < m.first_capture_ns) m.first_capture_ns = cap;
+        }
+        m.pending.clear();
+      }
+      const auto boxes = m.detector.finish_sample(b.timestamp_us());
+      msgs::DetectionArray d;
+      d.set_sample_token(b.sample_token());
+      d.set_detector(m.detector.config().describe());
+      for (const auto& box : boxes) to_detection(box, d.add_detections());
+      d.set_processing_ns(m.sample_processing_ns +
+                          std::chrono::duration_cast<std::chrono::nanoseconds>(Clock::now() - t0).count());
+      d.set_first_frame_capture_ns(m.first_capture_ns);
+      d.mutable_header()->set_seq(++seq);
+      d.mutable_header()->set_publisher(m.node);
+      d.mutable_header()->set_capture_stamp_ns(b.timestamp_us() * 1000);
+      d.mutable_header()->set_publish_stamp_ns(realtime_now_ns());
+      d.mutable_header()->set_publish_mono_ns(monotonic_now_ns());
+      if (transport::send_message(m.push, m.cfg.detections_topic, d).is_ok()) {
+        ++counts_.arrays_sent;
+      } else {
+        ++counts_.send_failures;
+      }
+      m.sample_processing_ns = 0;
+      m.first_capture_ns = 0;
+      if (b.last_in_run() && m.cfg.exit_on_last) return 0;
+      continue;
+    }
+    auto view = transport::parse_camera_frame(*r);
+    if (!view) {
+      ++counts_.malformed;
+      if (m.bad_limiter.allow()) m.log->warn("malformed frame on {}: {}", topic, view.status().message());
+      continue;
+    }
+    ++counts_.frames;
+    const msgs::CameraFrame& h = view->header;
+    if (m.cfg.temporal) {
+      const auto t0 = Clock::now();
+      auto in = to_input(h, view->payload, view->payload_size);
+      if (!in) {
+        ++counts_.undecodable;  // a frame the injector broke: the tracks coast through it
+        if (m.bad_limiter.allow()) m.log->warn("undecodable frame on {}: {}", topic, in.status().message());
+        continue;
+      }
+      m.detector.add_frame(*in);
+      m.sample_processing_ns += std::chrono::duration_cast<std::chrono::nanoseconds>(Clock::now() - t0).count();
+      const std::int64_t cap = h.header().capture_stamp_ns();
+      if (m.first_capture_ns == 0 || cap < m.first_capture_ns) m.first_capture_ns = cap;
+    } else {
+      auto it = m.pending.find(h.camera());
+      if (it != m.pending.end() && it->second.header.sample_token() == h.sample_token() &&
+          it->second.header.is_key_frame() && !h.is_key_frame())
+        continue;  // keep the key frame of this sample
+      auto& p = m.pending[h.camera()];
+      p.header = h;
+      p.payload.assign(view->payload, view->payload + view->payload_size);
+    }
+  }
+  return 0;
+}
+
+}  // namespace faultline::detector

@@ -1,0 +1,62 @@
+// The detector node's loop: subscribes to the faulted camera topics (jpeg or bgr8) and the sample boundaries,
+// runs the reference detector and PUSHes one DetectionArray per key-frame sample to the sink.
+#pragma once
+
+#include <spdlog/logger.h>
+
+#include <atomic>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace faultline::detector {
+
+struct DetectorLoopConfig {
+  std::vector<std::string> input_endpoints{"tcp://127.0.0.1:5601"};  // injector PUB
+  std::string input_prefix = "/faulty/";               // camera topics to subscribe to
+  std::string sync_topic = "/sync/sample";             // SampleBoundary topic
+  int input_hwm = 64;                                  // receive queue (messages)
+  std::string sink_endpoint = "tcp://127.0.0.1:5602";  // sink PULL address (we connect and PUSH)
+  std::string detections_topic = "/detections";        // DetectionArray topic
+  double scale = 1.0;                                  // input scale: 1.0, 0.5 or 0.25
+  bool temporal = true;                                // track over every frame vs single key frame
+  bool exit_on_last = true;                            // stop after the last_in_run boundary
+  int linger_ms = 2000;                                // time to deliver the last DetectionArrays
+
+  template <class V>
+  void visit(V& v) {
+    v("input_endpoints", input_endpoints, "camera publishers to subscribe to");
+    v("input_prefix", input_prefix, "camera topic prefix");
+    v("sync_topic", sync_topic, "SampleBoundary topic");
+    v("input_hwm", input_hwm, "receive queue (messages)");
+    v("sink_endpoint", sink_endpoint, "detection sink PULL address");
+    v("detections_topic", detections_topic, "DetectionArray topic");
+    v("scale", scale, "input scale 1.0, 0.5 or 0.25");
+    v("temporal", temporal, "track over every frame (true) or single key frame (false)");
+    v("exit_on_last", exit_on_last, "stop after the last sample");
+    v("linger_ms", linger_ms, "end of run: time to deliver queued detections (ms)");
+  }
+  void validate() const;  // throws ConfigError
+};
+
+struct DetectorLoopCounts {
+  std::uint64_t frames = 0, malformed = 0, undecodable = 0, boundaries = 0, arrays_sent = 0, send_failures = 0;
+};
+
+class DetectorLoop {
+ public:
+  // Connects now, so a publisher waiting for subscribers sees this node.
+  DetectorLoop(DetectorLoopConfig config, std::string node, std::shared_ptr<spdlog::logger> log);
+  ~DetectorLoop();
+  // Runs until `stop` (0), last_in_run with exit_on_last (0) or context termination (0).
+  int run(const std::atomic<bool>& stop);
+  const DetectorLoopCounts& counts() const { return counts_; }
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+  DetectorLoopCounts counts_;
+};
+
+}  // namespace faultline::detector
