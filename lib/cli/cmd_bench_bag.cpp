@@ -58,7 +58,7 @@ cv::Mat synthetic_frame(int seed) {
                   cv::Scalar(rng.uniform(0, 255), rng.uniform(0, 255), rng.uniform(0, 255)), cv::FILLED);
   }
   cv::Mat noise(img.size(), CV_16SC3);
-  rng.fill(noise, cv::RNG::NORMAL, 0, 6);
+  rng.fill(noise, cv::RNG::NORMAL, 0, 9);
   cv::Mat out;
   img.convertTo(out, CV_16SC3);
   out += noise;
@@ -157,11 +157,14 @@ int run(int argc, char** argv) {
   for (int s = 0; s < 12; ++s) {
     frames.push_back(synthetic_frame(s));
     jpegs.push_back(jpeg_near(frames.back(), 400 * 1024));
-    raws.emplace_back(reinterpret_cast<const char*>(frames.back().data), frames.back().total() * 3);
+    // Raw frames are decoded JPEGs, as the injector produces them from nuScenes images.
+    const cv::Mat decoded = cv::imdecode(cv::Mat(1, static_cast<int>(jpegs.back().size()), CV_8UC1,
+                                                 jpegs.back().data()), cv::IMREAD_COLOR);
+    raws.emplace_back(reinterpret_cast<const char*>(decoded.data), decoded.total() * 3);
   }
   double jpeg_mean = 0;
   for (const auto& j : jpegs) jpeg_mean += static_cast<double>(j.size()) / jpegs.size();
-  std::printf("payloads: 12 synthetic 1600x900 frames; JPEG mean %.0f KB; raw bgr8 %zu KB\n",
+  std::printf("payloads: 12 synthetic 1600x900 frames; JPEG mean %.0f KB; raw bgr8 (decoded JPEG) %zu KB\n",
               jpeg_mean / 1024, raws[0].size() / 1024);
   std::printf("%-6s %-5s %8s %10s %12s %11s %12s %10s %9s\n", "data", "comp", "msgs", "cpu ms/s",
               "core %", "write MB/s", "read x real", "stored/raw", "raw chunks");
