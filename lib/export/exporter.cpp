@@ -1,0 +1,411 @@
+#include "export/exporter.hpp"
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <condition_variable>
+#include <filesystem>
+#include <memory>
+#include <mutex>
+#include <thread>
+
+#include "corruption/corrupt.hpp"
+#include "dataset/nuscenes.hpp"
+#include "export/manifest.hpp"
+#include "export/seeds.hpp"
+#include "policy/temporal_draws.hpp"
+#include "scoring/splits.hpp"
+
+namespace faultline::exporter {
+namespace {
+
+namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+
+double seconds_since(Clock::time_point t0) {
+  return std::chrono::duration<double>(Clock::now() - t0).count();
+}
+
+const char* subsampling_name(codec::Subsampling s) {
+  switch (s) {
+    case codec::Subsampling::k444: return "444";
+    case codec::Subsampling::k422: return "422";
+    case codec::Subsampling::k420: return "420";
+    case codec::Subsampling::kGray: return "gray";
+  }
+  return "?";
+}
+
+int camera_index(const std::string& channel) {
+  for (int i = 0; i < policy::kNumCameras; ++i) {
+    if (channel == policy::kCameraNames[i]) return i;
+  }
+  return -1;
+}
+
+std::string base_name(const std::string& path) {
+  const auto slash = path.find_last_of('/');
+  return slash == std::string::npos ? path : path.substr(slash + 1);
+}
+
+constexpr const char* kSeedDerivation =
+    "seed64 = splitmix64(run_seed ^ splitmix64(fnv1a64(\"<ClassName>/<level>/<key>\"))); numpy mode: "
+    "np.random.seed(seed64 >> 32) before each draw; fast mode: FastRng(seed64). key: image corruptions "
+    "\"<CAM_X>/<file>\", FrameLost the sample token (6 uniforms in camera order; sweeps: the file key), "
+    "CameraCrash \"run\"";
+
+// One (condition, level) output folder.
+struct Output {
+  Condition condition{};
+  corruption::Level level{};
+  int severity = 0;
+  std::string dir, manifest_path;
+  std::vector<int> dead_cameras;
+  std::uint64_t crash_seed = 0;
+  std::map<std::string, FileEntry> previous;  // from an earlier run's manifest; read-only while workers run
+  std::mutex mu;
+  Manifest manifest;
+  std::atomic<std::int64_t> busy_ns{0};
+  std::atomic<std::int64_t> written{0};
+};
+
+bool file_matches(const std::string& path, const FileEntry& e) {
+  std::error_code ec;
+  const auto size = fs::file_size(path, ec);
+  if (ec || size != e.size_bytes) return false;
+  auto bytes = dataset::read_file(path);
+  return bytes && crc32_of(bytes->data(), bytes->size()) == e.crc32;
+}
+
+template <typename Rng, typename Seed>
+std::vector<int> dead_set(int severity, Seed seed) {
+  Rng rng(seed);
+  return policy::draw_dead_cameras(severity, rng);
+}
+
+bool frame_lost(corruption::RngMode mode, int severity, std::uint64_t seed64, int cam) {
+  if (mode == corruption::RngMode::Numpy) {
+    rng::NumpyRandomState rng(numpy_seed(seed64));
+    return policy::draw_lost_frame(severity, rng)[cam];
+  }
+  rng::FastRng rng(seed64);
+  return policy::draw_lost_frame(severity, rng)[cam];
+}
+
+class Runner {
+ public:
+  Runner(const ExportConfig& cfg, const dataset::NuScenesReader& reader,
+         std::vector<dataset::CameraFrameRecord> frames, std::vector<std::unique_ptr<Output>> outputs)
+      : cfg_(cfg), reader_(reader), frames_(std::move(frames)), outputs_(std::move(outputs)) {}
+
+  void worker() {
+    for (;;) {
+      const std::size_t i = next_.fetch_add(1);
+      if (i >= frames_.size()) break;
+      process(frames_[i]);
+    }
+  }
+
+  std::atomic<std::int64_t> done{0};
+  std::atomic<std::int64_t> decode_ns{0}, decoded{0};
+
+ private:
+  void add_entry(Output& o, const std::string& rel, const FileEntry& e, bool written) {
+    std::lock_guard<std::mutex> lock(o.mu);
+    o.manifest.files[rel] = e;
+    o.manifest.errors.erase(rel);
+    (written ? o.manifest.written : o.manifest.skipped) += 1;
+    done.fetch_add(1);
+  }
+  void add_error(Output& o, const std::string& rel, const std::string& input, const std::string& error) {
+    std::lock_guard<std::mutex> lock(o.mu);
+    o.manifest.files.erase(rel);
+    o.manifest.errors[rel] = InputError{input, error};
+    done.fetch_add(1);
+  }
+
+  void process(const dataset::CameraFrameRecord& f) {
+    const int cam = camera_index(f.channel);
+    const std::string rel = f.channel + "/" + base_name(f.filename);
+    const std::string input = reader_.path_of(f);
+    std::vector<Output*> pending;
+    for (auto& o : outputs_) {
+      const auto it = o->previous.find(rel);
+      if (it != o->previous.end() && file_matches(o->dir + "/" + rel, it->second)) {
+        add_entry(*o, rel, it->second, false);
+      } else {
+        pending.push_back(o.get());
+      }
+    }
+    if (pending.empty()) return;
+    const auto t0 = Clock::now();
+    auto bytes = dataset::read_file(input);
+    Result<cv::Mat> image = Status(StatusCode::kInternal, "not decoded");
+    if (bytes) image = codec::decode_jpeg(bytes->data(), bytes->size());
+    decode_ns.fetch_add(std::chrono::duration_cast<std::chrono::nanoseconds>(Clock::now() - t0).count());
+    decoded.fetch_add(1);
+    if (!bytes || !image) {
+      const Status& s = bytes ? image.status() : bytes.status();
+      for (Output* o : pending) add_error(*o, rel, input, s.to_string());
+      return;
+    }
+    const cv::Mat& bgr = *image;
+    std::vector<std::uint8_t> reencoded, black;  // made at most once per frame
+    for (Output* o : pending) {
+      const auto t1 = Clock::now();
+      FileEntry e;
+      const std::vector<std::uint8_t>* jpeg = nullptr;
+      std::vector<std::uint8_t> corrupted;
+      Status status;  // ok until a step fails
+      bool is_black = false;
+      if (o->condition == Condition::CameraCrash) {
+        e.seed = o->crash_seed;
+        is_black = std::binary_search(o->dead_cameras.begin(), o->dead_cameras.end(), cam);
+      } else if (o->condition == Condition::FrameLost) {
+        const std::string& key = f.is_key_frame ? f.sample_token : rel;
+        e.seed = derive_seed64(cfg_.seed, o->condition, o->level, key);
+        is_black = cam >= 0 && frame_lost(cfg_.rng, o->severity, e.seed, cam);
+      } else {
+        e.seed = derive_seed64(cfg_.seed, o->condition, o->level, rel);
+        const auto type = *image_corruption(o->condition);
+        Result<cv::Mat> out = Status(StatusCode::kInternal, "not run");
+        if (cfg_.rng == corruption::RngMode::Numpy) {
+          rng::NumpyRandomState rng(numpy_seed(e.seed));
+          out = corruption::corrupt(bgr, type, o->severity, rng);
+        } else {
+          rng::FastRng rng(e.seed);
+          out = corruption::corrupt(bgr, type, o->severity, rng);
+        }
+        if (out) {
+          auto enc = codec::encode_jpeg(*out, cfg_.quality, cfg_.subsampling);
+          if (enc) corrupted = std::move(*enc); else status = enc.status();
+        } else {
+          status = out.status();
+        }
+        jpeg = &corrupted;
+        e.kind = "corrupted";
+      }
+      if (!jpeg) {
+        std::vector<std::uint8_t>& cache = is_black ? black : reencoded;
+        if (cache.empty()) {
+          const cv::Mat src = is_black ? cv::Mat::zeros(bgr.size(), bgr.type()) : bgr;
+          auto enc = codec::encode_jpeg(src, cfg_.quality, cfg_.subsampling);
+          if (enc) cache = std::move(*enc); else status = enc.status();
+        }
+        jpeg = &cache;
+        e.kind = is_black ? "black" : "reencoded";
+      }
+      if (status) status = write_file_atomic(o->dir + "/" + rel, jpeg->data(), jpeg->size());
+      o->busy_ns.fetch_add(std::chrono::duration_cast<std::chrono::nanoseconds>(Clock::now() - t1).count());
+      if (!status) {
+        add_error(*o, rel, input, status.to_string());
+        continue;
+      }
+      e.size_bytes = jpeg->size();
+      e.crc32 = crc32_of(jpeg->data(), jpeg->size());
+      o->written.fetch_add(1);
+      add_entry(*o, rel, e, true);
+    }
+  }
+
+  const ExportConfig& cfg_;
+  const dataset::NuScenesReader& reader_;
+  std::vector<dataset::CameraFrameRecord> frames_;
+
+ public:
+  std::vector<std::unique_ptr<Output>> outputs_;
+
+ private:
+  std::atomic<std::size_t> next_{0};
+};
+
+Status flush_manifests(const std::vector<std::unique_ptr<Output>>& outputs) {
+  for (const auto& o : outputs) {
+    Manifest copy;
+    {
+      std::lock_guard<std::mutex> lock(o->mu);
+      copy = o->manifest;
+    }
+    if (Status s = write_manifest_atomic(o->manifest_path, copy); !s) return s;
+  }
+  return Status::ok();
+}
+
+}  // namespace
+
+std::string manifest_name(int shard_index, int shard_count) {
+  if (shard_count <= 1) return "manifest.json";
+  return "manifest.shard-" + std::to_string(shard_index) + "-of-" + std::to_string(shard_count) + ".json";
+}
+
+Result<std::vector<std::string>> select_scenes(const ExportConfig& config, const std::vector<std::string>& all_scenes) {
+  if (config.shard_count < 1 || config.shard_index < 1 || config.shard_index > config.shard_count) {
+    return Status(StatusCode::kInvalidArgument, "shard " + std::to_string(config.shard_index) + "/" +
+                                                    std::to_string(config.shard_count) + ": expected 1 <= K <= N");
+  }
+  std::vector<std::string> chosen;
+  if (!config.scenes.empty() && !config.split.empty()) {
+    return Status(StatusCode::kInvalidArgument, "give either scenes or a split, not both");
+  }
+  if (!config.scenes.empty()) {
+    chosen = config.scenes;
+  } else if (!config.split.empty()) {
+    auto names = scoring::is_predefined_split(config.split)
+                     ? scoring::predefined_split_scenes(config.split, config.version)
+                     : scoring::custom_split_scenes(config.split, config.dataroot, config.version);
+    if (!names) return names.status();
+    // Keep only scenes the dataset has, like the devkit's create_splits_scenes filtering on available scenes.
+    for (const auto& n : *names) {
+      if (std::find(all_scenes.begin(), all_scenes.end(), n) != all_scenes.end()) chosen.push_back(n);
+    }
+  } else {
+    chosen = all_scenes;
+  }
+  std::sort(chosen.begin(), chosen.end());
+  chosen.erase(std::unique(chosen.begin(), chosen.end()), chosen.end());
+  std::vector<std::string> shard;
+  for (std::size_t i = 0; i < chosen.size(); ++i) {
+    if (static_cast<int>(i % static_cast<std::size_t>(config.shard_count)) == config.shard_index - 1) {
+      shard.push_back(chosen[i]);
+    }
+  }
+  return shard;
+}
+
+Result<ExportSummary> run_export(const ExportConfig& cfg, const ExportProgressFn& progress,
+                                 double progress_interval_s) {
+  const auto t0 = Clock::now();
+  if (cfg.out_dir.empty()) return Status(StatusCode::kInvalidArgument, "no output folder");
+  if (cfg.quality < 1 || cfg.quality > 100) {
+    return Status(StatusCode::kInvalidArgument, "quality " + std::to_string(cfg.quality) + ": expected 1..100");
+  }
+  auto reader = dataset::NuScenesReader::open(cfg.dataroot, cfg.version);
+  if (!reader) return reader.status();
+  std::vector<std::string> all_scenes;
+  for (const auto& s : reader->scenes()) all_scenes.push_back(s.name);
+  auto scenes = select_scenes(cfg, all_scenes);
+  if (!scenes) return scenes.status();
+
+  ExportSummary summary;
+  std::vector<dataset::CameraFrameRecord> frames;
+  if (!scenes->empty()) {
+    std::mutex problem_mu;
+    auto loaded = reader->load_camera_frames(*scenes, [&](const Status& s) {
+      std::lock_guard<std::mutex> lock(problem_mu);
+      summary.problems.push_back("dataset: " + s.to_string());
+    });
+    if (!loaded) return loaded.status();
+    for (auto& f : *loaded) {
+      if (f.is_key_frame || cfg.sweeps) frames.push_back(std::move(f));
+    }
+  }
+  summary.frames = static_cast<std::int64_t>(frames.size());
+
+  std::map<std::string, std::string> config_echo = {
+      {"dataroot", cfg.dataroot},
+      {"version", cfg.version},
+      {"rng", corruption::to_string(cfg.rng)},
+      {"seed", std::to_string(cfg.seed)},
+      {"quality", std::to_string(cfg.quality)},
+      {"subsampling", subsampling_name(cfg.subsampling)},
+      {"sweeps", cfg.sweeps ? "true" : "false"},
+      {"split", cfg.split},
+      {"scenes", [&] {
+         std::string s;
+         for (const auto& n : *scenes) s += (s.empty() ? "" : ",") + n;
+         return s;
+       }()},
+      {"shard", std::to_string(cfg.shard_index) + "/" + std::to_string(cfg.shard_count)},
+  };
+
+  std::vector<std::unique_ptr<Output>> outputs;
+  for (Condition c : cfg.conditions) {
+    for (auto level : cfg.levels) {
+      auto o = std::make_unique<Output>();
+      o->condition = c;
+      o->level = level;
+      o->severity = severity_of(c, level);
+      o->dir = cfg.out_dir + "/" + class_name(c) + "/" + corruption::to_string(level);
+      o->manifest_path = o->dir + "/" + manifest_name(cfg.shard_index, cfg.shard_count);
+      std::error_code ec;
+      for (const char* cam : policy::kCameraNames) fs::create_directories(o->dir + "/" + cam, ec);
+      if (ec) return Status(StatusCode::kIoError, "cannot create " + o->dir + ": " + ec.message());
+      if (fs::exists(o->manifest_path)) {
+        auto prev = read_manifest(o->manifest_path);
+        // An unreadable manifest only costs a redo of everything in that folder.
+        if (prev) o->previous = std::move(prev->files);
+        else summary.problems.push_back("resume: " + prev.status().to_string() + " (redoing the folder)");
+      }
+      if (c == Condition::CameraCrash) {
+        o->crash_seed = derive_seed64(cfg.seed, c, level, "run");
+        o->dead_cameras = cfg.rng == corruption::RngMode::Numpy
+                              ? dead_set<rng::NumpyRandomState>(o->severity, numpy_seed(o->crash_seed))
+                              : dead_set<rng::FastRng>(o->severity, o->crash_seed);
+      }
+      Manifest& m = o->manifest;
+      m.tool_version = cfg.tool_version;
+      m.condition = class_name(c);
+      m.level = corruption::to_string(level);
+      m.severity = o->severity;
+      m.config = config_echo;
+      m.seed_derivation = kSeedDerivation;
+      m.dead_cameras = o->dead_cameras;
+      m.expected = summary.frames;
+      outputs.push_back(std::move(o));
+    }
+  }
+  const std::int64_t total = summary.frames * static_cast<std::int64_t>(outputs.size());
+  summary.expected = total;
+
+  int threads = cfg.threads > 0 ? cfg.threads : static_cast<int>(std::thread::hardware_concurrency());
+  threads = std::max(1, threads);
+  summary.threads = threads;
+  Runner runner(cfg, *reader, std::move(frames), std::move(outputs));
+  std::mutex mu;
+  std::condition_variable cv;
+  int running = threads;
+  std::vector<std::thread> pool;
+  for (int i = 0; i < threads; ++i) {
+    pool.emplace_back([&] {
+      runner.worker();
+      std::lock_guard<std::mutex> lock(mu);
+      --running;
+      cv.notify_all();
+    });
+  }
+  auto last_flush = Clock::now();
+  {
+    std::unique_lock<std::mutex> lock(mu);
+    while (running > 0) {
+      cv.wait_for(lock, std::chrono::duration<double>(progress_interval_s));
+      if (progress && running > 0) progress(runner.done.load(), total, seconds_since(t0));
+      if (seconds_since(last_flush) >= cfg.manifest_flush_seconds && running > 0) {
+        lock.unlock();
+        (void)flush_manifests(runner.outputs_);  // best effort; the final flush reports errors
+        last_flush = Clock::now();
+        lock.lock();
+      }
+    }
+  }
+  for (auto& t : pool) t.join();
+  if (Status s = flush_manifests(runner.outputs_); !s) return s;
+
+  for (const auto& o : runner.outputs_) {
+    auto& st = summary.per_condition[class_name(o->condition)];
+    st.images += o->written.load();
+    st.busy_seconds += static_cast<double>(o->busy_ns.load()) * 1e-9;
+    summary.written += o->manifest.written;
+    summary.skipped += o->manifest.skipped;
+    summary.failed += static_cast<std::int64_t>(o->manifest.errors.size());
+    for (const auto& [rel, e] : o->manifest.errors) {
+      summary.problems.push_back(o->manifest.condition + "/" + o->manifest.level + "/" + rel + ": " + e.error);
+    }
+  }
+  summary.read_decode_seconds = static_cast<double>(runner.decode_ns.load()) * 1e-9;
+  summary.frames_decoded = runner.decoded.load();
+  summary.wall_seconds = seconds_since(t0);
+  if (progress) progress(runner.done.load(), total, summary.wall_seconds);
+  return summary;
+}
+
+}  // namespace faultline::exporter
