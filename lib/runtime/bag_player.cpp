@@ -1,0 +1,219 @@
+#include "runtime/bag_player.hpp"
+
+#include <algorithm>
+#include <cstdio>
+#include <regex>
+#include <thread>
+
+#include "bag/reader.hpp"
+#include "common/clock.hpp"
+#include "common/config.hpp"
+#include "detection.pb.h"
+#include "runtime/bag_layout.hpp"
+#include "transport/publisher.hpp"
+#include "transport/subscriber.hpp"
+#include "transport/typed.hpp"
+
+namespace faultline::runtime {
+
+void BagPlayerConfig::validate() const {
+  if (files.empty()) throw ConfigError("player.files: expected at least one bag");
+  if (rate < 0) throw ConfigError("player.rate = " + std::to_string(rate) + ": expected >= 0");
+  if (start_offset_s < 0) throw ConfigError("player.start_offset_s = " + std::to_string(start_offset_s) + ": expected >= 0");
+  if (duration_s < 0) throw ConfigError("player.duration_s = " + std::to_string(duration_s) + ": expected >= 0");
+  try {
+    for (const auto& e : include) std::regex re(e);
+    for (const auto& e : exclude) std::regex re(e);
+  } catch (const std::regex_error& e) {
+    throw ConfigError("player.include/exclude: invalid regular expression: " + std::string(e.what()));
+  }
+}
+
+struct BagPlayer::Impl {
+  BagPlayerConfig cfg;
+  std::shared_ptr<spdlog::logger> log;
+  std::unique_ptr<transport::Publisher> pub;
+  std::unique_ptr<transport::RawSubscriber> acks;
+  std::vector<std::regex> include_re, exclude_re;
+  std::map<std::uint16_t, int> channel_frames;  // per file: channel id -> 2/3, or 0 = not replayed
+  bool waited = false;
+  StampNs first_log_ns = -1;                    // first replayable message of the bag
+  StampNs base_log_ns = -1, base_wall_ns = 0;   // pacing anchor of the current pass
+  StampNs last_progress_ns = 0;
+
+  bool wanted(const std::string& topic) const {
+    for (const auto& re : exclude_re) {
+      if (std::regex_search(topic, re)) return false;
+    }
+    if (include_re.empty()) return true;
+    return std::any_of(include_re.begin(), include_re.end(),
+                       [&](const std::regex& re) { return std::regex_search(topic, re); });
+  }
+
+  // Sleeps until `deadline` in short steps so a stop request is seen within 50 ms.
+  static bool sleep_until(StampNs deadline, const std::atomic<bool>& stop) {
+    while (!stop.load()) {
+      const StampNs now = monotonic_now_ns();
+      if (now >= deadline) return true;
+      std::this_thread::sleep_for(std::chrono::nanoseconds(std::min<StampNs>(deadline - now, 50 * kNsPerMs)));
+    }
+    return false;
+  }
+
+  bool wait_ack(const std::string& token, const std::atomic<bool>& stop, BagPlayerCounts& counts) {
+    const StampNs deadline = monotonic_now_ns() + static_cast<DurationNs>(cfg.ack_timeout_ms) * kNsPerMs;
+    while (!stop.load()) {
+      if (cfg.ack_timeout_ms > 0 && monotonic_now_ns() >= deadline) {
+        ++counts.ack_timeouts;
+        log->warn("lockstep: no SampleAck for sample {} within {} ms, continuing", token, cfg.ack_timeout_ms);
+        return true;
+      }
+      auto r = acks->receive(50 * kNsPerMs);
+      if (!r) continue;
+      msgs::SampleAck ack;
+      if (!transport::parse_message(*r, &ack).is_ok()) {
+        acks->count_malformed();
+        continue;
+      }
+      if (ack.sample_token() == token) return true;
+    }
+    return false;
+  }
+};
+
+BagPlayer::BagPlayer(BagPlayerConfig config, std::shared_ptr<spdlog::logger> log)
+    : impl_(std::make_unique<Impl>()) {
+  config.validate();
+  Impl& m = *impl_;
+  m.cfg = std::move(config);
+  m.log = std::move(log);
+  for (const auto& e : m.cfg.include) m.include_re.emplace_back(e);
+  for (const auto& e : m.cfg.exclude) m.exclude_re.emplace_back(e);
+  transport::PublisherConfig pc;
+  pc.endpoint = m.cfg.endpoint;
+  pc.snd_hwm = m.cfg.hwm;
+  pc.zero_copy = false;  // the bag buffer only lives during the read callback
+  pc.linger_ms = m.cfg.linger_ms;
+  m.pub = std::make_unique<transport::Publisher>(pc);
+  if (m.cfg.lockstep) {
+    transport::SubscriberConfig sc;
+    sc.endpoints = {m.cfg.ack_endpoint};
+    sc.pattern = transport::Pattern::PushPull;
+    sc.bind = true;
+    sc.rcv_hwm = 64;
+    m.acks = std::make_unique<transport::RawSubscriber>(sc);
+  }
+}
+
+BagPlayer::~BagPlayer() = default;
+
+std::string BagPlayer::endpoint() const { return impl_->pub->endpoint(); }
+std::string BagPlayer::ack_endpoint() const { return impl_->acks ? impl_->acks->endpoints().front() : ""; }
+
+int BagPlayer::run(const std::atomic<bool>& stop) {
+  Impl& m = *impl_;
+  const StampNs offset_ns = static_cast<StampNs>(m.cfg.start_offset_s * kNsPerSec);
+  const StampNs span_ns = m.cfg.duration_s > 0 ? static_cast<StampNs>(m.cfg.duration_s * kNsPerSec) : -1;
+  bool ended = false;  // the duration limit was reached
+  do {
+    m.base_log_ns = -1;
+    for (const auto& file : m.cfg.files) {
+      auto reader = bag::Reader::open(file);
+      if (!reader) {
+        m.log->error("cannot open bag {}: {}", file, reader.status().to_string());
+        return 1;
+      }
+      m.channel_frames.clear();
+      bag::ReadOptions ro;
+      auto on_message = [&](const bag::MessageView& v) -> bool {
+        if (stop.load()) return false;
+        auto it = m.channel_frames.find(v.channel->id);
+        if (it == m.channel_frames.end()) {
+          int frames = 0;
+          const auto f = v.channel->metadata.find(kMetaFrames);
+          const auto t = v.channel->metadata.find(kMetaTopic);
+          if (f != v.channel->metadata.end() && t != v.channel->metadata.end() && m.wanted(t->second)) {
+            frames = f->second == "3" ? 3 : f->second == "2" ? 2 : 0;
+          }
+          it = m.channel_frames.emplace(v.channel->id, frames).first;
+        }
+        if (it->second == 0) return true;
+        if (m.first_log_ns < 0) m.first_log_ns = v.log_time_ns;
+        const StampNs rel = v.log_time_ns - m.first_log_ns;
+        if (rel < offset_ns) return true;
+        if (span_ns >= 0 && rel - offset_ns > span_ns) {
+          ended = true;
+          return false;
+        }
+        std::string topic = v.channel->metadata.at(kMetaTopic);
+        if (const auto r = m.cfg.remap.find(topic); r != m.cfg.remap.end()) topic = r->second;
+        if (!m.waited && m.cfg.wait_subscribers > 0) {
+          m.waited = true;
+          const Status w = m.pub->wait_for_subscribers(topic, m.cfg.wait_subscribers,
+                                                       static_cast<DurationNs>(m.cfg.wait_timeout_ms) * kNsPerMs, &stop);
+          if (!w.is_ok()) m.log->warn("starting without {} subscriber(s) on {}: {}", m.cfg.wait_subscribers, topic, w.to_string());
+        }
+        if (m.cfg.rate > 0) {
+          if (m.base_log_ns < 0) {
+            m.base_log_ns = v.log_time_ns;
+            m.base_wall_ns = monotonic_now_ns();
+          }
+          const auto due = m.base_wall_ns +
+                           static_cast<StampNs>(static_cast<double>(v.log_time_ns - m.base_log_ns) / m.cfg.rate);
+          if (!Impl::sleep_until(due, stop)) return false;
+        }
+        Status s;
+        if (it->second == 3) {
+          auto mp = decode_multipart(v.data);
+          if (!mp) {
+            ++counts_.malformed;
+            return true;
+          }
+          transport::Payload p;
+          p.data = reinterpret_cast<const std::uint8_t*>(mp->payload.data());
+          p.size_bytes = mp->payload.size();
+          s = m.pub->send(topic, mp->header, p);
+        } else {
+          s = m.pub->send(topic, v.data);
+        }
+        if (!s.is_ok()) {
+          ++counts_.send_failures;
+          return s.code() != StatusCode::kCancelled;
+        }
+        ++counts_.messages_sent;
+        counts_.bytes_sent += v.data.size();
+        counts_.bag_seconds = static_cast<double>(rel) / 1e9;
+        if (m.cfg.progress && monotonic_now_ns() - m.last_progress_ns > 200 * kNsPerMs) {
+          m.last_progress_ns = monotonic_now_ns();
+          std::fprintf(stderr, "\r[play] bag time %8.2f s  messages %llu  ", counts_.bag_seconds,
+                       static_cast<unsigned long long>(counts_.messages_sent));
+        }
+        if (m.cfg.lockstep && topic == m.cfg.sync_topic) {
+          msgs::SampleBoundary b;
+          if (b.ParseFromArray(v.data.data(), static_cast<int>(v.data.size())) &&
+              !m.wait_ack(b.sample_token(), stop, counts_)) {
+            return false;
+          }
+          m.base_log_ns = -1;  // pacing restarts after the sink caught up
+        }
+        return true;
+      };
+      auto scan = (*reader)->read_linear(ro, on_message, [&](const bag::Problem& p) {
+        ++counts_.bag_problems;
+        m.log->warn("{}: {}", file, p.to_string());
+      });
+      if (!scan) {
+        m.log->error("cannot read bag {}: {}", file, scan.status().to_string());
+        return 1;
+      }
+      if (stop.load() || ended) break;
+    }
+  } while (m.cfg.loop && !stop.load() && !ended);
+  if (m.cfg.progress) std::fprintf(stderr, "\n");
+  m.log->info("played {} messages ({} bytes, {:.2f} s of bag time), {} send failures, {} ack timeouts",
+              counts_.messages_sent, counts_.bytes_sent, counts_.bag_seconds, counts_.send_failures,
+              counts_.ack_timeouts);
+  return 0;
+}
+
+}  // namespace faultline::runtime
