@@ -5,6 +5,7 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <mutex>
 #include <vector>
 
 namespace faultline::corruption {
@@ -69,12 +70,24 @@ cv::Mat brightness_exact(const cv::Mat& bgr, int severity) {
   return out;
 }
 
-cv::Mat brightness_fast(const cv::Mat& bgr, int severity) {
-  const double c = brightness_offset(severity);
-  // table[v * 256 + a]: output for a channel a of a pixel whose max is v, or -1 when the closed form is within
+namespace {
+
+// Per-severity tables, built once per process (severity is fixed per stream, so every later frame reuses them).
+struct BrightnessTables {
+  // main[v * 256 + a]: output for a channel a of a pixel whose max is v, or -1 when the closed form is within
   // 1e-6 of a truncation boundary (then the pixel takes the exact path). Without ties the max channel gets V2
   // exactly and a zero channel gets p = V2 * (1 - 1) = 0 exactly; the others are a * V2 / V up to a few ulps.
-  std::vector<std::int16_t> table(256 * 256, -1);
+  std::vector<std::int16_t> main;
+  // tie[pattern * 65536 + tied * 256 + other]: the exact HSV-path output (packed b | g << 8 | r << 16) of a pixel
+  // with exactly two equal channels. Such a pixel is a function of those two numbers, so tabulating the exact
+  // path keeps it bit-exact. Patterns: 0 = ch0 == ch1, 1 = ch1 == ch2, 2 = ch0 == ch2.
+  std::vector<std::uint32_t> tie;
+  std::uint8_t grey_out = 0;
+};
+
+BrightnessTables build_tables(double c) {
+  BrightnessTables t;
+  t.main.assign(256 * 256, -1);
   for (int v = 1; v < 256; ++v) {
     const double vf = v / 255.0;
     const double v2 = std::min(std::max(vf + c, 0.0), 1.0);
@@ -89,29 +102,74 @@ cv::Mat brightness_fast(const cv::Mat& bgr, int severity) {
         const double lo = std::floor(e - 1e-6), hi = std::floor(e + 1e-6);
         if (lo == hi) out = static_cast<std::int16_t>(std::min(hi, 255.0));
       }
-      table[static_cast<std::size_t>(v * 256 + a)] = out;
+      t.main[static_cast<std::size_t>(v * 256 + a)] = out;
     }
   }
-  const std::uint8_t grey_out = to_u8(std::min(std::max(c, 0.0), 1.0));
+  t.tie.resize(3 * 65536);
+  for (int pattern = 0; pattern < 3; ++pattern) {
+    for (int tied = 0; tied < 256; ++tied) {
+      for (int other = 0; other < 256; ++other) {
+        std::uint8_t px[3];
+        const auto a = static_cast<std::uint8_t>(tied), b = static_cast<std::uint8_t>(other);
+        if (pattern == 0) px[0] = a, px[1] = a, px[2] = b;
+        if (pattern == 1) px[0] = b, px[1] = a, px[2] = a;
+        if (pattern == 2) px[0] = a, px[1] = b, px[2] = a;
+        std::uint8_t o[3];
+        hsv_shift_pixel(px, o, c);
+        t.tie[static_cast<std::size_t>(pattern * 65536 + tied * 256 + other)] =
+            o[0] | (static_cast<std::uint32_t>(o[1]) << 8) | (static_cast<std::uint32_t>(o[2]) << 16);
+      }
+    }
+  }
+  t.grey_out = to_u8(std::min(std::max(c, 0.0), 1.0));
+  return t;
+}
+
+const BrightnessTables& tables_for(int severity) {
+  static std::once_flag once[5];
+  static BrightnessTables tables[5];
+  const int i = std::clamp(severity, 1, 5) - 1;
+  std::call_once(once[i], [&] { tables[i] = build_tables(brightness_offset(severity)); });
+  return tables[i];
+}
+
+}  // namespace
+
+cv::Mat brightness_fast(const cv::Mat& bgr, int severity) {
+  const double c = brightness_offset(severity);
+  const BrightnessTables& t = tables_for(severity);
   const cv::Mat in = continuous(bgr);
   cv::Mat out(in.size(), in.type());
   const std::size_t n = in.total();
   const std::uint8_t* src = in.data;
   std::uint8_t* dst = out.data;
+  const std::int16_t* table = t.main.data();
+  const std::uint32_t* tie = t.tie.data();
   for (std::size_t i = 0; i < n; ++i) {
     const std::uint8_t* px = src + 3 * i;
     std::uint8_t* o = dst + 3 * i;
-    const int v = std::max(std::max(px[0], px[1]), px[2]);
-    if (v == 0) {
-      o[0] = o[1] = o[2] = grey_out;
+    const int b = px[0], g = px[1], r = px[2];
+    const bool e01 = b == g, e12 = g == r, e02 = b == r;
+    if (e01 + e12 + e02 == 1) {
+      // Two equal channels put the hue on a sector boundary, where the HSV path may hand the max channel a value
+      // a few ulps below V2: take the tabulated exact result.
+      const int pattern = e01 ? 0 : (e12 ? 1 : 2);
+      const int tied = e02 ? b : g;
+      const int other = e01 ? r : (e12 ? b : g);
+      const std::uint32_t packed = tie[pattern * 65536 + tied * 256 + other];
+      o[0] = static_cast<std::uint8_t>(packed);
+      o[1] = static_cast<std::uint8_t>(packed >> 8);
+      o[2] = static_cast<std::uint8_t>(packed >> 16);
       continue;
     }
-    const std::int16_t* row = table.data() + v * 256;
-    const std::int16_t r0 = row[px[0]], r1 = row[px[1]], r2 = row[px[2]];
-    // Two equal channels (not all three) put the hue on a sector boundary, where the HSV path may hand the max
-    // channel a value a few ulps below V2: those pixels take the exact path.
-    const bool partial_tie = (px[0] == px[1]) + (px[1] == px[2]) + (px[0] == px[2]) == 1;
-    if (partial_tie || (r0 | r1 | r2) < 0) {
+    const int v = std::max(std::max(b, g), r);
+    if (v == 0) {
+      o[0] = o[1] = o[2] = t.grey_out;
+      continue;
+    }
+    const std::int16_t* row = table + v * 256;
+    const std::int16_t r0 = row[b], r1 = row[g], r2 = row[r];
+    if ((r0 | r1 | r2) < 0) {
       hsv_shift_pixel(px, o, c);
     } else {
       o[0] = static_cast<std::uint8_t>(r0);

@@ -30,7 +30,7 @@ Result<cv::Mat> corrupt(const cv::Mat& bgr, Corruption type, int severity, rng::
     case Corruption::ColorQuant: return color_quant(bgr, severity);
     case Corruption::MotionBlur: {
       const double angle = options.angle_deg ? *options.angle_deg : rng.uniform(-45.0, 45.0);
-      return motion_blur_exact(bgr, severity, angle);
+      return motion_blur_numpy(bgr, severity, angle);
     }
     case Corruption::Fog: {
       const FogParams p = fog_params(severity);

@@ -5,6 +5,9 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <deque>
+#include <memory>
+#include <mutex>
 #include <vector>
 
 namespace faultline::corruption {
@@ -17,10 +20,10 @@ DarkParams dark_params(int severity) {
   return {kC[i], 10 * kP[i], 0.1 * kS[i]};
 }
 
-void dark_lambdas(const cv::Mat& bgr, int severity, double lambdas[256]) {
+namespace {
+
+void lambdas_for_range(double lo_u8, double hi_u8, int severity, double lambdas[256]) {
   const DarkParams p = dark_params(severity);
-  double lo_u8 = 0.0, hi_u8 = 0.0;
-  cv::minMaxLoc(bgr.reshape(1), &lo_u8, &hi_u8);
   const double lo = lo_u8 / 255.0, hi = hi_u8 / 255.0;
   for (int v = 0; v < 256; ++v) {
     double y = 0.0;
@@ -31,6 +34,14 @@ void dark_lambdas(const cv::Mat& bgr, int severity, double lambdas[256]) {
     }
     lambdas[v] = y * p.poisson_scale;
   }
+}
+
+}  // namespace
+
+void dark_lambdas(const cv::Mat& bgr, int severity, double lambdas[256]) {
+  double lo_u8 = 0.0, hi_u8 = 0.0;
+  cv::minMaxLoc(bgr.reshape(1), &lo_u8, &hi_u8);
+  lambdas_for_range(lo_u8, hi_u8, severity, lambdas);
 }
 
 cv::Mat dark_exact(const cv::Mat& bgr, int severity, rng::NumpyRandomState& rng) {
@@ -77,10 +88,11 @@ void noise_row(double y, double sigma, double* prob) {
   }
 }
 
-// Walker alias table over 256 outcomes with 32-bit thresholds.
+// Walker alias table over 256 outcomes with 23-bit thresholds, packed as threshold << 8 | alias so one load serves
+// a sample (two samples per 64-bit draw; each outcome's probability is quantised below 2^-31, far under the spec's
+// statistical tolerances).
 struct Alias {
-  std::array<std::uint32_t, 256> threshold;
-  std::array<std::uint8_t, 256> alias;
+  std::array<std::uint32_t, 256> entry;
 };
 
 void build_alias(const double* prob, Alias& a) {
@@ -91,39 +103,40 @@ void build_alias(const double* prob, Alias& a) {
   int ns = 0, nl = 0;
   for (int j = 0; j < 256; ++j) {
     scaled[static_cast<std::size_t>(j)] = prob[j] / total * 256.0;
-    a.alias[static_cast<std::size_t>(j)] = static_cast<std::uint8_t>(j);
     if (scaled[static_cast<std::size_t>(j)] < 1.0) {
       small[static_cast<std::size_t>(ns++)] = j;
     } else {
       large[static_cast<std::size_t>(nl++)] = j;
     }
   }
+  constexpr double kOne = 8388608.0;  // 2^23: u < threshold keeps the bucket
+  constexpr std::uint32_t kKeep = 1u << 23;
+  for (int j = 0; j < 256; ++j) a.entry[static_cast<std::size_t>(j)] = (kKeep << 8) | static_cast<std::uint32_t>(j);
   while (ns > 0 && nl > 0) {
     const int s = small[static_cast<std::size_t>(--ns)];
     const int l = large[static_cast<std::size_t>(nl - 1)];
-    a.threshold[static_cast<std::size_t>(s)] =
-        static_cast<std::uint32_t>(std::min(scaled[static_cast<std::size_t>(s)] * 4294967296.0, 4294967295.0));
-    a.alias[static_cast<std::size_t>(s)] = static_cast<std::uint8_t>(l);
+    const auto threshold = static_cast<std::uint32_t>(std::llround(scaled[static_cast<std::size_t>(s)] * kOne));
+    a.entry[static_cast<std::size_t>(s)] = (threshold << 8) | static_cast<std::uint32_t>(l);
     scaled[static_cast<std::size_t>(l)] -= 1.0 - scaled[static_cast<std::size_t>(s)];
     if (scaled[static_cast<std::size_t>(l)] < 1.0) {
       --nl;
       small[static_cast<std::size_t>(ns++)] = l;
     }
   }
-  while (nl > 0) a.threshold[static_cast<std::size_t>(large[static_cast<std::size_t>(--nl)])] = 0xFFFFFFFFu;
-  while (ns > 0) a.threshold[static_cast<std::size_t>(small[static_cast<std::size_t>(--ns)])] = 0xFFFFFFFFu;
+  // Leftovers (rounding) keep their own bucket always, as initialised.
 }
 
-}  // namespace
+// Output distribution per input level. It depends only on (severity, image min, image max), which are the same for
+// most frames of a stream, so the last few table sets are kept for reuse.
+struct DarkTables {
+  int severity = 0, lo = 0, hi = 0;
+  std::vector<Alias> levels;  // indexed by v - lo, for lo <= v <= hi (no other level occurs in the image)
+};
 
-cv::Mat dark_fast(const cv::Mat& bgr, int severity, rng::FastRng& rng) {
+std::shared_ptr<const DarkTables> build_tables(int severity, int lo, int hi) {
   const DarkParams p = dark_params(severity);
   double lam[256];
-  dark_lambdas(bgr, severity, lam);
-  const cv::Mat in = bgr.isContinuous() ? bgr : bgr.clone();
-  const std::size_t n = in.total() * 3;
-  std::array<bool, 256> used{};
-  for (std::size_t i = 0; i < n; ++i) used[in.data[i]] = true;
+  lambdas_for_range(lo, hi, severity, lam);
   // Noise rows per Poisson count k (the value k / P is what the read noise is added to).
   const double max_lam = *std::max_element(lam, lam + 256);
   const int k_max = static_cast<int>(max_lam + 12.0 * std::sqrt(max_lam) + 12.0);
@@ -132,10 +145,11 @@ cv::Mat dark_fast(const cv::Mat& bgr, int severity, rng::FastRng& rng) {
     const double y = std::min(std::max(k / p.poisson_scale, 0.0), 1.0);
     noise_row(y, p.sigma, rows.data() + static_cast<std::size_t>(k) * 256);
   }
-  std::vector<Alias> tables(256);
+  auto t = std::make_shared<DarkTables>();
+  t->severity = severity, t->lo = lo, t->hi = hi;
+  t->levels.resize(static_cast<std::size_t>(hi - lo + 1));
   std::array<double, 256> mix{};
-  for (int v = 0; v < 256; ++v) {
-    if (!used[static_cast<std::size_t>(v)]) continue;
+  for (int v = lo; v <= hi; ++v) {
     mix.fill(0.0);
     const double l = lam[v];
     double pk = std::exp(-l);  // Poisson pmf by recurrence
@@ -146,18 +160,58 @@ cv::Mat dark_fast(const cv::Mat& bgr, int severity, rng::FastRng& rng) {
       const double* row = rows.data() + static_cast<std::size_t>(k) * 256;
       for (int j = 0; j < 256; ++j) mix[static_cast<std::size_t>(j)] += pk * row[j];
     }
-    build_alias(mix.data(), tables[static_cast<std::size_t>(v)]);
+    build_alias(mix.data(), t->levels[static_cast<std::size_t>(v - lo)]);
   }
+  return t;
+}
+
+std::shared_ptr<const DarkTables> tables_for(int severity, int lo, int hi) {
+  static std::mutex mutex;
+  static std::deque<std::shared_ptr<const DarkTables>> cache;
+  {
+    const std::lock_guard<std::mutex> lock(mutex);
+    for (const auto& t : cache) {
+      if (t->severity == severity && t->lo == lo && t->hi == hi) return t;
+    }
+  }
+  auto t = build_tables(severity, lo, hi);  // outside the lock: other streams keep sampling meanwhile
+  const std::lock_guard<std::mutex> lock(mutex);
+  cache.push_front(t);
+  if (cache.size() > 8) cache.pop_back();
+  return t;
+}
+
+inline std::uint8_t sample(const Alias& a, std::uint32_t bits) {
+  const std::uint32_t bucket = bits >> 24;
+  const std::uint32_t u = bits & 0x7FFFFFu;
+  const std::uint32_t e = a.entry[bucket];
+  // Branch-free select: the outcome is random, so a branch would mispredict half the time.
+  const std::uint32_t keep = 0u - static_cast<std::uint32_t>(u < (e >> 8));
+  return static_cast<std::uint8_t>((bucket & keep) | (e & ~keep));
+}
+
+}  // namespace
+
+cv::Mat dark_fast(const cv::Mat& bgr, int severity, rng::FastRng& rng) {
+  const cv::Mat in = bgr.isContinuous() ? bgr : bgr.clone();
+  double lo_u8 = 0.0, hi_u8 = 0.0;
+  cv::minMaxLoc(in.reshape(1), &lo_u8, &hi_u8);
+  const int lo = static_cast<int>(lo_u8), hi = static_cast<int>(hi_u8);
+  const auto tables = tables_for(severity, lo, hi);
+  const Alias* level = tables->levels.data() - lo;  // level[v] for lo <= v <= hi
+  const std::size_t n = in.total() * 3;
   cv::Mat out(in.size(), in.type());
   std::uint8_t* dst = out.data;
   const std::uint8_t* src = in.data;
-  for (std::size_t i = 0; i < n; ++i) {
-    const std::uint64_t r = rng.next_u64();
-    const Alias& a = tables[src[i]];
-    const auto bucket = static_cast<std::uint8_t>(r >> 56);
-    const auto u = static_cast<std::uint32_t>(r);
-    dst[i] = u <= a.threshold[bucket] ? bucket : a.alias[bucket];
+  rng::FastRng local = rng;  // a local copy keeps the generator state in registers
+  std::size_t i = 0;
+  for (; i + 2 <= n; i += 2) {
+    const std::uint64_t r = local.next_u64();
+    dst[i] = sample(level[src[i]], static_cast<std::uint32_t>(r >> 32));
+    dst[i + 1] = sample(level[src[i + 1]], static_cast<std::uint32_t>(r));
   }
+  if (i < n) dst[i] = sample(level[src[i]], static_cast<std::uint32_t>(local.next_u64() >> 32));
+  rng = local;
   return out;
 }
 

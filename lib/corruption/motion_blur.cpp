@@ -118,10 +118,80 @@ cv::Mat motion_blur_exact(const cv::Mat& bgr, int severity, double angle_deg) {
   return blur_u8<double>(bgr, severity, angle_deg, false);
 }
 
+namespace {
+
+cv::Mat blur_banded(const cv::Mat& bgr, int severity, double angle_deg, bool renormalise) {
+  // float32 sums (8 lanes per AVX2 op, register-blocked) decide every value whose truncation is unambiguous; the
+  // rest are recomputed with the exact float64 sum, so the output equals the float64 path bit for bit.
+  const MotionBlurParams p = motion_blur_params(severity);
+  const TabulatedKernel* k = find_tabulated_kernel(p.radius, p.sigma);
+  const auto offsets = motion_offsets(angle_deg, k->width);
+  const int rows = bgr.rows, cols = bgr.cols, ch = bgr.channels();
+  const int taps = usable_taps(offsets, rows, cols);
+  double used = 0.0;
+  for (int i = 0; i < taps; ++i) used += k->weights[i];
+  // Fast mode: images smaller than the streak renormalise the used taps (see the header).
+  const bool scale = renormalise && taps < k->width && used > 0.0;
+  std::vector<double> wd(static_cast<std::size_t>(taps));
+  std::vector<float> wf(static_cast<std::size_t>(taps));
+  for (int i = 0; i < taps; ++i) {
+    wd[static_cast<std::size_t>(i)] = scale ? k->weights[i] / used : k->weights[i];
+    wf[static_cast<std::size_t>(i)] = static_cast<float>(wd[static_cast<std::size_t>(i)]);
+  }
+  // |float32 sum - real sum| <= (2 * taps + 2) * 256 * 2^-24 (weight, product and addition roundings on values
+  // <= 255 * sum(w)); the float64 reference is far closer. Outside this band both truncate to the same integer.
+  const float band = static_cast<float>((2.0 * taps + 2.0) * 256.0 * 0x1p-24);
+  int pad = 0;
+  for (int i = 0; i < taps; ++i) pad = std::max(pad, std::abs(offsets[static_cast<std::size_t>(i)].dx));
+  cv::Mat padded;
+  cv::copyMakeBorder(bgr, padded, 0, 0, pad, pad, cv::BORDER_REPLICATE);
+  cv::Mat out(bgr.size(), bgr.type());
+  const std::size_t n = static_cast<std::size_t>(cols) * static_cast<std::size_t>(ch);
+  std::vector<float> acc(n);
+  std::vector<std::uint8_t> ambiguous(n);
+  std::vector<const std::uint8_t*> src(static_cast<std::size_t>(taps));
+  // The exact float64 result of a flat neighbourhood of value v (same summation order as the exact path).
+  std::uint8_t flat[256];
+  for (int v = 0; v < 256; ++v) {
+    double sum = 0.0;
+    for (int i = 0; i < taps; ++i) sum += wd[static_cast<std::size_t>(i)] * v;
+    flat[v] = static_cast<std::uint8_t>(std::min(std::max(sum, 0.0), 255.0));
+  }
+  for (int y = 0; y < rows; ++y) {
+    for (int i = 0; i < taps; ++i) {
+      const auto& o = offsets[static_cast<std::size_t>(i)];
+      const int sy = std::clamp(y - o.dy, 0, rows - 1);
+      src[static_cast<std::size_t>(i)] = padded.ptr<std::uint8_t>(sy) + static_cast<std::ptrdiff_t>(pad - o.dx) * ch;
+    }
+    simd::weighted_rows(acc.data(), src.data(), wf.data(), taps, n);
+    std::uint8_t* dst = out.ptr<std::uint8_t>(y);
+    if (simd::truncate_outside_band(acc.data(), band, dst, ambiguous.data(), n) == 0) continue;
+    for (std::size_t j = 0; j < n; ++j) {
+      if (!ambiguous[j]) continue;
+      // Flat neighbourhoods (all taps equal) land exactly on the band; their exact value is tabulated.
+      const std::uint8_t first = src[0][j];
+      int i = 1;
+      while (i < taps && src[static_cast<std::size_t>(i)][j] == first) ++i;
+      if (i == taps) {
+        dst[j] = flat[first];
+        continue;
+      }
+      double sum = 0.0;
+      for (i = 0; i < taps; ++i) sum += wd[static_cast<std::size_t>(i)] * src[static_cast<std::size_t>(i)][j];
+      dst[j] = static_cast<std::uint8_t>(std::min(std::max(sum, 0.0), 255.0));
+    }
+  }
+  return out;
+}
+
+}  // namespace
+
 cv::Mat motion_blur_fast(const cv::Mat& bgr, int severity, double angle_deg) {
-  // float32 accumulation measured no faster here and flips 1-14 % of values by 1 (flat regions truncate on the
-  // last ulp of the double kernel), so fast mode keeps the exact float64 sum and only renormalises tiny images.
-  return blur_u8<double>(bgr, severity, angle_deg, true);
+  return blur_banded(bgr, severity, angle_deg, true);
+}
+
+cv::Mat motion_blur_numpy(const cv::Mat& bgr, int severity, double angle_deg) {
+  return blur_banded(bgr, severity, angle_deg, false);
 }
 
 cv::Mat blur_layer(const cv::Mat& layer, int radius, int sigma, double angle_deg) {
@@ -133,9 +203,28 @@ cv::Mat blur_layer(const cv::Mat& layer, int radius, int sigma, double angle_deg
       std::copy(acc, acc + n, out.ptr<double>(y));
     });
   } else {
-    run_taps<float, float>(layer, k->weights, offsets, true, [&](int y, const float* acc, std::size_t n) {
-      std::copy(acc, acc + n, out.ptr<float>(y));
-    });
+    // Fast layer: register-blocked float32 sums, same tap order and rounding as the streaming version.
+    const int rows = layer.rows, cols = layer.cols;
+    const int taps = usable_taps(offsets, rows, cols);
+    double used = 0.0;
+    for (int i = 0; i < taps; ++i) used += k->weights[i];
+    const bool scale = taps < k->width && used > 0.0;
+    std::vector<float> w(static_cast<std::size_t>(taps));
+    int pad = 0;
+    for (int i = 0; i < taps; ++i) {
+      w[static_cast<std::size_t>(i)] = static_cast<float>(scale ? k->weights[i] / used : k->weights[i]);
+      pad = std::max(pad, std::abs(offsets[static_cast<std::size_t>(i)].dx));
+    }
+    cv::Mat padded;
+    cv::copyMakeBorder(layer, padded, 0, 0, pad, pad, cv::BORDER_REPLICATE);
+    std::vector<const float*> src(static_cast<std::size_t>(taps));
+    for (int y = 0; y < rows; ++y) {
+      for (int i = 0; i < taps; ++i) {
+        const auto& o = offsets[static_cast<std::size_t>(i)];
+        src[static_cast<std::size_t>(i)] = padded.ptr<float>(std::clamp(y - o.dy, 0, rows - 1)) + (pad - o.dx);
+      }
+      simd::weighted_rows(out.ptr<float>(y), src.data(), w.data(), taps, static_cast<std::size_t>(cols));
+    }
   }
   return out;
 }

@@ -19,7 +19,13 @@ MotionBlurParams motion_blur_params(int severity);
 // Exact reference arithmetic (float64 accumulation, product rounded before the add, truncation). bgr: CV_8UC3.
 cv::Mat motion_blur_exact(const cv::Mat& bgr, int severity, double angle_deg);
 
-// Fast mode: the exact sum, except that images smaller than the streak renormalise the used taps.
+// numpy mode: the float32-with-float64-fallback path below without renormalisation. Bit-identical to
+// motion_blur_exact (which stays as the plain float64 reference) and about twice as fast.
+cv::Mat motion_blur_numpy(const cv::Mat& bgr, int severity, double angle_deg);
+
+// Fast mode: float32 register-blocked sums, with the float64 sum recomputed wherever the float32 value lies within
+// its error bound of an integer, so the output equals the exact path bit for bit; except that images smaller than
+// the streak renormalise the used taps.
 cv::Mat motion_blur_fast(const cv::Mat& bgr, int severity, double angle_deg);
 
 // Blurs a single-channel layer (CV_64F exact, CV_32F fast) with the tabulated (radius, sigma) kernel; output has

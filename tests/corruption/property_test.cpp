@@ -7,6 +7,7 @@
 
 #include "corruption/brightness.hpp"
 #include "corruption/color_quant.hpp"
+#include "corruption/dark.hpp"
 #include "corruption/fog.hpp"
 #include "corruption/corrupt.hpp"
 #include "corruption/test_images.hpp"
@@ -183,17 +184,19 @@ TEST(DegenerateBehaviourTest, FogOnBlackStaysBlack) {
 }
 
 TEST(BrightnessPathsTest, TablePathEqualsHsvMirrorOnEveryColourClass) {
-  // Random colours plus every tie pattern (two or three equal channels), at every severity.
+  // Random colours plus every tie pattern (ch0 == ch1, ch0 == ch2, ch1 == ch2, all three), at every severity: the
+  // fast path tabulates two-channel ties, so each pattern must match the HSV mirror.
   cv::Mat img(128, 128, CV_8UC3);
   std::uint32_t s = 99;
   for (int y = 0; y < img.rows; ++y) {
     for (int x = 0; x < img.cols; ++x) {
       s = s * 1664525u + 1013904223u;
       const auto a = static_cast<uchar>(s >> 24), b = static_cast<uchar>(s >> 16), c = static_cast<uchar>(s >> 8);
-      switch (x % 4) {
+      switch (x % 5) {
         case 0: img.at<cv::Vec3b>(y, x) = cv::Vec3b(a, b, c); break;
         case 1: img.at<cv::Vec3b>(y, x) = cv::Vec3b(a, a, c); break;
         case 2: img.at<cv::Vec3b>(y, x) = cv::Vec3b(b, c, b); break;
+        case 3: img.at<cv::Vec3b>(y, x) = cv::Vec3b(c, b, b); break;
         default: img.at<cv::Vec3b>(y, x) = cv::Vec3b(a, a, a); break;
       }
     }
@@ -201,6 +204,24 @@ TEST(BrightnessPathsTest, TablePathEqualsHsvMirrorOnEveryColourClass) {
   for (int sev = 1; sev <= 5; ++sev) {
     EXPECT_EQ(cv::norm(brightness_fast(img, sev), brightness_exact(img, sev), cv::NORM_INF), 0.0) << sev;
   }
+}
+
+TEST(DarkFastTablesTest, EachFrameUsesTheTablesOfItsOwnRange) {
+  // The sampling tables are cached per (severity, image min, image max): a frame with another range right after a
+  // full-range frame must follow its own stretch. Severity 2 (c = 0.4): the image maximum maps to a mean of about
+  // 255 * 0.4 - 0.5 and the image minimum to pure read noise, mean about 1.6 (spec section 3).
+  rng::FastRng rng(5);
+  cv::Mat full(64, 64, CV_8UC3);
+  cv::randu(full, 0, 256);
+  full.at<cv::Vec3b>(0, 0) = cv::Vec3b(0, 255, 0);
+  (void)dark_fast(full, 2, rng);
+  cv::Mat narrow(100, 100, CV_8UC3, cv::Scalar::all(50));
+  narrow(cv::Rect(0, 0, 100, 50)).setTo(cv::Scalar::all(100));
+  const cv::Mat out = dark_fast(narrow, 2, rng);
+  const double at_hi = cv::mean(out(cv::Rect(0, 0, 100, 50)))[0];
+  const double at_lo = cv::mean(out(cv::Rect(0, 50, 100, 50)))[0];
+  EXPECT_NEAR(at_hi, 255 * 0.4 - 0.5, 1.0);
+  EXPECT_NEAR(at_lo, 1.6, 0.6);
 }
 
 TEST(FogFractalTest, CropEqualsFullMapCropAndConsumesTheSameDraws) {
