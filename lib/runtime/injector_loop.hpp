@@ -7,6 +7,7 @@
 #pragma once
 
 #include <spdlog/logger.h>
+#include <yaml-cpp/yaml.h>
 
 #include <atomic>
 #include <map>
@@ -39,6 +40,9 @@ struct InjectorConfig {
   double stats_window_s = 1.0;                       // statistics window (s)
   double stats_log_period_s = 5.0;                   // info log of statistics every this many s
   std::map<std::string, std::string> remap;          // topic remaps (from -> to), applied to outputs
+  YAML::Node faults;                                 // fault schedule (policy/fault_spec.hpp); null = none
+  std::string corruption;                            // shorthand "fog/mid": one more fault on all cameras
+  std::uint64_t seed = 0;                            // run seed of every fault draw
 
   template <class V>
   void visit(V& v) {
@@ -60,6 +64,9 @@ struct InjectorConfig {
     v("stats_window_s", stats_window_s, "statistics window (s)");
     v("stats_log_period_s", stats_log_period_s, "info log period of statistics (s)");
     v("remap", remap, "topic remaps from -> to");
+    v("faults", faults, "fault schedule: list of {type, level|severity, cameras, rng, coherent, mode, ...}");
+    v("corruption", corruption, "shorthand for one fault on all cameras, e.g. fog/mid");
+    v("seed", seed, "run seed of the fault draws");
   }
   void validate() const;  // throws ConfigError
 };

@@ -1,0 +1,262 @@
+// `faultline bench injector`: 6 cameras x 12 Hz of 1600x900 JPEG frames through the real InjectorLoop (ipc), with
+// decode + one corruption per run (each type at one level, fast mode), paced in real time for N seconds. Reports
+// the injector thread's CPU (getrusage RUSAGE_THREAD, % of one core), p50/p99 added latency per frame (capture ->
+// received downstream, and the injector's own receive -> publish), and unintended drops.
+#include <CLI/CLI.hpp>
+#include <sys/resource.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cctype>
+#include <chrono>
+#include <cstdio>
+#include <future>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "cli/command.hpp"
+#include "codec/jpeg.hpp"
+#include "common/logging.hpp"
+#include "policy/injector_policy.hpp"
+#include "policy/temporal_draws.hpp"
+#include "runtime/injector_loop.hpp"
+#include "transport/publisher.hpp"
+#include "transport/subscriber.hpp"
+#include "transport/typed.hpp"
+
+namespace faultline::cli {
+namespace {
+
+double thread_cpu_s() {
+  rusage u{};
+  ::getrusage(RUSAGE_THREAD, &u);
+  return static_cast<double>(u.ru_utime.tv_sec + u.ru_stime.tv_sec) +
+         static_cast<double>(u.ru_utime.tv_usec + u.ru_stime.tv_usec) * 1e-6;
+}
+
+// A road-like scene with edges and mild texture, so the JPEG has a realistic size.
+cv::Mat scene(int width, int height, int variant) {
+  cv::Mat img(height, width, CV_8UC3);
+  for (int y = 0; y < height; ++y) {
+    const double t = static_cast<double>(y) / height;
+    img.row(y).setTo(cv::Scalar(220 - 90 * t, 190 - 60 * t, 140 + 40 * t));
+  }
+  cv::rectangle(img, cv::Rect(0, height / 2, width, height / 2), cv::Scalar(70, 72, 75), cv::FILLED);
+  for (int b = 0; b < 12; ++b) {
+    const int x0 = b * width / 12, h = 120 + (b * 37 + variant * 53) % 240;
+    cv::rectangle(img, cv::Rect(x0, height / 2 - h, width / 12 - 10, h),
+                  cv::Scalar(60 + (b * 29) % 120, 80 + (b * 17) % 100, 70 + (b * 41 + variant) % 140), cv::FILLED);
+  }
+  cv::Mat noise(height, width, CV_8UC3);
+  cv::randn(noise, cv::Scalar::all(0), cv::Scalar::all(6));
+  cv::add(img, noise, img);
+  return img;
+}
+
+struct Row {
+  std::string corruption;
+  int severity = 0;
+  std::uint64_t sent = 0, received = 0, injected_drops = 0, unintended_drops = 0;
+  double seconds = 0, cpu_pct = 0;
+  double e2e_p50_ms = 0, e2e_p99_ms = 0, inj_p50_ms = 0, inj_p99_ms = 0;
+};
+
+double pct(std::vector<double> v, double q) {
+  if (v.empty()) return 0;
+  std::sort(v.begin(), v.end());
+  return v[static_cast<std::size_t>(std::min<double>(v.size() - 1, q * (v.size() - 1) + 0.5))];
+}
+
+Row run_one(const std::string& spec, double seconds, double rate_hz, bool decode,
+            const std::vector<std::shared_ptr<const std::vector<std::uint8_t>>>& jpegs, const std::string& dir,
+            int run_index) {
+  Row row;
+  row.corruption = spec;
+  auto log = logging::make_node_logger("bench_injector", "warn");
+  transport::PublisherConfig pc;
+  pc.endpoint = "ipc://" + dir + "/src" + std::to_string(run_index) + ".sock";
+  pc.snd_hwm = 1000;
+  pc.linger_ms = 1000;
+  transport::Publisher source(pc);
+
+  runtime::InjectorConfig ic;
+  ic.input_endpoints = {source.endpoint()};
+  ic.output_endpoint = "ipc://" + dir + "/inj" + std::to_string(run_index) + ".sock";
+  ic.input_hwm = ic.output_hwm = 1000;
+  ic.decode = decode;
+  ic.wait_subscribers = 1;
+  auto policy = policy::make_frame_policy(YAML::Node(), spec, 7, "bench");
+  if (auto* ep = dynamic_cast<policy::EnginePolicy*>(policy.get())) row.severity = ep->engine().config().faults[0].severity;
+  runtime::InjectorLoop injector(ic, "fault_injector", std::move(policy), log);
+  transport::SubscriberConfig sc;
+  sc.endpoints = {injector.output_endpoint()};
+  sc.topics = {"/faulty/", "/sync/sample"};
+  sc.rcv_hwm = 100000;
+  transport::RawSubscriber sink(sc);
+
+  std::atomic<bool> stop{false};
+  double cpu_s = 0;
+  auto injector_rc = std::async(std::launch::async, [&] {
+    const double c0 = thread_cpu_s();
+    const int rc = injector.run(stop);
+    cpu_s = thread_cpu_s() - c0;
+    return rc;
+  });
+  if (!source.wait_for_subscribers("/cam_front/image_rect_compressed", 1, 20 * kNsPerSec, &stop).is_ok()) {
+    stop = true;
+    injector_rc.get();
+    throw std::runtime_error("injector did not subscribe");
+  }
+  auto publisher = std::async(std::launch::async, [&] {
+    const auto period = std::chrono::nanoseconds(static_cast<std::int64_t>(1e9 / rate_hz));
+    const auto start = std::chrono::steady_clock::now();
+    const int ticks = static_cast<int>(seconds * rate_hz);
+    std::uint64_t sent = 0;
+    for (int k = 0; k < ticks; ++k) {
+      std::this_thread::sleep_until(start + k * period);  // pacing of the synthetic camera rig
+      for (int cam = 0; cam < policy::kNumCameras; ++cam) {
+        std::string name = policy::kCameraNames[cam];
+        std::string topic = "/" + name + "/image_rect_compressed";
+        std::transform(topic.begin(), topic.end(), topic.begin(), ::tolower);
+        msgs::CameraFrame h;
+        h.set_camera(name);
+        h.set_encoding("jpeg");
+        h.set_width(1600);
+        h.set_height(900);
+        h.set_source_seq(static_cast<std::uint64_t>(k + 1));
+        h.set_is_key_frame(k % 6 == 0);
+        h.mutable_header()->set_seq(static_cast<std::uint64_t>(k + 1));
+        h.mutable_header()->set_publisher("bench_source");
+        h.mutable_header()->set_capture_stamp_ns(realtime_now_ns());
+        h.mutable_header()->set_publish_mono_ns(monotonic_now_ns());
+        h.mutable_header()->set_publish_stamp_ns(realtime_now_ns());
+        (void)transport::send_camera_frame(source, topic, h, transport::Payload::of(jpegs[static_cast<std::size_t>(cam)]));
+        ++sent;
+      }
+    }
+    msgs::SampleBoundary b;
+    b.set_last_in_run(true);
+    b.mutable_header()->set_publisher("bench_source");
+    (void)transport::send_message(source, "/sync/sample", b);
+    return sent;
+  });
+
+  std::vector<double> e2e_ms, inj_ms;
+  bool last = false;
+  const StampNs deadline = monotonic_now_ns() + static_cast<DurationNs>((seconds + 60) * 1e9);
+  while (!last && monotonic_now_ns() < deadline) {
+    auto r = sink.receive(100 * kNsPerMs);
+    if (!r.is_ok()) continue;
+    if (r->topic() == "/sync/sample") {
+      last = true;
+      continue;
+    }
+    auto view = transport::parse_camera_frame(*r);
+    if (!view) continue;
+    ++row.received;
+    e2e_ms.push_back(static_cast<double>(realtime_now_ns() - view->header.header().capture_stamp_ns()) / 1e6);
+    inj_ms.push_back(static_cast<double>(view->header.fault().injector_latency_ns()) / 1e6);
+  }
+  stop = true;
+  row.sent = publisher.get();
+  (void)injector_rc.get();
+  row.seconds = seconds;
+  row.cpu_pct = 100.0 * cpu_s / seconds;
+  row.injected_drops = injector.counts().injected_drops;
+  row.unintended_drops = row.sent - row.received - row.injected_drops;
+  row.e2e_p50_ms = pct(e2e_ms, 0.5);
+  row.e2e_p99_ms = pct(e2e_ms, 0.99);
+  row.inj_p50_ms = pct(inj_ms, 0.5);
+  row.inj_p99_ms = pct(inj_ms, 0.99);
+  return row;
+}
+
+int run(int argc, char** argv) {
+  CLI::App app("Real-time injector benchmark: 6 cameras x 12 Hz of 1600x900 JPEGs, decode + one corruption.", argv[0]);
+  double seconds = 10, rate_hz = 12;
+  std::string level = "mid", output = "bgr8";
+  std::vector<std::string> types = {"none", "brightness", "dark", "fog", "snow", "motion_blur", "color_quant"};
+  bool json = false;
+  app.add_option("--seconds", seconds, "real-time duration of each run (s)");
+  app.add_option("--rate-hz", rate_hz, "frames per second per camera");
+  app.add_option("--level", level, "easy|mid|hard");
+  app.add_option("--types", types, "corruptions to run (\"none\" = decode only)");
+  app.add_option("--output", output, "bgr8 (republish decoded) or jpeg (re-encode q95)")->check(CLI::IsMember({"bgr8", "jpeg"}));
+  app.add_flag("--json", json, "print a JSON array");
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e);
+  }
+  if (seconds <= 0 || rate_hz <= 0) {
+    std::fprintf(stderr, "faultline bench injector: --seconds and --rate-hz must be > 0\n");
+    return 2;
+  }
+  cv::setNumThreads(0);  // all corruption work on the injector thread, so RUSAGE_THREAD sees all of it
+  std::vector<std::shared_ptr<const std::vector<std::uint8_t>>> jpegs;
+  for (int cam = 0; cam < policy::kNumCameras; ++cam) {
+    auto bytes = codec::encode_jpeg(scene(1600, 900, cam), 95);
+    if (!bytes) {
+      std::fprintf(stderr, "faultline bench injector: %s\n", bytes.status().message().c_str());
+      return 1;
+    }
+    jpegs.push_back(std::make_shared<const std::vector<std::uint8_t>>(std::move(bytes).value()));
+  }
+  char tmpl[] = "/tmp/faultline-bench-injector-XXXXXX";
+  const std::string dir = ::mkdtemp(tmpl);
+  ::setenv("FAULTLINE_RUN_DIR", (dir + "/graph").c_str(), 0);
+  std::vector<Row> rows;
+  try {
+    int index = 0;
+    for (const auto& t : types) {
+      const std::string spec = t == "none" ? "" : t + "/" + level;
+      // "none" with bgr8 output still decodes; with jpeg output it is a pure passthrough.
+      rows.push_back(run_one(spec, seconds, rate_hz, output == "bgr8", jpegs, dir, index++));
+      rows.back().corruption = t;
+      if (!json) {
+        const Row& r = rows.back();
+        std::printf("%-12s sev %d  cpu %6.1f %% of one core  e2e p50 %7.2f ms p99 %7.2f ms  injector p50 %7.2f ms "
+                    "p99 %7.2f ms  sent %llu recv %llu unintended drops %llu\n",
+                    r.corruption.c_str(), r.severity, r.cpu_pct, r.e2e_p50_ms, r.e2e_p99_ms, r.inj_p50_ms,
+                    r.inj_p99_ms, static_cast<unsigned long long>(r.sent), static_cast<unsigned long long>(r.received),
+                    static_cast<unsigned long long>(r.unintended_drops));
+        std::fflush(stdout);
+      }
+    }
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "faultline bench injector: %s\n", e.what());
+    std::system(("rm -rf " + dir).c_str());
+    return 1;
+  }
+  std::system(("rm -rf " + dir).c_str());
+  if (json) {
+    std::printf("[\n");
+    for (std::size_t i = 0; i < rows.size(); ++i) {
+      const Row& r = rows[i];
+      std::printf("  {\"corruption\": \"%s\", \"severity\": %d, \"output\": \"%s\", \"seconds\": %.1f, "
+                  "\"cpu_pct_one_core\": %.1f, \"e2e_p50_ms\": %.2f, \"e2e_p99_ms\": %.2f, \"injector_p50_ms\": %.2f, "
+                  "\"injector_p99_ms\": %.2f, \"sent\": %llu, \"received\": %llu, \"injected_drops\": %llu, "
+                  "\"unintended_drops\": %llu}%s\n",
+                  r.corruption.c_str(), r.severity, output.c_str(), r.seconds, r.cpu_pct, r.e2e_p50_ms, r.e2e_p99_ms,
+                  r.inj_p50_ms, r.inj_p99_ms, static_cast<unsigned long long>(r.sent),
+                  static_cast<unsigned long long>(r.received), static_cast<unsigned long long>(r.injected_drops),
+                  static_cast<unsigned long long>(r.unintended_drops), i + 1 < rows.size() ? "," : "");
+    }
+    std::printf("]\n");
+  }
+  for (const Row& r : rows) {
+    if (r.unintended_drops != 0) return 3;
+  }
+  return 0;
+}
+
+}  // namespace
+
+FAULTLINE_COMMAND(bench_injector, "bench injector",
+                  "real-time injector benchmark: CPU, added latency and drops per corruption", &run);
+
+}  // namespace faultline::cli

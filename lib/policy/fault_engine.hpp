@@ -1,0 +1,103 @@
+// The fault engine: given the schedule and a run seed, decides per camera frame which faults fire (decide) and
+// applies them to the decoded pixels (render). Pure (no I/O, no clocks): time comes from the frames' capture
+// stamps, relative to the first frame seen. Not thread-safe; call from the injector thread in arrival order.
+//
+// - Image corruptions: a fresh RNG per (run seed, camera, source_seq) (seeding.hpp), or one CoherentCorruptor per
+//   camera (restarted when a ramp changes the severity).
+// - camera_crash: without `cameras`, the dead set is drawn once per run like RoboBEV (numpy mode:
+//   NumpyRandomState(seed), k choice draws with replacement; a ramp to severity k uses the first k draws).
+//   With `cameras`, exactly those cameras crash (scripted faults).
+// - frame_lost: one draw of 6 uniforms per frame instant, cameras in reference order; a camera's n-th eligible
+//   frame uses the n-th draw, so numpy mode reproduces the reference masks for a seed and the result does not
+//   depend on the interleaving of cameras. Dropped iff u < severity/6.
+// - Several faults on one frame: corruptions stack in list order; the strongest temporal outcome wins
+//   (drop > black > freeze > delay).
+#pragma once
+
+#include <opencv2/core.hpp>
+
+#include <array>
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "common/clock.hpp"
+#include "common/status.hpp"
+#include "corruption/coherent.hpp"
+#include "policy/fault_spec.hpp"
+#include "policy/temporal_draws.hpp"
+#include "rng/numpy_legacy.hpp"
+
+namespace faultline::policy {
+
+struct FrameInfo {
+  std::string camera;            // "CAM_FRONT", ...; unknown cameras get no faults
+  std::uint64_t source_seq = 0;  // the source's seq of this frame (per camera)
+  StampNs capture_stamp_ns = 0;
+  bool is_key_frame = true;
+};
+
+enum class Action { Pass, Corrupt, Drop, Black, Freeze, Delay };
+const char* to_string(Action action);
+
+struct AppliedFault {
+  std::string name;
+  int severity = 0;
+  std::uint64_t seed = 0;
+  std::string rng;                        // "numpy" or "fast"
+  std::map<std::string, double> params;   // angle_deg, delay_ms, u, p, ...
+};
+
+struct FramePlan {
+  Action action = Action::Pass;
+  std::vector<AppliedFault> faults;
+  DurationNs delay_ns = 0;
+  int camera = -1;
+  struct Step {                 // one image corruption to apply in render()
+    std::size_t fault_index = 0;
+    std::size_t applied_index = 0;  // its entry in `faults`
+    int severity = 0;
+    std::uint64_t seed = 0;
+  };
+  std::vector<Step> corruptions;
+  bool needs_pixels() const;    // render() has work to do
+};
+
+struct EngineConfig {
+  std::vector<FaultSpec> faults;
+  std::uint64_t seed = 0;  // run seed
+};
+
+class FaultEngine {
+ public:
+  explicit FaultEngine(EngineConfig config);
+  ~FaultEngine();
+
+  FramePlan decide(const FrameInfo& frame);
+
+  // Applies the plan to `image` (CV_8UC3) in place: corruptions, then black or freeze. Keeps the camera's last
+  // good frame (PASS/CORRUPT/DELAY output) when some fault freezes. Must see every frame that is not dropped.
+  Status render(FramePlan& plan, cv::Mat& image);
+
+  bool freezes() const { return freezes_; }  // some fault may freeze: the caller keeps history
+  const EngineConfig& config() const { return config_; }
+
+ private:
+  double lost_uniform(std::size_t i, const FaultSpec& spec, int camera);
+
+  EngineConfig config_;
+  bool freezes_ = false;
+  std::optional<StampNs> first_stamp_ns_;
+  std::vector<std::vector<std::vector<int>>> crash_sets_;  // per fault: dead set at severity k at [k]
+  std::vector<std::vector<std::array<double, kNumCameras>>> lost_draws_;  // per fault (numpy): uniforms per instant
+  std::vector<std::unique_ptr<rng::NumpyRandomState>> lost_streams_;     // per fault (numpy): the run's stream
+  std::vector<std::array<std::uint64_t, kNumCameras>> lost_counters_;   // per fault: eligible frames per camera
+  std::map<std::pair<std::size_t, int>, std::unique_ptr<corruption::CoherentCorruptor>> coherent_;
+  std::map<std::pair<std::size_t, int>, int> coherent_severity_;
+  std::array<cv::Mat, kNumCameras> last_good_;
+};
+
+}  // namespace faultline::policy

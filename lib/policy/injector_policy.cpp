@@ -1,0 +1,124 @@
+// FaultEngine -> runtime::FramePolicy: JPEG handling and the mapping to FaultDecision / ActiveFault.
+#include "policy/injector_policy.hpp"
+
+#include "codec/jpeg.hpp"
+#include "common/config.hpp"
+
+namespace faultline::policy {
+namespace {
+
+msgs::FaultAction to_msg(Action a) {
+  switch (a) {
+    case Action::Pass: return msgs::FAULT_ACTION_PASS;
+    case Action::Corrupt: return msgs::FAULT_ACTION_CORRUPT;
+    case Action::Drop: return msgs::FAULT_ACTION_DROP;
+    case Action::Black: return msgs::FAULT_ACTION_BLACK;
+    case Action::Freeze: return msgs::FAULT_ACTION_FREEZE;
+    case Action::Delay: return msgs::FAULT_ACTION_DELAY;
+  }
+  return msgs::FAULT_ACTION_PASS;
+}
+
+FrameInfo info_of(const transport::CameraFrameView& frame) {
+  const auto& h = frame.header;
+  FrameInfo info;
+  info.camera = h.camera();
+  info.source_seq = h.source_seq() != 0 ? h.source_seq() : h.header().seq();
+  info.capture_stamp_ns = h.header().capture_stamp_ns();
+  info.is_key_frame = h.is_key_frame();
+  return info;
+}
+
+// A render that failed (e.g. undecodable pixels) degrades to pass-through and says why.
+void mark_failed(FramePlan& plan, const Status& s) {
+  plan.action = Action::Pass;
+  plan.corruptions.clear();
+  AppliedFault f;
+  f.name = "render_error";
+  f.params["status_code"] = static_cast<double>(s.code());
+  plan.faults.push_back(std::move(f));
+}
+
+}  // namespace
+
+EnginePolicy::EnginePolicy(EngineConfig config, int jpeg_quality)
+    : engine_(std::move(config)), jpeg_quality_(jpeg_quality) {}
+
+runtime::FaultDecision EnginePolicy::finish(FramePlan& plan, const Status& rendered) {
+  if (!rendered.is_ok()) mark_failed(plan, rendered);
+  runtime::FaultDecision d;
+  d.action = to_msg(plan.action);
+  d.delay_ns = plan.action == Action::Delay ? plan.delay_ns : 0;
+  for (const auto& f : plan.faults) {
+    msgs::ActiveFault& a = d.faults.emplace_back();
+    a.set_name(f.name);
+    a.set_severity(static_cast<std::uint32_t>(f.severity));
+    a.set_seed(f.seed);
+    a.set_rng(f.rng);
+    for (const auto& [k, v] : f.params) (*a.mutable_params())[k] = v;
+  }
+  return d;
+}
+
+EnginePolicy::Bytes EnginePolicy::black_jpeg(const transport::CameraFrameView& frame) {
+  auto size = codec::jpeg_size(frame.payload, frame.payload_size);
+  if (!size) return nullptr;
+  auto& cached = black_cache_[{size->width, size->height}];
+  if (!cached) {
+    auto encoded = codec::encode_jpeg(cv::Mat::zeros(*size, CV_8UC3), jpeg_quality_);
+    if (!encoded) return nullptr;
+    cached = std::make_shared<const std::vector<std::uint8_t>>(std::move(encoded).value());
+  }
+  return cached;
+}
+
+runtime::FaultDecision EnginePolicy::apply(const transport::CameraFrameView& frame, cv::Mat* image) {
+  FramePlan plan = engine_.decide(info_of(frame));
+  if (plan.action == Action::Drop || plan.camera < 0) return finish(plan, Status::ok());
+  if (image) return finish(plan, engine_.render(plan, *image));
+
+  // JPEG passthrough: touch pixels only when they change.
+  const auto cam = static_cast<std::size_t>(plan.camera);
+  if (plan.action == Action::Black) {
+    auto d = finish(plan, Status::ok());
+    d.replacement_jpeg = black_jpeg(frame);
+    if (!d.replacement_jpeg) return finish(plan, Status{StatusCode::kCorruptData, "JPEG header"});
+    return d;
+  }
+  if (plan.action == Action::Freeze) {
+    auto d = finish(plan, Status::ok());
+    d.replacement_jpeg = last_good_jpeg_[cam] ? last_good_jpeg_[cam] : black_jpeg(frame);
+    if (!last_good_jpeg_[cam]) (*d.faults.back().mutable_params())["no_history"] = 1;
+    return d;
+  }
+  if (plan.corruptions.empty()) {
+    if (engine_.freezes()) {
+      last_good_jpeg_[cam] =
+          std::make_shared<const std::vector<std::uint8_t>>(frame.payload, frame.payload + frame.payload_size);
+    }
+    return finish(plan, Status::ok());
+  }
+  auto decoded = codec::decode_jpeg(frame.payload, frame.payload_size);
+  if (!decoded) return finish(plan, decoded.status());
+  cv::Mat pixels = std::move(decoded).value();
+  const Status rendered = engine_.render(plan, pixels);
+  if (!rendered.is_ok()) return finish(plan, rendered);
+  auto encoded = codec::encode_jpeg(pixels, jpeg_quality_);
+  if (!encoded) return finish(plan, encoded.status());
+  auto d = finish(plan, Status::ok());
+  d.replacement_jpeg = std::make_shared<const std::vector<std::uint8_t>>(std::move(encoded).value());
+  if (engine_.freezes()) last_good_jpeg_[cam] = d.replacement_jpeg;
+  return d;
+}
+
+std::unique_ptr<runtime::FramePolicy> make_frame_policy(const YAML::Node& faults, const std::string& corruption,
+                                                        std::uint64_t seed, const std::string& origin) {
+  EngineConfig config;
+  config.faults = parse_faults(faults, origin);
+  if (auto shorthand = parse_corruption_shorthand(corruption, origin)) config.faults.push_back(*shorthand);
+  config.seed = seed;
+  if (config.faults.empty()) return std::make_unique<runtime::PassThroughPolicy>();
+  return std::make_unique<EnginePolicy>(std::move(config));
+}
+
+}  // namespace faultline::policy

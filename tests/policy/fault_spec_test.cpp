@@ -1,0 +1,143 @@
+// The `faults` schedule: parsing, errors that name key and value, windows and ramps.
+#include <gtest/gtest.h>
+
+#include "common/config.hpp"
+#include "policy/fault_spec.hpp"
+
+namespace faultline::policy {
+namespace {
+
+std::vector<FaultSpec> Parse(const std::string& yaml) { return parse_faults(YAML::Load(yaml), "fault_injector"); }
+
+std::string ErrorOf(const std::string& yaml) {
+  try {
+    Parse(yaml);
+  } catch (const ConfigError& e) {
+    return e.what();
+  }
+  return "(no error)";
+}
+
+DurationNs Sec(double s) { return static_cast<DurationNs>(s * 1e9); }
+
+TEST(FaultSpecTest, ParsesTheDocumentedExample) {
+  const auto faults = Parse(R"(
+- type: fog
+  level: mid
+  cameras: all
+  rng: fast
+  coherent: false
+- type: camera_crash
+  severity: 3
+  cameras: [CAM_FRONT_LEFT, CAM_BACK]
+  rng: numpy
+  mode: delay
+  delay_ms: 150
+  start_s: 12
+  duration_s: 3
+  ramp_s: 1.5
+  frames: key
+)");
+  ASSERT_EQ(faults.size(), 2u);
+  EXPECT_EQ(faults[0].kind, FaultKind::Corruption);
+  EXPECT_EQ(faults[0].corruption, corruption::Corruption::Fog);
+  EXPECT_EQ(faults[0].severity, 4);  // fog mid
+  EXPECT_TRUE(faults[0].cameras.empty());
+  EXPECT_EQ(faults[0].frames, FrameSet::All);
+  EXPECT_EQ(faults[0].name(), "fog");
+  EXPECT_EQ(faults[1].kind, FaultKind::CameraCrash);
+  EXPECT_EQ(faults[1].severity, 3);
+  EXPECT_EQ(faults[1].cameras, (std::vector<int>{2, 3}));
+  EXPECT_EQ(faults[1].rng, corruption::RngMode::Numpy);
+  EXPECT_EQ(faults[1].mode, OutputMode::Delay);
+  EXPECT_DOUBLE_EQ(faults[1].delay_ms, 150);
+  EXPECT_DOUBLE_EQ(faults[1].start_s, 12);
+  ASSERT_TRUE(faults[1].duration_s.has_value());
+  EXPECT_DOUBLE_EQ(*faults[1].duration_s, 3);
+  EXPECT_DOUBLE_EQ(faults[1].ramp_s, 1.5);
+  EXPECT_EQ(faults[1].frames, FrameSet::Key);
+  EXPECT_FALSE(faults[1].applies_to(0));
+  EXPECT_TRUE(faults[1].applies_to(3));
+}
+
+TEST(FaultSpecTest, LevelsOfTemporalFaultsAreTheNuscenesCSeverities) {
+  EXPECT_EQ(Parse("[{type: frame_lost, level: easy}]")[0].severity, 2);
+  EXPECT_EQ(Parse("[{type: frame_lost, level: mid}]")[0].severity, 4);
+  EXPECT_EQ(Parse("[{type: camera_crash, level: hard}]")[0].severity, 5);
+  EXPECT_EQ(Parse("[{type: snow, level: hard}]")[0].severity, 3);
+  EXPECT_EQ(Parse("[{type: low_light}]")[0].corruption, corruption::Corruption::Dark);
+}
+
+TEST(FaultSpecTest, NullOrMissingListMeansNoFaults) {
+  EXPECT_TRUE(parse_faults(YAML::Node(), "x").empty());
+  EXPECT_TRUE(Parse("[]").empty());
+}
+
+TEST(FaultSpecTest, ErrorsNameTheKeyAndTheValue) {
+  EXPECT_NE(ErrorOf("[{type: fog, colour: red}]").find("fault_injector: faults[0].colour = red: unknown key"),
+            std::string::npos);
+  EXPECT_NE(ErrorOf("[{type: fog}, {type: fgo}]").find("faults[1].type = fgo: expected"), std::string::npos);
+  EXPECT_NE(ErrorOf("[{type: fog, severity: abc}]").find("faults[0].severity = abc: expected integer"),
+            std::string::npos);
+  EXPECT_NE(ErrorOf("[{type: fog, severity: 7}]").find("faults[0].severity = 7: expected 1..5"), std::string::npos);
+  EXPECT_NE(ErrorOf("[{type: fog, level: extreme}]").find("faults[0].level = extreme"), std::string::npos);
+  EXPECT_NE(ErrorOf("[{type: fog, cameras: [CAM_TOP]}]").find("faults[0].cameras = CAM_TOP"), std::string::npos);
+  EXPECT_NE(ErrorOf("[{type: fog, rng: mt}]").find("faults[0].rng = mt"), std::string::npos);
+  EXPECT_NE(ErrorOf("[{type: fog, coherent: maybe}]").find("faults[0].coherent = maybe: expected bool"),
+            std::string::npos);
+  EXPECT_NE(ErrorOf("[{type: fog, mode: drop}]").find("faults[0].mode = drop"), std::string::npos);
+  EXPECT_NE(ErrorOf("[{type: frame_lost, mode: vanish}]").find("faults[0].mode = vanish"), std::string::npos);
+  EXPECT_NE(ErrorOf("[{type: drop, start_s: -1}]").find("faults[0].start_s = -1"), std::string::npos);
+  EXPECT_NE(ErrorOf("[{type: drop, duration_s: soon}]").find("faults[0].duration_s = soon: expected number"),
+            std::string::npos);
+  EXPECT_NE(ErrorOf("[{type: fog, frames: some}]").find("faults[0].frames = some: expected key|all"),
+            std::string::npos);
+  EXPECT_NE(ErrorOf("[{level: mid}]").find("faults[0].type"), std::string::npos);
+  EXPECT_NE(ErrorOf("{type: fog}").find("faults = "), std::string::npos);
+  EXPECT_NE(ErrorOf("[{type: fog, rng: numpy, coherent: true}]").find("coherent"), std::string::npos);
+}
+
+TEST(FaultSpecTest, CorruptionShorthandIsOneFaultOnAllCameras) {
+  const auto fog = parse_corruption_shorthand("fog/mid", "fault_injector");
+  ASSERT_TRUE(fog);
+  EXPECT_EQ(fog->corruption, corruption::Corruption::Fog);
+  EXPECT_EQ(fog->severity, 4);
+  EXPECT_TRUE(fog->cameras.empty());
+  EXPECT_EQ(parse_corruption_shorthand("snow/2", "x")->severity, 2);
+  EXPECT_EQ(parse_corruption_shorthand("camera_crash/hard", "x")->kind, FaultKind::CameraCrash);
+  EXPECT_FALSE(parse_corruption_shorthand("", "x"));
+  try {
+    (void)parse_corruption_shorthand("fog/extreme", "fault_injector");
+    FAIL() << "no error";
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("fault_injector: corruption = fog/extreme"), std::string::npos) << e.what();
+  }
+}
+
+TEST(FaultSpecTest, WindowOpensAtStartAndClosesAfterDuration) {
+  const auto f = Parse("[{type: black, start_s: 12, duration_s: 3}]")[0];
+  EXPECT_EQ(severity_at(f, Sec(0)), 0);
+  EXPECT_EQ(severity_at(f, Sec(11.999)), 0);
+  EXPECT_EQ(severity_at(f, Sec(12)), 1);
+  EXPECT_EQ(severity_at(f, Sec(14.999)), 1);
+  EXPECT_EQ(severity_at(f, Sec(15)), 0);
+  const auto forever = Parse("[{type: fog, severity: 3, start_s: 1}]")[0];
+  EXPECT_EQ(severity_at(forever, Sec(1e6)), 3);
+}
+
+TEST(FaultSpecTest, RampClimbsFromOneToTheSeverityInEqualSteps) {
+  const auto f = Parse("[{type: fog, severity: 5, start_s: 10, ramp_s: 5}]")[0];
+  EXPECT_EQ(severity_at(f, Sec(9.9)), 0);
+  EXPECT_EQ(severity_at(f, Sec(10)), 1);
+  EXPECT_EQ(severity_at(f, Sec(10.99)), 1);
+  EXPECT_EQ(severity_at(f, Sec(11)), 2);
+  EXPECT_EQ(severity_at(f, Sec(12.5)), 3);
+  EXPECT_EQ(severity_at(f, Sec(14.5)), 5);
+  EXPECT_EQ(severity_at(f, Sec(20)), 5);
+  const auto two = Parse("[{type: fog, severity: 2, ramp_s: 4}]")[0];
+  EXPECT_EQ(severity_at(two, Sec(1.9)), 1);
+  EXPECT_EQ(severity_at(two, Sec(2)), 2);
+}
+
+}  // namespace
+}  // namespace faultline::policy
