@@ -55,7 +55,8 @@ cv::Mat zoom_threshold(const cv::Mat& crop, cv::Size out_size, double threshold)
   const int depth = cv::DataType<T>::depth;
   const AxisMap rm = axis_map(crop.rows, out_size.height);
   const AxisMap cm = axis_map(crop.cols, out_size.width);
-  cv::Mat tmp(out_size.height, crop.cols, depth);
+  thread_local cv::Mat tmp;  // reused per thread (avoids page faults on a fresh buffer every frame)
+  tmp.create(out_size.height, crop.cols, depth);
   for (int o = 0; o < out_size.height; ++o) {
     const T* a = crop.ptr<T>(rm.i0[static_cast<std::size_t>(o)]);
     const T* b = crop.ptr<T>(rm.i1[static_cast<std::size_t>(o)]);
