@@ -54,6 +54,16 @@ constexpr const char* kSeedDerivation =
     "\"<CAM_X>/<file>\", FrameLost the sample token (6 uniforms in camera order; sweeps: the file key), "
     "CameraCrash \"run\"";
 
+// The settings that change output bytes; a resume only trusts an earlier run that used the same ones.
+std::string config_mismatch(const std::map<std::string, std::string>& before,
+                            const std::map<std::string, std::string>& now) {
+  for (const char* key : {"version", "rng", "seed", "quality", "subsampling"}) {
+    const auto it = before.find(key);
+    if (it == before.end() || it->second != now.at(key)) return key;
+  }
+  return {};
+}
+
 // One (condition, level) output folder.
 struct Output {
   Condition condition{};
@@ -333,8 +343,15 @@ Result<ExportSummary> run_export(const ExportConfig& cfg, const ExportProgressFn
       if (fs::exists(o->manifest_path)) {
         auto prev = read_manifest(o->manifest_path);
         // An unreadable manifest only costs a redo of everything in that folder.
-        if (prev) o->previous = std::move(prev->files);
-        else summary.problems.push_back("resume: " + prev.status().to_string() + " (redoing the folder)");
+        if (!prev) {
+          summary.problems.push_back("resume: " + prev.status().to_string() + " (redoing the folder)");
+        } else if (const std::string key = config_mismatch(prev->config, config_echo); !key.empty()) {
+          // Files made with another seed, rng or encoder setting are not this run's outputs.
+          summary.problems.push_back("resume: " + o->manifest_path + ": " + key +
+                                     " differs from the earlier run (redoing the folder)");
+        } else {
+          o->previous = std::move(prev->files);
+        }
       }
       if (c == Condition::CameraCrash) {
         o->crash_seed = derive_seed64(cfg.seed, c, level, "run");

@@ -104,3 +104,23 @@ TEST_F(ExportTest, CorruptAndMissingInputsAreListedAndTheRunCompletes) {
 
 }  // namespace
 }  // namespace faultline::exporter
+
+namespace faultline::exporter {
+namespace {
+
+using testing_util::ExportTest;
+
+TEST_F(ExportTest, ResumeWithAnotherSeedRedoesEverything) {
+  const auto out = testing_util::scratch_dir("resume_seed");
+  auto c = config(out);
+  c.conditions = {Condition::Snow};
+  c.levels = {corruption::Level::Easy};
+  const auto first = run_ok(c);
+  c.seed = 1234;
+  const auto second = run_ok(c);
+  EXPECT_EQ(second.skipped, 0);
+  EXPECT_EQ(second.written, first.written);
+}
+
+}  // namespace
+}  // namespace faultline::exporter
