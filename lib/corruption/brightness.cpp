@@ -24,8 +24,9 @@ void hsv_shift_pixel(const std::uint8_t* in, std::uint8_t* out, double c) {
   if (a0 == v) h = (a1 - a2) / delta;
   if (a1 == v) h = 2.0 + (a2 - a0) / delta;
   if (a2 == v) h = 4.0 + (a0 - a1) / delta;
-  // numpy floor-mod: fmod, then shift negatives into [0, 1).
-  double hue = std::fmod(h / 6.0, 1.0);
+  // numpy floor-mod: fmod, then shift negatives into [0, 1). h lies in [-1, 5] (or is NaN), so |h / 6| < 1 and
+  // fmod(h / 6, 1) is exactly h / 6: the libm call is skipped without changing a bit.
+  double hue = h / 6.0;
   if (hue != 0.0 && hue < 0.0) hue += 1.0;
   if (delta == 0.0) hue = 0.0;
   if (std::isnan(hue)) hue = 0.0;
