@@ -1,0 +1,65 @@
+// `faultline bag play FILE...`: republish a recorded bag byte for byte.
+#include <CLI/CLI.hpp>
+
+#include <cstdio>
+
+#include "cli/command.hpp"
+#include "common/config.hpp"
+#include "common/logging.hpp"
+#include "common/shutdown.hpp"
+#include "runtime/bag_player.hpp"
+#include "transport/context.hpp"
+
+namespace faultline::cli {
+namespace {
+
+int run(int argc, char** argv) {
+  CLI::App app{"Republish the replay channels of a bag (same bytes, order and seq) on one PUB socket."};
+  runtime::BagPlayerConfig cfg;
+  cfg.progress = true;
+  std::vector<std::string> remaps;
+  app.add_option("files", cfg.files, "bag file(s), played in order (split parts)")->required()->check(CLI::ExistingFile);
+  app.add_option("-r,--rate", cfg.rate, "speed factor; 0 = as fast as possible")->capture_default_str();
+  app.add_flag("-l,--loop", cfg.loop, "start over at the end");
+  app.add_option("--start-offset", cfg.start_offset_s, "skip SECONDS from the start");
+  app.add_option("--duration", cfg.duration_s, "play SECONDS of bag time (0 = all)");
+  app.add_option("--include", cfg.include, "regex of topics to play (repeatable)");
+  app.add_option("--exclude", cfg.exclude, "regex of topics not to play (repeatable)");
+  app.add_option("--remap", remaps, "FROM:=TO topic remap (repeatable)");
+  app.add_option("--endpoint", cfg.endpoint, "PUB bind address")->capture_default_str();
+  app.add_option("--hwm", cfg.hwm, "send queue per subscriber")->capture_default_str();
+  app.add_option("--wait-subscribers", cfg.wait_subscribers, "wait for N subscribers before the first message");
+  app.add_flag("--lockstep", cfg.lockstep, "wait for the sink's SampleAck after each sample boundary");
+  app.add_option("--sync-topic", cfg.sync_topic, "sample boundary topic")->capture_default_str();
+  app.add_option("--ack-endpoint", cfg.ack_endpoint, "PULL bind address for SampleAck")->capture_default_str();
+  app.add_option("--ack-timeout-ms", cfg.ack_timeout_ms, "lockstep ack timeout (0 = forever)")->capture_default_str();
+  app.add_flag("!--no-progress", cfg.progress, "no progress line");
+  CLI11_PARSE(app, argc, argv);
+  for (const auto& r : remaps) {
+    const auto sep = r.find(":=");
+    if (sep == std::string::npos || sep == 0 || sep + 2 >= r.size()) {
+      std::fprintf(stderr, "bag play: --remap %s: expected FROM:=TO\n", r.c_str());
+      return 2;
+    }
+    cfg.remap[r.substr(0, sep)] = r.substr(sep + 2);
+  }
+  try {
+    auto log = logging::make_node_logger("bag_play", "info");
+    int rc = 0;
+    {
+      runtime::BagPlayer player(cfg, log);
+      log->info("playing on {}{}", player.endpoint(),
+                cfg.lockstep ? " (lockstep, acks on " + player.ack_endpoint() + ")" : "");
+      rc = player.run(shutdown_requested());
+    }
+    transport::terminate_context();
+    return rc;
+  } catch (const ConfigError& e) {
+    std::fprintf(stderr, "bag play: %s\n", e.what());
+    return 2;
+  }
+}
+
+}  // namespace
+FAULTLINE_COMMAND(bag_play, "bag play", "republish a recorded bag", &run);
+}  // namespace faultline::cli
