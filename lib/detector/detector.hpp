@@ -20,6 +20,7 @@ namespace faultline::detector {
 struct DetectorConfig {
   double scale = 1.0;     // input scale: 1.0, 0.5 or 0.25 of the full image
   bool temporal = true;   // track over every frame (velocity, smoothing, coasting) vs single key frame
+  double max_gain = 4.0;  // low-light stretch limit (98th-percentile brightness -> 220)
   ColorLutConfig colors;
   BlobConfig blobs;
   LiftConfig lift;
