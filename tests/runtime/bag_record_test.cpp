@@ -292,6 +292,63 @@ TEST_F(BagRecordTest, PlayRepublishesRecordingExactly) {
   expect_same(stream, got);
 }
 
+TEST_F(BagRecordTest, LockstepPlayWaitsForEachSampleAck) {
+  const auto stream = make_stream(12, 0);
+  BagRecorder recorder(recorder_config(), quiet_logger());
+  ASSERT_EQ(record(stream, recorder), 0);
+
+  BagPlayerConfig pc;
+  pc.files = recorder.paths();
+  pc.rate = 0;
+  pc.endpoint = "ipc://" + (dir_ / "play.sock").string();
+  pc.ack_endpoint = "ipc://" + (dir_ / "ack.sock").string();
+  pc.lockstep = true;
+  pc.ack_timeout_ms = 0;  // wait forever: a missing ack would hang, caught by the receive timeout below
+  pc.wait_subscribers = 1;
+  BagPlayer player(pc, quiet_logger());
+  transport::SubscriberConfig sc;
+  sc.endpoints = {player.endpoint()};
+  sc.topics = {""};
+  sc.rcv_hwm = 1000;
+  transport::RawSubscriber sub(sc);
+  transport::PublisherConfig ac;
+  ac.endpoint = player.ack_endpoint();
+  ac.pattern = transport::Pattern::PushPull;
+  ac.bind = false;
+  ac.linger_ms = 200;
+  transport::Publisher acks(ac);
+  std::atomic<bool> stop{false};
+  int rc = -1;
+  std::thread t([&] { rc = player.run(stop); });
+  std::vector<SentMessage> got;
+  std::size_t acked = 0;
+  while (got.size() < stream.size()) {
+    auto r = sub.receive(10 * kNsPerSec);
+    ASSERT_TRUE(r.is_ok()) << "after " << got.size() << " messages: " << r.status().to_string();
+    SentMessage m;
+    m.topic = std::string(r->topic());
+    m.header = std::string(r->header());
+    if (r->has_payload()) m.payload.assign(reinterpret_cast<const char*>(r->payload_data()), r->payload_size());
+    HeaderFields h;
+    ASSERT_TRUE(read_header_fields(m.header, &h));
+    m.seq = h.seq;
+    if (m.topic == kSyncTopic) {
+      msgs::SampleBoundary b;
+      ASSERT_TRUE(b.ParseFromString(m.header));
+      msgs::SampleAck ack;
+      ack.set_sample_token(b.sample_token());
+      ASSERT_TRUE(transport::send_message(acks, "/sync/ack", ack).is_ok());
+      ++acked;
+    }
+    got.push_back(std::move(m));
+  }
+  t.join();
+  EXPECT_EQ(rc, 0);
+  EXPECT_EQ(acked, 3u);
+  EXPECT_EQ(player.counts().ack_timeouts, 0u);
+  expect_same(stream, got);
+}
+
 TEST_F(BagRecordTest, StopDuringRecordingLeavesIndexedFile) {
   RecorderConfig cfg = recorder_config();
   BagRecorder recorder(cfg, quiet_logger());
