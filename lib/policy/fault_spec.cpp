@@ -89,7 +89,10 @@ FaultSpec parse_one(const YAML::Node& node, const std::string& where) {
          "expected brightness|dark|fog|snow|motion_blur|color_quant|camera_crash|frame_lost|black|freeze|drop|delay");
   }
   if (node["level"] && node["severity"]) fail(where, "level", config::yaml_to_string(node["level"]), "give level or severity, not both");
-  spec.severity = level_severity(spec, corruption::Level::Mid);
+  // Scripted actions (black, freeze, drop, delay) have no strength: severity 1 unless given.
+  const bool graded = spec.kind == FaultKind::Corruption || spec.kind == FaultKind::CameraCrash ||
+                      spec.kind == FaultKind::FrameLost;
+  spec.severity = graded ? level_severity(spec, corruption::Level::Mid) : 1;
   if (node["level"]) {
     const auto text = read<std::string>(node["level"], where, "level", "string");
     const auto level = corruption::level_from_string(text);

@@ -229,7 +229,7 @@ TEST(InjectorIntegrationTest, DroppedFramesAreEventsNotSeqGaps) {
         EXPECT_EQ(view->header.fault().action(), msgs::FAULT_ACTION_CORRUPT);
         ASSERT_EQ(view->header.fault().faults_size(), 1);
         EXPECT_EQ(view->header.fault().faults(0).name(), "fog");
-        EXPECT_EQ(view->header.fault().faults(0).seed(), frame_seed(5, 3, view->header.source_seq()));
+        EXPECT_EQ(view->header.fault().faults(0).seed(), frame_seed(5, 3, view->header.source_seq(), /*fault_index=*/1));
         const auto decoded = codec::decode_jpeg(view->payload, view->payload_size);
         ASSERT_TRUE(decoded.is_ok());
         EXPECT_EQ(decoded->size(), cv::Size(48, 32));
