@@ -1,0 +1,191 @@
+// `faultline bench record`: recorder thread CPU for N cameras x R Hz of JPEG frames over ipc, player
+// speed (rate 0 into a draining subscriber) and bag size versus the raw message bytes.
+#include <CLI/CLI.hpp>
+
+#include <spdlog/sinks/null_sink.h>
+#include <spdlog/spdlog.h>
+#include <time.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "bag/foxglove.hpp"
+#include "camera_frame.pb.h"
+#include "cli/command.hpp"
+#include "runtime/bag_player.hpp"
+#include "runtime/bag_recorder.hpp"
+#include "transport/publisher.hpp"
+#include "transport/subscriber.hpp"
+#include "transport/typed.hpp"
+
+namespace faultline::cli {
+namespace {
+
+const char* const kCameras[] = {"CAM_FRONT", "CAM_FRONT_LEFT", "CAM_FRONT_RIGHT",
+                                "CAM_BACK", "CAM_BACK_LEFT", "CAM_BACK_RIGHT"};
+
+double thread_cpu_s() {
+  timespec ts{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return static_cast<double>(ts.tv_sec) + static_cast<double>(ts.tv_nsec) * 1e-9;
+}
+
+double median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  return v.empty() ? 0.0 : v[v.size() / 2];
+}
+
+// 1600x900 gradient plus noise, JPEG quality 90 (~nuScenes-sized frames).
+std::vector<std::uint8_t> make_jpeg(int seed) {
+  cv::Mat img(900, 1600, CV_8UC3);
+  for (int y = 0; y < img.rows; ++y) {
+    for (int x = 0; x < img.cols; ++x) {
+      img.at<cv::Vec3b>(y, x) = cv::Vec3b(static_cast<uchar>((x / 5 + seed * 40) % 256),
+                                          static_cast<uchar>((y / 3) % 256), static_cast<uchar>((x + y) / 9 % 256));
+    }
+  }
+  cv::Mat noise(img.size(), CV_8UC3);
+  cv::randu(noise, 0, 40);
+  img += noise;
+  std::vector<std::uint8_t> out;
+  cv::imencode(".jpg", img, out, {cv::IMWRITE_JPEG_QUALITY, 90});
+  return out;
+}
+
+struct RunFigures {
+  double record_cpu_pct = 0, play_speed = 0, bag_mb = 0, message_mb = 0, stored_over_raw = 0;
+};
+
+RunFigures run_once(const std::vector<std::vector<std::uint8_t>>& jpegs, double seconds, double rate_hz,
+                    const std::string& dir, int rep, bool view) {
+  auto log = std::make_shared<spdlog::logger>("bench_record", std::make_shared<spdlog::sinks::null_sink_mt>());
+  const std::string ep = "ipc://" + dir + "/bench_pub_" + std::to_string(rep) + ".sock";
+  transport::PublisherConfig pc;
+  pc.endpoint = ep;
+  pc.snd_hwm = 256;
+  transport::Publisher pub(pc);
+  runtime::RecorderConfig rc;
+  rc.output = dir + "/bench_" + std::to_string(rep) + ".mcap";
+  rc.all = true;
+  rc.endpoints = {ep};
+  rc.foxglove_view = view;
+  runtime::BagRecorder recorder(rc, log);
+  std::atomic<bool> stop{false};
+  double cpu_s = 0, wall_s = 0;
+  std::thread t([&] {
+    const double c0 = thread_cpu_s();
+    const auto w0 = std::chrono::steady_clock::now();
+    (void)recorder.run(stop);
+    cpu_s = thread_cpu_s() - c0;
+    wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - w0).count();
+  });
+  (void)pub.wait_for_subscribers(bag::image_topic(kCameras[0]), 1, 10 * kNsPerSec);
+  const int frames = static_cast<int>(seconds * rate_hz);
+  const auto start = std::chrono::steady_clock::now();
+  std::uint64_t sent = 0;
+  for (int i = 0; i < frames; ++i) {
+    std::this_thread::sleep_until(start + std::chrono::duration<double>(i / rate_hz));
+    for (std::size_t c = 0; c < jpegs.size(); ++c) {
+      msgs::CameraFrame f;
+      f.mutable_header()->set_seq(static_cast<std::uint64_t>(i + 1));
+      f.mutable_header()->set_publish_stamp_ns(realtime_now_ns());
+      f.mutable_header()->set_publisher("bench");
+      f.set_camera(kCameras[c]);
+      f.set_encoding("jpeg");
+      f.set_width(1600);
+      f.set_height(900);
+      for (int k = 0; k < 9; ++k) f.add_intrinsics(k == 0 || k == 4 ? 1266.0 : k == 8 ? 1.0 : 0.0);
+      transport::Payload p;
+      p.data = jpegs[c].data();
+      p.size_bytes = jpegs[c].size();
+      if (transport::send_camera_frame(pub, bag::image_topic(kCameras[c]), f, p).is_ok()) ++sent;
+    }
+  }
+  // Stop once everything sent has been written (bounded: the recorder may have dropped some).
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(10);
+  while (recorder.recorded() + recorder.drops().total().transport_drops < sent &&
+         std::chrono::steady_clock::now() < deadline) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  stop = true;
+  t.join();
+  RunFigures fig;
+  fig.record_cpu_pct = 100.0 * cpu_s / wall_s;
+  fig.bag_mb = static_cast<double>(recorder.writer_stats().file_bytes) / 1e6;
+  fig.message_mb = static_cast<double>(recorder.writer_stats().message_bytes) / 1e6;
+  fig.stored_over_raw = static_cast<double>(recorder.writer_stats().chunk_stored_bytes) /
+                        static_cast<double>(std::max<std::uint64_t>(1, recorder.writer_stats().chunk_raw_bytes));
+
+  runtime::BagPlayerConfig plc;
+  plc.files = recorder.paths();
+  plc.rate = 0;
+  plc.endpoint = "ipc://" + dir + "/bench_play_" + std::to_string(rep) + ".sock";
+  plc.wait_subscribers = 1;
+  plc.hwm = 256;
+  runtime::BagPlayer player(plc, log);
+  transport::SubscriberConfig sc;
+  sc.endpoints = {player.endpoint()};
+  sc.topics = {""};
+  sc.rcv_hwm = 256;
+  transport::RawSubscriber sub(sc);
+  std::atomic<bool> pstop{false};
+  double play_wall = 0;
+  std::thread pt([&] {
+    const auto w0 = std::chrono::steady_clock::now();
+    (void)player.run(pstop);
+    play_wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - w0).count();
+  });
+  std::uint64_t got = 0;
+  while (got < recorder.counts().messages && sub.receive(2 * kNsPerSec).is_ok()) ++got;
+  pt.join();
+  fig.play_speed = player.counts().bag_seconds / std::max(1e-9, play_wall);
+  std::printf("rep %d: recorded %llu/%llu msgs, recorder thread %.2f%% of one core, play %.1fx real time "
+              "(%llu received), bag %.1f MB, message bytes %.1f MB, chunks stored/raw %.3f\n",
+              rep, static_cast<unsigned long long>(recorder.counts().messages),
+              static_cast<unsigned long long>(sent), fig.record_cpu_pct, fig.play_speed,
+              static_cast<unsigned long long>(got), fig.bag_mb, fig.message_mb, fig.stored_over_raw);
+  for (const auto& p : recorder.paths()) std::filesystem::remove(p);
+  return fig;
+}
+
+int run(int argc, char** argv) {
+  CLI::App app{"Recorder CPU, player speed and bag size for N cameras of JPEG frames over ipc."};
+  double seconds = 5, rate_hz = 12;
+  int cameras = 6, reps = 3;
+  bool view = true;
+  app.add_option("--seconds", seconds, "recording length per rep")->capture_default_str();
+  app.add_option("--rate", rate_hz, "frames per second per camera")->capture_default_str();
+  app.add_option("--cameras", cameras, "1..6")->check(CLI::Range(1, 6))->capture_default_str();
+  app.add_option("--reps", reps, "repetitions (medians printed)")->check(CLI::PositiveNumber)->capture_default_str();
+  app.add_flag("!--no-foxglove-view", view, "replay channels only");
+  CLI11_PARSE(app, argc, argv);
+  std::vector<std::vector<std::uint8_t>> jpegs;
+  for (int c = 0; c < cameras; ++c) jpegs.push_back(make_jpeg(c));
+  std::printf("%d cameras x %.0f Hz, JPEG %zu bytes, %.1f s per rep, foxglove view %s\n", cameras, rate_hz,
+              jpegs[0].size(), seconds, view ? "on" : "off");
+  const std::string dir = std::filesystem::temp_directory_path().string();
+  std::vector<double> cpu, speed, ratio, mb;
+  for (int r = 0; r < reps; ++r) {
+    const RunFigures f = run_once(jpegs, seconds, rate_hz, dir, r, view);
+    cpu.push_back(f.record_cpu_pct);
+    speed.push_back(f.play_speed);
+    ratio.push_back(f.stored_over_raw);
+    mb.push_back(f.bag_mb / seconds);
+  }
+  std::printf("median: recorder thread %.2f%% of one core | play %.1fx real time | bag %.1f MB/s | "
+              "chunks stored/raw %.3f\n", median(cpu), median(speed), median(mb), median(ratio));
+  return 0;
+}
+
+}  // namespace
+FAULTLINE_COMMAND(bench_record, "bench record", "recorder CPU, player speed and bag size", &run);
+}  // namespace faultline::cli
