@@ -1,0 +1,350 @@
+#include "benchmark/benchmark.hpp"
+
+#include <unistd.h>
+
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <sstream>
+#include <thread>
+
+#include "launch/supervisor.hpp"
+#include "report/report.hpp"
+#include "scoring/evaluate.hpp"
+#include "scoring/run_manifest.hpp"
+
+namespace faultline::benchmark {
+namespace fs = std::filesystem;
+namespace {
+
+std::string read_text(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+bool write_text(const std::string& path, const std::string& text) {
+  const std::string tmp = path + ".tmp";
+  {
+    std::ofstream out(tmp, std::ios::binary);
+    out << text;
+    if (!out) return false;
+  }
+  std::error_code ec;
+  fs::rename(tmp, path, ec);
+  return !ec;
+}
+
+std::string json_number(double v) {
+  if (!std::isfinite(v)) return "null";
+  char buf[32];
+  std::snprintf(buf, sizeof(buf), "%.6f", v);
+  return buf;
+}
+
+// One run's processes: sink (required: the run ends when it has finalized), injector, detector, player.
+std::vector<launch::ChildSpec> run_children(const BenchmarkOptions& o, const std::string& sock, const std::string& run_dir,
+                                            const std::string& corruption, const std::string& level, int seed) {
+  const std::string player = "ipc://" + sock + "/player", frames = "ipc://" + sock + "/frames",
+                    det = "ipc://" + sock + "/det", ack = "ipc://" + sock + "/ack";
+  auto bin = [&](const char* name) { return (fs::path(o.bin_dir) / name).string(); };
+  auto node = [&](const char* name, std::vector<std::string> params, bool required) {
+    launch::ChildSpec c;
+    c.name = name;
+    c.required = required;
+    c.argv = {bin(name), "--name", name};
+    for (auto& p : params) {
+      c.argv.push_back("-p");
+      c.argv.push_back(std::move(p));
+    }
+    return c;
+  };
+  std::vector<launch::ChildSpec> children;
+  children.push_back(node("detection_sink",
+                          {"detections_endpoint:=" + det, "sync_endpoints:=[" + frames + "]",
+                           "output:=" + run_dir + "/results.json", "lockstep:=true", "ack_endpoint:=" + ack,
+                           "resume:=false", "finalize_grace_ms:=30000", "stats_log_period_s:=1000"},
+                          true));
+  std::vector<std::string> inj = {"input_endpoints:=[" + player + "]", "output_endpoint:=" + frames,
+                                  "input_hwm:=256", "output_hwm:=256", "decode:=true", "wait_subscribers:=2",
+                                  "wait_timeout_ms:=60000", "seed:=" + std::to_string(seed),
+                                  "stats_log_period_s:=1000"};
+  if (!corruption.empty()) inj.push_back("corruption:=" + injector_corruption_name(corruption) + "/" + level);
+  children.push_back(node("fault_injector", inj, false));
+  if (o.detector_cmd.empty()) {
+    std::vector<std::string> dp = {"input_endpoints:=[" + frames + "]", "sink_endpoint:=" + det,
+                                   "input_hwm:=256"};
+    for (const auto& p : o.detector_params) dp.push_back(p);
+    children.push_back(node("detector", dp, false));
+  } else {
+    launch::ChildSpec c;
+    c.name = "detector";
+    c.required = false;
+    c.argv = {"/bin/sh", "-c", o.detector_cmd};
+    children.push_back(c);
+  }
+  std::vector<std::string> pp = {"dataroot:=" + o.dataroot, "version:=" + o.version, "endpoint:=" + player,
+                                 "rate:=0", "hwm:=256", "lockstep:=true", "ack_endpoint:=" + ack,
+                                 "wait_subscribers:=1", "wait_timeout_ms:=60000", "stats_log_period_s:=1000"};
+  if (!o.scenes.empty()) {
+    std::string list = "scenes:=[";
+    for (std::size_t i = 0; i < o.scenes.size(); ++i) list += (i ? "," : "") + o.scenes[i];
+    pp.push_back(list + "]");
+  }
+  children.push_back(node("nusc_player", pp, false));
+  return children;
+}
+
+ConditionResult run_condition(const BenchmarkOptions& o, const std::string& corruption, const std::string& level,
+                              int seed, const std::atomic<bool>& stop, std::FILE* log) {
+  ConditionResult r;
+  r.condition = corruption.empty() ? "clean" : corruption + "/" + level;
+  r.seed = seed;
+  std::string run_name = corruption.empty() ? "clean" : corruption + "_" + level;
+  if (o.seeds > 1 && !corruption.empty()) run_name += "_s" + std::to_string(seed);
+  const fs::path run_dir = fs::path(o.out_dir) / "runs" / run_name;
+  fs::remove_all(run_dir);
+  fs::create_directories(run_dir);
+  // ipc paths must stay under ~100 characters: sockets live in a short private temp dir.
+  char sock_template[] = "/tmp/flbench-XXXXXX";
+  const char* sock = mkdtemp(sock_template);
+  if (!sock) {
+    r.error = "cannot create a socket directory in /tmp";
+    return r;
+  }
+  std::ofstream node_log(run_dir / "nodes.log");
+  launch::SupervisorOptions so;
+  so.grace_ns = 3 * kNsPerSec;
+  if (!o.detector_cmd.empty()) {
+    so.env["FAULTLINE_FRAMES"] = "ipc://" + std::string(sock) + "/frames";
+    so.env["FAULTLINE_DETECTIONS"] = "ipc://" + std::string(sock) + "/det";
+  }
+  so.sink = [&node_log](const std::string& node, std::string_view line, launch::OutputStream) {
+    node_log << "[" << node << "] " << line << "\n";
+  };
+  std::atomic<bool> run_stop{false};
+  const auto t0 = std::chrono::steady_clock::now();
+  so.on_exit = [](const launch::ChildOutcome&) {};
+  launch::Supervisor sup(run_children(o, sock, run_dir.string(), corruption, level, seed), so);
+  // Stop the run on the user's request or when it exceeds its time budget.
+  std::atomic<bool> done{false};
+  std::thread watchdog([&] {
+    while (!done.load()) {
+      const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      if (stop.load() || s > o.run_timeout_s) {
+        run_stop.store(true);
+        return;
+      }
+      std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    }
+  });
+  const launch::LaunchResult lr = sup.run(run_stop);
+  done.store(true);
+  watchdog.join();
+  fs::remove_all(sock);
+  r.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  node_log.flush();
+  for (const auto& c : lr.children) {
+    if (c.name == "detection_sink" && (c.failed() || !c.exited)) {
+      r.error = "detection_sink failed (exit " + std::to_string(c.exit_code) + "); see " + (run_dir / "nodes.log").string();
+    }
+  }
+  if (run_stop.load()) r.error = stop.load() ? "stopped" : "timed out after " + std::to_string(o.run_timeout_s) + " s";
+  if (!r.error.empty()) return r;
+
+  scoring::EvalOptions eo;
+  eo.results_path = (run_dir / "results.json").string();
+  eo.dataroot = o.dataroot;
+  eo.version = o.version;
+  eo.eval_set = o.eval_set;
+  eo.output_dir = (run_dir / "score").string();
+  std::FILE* eval_log = std::fopen((run_dir / "score.log").c_str(), "w");
+  auto outcome = scoring::evaluate_detection(eo, eval_log);
+  if (eval_log) std::fclose(eval_log);
+  if (!outcome) {
+    r.error = "scoring: " + outcome.status().message();
+    return r;
+  }
+  if (Status s = scoring::write_eval_outputs(*outcome, eo.output_dir); !s) {
+    r.error = "writing metrics: " + s.message();
+    return r;
+  }
+  r.ok = true;
+  r.nds = outcome->metrics.nd_score;
+  r.map = outcome->metrics.mean_ap;
+  for (std::size_t i = 0; i < 5; ++i) r.tp_errors[i] = outcome->metrics.tp_errors[i];
+  (void)log;
+  return r;
+}
+
+std::string summary_json(const BenchmarkOptions& o, const BenchmarkResult& b) {
+  std::ostringstream js;
+  js << "{\n  \"dataroot\": \"" << o.dataroot << "\",\n  \"version\": \"" << o.version << "\",\n  \"eval_set\": \""
+     << o.eval_set << "\",\n  \"detector\": \"" << (o.detector_cmd.empty() ? "faultline detector" : o.detector_cmd)
+     << "\",\n  \"conditions\": {";
+  // Mean over seeds per condition.
+  std::map<std::string, std::vector<const ConditionResult*>> by;
+  std::vector<std::string> order;
+  for (const auto& r : b.runs) {
+    if (!by.count(r.condition)) order.push_back(r.condition);
+    by[r.condition].push_back(&r);
+  }
+  bool first = true;
+  static const char* kTp[5] = {"mATE", "mASE", "mAOE", "mAVE", "mAAE"};
+  for (const auto& c : order) {
+    double nds = 0, map = 0, nds2 = 0;
+    std::array<double, 5> tp{};
+    int n = 0;
+    for (const auto* r : by[c]) {
+      if (!r->ok) continue;
+      ++n;
+      nds += r->nds;
+      nds2 += r->nds * r->nds;
+      map += r->map;
+      for (int i = 0; i < 5; ++i) tp[i] += r->tp_errors[i];
+    }
+    js << (first ? "" : ",") << "\n    \"" << c << "\": {";
+    first = false;
+    if (n == 0) {
+      js << "\"error\": \"" << by[c].front()->error << "\"}";
+      continue;
+    }
+    const double mean = nds / n;
+    js << "\"NDS\": " << json_number(mean) << ", \"mAP\": " << json_number(map / n);
+    for (int i = 0; i < 5; ++i) js << ", \"" << kTp[i] << "\": " << json_number(tp[i] / n);
+    js << ", \"runs\": " << n << ", \"NDS_std\": " << json_number(n > 1 ? std::sqrt(std::max(0.0, nds2 / n - mean * mean)) : 0.0)
+       << "}";
+  }
+  js << "\n  }";
+  if (b.robustness_ok) {
+    js << ",\n  \"mCE\": " << json_number(100 * b.robustness.mce) << ",\n  \"mRR\": " << json_number(100 * b.robustness.mrr)
+       << ",\n  \"baseline\": \"" << b.robustness.baseline << "\"";
+  }
+  js << ",\n  \"report\": \"" << b.report_path << "\"\n}\n";
+  return js.str();
+}
+
+}  // namespace
+
+std::string injector_corruption_name(const std::string& robobev_name) {
+  const std::string c = scoring::canonical_corruption(robobev_name);
+  if (c == "low_light") return "dark";
+  if (c == "bright") return "brightness";
+  return c;
+}
+
+Result<BenchmarkResult> run_benchmark(const BenchmarkOptions& o, const std::atomic<bool>& stop, std::FILE* log) {
+  for (const char* node : {"nusc_player", "fault_injector", "detection_sink", "detector"}) {
+    if (!o.detector_cmd.empty() && std::string(node) == "detector") continue;
+    if (access((fs::path(o.bin_dir) / node).c_str(), X_OK) != 0) {
+      return Status(StatusCode::kNotFound, (fs::path(o.bin_dir) / node).string() + ": node executable not found");
+    }
+  }
+  std::error_code ec;
+  fs::create_directories(fs::path(o.out_dir) / "runs", ec);
+  if (ec) return Status(StatusCode::kIoError, o.out_dir + ": " + ec.message());
+
+  struct Plan {
+    std::string corruption, level;
+    int seed;
+  };
+  std::vector<Plan> plan{{"", "", 1}};
+  for (const auto& c : o.corruptions)
+    for (const auto& l : o.levels)
+      for (int s = 1; s <= o.seeds; ++s) plan.push_back({c, l, s});
+
+  BenchmarkResult b;
+  const auto t0 = std::chrono::steady_clock::now();
+  for (std::size_t i = 0; i < plan.size() && !stop.load(); ++i) {
+    const auto& p = plan[i];
+    ConditionResult r = run_condition(o, p.corruption, p.level, p.seed, stop, log);
+    const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    const double eta = elapsed / static_cast<double>(i + 1) * static_cast<double>(plan.size() - i - 1);
+    if (r.ok) {
+      std::fprintf(log, "[%zu/%zu] %-22s seed %d  NDS %.4f  mAP %.4f  (%.1f s; ETA %.0f s)\n", i + 1, plan.size(),
+                   r.condition.c_str(), r.seed, r.nds, r.map, r.wall_s, eta);
+    } else {
+      std::fprintf(log, "[%zu/%zu] %-22s seed %d  FAILED: %s\n", i + 1, plan.size(), r.condition.c_str(), r.seed,
+                   r.error.c_str());
+    }
+    std::fflush(log);
+    b.runs.push_back(std::move(r));
+    write_text((fs::path(o.out_dir) / "summary.json").string(), summary_json(o, b));  // partial results survive
+  }
+
+  // Robustness: severity-averaged NDS per corruption (seeds averaged), against the baseline's same levels.
+  scoring::DetectorScores model;
+  model.name = o.detector_cmd.empty() ? "faultline detector" : o.detector_cmd;
+  bool have_clean = false;
+  for (const auto& r : b.runs) {
+    if (r.condition == "clean" && r.ok) {
+      model.clean_nds = r.nds;
+      have_clean = true;
+    }
+  }
+  std::vector<int> level_idx;
+  for (const auto& l : o.levels) level_idx.push_back(scoring::severity_index(l));
+  for (const auto& c : o.corruptions) {
+    scoring::CorruptionScores cs;
+    cs.name = scoring::canonical_corruption(c);
+    bool complete = true;
+    for (const auto& l : o.levels) {
+      double sum = 0;
+      int n = 0;
+      for (const auto& r : b.runs) {
+        if (r.ok && r.condition == c + "/" + l) {
+          sum += r.nds;
+          ++n;
+        }
+      }
+      if (n == 0) complete = false;
+      cs.nds_by_level.push_back(n ? sum / n : 0.0);
+    }
+    if (complete) model.corruptions.push_back(cs);
+  }
+  scoring::DetectorScores baseline = scoring::detr3d_baseline();
+  if (!o.baseline_manifest.empty()) {
+    std::string bname = "baseline";
+    auto runs = scoring::read_run_manifest(o.baseline_manifest, &bname, nullptr);
+    if (!runs) return runs.status();
+    auto bs = scoring::collect_detector_scores(bname, *runs);
+    if (!bs) return bs.status();
+    baseline = *bs;
+  }
+  // Keep only the baseline levels this benchmark ran, so a reduced matrix compares like with like.
+  if (baseline.corruptions.size() && baseline.corruptions.front().nds_by_level.size() == 3) {
+    for (auto& c : baseline.corruptions) {
+      std::vector<double> kept;
+      for (int li : level_idx)
+        if (li >= 0 && li < 3) kept.push_back(c.nds_by_level[static_cast<std::size_t>(li)]);
+      c.nds_by_level = kept;
+    }
+  }
+  if (have_clean && !model.corruptions.empty()) {
+    auto rs = scoring::compute_robustness(model, baseline);
+    if (rs) {
+      b.robustness = *rs;
+      b.robustness_ok = true;
+      write_text((fs::path(o.out_dir) / "robustness.md").string(), scoring::robustness_markdown(*rs));
+      write_text((fs::path(o.out_dir) / "robustness.csv").string(), scoring::robustness_csv(*rs));
+      write_text((fs::path(o.out_dir) / "robustness.json").string(), scoring::robustness_json(*rs));
+      report::ReportData data;
+      data.title = "Faultline benchmark: " + model.name;
+      data.detectors.push_back(*rs);
+      if (!o.corrupt_bench.empty() && fs::exists(o.corrupt_bench)) {
+        if (auto pts = report::parse_corrupt_bench(read_text(o.corrupt_bench), o.corrupt_bench)) data.corrupt_bench = *pts;
+      }
+      b.report_path = (fs::path(o.out_dir) / "report.html").string();
+      write_text(b.report_path, report::render_html(data));
+    } else {
+      std::fprintf(log, "robustness: %s\n", rs.status().message().c_str());
+    }
+  }
+  write_text((fs::path(o.out_dir) / "summary.json").string(), summary_json(o, b));
+  return b;
+}
+
+}  // namespace faultline::benchmark
