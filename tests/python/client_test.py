@@ -13,13 +13,17 @@ from faultline_client.client import decode_payload  # noqa: E402
 
 
 class ClientTest(unittest.TestCase):
+    count = 0
+
     def setUp(self):
+        ClientTest.count += 1  # fresh endpoints per test: closing a socket releases its name asynchronously
+        frames, detections = f"inproc://frames-{self.count}", f"inproc://detections-{self.count}"
         self.ctx = zmq.Context.instance()
         self.pub = self.ctx.socket(zmq.XPUB)
-        self.pub.bind("inproc://frames")
+        self.pub.bind(frames)
         self.pull = self.ctx.socket(zmq.PULL)
-        self.pull.bind("inproc://detections")
-        self.client = FaultlineClient("inproc://frames", "inproc://detections")
+        self.pull.bind(detections)
+        self.client = FaultlineClient(frames, detections)
         self.msgs = self.client.msgs
         for _ in range(2):  # both subscriptions reached the publisher: no slow-joiner loss
             self.assertTrue(self.pub.poll(5000))
@@ -54,10 +58,10 @@ class ClientTest(unittest.TestCase):
     def test_groups_frames_per_sample_and_counts_gaps_and_malformed(self):
         img = np.arange(4 * 5 * 3, dtype=np.uint8).reshape(4, 5, 3)
         self.send_frame("CAM_FRONT", 1, "s1", img)
-        self.send_frame("CAM_BACK", 2, "s1", img)
+        self.send_frame("CAM_BACK", 1, "s1", img)  # seq counts per (publisher, topic)
         self.pub.send_multipart([b"/faulty/cam_back/image_raw", b"\xff\xfe garbage"])  # wrong frame count
         self.send_boundary("s1")
-        self.send_frame("CAM_FRONT", 5, "s2", img)  # seq 3 and 4 lost in transport
+        self.send_frame("CAM_FRONT", 4, "s2", img)  # CAM_FRONT seq 2 and 3 lost in transport
         self.send_boundary("s2", last=True)
         samples = list(self.client.samples(timeout_s=5))
         self.assertEqual([s.token for s in samples], ["s1", "s2"])
