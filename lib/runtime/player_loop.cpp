@@ -192,6 +192,8 @@ int PlayerLoop::run(const std::atomic<bool>& stop) {
         break;
       }
       if (m.cfg.rate > 0) {
+        // Scenes are recorded hours or days apart: pacing restarts at each scene change.
+        if (i > 0 && f.scene_token != frames[i - 1].scene_token) anchored = false;
         if (!anchored) {
           anchored = true;
           anchor_ns = m.clock.now_ns();

@@ -1,6 +1,7 @@
 """Starts Faultline node processes for the Python tests (ipc endpoints in a private temp dir)."""
 import json
 import os
+import re
 import subprocess
 import sys
 import tempfile
@@ -60,13 +61,13 @@ class Pipeline:
 
     def start_injector(self):
         self._start("fault_injector", [binary("fault_injector"), "-p", f"input_endpoints:=[{self.player_ep}]",
-                                       "-p", f"output_endpoint:={self.frames_ep}", "-p", "input_hwm:=64",
-                                       "-p", "output_hwm:=64", "-p", f"wait_subscribers:={self.subscribers}",
+                                       "-p", f"output_endpoint:={self.frames_ep}", "-p", "input_hwm:=256",
+                                       "-p", "output_hwm:=256", "-p", f"wait_subscribers:={self.subscribers}",
                                        "-p", "wait_timeout_ms:=30000"])
 
     def start_player(self):
         self._start("nusc_player", [binary("nusc_player"), "-p", f"dataroot:={self.dataroot}", "-p",
-                                    f"endpoint:={self.player_ep}", "-p", f"rate:={self.rate}", "-p", "hwm:=64",
+                                    f"endpoint:={self.player_ep}", "-p", f"rate:={self.rate}", "-p", "hwm:=256",
                                     "-p", f"lockstep:={str(self.lockstep).lower()}", "-p",
                                     f"ack_endpoint:={self.ack_ep}", "-p", "wait_subscribers:=1",
                                     "-p", "wait_timeout_ms:=30000"])
@@ -79,6 +80,14 @@ class Pipeline:
 
     def log(self, name):
         return open(os.path.join(self.tmp, name + ".log")).read()
+
+    def injector_out(self):
+        """Frames the injector forwarded (its end-of-run line); trailing sweeps after the run's last
+        sample boundary are not forwarded, so this can be below the dataset's camera frame count."""
+        m = re.search(r"injector done: in (\d+) out (\d+)", self.log("fault_injector"))
+        if not m:
+            raise AssertionError("no end-of-run line in the injector log:\n" + self.log("fault_injector"))
+        return int(m.group(2))
 
     def stop(self):
         for p in self.procs.values():

@@ -110,7 +110,7 @@ class FaultlineClient:
 
     def __init__(self, frames_endpoint: Optional[str] = None, detections_endpoint: Optional[str] = None,
                  frame_prefix: Optional[str] = None, sync_topic: str = "/sync/sample",
-                 detector_name: str = "python", rcv_hwm: int = 64, msgs_dir: Optional[str] = None):
+                 detector_name: str = "python", rcv_hwm: int = 256, msgs_dir: Optional[str] = None):
         self.msgs = load_messages(msgs_dir)
         self.frames_endpoint = frames_endpoint or os.environ.get("FAULTLINE_FRAMES", "tcp://127.0.0.1:5601")
         self.detections_endpoint = detections_endpoint or os.environ.get("FAULTLINE_DETECTIONS",
