@@ -39,8 +39,10 @@ int run(int argc, char** argv) {
       std::fprintf(stderr, "faultline bench score: error: %s\n", stats.status().message().c_str());
       return 1;
     }
-    std::printf("wrote %s: %d scenes, %d samples, %zu annotations, %zu predictions in %.1f s\n", make_dir.c_str(),
-                stats->scenes, stats->samples, stats->annotations, stats->predictions,
+    std::printf("wrote %s: %d scenes, %d val samples, %zu annotations, %zu sample_data records, %zu predictions in "
+                "%.1f s\n",
+                make_dir.c_str(), stats->scenes, stats->samples, stats->annotations, stats->sample_data,
+                stats->predictions,
                 std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
   }
   if (dir.empty()) return make_dir.empty() ? 2 : 0;
@@ -68,6 +70,10 @@ int run(int argc, char** argv) {
                   outcome->pred_counts.original, outcome->pred_counts.after_bike_rack, outcome->gt_counts.original,
                   outcome->gt_counts.after_bike_rack, outcome->metrics.nd_score, outcome->metrics.mean_ap);
     }
+    const auto& t = outcome->timings;
+    std::printf("  run %d phases: submission %.3f s | ground truth %.3f s (waited %.3f s) | filter %.3f s | "
+                "accumulate %.3f s\n",
+                r + 1, t.submission_s, t.ground_truth_s, t.ground_truth_wait_s, t.filter_s, t.accumulate_s);
   }
   std::sort(times.begin(), times.end());
   std::printf("score wall time: median %.3f s (min %.3f, max %.3f, n=%zu), peak RSS %.1f MB\n",

@@ -34,6 +34,10 @@ Status write_file(const std::string& path, const std::string& text) {
   return Status::ok();
 }
 
+double seconds_since(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
 }  // namespace
 
 Result<EvalOutcome> evaluate_detection(const EvalOptions& opts, std::FILE* log) {
@@ -51,8 +55,9 @@ Result<EvalOutcome> evaluate_detection(const EvalOptions& opts, std::FILE* log) 
     scope.samples = std::move(*tokens);
   }
   logf(log, "Initializing nuScenes detection evaluation");
-  // The GT depends only on the split, so it loads on a second thread while the submission is parsed.
-  // A predefined split's version check still comes after the submission checks, as in the devkit.
+  // The GT depends only on the split, so it loads on a second thread while the submission is
+  // parsed. A predefined split's version check still comes after the submission checks, as in the
+  // devkit.
   std::vector<std::string> predefined_scenes;
   Status split_status;
   if (predefined) {
@@ -65,12 +70,18 @@ Result<EvalOutcome> evaluate_detection(const EvalOptions& opts, std::FILE* log) 
   }
   const std::vector<std::string>& gt_scenes = predefined ? predefined_scenes : scenes;
   std::future<Result<GroundTruth>> gt_future;
+  double gt_load_s = 0;
   if (split_status.is_ok()) {
-    gt_future = std::async(std::launch::async, [&opts, &gt_scenes] {
-      return load_ground_truth(opts.dataroot, opts.version, gt_scenes);
+    gt_future = std::async(std::launch::async, [&opts, &gt_scenes, &gt_load_s] {
+      const auto start = std::chrono::steady_clock::now();
+      auto gt = load_ground_truth(opts.dataroot, opts.version, gt_scenes);
+      gt_load_s = seconds_since(start);
+      return gt;
     });
   }
+  EvalTimings timings;
   auto sub = read_submission(opts.results_path, scope);
+  timings.submission_s = seconds_since(t0);
   if (!sub) {
     if (gt_future.valid()) gt_future.wait();
     return sub.status();
@@ -78,11 +89,15 @@ Result<EvalOutcome> evaluate_detection(const EvalOptions& opts, std::FILE* log) 
   logf(log, "Loaded results from " + opts.results_path + ". Found detections for " +
                 std::to_string(sub->boxes.sample_tokens.size()) + " samples.");
   if (!split_status.is_ok()) return split_status;
-  logf(log, "Loading annotations for " + opts.eval_set + " split from nuScenes version: " + opts.version);
+  logf(log, "Loading annotations for " + opts.eval_set +
+                " split from nuScenes version: " + opts.version);
+  const auto wait_start = std::chrono::steady_clock::now();
   auto gt = gt_future.get();
+  timings.ground_truth_wait_s = seconds_since(wait_start);
+  timings.ground_truth_s = gt_load_s;
   if (!gt) return gt.status();
-  logf(log, "Loaded ground truth annotations for " + std::to_string(gt->boxes.sample_tokens.size()) +
-                " samples.");
+  logf(log, "Loaded ground truth annotations for " +
+                std::to_string(gt->boxes.sample_tokens.size()) + " samples.");
 
   // Key set must equal the split (predefined); custom splits are equal by construction.
   std::vector<int> pred_to_gt(sub->boxes.sample_tokens.size(), -1);
@@ -103,8 +118,10 @@ Result<EvalOutcome> evaluate_detection(const EvalOptions& opts, std::FILE* log) 
     if (!in_results.count(tok) && missing++ == 0) first_missing = tok;
   }
   if (missing || extra) {
-    std::string msg = "Samples in split doesn't match samples in predictions. " + opts.results_path + ": ";
-    msg += std::to_string(missing) + " sample(s) of split " + opts.eval_set + " missing from results";
+    std::string msg =
+        "Samples in split doesn't match samples in predictions. " + opts.results_path + ": ";
+    msg +=
+        std::to_string(missing) + " sample(s) of split " + opts.eval_set + " missing from results";
     if (missing) msg += " (first: " + first_missing + ")";
     msg += ", " + std::to_string(extra) + " sample(s) not in the split";
     if (extra) msg += " (first: " + first_extra + ")";
@@ -116,18 +133,21 @@ Result<EvalOutcome> evaluate_detection(const EvalOptions& opts, std::FILE* log) 
       if (b.match_sample == kMatchSampleIsKey) {
         b.match_sample = pred_to_gt[i];
       } else {
-        auto it = gt->sample_index.find(sub->odd_sample_fields[static_cast<std::size_t>(b.match_sample)]);
+        auto it =
+            gt->sample_index.find(sub->odd_sample_fields[static_cast<std::size_t>(b.match_sample)]);
         b.match_sample = it == gt->sample_index.end() ? -1 : it->second;
       }
     }
   }
   if (sub->boxes.total() == 0) {
-    logf(log, "Warning: the submission holds no box at all; every class scores AP 0 (the devkit crashes "
-              "here with 'Error: Invalid box type: None').");
+    logf(log,
+         "Warning: the submission holds no box at all; every class scores AP 0 (the devkit crashes "
+         "here with 'Error: Invalid box type: None').");
   }
   EvalOutcome out;
   out.samples = gt->boxes.sample_tokens.size();
   out.meta = sub->meta;
+  const auto filter_start = std::chrono::steady_clock::now();
   logf(log, "Filtering predictions");
   out.pred_counts = filter_boxes(sub->boxes, pred_to_gt, *gt);
   log_counts(log, out.pred_counts);
@@ -137,6 +157,8 @@ Result<EvalOutcome> evaluate_detection(const EvalOptions& opts, std::FILE* log) 
   out.gt_counts = filter_boxes(gt->boxes, identity, *gt);
   log_counts(log, out.gt_counts);
 
+  timings.filter_s = seconds_since(filter_start);
+  const auto accumulate_start = std::chrono::steady_clock::now();
   logf(log, "Accumulating metric data...");
   // Classes are independent: odd classes on a second thread (read-only shared inputs).
   std::array<Status, kNumClasses> class_status;
@@ -156,6 +178,8 @@ Result<EvalOutcome> evaluate_detection(const EvalOptions& opts, std::FILE* log) 
   for (const Status& st : class_status) {
     if (!st) return Status(st.code(), opts.results_path + ": " + st.message());
   }
+  timings.accumulate_s = seconds_since(accumulate_start);
+  out.timings = timings;
   logf(log, "Calculating metrics...");
   out.metrics = compute_metrics(out.curves);
   out.metrics.eval_time_s =
@@ -166,7 +190,8 @@ Result<EvalOutcome> evaluate_detection(const EvalOptions& opts, std::FILE* log) 
 Status write_eval_outputs(const EvalOutcome& outcome, const std::string& dir) {
   std::error_code ec;
   std::filesystem::create_directories(dir, ec);
-  if (ec) return Status(StatusCode::kIoError, dir + ": cannot create output folder: " + ec.message());
+  if (ec)
+    return Status(StatusCode::kIoError, dir + ": cannot create output folder: " + ec.message());
   if (Status s = write_file(dir + "/metrics_summary.json",
                             summary_json(outcome.metrics, outcome.meta.get()));
       !s) {

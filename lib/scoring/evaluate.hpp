@@ -26,8 +26,14 @@ struct EvalOptions {
   std::string output_dir;        // metrics_summary.json / metrics_details.json; empty = do not write
 };
 
+// Wall seconds per phase; GT loading overlaps submission parsing on a second thread.
+struct EvalTimings {
+  double submission_s = 0, ground_truth_s = 0, ground_truth_wait_s = 0, filter_s = 0, accumulate_s = 0;
+};
+
 struct EvalOutcome {
   DetectionMetrics metrics;
+  EvalTimings timings;
   MetricDataList curves;
   FilterCounts pred_counts, gt_counts;
   std::size_t samples = 0;

@@ -3,6 +3,7 @@
 
 #include <cmath>
 #include <filesystem>
+#include <future>
 #include <limits>
 #include <unordered_set>
 
@@ -77,7 +78,8 @@ Status load_samples(const std::string& dataroot, const std::string& version,
 
 }  // namespace
 
-Result<std::vector<std::string>> split_sample_tokens(const std::string& dataroot, const std::string& version,
+Result<std::vector<std::string>> split_sample_tokens(const std::string& dataroot,
+                                                     const std::string& version,
                                                      const std::vector<std::string>& scenes) {
   std::vector<SampleRec> samples;
   if (Status s = load_samples(dataroot, version, scenes, samples); !s) return s;
@@ -102,7 +104,7 @@ Result<GroundTruth> load_ground_truth(const std::string& dataroot, const std::st
   gt.ego_translation.assign(n, {0, 0, 0});
 
   // Categories, attributes, instances (small tables).
-  std::unordered_map<std::string, std::string> category_name, attribute_name, instance_category;
+  TokenMap<std::string> category_name, attribute_name, instance_category;
   const std::string cat_path = table_path(dataroot, version, "category");
   Status s = stream_table(cat_path, {"token", "name"}, [&](const TableRecord& r, std::size_t) {
     category_name[r.fields[0].str] = r.fields[1].str;
@@ -122,6 +124,55 @@ Result<GroundTruth> load_ground_truth(const std::string& dataroot, const std::st
   });
   if (!s) return s;
 
+  // Records of other samples are skipped undecoded.
+  const RecordFilter in_split{
+      1, [&gt](const std::string& token) { return gt.sample_index.count(token) != 0; }};
+  // Annotations of the split's samples, in file order: the biggest scan after sample_data, so it
+  // runs on a second thread while sample_data and ego_pose are read (it needs only the sample
+  // index).
+  std::vector<AnnRec> anns;
+  TokenMap<int> ann_index;
+  const std::string ann_path = table_path(dataroot, version, "sample_annotation");
+  auto ann_future = std::async(std::launch::async, [&]() -> Status {
+    {
+      // ~480 bytes per record in nuScenes tables; reserving avoids rehashing 1M-entry maps.
+      std::error_code ec;
+      const auto bytes = std::filesystem::file_size(ann_path, ec);
+      if (!ec) ann_index.reserve(static_cast<std::size_t>(bytes / 480));
+    }
+    const std::vector<std::string> ann_fields = {
+        "token", "sample_token", "instance_token", "attribute_tokens", "translation",
+        "size",  "rotation",     "num_lidar_pts",  "num_radar_pts",    "prev",
+        "next"};
+    Status s = stream_table(ann_path, ann_fields, [&](const TableRecord& r, std::size_t i) {
+      auto it = gt.sample_index.find(r.fields[1].str);
+      if (it == gt.sample_index.end()) return Status::ok();
+      for (std::size_t k = 0; k < ann_fields.size(); ++k) {
+        if (Status e = need(r, k, ann_path, i, ann_fields[k].c_str()); !e) return e;
+      }
+      AnnRec a;
+      a.token = r.fields[0].str;
+      a.sample = it->second;
+      a.instance = r.fields[2].str;
+      a.attrs = r.fields[3].strs;
+      const std::string where = ann_path + " record " + std::to_string(i) + " (" + a.token + ")";
+      if (Status e = copy_vec(r.fields[4], a.translation, where + " translation"); !e) return e;
+      if (Status e = copy_vec(r.fields[5], a.size, where + " size"); !e) return e;
+      if (Status e = copy_vec(r.fields[6], a.rotation, where + " rotation"); !e) return e;
+      a.num_pts = r.fields[7].num + r.fields[8].num;
+      a.prev = r.fields[9].str;
+      a.next = r.fields[10].str;
+      ann_index.emplace(a.token, static_cast<int>(anns.size()));
+      anns.push_back(std::move(a));
+      return Status::ok();
+    });
+    return s;
+  });
+  // Every early return waits for the annotation thread (it references this frame).
+  auto join = [&](Status first) {
+    Status ann_status = ann_future.get();
+    return first.is_ok() ? ann_status : first;
+  };
   // LIDAR_TOP calibrations -> key-frame sample_data -> ego pose.
   std::unordered_set<std::string> lidar_sensors, lidar_calibs;
   const std::string sensor_path = table_path(dataroot, version, "sensor");
@@ -129,106 +180,80 @@ Result<GroundTruth> load_ground_truth(const std::string& dataroot, const std::st
     if (r.fields[1].str == "LIDAR_TOP") lidar_sensors.insert(r.fields[0].str);
     return Status::ok();
   });
-  if (!s) return s;
+  if (!s) return join(s);
   const std::string calib_path = table_path(dataroot, version, "calibrated_sensor");
   s = stream_table(calib_path, {"token", "sensor_token"}, [&](const TableRecord& r, std::size_t) {
     if (lidar_sensors.count(r.fields[1].str)) lidar_calibs.insert(r.fields[0].str);
     return Status::ok();
   });
-  if (!s) return s;
+  if (!s) return join(s);
   std::vector<std::string> pose_token(n);
   const std::string sd_path = table_path(dataroot, version, "sample_data");
-  s = stream_table(sd_path, {"sample_token", "ego_pose_token", "calibrated_sensor_token", "is_key_frame"},
-                   [&](const TableRecord& r, std::size_t) {
-                     if (!r.fields[3].boolean) return Status::ok();
-                     auto it = gt.sample_index.find(r.fields[0].str);
-                     if (it == gt.sample_index.end() || !lidar_calibs.count(r.fields[2].str)) {
-                       return Status::ok();
-                     }
-                     pose_token[static_cast<std::size_t>(it->second)] = r.fields[1].str;  // last wins
-                     return Status::ok();
-                   });
-  if (!s) return s;
-  std::unordered_map<std::string, std::vector<int>> pose_users;
+  s = stream_table(
+      sd_path, {"sample_token", "ego_pose_token", "calibrated_sensor_token", "is_key_frame"},
+      [&](const TableRecord& r, std::size_t) {
+        if (!r.fields[3].boolean) return Status::ok();
+        auto it = gt.sample_index.find(r.fields[0].str);
+        if (it == gt.sample_index.end() || !lidar_calibs.count(r.fields[2].str)) {
+          return Status::ok();
+        }
+        pose_token[static_cast<std::size_t>(it->second)] = r.fields[1].str;  // last wins
+        return Status::ok();
+      });
+  if (!s) return join(s);
+  TokenMap<std::vector<int>> pose_users;
   for (std::size_t i = 0; i < n; ++i) {
     if (pose_token[i].empty()) {
-      return Status(StatusCode::kNotFound, sd_path + ": sample " + samples[i].token +
-                                               " has no LIDAR_TOP key-frame sample_data record");
+      return join(
+          Status(StatusCode::kNotFound, sd_path + ": sample " + samples[i].token +
+                                            " has no LIDAR_TOP key-frame sample_data record"));
     }
     pose_users[pose_token[i]].push_back(static_cast<int>(i));
   }
   std::size_t poses_found = 0;
   const std::string pose_path = table_path(dataroot, version, "ego_pose");
-  s = stream_table(pose_path, {"token", "translation"}, [&](const TableRecord& r, std::size_t i) {
-    auto it = pose_users.find(r.fields[0].str);
-    if (it == pose_users.end()) return Status::ok();
-    std::array<double, 3> t{};
-    if (Status e = copy_vec(r.fields[1], t, pose_path + " record " + std::to_string(i) + " translation"); !e) {
-      return e;
-    }
-    for (int u : it->second) gt.ego_translation[static_cast<std::size_t>(u)] = t;
-    poses_found += it->second.size();
-    pose_users.erase(it);  // a duplicated pose token counts once
-    return Status::ok();
-  });
-  if (!s) return s;
+  s = stream_table(
+      pose_path, {"token", "translation"},
+      [&](const TableRecord& r, std::size_t i) {
+        auto it = pose_users.find(r.fields[0].str);
+        if (it == pose_users.end()) return Status::ok();
+        std::array<double, 3> t{};
+        if (Status e = copy_vec(r.fields[1], t,
+                                pose_path + " record " + std::to_string(i) + " translation");
+            !e) {
+          return e;
+        }
+        for (int u : it->second) gt.ego_translation[static_cast<std::size_t>(u)] = t;
+        poses_found += it->second.size();
+        pose_users.erase(it);  // a duplicated pose token counts once
+        return Status::ok();
+      },
+      RecordFilter{
+          0, [&pose_users](const std::string& token) { return pose_users.count(token) != 0; }});
+  if (!s) return join(s);
   if (poses_found < n) {
-    return Status(StatusCode::kNotFound, pose_path + ": " + std::to_string(n - poses_found) +
-                                             " LIDAR_TOP ego poses of the split's samples are missing");
+    return join(Status(StatusCode::kNotFound,
+                       pose_path + ": " + std::to_string(n - poses_found) +
+                           " LIDAR_TOP ego poses of the split's samples are missing"));
   }
 
-  // Annotations of the split's samples, in file order.
-  std::vector<AnnRec> anns;
-  std::unordered_map<std::string, int> ann_index;
-  const std::string ann_path = table_path(dataroot, version, "sample_annotation");
-  {
-    // ~480 bytes per record in nuScenes tables; reserving avoids rehashing 1M-entry maps.
-    std::error_code ec;
-    const auto bytes = std::filesystem::file_size(ann_path, ec);
-    if (!ec) ann_index.reserve(static_cast<std::size_t>(bytes / 480));
-  }
-  const std::vector<std::string> ann_fields = {"token",       "sample_token", "instance_token",
-                                               "attribute_tokens", "translation", "size",
-                                               "rotation",    "num_lidar_pts", "num_radar_pts",
-                                               "prev",        "next"};
-  s = stream_table(ann_path, ann_fields, [&](const TableRecord& r, std::size_t i) {
-    auto it = gt.sample_index.find(r.fields[1].str);
-    if (it == gt.sample_index.end()) return Status::ok();
-    for (std::size_t k = 0; k < ann_fields.size(); ++k) {
-      if (Status e = need(r, k, ann_path, i, ann_fields[k].c_str()); !e) return e;
-    }
-    AnnRec a;
-    a.token = r.fields[0].str;
-    a.sample = it->second;
-    a.instance = r.fields[2].str;
-    a.attrs = r.fields[3].strs;
-    const std::string where = ann_path + " record " + std::to_string(i) + " (" + a.token + ")";
-    if (Status e = copy_vec(r.fields[4], a.translation, where + " translation"); !e) return e;
-    if (Status e = copy_vec(r.fields[5], a.size, where + " size"); !e) return e;
-    if (Status e = copy_vec(r.fields[6], a.rotation, where + " rotation"); !e) return e;
-    a.num_pts = r.fields[7].num + r.fields[8].num;
-    a.prev = r.fields[9].str;
-    a.next = r.fields[10].str;
-    ann_index.emplace(a.token, static_cast<int>(anns.size()));
-    anns.push_back(std::move(a));
-    return Status::ok();
-  });
-  if (!s) return s;
+  if (Status ann_status = ann_future.get(); !ann_status) return ann_status;
 
   const double nan = std::numeric_limits<double>::quiet_NaN();
   auto find_ann = [&](const std::string& token, const AnnRec& from) -> Result<const AnnRec*> {
     auto it = ann_index.find(token);
     if (it == ann_index.end()) {
-      return Status(StatusCode::kNotFound, ann_path + ": annotation " + from.token + " links to " + token +
-                                               ", which is not an annotation of the split's samples");
+      return Status(StatusCode::kNotFound,
+                    ann_path + ": annotation " + from.token + " links to " + token +
+                        ", which is not an annotation of the split's samples");
     }
     return &anns[static_cast<std::size_t>(it->second)];
   };
   for (const AnnRec& a : anns) {
     auto inst = instance_category.find(a.instance);
     if (inst == instance_category.end()) {
-      return Status(StatusCode::kNotFound, inst_path + ": instance " + a.instance + " of annotation " +
-                                               a.token + " not found");
+      return Status(StatusCode::kNotFound, inst_path + ": instance " + a.instance +
+                                               " of annotation " + a.token + " not found");
     }
     auto cat = category_name.find(inst->second);
     if (cat == category_name.end()) {
@@ -244,17 +269,20 @@ Result<GroundTruth> load_ground_truth(const std::string& dataroot, const std::st
     EvalBox box;
     box.cls = static_cast<std::int8_t>(*cls);
     if (a.attrs.size() > 1) {
-      return Status(StatusCode::kCorruptData, ann_path + ": annotation " + a.token +
-                                                  ": Error: GT annotations must not have more than one attribute!");
+      return Status(StatusCode::kCorruptData,
+                    ann_path + ": annotation " + a.token +
+                        ": Error: GT annotations must not have more than one attribute!");
     }
     if (a.attrs.size() == 1) {
       auto an = attribute_name.find(a.attrs[0]);
       if (an == attribute_name.end()) {
-        return Status(StatusCode::kNotFound, attr_path + ": attribute " + a.attrs[0] + " not found");
+        return Status(StatusCode::kNotFound,
+                      attr_path + ": attribute " + a.attrs[0] + " not found");
       }
       auto ai = attribute_index(an->second);
       if (!ai) {
-        return Status(StatusCode::kCorruptData, attr_path + ": unknown attribute name " + an->second);
+        return Status(StatusCode::kCorruptData,
+                      attr_path + ": unknown attribute name " + an->second);
       }
       box.attr = static_cast<std::int8_t>(*ai);
     }

@@ -1,6 +1,7 @@
 // Synthetic val-sized tables and submission, written with stdio for speed.
 #include "scoring/synthetic_val.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -62,13 +63,18 @@ struct Category {
   double w, l, h;
 };
 
-const Category kCategories[] = {
-    {"vehicle.car", 0, 1.9, 4.6, 1.7},          {"vehicle.truck", 1, 2.5, 7.5, 3.0},
-    {"vehicle.bus.rigid", 2, 2.9, 11.0, 3.4},   {"vehicle.trailer", 3, 2.8, 10.0, 3.8},
-    {"vehicle.construction", 4, 2.8, 6.5, 3.2}, {"human.pedestrian.adult", 5, 0.7, 0.7, 1.75},
-    {"vehicle.motorcycle", 6, 0.8, 2.1, 1.5},   {"vehicle.bicycle", 7, 0.6, 1.7, 1.3},
-    {"movable_object.trafficcone", 8, 0.4, 0.4, 1.0}, {"movable_object.barrier", 9, 2.1, 0.5, 1.0},
-    {"static_object.bicycle_rack", -1, 2.0, 6.0, 1.2}, {"animal", -1, 0.4, 0.8, 0.6}};
+const Category kCategories[] = {{"vehicle.car", 0, 1.9, 4.6, 1.7},
+                                {"vehicle.truck", 1, 2.5, 7.5, 3.0},
+                                {"vehicle.bus.rigid", 2, 2.9, 11.0, 3.4},
+                                {"vehicle.trailer", 3, 2.8, 10.0, 3.8},
+                                {"vehicle.construction", 4, 2.8, 6.5, 3.2},
+                                {"human.pedestrian.adult", 5, 0.7, 0.7, 1.75},
+                                {"vehicle.motorcycle", 6, 0.8, 2.1, 1.5},
+                                {"vehicle.bicycle", 7, 0.6, 1.7, 1.3},
+                                {"movable_object.trafficcone", 8, 0.4, 0.4, 1.0},
+                                {"movable_object.barrier", 9, 2.1, 0.5, 1.0},
+                                {"static_object.bicycle_rack", -1, 2.0, 6.0, 1.2},
+                                {"animal", -1, 0.4, 0.8, 0.6}};
 // Relative frequency of each category among the objects.
 const double kWeights[] = {30, 6, 2, 2, 2, 20, 3, 3, 14, 14, 1, 1};
 
@@ -80,9 +86,20 @@ int attribute_for(int cls, std::mt19937_64& rng) {
   return -1;
 }
 
+// Token of record i of one channel in one scene: a pure function, so prev/next links need no
+// lookahead.
+std::string channel_token(std::uint64_t seed, int scene, int channel, int i) {
+  // Injective for scene < 1e6, channel < 16, i < 2^32 (the odd multiplier is a bijection mod 2^64).
+  const std::uint64_t sc = (seed * 1000003ULL + static_cast<std::uint64_t>(scene)) * 16 +
+                           static_cast<std::uint64_t>(channel);
+  Tokens t(sc * 4294967311ULL + static_cast<std::uint64_t>(i));
+  return t.next();
+}
+
 }  // namespace
 
-Result<SyntheticValStats> write_synthetic_val(const std::string& dir, const SyntheticValConfig& cfg) {
+Result<SyntheticValStats> write_synthetic_val(const std::string& dir,
+                                              const SyntheticValConfig& cfg) {
   auto scenes_r = predefined_split_scenes("val", "v1.0-trainval");
   if (!scenes_r) return scenes_r.status();
   const auto& scene_names = *scenes_r;
@@ -103,7 +120,8 @@ Result<SyntheticValStats> write_synthetic_val(const std::string& dir, const Synt
     if (!w.ok()) return Status(StatusCode::kIoError, tdir + "/category.json: cannot write");
     for (const auto& c : kCategories) {
       cat_tokens.push_back(tok.next());
-      std::fprintf(w.next(), "{\"token\": \"%s\", \"name\": \"%s\", \"description\": \"synthetic\"}",
+      std::fprintf(w.next(),
+                   "{\"token\": \"%s\", \"name\": \"%s\", \"description\": \"synthetic\"}",
                    cat_tokens.back().c_str(), c.name);
     }
   }
@@ -111,45 +129,75 @@ Result<SyntheticValStats> write_synthetic_val(const std::string& dir, const Synt
     ArrayWriter w(tdir + "/attribute.json");
     for (const char* a : kAttributeNames) {
       attr_tokens.push_back(tok.next());
-      std::fprintf(w.next(), "{\"token\": \"%s\", \"name\": \"%s\", \"description\": \"synthetic\"}",
+      std::fprintf(w.next(),
+                   "{\"token\": \"%s\", \"name\": \"%s\", \"description\": \"synthetic\"}",
                    attr_tokens.back().c_str(), a);
     }
   }
   {
     ArrayWriter w(tdir + "/visibility.json");
     for (int v = 1; v <= 4; ++v) {
-      std::fprintf(w.next(), "{\"token\": \"%d\", \"level\": \"v%d\", \"description\": \"synthetic\"}", v, v);
+      std::fprintf(w.next(),
+                   "{\"token\": \"%d\", \"level\": \"v%d\", \"description\": \"synthetic\"}", v, v);
     }
   }
-  const char* channels[] = {"CAM_FRONT", "CAM_FRONT_RIGHT", "CAM_FRONT_LEFT", "CAM_BACK", "CAM_BACK_LEFT",
-                            "CAM_BACK_RIGHT", "LIDAR_TOP", "RADAR_FRONT", "RADAR_FRONT_LEFT",
+  const char* channels[] = {"CAM_FRONT",         "CAM_FRONT_RIGHT", "CAM_FRONT_LEFT",
+                            "CAM_BACK",          "CAM_BACK_LEFT",   "CAM_BACK_RIGHT",
+                            "LIDAR_TOP",         "RADAR_FRONT",     "RADAR_FRONT_LEFT",
                             "RADAR_FRONT_RIGHT", "RADAR_BACK_LEFT", "RADAR_BACK_RIGHT"};
-  std::string lidar_sensor;
+  std::vector<std::string> sensor_tokens;
   {
     ArrayWriter w(tdir + "/sensor.json");
     for (const char* ch : channels) {
       const std::string t = tok.next();
-      if (std::string(ch) == "LIDAR_TOP") lidar_sensor = t;
+      sensor_tokens.push_back(t);
       const char* mod = ch[0] == 'C' ? "camera" : (ch[0] == 'L' ? "lidar" : "radar");
-      std::fprintf(w.next(), "{\"token\": \"%s\", \"channel\": \"%s\", \"modality\": \"%s\"}", t.c_str(), ch, mod);
+      std::fprintf(w.next(), "{\"token\": \"%s\", \"channel\": \"%s\", \"modality\": \"%s\"}",
+                   t.c_str(), ch, mod);
     }
   }
-  const int n_scenes = static_cast<int>(scene_names.size());
+  // Scenes in name order, as scene.json lists them; val scenes also get predictions.
+  std::vector<std::pair<std::string, bool>> scene_list;
+  for (const auto& n : scene_names) scene_list.emplace_back(n, true);
+  if (cfg.full_trainval) {
+    auto train = predefined_split_scenes("train", "v1.0-trainval");
+    if (!train) return train.status();
+    for (const auto& n : *train) scene_list.emplace_back(n, false);
+    std::sort(scene_list.begin(), scene_list.end());
+  }
+  const int n_val = static_cast<int>(scene_names.size());
+  const int n_train = static_cast<int>(scene_list.size()) - n_val;
+  const int n_scenes = static_cast<int>(scene_list.size());
   SyntheticValStats stats;
   stats.scenes = n_scenes;
+  // Frames per 0.5 s sample period for each channel (12 Hz cameras, 20 Hz LIDAR, ~13 Hz radar).
+  const int frames_per_sample[] = {6, 6, 6, 6, 6, 6, 10, 7, 6, 7, 6, 7};
 
-  ArrayWriter scene_w(tdir + "/scene.json"), log_w(tdir + "/log.json"), calib_w(tdir + "/calibrated_sensor.json"),
-      sample_w(tdir + "/sample.json"), sd_w(tdir + "/sample_data.json"), pose_w(tdir + "/ego_pose.json"),
+  ArrayWriter scene_w(tdir + "/scene.json"), log_w(tdir + "/log.json"),
+      calib_w(tdir + "/calibrated_sensor.json"), sample_w(tdir + "/sample.json"),
+      sd_w(tdir + "/sample_data.json"), pose_w(tdir + "/ego_pose.json"),
       inst_w(tdir + "/instance.json"), ann_w(tdir + "/sample_annotation.json");
   File res(std::fopen((dir + "/results.json").c_str(), "wb"), &std::fclose);
   if (!ann_w.ok() || !res) return Status(StatusCode::kIoError, dir + ": cannot write the tables");
-  std::fputs("{\"meta\": {\"use_camera\": true, \"use_lidar\": false, \"use_radar\": false, \"use_map\": false, "
-             "\"use_external\": false}, \"results\": {\n", res.get());
+  std::fputs(
+      "{\"meta\": {\"use_camera\": true, \"use_lidar\": false, \"use_radar\": false, \"use_map\": "
+      "false, "
+      "\"use_external\": false}, \"results\": {\n",
+      res.get());
   std::vector<std::string> log_tokens;
   std::size_t results_written = 0;
+  int val_seen = 0, train_seen = 0;
   for (int s = 0; s < n_scenes; ++s) {
-    const int n_samples = cfg.samples / n_scenes + (s < cfg.samples % n_scenes ? 1 : 0);
-    const std::string scene_tok = tok.next(), log_tok = tok.next(), calib_tok = tok.next();
+    const bool is_val = scene_list[static_cast<std::size_t>(s)].second;
+    const int n_samples =
+        is_val ? cfg.samples / n_val + (val_seen < cfg.samples % n_val ? 1 : 0)
+               : cfg.train_samples / n_train + (train_seen < cfg.train_samples % n_train ? 1 : 0);
+    (is_val ? val_seen : train_seen)++;
+    const int n_objects = is_val ? cfg.objects_per_scene : cfg.train_objects_per_scene;
+    const std::string scene_tok = tok.next(), log_tok = tok.next();
+    std::vector<std::string> calib_toks;
+    for (std::size_t c = 0; c < std::size(channels); ++c) calib_toks.push_back(tok.next());
+    const std::string& calib_tok = calib_toks[6];  // LIDAR_TOP
     log_tokens.push_back(log_tok);
     std::vector<std::string> sample_toks(static_cast<std::size_t>(n_samples));
     for (auto& t : sample_toks) t = tok.next();
@@ -157,17 +205,25 @@ Result<SyntheticValStats> write_synthetic_val(const std::string& dir, const Synt
                  "{\"token\": \"%s\", \"logfile\": \"n000-synthetic-%03d\", \"vehicle\": \"n000\", "
                  "\"date_captured\": \"2018-08-01\", \"location\": \"boston-seaport\"}",
                  log_tok.c_str(), s);
-    std::fprintf(scene_w.next(),
-                 "{\"token\": \"%s\", \"log_token\": \"%s\", \"nbr_samples\": %d, \"first_sample_token\": \"%s\", "
-                 "\"last_sample_token\": \"%s\", \"name\": \"%s\", \"description\": \"synthetic val scene\"}",
-                 scene_tok.c_str(), log_tok.c_str(), n_samples, sample_toks.front().c_str(),
-                 sample_toks.back().c_str(), scene_names[static_cast<std::size_t>(s)].c_str());
-    std::fprintf(calib_w.next(),
-                 "{\"token\": \"%s\", \"sensor_token\": \"%s\", \"translation\": [0.94, 0.0, 1.84], "
-                 "\"rotation\": [0.7071, 0.0, 0.0, -0.7071], \"camera_intrinsic\": []}",
-                 calib_tok.c_str(), lidar_sensor.c_str());
+    std::fprintf(
+        scene_w.next(),
+        "{\"token\": \"%s\", \"log_token\": \"%s\", \"nbr_samples\": %d, \"first_sample_token\": "
+        "\"%s\", "
+        "\"last_sample_token\": \"%s\", \"name\": \"%s\", \"description\": \"synthetic %s scene\"}",
+        scene_tok.c_str(), log_tok.c_str(), n_samples, sample_toks.front().c_str(),
+        sample_toks.back().c_str(), scene_list[static_cast<std::size_t>(s)].first.c_str(),
+        is_val ? "val" : "train");
+    for (std::size_t c = 0; c < std::size(channels); ++c) {
+      std::fprintf(
+          calib_w.next(),
+          "{\"token\": \"%s\", \"sensor_token\": \"%s\", \"translation\": [0.94, 0.0, 1.84], "
+          "\"rotation\": [0.7071, 0.0, 0.0, -0.7071], \"camera_intrinsic\": %s}",
+          calib_toks[c].c_str(), sensor_tokens[c].c_str(),
+          c < 6 ? "[[1266.4, 0.0, 816.3], [0.0, 1266.4, 491.5], [0.0, 0.0, 1.0]]" : "[]");
+    }
     // Ego drives straight along a random heading at a random speed.
-    const double ex0 = 300 + 2000 * unif(rng), ey0 = 300 + 2000 * unif(rng), heading = 2 * M_PI * unif(rng);
+    const double ex0 = 300 + 2000 * unif(rng), ey0 = 300 + 2000 * unif(rng),
+                 heading = 2 * M_PI * unif(rng);
     const double speed = 8 * unif(rng);
     const long long t0 = 1533000000000000LL + static_cast<long long>(s) * 100000000LL;
     std::vector<long long> ts(static_cast<std::size_t>(n_samples));
@@ -177,21 +233,48 @@ Result<SyntheticValStats> write_synthetic_val(const std::string& dir, const Synt
       ts[uk] = t0 + static_cast<long long>(k) * 500000LL + static_cast<long long>(unif(rng) * 4000);
       const double d = speed * 0.5 * k;
       ego[uk] = {ex0 + d * std::cos(heading), ey0 + d * std::sin(heading)};
-      const std::string sd = tok.next(), pose = tok.next();
       std::fprintf(sample_w.next(),
-                   "{\"token\": \"%s\", \"timestamp\": %lld, \"prev\": \"%s\", \"next\": \"%s\", \"scene_token\": \"%s\"}",
+                   "{\"token\": \"%s\", \"timestamp\": %lld, \"prev\": \"%s\", \"next\": \"%s\", "
+                   "\"scene_token\": \"%s\"}",
                    sample_toks[uk].c_str(), ts[uk], k ? sample_toks[uk - 1].c_str() : "",
                    k + 1 < n_samples ? sample_toks[uk + 1].c_str() : "", scene_tok.c_str());
-      std::fprintf(pose_w.next(),
-                   "{\"token\": \"%s\", \"timestamp\": %lld, \"rotation\": [%.9f, 0.0, 0.0, %.9f], "
-                   "\"translation\": [%.6f, %.6f, 0.0]}",
-                   pose.c_str(), ts[uk], std::cos(heading / 2), std::sin(heading / 2), ego[uk][0], ego[uk][1]);
-      std::fprintf(sd_w.next(),
-                   "{\"token\": \"%s\", \"sample_token\": \"%s\", \"ego_pose_token\": \"%s\", "
-                   "\"calibrated_sensor_token\": \"%s\", \"timestamp\": %lld, \"fileformat\": \"pcd\", "
-                   "\"is_key_frame\": true, \"height\": 0, \"width\": 0, \"filename\": "
-                   "\"samples/LIDAR_TOP/n000-synthetic-%03d__LIDAR_TOP__%lld.pcd.bin\", \"prev\": \"\", \"next\": \"\"}",
-                   sd.c_str(), sample_toks[uk].c_str(), pose.c_str(), calib_tok.c_str(), ts[uk], s, ts[uk]);
+    }
+    // sample_data + ego_pose, one pose per record with the record's token, channel by channel. The
+    // key frame of each channel opens each sample period; sweeps follow it (without sweeps: LIDAR
+    // key frames).
+    for (std::size_t c = 0; c < std::size(channels); ++c) {
+      if (!cfg.sweeps && c != 6) continue;
+      const int per_sample = cfg.sweeps ? frames_per_sample[c] : 1;
+      const int total = n_samples * per_sample;
+      auto sd_token = [&](int i) { return channel_token(cfg.seed, s, static_cast<int>(c), i); };
+      std::string prev, cur = sd_token(0), next;
+      for (int i = 0; i < total; ++i) {
+        next = i + 1 < total ? sd_token(i + 1) : std::string();
+        const int k = i / per_sample, f = i % per_sample;
+        const auto uk = static_cast<std::size_t>(k);
+        const long long t = ts[uk] + static_cast<long long>(f) * 500000LL / per_sample;
+        const double d = speed * (1e-6 * static_cast<double>(t - t0));
+        const bool camera = c < 6, lidar = c == 6;
+        std::fprintf(
+            sd_w.next(),
+            "{\"token\": \"%s\", \"sample_token\": \"%s\", \"ego_pose_token\": \"%s\", "
+            "\"calibrated_sensor_token\": \"%s\", \"timestamp\": %lld, \"fileformat\": \"%s\", "
+            "\"is_key_frame\": %s, \"height\": %d, \"width\": %d, \"filename\": "
+            "\"%s/%s/n000-synthetic-%03d__%s__%lld.%s\", \"prev\": \"%s\", \"next\": \"%s\"}",
+            cur.c_str(), sample_toks[uk].c_str(), cur.c_str(), calib_toks[c].c_str(), t,
+            camera ? "jpg" : "pcd", f == 0 ? "true" : "false", camera ? 900 : 0, camera ? 1600 : 0,
+            f == 0 ? "samples" : "sweeps", channels[c], s, channels[c], t,
+            camera ? "jpg" : (lidar ? "pcd.bin" : "pcd"), prev.c_str(), next.c_str());
+        std::fprintf(
+            pose_w.next(),
+            "{\"token\": \"%s\", \"timestamp\": %lld, \"rotation\": [%.9f, 0.0, 0.0, %.9f], "
+            "\"translation\": [%.6f, %.6f, 0.0]}",
+            cur.c_str(), t, std::cos(heading / 2), std::sin(heading / 2),
+            ex0 + d * std::cos(heading), ey0 + d * std::sin(heading));
+        ++stats.sample_data;
+        prev = std::move(cur);
+        cur = std::move(next);
+      }
     }
     // Objects: each is annotated in every sample of the scene.
     struct Obj {
@@ -201,7 +284,7 @@ Result<SyntheticValStats> write_synthetic_val(const std::string& dir, const Synt
       std::string inst;
       std::vector<std::string> anns;
     };
-    std::vector<Obj> objs(static_cast<std::size_t>(cfg.objects_per_scene));
+    std::vector<Obj> objs(static_cast<std::size_t>(n_objects));
     const double mid = speed * 0.5 * (n_samples - 1) / 2;
     for (auto& o : objs) {
       o.cat = pick_cat(rng);
@@ -229,16 +312,22 @@ Result<SyntheticValStats> write_synthetic_val(const std::string& dir, const Synt
     }
     for (int k = 0; k < n_samples; ++k) {
       const auto uk = static_cast<std::size_t>(k);
-      std::fprintf(res.get(), "%s\"%s\": [", results_written++ ? ",\n" : "", sample_toks[uk].c_str());
+      if (is_val) {
+        std::fprintf(res.get(), "%s\"%s\": [", results_written++ ? ",\n" : "",
+                     sample_toks[uk].c_str());
+      }
       int boxes_in_sample = 0;
-      auto emit_pred = [&](int cls, double x, double y, double z, double w, double l, double h, double yaw,
-                           double vx, double vy, int attr, double score) {
+      auto emit_pred = [&](int cls, double x, double y, double z, double w, double l, double h,
+                           double yaw, double vx, double vy, int attr, double score) {
         std::fprintf(res.get(),
-                     "%s{\"sample_token\": \"%s\", \"translation\": [%.4f, %.4f, %.4f], \"size\": [%.3f, %.3f, %.3f], "
-                     "\"rotation\": [%.6f, 0.0, 0.0, %.6f], \"velocity\": [%.3f, %.3f], \"detection_name\": \"%s\", "
+                     "%s{\"sample_token\": \"%s\", \"translation\": [%.4f, %.4f, %.4f], \"size\": "
+                     "[%.3f, %.3f, %.3f], "
+                     "\"rotation\": [%.6f, 0.0, 0.0, %.6f], \"velocity\": [%.3f, %.3f], "
+                     "\"detection_name\": \"%s\", "
                      "\"detection_score\": %.5f, \"attribute_name\": \"%s\"}",
-                     boxes_in_sample++ ? ", " : "", sample_toks[uk].c_str(), x, y, z, w, l, h, std::cos(yaw / 2),
-                     std::sin(yaw / 2), vx, vy, kClassNames[static_cast<std::size_t>(cls)], score,
+                     boxes_in_sample++ ? ", " : "", sample_toks[uk].c_str(), x, y, z, w, l, h,
+                     std::cos(yaw / 2), std::sin(yaw / 2), vx, vy,
+                     kClassNames[static_cast<std::size_t>(cls)], score,
                      attr >= 0 ? kAttributeNames[static_cast<std::size_t>(attr)] : "");
         ++stats.predictions;
       };
@@ -247,40 +336,49 @@ Result<SyntheticValStats> write_synthetic_val(const std::string& dir, const Synt
         const double t = 0.5 * k;
         const double x = o.x0 + o.vx * t, y = o.y0 + o.vy * t, z = o.h / 2;
         const int lidar = unif(rng) < 0.04 ? 0 : 1 + static_cast<int>(200 * unif(rng));
-        std::fprintf(ann_w.next(),
-                     "{\"token\": \"%s\", \"sample_token\": \"%s\", \"instance_token\": \"%s\", "
-                     "\"visibility_token\": \"4\", \"attribute_tokens\": [%s%s%s], \"translation\": [%.6f, %.6f, %.6f], "
-                     "\"size\": [%.3f, %.3f, %.3f], \"rotation\": [%.9f, 0.0, 0.0, %.9f], \"prev\": \"%s\", "
-                     "\"next\": \"%s\", \"num_lidar_pts\": %d, \"num_radar_pts\": %d}",
-                     o.anns[uk].c_str(), sample_toks[uk].c_str(), o.inst.c_str(), o.attr >= 0 ? "\"" : "",
-                     o.attr >= 0 ? attr_tokens[static_cast<std::size_t>(o.attr)].c_str() : "", o.attr >= 0 ? "\"" : "",
-                     x, y, z, o.w, o.l, o.h, std::cos(o.yaw / 2), std::sin(o.yaw / 2), k ? o.anns[uk - 1].c_str() : "",
-                     k + 1 < n_samples ? o.anns[uk + 1].c_str() : "", lidar, static_cast<int>(5 * unif(rng)));
+        std::fprintf(
+            ann_w.next(),
+            "{\"token\": \"%s\", \"sample_token\": \"%s\", \"instance_token\": \"%s\", "
+            "\"visibility_token\": \"4\", \"attribute_tokens\": [%s%s%s], \"translation\": [%.6f, "
+            "%.6f, %.6f], "
+            "\"size\": [%.3f, %.3f, %.3f], \"rotation\": [%.9f, 0.0, 0.0, %.9f], \"prev\": \"%s\", "
+            "\"next\": \"%s\", \"num_lidar_pts\": %d, \"num_radar_pts\": %d}",
+            o.anns[uk].c_str(), sample_toks[uk].c_str(), o.inst.c_str(), o.attr >= 0 ? "\"" : "",
+            o.attr >= 0 ? attr_tokens[static_cast<std::size_t>(o.attr)].c_str() : "",
+            o.attr >= 0 ? "\"" : "", x, y, z, o.w, o.l, o.h, std::cos(o.yaw / 2),
+            std::sin(o.yaw / 2), k ? o.anns[uk - 1].c_str() : "",
+            k + 1 < n_samples ? o.anns[uk + 1].c_str() : "", lidar,
+            static_cast<int>(5 * unif(rng)));
         ++stats.annotations;
-        if (c.cls < 0 || unif(rng) > cfg.detection_rate) continue;
+        if (!is_val || c.cls < 0 || unif(rng) > cfg.detection_rate) continue;
         const double noise = 0.3 + 0.5 * unif(rng);
         emit_pred(c.cls, x + noise * gauss(rng), y + noise * gauss(rng), z + 0.1 * gauss(rng),
-                  o.w * (1 + 0.05 * gauss(rng)), o.l * (1 + 0.05 * gauss(rng)), o.h * (1 + 0.05 * gauss(rng)),
-                  o.yaw + 0.15 * gauss(rng), o.vx + 0.5 * gauss(rng), o.vy + 0.5 * gauss(rng),
-                  unif(rng) < 0.9 ? o.attr : attribute_for(c.cls, rng), 0.3 + 0.7 * unif(rng) / (1 + noise));
+                  o.w * (1 + 0.05 * gauss(rng)), o.l * (1 + 0.05 * gauss(rng)),
+                  o.h * (1 + 0.05 * gauss(rng)), o.yaw + 0.15 * gauss(rng), o.vx + 0.5 * gauss(rng),
+                  o.vy + 0.5 * gauss(rng), unif(rng) < 0.9 ? o.attr : attribute_for(c.cls, rng),
+                  0.3 + 0.7 * unif(rng) / (1 + noise));
       }
+      if (!is_val) continue;
       for (int f = 0; f < cfg.false_positives; ++f) {
         const int cls = static_cast<int>(unif(rng) * kNumClasses) % kNumClasses;
         const double r = 45 * std::sqrt(unif(rng)), a = 2 * M_PI * unif(rng);
-        emit_pred(cls, ego[uk][0] + r * std::cos(a), ego[uk][1] + r * std::sin(a), 1.0, 2, 4, 1.6, a, 0, 0,
-                  attribute_for(cls, rng), 0.4 * unif(rng));
+        emit_pred(cls, ego[uk][0] + r * std::cos(a), ego[uk][1] + r * std::sin(a), 1.0, 2, 4, 1.6,
+                  a, 0, 0, attribute_for(cls, rng), 0.4 * unif(rng));
       }
       std::fputs("]", res.get());
     }
-    stats.samples += n_samples;
+    if (is_val) stats.samples += n_samples;
   }
   std::fputs("\n}}\n", res.get());
   {
     ArrayWriter w(tdir + "/map.json");
     std::string logs;
-    for (std::size_t i = 0; i < log_tokens.size(); ++i) logs += (i ? ", \"" : "\"") + log_tokens[i] + "\"";
-    std::fprintf(w.next(), "{\"token\": \"%s\", \"log_tokens\": [%s], \"category\": \"semantic_prior\", "
-                           "\"filename\": \"maps/synthetic.png\"}", tok.next().c_str(), logs.c_str());
+    for (std::size_t i = 0; i < log_tokens.size(); ++i)
+      logs += (i ? ", \"" : "\"") + log_tokens[i] + "\"";
+    std::fprintf(w.next(),
+                 "{\"token\": \"%s\", \"log_tokens\": [%s], \"category\": \"semantic_prior\", "
+                 "\"filename\": \"maps/synthetic.png\"}",
+                 tok.next().c_str(), logs.c_str());
   }
   return stats;
 }

@@ -1,9 +1,10 @@
-// Streams a nuScenes table (a JSON array of flat records) with RapidJSON's SAX reader, keeping only the
-// named fields, so GB-sized tables (sample_data, ego_pose, sample_annotation) never sit in memory.
+// Streams a nuScenes table (a JSON array of flat records) from a memory-mapped file, decoding only the
+// named fields, so GB-sized tables (sample_data, ego_pose, sample_annotation) never sit in memory as trees.
 #pragma once
 
 #include <functional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "common/status.hpp"
@@ -25,9 +26,18 @@ struct TableRecord {
   std::vector<TableField> fields;
 };
 
+// Optional early rejection: once the wanted field `field` (an index into `wanted`) is read, `keep` sees its
+// string value; if it returns false the rest of the record is validated but not decoded and `on_record` is
+// not called. Tables where few records matter (sample_data for one split) scan several times faster.
+struct RecordFilter {
+  int field = -1;
+  std::function<bool(const std::string&)> keep;
+};
+
 // Calls `on_record(record, index)` for every record of the array in file order. A non-ok Status from
 // the callback stops the scan and is returned. Errors name the file and the byte offset.
 Status stream_table(const std::string& path, const std::vector<std::string>& wanted,
-                    const std::function<Status(const TableRecord&, std::size_t)>& on_record);
+                    const std::function<Status(const TableRecord&, std::size_t)>& on_record,
+                    const RecordFilter& filter = {});
 
 }  // namespace faultline::scoring
