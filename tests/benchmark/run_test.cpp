@@ -1,0 +1,120 @@
+// `faultline soak` and `faultline benchmark --detector-cmd` run for real: node executables as
+// processes, on a tiny generated dataset, checked through the files they write.
+#include <gtest/gtest.h>
+#include <rapidjson/document.h>
+#include <unistd.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "dataset/synth.hpp"
+
+namespace faultline::benchmark {
+namespace {
+namespace fs = std::filesystem;
+
+std::string read_text(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+class RunTest : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    root_ = fs::temp_directory_path() / ("faultline_benchmark_" + std::to_string(::getpid()));
+    fs::remove_all(root_);
+    dataset::SynthOptions so;
+    so.out_dir = (root_ / "data").string();
+    so.scenes = 2;  // both are mini_val scenes, so every loop is scored on the whole replay
+    so.seconds = 3;
+    so.seed = 5;
+    auto s = dataset::write_synthetic_dataset(so);
+    ASSERT_TRUE(s.is_ok()) << s.status().message();
+  }
+  static void TearDownTestSuite() { fs::remove_all(root_); }
+
+  static int run(const std::string& args, const fs::path& log) {
+    const std::string cmd =
+        std::string(FAULTLINE_BIN_DIR) + "/faultline " + args + " > " + log.string() + " 2>&1";
+    return std::system(cmd.c_str());
+  }
+  static fs::path root_;
+};
+fs::path RunTest::root_;
+
+TEST_F(RunTest, SoakReportsEveryPeriodAndScoresEveryLoop) {
+  const fs::path out = root_ / "soak";
+  const int rc = run("soak --out " + out.string() + " --dataroot " + (root_ / "data").string() +
+                         " --minutes 0.4 --period 6 --max-rss-growth 200",
+                     root_ / "soak.log");
+  ASSERT_EQ(rc, 0) << read_text(root_ / "soak.log") << read_text(out / "nodes.log");
+  rapidjson::Document d;
+  d.Parse(read_text(out / "soak.json").c_str());
+  ASSERT_FALSE(d.HasParseError());
+  EXPECT_EQ(d["node_failures"].Size(), 0u);
+  const auto& periods = d["periods"];
+  ASSERT_GE(periods.Size(), 3u);
+  std::uint64_t samples = 0, detections = 0;
+  for (const auto& p : periods.GetArray()) {
+    samples += p["samples_published"].GetUint64();
+    detections += p["detection_arrays"].GetUint64();
+    // Memory of the three nodes is sampled every period.
+    EXPECT_EQ(p["rss_mb"].MemberCount(), 3u);
+  }
+  // The player replays 6 cameras; the injector forwards what it receives.
+  const auto& first_full = periods[1];
+  EXPECT_EQ(first_full["frames_in"].MemberCount(), 6u);
+  EXPECT_EQ(first_full["frames_out"].MemberCount(), 6u);
+  EXPECT_GT(samples, 20u);
+  EXPECT_GT(detections, 0u);
+  // 6 s of scenes per loop: several loops in 24 s, each scored by the official metric.
+  const auto& loops = d["loops"];
+  ASSERT_GE(loops.Size(), 2u) << read_text(root_ / "soak.log");
+  for (const auto& l : loops.GetArray()) {
+    EXPECT_TRUE(l["scored"].GetBool()) << l["error"].GetString();
+    EXPECT_GT(l["nds"].GetDouble(), 0.0);
+  }
+  EXPECT_TRUE(fs::exists(out / "periods.csv"));
+  EXPECT_TRUE(fs::exists(out / "loops" / "loop_1.json"));
+}
+
+TEST_F(RunTest, BenchmarkScoresAnExternalPythonDetector) {
+  const std::string python = FAULTLINE_PYTHON;
+  if (std::system((python + " -c 'import zmq, google.protobuf, numpy, cv2' 2>/dev/null").c_str()) !=
+      0) {
+    FAIL() << python
+           << " cannot import zmq, google.protobuf, numpy and cv2 (scripts/install-deps.sh "
+              "installs them)";
+  }
+  ::setenv("FAULTLINE_PYTHON_MSGS", FAULTLINE_PYTHON_MSGS, 1);
+  const fs::path out = root_ / "bench";
+  const std::string detector =
+      python + " " + FAULTLINE_SOURCE_DIR + "/clients/python/examples/simple_detector.py";
+  const int rc =
+      run("benchmark --out " + out.string() + " --dataroot " + (root_ / "data").string() +
+              " --version v1.0-mini --corruptions fog,camera_crash --levels mid --detector-cmd '" +
+              detector + "'",
+          root_ / "bench.log");
+  ASSERT_EQ(rc, 0) << read_text(root_ / "bench.log");
+  rapidjson::Document d;
+  d.Parse(read_text(out / "summary.json").c_str());
+  ASSERT_FALSE(d.HasParseError()) << read_text(out / "summary.json");
+  EXPECT_NE(std::string(d["detector"].GetString()).find("simple_detector.py"), std::string::npos);
+  const auto& c = d["conditions"];
+  ASSERT_TRUE(c.HasMember("clean") && c.HasMember("fog/mid") && c.HasMember("camera_crash/mid"))
+      << read_text(out / "summary.json");
+  const double clean = c["clean"]["NDS"].GetDouble();
+  EXPECT_GT(clean, 0.2);
+  // The faults must show in the score: fog hides the colours, a crashed camera loses its objects.
+  EXPECT_LT(c["fog/mid"]["NDS"].GetDouble(), clean);
+  EXPECT_LT(c["camera_crash/mid"]["NDS"].GetDouble(), clean);
+  EXPECT_TRUE(fs::exists(out / "report.html"));
+  EXPECT_TRUE(fs::exists(out / "robustness.md"));
+}
+
+}  // namespace
+}  // namespace faultline::benchmark
