@@ -45,9 +45,13 @@ std::string json_number(double v) {
   return buf;
 }
 
-// One run's processes: sink (required: the run ends when it has finalized), injector, detector, player.
-std::vector<launch::ChildSpec> run_children(const BenchmarkOptions& o, const std::string& sock, const std::string& run_dir,
-                                            const std::string& corruption, const std::string& level, int seed) {
+// One run's processes: sink (required: the run ends when it has finalized), injector, detector,
+// player.
+std::vector<launch::ChildSpec> run_children(const BenchmarkOptions& o, const std::string& sock,
+                                            const std::string& run_dir,
+                                            const std::string& corruption, const std::string& level,
+                                            int seed,
+                                            const std::vector<std::string>& variant_params) {
   const std::string player = "ipc://" + sock + "/player", frames = "ipc://" + sock + "/frames",
                     det = "ipc://" + sock + "/det", ack = "ipc://" + sock + "/ack";
   auto bin = [&](const char* name) { return (fs::path(o.bin_dir) / name).string(); };
@@ -63,21 +67,29 @@ std::vector<launch::ChildSpec> run_children(const BenchmarkOptions& o, const std
     return c;
   };
   std::vector<launch::ChildSpec> children;
-  children.push_back(node("detection_sink",
-                          {"detections_endpoint:=" + det, "sync_endpoints:=[" + frames + "]",
-                           "output:=" + run_dir + "/results.json", "lockstep:=true", "ack_endpoint:=" + ack,
-                           "resume:=false", "finalize_grace_ms:=30000", "stats_log_period_s:=1000"},
-                          true));
-  std::vector<std::string> inj = {"input_endpoints:=[" + player + "]", "output_endpoint:=" + frames,
-                                  "input_hwm:=256", "output_hwm:=256", "decode:=true", "wait_subscribers:=2",
-                                  "wait_timeout_ms:=60000", "seed:=" + std::to_string(seed),
+  children.push_back(
+      node("detection_sink",
+           {"detections_endpoint:=" + det, "sync_endpoints:=[" + frames + "]",
+            "output:=" + run_dir + "/results.json", "lockstep:=true", "ack_endpoint:=" + ack,
+            "resume:=false", "finalize_grace_ms:=30000", "stats_log_period_s:=1000"},
+           true));
+  std::vector<std::string> inj = {"input_endpoints:=[" + player + "]",
+                                  "output_endpoint:=" + frames,
+                                  "input_hwm:=256",
+                                  "output_hwm:=256",
+                                  "decode:=true",
+                                  "wait_subscribers:=2",
+                                  "wait_timeout_ms:=60000",
+                                  "seed:=" + std::to_string(seed),
                                   "stats_log_period_s:=1000"};
-  if (!corruption.empty()) inj.push_back("corruption:=" + injector_corruption_name(corruption) + "/" + level);
+  if (!corruption.empty())
+    inj.push_back("corruption:=" + injector_corruption_name(corruption) + "/" + level);
   children.push_back(node("fault_injector", inj, false));
   if (o.detector_cmd.empty()) {
     std::vector<std::string> dp = {"input_endpoints:=[" + frames + "]", "sink_endpoint:=" + det,
                                    "input_hwm:=256"};
     for (const auto& p : o.detector_params) dp.push_back(p);
+    for (const auto& p : variant_params) dp.push_back(p);  // later -p overrides earlier ones
     children.push_back(node("detector", dp, false));
   } else {
     launch::ChildSpec c;
@@ -86,9 +98,16 @@ std::vector<launch::ChildSpec> run_children(const BenchmarkOptions& o, const std
     c.argv = {"/bin/sh", "-c", o.detector_cmd};
     children.push_back(c);
   }
-  std::vector<std::string> pp = {"dataroot:=" + o.dataroot, "version:=" + o.version, "endpoint:=" + player,
-                                 "rate:=0", "hwm:=256", "lockstep:=true", "ack_endpoint:=" + ack,
-                                 "wait_subscribers:=1", "wait_timeout_ms:=60000", "stats_log_period_s:=1000"};
+  std::vector<std::string> pp = {"dataroot:=" + o.dataroot,
+                                 "version:=" + o.version,
+                                 "endpoint:=" + player,
+                                 "rate:=0",
+                                 "hwm:=256",
+                                 "lockstep:=true",
+                                 "ack_endpoint:=" + ack,
+                                 "wait_subscribers:=1",
+                                 "wait_timeout_ms:=60000",
+                                 "stats_log_period_s:=1000"};
   if (!o.scenes.empty()) {
     std::string list = "scenes:=[";
     for (std::size_t i = 0; i < o.scenes.size(); ++i) list += (i ? "," : "") + o.scenes[i];
@@ -98,12 +117,21 @@ std::vector<launch::ChildSpec> run_children(const BenchmarkOptions& o, const std
   return children;
 }
 
-ConditionResult run_condition(const BenchmarkOptions& o, const std::string& corruption, const std::string& level,
-                              int seed, const std::atomic<bool>& stop, std::FILE* log) {
+// A detector configuration beyond the configured one: a name and its -p overrides.
+struct Variant {
+  std::string name, tag;
+  std::vector<std::string> params;
+};
+
+ConditionResult run_condition(const BenchmarkOptions& o, const std::string& corruption,
+                              const std::string& level, int seed, const std::atomic<bool>& stop,
+                              std::FILE* log, const Variant* variant = nullptr) {
   ConditionResult r;
   r.condition = corruption.empty() ? "clean" : corruption + "/" + level;
   r.seed = seed;
+  if (variant) r.variant = variant->name;
   std::string run_name = corruption.empty() ? "clean" : corruption + "_" + level;
+  if (variant) run_name = "variant_" + variant->tag + "_" + run_name;
   if (o.seeds > 1 && !corruption.empty()) run_name += "_s" + std::to_string(seed);
   const fs::path run_dir = fs::path(o.out_dir) / "runs" / run_name;
   fs::remove_all(run_dir);
@@ -128,7 +156,9 @@ ConditionResult run_condition(const BenchmarkOptions& o, const std::string& corr
   std::atomic<bool> run_stop{false};
   const auto t0 = std::chrono::steady_clock::now();
   so.on_exit = [](const launch::ChildOutcome&) {};
-  launch::Supervisor sup(run_children(o, sock, run_dir.string(), corruption, level, seed), so);
+  launch::Supervisor sup(run_children(o, sock, run_dir.string(), corruption, level, seed,
+                                      variant ? variant->params : std::vector<std::string>{}),
+                         so);
   // Stop the run on the user's request or when it exceeds its time budget.
   std::atomic<bool> done{false};
   std::thread watchdog([&] {
@@ -149,10 +179,12 @@ ConditionResult run_condition(const BenchmarkOptions& o, const std::string& corr
   node_log.flush();
   for (const auto& c : lr.children) {
     if (c.name == "detection_sink" && (c.failed() || !c.exited)) {
-      r.error = "detection_sink failed (exit " + std::to_string(c.exit_code) + "); see " + (run_dir / "nodes.log").string();
+      r.error = "detection_sink failed (exit " + std::to_string(c.exit_code) + "); see " +
+                (run_dir / "nodes.log").string();
     }
   }
-  if (run_stop.load()) r.error = stop.load() ? "stopped" : "timed out after " + std::to_string(o.run_timeout_s) + " s";
+  if (run_stop.load())
+    r.error = stop.load() ? "stopped" : "timed out after " + std::to_string(o.run_timeout_s) + " s";
   if (!r.error.empty()) return r;
 
   scoring::EvalOptions eo;
@@ -173,6 +205,11 @@ ConditionResult run_condition(const BenchmarkOptions& o, const std::string& corr
     return r;
   }
   r.ok = true;
+  if (outcome->meta && outcome->meta->IsObject() &&
+      outcome->meta->HasMember("faultline_detector_ms_per_sample") &&
+      (*outcome->meta)["faultline_detector_ms_per_sample"].IsNumber()) {
+    r.detector_ms_per_sample = (*outcome->meta)["faultline_detector_ms_per_sample"].GetDouble();
+  }
   r.nds = outcome->metrics.nd_score;
   r.map = outcome->metrics.mean_ap;
   for (std::size_t i = 0; i < 5; ++i) r.tp_errors[i] = outcome->metrics.tp_errors[i];
@@ -182,13 +219,15 @@ ConditionResult run_condition(const BenchmarkOptions& o, const std::string& corr
 
 std::string summary_json(const BenchmarkOptions& o, const BenchmarkResult& b) {
   std::ostringstream js;
-  js << "{\n  \"dataroot\": \"" << o.dataroot << "\",\n  \"version\": \"" << o.version << "\",\n  \"eval_set\": \""
-     << o.eval_set << "\",\n  \"detector\": \"" << (o.detector_cmd.empty() ? "faultline detector" : o.detector_cmd)
+  js << "{\n  \"dataroot\": \"" << o.dataroot << "\",\n  \"version\": \"" << o.version
+     << "\",\n  \"eval_set\": \"" << o.eval_set << "\",\n  \"detector\": \""
+     << (o.detector_cmd.empty() ? "faultline detector" : o.detector_cmd)
      << "\",\n  \"conditions\": {";
   // Mean over seeds per condition.
   std::map<std::string, std::vector<const ConditionResult*>> by;
   std::vector<std::string> order;
   for (const auto& r : b.runs) {
+    if (!r.variant.empty()) continue;
     if (!by.count(r.condition)) order.push_back(r.condition);
     by[r.condition].push_back(&r);
   }
@@ -215,14 +254,30 @@ std::string summary_json(const BenchmarkOptions& o, const BenchmarkResult& b) {
     const double mean = nds / n;
     js << "\"NDS\": " << json_number(mean) << ", \"mAP\": " << json_number(map / n);
     for (int i = 0; i < 5; ++i) js << ", \"" << kTp[i] << "\": " << json_number(tp[i] / n);
-    js << ", \"runs\": " << n << ", \"NDS_std\": " << json_number(n > 1 ? std::sqrt(std::max(0.0, nds2 / n - mean * mean)) : 0.0)
-       << "}";
+    js << ", \"runs\": " << n << ", \"NDS_std\": "
+       << json_number(n > 1 ? std::sqrt(std::max(0.0, nds2 / n - mean * mean)) : 0.0) << "}";
   }
   js << "\n  }";
   if (b.robustness_ok) {
-    js << ",\n  \"mCE\": " << json_number(100 * b.robustness.mce) << ",\n  \"mRR\": " << json_number(100 * b.robustness.mrr)
-       << ",\n  \"baseline\": \"" << b.robustness.baseline << "\"";
+    js << ",\n  \"mCE\": " << json_number(100 * b.robustness.mce)
+       << ",\n  \"mRR\": " << json_number(100 * b.robustness.mrr) << ",\n  \"baseline\": \""
+       << b.robustness.baseline << "\"";
   }
+  js << ",\n  \"detector_configurations\": [";
+  bool first_variant = true;
+  for (const auto& r : b.runs) {
+    if (r.variant.empty() && !(r.condition == "clean" || r.condition.rfind("frame_lost/", 0) == 0 ||
+                               r.condition.rfind("camera_crash/", 0) == 0)) {
+      continue;
+    }
+    js << (first_variant ? "" : ",") << "\n    {\"configuration\": \""
+       << (r.variant.empty() ? std::string("configured") : r.variant) << "\", \"condition\": \""
+       << r.condition << "\", \"NDS\": " << (r.ok ? json_number(r.nds) : "null")
+       << ", \"detector_ms_per_sample\": "
+       << (r.detector_ms_per_sample > 0 ? json_number(r.detector_ms_per_sample) : "null") << "}";
+    first_variant = false;
+  }
+  js << "\n  ]";
   js << ",\n  \"report\": \"" << b.report_path << "\"\n}\n";
   return js.str();
 }
@@ -236,11 +291,13 @@ std::string injector_corruption_name(const std::string& robobev_name) {
   return c;
 }
 
-Result<BenchmarkResult> run_benchmark(const BenchmarkOptions& o, const std::atomic<bool>& stop, std::FILE* log) {
+Result<BenchmarkResult> run_benchmark(const BenchmarkOptions& o, const std::atomic<bool>& stop,
+                                      std::FILE* log) {
   for (const char* node : {"nusc_player", "fault_injector", "detection_sink", "detector"}) {
     if (!o.detector_cmd.empty() && std::string(node) == "detector") continue;
     if (access((fs::path(o.bin_dir) / node).c_str(), X_OK) != 0) {
-      return Status(StatusCode::kNotFound, (fs::path(o.bin_dir) / node).string() + ": node executable not found");
+      return Status(StatusCode::kNotFound,
+                    (fs::path(o.bin_dir) / node).string() + ": node executable not found");
     }
   }
   std::error_code ec;
@@ -261,26 +318,71 @@ Result<BenchmarkResult> run_benchmark(const BenchmarkOptions& o, const std::atom
   for (std::size_t i = 0; i < plan.size() && !stop.load(); ++i) {
     const auto& p = plan[i];
     ConditionResult r = run_condition(o, p.corruption, p.level, p.seed, stop, log);
-    const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    const double eta = elapsed / static_cast<double>(i + 1) * static_cast<double>(plan.size() - i - 1);
+    const double elapsed =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    const double eta =
+        elapsed / static_cast<double>(i + 1) * static_cast<double>(plan.size() - i - 1);
     if (r.ok) {
-      std::fprintf(log, "[%zu/%zu] %-22s seed %d  NDS %.4f  mAP %.4f  (%.1f s; ETA %.0f s)\n", i + 1, plan.size(),
-                   r.condition.c_str(), r.seed, r.nds, r.map, r.wall_s, eta);
+      std::fprintf(log, "[%zu/%zu] %-22s seed %d  NDS %.4f  mAP %.4f  (%.1f s; ETA %.0f s)\n",
+                   i + 1, plan.size(), r.condition.c_str(), r.seed, r.nds, r.map, r.wall_s, eta);
     } else {
-      std::fprintf(log, "[%zu/%zu] %-22s seed %d  FAILED: %s\n", i + 1, plan.size(), r.condition.c_str(), r.seed,
-                   r.error.c_str());
+      std::fprintf(log, "[%zu/%zu] %-22s seed %d  FAILED: %s\n", i + 1, plan.size(),
+                   r.condition.c_str(), r.seed, r.error.c_str());
     }
     std::fflush(log);
     b.runs.push_back(std::move(r));
-    write_text((fs::path(o.out_dir) / "summary.json").string(), summary_json(o, b));  // partial results survive
+    write_text((fs::path(o.out_dir) / "summary.json").string(),
+               summary_json(o, b));  // partial results survive
   }
 
-  // Robustness: severity-averaged NDS per corruption (seeds averaged), against the baseline's same levels.
+  // Detector configurations (Faultline's detector only): input scales on clean, and single-frame
+  // against the configured (temporal) detector on the temporal faults.
+  if (o.variants && o.detector_cmd.empty() && !stop.load()) {
+    const std::string lvl = o.levels.empty() ? "mid" : o.levels.front();
+    std::vector<std::pair<Variant, std::vector<std::string>>> extra = {
+        {{"temporal, scale 0.5", "scale050", {"scale:=0.5"}}, {""}},
+        {{"temporal, scale 0.25", "scale025", {"scale:=0.25"}}, {""}},
+        {{"single-frame, scale 1", "single", {"temporal:=false"}},
+         {"", "frame_lost", "camera_crash"}},
+    };
+    // The configured detector's own frame_lost / camera_crash runs, if the matrix did not include
+    // them.
+    std::vector<std::string> missing;
+    for (const char* c : {"frame_lost", "camera_crash"}) {
+      bool have = false;
+      for (const auto& r : b.runs)
+        have |= r.variant.empty() && r.condition == std::string(c) + "/" + lvl;
+      if (!have) missing.push_back(c);
+    }
+    std::vector<std::pair<const Variant*, std::string>> todo;
+    Variant configured{"", "", {}};
+    for (const auto& c : missing) todo.push_back({nullptr, c});
+    for (const auto& [v, conds] : extra)
+      for (const auto& c : conds) todo.push_back({&v, c});
+    for (std::size_t i = 0; i < todo.size() && !stop.load(); ++i) {
+      const auto& [v, c] = todo[i];
+      ConditionResult r = run_condition(o, c, c.empty() ? "" : lvl, 1, stop, log, v);
+      std::fprintf(
+          log, "[config %zu/%zu] %-24s %-18s %s\n", i + 1, todo.size(),
+          v ? v->name.c_str() : "configured", r.condition.c_str(),
+          r.ok ? ("NDS " + json_number(r.nds) +
+                  (r.detector_ms_per_sample > 0
+                       ? ", " + json_number(1000.0 / r.detector_ms_per_sample) + " samples/s"
+                       : std::string()))
+                     .c_str()
+               : ("FAILED: " + r.error).c_str());
+      std::fflush(log);
+      b.runs.push_back(std::move(r));
+    }
+  }
+
+  // Robustness: severity-averaged NDS per corruption (seeds averaged), against the baseline's same
+  // levels.
   scoring::DetectorScores model;
   model.name = o.detector_cmd.empty() ? "faultline detector" : o.detector_cmd;
   bool have_clean = false;
   for (const auto& r : b.runs) {
-    if (r.condition == "clean" && r.ok) {
+    if (r.condition == "clean" && r.ok && r.variant.empty()) {
       model.clean_nds = r.nds;
       have_clean = true;
     }
@@ -295,7 +397,7 @@ Result<BenchmarkResult> run_benchmark(const BenchmarkOptions& o, const std::atom
       double sum = 0;
       int n = 0;
       for (const auto& r : b.runs) {
-        if (r.ok && r.condition == c + "/" + l) {
+        if (r.ok && r.variant.empty() && r.condition == c + "/" + l) {
           sum += r.nds;
           ++n;
         }
@@ -326,16 +428,36 @@ Result<BenchmarkResult> run_benchmark(const BenchmarkOptions& o, const std::atom
   if (have_clean && !model.corruptions.empty()) {
     auto rs = scoring::compute_robustness(model, baseline);
     if (rs) {
+      rs->level_names = o.levels;
       b.robustness = *rs;
       b.robustness_ok = true;
-      write_text((fs::path(o.out_dir) / "robustness.md").string(), scoring::robustness_markdown(*rs));
+      write_text((fs::path(o.out_dir) / "robustness.md").string(),
+                 scoring::robustness_markdown(*rs));
       write_text((fs::path(o.out_dir) / "robustness.csv").string(), scoring::robustness_csv(*rs));
       write_text((fs::path(o.out_dir) / "robustness.json").string(), scoring::robustness_json(*rs));
       report::ReportData data;
       data.title = "Faultline benchmark: " + model.name;
       data.detectors.push_back(*rs);
       if (!o.corrupt_bench.empty() && fs::exists(o.corrupt_bench)) {
-        if (auto pts = report::parse_corrupt_bench(read_text(o.corrupt_bench), o.corrupt_bench)) data.corrupt_bench = *pts;
+        if (auto pts = report::parse_corrupt_bench(read_text(o.corrupt_bench), o.corrupt_bench))
+          data.corrupt_bench = *pts;
+      }
+      for (const auto& r : b.runs) {
+        const bool temporal_fault = r.condition == "clean" ||
+                                    r.condition.rfind("frame_lost/", 0) == 0 ||
+                                    r.condition.rfind("camera_crash/", 0) == 0;
+        if (!r.ok || (r.variant.empty() && !temporal_fault) || r.seed != 1) continue;
+        report::DetectorVariantRun v;
+        std::string configured = "temporal, scale 1 (default)";
+        if (!o.detector_params.empty()) {
+          configured = "configured:";
+          for (const auto& p : o.detector_params) configured += " " + p;
+        }
+        v.variant = r.variant.empty() ? configured : r.variant;
+        v.condition = r.condition;
+        v.nds = r.nds;
+        v.fps = r.detector_ms_per_sample > 0 ? 1000.0 / r.detector_ms_per_sample : -1.0;
+        data.variants.push_back(v);
       }
       b.report_path = (fs::path(o.out_dir) / "report.html").string();
       write_text(b.report_path, report::render_html(data));

@@ -30,9 +30,13 @@ struct BenchmarkOptions {
   std::string bin_dir;                      // where the node executables are
   std::string corrupt_bench;                // bench/results/corrupt.json for the report, if present
   int run_timeout_s = 600;                  // a run that takes longer is stopped and marked failed
+  // Faultline's detector only: also run it at input scales 0.5 and 0.25 (clean) and single-frame (clean,
+  // frame_lost, camera_crash), for the report's NDS-vs-fps and temporal-vs-single-frame views.
+  bool variants = true;
 };
 
 struct ConditionResult {
+  std::string variant;    // "" = the configured detector; else e.g. "single-frame, scale 1"
   std::string condition;  // "clean", "fog/mid"
   int seed = 0;
   bool ok = false;
@@ -40,7 +44,7 @@ struct ConditionResult {
   double nds = 0, map = 0;
   std::array<double, 5> tp_errors{};  // mATE, mASE, mAOE, mAVE, mAAE
   double wall_s = 0;
-  double detector_ms_per_sample = -1;
+  double detector_ms_per_sample = -1;  // detector compute per sample (from the sink's results meta)
 };
 
 struct BenchmarkResult {

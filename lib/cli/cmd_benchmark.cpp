@@ -52,6 +52,10 @@ int run(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--corrupt-bench", o.corrupt_bench, "corruption engine figures for the report")
       ->capture_default_str();
+  bool no_variants = false;
+  app.add_flag("--no-variants", no_variants,
+               "skip the detector-configuration runs (input scales 0.5/0.25, single-frame on clean, frame_lost, "
+               "camera_crash) that feed the report's fps and temporal views");
   app.add_option("--run-timeout", o.run_timeout_s, "seconds before one run is stopped as failed")->capture_default_str();
   o.corrupt_bench = "bench/results/corrupt.json";
   try {
@@ -59,6 +63,7 @@ int run(int argc, char** argv) {
   } catch (const CLI::ParseError& e) {
     return app.exit(e);
   }
+  o.variants = !no_variants;
   auto split = [](const std::string& s) {
     std::vector<std::string> out;
     std::string cur;

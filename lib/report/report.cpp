@@ -28,7 +28,8 @@ std::string svg_open(int w, int h) {
 }
 
 // Y axis with gridlines and labels.
-std::string y_axis(const svg::Axis& ay, double step, double x0, double x1, const std::string& label) {
+std::string y_axis(const svg::Axis& ay, double step, double x0, double x1,
+                   const std::string& label) {
   std::string s;
   for (double v = ay.lo; v <= ay.hi + step * 1e-6; v += step) {
     const double y = ay.map(v);
@@ -43,7 +44,8 @@ std::string y_axis(const svg::Axis& ay, double step, double x0, double x1, const
 std::string bars_by_level(const RobustnessSummary& d) {
   const int w = 1100, h = 340, left = 60, right = 20, top = 40, bottom = 60;
   std::string s = svg_open(w, h);
-  s += svg::text(w / 2.0, 22, "NDS per corruption and severity: " + d.detector, "middle", 15, "font-weight=\"bold\"");
+  s += svg::text(w / 2.0, 22, "NDS per corruption and severity: " + d.detector, "middle", 15,
+                 "font-weight=\"bold\"");
   double lo = 0, hi = d.clean_nds;
   for (const auto& c : d.corruptions) {
     for (double v : c.nds_by_level) hi = std::max(hi, v);
@@ -62,20 +64,25 @@ std::string bars_by_level(const RobustnessSummary& d) {
     for (std::size_t l = 0; l < c.nds_by_level.size(); ++l) {
       const double v = c.nds_by_level[l];
       const double y = ay.map(v);
-      const std::string lvl = l < scoring::kSeverityLevels.size() ? scoring::kSeverityLevels[l] : std::to_string(l + 1);
-      s += svg::rect(x0 + bw * static_cast<double>(l), y, bw - 2, ay.map(lo) - y, level_colours[std::min<std::size_t>(l, 4)],
+      const std::string lvl = scoring::level_name(d, l);
+      s += svg::rect(x0 + bw * static_cast<double>(l), y, bw - 2, ay.map(lo) - y,
+                     level_colours[std::min<std::size_t>(l, 4)],
                      c.name + " " + lvl + ": NDS " + fmt("%.4f", v));
     }
     s += svg::text(x0 + group * 0.35, h - bottom + 18, c.name, "middle", 11);
-    s += svg::text(x0 + group * 0.35, h - bottom + 34, "RR " + fmt("%.1f%%", 100 * c.rr), "middle", 10,
-                   "fill=\"#555\"");
+    s += svg::text(x0 + group * 0.35, h - bottom + 34, "RR " + fmt("%.1f%%", 100 * c.rr), "middle",
+                   10, "fill=\"#555\"");
   }
   const double yc = ay.map(d.clean_nds);
   s += svg::line(left, yc, w - right, yc, "#d62728", 2, "6 4");
-  s += svg::text(w - right - 4, yc - 6, "clean " + fmt("%.4f", d.clean_nds), "end", 11, "fill=\"#d62728\"");
-  for (std::size_t l = 0; l < 3; ++l) {
+  s += svg::text(w - right - 4, yc - 6, "clean " + fmt("%.4f", d.clean_nds), "end", 11,
+                 "fill=\"#d62728\"");
+  std::size_t levels = 0;
+  for (const auto& c : d.corruptions) levels = std::max(levels, c.nds_by_level.size());
+  for (std::size_t l = 0; l < std::min<std::size_t>(levels, 5); ++l) {
     s += svg::rect(left + 10 + 90.0 * static_cast<double>(l), h - 18, 12, 12, level_colours[l]);
-    s += svg::text(left + 28 + 90.0 * static_cast<double>(l), h - 8, scoring::kSeverityLevels[l], "start", 11);
+    s += svg::text(left + 28 + 90.0 * static_cast<double>(l), h - 8, scoring::level_name(d, l),
+                   "start", 11);
   }
   return s + "</svg>";
 }
@@ -84,14 +91,16 @@ std::string radar(const std::vector<RobustnessSummary>& ds) {
   const int w = 620, h = 560;
   const double cx = 300, cy = 290, r = 200;
   std::string s = svg_open(w, h);
-  s += svg::text(w / 2.0, 24, "NDS by corruption (mean over severities)", "middle", 15, "font-weight=\"bold\"");
+  s += svg::text(w / 2.0, 24, "NDS by corruption (mean over severities)", "middle", 15,
+                 "font-weight=\"bold\"");
   std::vector<std::string> axes;
   for (const auto& d : ds) {
     for (const auto& c : d.corruptions) {
       if (std::find(axes.begin(), axes.end(), c.name) == axes.end()) axes.push_back(c.name);
     }
   }
-  if (axes.size() < 3) return s + svg::text(cx, cy, "radar needs at least 3 corruptions", "middle", 13) + "</svg>";
+  if (axes.size() < 3)
+    return s + svg::text(cx, cy, "radar needs at least 3 corruptions", "middle", 13) + "</svg>";
   double top = 0;
   for (const auto& d : ds) top = std::max(top, d.clean_nds);
   double lo = 0;
@@ -125,10 +134,11 @@ std::string radar(const std::vector<RobustnessSummary>& ds) {
       }
       auto [x, y] = pt(i, v / top);
       poly += svg::num(x) + "," + svg::num(y) + " ";
-      s += svg::circle(x, y, 3.5, svg::colour(k), ds[k].detector + " " + axes[i] + ": " + fmt("%.4f", v));
+      s += svg::circle(x, y, 3.5, svg::colour(k),
+                       ds[k].detector + " " + axes[i] + ": " + fmt("%.4f", v));
     }
-    s += "<polygon points=\"" + poly + "\" fill=\"" + svg::colour(k) + "\" fill-opacity=\"0.18\" stroke=\"" +
-         svg::colour(k) + "\" stroke-width=\"2\"/>";
+    s += "<polygon points=\"" + poly + "\" fill=\"" + svg::colour(k) +
+         "\" fill-opacity=\"0.18\" stroke=\"" + svg::colour(k) + "\" stroke-width=\"2\"/>";
     s += svg::rect(20, h - 24.0 - 18.0 * static_cast<double>(k), 12, 12, svg::colour(k));
     s += svg::text(38, h - 14.0 - 18.0 * static_cast<double>(k), ds[k].detector, "start", 12);
   }
@@ -166,7 +176,8 @@ std::string scatter(const std::string& title, const std::string& xlabel, const s
   for (double v = xlo; v <= xhi + xstep * 1e-6; v += xstep) {
     const double x = ax.map(v);
     s += svg::line(x, top, x, h - bottom, "#eeeeee");
-    const std::string lab = log_x ? fmt("%.3g", std::pow(10.0, v)) : fmt(xstep < 1 ? "%.2f" : "%.0f", v);
+    const std::string lab =
+        log_x ? fmt("%.3g", std::pow(10.0, v)) : fmt(xstep < 1 ? "%.2f" : "%.0f", v);
     s += svg::text(x, h - bottom + 16, lab, "middle", 11);
   }
   s += svg::text((left + w - right) / 2.0, h - 14, xlabel + (log_x ? " (log)" : ""), "middle", 12);
@@ -179,12 +190,14 @@ std::string scatter(const std::string& title, const std::string& xlabel, const s
 }
 
 std::string summary_table(const std::vector<RobustnessSummary>& ds) {
-  std::string t = "<table><tr><th>detector</th><th>baseline</th><th>clean NDS</th><th>mCE %</th><th>mRR %</th>"
-                  "<th>latency ms</th></tr>";
+  std::string t =
+      "<table><tr><th>detector</th><th>baseline</th><th>clean NDS</th><th>mCE %</th><th>mRR %</th>"
+      "<th>latency ms</th></tr>";
   for (const auto& d : ds) {
     t += "<tr><td>" + svg::esc(d.detector) + "</td><td>" + svg::esc(d.baseline) + "</td><td>" +
-         fmt("%.4f", d.clean_nds) + "</td><td>" + (std::isfinite(d.mce) ? fmt("%.2f", 100 * d.mce) : "n/a") +
-         "</td><td>" + fmt("%.2f", 100 * d.mrr) + "</td><td>" +
+         fmt("%.4f", d.clean_nds) + "</td><td>" +
+         (std::isfinite(d.mce) ? fmt("%.2f", 100 * d.mce) : "n/a") + "</td><td>" +
+         fmt("%.2f", 100 * d.mrr) + "</td><td>" +
          (d.latency_ms > 0 ? fmt("%.1f", d.latency_ms) : "&ndash;") + "</td></tr>";
   }
   return t + "</table>";
@@ -192,12 +205,60 @@ std::string summary_table(const std::vector<RobustnessSummary>& ds) {
 
 }  // namespace
 
+namespace {
+
+// Grouped bars: one group per condition, one bar per detector configuration.
+std::string variant_bars(const std::vector<DetectorVariantRun>& runs,
+                         const std::vector<std::string>& names,
+                         const std::vector<std::string>& conditions) {
+  const int w = 640, h = 320, left = 56, right = 180, top = 40, bottom = 48;
+  std::string s = svg_open(w, h);
+  s += svg::text((w - right) / 2.0, 22, "Temporal vs single-frame: NDS by condition", "middle", 14,
+                 "font-weight=\"bold\"");
+  const double plot_w = w - left - right, plot_h = h - top - bottom;
+  double vmax = 0.05;
+  for (const auto& r : runs) vmax = std::max(vmax, r.nds);
+  vmax = std::ceil(vmax * 10) / 10;
+  s += svg::line(left, top + plot_h, left + plot_w, top + plot_h, "#333");
+  s += svg::line(left, top, left, top + plot_h, "#333");
+  for (int t = 0; t <= 4; ++t) {
+    const double v = vmax * t / 4, y = top + plot_h - plot_h * v / vmax;
+    s += svg::line(left - 3, y, left + plot_w, y, "#ddd");
+    s += svg::text(left - 6, y + 4, fmt("%.2f", v), "end", 11);
+  }
+  const double group = plot_w / static_cast<double>(std::max<std::size_t>(conditions.size(), 1));
+  const double bw = group * 0.8 / static_cast<double>(std::max<std::size_t>(names.size(), 1));
+  for (std::size_t c = 0; c < conditions.size(); ++c) {
+    for (std::size_t n = 0; n < names.size(); ++n) {
+      for (const auto& r : runs) {
+        if (r.variant != names[n] || r.condition != conditions[c]) continue;
+        const double bh = plot_h * r.nds / vmax;
+        s += svg::rect(
+            left + group * static_cast<double>(c) + group * 0.1 + bw * static_cast<double>(n),
+            top + plot_h - bh, bw * 0.92, bh, svg::colour(n),
+            names[n] + " / " + conditions[c] + ": NDS " + fmt("%.4f", r.nds));
+      }
+    }
+    s += svg::text(left + group * (static_cast<double>(c) + 0.5), top + plot_h + 18, conditions[c],
+                   "middle", 11);
+  }
+  for (std::size_t n = 0; n < names.size(); ++n) {
+    const double y = top + 12 + 18 * static_cast<double>(n);
+    s += svg::rect(w - right + 12, y - 9, 10, 10, svg::colour(n));
+    s += svg::text(w - right + 28, y, names[n], "start", 11);
+  }
+  return s + "</svg>\n";
+}
+
+}  // namespace
+
 std::string render_html(const ReportData& data) {
-  std::string h = "<!DOCTYPE html>\n<html><head><meta charset=\"utf-8\"><title>" + svg::esc(data.title) +
-                  "</title><style>body{font-family:sans-serif;margin:24px;background:#fff;color:#222}"
-                  "table{border-collapse:collapse;margin:12px 0}td,th{border:1px solid #ccc;padding:4px 10px;"
-                  "text-align:right}th{background:#f0f0f0}.row{display:flex;flex-wrap:wrap;gap:16px}"
-                  ".note{color:#666;font-size:13px}</style></head><body>\n";
+  std::string h =
+      "<!DOCTYPE html>\n<html><head><meta charset=\"utf-8\"><title>" + svg::esc(data.title) +
+      "</title><style>body{font-family:sans-serif;margin:24px;background:#fff;color:#222}"
+      "table{border-collapse:collapse;margin:12px 0}td,th{border:1px solid #ccc;padding:4px 10px;"
+      "text-align:right}th{background:#f0f0f0}.row{display:flex;flex-wrap:wrap;gap:16px}"
+      ".note{color:#666;font-size:13px}</style></head><body>\n";
   h += "<h1>" + svg::esc(data.title) + "</h1>\n";
   if (data.detectors.empty()) h += "<p class=\"note\">No robustness results were given.</p>\n";
   if (!data.detectors.empty()) {
@@ -217,7 +278,8 @@ std::string render_html(const ReportData& data) {
     if (!mce.empty()) h += scatter("Clean NDS vs mCE", "mCE %", "clean NDS", mce);
     h += scatter("Clean NDS vs mRR", "mRR %", "clean NDS", mrr) + "</div>\n";
   } else if (!data.detectors.empty()) {
-    h += "<p class=\"note\">NDS vs mCE / mRR scatter plots appear when several detectors are scored.</p>\n";
+    h += "<p class=\"note\">NDS vs mCE / mRR scatter plots appear when several detectors are "
+         "scored.</p>\n";
   }
   std::vector<Point> speed;
   for (std::size_t i = 0; i < data.detectors.size(); ++i) {
@@ -230,56 +292,115 @@ std::string render_html(const ReportData& data) {
     if (p.psnr_db < 0 || !std::isfinite(p.psnr_db)) continue;
     auto it = std::find(types.begin(), types.end(), p.type);
     if (it == types.end()) types.push_back(p.type);
-    const auto ci = static_cast<std::size_t>(std::find(types.begin(), types.end(), p.type) - types.begin());
-    engine.push_back({p.ms, p.psnr_db, p.type + "/" + std::to_string(p.level) + (p.mode.empty() ? "" : " " + p.mode), ci});
+    const auto ci =
+        static_cast<std::size_t>(std::find(types.begin(), types.end(), p.type) - types.begin());
+    engine.push_back({p.ms, p.psnr_db,
+                      p.type + "/" + std::to_string(p.level) + (p.mode.empty() ? "" : " " + p.mode),
+                      ci});
   }
-  if (!speed.empty() || !engine.empty() || !data.corrupt_bench.empty()) {
+  // Detector configurations: NDS against fps on the clean condition (input scales), and temporal vs
+  // single-frame NDS per condition.
+  std::vector<Point> scales;
+  std::vector<std::string> variant_names, variant_conditions;
+  for (const auto& v : data.variants) {
+    if (std::find(variant_names.begin(), variant_names.end(), v.variant) == variant_names.end()) {
+      variant_names.push_back(v.variant);
+    }
+    if (std::find(variant_conditions.begin(), variant_conditions.end(), v.condition) ==
+        variant_conditions.end()) {
+      variant_conditions.push_back(v.condition);
+    }
+  }
+  for (const auto& v : data.variants) {
+    if (v.condition != "clean" || v.fps <= 0) continue;
+    const auto ci = static_cast<std::size_t>(
+        std::find(variant_names.begin(), variant_names.end(), v.variant) - variant_names.begin());
+    scales.push_back(
+        {v.fps, v.nds,
+         v.variant + ": " + fmt("%.1f", v.fps) + " samples/s, NDS " + fmt("%.3f", v.nds), ci});
+  }
+  if (!speed.empty() || !engine.empty() || !data.corrupt_bench.empty() || !scales.empty()) {
     h += "<h2>Speed vs accuracy</h2>\n<div class=\"row\">";
-    if (!speed.empty()) h += scatter("Detector latency vs clean NDS", "latency ms", "clean NDS", speed, true);
+    if (!speed.empty())
+      h += scatter("Detector latency vs clean NDS", "latency ms", "clean NDS", speed, true);
+    if (!scales.empty())
+      h += scatter("Detector fps vs clean NDS (input scales)", "samples/s", "clean NDS", scales);
     if (!engine.empty()) {
       h += scatter("Corruption engine: time vs fidelity", "ms per frame", "PSNR dB", engine, true);
     }
     h += "</div>\n";
     if (engine.empty() && !data.corrupt_bench.empty()) {
-      h += "<p class=\"note\">The corruption benchmark has no psnr_db values; its timings are listed below.</p>\n";
+      h += "<p class=\"note\">The corruption benchmark has no psnr_db values; its timings are "
+           "listed below.</p>\n";
     }
     if (!data.corrupt_bench.empty()) {
-      h += "<table><tr><th>type</th><th>level</th><th>mode</th><th>ms</th><th>PSNR dB</th><th>max |diff|</th></tr>";
+      h += "<table><tr><th>type</th><th>level</th><th>mode</th><th>ms</th><th>PSNR dB</th><th>max "
+           "|diff|</th></tr>";
       for (const auto& p : data.corrupt_bench) {
-        h += "<tr><td>" + svg::esc(p.type) + "</td><td>" + std::to_string(p.level) + "</td><td>" + svg::esc(p.mode) +
-             "</td><td>" + fmt("%.3f", p.ms) + "</td><td>" + (p.psnr_db >= 0 ? fmt("%.2f", p.psnr_db) : "&ndash;") +
-             "</td><td>" + (p.max_abs_diff >= 0 ? fmt("%.4g", p.max_abs_diff) : "&ndash;") + "</td></tr>";
+        h += "<tr><td>" + svg::esc(p.type) + "</td><td>" + std::to_string(p.level) + "</td><td>" +
+             svg::esc(p.mode) + "</td><td>" + fmt("%.3f", p.ms) + "</td><td>" +
+             (p.psnr_db >= 0 ? fmt("%.2f", p.psnr_db) : "&ndash;") + "</td><td>" +
+             (p.max_abs_diff >= 0 ? fmt("%.4g", p.max_abs_diff) : "&ndash;") + "</td></tr>";
       }
       h += "</table>\n";
     }
   }
-  h += "<p class=\"note\">mCE: mean corruption error against the baseline (RoboBEV, arXiv 2304.06719); mRR: mean "
+  if (!data.variants.empty()) {
+    h += "<h2>Detector configurations</h2>\n<table><tr><th>configuration</th>";
+    for (const auto& c : variant_conditions) h += "<th>" + svg::esc(c) + " NDS</th>";
+    h += "<th>samples/s</th></tr>";
+    for (const auto& name : variant_names) {
+      h += "<tr><td>" + svg::esc(name) + "</td>";
+      double fps = -1;
+      for (const auto& c : variant_conditions) {
+        std::string cell = "&ndash;";
+        for (const auto& v : data.variants) {
+          if (v.variant == name && v.condition == c) {
+            cell = fmt("%.4f", v.nds);
+            if (v.fps > 0 && (c == "clean" || fps < 0)) fps = v.fps;
+          }
+        }
+        h += "<td>" + cell + "</td>";
+      }
+      h += "<td>" + (fps > 0 ? fmt("%.1f", fps) : std::string("&ndash;")) + "</td></tr>";
+    }
+    h += "</table>\n";
+    h += variant_bars(data.variants, variant_names, variant_conditions);
+  }
+  h += "<p class=\"note\">mCE: mean corruption error against the baseline (RoboBEV, arXiv "
+       "2304.06719); mRR: mean "
        "resilience rate against the detector's own clean NDS.</p>\n</body></html>\n";
   return h;
 }
 
-Result<std::vector<CorruptBenchPoint>> parse_corrupt_bench(const std::string& text, const std::string& name) {
+Result<std::vector<CorruptBenchPoint>> parse_corrupt_bench(const std::string& text,
+                                                           const std::string& name) {
   rapidjson::Document d;
   d.Parse<rapidjson::kParseNanAndInfFlag>(text.c_str(), text.size());
   if (d.HasParseError()) {
-    return Status(StatusCode::kCorruptData, name + ": malformed JSON at offset " + std::to_string(d.GetErrorOffset()) +
-                                                ": " + rapidjson::GetParseError_En(d.GetParseError()));
+    return Status(StatusCode::kCorruptData, name + ": malformed JSON at offset " +
+                                                std::to_string(d.GetErrorOffset()) + ": " +
+                                                rapidjson::GetParseError_En(d.GetParseError()));
   }
-  if (!d.IsArray()) return Status(StatusCode::kCorruptData, name + ": expected an array of benchmark records");
+  if (!d.IsArray())
+    return Status(StatusCode::kCorruptData, name + ": expected an array of benchmark records");
   std::vector<CorruptBenchPoint> out;
   for (rapidjson::SizeType i = 0; i < d.Size(); ++i) {
     const auto& r = d[i];
     const std::string where = name + "[" + std::to_string(i) + "]";
-    if (!r.IsObject() || !r.HasMember("type") || !r["type"].IsString() || !r.HasMember("ms") || !r["ms"].IsNumber()) {
+    if (!r.IsObject() || !r.HasMember("type") || !r["type"].IsString() || !r.HasMember("ms") ||
+        !r["ms"].IsNumber()) {
       return Status(StatusCode::kCorruptData, where + ": needs string 'type' and number 'ms'");
     }
     CorruptBenchPoint p;
     p.type = r["type"].GetString();
     p.ms = r["ms"].GetDouble();
-    if (r.HasMember("level") && r["level"].IsNumber()) p.level = static_cast<int>(r["level"].GetDouble());
+    if (r.HasMember("level") && r["level"].IsNumber())
+      p.level = static_cast<int>(r["level"].GetDouble());
     if (r.HasMember("mode") && r["mode"].IsString()) p.mode = r["mode"].GetString();
     if (r.HasMember("psnr_db") && r["psnr_db"].IsNumber()) p.psnr_db = r["psnr_db"].GetDouble();
-    if (r.HasMember("max_abs_diff") && r["max_abs_diff"].IsNumber()) p.max_abs_diff = r["max_abs_diff"].GetDouble();
+    if (r.HasMember("max_abs_diff") && r["max_abs_diff"].IsNumber())
+      p.max_abs_diff = r["max_abs_diff"].GetDouble();
     out.push_back(p);
   }
   return out;

@@ -22,10 +22,19 @@ struct CorruptBenchPoint {
   double max_abs_diff = -1.0;  // -1 = absent
 };
 
+// One live run of a detector configuration (input scale, temporal or single-frame) on one condition.
+struct DetectorVariantRun {
+  std::string variant;    // "temporal, scale 1", "single-frame, scale 1", ...
+  std::string condition;  // "clean", "frame_lost/mid"
+  double nds = 0.0;
+  double fps = -1.0;      // samples per second of detector compute; -1 = unknown
+};
+
 struct ReportData {
   std::string title = "Faultline robustness report";
   std::vector<scoring::RobustnessSummary> detectors;
   std::vector<CorruptBenchPoint> corrupt_bench;
+  std::vector<DetectorVariantRun> variants;
 };
 
 // Renders the whole page. Pure function: no I/O.

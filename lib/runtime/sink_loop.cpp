@@ -17,7 +17,8 @@ void SinkConfig::validate() const {
   };
   if (output.empty()) fail("output", "''", "expected a file path");
   if (detections_hwm < 1) fail("detections_hwm", std::to_string(detections_hwm), "expected >= 1");
-  if (finalize_grace_ms < 0) fail("finalize_grace_ms", std::to_string(finalize_grace_ms), "expected >= 0");
+  if (finalize_grace_ms < 0)
+    fail("finalize_grace_ms", std::to_string(finalize_grace_ms), "expected >= 0");
   if (stats_window_s <= 0) fail("stats_window_s", std::to_string(stats_window_s), "expected > 0");
 }
 
@@ -69,6 +70,9 @@ struct SinkLoop::Impl {
     }
   }
 
+  std::int64_t processing_ns_sum = 0;
+  std::uint64_t processing_n = 0;
+
   std::string meta_json() const {
     rapidjson::StringBuffer buf;
     rapidjson::Writer<rapidjson::StringBuffer> w(buf);
@@ -81,6 +85,11 @@ struct SinkLoop::Impl {
     w.String(store.detector().c_str());
     w.Key("faultline_sink");
     w.String(config::describe(cfg).c_str());
+    if (processing_n >
+        0) {  // the detector's own compute time per sample (DetectionArray.processing_ns)
+      w.Key("faultline_detector_ms_per_sample");
+      w.Double(static_cast<double>(processing_ns_sum) / 1e6 / static_cast<double>(processing_n));
+    }
     w.EndObject();
     return buf.GetString();
   }
@@ -88,8 +97,8 @@ struct SinkLoop::Impl {
   void finalize(const char* why) {
     const Status s = store.finalize(meta_json());
     if (s.is_ok()) {
-      log->info("results written to {} ({} samples, {} with detections; {})", cfg.output, store.sample_count(),
-                store.detection_count(), why);
+      log->info("results written to {} ({} samples, {} with detections; {})", cfg.output,
+                store.sample_count(), store.detection_count(), why);
     } else {
       log->error("cannot write results: {}", s.message());
     }
@@ -133,13 +142,19 @@ int SinkLoop::run(const std::atomic<bool>& stop) {
           if (!transport::parse_message(*r, &d).is_ok()) {
             ++counts_.malformed;
             m.stats.collector().add_malformed(topic, 1);
-            if (m.bad_limiter.allow()) m.log->warn("malformed DetectionArray dropped ({} so far)", counts_.malformed);
+            if (m.bad_limiter.allow())
+              m.log->warn("malformed DetectionArray dropped ({} so far)", counts_.malformed);
             continue;
           }
           sample.capture_stamp_ns = d.first_frame_capture_ns();
           sample.publish_mono_ns = d.header().publish_mono_ns();
           m.stats.collector().record(topic, d.header().publisher(), sample);
-          if (Status s = m.store.add_detections(d); !s.is_ok()) m.log->error("journal: {}", s.message());
+          if (d.processing_ns() > 0) {
+            m.processing_ns_sum += d.processing_ns();
+            ++m.processing_n;
+          }
+          if (Status s = m.store.add_detections(d); !s.is_ok())
+            m.log->error("journal: {}", s.message());
           ++counts_.detection_arrays;
           counts_.boxes += static_cast<std::uint64_t>(d.detections_size());
           m.log->debug("detections sample={} boxes={}", d.sample_token(), d.detections_size());
@@ -164,10 +179,12 @@ int SinkLoop::run(const std::atomic<bool>& stop) {
           sample.publish_mono_ns = b.header().publish_mono_ns();
           m.stats.collector().record(topic, b.header().publisher(), sample);
           ++counts_.boundaries;
-          if (Status s = m.store.add_sample(b.sample_token()); !s.is_ok()) m.log->error("journal: {}", s.message());
+          if (Status s = m.store.add_sample(b.sample_token()); !s.is_ok())
+            m.log->error("journal: {}", s.message());
           if (b.last_in_run() && !last_seen) {
             last_seen = true;
-            finalize_deadline = monotonic_now_ns() + static_cast<DurationNs>(m.cfg.finalize_grace_ms) * kNsPerMs;
+            finalize_deadline =
+                monotonic_now_ns() + static_cast<DurationNs>(m.cfg.finalize_grace_ms) * kNsPerMs;
           }
         }
       }
@@ -185,8 +202,9 @@ int SinkLoop::run(const std::atomic<bool>& stop) {
   }
   if (!complete) m.finalize(stop.load() ? "shutdown" : "end");
   m.stats.log_totals(monotonic_now_ns());
-  m.log->info("sink done: {} detection arrays, {} boxes, {} boundaries, {} acks, {} malformed", counts_.detection_arrays,
-              counts_.boxes, counts_.boundaries, counts_.acks_sent, counts_.malformed);
+  m.log->info("sink done: {} detection arrays, {} boxes, {} boundaries, {} acks, {} malformed",
+              counts_.detection_arrays, counts_.boxes, counts_.boundaries, counts_.acks_sent,
+              counts_.malformed);
   return 0;
 }
 

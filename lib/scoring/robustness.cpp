@@ -64,18 +64,21 @@ DetectorScores detr3d_baseline() {
   DetectorScores d;
   d.name = "DETR3D";
   d.clean_nds = 0.4224;
-  d.corruptions = {{"camera_crash", {0.3284, 0.2594, 0.2700}}, {"frame_lost", {0.3437, 0.2514, 0.1860}},
-                   {"color_quant", {0.3990, 0.3255, 0.2287}},  {"motion_blur", {0.3721, 0.2343, 0.1918}},
-                   {"brightness", {0.4225, 0.4012, 0.3769}},   {"low_light", {0.3334, 0.2832, 0.2192}},
-                   {"fog", {0.4047, 0.3922, 0.3767}},          {"snow", {0.2432, 0.1692, 0.1616}}};
+  d.corruptions = {
+      {"camera_crash", {0.3284, 0.2594, 0.2700}}, {"frame_lost", {0.3437, 0.2514, 0.1860}},
+      {"color_quant", {0.3990, 0.3255, 0.2287}},  {"motion_blur", {0.3721, 0.2343, 0.1918}},
+      {"brightness", {0.4225, 0.4012, 0.3769}},   {"low_light", {0.3334, 0.2832, 0.2192}},
+      {"fog", {0.4047, 0.3922, 0.3767}},          {"snow", {0.2432, 0.1692, 0.1616}}};
   return d;
 }
 
-Result<RobustnessSummary> compute_robustness(const DetectorScores& model, const DetectorScores& baseline,
+Result<RobustnessSummary> compute_robustness(const DetectorScores& model,
+                                             const DetectorScores& baseline,
                                              const RobustnessOptions& opts) {
   if (!(model.clean_nds > 0)) {
     return Status(StatusCode::kInvalidArgument,
-                  model.name + ": clean NDS must be > 0 for the resilience rate (got " + f4(model.clean_nds) + ")");
+                  model.name + ": clean NDS must be > 0 for the resilience rate (got " +
+                      f4(model.clean_nds) + ")");
   }
   auto avg = [&](const std::vector<double>& v) {
     double s = 0;
@@ -93,7 +96,8 @@ Result<RobustnessSummary> compute_robustness(const DetectorScores& model, const 
   int ce_n = 0, rr_n = 0;
   for (const CorruptionScores& c : model.corruptions) {
     if (c.nds_by_level.empty()) {
-      return Status(StatusCode::kInvalidArgument, model.name + ": corruption " + c.name + " has no levels");
+      return Status(StatusCode::kInvalidArgument,
+                    model.name + ": corruption " + c.name + " has no levels");
     }
     CorruptionRobustness r;
     r.name = c.name;
@@ -105,9 +109,9 @@ Result<RobustnessSummary> compute_robustness(const DetectorScores& model, const 
       if (b.name != c.name) continue;
       if (b.nds_by_level.size() != c.nds_by_level.size()) {
         return Status(StatusCode::kInvalidArgument,
-                      model.name + ": corruption " + c.name + " has " + std::to_string(c.nds_by_level.size()) +
-                          " levels but baseline " + baseline.name + " has " +
-                          std::to_string(b.nds_by_level.size()));
+                      model.name + ": corruption " + c.name + " has " +
+                          std::to_string(c.nds_by_level.size()) + " levels but baseline " +
+                          baseline.name + " has " + std::to_string(b.nds_by_level.size()));
       }
       // Sum form: sum(1 - NDS_model) / sum(1 - NDS_base) == (1 - mean_m) / (1 - mean_b).
       r.ce = (1.0 - r.mean_nds) / (1.0 - avg(b.nds_by_level));
@@ -125,14 +129,20 @@ Result<RobustnessSummary> compute_robustness(const DetectorScores& model, const 
   return out;
 }
 
+std::string level_name(const RobustnessSummary& summary, std::size_t l) {
+  if (l < summary.level_names.size()) return summary.level_names[l];
+  return l < kSeverityLevels.size() ? kSeverityLevels[l] : std::to_string(l + 1);
+}
+
 std::string robustness_markdown(const RobustnessSummary& s) {
   std::string md = "# Robustness of " + s.detector + " (baseline " + s.baseline + ")\n\n";
-  md += "Clean NDS " + f4(s.clean_nds) + " | **mCE " + pct(s.mce) + " %** | **mRR " + pct(s.mrr) + " %**\n\n";
+  md += "Clean NDS " + f4(s.clean_nds) + " | **mCE " + pct(s.mce) + " %** | **mRR " + pct(s.mrr) +
+        " %**\n\n";
   std::size_t levels = 0;
   for (const auto& c : s.corruptions) levels = std::max(levels, c.nds_by_level.size());
   md += "| corruption |";
   for (std::size_t l = 0; l < levels; ++l) {
-    md += std::string(" ") + (l < kSeverityLevels.size() ? kSeverityLevels[l] : std::to_string(l + 1).c_str()) + " |";
+    md += " " + level_name(s, l) + " |";
   }
   md += " mean NDS | CE % | RR % |\n|---|";
   for (std::size_t l = 0; l < levels; ++l) md += "---|";
@@ -151,7 +161,7 @@ std::string robustness_csv(const RobustnessSummary& s) {
   std::string csv = "detector,corruption,level,nds,mean_nds,ce_pct,rr_pct\n";
   for (const auto& c : s.corruptions) {
     for (std::size_t l = 0; l < c.nds_by_level.size(); ++l) {
-      const std::string level = l < kSeverityLevels.size() ? kSeverityLevels[l] : std::to_string(l + 1);
+      const std::string level = level_name(s, l);
       csv += s.detector + "," + c.name + "," + level + "," + py_float(c.nds_by_level[l]) + "," +
              py_float(c.mean_nds) + "," + pct(c.ce) + "," + pct(c.rr) + "\n";
     }
@@ -176,6 +186,14 @@ std::string robustness_json(const RobustnessSummary& s) {
   w.value(s.mce);
   w.key("mrr");
   w.value(s.mrr);
+  w.key("levels");
+  w.begin_array();
+  {
+    std::size_t levels = 0;
+    for (const auto& c : s.corruptions) levels = std::max(levels, c.nds_by_level.size());
+    for (std::size_t l = 0; l < levels; ++l) w.value_string(level_name(s, l));
+  }
+  w.end_array();
   w.key("corruptions");
   w.begin_array();
   for (const auto& c : s.corruptions) {
@@ -201,7 +219,8 @@ std::string robustness_json(const RobustnessSummary& s) {
 
 Result<RobustnessSummary> parse_robustness_json(const std::string& text, const std::string& name) {
   rapidjson::Document d;
-  d.Parse<rapidjson::kParseNanAndInfFlag | rapidjson::kParseFullPrecisionFlag>(text.c_str(), text.size());
+  d.Parse<rapidjson::kParseNanAndInfFlag | rapidjson::kParseFullPrecisionFlag>(text.c_str(),
+                                                                               text.size());
   if (d.HasParseError()) {
     return Status(StatusCode::kCorruptData, name + ": malformed JSON at offset " +
                                                 std::to_string(d.GetErrorOffset()) + ": " +
@@ -215,12 +234,15 @@ Result<RobustnessSummary> parse_robustness_json(const std::string& text, const s
     out = it->value.GetDouble();
     return Status::ok();
   };
-  if (!d.IsObject()) return Status(StatusCode::kCorruptData, name + ": top level must be an object");
+  if (!d.IsObject())
+    return Status(StatusCode::kCorruptData, name + ": top level must be an object");
   RobustnessSummary s;
   if (d.HasMember("detector") && d["detector"].IsString()) s.detector = d["detector"].GetString();
   if (d.HasMember("baseline") && d["baseline"].IsString()) s.baseline = d["baseline"].GetString();
-  for (auto [k, p] : {std::pair<const char*, double*>{"clean_nds", &s.clean_nds}, {"mce", &s.mce},
-                      {"mrr", &s.mrr}, {"latency_ms", &s.latency_ms}}) {
+  for (auto [k, p] : {std::pair<const char*, double*>{"clean_nds", &s.clean_nds},
+                      {"mce", &s.mce},
+                      {"mrr", &s.mrr},
+                      {"latency_ms", &s.latency_ms}}) {
     if (Status st = num(d, k, *p); !st) return st;
   }
   if (!d.HasMember("corruptions") || !d["corruptions"].IsArray()) {
@@ -232,7 +254,8 @@ Result<RobustnessSummary> parse_robustness_json(const std::string& text, const s
       return Status(StatusCode::kCorruptData, name + ": a corruption entry has no name");
     }
     r.name = c["name"].GetString();
-    for (auto [k, p] : {std::pair<const char*, double*>{"mean_nds", &r.mean_nds}, {"ce", &r.ce}, {"rr", &r.rr}}) {
+    for (auto [k, p] :
+         {std::pair<const char*, double*>{"mean_nds", &r.mean_nds}, {"ce", &r.ce}, {"rr", &r.rr}}) {
       if (Status st = num(c, k, *p); !st) return st;
     }
     if (c.HasMember("nds_by_level") && c["nds_by_level"].IsArray()) {
@@ -248,12 +271,14 @@ Result<RobustnessSummary> parse_robustness_json(const std::string& text, const s
 Result<double> read_nd_score(const std::string& run_dir) {
   const std::string path = run_dir + "/metrics_summary.json";
   std::ifstream in(path, std::ios::binary);
-  if (!in) return Status(StatusCode::kNotFound, path + ": not found (is this a scored run folder?)");
+  if (!in)
+    return Status(StatusCode::kNotFound, path + ": not found (is this a scored run folder?)");
   std::stringstream ss;
   ss << in.rdbuf();
   const std::string text = ss.str();
   rapidjson::Document d;
-  d.Parse<rapidjson::kParseNanAndInfFlag | rapidjson::kParseFullPrecisionFlag>(text.c_str(), text.size());
+  d.Parse<rapidjson::kParseNanAndInfFlag | rapidjson::kParseFullPrecisionFlag>(text.c_str(),
+                                                                               text.size());
   if (d.HasParseError()) {
     return Status(StatusCode::kCorruptData, path + ": malformed JSON at offset " +
                                                 std::to_string(d.GetErrorOffset()) + ": " +

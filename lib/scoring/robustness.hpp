@@ -38,6 +38,7 @@ struct CorruptionRobustness {
 
 struct RobustnessSummary {
   std::string detector, baseline;
+  std::vector<std::string> level_names;  // names of nds_by_level's entries; empty = easy, mid, hard
   double clean_nds = 0.0;
   double latency_ms = -1.0;
   std::vector<CorruptionRobustness> corruptions;
@@ -54,6 +55,8 @@ struct RobustnessOptions {
 
 // "MotionBlur", "motion-blur", "Motion Blur" -> "motion_blur".
 std::string canonical_corruption(const std::string& name);
+// Name of level l of a summary: its level_names, else easy/mid/hard by position.
+std::string level_name(const RobustnessSummary& summary, std::size_t l);
 // "easy"/"mid"/"hard" (also 1/2/3, "medium") -> 0/1/2, -1 if unknown.
 int severity_index(const std::string& level);
 

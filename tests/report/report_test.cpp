@@ -1,5 +1,7 @@
-// The report is self-contained and actually renders: headless Chromium screenshots it and the PNG must
-// show many colours and plenty of non-white pixels.
+// The report is self-contained and actually renders: headless Chromium screenshots it and the PNG
+// must show many colours and plenty of non-white pixels.
+#include "report/report.hpp"
+
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -8,8 +10,6 @@
 #include <fstream>
 #include <opencv2/imgcodecs.hpp>
 #include <set>
-
-#include "report/report.hpp"
 
 namespace faultline::report {
 namespace {
@@ -34,6 +34,11 @@ ReportData sample_data() {
       "mem");
   EXPECT_TRUE(bench.is_ok());
   data.corrupt_bench = *bench;
+  data.variants = {{"temporal, scale 1", "clean", 0.58, 12.0},
+                   {"temporal, scale 0.5", "clean", 0.45, 30.0},
+                   {"single-frame, scale 1", "clean", 0.50, 60.0},
+                   {"temporal, scale 1", "frame_lost/mid", 0.41, 12.0},
+                   {"single-frame, scale 1", "frame_lost/mid", 0.30, 60.0}};
   return data;
 }
 
@@ -44,8 +49,11 @@ TEST(ReportTest, HtmlIsSelfContainedWithAllViews) {
                 html.find("http://") == html.find("http://www.w3.org/2000/svg"),
             true);
   EXPECT_EQ(html.find("https://"), std::string::npos);
-  for (const char* view : {"NDS by corruption", "Per-corruption NDS by severity", "Clean NDS vs mCE",
-                           "Clean NDS vs mRR", "Detector latency vs clean NDS", "Corruption engine: time vs fidelity"}) {
+  for (const char* view :
+       {"NDS by corruption", "Per-corruption NDS by severity", "Clean NDS vs mCE",
+        "Clean NDS vs mRR", "Detector latency vs clean NDS", "Corruption engine: time vs fidelity",
+        "Detector fps vs clean NDS (input scales)", "Temporal vs single-frame: NDS by condition",
+        "single-frame, scale 1 / frame_lost/mid: NDS 0.3000"}) {
     EXPECT_NE(html.find(view), std::string::npos) << view;
   }
   EXPECT_NE(html.find("70.77"), std::string::npos);  // DETR3D mRR in the summary table
@@ -59,8 +67,10 @@ TEST(ReportTest, BadBenchFileIsRejectedWithPlace) {
 
 TEST(ReportTest, RendersInHeadlessChromium) {
   const char* chromium = "/usr/bin/chromium";
-  if (!std::filesystem::exists(chromium)) GTEST_SKIP() << "chromium not installed: render test skipped";
-  const auto dir = std::filesystem::temp_directory_path() / ("faultline_report_" + std::to_string(::getpid()));
+  if (!std::filesystem::exists(chromium))
+    GTEST_SKIP() << "chromium not installed: render test skipped";
+  const auto dir =
+      std::filesystem::temp_directory_path() / ("faultline_report_" + std::to_string(::getpid()));
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir / "profile");
   const auto html = dir / "report.html", png = dir / "shot.png";
@@ -68,12 +78,14 @@ TEST(ReportTest, RendersInHeadlessChromium) {
     std::ofstream out(html);
     out << render_html(sample_data());
   }
-  const std::string cmd = std::string(chromium) +
-                          " --headless --no-sandbox --disable-gpu --disable-quic --no-first-run"
-                          " --disable-background-networking --disable-component-update --disable-sync"
-                          " --user-data-dir=" + (dir / "profile").string() + " --screenshot=" + png.string() +
-                          " --window-size=1200,1600 file://" + html.string() + " > " + (dir / "log.txt").string() +
-                          " 2>&1";
+  const std::string cmd =
+      std::string(chromium) +
+      " --headless --no-sandbox --disable-gpu --disable-quic --no-first-run"
+      " --disable-background-networking --disable-component-update --disable-sync"
+      " --user-data-dir=" +
+      (dir / "profile").string() + " --screenshot=" + png.string() +
+      " --window-size=1200,1600 file://" + html.string() + " > " + (dir / "log.txt").string() +
+      " 2>&1";
   ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
   const cv::Mat img = cv::imread(png.string(), cv::IMREAD_COLOR);
   ASSERT_FALSE(img.empty()) << "no screenshot at " << png;

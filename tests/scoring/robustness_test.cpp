@@ -1,10 +1,11 @@
 // RoboBEV mCE / mRR self-test against the paper's DETR3D table, plus table outputs.
+#include "scoring/robustness.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <filesystem>
 
-#include "scoring/robustness.hpp"
 #include "scoring/run_manifest.hpp"
 #include "test_util.hpp"
 
@@ -24,7 +25,8 @@ TEST(RobustnessTest, Detr3dBaselineGivesPaperFigures) {
     const double paper_rr[] = {67.68, 61.65, 75.21, 63.00, 94.74, 65.96, 92.61, 45.29};
     ASSERT_EQ(r->corruptions.size(), 8u);
     for (std::size_t i = 0; i < 8; ++i) {
-      // The paper's per-corruption RRs come from 4-decimal averages; the exact form differs by <= 0.01.
+      // The paper's per-corruption RRs come from 4-decimal averages; the exact form differs by <=
+      // 0.01.
       EXPECT_NEAR(round2(r->corruptions[i].rr), paper_rr[i], rounded ? 1e-9 : 0.0100001)
           << r->corruptions[i].name;
       EXPECT_DOUBLE_EQ(r->corruptions[i].ce, 1.0);
@@ -56,6 +58,27 @@ TEST(RobustnessTest, UnknownCorruptionHasNoCeAndLevelMismatchFails) {
   EXPECT_NE(bad.status().message().find("fog"), std::string::npos);
 }
 
+TEST(RobustnessTest, TablesNameTheLevelsThatWereRun) {
+  DetectorScores model = detr3d_baseline();
+  DetectorScores base = detr3d_baseline();
+  for (auto* d : {&model, &base}) {
+    for (auto& c : d->corruptions) c.nds_by_level = {c.nds_by_level[1]};  // mid only
+  }
+  auto r = compute_robustness(model, base);
+  ASSERT_TRUE(r.is_ok()) << r.status().message();
+  r->level_names = {"mid"};
+  EXPECT_NE(robustness_markdown(*r).find("| corruption | mid |"), std::string::npos)
+      << robustness_markdown(*r);
+  EXPECT_EQ(robustness_markdown(*r).find("easy"), std::string::npos);
+  EXPECT_NE(robustness_csv(*r).find(",fog,mid,"), std::string::npos);
+  const std::string js = robustness_json(*r);
+  const auto levels_at = js.find("\"levels\"");
+  ASSERT_NE(levels_at, std::string::npos) << js;
+  EXPECT_EQ(js.find("\"mid\"", levels_at), js.find('"', js.find('[', levels_at))) << js;
+  r->level_names.clear();
+  EXPECT_NE(robustness_markdown(*r).find("| corruption | easy |"), std::string::npos);
+}
+
 TEST(RobustnessTest, CanonicalNamesAndLevels) {
   EXPECT_EQ(canonical_corruption("MotionBlur"), "motion_blur");
   EXPECT_EQ(canonical_corruption("Camera Crash"), "camera_crash");
@@ -77,15 +100,17 @@ TEST(RobustnessTest, JsonRoundTripsAndTablesCarryThePercentages) {
   EXPECT_NE(robustness_csv(*r).find("DETR3D,snow,hard,0.1616"), std::string::npos);
 }
 
-// Scored run folders of the DETR3D table + a YAML manifest reproduce the paper's figures end to end.
+// Scored run folders of the DETR3D table + a YAML manifest reproduce the paper's figures end to
+// end.
 TEST(RunManifestTest, ManifestOfScoredRunsGivesPaperFigures) {
   testing::TempDir dir("manifest");
   const DetectorScores table = detr3d_baseline();
   std::string yaml = "detector: detr3d-runs\nlatency_ms: 120\nruns:\n  clean: clean\n";
   auto write_run = [&](const std::string& sub, double nds) {
     std::filesystem::create_directories(dir.file(sub));
-    testing::write_text(dir.file(sub) + "/metrics_summary.json",
-                        "{\"mean_ap\": 0.3, \"nd_score\": " + std::to_string(nds) + ", \"x\": NaN}");
+    testing::write_text(
+        dir.file(sub) + "/metrics_summary.json",
+        "{\"mean_ap\": 0.3, \"nd_score\": " + std::to_string(nds) + ", \"x\": NaN}");
   };
   write_run("clean", table.clean_nds);
   for (const auto& c : table.corruptions) {
@@ -116,7 +141,8 @@ TEST(RunManifestTest, ConditionsFromFolderNamesAndMissingRuns) {
   EXPECT_EQ(condition_from_path("/x/runs/clean"), "clean");
   auto missing = collect_detector_scores("d", {{"clean", "/nonexistent/run"}});
   ASSERT_FALSE(missing.is_ok());
-  EXPECT_NE(missing.status().message().find("/nonexistent/run/metrics_summary.json"), std::string::npos);
+  EXPECT_NE(missing.status().message().find("/nonexistent/run/metrics_summary.json"),
+            std::string::npos);
 }
 
 }  // namespace
