@@ -26,4 +26,51 @@ Result<std::vector<std::uint8_t>> encode_jpeg(const cv::Mat& image, int quality 
 // Width and height from the header only (cheap); kCorruptData if the header cannot be parsed.
 Result<cv::Size> jpeg_size(const std::uint8_t* data, std::size_t size);
 
+// A TurboJPEG decompressor kept across calls, for loops that decode many frames on one thread: no handle setup per
+// frame, and the destination image is only reallocated when the frame size changes. Not thread-safe (one per
+// thread); movable, not copyable.
+class JpegDecoder {
+ public:
+  JpegDecoder();
+  ~JpegDecoder();
+  JpegDecoder(JpegDecoder&& other) noexcept;
+  JpegDecoder& operator=(JpegDecoder&& other) noexcept;
+  JpegDecoder(const JpegDecoder&) = delete;
+  JpegDecoder& operator=(const JpegDecoder&) = delete;
+
+  // Decodes into `out` (made CV_8UC3 BGR of the JPEG's size; its buffer is reused when it already has that shape
+  // and is not shared). Same checks and error codes as decode_jpeg; after an error `out` holds unspecified pixels.
+  Status decode(const std::uint8_t* data, std::size_t size, cv::Mat& out);
+
+ private:
+  void* handle_ = nullptr;
+};
+
+// A TurboJPEG compressor with an output buffer kept across calls (sized by tjBufSize, never reallocated by the
+// library): encoding costs no handle setup, no allocation and no copy per frame. Output bytes equal encode_jpeg's
+// for the same image and settings. Not thread-safe (one per thread); movable, not copyable.
+class JpegEncoder {
+ public:
+  JpegEncoder();
+  ~JpegEncoder();
+  JpegEncoder(JpegEncoder&& other) noexcept;
+  JpegEncoder& operator=(JpegEncoder&& other) noexcept;
+  JpegEncoder(const JpegEncoder&) = delete;
+  JpegEncoder& operator=(const JpegEncoder&) = delete;
+
+  struct Bytes {
+    const std::uint8_t* data = nullptr;
+    std::size_t size = 0;
+  };
+  // Encodes like encode_jpeg (same argument checks). The returned bytes live in this encoder and stay valid until
+  // the next encode() or the encoder's destruction.
+  Result<Bytes> encode(const cv::Mat& image, int quality = 95, Subsampling subsampling = Subsampling::k420);
+
+ private:
+  void release();
+  void* handle_ = nullptr;
+  unsigned char* buf_ = nullptr;  // tjAlloc'ed
+  unsigned long capacity_ = 0;
+};
+
 }  // namespace faultline::codec

@@ -2,12 +2,18 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cerrno>
 #include <chrono>
 #include <condition_variable>
 #include <filesystem>
 #include <memory>
 #include <mutex>
 #include <thread>
+
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <time.h>
+#include <unistd.h>
 
 #include "corruption/corrupt.hpp"
 #include "dataset/nuscenes.hpp"
@@ -24,6 +30,43 @@ using Clock = std::chrono::steady_clock;
 
 double seconds_since(Clock::time_point t0) {
   return std::chrono::duration<double>(Clock::now() - t0).count();
+}
+
+// CPU time of the calling thread: unlike wall time it does not count time spent descheduled on a loaded machine.
+std::int64_t thread_cpu_ns() {
+  timespec ts{};
+  ::clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return static_cast<std::int64_t>(ts.tv_sec) * 1000000000 + ts.tv_nsec;
+}
+
+// Reads a whole file into `out`, reusing its capacity. Errors as dataset::read_file: kNotFound / kIoError.
+Status read_into(const std::string& path, std::vector<std::uint8_t>& out) {
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) return Status(StatusCode::kNotFound, path + ": file not found");
+  struct stat st {};
+  if (::fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
+    ::close(fd);
+    return Status(StatusCode::kIoError, path + ": not a regular file");
+  }
+  out.resize(static_cast<std::size_t>(st.st_size));
+  std::size_t got = 0;
+  while (got < out.size()) {
+    const ssize_t n = ::read(fd, out.data() + got, out.size() - got);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) break;
+    got += static_cast<std::size_t>(n);
+  }
+  ::close(fd);
+  if (got != out.size()) return Status(StatusCode::kIoError, path + ": read failed");
+  return Status::ok();
+}
+
+// Asks the kernel to start reading a file we will need soon (no-op if it is cached or missing).
+void prefetch(const std::string& path) {
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) return;
+  (void)::posix_fadvise(fd, 0, 0, POSIX_FADV_WILLNEED);
+  ::close(fd);
 }
 
 const char* subsampling_name(codec::Subsampling s) {
@@ -75,7 +118,8 @@ struct Output {
   std::map<std::string, FileEntry> previous;  // from an earlier run's manifest; read-only while workers run
   std::mutex mu;
   Manifest manifest;
-  std::atomic<std::int64_t> busy_ns{0};
+  std::atomic<std::int64_t> busy_ns{0};  // wall, summed over workers
+  std::atomic<std::int64_t> cpu_ns{0};   // thread CPU, summed over workers
   std::atomic<std::int64_t> written{0};
 };
 
@@ -102,22 +146,39 @@ bool frame_lost(corruption::RngMode mode, int severity, std::uint64_t seed64, in
   return policy::draw_lost_frame(severity, rng)[cam];
 }
 
+// Per-worker state kept across frames: TurboJPEG handles, the input bytes, the decoded frame and the encoded
+// outputs live in buffers that are reused, so the steady state allocates only what the corruption kernels do.
+struct WorkerState {
+  codec::JpegDecoder decoder;
+  codec::JpegEncoder encoder;    // corrupted outputs
+  codec::JpegEncoder reencoder;  // this frame's untouched re-encode (shared by CameraCrash/FrameLost outputs)
+  std::vector<std::uint8_t> input;
+  cv::Mat frame;
+  codec::JpegEncoder::Bytes reencoded;  // valid for the current frame when reencoded_frame == frame index
+  std::size_t reencoded_frame = static_cast<std::size_t>(-1);
+  std::vector<std::uint8_t> black;  // an all-zero frame of black_size: the same bytes for every frame of that size
+  cv::Size black_size;
+};
+
 class Runner {
  public:
   Runner(const ExportConfig& cfg, const dataset::NuScenesReader& reader,
          std::vector<dataset::CameraFrameRecord> frames, std::vector<std::unique_ptr<Output>> outputs)
       : cfg_(cfg), reader_(reader), frames_(std::move(frames)), outputs_(std::move(outputs)) {}
 
-  void worker() {
+  // Runs until every frame is taken. `lookahead`: frames ahead of the one taken whose file is prefetched.
+  void worker(std::size_t lookahead) {
+    WorkerState ws;
     for (;;) {
       const std::size_t i = next_.fetch_add(1);
       if (i >= frames_.size()) break;
-      process(frames_[i]);
+      if (i + lookahead < frames_.size()) prefetch(reader_.path_of(frames_[i + lookahead]));
+      process(i, ws);
     }
   }
 
   std::atomic<std::int64_t> done{0};
-  std::atomic<std::int64_t> decode_ns{0}, decoded{0};
+  std::atomic<std::int64_t> decode_ns{0}, decode_cpu_ns{0}, decoded{0};
 
  private:
   void add_entry(Output& o, const std::string& rel, const FileEntry& e, bool written) {
@@ -134,7 +195,8 @@ class Runner {
     done.fetch_add(1);
   }
 
-  void process(const dataset::CameraFrameRecord& f) {
+  void process(std::size_t index, WorkerState& ws) {
+    const dataset::CameraFrameRecord& f = frames_[index];
     const int cam = camera_index(f.channel);
     const std::string rel = f.channel + "/" + base_name(f.filename);
     const std::string input = reader_.path_of(f);
@@ -149,24 +211,23 @@ class Runner {
     }
     if (pending.empty()) return;
     const auto t0 = Clock::now();
-    auto bytes = dataset::read_file(input);
-    Result<cv::Mat> image = Status(StatusCode::kInternal, "not decoded");
-    if (bytes) image = codec::decode_jpeg(bytes->data(), bytes->size());
+    const std::int64_t c0 = thread_cpu_ns();
+    Status status = read_into(input, ws.input);
+    if (status) status = ws.decoder.decode(ws.input.data(), ws.input.size(), ws.frame);
     decode_ns.fetch_add(std::chrono::duration_cast<std::chrono::nanoseconds>(Clock::now() - t0).count());
+    decode_cpu_ns.fetch_add(thread_cpu_ns() - c0);
     decoded.fetch_add(1);
-    if (!bytes || !image) {
-      const Status& s = bytes ? image.status() : bytes.status();
-      for (Output* o : pending) add_error(*o, rel, input, s.to_string());
+    if (!status) {
+      for (Output* o : pending) add_error(*o, rel, input, status.to_string());
       return;
     }
-    const cv::Mat& bgr = *image;
-    std::vector<std::uint8_t> reencoded, black;  // made at most once per frame
+    const cv::Mat& bgr = ws.frame;
     for (Output* o : pending) {
       const auto t1 = Clock::now();
+      const std::int64_t c1 = thread_cpu_ns();
       FileEntry e;
-      const std::vector<std::uint8_t>* jpeg = nullptr;
-      std::vector<std::uint8_t> corrupted;
-      Status status;  // ok until a step fails
+      codec::JpegEncoder::Bytes jpeg;
+      Status st;  // ok until a step fails
       bool is_black = false;
       if (o->condition == Condition::CameraCrash) {
         e.seed = o->crash_seed;
@@ -177,6 +238,7 @@ class Runner {
         is_black = cam >= 0 && frame_lost(cfg_.rng, o->severity, e.seed, cam);
       } else {
         e.seed = derive_seed64(cfg_.seed, o->condition, o->level, rel);
+        e.kind = "corrupted";
         const auto type = *image_corruption(o->condition);
         Result<cv::Mat> out = Status(StatusCode::kInternal, "not run");
         if (cfg_.rng == corruption::RngMode::Numpy) {
@@ -187,32 +249,48 @@ class Runner {
           out = corruption::corrupt(bgr, type, o->severity, rng);
         }
         if (out) {
-          auto enc = codec::encode_jpeg(*out, cfg_.quality, cfg_.subsampling);
-          if (enc) corrupted = std::move(*enc); else status = enc.status();
+          auto enc = ws.encoder.encode(*out, cfg_.quality, cfg_.subsampling);
+          if (enc) jpeg = *enc; else st = enc.status();
         } else {
-          status = out.status();
+          st = out.status();
         }
-        jpeg = &corrupted;
-        e.kind = "corrupted";
       }
-      if (!jpeg) {
-        std::vector<std::uint8_t>& cache = is_black ? black : reencoded;
-        if (cache.empty()) {
-          const cv::Mat src = is_black ? cv::Mat::zeros(bgr.size(), bgr.type()) : bgr;
-          auto enc = codec::encode_jpeg(src, cfg_.quality, cfg_.subsampling);
-          if (enc) cache = std::move(*enc); else status = enc.status();
-        }
-        jpeg = &cache;
+      if (e.kind.empty()) {
         e.kind = is_black ? "black" : "reencoded";
+        if (is_black) {
+          if (ws.black.empty() || ws.black_size != bgr.size()) {
+            auto enc = ws.reencoder.encode(cv::Mat::zeros(bgr.size(), bgr.type()), cfg_.quality, cfg_.subsampling);
+            if (enc) {
+              ws.black.assign(enc->data, enc->data + enc->size);
+              ws.black_size = bgr.size();
+              ws.reencoded_frame = static_cast<std::size_t>(-1);  // the re-encoder's buffer was overwritten
+            } else {
+              st = enc.status();
+            }
+          }
+          if (st) jpeg = {ws.black.data(), ws.black.size()};
+        } else {
+          if (ws.reencoded_frame != index) {
+            auto enc = ws.reencoder.encode(bgr, cfg_.quality, cfg_.subsampling);
+            if (enc) {
+              ws.reencoded = *enc;
+              ws.reencoded_frame = index;
+            } else {
+              st = enc.status();
+            }
+          }
+          if (st) jpeg = ws.reencoded;
+        }
       }
-      if (status) status = write_file_atomic(o->dir + "/" + rel, jpeg->data(), jpeg->size());
+      if (st) st = write_file_atomic(o->dir + "/" + rel, jpeg.data, jpeg.size);
       o->busy_ns.fetch_add(std::chrono::duration_cast<std::chrono::nanoseconds>(Clock::now() - t1).count());
-      if (!status) {
-        add_error(*o, rel, input, status.to_string());
+      o->cpu_ns.fetch_add(thread_cpu_ns() - c1);
+      if (!st) {
+        add_error(*o, rel, input, st.to_string());
         continue;
       }
-      e.size_bytes = jpeg->size();
-      e.crc32 = crc32_of(jpeg->data(), jpeg->size());
+      e.size_bytes = jpeg.size;
+      e.crc32 = crc32_of(jpeg.data, jpeg.size);
       o->written.fetch_add(1);
       add_entry(*o, rel, e, true);
     }
@@ -384,7 +462,7 @@ Result<ExportSummary> run_export(const ExportConfig& cfg, const ExportProgressFn
   std::vector<std::thread> pool;
   for (int i = 0; i < threads; ++i) {
     pool.emplace_back([&] {
-      runner.worker();
+      runner.worker(static_cast<std::size_t>(threads));
       std::lock_guard<std::mutex> lock(mu);
       --running;
       cv.notify_all();
@@ -411,6 +489,7 @@ Result<ExportSummary> run_export(const ExportConfig& cfg, const ExportProgressFn
     auto& st = summary.per_condition[class_name(o->condition)];
     st.images += o->written.load();
     st.busy_seconds += static_cast<double>(o->busy_ns.load()) * 1e-9;
+    st.cpu_seconds += static_cast<double>(o->cpu_ns.load()) * 1e-9;
     summary.written += o->manifest.written;
     summary.skipped += o->manifest.skipped;
     summary.failed += static_cast<std::int64_t>(o->manifest.errors.size());
@@ -419,6 +498,7 @@ Result<ExportSummary> run_export(const ExportConfig& cfg, const ExportProgressFn
     }
   }
   summary.read_decode_seconds = static_cast<double>(runner.decode_ns.load()) * 1e-9;
+  summary.read_decode_cpu_seconds = static_cast<double>(runner.decode_cpu_ns.load()) * 1e-9;
   summary.frames_decoded = runner.decoded.load();
   summary.wall_seconds = seconds_since(t0);
   if (progress) progress(runner.done.load(), total, summary.wall_seconds);

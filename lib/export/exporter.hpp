@@ -1,7 +1,9 @@
 // `faultline export`: writes nuScenes-C from a nuScenes dataroot, in the layout RoboBEV's evaluation loader reads:
 // <out>/<ClassName>/<level>/<CAM_X>/<original file name>, one manifest.json per <ClassName>/<level>.
 // Workers take one input frame at a time: read, decode once, then corrupt + JPEG-encode + atomically write every
-// requested (condition, level) output of that frame. Memory is bounded by threads x (one frame + one output).
+// requested (condition, level) output of that frame (one decode for up to 24 outputs). Each worker keeps its
+// TurboJPEG handles and buffers across frames and prefetches the files of the frames ahead of it. Memory is bounded
+// by threads x (one frame + one corrupted frame + a few JPEGs).
 #pragma once
 
 #include <cstdint>
@@ -36,14 +38,16 @@ struct ExportConfig {
 
 struct ConditionStats {
   std::int64_t images = 0;     // outputs written
-  double busy_seconds = 0;     // corrupt + encode + write, summed over workers
+  double busy_seconds = 0;     // corrupt + encode + write, wall clock summed over workers
+  double cpu_seconds = 0;      // the same work in thread CPU time (what a loaded machine does not inflate)
 };
 
 struct ExportSummary {
   std::int64_t frames = 0;    // input frames in this shard
   std::int64_t expected = 0, written = 0, skipped = 0, failed = 0;
   double wall_seconds = 0;
-  double read_decode_seconds = 0;  // summed over workers
+  double read_decode_seconds = 0;      // wall clock, summed over workers
+  double read_decode_cpu_seconds = 0;  // thread CPU, summed over workers
   std::int64_t frames_decoded = 0;
   int threads = 0;
   std::map<std::string, ConditionStats> per_condition;  // key: class name
