@@ -1,6 +1,8 @@
 // zstd and LZ4-frame compression for chunks.
 #include "bag/compression.hpp"
 
+#include <memory>
+
 #include <lz4frame.h>
 #include <zstd.h>
 
@@ -33,8 +35,11 @@ Status compress(Compression c, int level, std::string_view in, std::string& out)
     return Status::ok();
   }
   if (c == Compression::kZstd) {
+    // One compression context per thread, reused: ZSTD_compress would allocate its workspace per call.
+    thread_local std::unique_ptr<ZSTD_CCtx, decltype(&ZSTD_freeCCtx)> ctx(ZSTD_createCCtx(), &ZSTD_freeCCtx);
+    if (!ctx) return Status(StatusCode::kInternal, "zstd: cannot create context");
     out.resize(ZSTD_compressBound(in.size()));
-    const std::size_t n = ZSTD_compress(out.data(), out.size(), in.data(), in.size(), level);
+    const std::size_t n = ZSTD_compressCCtx(ctx.get(), out.data(), out.size(), in.data(), in.size(), level);
     if (ZSTD_isError(n)) {
       return Status(StatusCode::kInternal, std::string("zstd: ") + ZSTD_getErrorName(n));
     }

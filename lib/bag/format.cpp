@@ -223,4 +223,8 @@ std::uint32_t crc32_update(std::uint32_t crc, std::string_view bytes) {
   return static_cast<std::uint32_t>(c);
 }
 
+std::uint32_t crc32_combine_len(std::uint32_t crc_a, std::uint32_t crc_b, std::uint64_t length_b) {
+  return static_cast<std::uint32_t>(crc32_combine(crc_a, crc_b, static_cast<z_off_t>(length_b)));
+}
+
 }  // namespace faultline::bag

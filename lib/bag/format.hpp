@@ -172,5 +172,7 @@ struct Footer {
 bool parse_footer(std::string_view content, Footer& out);
 
 std::uint32_t crc32_update(std::uint32_t crc, std::string_view bytes);  // zlib crc32, start at 0
+// CRC of A followed by B from crc(A), crc(B) and B's length (zlib crc32_combine).
+std::uint32_t crc32_combine_len(std::uint32_t crc_a, std::uint32_t crc_b, std::uint64_t length_b);
 
 }  // namespace faultline::bag

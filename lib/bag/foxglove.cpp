@@ -51,6 +51,31 @@ foxglove::RawImage to_raw_image(const msgs::CameraFrame& frame, std::string_view
   return img;
 }
 
+namespace {
+// Appends the tag (field, wire type 2) and the varint length of a bytes field.
+void append_bytes_field_prefix(int field, std::size_t size, std::string& out) {
+  out.push_back(static_cast<char>((field << 3) | 2));
+  auto v = static_cast<std::uint64_t>(size);
+  while (v >= 0x80) {
+    out.push_back(static_cast<char>((v & 0x7f) | 0x80));
+    v >>= 7;
+  }
+  out.push_back(static_cast<char>(v));
+}
+}  // namespace
+
+void compressed_image_head(const msgs::CameraFrame& frame, std::size_t image_bytes, std::string& head) {
+  foxglove::CompressedImage img = to_compressed_image(frame, std::string_view("", 0));
+  img.SerializeToString(&head);
+  append_bytes_field_prefix(foxglove::CompressedImage::kDataFieldNumber, image_bytes, head);
+}
+
+void raw_image_head(const msgs::CameraFrame& frame, std::size_t image_bytes, std::string& head) {
+  foxglove::RawImage img = to_raw_image(frame, std::string_view("", 0));
+  img.SerializeToString(&head);
+  append_bytes_field_prefix(foxglove::RawImage::kDataFieldNumber, image_bytes, head);
+}
+
 foxglove::CameraCalibration to_camera_calibration(const msgs::CameraFrame& frame) {
   foxglove::CameraCalibration cal;
   set_timestamp(frame.header().capture_stamp_ns(), cal.mutable_timestamp());

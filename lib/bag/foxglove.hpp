@@ -32,6 +32,13 @@ void set_timestamp(StampNs stamp_ns, google::protobuf::Timestamp* out);
 foxglove::CompressedImage to_compressed_image(const msgs::CameraFrame& frame, std::string_view jpeg);
 // Raw payload (bgr8/rgb8/mono8) as described by the frame's encoding/width/height/step.
 foxglove::RawImage to_raw_image(const msgs::CameraFrame& frame, std::string_view pixels);
+
+// The same two messages without copying the image: returns every field but `data`, followed by the
+// tag and length of `data`, so the serialized message is `head + image bytes` (protobuf parsers
+// accept fields in any order). Lets the recorder and `bag convert` hand the image straight to
+// Writer::write_parts. `head` is overwritten (reuse it across frames).
+void compressed_image_head(const msgs::CameraFrame& frame, std::size_t image_bytes, std::string& head);
+void raw_image_head(const msgs::CameraFrame& frame, std::size_t image_bytes, std::string& head);
 // K from intrinsics (row-major), R = identity, P = [K | 0], no distortion.
 foxglove::CameraCalibration to_camera_calibration(const msgs::CameraFrame& frame);
 // map -> base_link from the frame's ego pose.

@@ -45,6 +45,31 @@ Status decode_chunk(std::string_view content, std::uint64_t max_bytes, ChunkHead
   return Status::ok();
 }
 
+// Like decode_chunk, but an uncompressed chunk is not copied: `records` then views `content`.
+Status decode_chunk_view(std::string_view content, std::uint64_t max_bytes, ChunkHeader& header,
+                         std::string& scratch, std::string_view& records) {
+  if (!parse_chunk(content, header)) return Status(StatusCode::kCorruptData, "malformed Chunk header");
+  if (!header.compression.empty()) {
+    if (Status s = decode_chunk(content, max_bytes, header, scratch); !s) return s;
+    records = scratch;
+    return Status::ok();
+  }
+  if (header.records.size() != header.uncompressed_size) {
+    return Status(StatusCode::kCorruptData, "Chunk (none): uncompressed chunk of " +
+                                                std::to_string(header.records.size()) + " bytes declares " +
+                                                std::to_string(header.uncompressed_size));
+  }
+  if (header.uncompressed_crc != 0) {
+    const std::uint32_t crc = crc32_update(0, header.records);
+    if (crc != header.uncompressed_crc) {
+      return Status(StatusCode::kCorruptData, "Chunk CRC mismatch: stored " + hex32(header.uncompressed_crc) +
+                                                  ", computed " + hex32(crc));
+    }
+  }
+  records = header.records;
+  return Status::ok();
+}
+
 struct InnerRecord {
   std::uint64_t offset;
   std::uint8_t opcode;
@@ -234,13 +259,14 @@ Result<LinearScan> Reader::read_linear(const ReadOptions& options, const Message
       }
       case Opcode::kChunk: {
         ChunkHeader header;
-        if (Status s = decode_chunk(content, options.max_record_bytes, header, records); !s) {
+        std::string_view chunk_records;
+        if (Status s = decode_chunk_view(content, options.max_record_bytes, header, records, chunk_records); !s) {
           scan.bad_chunks++;
           report({pos, s.code(), s.message()});
           break;
         }
         std::uint64_t bad = 0;
-        const bool ok = for_each_inner_record(records, bad, [&](const InnerRecord& r) {
+        const bool ok = for_each_inner_record(chunk_records, bad, [&](const InnerRecord& r) {
           const std::uint64_t at = pos;  // problems inside a chunk name the chunk's offset
           switch (static_cast<Opcode>(r.opcode)) {
             case Opcode::kSchema: tables.add_schema(r.content, at, report); break;

@@ -3,8 +3,10 @@
 
 #include <fcntl.h>
 #include <sys/stat.h>
+#include <sys/uio.h>
 #include <unistd.h>
 
+#include <array>
 #include <cerrno>
 #include <cstring>
 
@@ -37,6 +39,33 @@ Status FileSink::write(std::string_view bytes) {
     p += n;
     left -= static_cast<std::size_t>(n);
     size_ += static_cast<std::uint64_t>(n);
+  }
+  return Status::ok();
+}
+
+Status FileSink::write_parts(std::initializer_list<std::string_view> parts) {
+  if (fd_ < 0) return Status(StatusCode::kIoError, path_ + ": write after close");
+  std::array<iovec, 8> iov{};
+  std::size_t n_iov = 0;
+  for (std::string_view p : parts) {
+    if (p.empty()) continue;
+    if (n_iov == iov.size()) return IWritable::write_parts(parts);  // unusual: many parts
+    iov[n_iov++] = iovec{const_cast<char*>(p.data()), p.size()};
+  }
+  std::size_t first = 0;
+  while (first < n_iov) {
+    const ssize_t n = ::writev(fd_, iov.data() + first, static_cast<int>(n_iov - first));
+    if (n < 0) {
+      if (errno == EINTR) continue;
+      return Status(StatusCode::kIoError, path_ + ": " + errno_text());
+    }
+    size_ += static_cast<std::uint64_t>(n);
+    auto left = static_cast<std::size_t>(n);  // a short write: skip what went out, retry the rest
+    while (first < n_iov && left >= iov[first].iov_len) left -= iov[first++].iov_len;
+    if (first < n_iov) {
+      iov[first].iov_base = static_cast<char*>(iov[first].iov_base) + left;
+      iov[first].iov_len -= left;
+    }
   }
   return Status::ok();
 }

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstdint>
+#include <initializer_list>
 #include <memory>
 #include <string>
 #include <string_view>
@@ -16,6 +17,14 @@ class IWritable {
  public:
   virtual ~IWritable() = default;
   virtual Status write(std::string_view bytes) = 0;
+  // Writes the parts back to back; files hand them to the kernel in one writev() (so a completed
+  // chunk is never half-written by a kill between parts). Default: one write() per part.
+  virtual Status write_parts(std::initializer_list<std::string_view> parts) {
+    for (std::string_view p : parts) {
+      if (Status s = write(p); !s) return s;
+    }
+    return Status::ok();
+  }
   virtual Status flush() = 0;  // make completed chunks durable enough to survive a process kill
   virtual Status close() = 0;
   virtual std::uint64_t size() const = 0;  // bytes written so far
@@ -28,6 +37,7 @@ class FileSink : public IWritable {
   static Result<std::unique_ptr<FileSink>> create(const std::string& path, bool sync_on_flush = false);
   ~FileSink() override;
   Status write(std::string_view bytes) override;
+  Status write_parts(std::initializer_list<std::string_view> parts) override;
   Status flush() override;
   Status close() override;
   std::uint64_t size() const override { return size_; }

@@ -141,6 +141,13 @@ Result<std::uint16_t> Writer::proto_channel(const std::string& topic,
 
 Status Writer::write(std::uint16_t channel_id, std::uint64_t seq, StampNs log_time_ns,
                      StampNs publish_time_ns, std::string_view data) {
+  return write_parts(channel_id, seq, log_time_ns, publish_time_ns, {data});
+}
+
+Status Writer::write_parts(std::uint16_t channel_id, std::uint64_t seq, StampNs log_time_ns,
+                           StampNs publish_time_ns, std::initializer_list<std::string_view> parts) {
+  std::size_t data_size = 0;
+  for (std::string_view p : parts) data_size += p.size();
   if (!failed_) return failed_;
   if (closed_) return Status(StatusCode::kInvalidArgument, "write after close");
   if (channel_id == 0 || channel_id > channels_.size()) {
@@ -152,7 +159,7 @@ Status Writer::write(std::uint16_t channel_id, std::uint64_t seq, StampNs log_ti
   const bool split_by_time = options_.split_ns > 0 && file_has_messages_ &&
                              log_time_ns - file_first_log_ns_ >= options_.split_ns;
   const bool split_by_size = options_.split_bytes > 0 && file_has_messages_ &&
-                             sink_->size() + chunk_.size() + data.size() >= options_.split_bytes;
+                             sink_->size() + chunk_.size() + data_size >= options_.split_bytes;
   if (split_by_time || split_by_size) {
     if (Status s = finish_file(); !s) return s;
     if (Status s = start_file(); !s) return s;
@@ -172,7 +179,7 @@ Status Writer::write(std::uint16_t channel_id, std::uint64_t seq, StampNs log_ti
   w.u32(static_cast<std::uint32_t>(seq & 0xFFFFFFFFu));
   w.u64(log_time);
   w.u64(static_cast<std::uint64_t>(publish_time_ns));
-  w.raw(data);
+  for (std::string_view p : parts) w.raw(p);
   w.finish_record(rec);
 
   if (chunk_msg_index_.empty()) chunk_start_ = chunk_end_ = log_time;  // first message of the chunk
@@ -191,7 +198,7 @@ Status Writer::write(std::uint16_t channel_id, std::uint64_t seq, StampNs log_ti
   file_stats_.message_count++;
   file_stats_.channel_message_counts[channel_id]++;
   stats_.messages++;
-  stats_.message_bytes += data.size();
+  stats_.message_bytes += data_size;
 
   if (chunk_.size() >= options_.chunk_size_bytes) return flush_chunk();
   return Status::ok();
@@ -199,18 +206,21 @@ Status Writer::write(std::uint16_t channel_id, std::uint64_t seq, StampNs log_ti
 
 Status Writer::write_proto(std::uint16_t channel_id, std::uint64_t seq, StampNs log_time_ns,
                            StampNs publish_time_ns, const google::protobuf::Message& message) {
-  std::string bytes;
-  if (!message.SerializeToString(&bytes)) {
+  if (!message.SerializeToString(&proto_buf_)) {
     return Status(StatusCode::kInvalidArgument, "cannot serialize " + message.GetTypeName());
   }
-  return write(channel_id, seq, log_time_ns, publish_time_ns, bytes);
+  return write(channel_id, seq, log_time_ns, publish_time_ns, proto_buf_);
 }
 
 Status Writer::flush_chunk() {
   if (chunk_.empty()) return Status::ok();
   const std::uint32_t crc = crc32_update(0, chunk_);
   Compression used = options_.compression;
-  if (used != Compression::kNone) {
+  if (used != Compression::kNone && skip_compression_ > 0) {
+    --skip_compression_;
+    used = Compression::kNone;
+    stats_.chunks_not_tried++;
+  } else if (used != Compression::kNone) {
     if (Status s = compress(used, options_.compression_level, chunk_, compressed_); !s) {
       failed_ = s;
       return s;
@@ -218,31 +228,38 @@ Status Writer::flush_chunk() {
     const double limit = static_cast<double>(chunk_.size()) * (1.0 - options_.min_compression_saving);
     if (compressed_.size() >= chunk_.size() || static_cast<double>(compressed_.size()) > limit) {
       used = Compression::kNone;  // e.g. JPEG payloads
+      skip_compression_ = options_.incompressible_skip_chunks;
     }
   }
   const std::string_view stored = used == Compression::kNone ? std::string_view(chunk_)
                                                              : std::string_view(compressed_);
+  // The Chunk record is written as [head][stored records][message indexes] in one gather write,
+  // so the records are never copied into another buffer.
+  const std::string compression = to_string(used);
+  const std::uint64_t content_bytes = 8 + 8 + 8 + 4 + 4 + compression.size() + 8 + stored.size();
   out_.clear();
   ByteWriter w(out_);
-  const auto rec = w.begin_record(Opcode::kChunk);
+  w.u8(static_cast<std::uint8_t>(Opcode::kChunk));
+  w.u64(content_bytes);
   w.u64(chunk_start_);
   w.u64(chunk_end_);
   w.u64(chunk_.size());
   w.u32(crc);
-  w.str(to_string(used));
-  w.bytes64(stored);
-  w.finish_record(rec);
+  w.str(compression);
+  w.u64(stored.size());
+  const std::size_t head_bytes = out_.size();
 
   ChunkIndex index;
   index.message_start_time = chunk_start_;
   index.message_end_time = chunk_end_;
   index.chunk_start_offset = sink_->size();
-  index.chunk_length = out_.size();
-  index.compression = to_string(used);
+  index.chunk_length = head_bytes + stored.size();
+  index.compression = compression;
   index.compressed_size = stored.size();
   index.uncompressed_size = chunk_.size();
   for (const auto& [channel_id, entries] : chunk_msg_index_) {
-    index.message_index_offsets[channel_id] = index.chunk_start_offset + out_.size();
+    index.message_index_offsets[channel_id] =
+        index.chunk_start_offset + index.chunk_length + (out_.size() - head_bytes);
     const auto mi = w.begin_record(Opcode::kMessageIndex);
     w.u16(channel_id);
     w.u32(static_cast<std::uint32_t>(entries.size() * 16));
@@ -252,7 +269,21 @@ Status Writer::flush_chunk() {
     }
     w.finish_record(mi);
   }
-  index.message_index_length = out_.size() - index.chunk_length;
+  index.message_index_length = out_.size() - head_bytes;
+  const std::string_view head(out_.data(), head_bytes);
+  const std::string_view tail(out_.data() + head_bytes, index.message_index_length);
+
+  // Data-section CRC; for uncompressed records it reuses their CRC (crc32_combine) instead of
+  // scanning them a second time.
+  data_crc_ = crc32_update(data_crc_, head);
+  data_crc_ = used == Compression::kNone ? crc32_combine_len(data_crc_, crc, stored.size())
+                                         : crc32_update(data_crc_, stored);
+  data_crc_ = crc32_update(data_crc_, tail);
+  Status s = sink_->write_parts({head, stored, tail});
+  if (!s) {
+    failed_ = s;
+    return s;
+  }
   chunk_indexes_.push_back(std::move(index));
 
   stats_.chunks++;
@@ -266,8 +297,7 @@ Status Writer::flush_chunk() {
   chunk_msg_index_.clear();
   chunk_start_ = chunk_end_ = 0;
 
-  if (Status s = emit(out_); !s) return s;
-  Status s = sink_->flush();
+  s = sink_->flush();
   if (!s) failed_ = s;
   return s;
 }

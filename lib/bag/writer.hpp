@@ -11,6 +11,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <initializer_list>
 #include <map>
 #include <memory>
 #include <set>
@@ -34,6 +35,11 @@ struct WriterOptions {
   // A chunk is stored uncompressed unless compression saves at least this fraction: JPEG chunks
   // shrink by ~1% (record headers), not worth decompressing on every read. 0 = any saving.
   double min_compression_saving = 0.02;
+  // After a chunk that did not shrink by min_compression_saving, store this many following chunks
+  // without trying (a JPEG stream never compresses; trying costs ~as much CPU as all the rest of the
+  // write path). Every (N+1)-th chunk is probed again, so a stream that turns compressible (raw
+  // images) is compressed again within N chunks. 0 = try every chunk.
+  int incompressible_skip_chunks = 15;
   std::uint64_t split_bytes = 0;                 // start a new file past this size; 0 = never
   StampNs split_ns = 0;                          // start a new file after this log-time span; 0 = never
   bool sync_chunks = false;                      // fdatasync after each chunk (power-loss safety; slow)
@@ -48,6 +54,7 @@ struct WriterStats {
   std::uint64_t chunk_raw_bytes = 0;        // uncompressed chunk records
   std::uint64_t chunk_stored_bytes = 0;     // chunk records as stored
   std::uint64_t chunks_stored_raw = 0;      // chunks kept uncompressed because compression did not shrink them
+  std::uint64_t chunks_not_tried = 0;       // ... of which compression was skipped (incompressible_skip_chunks)
   std::uint64_t file_bytes = 0;
 };
 
@@ -80,6 +87,10 @@ class Writer {
   // Errors: unknown channel, negative time, I/O failure (the writer then stays failed).
   Status write(std::uint16_t channel_id, std::uint64_t seq, StampNs log_time_ns,
                StampNs publish_time_ns, std::string_view data);
+  // Same, with the message data given as consecutive parts (e.g. a length prefix, a header and a
+  // payload) that are copied straight into the chunk: no intermediate buffer.
+  Status write_parts(std::uint16_t channel_id, std::uint64_t seq, StampNs log_time_ns,
+                     StampNs publish_time_ns, std::initializer_list<std::string_view> parts);
   Status write_proto(std::uint16_t channel_id, std::uint64_t seq, StampNs log_time_ns,
                      StampNs publish_time_ns, const google::protobuf::Message& message);
   // A Metadata record, written at once (between chunks) into the current file.
@@ -122,7 +133,8 @@ class Writer {
   std::string chunk_;
   std::map<std::uint16_t, std::vector<std::pair<std::uint64_t, std::uint64_t>>> chunk_msg_index_;
   std::uint64_t chunk_start_ = 0, chunk_end_ = 0;
-  std::string compressed_, out_;  // reused buffers
+  std::string compressed_, out_, proto_buf_;  // reused buffers
+  int skip_compression_ = 0;      // chunks left to store without trying (incompressible stream)
 
   WriterStats stats_;
 };

@@ -7,11 +7,17 @@
 
 namespace faultline::runtime {
 
+std::string multipart_prefix(std::size_t header_bytes) {
+  std::string out(4, '\0');
+  const auto n = static_cast<std::uint32_t>(header_bytes);
+  for (int i = 0; i < 4; ++i) out[static_cast<std::size_t>(i)] = static_cast<char>((n >> (8 * i)) & 0xff);
+  return out;
+}
+
 std::string encode_multipart(std::string_view header, std::string_view payload) {
   std::string out;
   out.reserve(4 + header.size() + payload.size());
-  const auto n = static_cast<std::uint32_t>(header.size());
-  for (int i = 0; i < 4; ++i) out.push_back(static_cast<char>((n >> (8 * i)) & 0xff));
+  out.append(multipart_prefix(header.size()));
   out.append(header);
   out.append(payload);
   return out;

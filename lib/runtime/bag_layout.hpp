@@ -32,6 +32,8 @@ inline constexpr const char* kMetaType = "faultline.type";
 
 // u32 LE header length + header + payload.
 std::string encode_multipart(std::string_view header, std::string_view payload);
+// Just the 4-byte length prefix, for writing the parts without concatenating them.
+std::string multipart_prefix(std::size_t header_bytes);
 struct MultipartView {
   std::string_view header;
   std::string_view payload;

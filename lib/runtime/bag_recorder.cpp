@@ -69,6 +69,7 @@ struct BagRecorder::Impl {
   std::map<std::string, std::string> types;  // topic -> proto type from the registry
   std::map<std::string, TopicState> topics;
   std::uint16_t tf_channel = 0;
+  std::string view_head;  // reused: serialized image view without its data
 
   bool selected(const std::string& topic) const {
     for (const auto& re : exclude_re) {
@@ -144,11 +145,13 @@ struct BagRecorder::Impl {
       st.view_channel = h.encoding() == "jpeg" ? writer->channel_for<foxglove::CompressedImage>(topic).value()
                                                : writer->channel_for<foxglove::RawImage>(topic).value();
     }
+    // The image bytes go from the received message straight into the chunk (no proto copy).
     if (h.encoding() == "jpeg") {
-      check(writer->write_proto(st.view_channel, seq, log_ns, pub_ns, bag::to_compressed_image(h, payload)));
+      bag::compressed_image_head(h, payload.size(), view_head);
     } else {
-      check(writer->write_proto(st.view_channel, seq, log_ns, pub_ns, bag::to_raw_image(h, payload)));
+      bag::raw_image_head(h, payload.size(), view_head);
     }
+    check(writer->write_parts(st.view_channel, seq, log_ns, pub_ns, {view_head, payload}));
     if (h.intrinsics_size() == 9) {
       if (st.info_channel == 0) {
         st.info_channel =
@@ -161,6 +164,18 @@ struct BagRecorder::Impl {
       if (h.has_ego_pose()) check(writer->write_proto(tf_channel, seq, log_ns, pub_ns, bag::ego_transform(h)));
       if (h.has_sensor_to_ego()) {
         check(writer->write_proto(tf_channel, seq, log_ns, pub_ns, bag::sensor_transform(h)));
+      }
+    }
+  }
+
+  // Records whatever is queued on every socket without waiting (at most 256 per socket).
+  void drain(RecorderCounts& counts, transport::DropCounter& drops, std::atomic<std::uint64_t>& recorded) {
+    for (auto& sock : subs) {
+      for (int i = 0; i < 256; ++i) {
+        auto r = sock->receive(0);
+        if (!r) break;
+        record(*r, counts, drops);
+        recorded.store(counts.messages);
       }
     }
   }
@@ -180,7 +195,8 @@ struct BagRecorder::Impl {
     Status s;
     if (m.has_payload()) {
       const std::string_view payload(reinterpret_cast<const char*>(m.payload_data()), m.payload_size());
-      s = writer->write(st.replay_channel, hf.seq, log_ns, pub_ns, encode_multipart(m.header(), payload));
+      const std::string prefix = multipart_prefix(m.header().size());
+      s = writer->write_parts(st.replay_channel, hf.seq, log_ns, pub_ns, {prefix, m.header(), payload});
       if (cfg.foxglove_view) {
         auto f = transport::parse_camera_frame(m);
         if (f) write_image_view(topic, st, *f, log_ns, pub_ns, counts);
@@ -271,14 +287,16 @@ int BagRecorder::run(const std::atomic<bool>& stop) {
       continue;
     }
     if (transport::wait_readable(socks, 50 * kNsPerMs) < 0) continue;
-    // Drain whatever is queued on every socket without waiting.
-    for (auto* sock : socks) {
-      for (int i = 0; i < 256; ++i) {
-        auto r = sock->receive(0);
-        if (!r) break;
-        m.record(*r, counts_, drops_);
-        recorded_.store(counts_.messages);
-      }
+    m.drain(counts_, drops_, recorded_);
+  }
+  if (stop.load()) {
+    // SIGINT/SIGTERM: keep what already arrived (in flight from publishers that just finished) until
+    // the sockets stay quiet for 20 ms, at most 300 ms, then finalise.
+    std::vector<transport::RawSubscriber*> socks;
+    for (auto& sp : m.subs) socks.push_back(sp.get());
+    const StampNs drain_end = monotonic_now_ns() + 300 * kNsPerMs;
+    while (!socks.empty() && monotonic_now_ns() < drain_end && transport::wait_readable(socks, 20 * kNsPerMs) >= 0) {
+      m.drain(counts_, drops_, recorded_);
     }
   }
 
