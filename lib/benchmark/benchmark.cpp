@@ -54,17 +54,8 @@ std::vector<launch::ChildSpec> run_children(const BenchmarkOptions& o, const std
                                             const std::vector<std::string>& variant_params) {
   const std::string player = "ipc://" + sock + "/player", frames = "ipc://" + sock + "/frames",
                     det = "ipc://" + sock + "/det", ack = "ipc://" + sock + "/ack";
-  auto bin = [&](const char* name) { return (fs::path(o.bin_dir) / name).string(); };
   auto node = [&](const char* name, std::vector<std::string> params, bool required) {
-    launch::ChildSpec c;
-    c.name = name;
-    c.required = required;
-    c.argv = {bin(name), "--name", name};
-    for (auto& p : params) {
-      c.argv.push_back("-p");
-      c.argv.push_back(std::move(p));
-    }
-    return c;
+    return node_child(o.bin_dir, name, std::move(params), required);
   };
   std::vector<launch::ChildSpec> children;
   children.push_back(
@@ -283,6 +274,19 @@ std::string summary_json(const BenchmarkOptions& o, const BenchmarkResult& b) {
 }
 
 }  // namespace
+
+launch::ChildSpec node_child(const std::string& bin_dir, const std::string& name,
+                             std::vector<std::string> params, bool required) {
+  launch::ChildSpec c;
+  c.name = name;
+  c.required = required;
+  c.argv = {(fs::path(bin_dir) / name).string(), "--name", name};
+  for (auto& p : params) {
+    c.argv.push_back("-p");
+    c.argv.push_back(std::move(p));
+  }
+  return c;
+}
 
 std::string injector_corruption_name(const std::string& robobev_name) {
   const std::string c = scoring::canonical_corruption(robobev_name);

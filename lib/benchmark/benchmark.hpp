@@ -11,27 +11,29 @@
 #include <vector>
 
 #include "common/status.hpp"
+#include "launch/supervisor.hpp"
 #include "scoring/robustness.hpp"
 
 namespace faultline::benchmark {
 
 struct BenchmarkOptions {
-  std::string out_dir;                      // DIR: runs/, summary.json, robustness.*, report.html
-  std::string dataroot;                     // nuScenes tree (synthetic by default, see cmd_benchmark)
+  std::string out_dir;   // DIR: runs/, summary.json, robustness.*, report.html
+  std::string dataroot;  // nuScenes tree (synthetic by default, see cmd_benchmark)
   std::string version = "v1.0-mini";
-  std::string eval_set = "mini_val";        // split scored (predefined or splits.json key)
-  std::vector<std::string> scenes;          // replayed scenes; empty = all
-  std::vector<std::string> corruptions;     // RoboBEV names (camera_crash, ..., low_light, fog, snow)
+  std::string eval_set = "mini_val";     // split scored (predefined or splits.json key)
+  std::vector<std::string> scenes;       // replayed scenes; empty = all
+  std::vector<std::string> corruptions;  // RoboBEV names (camera_crash, ..., low_light, fog, snow)
   std::vector<std::string> levels{"easy", "mid", "hard"};
-  int seeds = 1;                            // faulted runs repeated with seeds 1..N
-  std::string detector_cmd;                 // external detector command line (sh -c); "" = our detector
-  std::vector<std::string> detector_params; // key:=value for our detector node
-  std::string baseline_manifest;            // "" = the paper's DETR3D
-  std::string bin_dir;                      // where the node executables are
-  std::string corrupt_bench;                // bench/results/corrupt.json for the report, if present
-  int run_timeout_s = 600;                  // a run that takes longer is stopped and marked failed
-  // Faultline's detector only: also run it at input scales 0.5 and 0.25 (clean) and single-frame (clean,
-  // frame_lost, camera_crash), for the report's NDS-vs-fps and temporal-vs-single-frame views.
+  int seeds = 1;             // faulted runs repeated with seeds 1..N
+  std::string detector_cmd;  // external detector command line (sh -c); "" = our detector
+  std::vector<std::string> detector_params;  // key:=value for our detector node
+  std::string baseline_manifest;             // "" = the paper's DETR3D
+  std::string bin_dir;                       // where the node executables are
+  std::string corrupt_bench;  // bench/results/corrupt.json for the report, if present
+  int run_timeout_s = 600;    // a run that takes longer is stopped and marked failed
+  // Faultline's detector only: also run it at input scales 0.5 and 0.25 (clean) and single-frame
+  // (clean, frame_lost, camera_crash), for the report's NDS-vs-fps and temporal-vs-single-frame
+  // views.
   bool variants = true;
 };
 
@@ -56,7 +58,12 @@ struct BenchmarkResult {
 
 // Runs the whole matrix; progress lines go to `log`. Fails only on setup problems (a missing node
 // executable, an unwritable output dir); a failing run is recorded and the matrix continues.
-Result<BenchmarkResult> run_benchmark(const BenchmarkOptions& opts, const std::atomic<bool>& stop, std::FILE* log);
+Result<BenchmarkResult> run_benchmark(const BenchmarkOptions& opts, const std::atomic<bool>& stop,
+                                      std::FILE* log);
+
+// One node process: `<bin_dir>/<name> --name <name> -p k:=v ...`.
+launch::ChildSpec node_child(const std::string& bin_dir, const std::string& name,
+                             std::vector<std::string> params, bool required);
 
 // The injector's corruption name for a RoboBEV name (low_light -> dark).
 std::string injector_corruption_name(const std::string& robobev_name);

@@ -14,6 +14,7 @@
 #include <thread>
 #include <unordered_map>
 
+#include "benchmark/benchmark.hpp"
 #include "camera_frame.pb.h"
 #include "detection.pb.h"
 #include "launch/supervisor.hpp"
@@ -196,17 +197,9 @@ Status write_loop_results(const std::string& path, const std::vector<std::string
 
 std::vector<launch::ChildSpec> soak_children(const SoakOptions& o, const std::string& player,
                                              const std::string& frames, const std::string& det) {
-  auto bin = [&](const char* name) { return (fs::path(o.bin_dir) / name).string(); };
+  // In a soak every node must survive: each is required, so an exit ends the run and is reported.
   auto node = [&](const char* name, std::vector<std::string> params) {
-    launch::ChildSpec c;
-    c.name = name;
-    c.required = true;  // in a soak every node must survive; an exit ends the run and is reported
-    c.argv = {bin(name), "--name", name};
-    for (auto& p : params) {
-      c.argv.push_back("-p");
-      c.argv.push_back(std::move(p));
-    }
-    return c;
+    return node_child(o.bin_dir, name, std::move(params), true);
   };
   std::vector<launch::ChildSpec> children;
   // The injector waits for the detector (the soak listens to its /statistics only).

@@ -1,6 +1,5 @@
 // `faultline soak`: the pipeline in real time for a long while, reported per period (see
 // benchmark/soak.hpp).
-#include <unistd.h>
 
 #include <CLI/CLI.hpp>
 #include <cstdio>
@@ -8,20 +7,12 @@
 
 #include "benchmark/soak.hpp"
 #include "cli/command.hpp"
+#include "cli/live_run.hpp"
 #include "common/shutdown.hpp"
-#include "dataset/synth.hpp"
 
 namespace faultline::cli {
 namespace {
 namespace fs = std::filesystem;
-
-std::string self_dir() {
-  char buf[4096];
-  const ssize_t n = readlink("/proc/self/exe", buf, sizeof(buf) - 1);
-  if (n <= 0) return ".";
-  buf[n] = 0;
-  return fs::path(buf).parent_path().string();
-}
 
 int run(int argc, char** argv) {
   CLI::App app{
@@ -79,19 +70,12 @@ int run(int argc, char** argv) {
   if (o.dataroot.empty()) {
     o.dataroot = synth_dir;
     o.version = "v1.0-mini";
-    if (!fs::exists(fs::path(synth_dir) / "v1.0-mini" / "sample.json")) {
-      std::fprintf(stderr, "generating the embedded synthetic dataset into %s ...\n",
-                   synth_dir.c_str());
-      dataset::SynthOptions so;
-      so.out_dir = synth_dir;
-      auto s = dataset::write_synthetic_dataset(so);
-      if (!s) {
-        std::fprintf(stderr, "faultline soak: %s\n", s.status().message().c_str());
-        return 1;
-      }
+    if (Status s = ensure_synth_dataset(synth_dir); !s) {
+      std::fprintf(stderr, "faultline soak: %s\n", s.message().c_str());
+      return 1;
     }
   }
-  o.bin_dir = self_dir();
+  o.bin_dir = executable_dir();
   std::fprintf(
       stderr,
       "soak: %.1f min on %s (%s), rate %.2f, corruption '%s', faults '%s'; rows every %.0f s\n",
