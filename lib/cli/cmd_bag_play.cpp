@@ -1,7 +1,12 @@
 // `faultline bag play FILE...`: republish a recorded bag byte for byte.
 #include <CLI/CLI.hpp>
+#include <poll.h>
+#include <termios.h>
+#include <unistd.h>
 
+#include <atomic>
 #include <cstdio>
+#include <thread>
 
 #include "cli/command.hpp"
 #include "common/config.hpp"
@@ -13,8 +18,54 @@
 namespace faultline::cli {
 namespace {
 
+// Keyboard control when stdin is a terminal: space toggles pause, 's' steps one message. The
+// terminal is put in non-canonical, no-echo mode while playing and restored afterwards.
+class KeyControl {
+ public:
+  explicit KeyControl(runtime::BagPlayer& player) : player_(player) {
+    if (::isatty(STDIN_FILENO) == 0 || ::tcgetattr(STDIN_FILENO, &saved_) != 0) return;
+    termios raw = saved_;
+    raw.c_lflag &= static_cast<tcflag_t>(~(ICANON | ECHO));
+    raw.c_cc[VMIN] = 0;
+    raw.c_cc[VTIME] = 0;
+    if (::tcsetattr(STDIN_FILENO, TCSANOW, &raw) != 0) return;
+    active_ = true;
+    thread_ = std::thread([this] { loop(); });
+  }
+  ~KeyControl() {
+    done_ = true;
+    if (thread_.joinable()) thread_.join();
+    if (active_) ::tcsetattr(STDIN_FILENO, TCSANOW, &saved_);
+  }
+
+ private:
+  void loop() {
+    while (!done_.load()) {
+      pollfd p{STDIN_FILENO, POLLIN, 0};
+      if (::poll(&p, 1, 100) <= 0) continue;
+      char c = 0;
+      if (::read(STDIN_FILENO, &c, 1) != 1) continue;
+      if (c == ' ') player_.toggle_pause();
+      if (c == 's' || c == 'S') {
+        player_.pause();
+        player_.step();
+      }
+    }
+  }
+  runtime::BagPlayer& player_;
+  termios saved_{};
+  bool active_ = false;
+  std::atomic<bool> done_{false};
+  std::thread thread_;
+};
+
 int run(int argc, char** argv) {
-  CLI::App app{"Republish the replay channels of a bag (same bytes, order and seq) on one PUB socket."};
+  CLI::App app{
+      "Republish the replay channels of a bag (same bytes, order and seq) on one PUB socket.\n"
+      "Pause control: with stdin on a terminal, SPACE toggles pause and 's' sends one message; with\n"
+      "--control ENDPOINT, `faultline bag control ENDPOINT pause|resume|toggle|step [N]` does the same\n"
+      "from another shell or program (text commands PUSHed to that PULL socket). --start-paused waits\n"
+      "for the first resume or step."};
   runtime::BagPlayerConfig cfg;
   cfg.progress = true;
   std::vector<std::string> remaps;
@@ -34,6 +85,13 @@ int run(int argc, char** argv) {
   app.add_option("--ack-endpoint", cfg.ack_endpoint, "PULL bind address for SampleAck")->capture_default_str();
   app.add_option("--ack-timeout-ms", cfg.ack_timeout_ms, "lockstep ack timeout (0 = forever)")->capture_default_str();
   app.add_flag("!--no-progress", cfg.progress, "no progress line");
+  app.add_flag("--start-paused", cfg.start_paused, "wait for resume (SPACE, or bag control ... resume) or step");
+  app.add_option("--control", cfg.control_endpoint,
+                 "PULL bind address for pause/resume/toggle/step commands, e.g. ipc:///tmp/play.ctl");
+  app.add_option("--max-gap", cfg.max_gap_s, "skip log-time gaps longer than SECONDS when paced (0 = never)")
+      ->capture_default_str();
+  bool keys = true;
+  app.add_flag("!--no-keys", keys, "ignore the keyboard even when stdin is a terminal");
   CLI11_PARSE(app, argc, argv);
   for (const auto& r : remaps) {
     const auto sep = r.find(":=");
@@ -48,8 +106,11 @@ int run(int argc, char** argv) {
     int rc = 0;
     {
       runtime::BagPlayer player(cfg, log);
-      log->info("playing on {}{}", player.endpoint(),
-                cfg.lockstep ? " (lockstep, acks on " + player.ack_endpoint() + ")" : "");
+      log->info("playing on {}{}{}", player.endpoint(),
+                cfg.lockstep ? " (lockstep, acks on " + player.ack_endpoint() + ")" : "",
+                cfg.control_endpoint.empty() ? "" : " (control on " + player.control_endpoint() + ")");
+      std::unique_ptr<KeyControl> key_control;
+      if (keys) key_control = std::make_unique<KeyControl>(player);
       rc = player.run(shutdown_requested());
     }
     transport::terminate_context();

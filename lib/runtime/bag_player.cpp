@@ -1,6 +1,7 @@
 #include "runtime/bag_player.hpp"
 
 #include <algorithm>
+#include <cctype>
 #include <cstdio>
 #include <regex>
 #include <thread>
@@ -21,6 +22,7 @@ void BagPlayerConfig::validate() const {
   if (rate < 0) throw ConfigError("player.rate = " + std::to_string(rate) + ": expected >= 0");
   if (start_offset_s < 0) throw ConfigError("player.start_offset_s = " + std::to_string(start_offset_s) + ": expected >= 0");
   if (duration_s < 0) throw ConfigError("player.duration_s = " + std::to_string(duration_s) + ": expected >= 0");
+  if (max_gap_s < 0) throw ConfigError("player.max_gap_s = " + std::to_string(max_gap_s) + ": expected >= 0");
   try {
     for (const auto& e : include) std::regex re(e);
     for (const auto& e : exclude) std::regex re(e);
@@ -34,12 +36,64 @@ struct BagPlayer::Impl {
   std::shared_ptr<spdlog::logger> log;
   std::unique_ptr<transport::Publisher> pub;
   std::unique_ptr<transport::RawSubscriber> acks;
+  std::unique_ptr<transport::RawSubscriber> control;
   std::vector<std::regex> include_re, exclude_re;
   std::map<std::uint16_t, int> channel_frames;  // per file: channel id -> 2/3, or 0 = not replayed
   bool waited = false;
   StampNs first_log_ns = -1;                    // first replayable message of the bag
   StampNs base_log_ns = -1, base_wall_ns = 0;   // pacing anchor of the current pass
   StampNs last_progress_ns = 0;
+  StampNs prev_log_ns = -1;                     // last message sent (gap detection)
+  double total_s = 0.0;                         // bag duration from the summaries (progress line)
+
+  // Applies one text command; false for an unknown one.
+  static bool apply_command(std::string_view text, std::atomic<bool>& paused, std::atomic<int>& steps) {
+    while (!text.empty() && std::isspace(static_cast<unsigned char>(text.back()))) text.remove_suffix(1);
+    if (text == "pause") {
+      paused.store(true);
+    } else if (text == "resume" || text == "play") {
+      paused.store(false);
+    } else if (text == "toggle") {
+      paused.store(!paused.load());
+    } else if (text.substr(0, 4) == "step") {
+      int n = 1;
+      if (text.size() > 5) {
+        try {
+          n = std::stoi(std::string(text.substr(5)));
+        } catch (const std::exception&) {
+          return false;
+        }
+      }
+      if (n < 1) return false;
+      paused.store(true);
+      steps.fetch_add(n);
+    } else {
+      return false;
+    }
+    return true;
+  }
+
+  // Drains queued control commands, waiting up to timeout for the first one.
+  void poll_control(DurationNs timeout, std::atomic<bool>& paused, std::atomic<int>& steps,
+                    BagPlayerCounts& counts) {
+    if (!control) {
+      if (timeout > 0) std::this_thread::sleep_for(std::chrono::nanoseconds(timeout));
+      return;
+    }
+    for (auto r = control->receive(timeout); r.is_ok(); r = control->receive(0)) {
+      if (apply_command(r->header(), paused, steps)) {
+        ++counts.control_commands;
+        log->info("control: {}", std::string(r->header()));
+      } else {
+        log->warn("control: unknown command '{}' (pause, resume, toggle, step [N])", std::string(r->header()));
+      }
+    }
+  }
+
+  void print_progress(const BagPlayerCounts& counts, bool paused) const {
+    std::fprintf(stderr, "\r[play] bag time %8.2f / %.2f s  messages %llu%s  ", counts.bag_seconds, total_s,
+                 static_cast<unsigned long long>(counts.messages_sent), paused ? "  [paused]" : "          ");
+  }
 
   bool wanted(const std::string& topic) const {
     for (const auto& re : exclude_re) {
@@ -103,18 +157,39 @@ BagPlayer::BagPlayer(BagPlayerConfig config, std::shared_ptr<spdlog::logger> log
     sc.rcv_hwm = 64;
     m.acks = std::make_unique<transport::RawSubscriber>(sc);
   }
+  if (!m.cfg.control_endpoint.empty()) {
+    transport::SubscriberConfig sc;
+    sc.endpoints = {m.cfg.control_endpoint};
+    sc.pattern = transport::Pattern::PushPull;
+    sc.bind = true;
+    sc.rcv_hwm = 64;
+    sc.max_msg_bytes = 4096;
+    m.control = std::make_unique<transport::RawSubscriber>(sc);
+  }
+  paused_.store(m.cfg.start_paused);
 }
 
 BagPlayer::~BagPlayer() = default;
 
 std::string BagPlayer::endpoint() const { return impl_->pub->endpoint(); }
 std::string BagPlayer::ack_endpoint() const { return impl_->acks ? impl_->acks->endpoints().front() : ""; }
+std::string BagPlayer::control_endpoint() const {
+  return impl_->control ? impl_->control->endpoints().front() : "";
+}
 
 int BagPlayer::run(const std::atomic<bool>& stop) {
   Impl& m = *impl_;
   const StampNs offset_ns = static_cast<StampNs>(m.cfg.start_offset_s * kNsPerSec);
   const StampNs span_ns = m.cfg.duration_s > 0 ? static_cast<StampNs>(m.cfg.duration_s * kNsPerSec) : -1;
   bool ended = false;  // the duration limit was reached
+  for (const auto& file : m.cfg.files) {  // duration for the progress line (indexed files only)
+    auto reader = bag::Reader::open(file);
+    if (reader && (*reader)->load_summary().is_ok() && (*reader)->summary().statistics) {
+      const auto& st = *(*reader)->summary().statistics;
+      m.total_s += static_cast<double>(st.message_end_time - st.message_start_time) / 1e9;
+    }
+  }
+  if (m.cfg.start_paused) m.log->info("paused: waiting for resume or step");
   do {
     m.base_log_ns = -1;
     for (const auto& file : m.cfg.files) {
@@ -153,6 +228,24 @@ int BagPlayer::run(const std::atomic<bool>& stop) {
                                                        static_cast<DurationNs>(m.cfg.wait_timeout_ms) * kNsPerMs, &stop);
           if (!w.is_ok()) m.log->warn("starting without {} subscriber(s) on {}: {}", m.cfg.wait_subscribers, topic, w.to_string());
         }
+        // Pause / step: nothing is sent while paused; one message per step.
+        m.poll_control(0, paused_, steps_, counts_);
+        if (paused_.load()) {
+          bool was_waiting = false;
+          while (paused_.load() && steps_.load() == 0 && !stop.load()) {
+            if (m.cfg.progress && !was_waiting) m.print_progress(counts_, true);
+            was_waiting = true;
+            m.poll_control(50 * kNsPerMs, paused_, steps_, counts_);
+          }
+          if (stop.load()) return false;
+          if (paused_.load()) steps_.fetch_sub(1);  // one message for this step
+          m.base_log_ns = -1;                       // the pacing clock restarts after a pause
+        }
+        if (m.cfg.rate > 0 && m.cfg.max_gap_s > 0 && m.prev_log_ns >= 0 &&
+            v.log_time_ns - m.prev_log_ns > static_cast<StampNs>(m.cfg.max_gap_s * kNsPerSec)) {
+          m.base_log_ns = -1;  // skip the gap
+        }
+        m.prev_log_ns = v.log_time_ns;
         if (m.cfg.rate > 0) {
           if (m.base_log_ns < 0) {
             m.base_log_ns = v.log_time_ns;
@@ -181,12 +274,12 @@ int BagPlayer::run(const std::atomic<bool>& stop) {
           return s.code() != StatusCode::kCancelled;
         }
         ++counts_.messages_sent;
+        sent_.store(counts_.messages_sent);
         counts_.bytes_sent += v.data.size();
         counts_.bag_seconds = static_cast<double>(rel) / 1e9;
         if (m.cfg.progress && monotonic_now_ns() - m.last_progress_ns > 200 * kNsPerMs) {
           m.last_progress_ns = monotonic_now_ns();
-          std::fprintf(stderr, "\r[play] bag time %8.2f s  messages %llu  ", counts_.bag_seconds,
-                       static_cast<unsigned long long>(counts_.messages_sent));
+          m.print_progress(counts_, paused_.load());
         }
         if (m.cfg.lockstep && topic == m.cfg.sync_topic) {
           msgs::SampleBoundary b;

@@ -1,7 +1,14 @@
 // The bag player (R10): republishes the replay channels of bags written by BagRecorder (or `bag
 // convert`) exactly as recorded: same bytes, same order (file order = receive order), same seq.
-// Pacing follows log time scaled by `rate` (0 = unlimited). In lockstep it waits after each message
-// on `sync_topic` for the sink's SampleAck of that sample, like runtime/player_loop.
+// Pacing follows log time scaled by `rate` (0 = unlimited); a log-time gap longer than `max_gap_s`
+// (e.g. between scenes of a converted bag, recorded days apart) is skipped, not slept. In lockstep it
+// waits after each message on `sync_topic` for the sink's SampleAck of that sample, like
+// runtime/player_loop.
+//
+// Pause control: pause()/resume()/toggle_pause()/step() from any thread, or text commands
+// ("pause", "resume", "toggle", "step", "step N") as two-part messages [any topic][command] sent
+// with PUSH to the PULL socket bound at `control_endpoint` (`faultline bag control`). While paused
+// nothing is sent; a step sends exactly one more message; resuming restarts the pacing clock.
 #pragma once
 
 #include <spdlog/logger.h>
@@ -34,6 +41,9 @@ struct BagPlayerConfig {
   int ack_timeout_ms = 30000;
   int linger_ms = 1000;
   bool progress = false;                    // a progress line on stderr
+  double max_gap_s = 10.0;                  // longer log-time gaps are skipped when pacing; 0 = never
+  bool start_paused = false;                // wait for resume/step before the first message
+  std::string control_endpoint;             // PULL bind address for pause/resume/step; "" = none
   void validate() const;                    // throws ConfigError
 };
 
@@ -44,6 +54,7 @@ struct BagPlayerCounts {
   std::uint64_t malformed = 0;
   std::uint64_t ack_timeouts = 0;
   std::uint64_t bag_problems = 0;
+  std::uint64_t control_commands = 0;       // accepted pause/resume/step commands
   double bag_seconds = 0.0;                 // bag time covered by what was sent
 };
 
@@ -53,6 +64,16 @@ class BagPlayer {
   ~BagPlayer();
   std::string endpoint() const;
   std::string ack_endpoint() const;
+  std::string control_endpoint() const;  // "" without a control socket
+
+  // Thread-safe pause control (also reachable through the control socket).
+  void pause() { paused_.store(true); }
+  void resume() { paused_.store(false); }
+  void toggle_pause() { paused_.store(!paused_.load()); }
+  void step(int messages = 1) { steps_.fetch_add(messages); }
+  bool paused() const { return paused_.load(); }
+  // Messages sent so far; safe to read from another thread while run() works.
+  std::uint64_t sent() const { return sent_.load(); }
   // 0 at the end of the bag or on stop; 1 when a bag cannot be read.
   int run(const std::atomic<bool>& stop);
   const BagPlayerCounts& counts() const { return counts_; }
@@ -61,6 +82,9 @@ class BagPlayer {
   struct Impl;
   std::unique_ptr<Impl> impl_;
   BagPlayerCounts counts_;
+  std::atomic<bool> paused_{false};
+  std::atomic<int> steps_{0};
+  std::atomic<std::uint64_t> sent_{0};
 };
 
 }  // namespace faultline::runtime

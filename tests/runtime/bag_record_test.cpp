@@ -10,12 +10,15 @@
 #include <chrono>
 #include <cstdlib>
 #include <filesystem>
+#include <functional>
+#include <map>
 #include <set>
 #include <string>
 #include <thread>
 #include <vector>
 
 #include "bag/reader.hpp"
+#include "bag/writer.hpp"
 #include "camera_frame.pb.h"
 #include "detection.pb.h"
 #include "runtime/bag_layout.hpp"
@@ -391,6 +394,173 @@ TEST_F(BagRecordTest, StopDuringRecordingLeavesIndexedFile) {
     const std::string cmd = "node " + (js / "validate_mcap.mjs").string() + " " + cfg.output + " > /dev/null";
     EXPECT_EQ(std::system(cmd.c_str()), 0) << cmd;
   }
+}
+
+
+// A replay bag written directly with controlled log times: two-part messages on /a and /b
+// alternating, message i at 1e18 + i * 100 ms (+ gap_s after the first half), seq per topic.
+std::string write_timed_bag(const fs::path& path, int n, double gap_s = 0) {
+  auto w = bag::Writer::open(path.string(), bag::WriterOptions{});
+  EXPECT_TRUE(w.is_ok());
+  std::map<std::string, std::uint16_t> ch;
+  std::map<std::string, std::uint64_t> seq;
+  for (const char* t : {"/a", "/b"}) {
+    ch[t] = (*w)->add_channel(t, 0, {{kMetaTopic, t}, {kMetaFrames, "2"}}, kBodyEncoding).value();
+  }
+  for (int i = 0; i < n; ++i) {
+    const std::string topic = i % 2 == 0 ? "/a" : "/b";
+    msgs::SampleAck body;  // any message with a Header
+    body.mutable_header()->set_seq(++seq[topic]);
+    body.set_sample_token("m" + std::to_string(i));
+    StampNs t = 1'000'000'000'000'000'000 + i * 100 * kNsPerMs;
+    if (i >= n / 2) t += static_cast<StampNs>(gap_s * kNsPerSec);
+    EXPECT_TRUE((*w)->write(ch[topic], seq[topic], t, t, body.SerializeAsString()).is_ok());
+  }
+  EXPECT_TRUE((*w)->close().is_ok());
+  return path.string();
+}
+
+struct Played {
+  std::string topic, token;
+};
+
+class BagPlayOptionsTest : public BagRecordTest {
+ protected:
+  BagPlayerConfig config(const std::string& file) const {
+    BagPlayerConfig pc;
+    pc.files = {file};
+    pc.rate = 0;
+    pc.endpoint = "ipc://" + (dir_ / "play.sock").string();
+    pc.wait_subscribers = 1;
+    return pc;
+  }
+  // Plays with `pc` into a subscriber until `expect` messages arrived (or 10 s of silence), then
+  // stops the player; `during` runs after the subscriber connected.
+  std::vector<Played> play(BagPlayerConfig pc, std::size_t expect, double* wall_s = nullptr,
+                           const std::function<void(BagPlayer&, transport::RawSubscriber&)>& during = {}) {
+    BagPlayer player(pc, quiet_logger());
+    transport::SubscriberConfig sc;
+    sc.endpoints = {player.endpoint()};
+    sc.topics = {""};
+    sc.rcv_hwm = 1000;
+    transport::RawSubscriber sub(sc);
+    std::atomic<bool> stop{false};
+    int rc = -1;
+    const auto t0 = std::chrono::steady_clock::now();
+    std::thread t([&] { rc = player.run(stop); });
+    if (during) during(player, sub);
+    std::vector<Played> got;
+    // Up to `expect` messages; a player that ends by itself (no loop) is then joined and whatever
+    // else it sent is collected too, so extra messages are seen.
+    while (got.size() < expect || !pc.loop) {
+      auto r = sub.receive(got.size() < expect ? 10 * kNsPerSec : 200 * kNsPerMs);
+      if (!r) break;
+      msgs::SampleAck a;
+      EXPECT_TRUE(a.ParseFromArray(r->header().data(), static_cast<int>(r->header().size())));
+      got.push_back({std::string(r->topic()), a.sample_token()});
+    }
+    if (pc.loop) stop = true;
+    t.join();
+    if (wall_s) *wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    EXPECT_EQ(rc, 0);
+    return got;
+  }
+};
+
+std::vector<std::string> tokens(const std::vector<Played>& p) {
+  std::vector<std::string> out;
+  for (const auto& x : p) out.push_back(x.token);
+  return out;
+}
+
+std::vector<std::string> range_tokens(int from, int to) {  // m<from> .. m<to-1>
+  std::vector<std::string> out;
+  for (int i = from; i < to; ++i) out.push_back("m" + std::to_string(i));
+  return out;
+}
+
+TEST_F(BagPlayOptionsTest, StartOffsetAndDurationSelectTheBagTimeWindow) {
+  auto pc = config(write_timed_bag(dir_ / "t.mcap", 40));
+  pc.start_offset_s = 0.5;  // from message 5 (0.5 s)
+  pc.duration_s = 1.0;      // through message 15 (1.5 s)
+  EXPECT_EQ(tokens(play(pc, 11)), range_tokens(5, 16));
+}
+
+TEST_F(BagPlayOptionsTest, IncludeExcludeAndRemapWorkOnTransportTopics) {
+  auto pc = config(write_timed_bag(dir_ / "t.mcap", 10));
+  pc.include = {"^/a$"};
+  auto a = play(pc, 5);
+  ASSERT_EQ(a.size(), 5u);
+  for (const auto& p : a) EXPECT_EQ(p.topic, "/a");
+  pc.include.clear();
+  pc.exclude = {"^/a$"};
+  pc.remap = {{"/b", "/renamed/b"}};
+  auto b = play(pc, 5);
+  ASSERT_EQ(b.size(), 5u);
+  for (const auto& p : b) EXPECT_EQ(p.topic, "/renamed/b");
+  EXPECT_EQ(b.front().token, "m1");
+}
+
+TEST_F(BagPlayOptionsTest, LoopRepeatsTheBagUntilStopped) {
+  auto pc = config(write_timed_bag(dir_ / "t.mcap", 6));
+  pc.loop = true;
+  auto got = play(pc, 18);
+  auto expected = range_tokens(0, 6);
+  for (int k = 0; k < 2; ++k) {
+    const auto once = range_tokens(0, 6);
+    expected.insert(expected.end(), once.begin(), once.end());
+  }
+  EXPECT_EQ(tokens(got), expected);
+}
+
+TEST_F(BagPlayOptionsTest, RatePacesByLogTimeAndLongGapsAreSkipped) {
+  // 20 messages over 1.9 s of bag time at rate 4: at least 0.475 s of wall time.
+  auto pc = config(write_timed_bag(dir_ / "t.mcap", 20));
+  pc.rate = 4;
+  double wall = 0;
+  EXPECT_EQ(play(pc, 20, &wall).size(), 20u);
+  EXPECT_GE(wall, 1.9 / 4);
+  // A one-hour gap in the middle is skipped (max_gap_s), not slept.
+  auto gap = config(write_timed_bag(dir_ / "gap.mcap", 20, 3600));
+  gap.rate = 20;
+  EXPECT_EQ(play(gap, 20, &wall).size(), 20u);
+  EXPECT_LT(wall, 60.0);
+}
+
+TEST_F(BagPlayOptionsTest, StartPausedStepsAndResumesFromTheControlSocket) {
+  auto pc = config(write_timed_bag(dir_ / "t.mcap", 12));
+  pc.start_paused = true;
+  pc.control_endpoint = "ipc://" + (dir_ / "ctl.sock").string();
+  auto got = play(pc, 10, nullptr, [&](BagPlayer& player, transport::RawSubscriber& sub) {
+    EXPECT_TRUE(player.paused());
+    EXPECT_EQ(sub.receive(300 * kNsPerMs).status().code(), StatusCode::kWouldBlock) << "paused: nothing sent";
+    transport::PublisherConfig cc;
+    cc.endpoint = player.control_endpoint();
+    cc.pattern = transport::Pattern::PushPull;
+    cc.bind = false;
+    cc.linger_ms = 200;
+    transport::Publisher ctl(cc);
+    ASSERT_TRUE(ctl.send("/ctl", "step 2").is_ok());
+    ASSERT_TRUE(wait_for([&] { return player.sent() == 2; }));
+    EXPECT_EQ(sub.receive(300 * kNsPerMs).is_ok(), true);  // the two stepped messages are queued
+    EXPECT_EQ(sub.receive(300 * kNsPerMs).is_ok(), true);
+    EXPECT_EQ(sub.receive(300 * kNsPerMs).status().code(), StatusCode::kWouldBlock) << "a step sends exactly N";
+    EXPECT_TRUE(player.paused());
+    ASSERT_TRUE(ctl.send("/ctl", "bogus").is_ok());  // logged and ignored
+    ASSERT_TRUE(ctl.send("/ctl", "resume").is_ok());
+  });
+  EXPECT_EQ(got.size(), 10u);  // the rest after resume
+  EXPECT_EQ(tokens(got), range_tokens(2, 12));
+}
+
+TEST_F(BagPlayOptionsTest, ProgressLineShowsBagTimeOverDuration) {
+  auto pc = config(write_timed_bag(dir_ / "t.mcap", 10));
+  pc.progress = true;
+  ::testing::internal::CaptureStderr();
+  EXPECT_EQ(play(pc, 10).size(), 10u);
+  const std::string err = ::testing::internal::GetCapturedStderr();
+  EXPECT_NE(err.find("[play] bag time"), std::string::npos) << err;
+  EXPECT_NE(err.find("/ 0.90 s"), std::string::npos) << err;
 }
 
 }  // namespace
