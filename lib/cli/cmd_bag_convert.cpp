@@ -1,0 +1,153 @@
+// `faultline bag convert --dataroot D --version V [--scenes LIST] -o FILE [--corrupt TYPE:LEVEL ...]`:
+// nuScenes scenes straight into an MCAP bag (runtime/bag_convert.hpp), unpaced, with a progress line.
+#include <CLI/CLI.hpp>
+#include <time.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <set>
+#include <sstream>
+
+#include "cli/command.hpp"
+#include "common/config.hpp"
+#include "common/logging.hpp"
+#include "common/shutdown.hpp"
+#include "policy/injector_policy.hpp"
+#include "runtime/bag_convert.hpp"
+
+namespace faultline::cli {
+namespace {
+
+std::vector<std::string> split_list(const std::string& text) {
+  std::vector<std::string> out;
+  std::stringstream ss(text);
+  for (std::string item; std::getline(ss, item, ',');) {
+    if (!item.empty()) out.push_back(item);
+  }
+  return out;
+}
+
+double process_cpu_s() {
+  timespec ts{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+  return static_cast<double>(ts.tv_sec) + static_cast<double>(ts.tv_nsec) * 1e-9;
+}
+
+int run(int argc, char** argv) {
+  CLI::App app{
+      "Write nuScenes scenes straight into an MCAP bag: camera frames as the player publishes them (replayable "
+      "with `bag play`), /sync/sample boundaries, and the Foxglove view (CompressedImage, CameraCalibration, /tf, "
+      "ground-truth SceneUpdate on /markers/annotations; nuscenes2mcap naming). With --corrupt, the injector's "
+      "fault engine runs on every frame and the bag also holds /faulty/... frames and /faultline/faults events. "
+      "Not paced: as fast as disk and CPU allow."};
+  std::string dataroot, version = "v1.0-mini", scenes;
+  std::vector<std::string> corrupt;
+  runtime::ConvertConfig cfg;
+  bool gt = true, quiet = false;
+  app.add_option("--dataroot", dataroot, "nuScenes root (holds <version>/, samples/, sweeps/)")->required();
+  app.add_option("--version", version, "table folder")->capture_default_str();
+  app.add_option("--scenes", scenes, "comma-separated scene names (default: all scenes of the version)");
+  app.add_option("-o,--output", cfg.output, "bag path (.mcap)")->required();
+  app.add_option("--corrupt", corrupt,
+                 "TYPE:LEVEL fault on all cameras, e.g. fog:mid, snow:3, camera_crash:hard (repeatable; the "
+                 "injector's `corruption` shorthand)");
+  app.add_option("--seed", cfg.run_metadata["seed"], "run seed of the fault draws")->default_str("0");
+  app.add_flag("!--no-clean", cfg.clean_frames, "with --corrupt: store only the faulted stream");
+  app.add_option("--compression", cfg.compression, "none | zstd | lz4")->capture_default_str();
+  app.add_flag("!--no-foxglove-view", cfg.foxglove_view, "replay channels only");
+  app.add_flag("!--no-ground-truth", gt, "no /markers/annotations boxes");
+  app.add_flag("-q,--quiet", quiet, "no progress line");
+  CLI11_PARSE(app, argc, argv);
+  if (cfg.run_metadata["seed"].empty()) cfg.run_metadata["seed"] = "0";
+  try {
+    auto log = logging::make_node_logger("bag_convert", "info");
+    std::uint64_t seed = 0;
+    try {
+      seed = std::stoull(cfg.run_metadata["seed"]);
+    } catch (const std::exception&) {
+      throw ConfigError("bag convert: --seed " + cfg.run_metadata["seed"] + ": expected an unsigned integer");
+    }
+    // The injector's policy: each --corrupt TYPE:LEVEL is its `corruption: TYPE/LEVEL` shorthand.
+    policy::EngineConfig engine;
+    engine.seed = seed;
+    std::string faults_text;
+    for (std::string c : corrupt) {
+      std::replace(c.begin(), c.end(), ':', '/');
+      auto spec = policy::parse_corruption_shorthand(c, "bag convert --corrupt");
+      if (!spec) continue;
+      engine.faults.push_back(*spec);
+      faults_text += (faults_text.empty() ? "" : " ") + c;
+    }
+    std::unique_ptr<runtime::FramePolicy> frame_policy;
+    if (!engine.faults.empty()) frame_policy = std::make_unique<policy::EnginePolicy>(std::move(engine));
+
+    const auto t0 = std::chrono::steady_clock::now();
+    const double c0 = process_cpu_s();
+    const auto scene_list = split_list(scenes);
+    auto source = runtime::NuScenesFrameSource::open(dataroot, version, scene_list);
+    if (!source) {
+      std::fprintf(stderr, "bag convert: %s\n", source.status().to_string().c_str());
+      return 1;
+    }
+    std::map<std::string, std::vector<bag::GtBox>> boxes;
+    if (gt && cfg.foxglove_view) {
+      std::set<std::string> samples;
+      for (const auto& f : (*source)->frames()) {
+        if (f.is_key_frame) samples.insert(f.sample_token);
+      }
+      auto loaded = runtime::load_gt_boxes(dataroot, version, samples);
+      if (!loaded) {
+        log->warn("no ground-truth boxes: {}", loaded.status().to_string());
+      } else {
+        boxes = std::move(loaded).value();
+      }
+    }
+    cfg.run_metadata["dataroot"] = dataroot;
+    cfg.run_metadata["dataset_version"] = version;
+    cfg.run_metadata["scenes"] = scenes.empty() ? "all" : scenes;
+    cfg.run_metadata["faults"] = faults_text;
+    const double load_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+
+    runtime::BagConverter converter(cfg, std::move(source).value(), std::move(boxes), std::move(frame_policy), log);
+    const auto t1 = std::chrono::steady_clock::now();
+    auto progress = [&](std::uint64_t done, std::uint64_t total) {
+      if (quiet) return;
+      const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count();
+      std::fprintf(stderr, "\r[convert] %llu/%llu frames  %.0f frames/s  ", static_cast<unsigned long long>(done),
+                   static_cast<unsigned long long>(total), s > 0 ? static_cast<double>(done) / s : 0.0);
+    };
+    auto counts = converter.run(shutdown_requested(), progress);
+    if (!quiet) std::fprintf(stderr, "\n");
+    if (!counts) {
+      std::fprintf(stderr, "bag convert: %s\n", counts.status().to_string().c_str());
+      return 1;
+    }
+    const double write_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count();
+    const double cpu_s = process_cpu_s() - c0;
+    const auto& ws = converter.writer_stats();
+    std::printf("%s\n", cfg.output.c_str());
+    std::printf("frames %llu (missing %llu), boundaries %llu, gt boxes %llu, messages %llu\n",
+                static_cast<unsigned long long>(counts->frames),
+                static_cast<unsigned long long>(counts->missing_images),
+                static_cast<unsigned long long>(counts->boundaries), static_cast<unsigned long long>(counts->gt_boxes),
+                static_cast<unsigned long long>(counts->messages));
+    if (!faults_text.empty()) {
+      std::printf("faults %s: %llu faulted frames (%llu changed), %llu injected drops\n", faults_text.c_str(),
+                  static_cast<unsigned long long>(counts->faulted_frames),
+                  static_cast<unsigned long long>(counts->changed_frames),
+                  static_cast<unsigned long long>(counts->injected_drops));
+    }
+    std::printf("tables %.2f s, frames %.2f s wall (%.0f frames/s), %.2f s cpu; bag %.1f MB, images read %.1f MB\n",
+                load_s, write_s, write_s > 0 ? static_cast<double>(counts->frames) / write_s : 0.0, cpu_s,
+                static_cast<double>(ws.file_bytes) / 1e6, static_cast<double>(counts->image_bytes) / 1e6);
+    return shutdown_requested().load() ? 130 : 0;
+  } catch (const ConfigError& e) {
+    std::fprintf(stderr, "bag convert: %s\n", e.what());
+    return 2;
+  }
+}
+
+}  // namespace
+FAULTLINE_COMMAND(bag_convert, "bag convert", "write nuScenes scenes straight into an MCAP bag", &run);
+}  // namespace faultline::cli
