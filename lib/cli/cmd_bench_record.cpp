@@ -222,7 +222,7 @@ int run(int argc, char** argv) {
   double seconds = 5, rate_hz = 12;
   int cameras = 6, reps = 3;
   bool view = true, noise = false;
-  std::string images, compression = "zstd";
+  std::string images, compression = "lz4";  // the recorder default
   app.add_option("--seconds", seconds, "recording length per rep")->capture_default_str();
   app.add_option("--rate", rate_hz, "frames per second per camera")->capture_default_str();
   app.add_option("--cameras", cameras, "1..6")->check(CLI::Range(1, 6))->capture_default_str();

@@ -29,7 +29,7 @@ struct RecorderConfig {
   double duration_s = 0.0;              // stop after this long; 0 = until stopped
   std::uint64_t split_bytes = 0;        // new file past this size; 0 = never
   double split_s = 0.0;                 // new file after this log-time span; 0 = never
-  std::string compression = "zstd";     // none | zstd | lz4
+  std::string compression = "lz4";      // none | zstd | lz4; lz4 is cheap, JPEG chunks are stored raw anyway
   bool foxglove_view = true;            // also write CompressedImage/RawImage, calibration, /tf, markers
   int hwm = 64;                         // receive queue per socket (messages)
   double discover_period_s = 0.5;       // registry re-scan period for late publishers
