@@ -57,8 +57,8 @@ __attribute__((target("avx2"))) std::size_t weighted_rows_avx2(float* acc, const
   return j0;
 }
 
-// Same for float sources (the fast snow layer).
-__attribute__((target("avx2"))) std::size_t weighted_rows_avx2(float* acc, const float* const* rows,
+// Same for float sources (the fast snow layer, fast mode only), with fused multiply-adds.
+__attribute__((target("avx2,fma"))) std::size_t weighted_rows_avx2(float* acc, const float* const* rows,
                                                                const float* weights, int taps, std::size_t n) {
   constexpr std::size_t kBlock = 64;
   std::size_t j0 = 0;
@@ -68,15 +68,85 @@ __attribute__((target("avx2"))) std::size_t weighted_rows_avx2(float* acc, const
     for (int i = 0; i < taps; ++i) {
       const float* r = rows[i] + j0;
       const __m256 k = _mm256_set1_ps(weights[i]);
-      for (int v = 0; v < 8; ++v) a[v] = _mm256_add_ps(a[v], _mm256_mul_ps(k, _mm256_loadu_ps(r + 8 * v)));
+      for (int v = 0; v < 8; ++v) a[v] = _mm256_fmadd_ps(k, _mm256_loadu_ps(r + 8 * v), a[v]);
     }
     for (int v = 0; v < 8; ++v) _mm256_storeu_ps(acc + j0 + 8 * v, a[v]);
   }
   return j0;
 }
 
+// 64 outputs per block kept in registers across all taps (fused multiply-add over half-precision source rows:
+// integers 0..255 are exact in binary16, and half the bytes per load of float32 rows, measured ~1.5x faster), then
+// the band test and truncation on the registers (no accumulator row written or re-read).
+__attribute__((target("avx2,fma,f16c"))) std::size_t weighted_rows_truncate_f16_avx2(
+    const std::uint16_t* const* rows, const float* weights, int taps, float band, std::uint8_t* dst,
+    std::uint8_t* ambiguous, std::size_t n, std::size_t* count) {
+  constexpr std::size_t kBlock = 64;
+  const __m256 vband = _mm256_set1_ps(band);
+  const __m256 zero = _mm256_setzero_ps();
+  const __m256i max255 = _mm256_set1_epi32(255);
+  std::size_t j0 = 0, bad_total = 0;
+  for (; j0 + kBlock <= n; j0 += kBlock) {
+    __m256 a[8];
+    for (auto& v : a) v = _mm256_setzero_ps();
+    for (int i = 0; i < taps; ++i) {
+      const std::uint16_t* r = rows[i] + j0;
+      const __m256 k = _mm256_set1_ps(weights[i]);
+      for (int v = 0; v < 8; ++v) {
+        const __m256 x = _mm256_cvtph_ps(_mm_loadu_si128(reinterpret_cast<const __m128i*>(r + 8 * v)));
+        a[v] = _mm256_fmadd_ps(k, x, a[v]);
+      }
+    }
+    for (int v = 0; v < 8; v += 2) {
+      __m256i q[2];
+      __m256i badm[2];
+      for (int h = 0; h < 2; ++h) {
+        const __m256 lo_f = _mm256_sub_ps(a[v + h], vband);
+        const __m256 hi_f = _mm256_add_ps(a[v + h], vband);
+        const __m256i lo = _mm256_cvttps_epi32(lo_f);
+        const __m256i hi = _mm256_cvttps_epi32(hi_f);
+        const __m256i neq = _mm256_xor_si256(_mm256_cmpeq_epi32(lo, hi), _mm256_set1_epi32(-1));
+        const __m256i neg = _mm256_castps_si256(_mm256_cmp_ps(lo_f, zero, _CMP_LT_OQ));
+        badm[h] = _mm256_or_si256(neq, neg);
+        q[h] = _mm256_min_epi32(_mm256_max_epi32(lo, _mm256_setzero_si256()), max255);
+      }
+      const __m256i w16 = _mm256_permute4x64_epi64(_mm256_packus_epi32(q[0], q[1]), 0xD8);
+      const __m128i b8 = _mm_packus_epi16(_mm256_castsi256_si128(w16), _mm256_extracti128_si256(w16, 1));
+      _mm_storeu_si128(reinterpret_cast<__m128i*>(dst + j0 + 8 * v), b8);
+      const __m256i m16 = _mm256_permute4x64_epi64(_mm256_packs_epi32(badm[0], badm[1]), 0xD8);
+      const __m128i m8 = _mm_packs_epi16(_mm256_castsi256_si128(m16), _mm256_extracti128_si256(m16, 1));
+      _mm_storeu_si128(reinterpret_cast<__m128i*>(ambiguous + j0 + 8 * v), _mm_and_si128(m8, _mm_set1_epi8(1)));
+      bad_total += static_cast<std::size_t>(__builtin_popcount(static_cast<unsigned>(_mm_movemask_epi8(m8))));
+    }
+  }
+  *count = bad_total;
+  return j0;
+}
+
+__attribute__((target("avx2,f16c"))) void u8_to_half_avx2(const std::uint8_t* src, std::uint16_t* dst,
+                                                          std::size_t n, std::size_t* done) {
+  std::size_t j = 0;
+  for (; j + 8 <= n; j += 8) {
+    const __m128i bytes = _mm_loadl_epi64(reinterpret_cast<const __m128i*>(src + j));
+    const __m256 x = _mm256_cvtepi32_ps(_mm256_cvtepu8_epi32(bytes));
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(dst + j), _mm256_cvtps_ph(x, 0));
+  }
+  *done = j;
+}
+
+bool have_avx2_fma_f16c() {
+  static const bool yes =
+      __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma") && __builtin_cpu_supports("f16c");
+  return yes;
+}
+
 bool have_avx2() {
   static const bool yes = __builtin_cpu_supports("avx2");
+  return yes;
+}
+
+bool have_avx2_fma() {
+  static const bool yes = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
   return yes;
 }
 #endif
@@ -98,13 +168,41 @@ void weighted_rows(float* acc, const std::uint8_t* const* rows, const float* wei
 void weighted_rows(float* acc, const float* const* rows, const float* weights, int taps, std::size_t n) {
   std::size_t j0 = 0;
 #if defined(__GNUC__) && defined(__x86_64__)
-  if (have_avx2()) j0 = weighted_rows_avx2(acc, rows, weights, taps, n);
+  if (have_avx2_fma()) j0 = weighted_rows_avx2(acc, rows, weights, taps, n);
 #endif
   for (std::size_t j = j0; j < n; ++j) {
     float a = 0.0f;
     for (int i = 0; i < taps; ++i) a += weights[i] * rows[i][j];
     acc[j] = a;
   }
+}
+
+void u8_to_half(const std::uint8_t* src, std::uint16_t* dst, std::size_t n) {
+  std::size_t j = 0;
+#if defined(__GNUC__) && defined(__x86_64__)
+  if (have_avx2_fma_f16c()) u8_to_half_avx2(src, dst, n, &j);
+#endif
+  for (; j < n; ++j) dst[j] = half_of_byte(src[j]);
+}
+
+std::size_t weighted_rows_truncate(const std::uint16_t* const* rows, const float* weights, int taps, float band,
+                                   std::uint8_t* dst, std::uint8_t* ambiguous, std::size_t n) {
+  std::size_t j0 = 0, count = 0;
+#if defined(__GNUC__) && defined(__x86_64__)
+  if (have_avx2_fma_f16c()) j0 = weighted_rows_truncate_f16_avx2(rows, weights, taps, band, dst, ambiguous, n, &count);
+#endif
+  for (std::size_t j = j0; j < n; ++j) {
+    float a = 0.0f;
+    for (int i = 0; i < taps; ++i) a += weights[i] * byte_of_half(rows[i][j]);
+    const float lo_f = a - band;
+    const int lo = static_cast<int>(lo_f);
+    const int hi = static_cast<int>(a + band);
+    const bool bad = (lo != hi) | (lo_f < 0.0f);
+    dst[j] = static_cast<std::uint8_t>(std::min(std::max(lo, 0), 255));
+    ambiguous[j] = static_cast<std::uint8_t>(bad);
+    count += bad;
+  }
+  return count;
 }
 
 FAULTLINE_CLONES std::size_t truncate_outside_band(const float* acc, float band, std::uint8_t* dst,

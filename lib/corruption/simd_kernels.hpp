@@ -13,9 +13,32 @@ void axpy(double* acc, const double* src, double k, std::size_t n);
 void axpy(float* acc, const std::uint8_t* src, float k, std::size_t n);
 void axpy(float* acc, const float* src, float k, std::size_t n);
 
-// acc[j] = sum_i weights[i] * rows[i][j] in float32, taps in order (rows are already shifted tap sources).
+// acc[j] = sum_i weights[i] * rows[i][j] in float32, taps in order (rows are already shifted tap sources). The
+// float-source version fuses multiply-adds where the CPU has FMA (fast mode only).
 void weighted_rows(float* acc, const std::uint8_t* const* rows, const float* weights, int taps, std::size_t n);
 void weighted_rows(float* acc, const float* const* rows, const float* weights, int taps, std::size_t n);
+
+// Bytes as IEEE binary16 bit patterns (every integer 0..255 is exact in half precision) and back.
+constexpr std::uint16_t half_of_byte(std::uint8_t v) {
+  if (v == 0) return 0;
+  int e = 7;
+  while (!(v >> e)) --e;
+  return static_cast<std::uint16_t>(((e + 15) << 10) | ((static_cast<unsigned>(v) << (10 - e)) & 0x3FFu));
+}
+constexpr float byte_of_half(std::uint16_t h) {
+  if (h == 0) return 0.0f;
+  const int e = (h >> 10) - 15;
+  return static_cast<float>((0x400u | (h & 0x3FFu)) >> (10 - e));
+}
+void u8_to_half(const std::uint8_t* src, std::uint16_t* dst, std::size_t n);
+
+// Fused blur + truncation over half-precision source rows (byte values): s = sum_i weights[i] * rows[i][j]
+// (float32, taps in order, fused multiply-adds where the CPU has FMA), then dst[j] = floor(s) clamped to 0..255
+// where floor(s - band) == floor(s + band) and s >= band; ambiguous[j] = 1 elsewhere (dst[j] is then to be
+// overwritten). `band` must bound |s - exact sum| (FMA only lowers the error). Returns the number of ambiguous
+// values.
+std::size_t weighted_rows_truncate(const std::uint16_t* const* rows, const float* weights, int taps, float band,
+                                   std::uint8_t* dst, std::uint8_t* ambiguous, std::size_t n);
 
 // dst[j] = floor(acc[j]) clamped to 0..255 where floor(acc[j] - band) == floor(acc[j] + band) and acc[j] >= band;
 // ambiguous[j] = 1 elsewhere (dst[j] is then to be overwritten). Returns the number of ambiguous values.

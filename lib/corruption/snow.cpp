@@ -10,6 +10,8 @@
 #include <opencv2/core.hpp>
 
 #include "corruption/motion_blur.hpp"
+#include "corruption/motion_kernel.hpp"
+#include "corruption/simd_kernels.hpp"
 
 namespace faultline::corruption {
 namespace {
@@ -192,12 +194,81 @@ FAULTLINE_AVX2_CLONES void quantise_row_fast(const float* __restrict s, std::uin
 
 }  // namespace
 
+namespace {
+
+// Row pass of the fast zoom, fused with threshold and clip, written into a padded row (row-major, vectorises).
+FAULTLINE_AVX2_CLONES void lerp_threshold_row(const float* __restrict a, const float* __restrict b, float w,
+                                              float thr, float* __restrict d, int n) {
+  const float w0 = 1.0f - w;
+  for (int x = 0; x < n; ++x) {
+    float v = w0 * a[x] + w * b[x];
+    v = v < thr ? 0.0f : v;
+    d[x] = std::min(std::max(v, 0.0f), 1.0f);
+  }
+}
+
+}  // namespace
+
 cv::Mat snow_layer_fast(const cv::Mat& crop_field, int rows, int cols, int severity, double blur_angle_deg) {
+  // Same stages as the exact layer in float32, reordered for speed: the zoom interpolates columns first (on the
+  // few crop rows, where the per-column gathers are cheap) and then rows (contiguous, vectorised); bilinear zoom
+  // is separable, so only float rounding differs. The zoomed layer goes straight into an edge-padded buffer, and
+  // each blurred row is quantised as soon as it is summed; only the top-left rows x cols are computed.
   const SnowParams p = snow_params(severity);
-  const cv::Mat zoomed = zoom_threshold<float>(crop_field, snow_layer_size(rows, cols, p.zoom), p.threshold);
-  const cv::Mat blurred = blur_layer(zoomed, p.radius, p.sigma, blur_angle_deg);
+  const cv::Size size = snow_layer_size(rows, cols, p.zoom);
+  const int lh = size.height, lw = size.width;
+  const TabulatedKernel* k = find_tabulated_kernel(p.radius, p.sigma);
+  const auto offsets = motion_offsets(blur_angle_deg, k->width);
+  const int taps = usable_taps(offsets, lh, lw);
+  double used = 0.0;
+  for (int i = 0; i < taps; ++i) used += k->weights[i];
+  const bool scale = taps < k->width && used > 0.0;
+  std::vector<float> w(static_cast<std::size_t>(taps));
+  int pad = 0;
+  for (int i = 0; i < taps; ++i) {
+    w[static_cast<std::size_t>(i)] = static_cast<float>(scale ? k->weights[i] / used : k->weights[i]);
+    pad = std::max(pad, std::abs(offsets[static_cast<std::size_t>(i)].dx));
+  }
+  // Column pass on the crop rows.
+  const AxisMap cm = axis_map(crop_field.cols, lw);
+  thread_local std::vector<float> colz, padded;  // reused per thread: fresh multi-MB buffers cost page faults
+  colz.resize(static_cast<std::size_t>(crop_field.rows) * static_cast<std::size_t>(lw));
+  std::vector<float> cw(static_cast<std::size_t>(lw));
+  for (int o = 0; o < lw; ++o) cw[static_cast<std::size_t>(o)] = static_cast<float>(cm.w[static_cast<std::size_t>(o)]);
+  for (int r = 0; r < crop_field.rows; ++r) {
+    const float* s = crop_field.ptr<float>(r);
+    float* d = colz.data() + static_cast<std::size_t>(r) * static_cast<std::size_t>(lw);
+    for (int o = 0; o < lw; ++o) {
+      const float wo = cw[static_cast<std::size_t>(o)];
+      d[o] = (1.0f - wo) * s[cm.i0[static_cast<std::size_t>(o)]] + wo * s[cm.i1[static_cast<std::size_t>(o)]];
+    }
+  }
+  // Row pass + threshold into the padded layer.
+  const AxisMap rm = axis_map(crop_field.rows, lh);
+  const std::size_t stride = static_cast<std::size_t>(lw + 2 * pad);
+  padded.resize(stride * static_cast<std::size_t>(lh));
+  const float thr = static_cast<float>(p.threshold);
+  for (int o = 0; o < lh; ++o) {
+    const float* a = colz.data() + static_cast<std::size_t>(rm.i0[static_cast<std::size_t>(o)]) * static_cast<std::size_t>(lw);
+    const float* b = colz.data() + static_cast<std::size_t>(rm.i1[static_cast<std::size_t>(o)]) * static_cast<std::size_t>(lw);
+    float* d = padded.data() + static_cast<std::size_t>(o) * stride;
+    lerp_threshold_row(a, b, static_cast<float>(rm.w[static_cast<std::size_t>(o)]), thr, d + pad, lw);
+    std::fill(d, d + pad, d[pad]);
+    std::fill(d + pad + lw, d + stride, d[pad + lw - 1]);
+  }
+  // Blur (edge clamp at the layer's own size) and quantise the top-left rows x cols.
   cv::Mat out(rows, cols, CV_8U);
-  for (int y = 0; y < rows; ++y) quantise_row_fast(blurred.ptr<float>(y), out.ptr<std::uint8_t>(y), cols);
+  std::vector<float> acc(static_cast<std::size_t>(cols));
+  std::vector<const float*> src(static_cast<std::size_t>(taps));
+  for (int y = 0; y < rows; ++y) {
+    for (int i = 0; i < taps; ++i) {
+      const auto& o = offsets[static_cast<std::size_t>(i)];
+      src[static_cast<std::size_t>(i)] =
+          padded.data() + static_cast<std::size_t>(std::clamp(y - o.dy, 0, lh - 1)) * stride + (pad - o.dx);
+    }
+    simd::weighted_rows(acc.data(), src.data(), w.data(), taps, static_cast<std::size_t>(cols));
+    quantise_row_fast(acc.data(), out.ptr<std::uint8_t>(y), cols);
+  }
   return out;
 }
 

@@ -5,6 +5,7 @@
 #include "corruption/golden_cases.hpp"
 #include "corruption/motion_blur.hpp"
 #include "corruption/motion_kernel.hpp"
+#include "corruption/simd_kernels.hpp"
 #include "rng/golden_json.hpp"
 
 namespace faultline::testing {
@@ -118,6 +119,20 @@ TEST(MotionBlurKernelTest, TablesExistForEveryUsedPairAndSumToOne) {
     EXPECT_NEAR(sum, 1.0, 1e-12);
   }
   EXPECT_EQ(corruption::find_tabulated_kernel(3, 3), nullptr);
+}
+
+TEST(HalfRowsTest, BytesRoundTripThroughBinary16Exactly) {
+  // The motion-blur ring stores bytes as binary16; both conversions must be exact for every byte.
+  EXPECT_EQ(corruption::simd::half_of_byte(1), 0x3C00);    // 1.0
+  EXPECT_EQ(corruption::simd::half_of_byte(255), 0x5BF8);  // 255.0
+  std::uint8_t bytes[256 + 13];
+  std::uint16_t halves[256 + 13];
+  for (int v = 0; v < 256 + 13; ++v) bytes[v] = static_cast<std::uint8_t>(v * 37);
+  corruption::simd::u8_to_half(bytes, halves, 256 + 13);  // vector body + scalar tail
+  for (int v = 0; v < 256 + 13; ++v) {
+    EXPECT_EQ(halves[v], corruption::simd::half_of_byte(bytes[v])) << v;
+    EXPECT_EQ(corruption::simd::byte_of_half(halves[v]), static_cast<float>(bytes[v])) << v;
+  }
 }
 
 }  // namespace
