@@ -206,6 +206,22 @@ TEST(BrightnessPathsTest, TablePathEqualsHsvMirrorOnEveryColourClass) {
   }
 }
 
+TEST(BrightnessPathsTest, TablePathEqualsHsvMirrorOnEveryColour) {
+  // All 2^24 colours once (4096 x 4096, also exercising the 8-pixel vector path and its scalar tail on a width that
+  // is a multiple of 8 and on an odd crop), at every severity.
+  cv::Mat all(4096, 4096, CV_8UC3);
+  for (int i = 0; i < (1 << 24); ++i) {
+    all.data[3 * i] = static_cast<uchar>(i);
+    all.data[3 * i + 1] = static_cast<uchar>(i >> 8);
+    all.data[3 * i + 2] = static_cast<uchar>(i >> 16);
+  }
+  const cv::Mat odd = all(cv::Rect(3, 5, 333, 197));
+  for (int sev = 1; sev <= 5; ++sev) {
+    EXPECT_EQ(cv::norm(brightness_fast(all, sev), brightness_exact(all, sev), cv::NORM_INF), 0.0) << sev;
+    EXPECT_EQ(cv::norm(brightness_fast(odd, sev), brightness_exact(odd, sev), cv::NORM_INF), 0.0) << sev;
+  }
+}
+
 TEST(DarkFastTablesTest, EachFrameUsesTheTablesOfItsOwnRange) {
   // The sampling tables are cached per (severity, image min, image max): a frame with another range right after a
   // full-range frame must follow its own stretch. Severity 2 (c = 0.4): the image maximum maps to a mean of about
