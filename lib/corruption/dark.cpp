@@ -8,6 +8,7 @@
 #include <deque>
 #include <memory>
 #include <mutex>
+#include <utility>
 #include <vector>
 
 namespace faultline::corruption {
@@ -59,16 +60,32 @@ cv::Mat dark_exact(const cv::Mat& bgr, int severity, rng::NumpyRandomState& rng)
   for (std::int64_t k = 0; k < kTable; ++k) y_of_k[static_cast<std::size_t>(k)] = y_for(k);
   const cv::Mat in = bgr.isContinuous() ? bgr : bgr.clone();
   const std::size_t n = in.total() * 3;
-  std::vector<double> y(n);
+  // All Poisson draws come before all normal draws, so the counts are kept: as uint16 (a per-thread buffer, 8.6 MB
+  // at 1600x900 instead of 35 MB of doubles), with counts >= kTable (never seen in practice) kept aside exactly.
+  thread_local std::vector<std::uint16_t> counts;
+  counts.resize(n);
+  std::vector<std::pair<std::size_t, std::int64_t>> large;
   const std::uint8_t* src = in.data;
   for (std::size_t i = 0; i < n; ++i) {
     const std::int64_t k = rng.poisson(prepared[src[i]]);
-    y[i] = k < kTable ? y_of_k[static_cast<std::size_t>(k)] : y_for(k);
+    if (k < kTable) {
+      counts[i] = static_cast<std::uint16_t>(k);
+    } else {
+      counts[i] = static_cast<std::uint16_t>(kTable);
+      large.emplace_back(i, k);
+    }
   }
   cv::Mat out(in.size(), in.type());
   std::uint8_t* dst = out.data;
+  std::size_t next_large = 0;
   for (std::size_t i = 0; i < n; ++i) {
-    const double v = y[i] + rng.normal(0.0, p.sigma);
+    double y = 0.0;
+    if (counts[i] < kTable) {
+      y = y_of_k[counts[i]];
+    } else {
+      y = y_for(large[next_large++].second);
+    }
+    const double v = y + rng.normal(0.0, p.sigma);
     dst[i] = static_cast<std::uint8_t>(std::min(std::max(v, 0.0), 1.0) * 255.0);
   }
   return out;
