@@ -125,8 +125,9 @@ Result<GroundTruth> load_ground_truth(const std::string& dataroot, const std::st
   if (!s) return s;
 
   // Records of other samples are skipped undecoded.
-  const RecordFilter in_split{
-      1, [&gt](const std::string& token) { return gt.sample_index.count(token) != 0; }};
+  const auto in_split = [&gt](const std::string& token) {
+    return gt.sample_index.count(token) != 0;
+  };
   // Annotations of the split's samples, in file order: the biggest scan after sample_data, so it
   // runs on a second thread while sample_data and ego_pose are read (it needs only the sample
   // index).
@@ -144,28 +145,32 @@ Result<GroundTruth> load_ground_truth(const std::string& dataroot, const std::st
         "token", "sample_token", "instance_token", "attribute_tokens", "translation",
         "size",  "rotation",     "num_lidar_pts",  "num_radar_pts",    "prev",
         "next"};
-    Status s = stream_table(ann_path, ann_fields, [&](const TableRecord& r, std::size_t i) {
-      auto it = gt.sample_index.find(r.fields[1].str);
-      if (it == gt.sample_index.end()) return Status::ok();
-      for (std::size_t k = 0; k < ann_fields.size(); ++k) {
-        if (Status e = need(r, k, ann_path, i, ann_fields[k].c_str()); !e) return e;
-      }
-      AnnRec a;
-      a.token = r.fields[0].str;
-      a.sample = it->second;
-      a.instance = r.fields[2].str;
-      a.attrs = r.fields[3].strs;
-      const std::string where = ann_path + " record " + std::to_string(i) + " (" + a.token + ")";
-      if (Status e = copy_vec(r.fields[4], a.translation, where + " translation"); !e) return e;
-      if (Status e = copy_vec(r.fields[5], a.size, where + " size"); !e) return e;
-      if (Status e = copy_vec(r.fields[6], a.rotation, where + " rotation"); !e) return e;
-      a.num_pts = r.fields[7].num + r.fields[8].num;
-      a.prev = r.fields[9].str;
-      a.next = r.fields[10].str;
-      ann_index.emplace(a.token, static_cast<int>(anns.size()));
-      anns.push_back(std::move(a));
-      return Status::ok();
-    });
+    Status s = stream_table(
+        ann_path, ann_fields,
+        [&](const TableRecord& r, std::size_t i) {
+          auto it = gt.sample_index.find(r.fields[1].str);
+          if (it == gt.sample_index.end()) return Status::ok();
+          for (std::size_t k = 0; k < ann_fields.size(); ++k) {
+            if (Status e = need(r, k, ann_path, i, ann_fields[k].c_str()); !e) return e;
+          }
+          AnnRec a;
+          a.token = r.fields[0].str;
+          a.sample = it->second;
+          a.instance = r.fields[2].str;
+          a.attrs = r.fields[3].strs;
+          const std::string where =
+              ann_path + " record " + std::to_string(i) + " (" + a.token + ")";
+          if (Status e = copy_vec(r.fields[4], a.translation, where + " translation"); !e) return e;
+          if (Status e = copy_vec(r.fields[5], a.size, where + " size"); !e) return e;
+          if (Status e = copy_vec(r.fields[6], a.rotation, where + " rotation"); !e) return e;
+          a.num_pts = r.fields[7].num + r.fields[8].num;
+          a.prev = r.fields[9].str;
+          a.next = r.fields[10].str;
+          ann_index.emplace(a.token, static_cast<int>(anns.size()));
+          anns.push_back(std::move(a));
+          return Status::ok();
+        },
+        RecordFilter{{{1, in_split}}});
     return s;
   });
   // Every early return waits for the annotation thread (it references this frame).
@@ -199,7 +204,10 @@ Result<GroundTruth> load_ground_truth(const std::string& dataroot, const std::st
         }
         pose_token[static_cast<std::size_t>(it->second)] = r.fields[1].str;  // last wins
         return Status::ok();
-      });
+      },
+      RecordFilter{{{0, in_split}, {2, [&lidar_calibs](const std::string& calib) {
+                                      return lidar_calibs.count(calib) != 0;
+                                    }}}});
   if (!s) return join(s);
   TokenMap<std::vector<int>> pose_users;
   for (std::size_t i = 0; i < n; ++i) {
@@ -229,7 +237,7 @@ Result<GroundTruth> load_ground_truth(const std::string& dataroot, const std::st
         return Status::ok();
       },
       RecordFilter{
-          0, [&pose_users](const std::string& token) { return pose_users.count(token) != 0; }});
+          {{0, [&pose_users](const std::string& token) { return pose_users.count(token) != 0; }}}});
   if (!s) return join(s);
   if (poses_found < n) {
     return join(Status(StatusCode::kNotFound,

@@ -76,9 +76,10 @@ class Scanner {
         on_record_(on_record),
         filter_(filter) {
     rec_.fields.resize(wanted.size());
-    if (filter_.keep && filter_.field >= 0 &&
-        static_cast<std::size_t>(filter_.field) < wanted.size()) {
-      filter_target_ = &rec_.fields[static_cast<std::size_t>(filter_.field)];
+    for (const auto& c : filter.all_of) {
+      if (c.keep && c.field >= 0 && static_cast<std::size_t>(c.field) < wanted.size()) {
+        conditions_.push_back({&rec_.fields[static_cast<std::size_t>(c.field)], &c.keep});
+      }
     }
   }
 
@@ -156,7 +157,12 @@ class Scanner {
       if (field) {
         field->present = true;
         if (Status s = field_value(*field); !s) return s;
-        if (field == filter_target_ && !filter_.keep(field->str)) kept = false;
+        for (const auto& [target, keep] : conditions_) {
+          if (field == target && !(*keep)(field->str)) {
+            kept = false;
+            return skip_rest_of_record();
+          }
+        }
       } else if (Status s = skip_value(); !s) {
         return s;
       }
@@ -168,6 +174,74 @@ class Scanner {
       if (!expect('}')) return fail("missing ',' or '}' after an object member");
       return Status::ok();
     }
+  }
+
+  // The rest of a rejected record, checked for structure only: strings (escapes, control
+  // characters) and nesting, up to the record's closing brace. Scalars in between are not parsed;
+  // most of a big table's records are rejected, so this is where the scan spends its time.
+  Status skip_rest_of_record() {
+    char stack[64];
+    int depth = 0;
+    stack[depth++] = '}';
+    const char* q = p_;
+    for (;;) {
+      q = next_structural(q);
+      if (q >= end_) {
+        p_ = q;
+        return fail("missing ',' or '}' after an object member");
+      }
+      const char c = *q;
+      if (c == '"') {
+        p_ = q;
+        std::string_view ignored;
+        if (Status s = string_view_token(ignored); !s) return s;
+        q = p_;
+        continue;
+      }
+      if (c == '{' || c == '[') {
+        if (depth == 64) {
+          p_ = q;
+          return fail("nesting deeper than 64 levels");
+        }
+        stack[depth++] = c == '{' ? '}' : ']';
+        ++q;
+        continue;
+      }
+      if (c != stack[depth - 1]) {
+        p_ = q;
+        return fail(stack[depth - 1] == '}' ? "missing ',' or '}' after an object member"
+                                            : "missing ',' or ']' after an array element");
+      }
+      ++q;
+      if (--depth == 0) {
+        p_ = q;
+        return Status::ok();
+      }
+    }
+  }
+
+  // First '"', '{', '}', '[' or ']' at or after q (end_ if none).
+  const char* next_structural(const char* q) const {
+#ifdef __SSE2__
+    const __m128i quote = _mm_set1_epi8('"'), open_obj = _mm_set1_epi8('{'),
+                  close_obj = _mm_set1_epi8('}'), open_arr = _mm_set1_epi8('['),
+                  close_arr = _mm_set1_epi8(']');
+    while (end_ - q >= 16) {
+      const __m128i x = _mm_loadu_si128(reinterpret_cast<const __m128i*>(q));
+      const __m128i hit = _mm_or_si128(
+          _mm_or_si128(_mm_cmpeq_epi8(x, quote),
+                       _mm_or_si128(_mm_cmpeq_epi8(x, open_obj), _mm_cmpeq_epi8(x, close_obj))),
+          _mm_or_si128(_mm_cmpeq_epi8(x, open_arr), _mm_cmpeq_epi8(x, close_arr)));
+      const int mask = _mm_movemask_epi8(hit);
+      if (mask) return q + __builtin_ctz(static_cast<unsigned>(mask));
+      q += 16;
+    }
+#endif
+    for (; q < end_; ++q) {
+      const char c = *q;
+      if (c == '"' || c == '{' || c == '}' || c == '[' || c == ']') return q;
+    }
+    return end_;
   }
 
   TableField* find_field(std::string_view key) {
@@ -553,7 +627,8 @@ class Scanner {
   const std::function<Status(const TableRecord&, std::size_t)>& on_record_;
   const RecordFilter& filter_;
   TableRecord rec_;
-  const TableField* filter_target_ = nullptr;
+  std::vector<std::pair<const TableField*, const std::function<bool(const std::string&)>*>>
+      conditions_;
   bool failed_ = false;
   std::size_t error_offset_ = 0;
 };

@@ -26,12 +26,16 @@ struct TableRecord {
   std::vector<TableField> fields;
 };
 
-// Optional early rejection: once the wanted field `field` (an index into `wanted`) is read, `keep` sees its
-// string value; if it returns false the rest of the record is validated but not decoded and `on_record` is
-// not called. Tables where few records matter (sample_data for one split) scan several times faster.
+// Optional early rejection: each condition sees the string value of one wanted field (an index into `wanted`)
+// as soon as it is read; when one returns false the rest of the record is checked for structure only (strings
+// and nesting; its scalars are not parsed) and `on_record` is not called. Tables where few records matter
+// (sample_data for one split) scan several times faster.
 struct RecordFilter {
-  int field = -1;
-  std::function<bool(const std::string&)> keep;
+  struct Condition {
+    int field = -1;
+    std::function<bool(const std::string&)> keep;
+  };
+  std::vector<Condition> all_of;
 };
 
 // Calls `on_record(record, index)` for every record of the array in file order. A non-ok Status from
