@@ -70,35 +70,11 @@ Result<std::map<std::string, std::vector<bag::GtBox>>> load_gt_boxes(const std::
 
 namespace {
 
-void set_transform(msgs::Transform* out, const dataset::Pose& p) {
-  out->mutable_translation()->set_x(p.translation[0]);
-  out->mutable_translation()->set_y(p.translation[1]);
-  out->mutable_translation()->set_z(p.translation[2]);
-  out->mutable_rotation()->set_w(p.rotation[0]);
-  out->mutable_rotation()->set_x(p.rotation[1]);
-  out->mutable_rotation()->set_y(p.rotation[2]);
-  out->mutable_rotation()->set_z(p.rotation[3]);
-}
-
-// The CameraFrame header exactly as runtime/player_loop.cpp builds it, with dataset-time stamps.
+// The player's CameraFrame header (camera_frame_header) with dataset-time publish stamps.
 msgs::CameraFrame frame_header(const dataset::CameraFrameRecord& f, std::uint64_t seq, const std::string& publisher,
                                std::size_t payload_bytes) {
-  msgs::CameraFrame h;
-  h.set_camera(f.channel);
-  h.set_encoding("jpeg");
-  h.set_width(static_cast<std::uint32_t>(f.width));
-  h.set_height(static_cast<std::uint32_t>(f.height));
-  h.set_sample_data_token(f.sample_data_token);
-  h.set_sample_token(f.sample_token);
-  h.set_is_key_frame(f.is_key_frame);
-  for (double k : f.intrinsics) h.add_intrinsics(k);
-  set_transform(h.mutable_sensor_to_ego(), f.sensor_to_ego);
-  set_transform(h.mutable_ego_pose(), f.ego_pose);
-  h.set_scene_token(f.scene_token);
-  h.set_scene_name(f.scene_name);
+  msgs::CameraFrame h = camera_frame_header(f);
   auto* hdr = h.mutable_header();
-  hdr->set_capture_stamp_ns(f.timestamp_us * 1000);
-  hdr->set_frame_id(bag::camera_frame_id(f.channel));
   hdr->set_seq(seq);
   hdr->set_publisher(publisher);
   hdr->set_publish_stamp_ns(f.timestamp_us * 1000);

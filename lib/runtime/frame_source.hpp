@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "camera_frame.pb.h"
 #include "common/status.hpp"
 #include "dataset/nuscenes.hpp"
 
@@ -30,11 +31,14 @@ class FrameSource {
 class NuScenesFrameSource final : public FrameSource {
  public:
   // Loads the frame list of `scenes` (empty = all). Errors name the dataroot/table/scene.
-  static Result<std::unique_ptr<NuScenesFrameSource>> open(const std::string& dataroot, const std::string& version,
+  static Result<std::unique_ptr<NuScenesFrameSource>> open(const std::string& dataroot,
+                                                           const std::string& version,
                                                            const std::vector<std::string>& scenes);
   const std::vector<dataset::CameraFrameRecord>& frames() const override { return frames_; }
   Result<ImageBytes> read_image(const dataset::CameraFrameRecord& frame) override;
-  std::map<std::string, std::int64_t> sample_timestamps_us() const override { return sample_times_; }
+  std::map<std::string, std::int64_t> sample_timestamps_us() const override {
+    return sample_times_;
+  }
 
  private:
   NuScenesFrameSource(dataset::NuScenesReader reader) : reader_(std::move(reader)) {}
@@ -47,7 +51,8 @@ class NuScenesFrameSource final : public FrameSource {
 // read as kNotFound, like a missing file.
 class MemoryFrameSource final : public FrameSource {
  public:
-  MemoryFrameSource(std::vector<dataset::CameraFrameRecord> frames, std::map<std::string, ImageBytes> images)
+  MemoryFrameSource(std::vector<dataset::CameraFrameRecord> frames,
+                    std::map<std::string, ImageBytes> images)
       : frames_(std::move(frames)), images_(std::move(images)) {}
   const std::vector<dataset::CameraFrameRecord>& frames() const override { return frames_; }
   Result<ImageBytes> read_image(const dataset::CameraFrameRecord& frame) override;
@@ -56,5 +61,10 @@ class MemoryFrameSource final : public FrameSource {
   std::vector<dataset::CameraFrameRecord> frames_;
   std::map<std::string, ImageBytes> images_;
 };
+
+// The CameraFrame header of a dataset frame as every replay publishes it (player, bag convert):
+// camera, encoding jpeg, size, tokens, calibration, ego pose, scene, capture stamp and frame_id.
+// Seq, publisher and publish stamps are the caller's.
+msgs::CameraFrame camera_frame_header(const dataset::CameraFrameRecord& frame);
 
 }  // namespace faultline::runtime

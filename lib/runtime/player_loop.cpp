@@ -30,25 +30,6 @@ std::string camera_topic(const std::string& channel) {
   return "/" + lower + "/image_rect_compressed";
 }
 
-namespace {
-
-void set_transform(msgs::Transform* out, const dataset::Pose& p) {
-  out->mutable_translation()->set_x(p.translation[0]);
-  out->mutable_translation()->set_y(p.translation[1]);
-  out->mutable_translation()->set_z(p.translation[2]);
-  out->mutable_rotation()->set_w(p.rotation[0]);
-  out->mutable_rotation()->set_x(p.rotation[1]);
-  out->mutable_rotation()->set_y(p.rotation[2]);
-  out->mutable_rotation()->set_z(p.rotation[3]);
-}
-
-std::string lower(std::string s) {
-  std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return std::tolower(c); });
-  return s;
-}
-
-}  // namespace
-
 struct PlayerLoop::Impl {
   PlayerConfig cfg;
   std::string node;
@@ -214,21 +195,7 @@ int PlayerLoop::run(const std::atomic<bool>& stop) {
         }
       } else {
         const std::string topic = remap_topic(m.cfg.remap, camera_topic(f.channel));
-        msgs::CameraFrame h;
-        h.set_camera(f.channel);
-        h.set_encoding("jpeg");
-        h.set_width(static_cast<std::uint32_t>(f.width));
-        h.set_height(static_cast<std::uint32_t>(f.height));
-        h.set_sample_data_token(f.sample_data_token);
-        h.set_sample_token(f.sample_token);
-        h.set_is_key_frame(f.is_key_frame);
-        for (double k : f.intrinsics) h.add_intrinsics(k);
-        set_transform(h.mutable_sensor_to_ego(), f.sensor_to_ego);
-        set_transform(h.mutable_ego_pose(), f.ego_pose);
-        h.set_scene_token(f.scene_token);
-        h.set_scene_name(f.scene_name);
-        h.mutable_header()->set_capture_stamp_ns(f.timestamp_us * 1000);
-        h.mutable_header()->set_frame_id(lower(f.channel));
+        msgs::CameraFrame h = camera_frame_header(f);
         m.stamp(h.mutable_header(), topic);
         h.set_source_seq(h.header().seq());
         const Status s = transport::send_camera_frame(m.pub, topic, h, transport::Payload::of(*image));
