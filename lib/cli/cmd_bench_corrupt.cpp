@@ -15,6 +15,7 @@
 #include <vector>
 
 #include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "cli/command.hpp"
@@ -196,9 +197,12 @@ int run(int argc, char** argv) {
   int reps = 9, width = 1600, height = 900;
   std::uint32_t seed = 130;
   bool json = false, fidelity = false;
-  std::string out_path;
+  std::string out_path, image_path;
   std::vector<std::string> only;
   app.add_option("--reps", reps, "timed repetitions per case (median reported; one warm-up run first)");
+  app.add_option("--image", image_path,
+                 "benchmark on this image (read with OpenCV, BGR) instead of the built-in road scene; "
+                 "--width/--height are then ignored");
   app.add_option("--width", width, "frame width");
   app.add_option("--height", height, "frame height");
   app.add_option("--seed", seed, "seed for the random corruptions");
@@ -217,7 +221,17 @@ int run(int argc, char** argv) {
   }
   if (!out_path.empty()) fidelity = true;
   cv::setNumThreads(0);
-  const cv::Mat frame = synthetic_frame(width, height);
+  cv::Mat frame;
+  if (image_path.empty()) {
+    frame = synthetic_frame(width, height);
+  } else {
+    frame = cv::imread(image_path, cv::IMREAD_COLOR);
+    if (frame.empty()) {
+      std::fprintf(stderr, "faultline bench corrupt: --image %s: cannot read it as an image\n", image_path.c_str());
+      return 1;
+    }
+    width = frame.cols, height = frame.rows;
+  }
   auto jpeg = codec::encode_jpeg(frame, 95);
   if (!jpeg) {
     std::fprintf(stderr, "faultline bench corrupt: %s\n", jpeg.status().to_string().c_str());

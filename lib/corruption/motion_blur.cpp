@@ -209,11 +209,11 @@ cv::Mat blur_banded(const cv::Mat& bgr, int severity, double angle_deg, bool ren
   std::vector<std::uint8_t> ambiguous(n);
   std::vector<const std::uint16_t*> src(static_cast<std::size_t>(taps));
   // The exact float64 result of a flat neighbourhood of value v (same summation order as the exact path).
-  std::uint8_t flat[256];
+  std::int32_t flat[256];
   for (int v = 0; v < 256; ++v) {
     double sum = 0.0;
     for (int i = 0; i < taps; ++i) sum += wd[static_cast<std::size_t>(i)] * v;
-    flat[v] = static_cast<std::uint8_t>(std::min(std::max(sum, 0.0), 255.0));
+    flat[v] = static_cast<std::int32_t>(std::min(std::max(sum, 0.0), 255.0));
   }
   // Whole rows (measured faster than vertical strips with an L2-sized ring: the long row streams prefetch well).
   {
@@ -225,7 +225,7 @@ cv::Mat blur_banded(const cv::Mat& bgr, int severity, double angle_deg, bool ren
         src[static_cast<std::size_t>(i)] = ring.row(sy) + static_cast<std::ptrdiff_t>(pad - o.dx) * ch;
       }
       std::uint8_t* dst = out.ptr<std::uint8_t>(y);
-      if (simd::weighted_rows_truncate(src.data(), wf.data(), taps, band, dst, ambiguous.data(), n) == 0) continue;
+      if (simd::weighted_rows_truncate(src.data(), wf.data(), wd.data(), taps, band, flat, dst, ambiguous.data(), n) == 0) continue;
       for (std::size_t j = 0; j < n; ++j) {
         if (!ambiguous[j]) {
           // Skip 8 clear flags at a time (ambiguous values are rare).
@@ -242,7 +242,7 @@ cv::Mat blur_banded(const cv::Mat& bgr, int severity, double angle_deg, bool ren
         int i = 1;
         while (i < taps && src[static_cast<std::size_t>(i)][j] == first) ++i;
         if (i == taps) {
-          dst[j] = flat[static_cast<int>(simd::byte_of_half(first))];
+          dst[j] = static_cast<std::uint8_t>(flat[static_cast<int>(simd::byte_of_half(first))]);
           continue;
         }
         // The half values are the bytes exactly, so this is the reference's sum of k_i * u8 value.

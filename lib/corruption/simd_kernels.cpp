@@ -79,8 +79,8 @@ __attribute__((target("avx2,fma"))) std::size_t weighted_rows_avx2(float* acc, c
 // integers 0..255 are exact in binary16, and half the bytes per load of float32 rows, measured ~1.5x faster), then
 // the band test and truncation on the registers (no accumulator row written or re-read).
 __attribute__((target("avx2,fma,f16c"))) std::size_t weighted_rows_truncate_f16_avx2(
-    const std::uint16_t* const* rows, const float* weights, int taps, float band, std::uint8_t* dst,
-    std::uint8_t* ambiguous, std::size_t n, std::size_t* count) {
+    const std::uint16_t* const* rows, const float* weights, const double* weights64, int taps, float band,
+    const std::int32_t* flat, std::uint8_t* dst, std::uint8_t* ambiguous, std::size_t n, std::size_t* count) {
   constexpr std::size_t kBlock = 64;
   const __m256 vband = _mm256_set1_ps(band);
   const __m256 zero = _mm256_setzero_ps();
@@ -97,23 +97,75 @@ __attribute__((target("avx2,fma,f16c"))) std::size_t weighted_rows_truncate_f16_
         a[v] = _mm256_fmadd_ps(k, x, a[v]);
       }
     }
+    __m256i lo[8], badm[8];
+    int bad_lanes = 0;
+    for (int v = 0; v < 8; ++v) {
+      const __m256 lo_f = _mm256_sub_ps(a[v], vband);
+      lo[v] = _mm256_cvttps_epi32(lo_f);
+      const __m256i hi = _mm256_cvttps_epi32(_mm256_add_ps(a[v], vband));
+      const __m256i neq = _mm256_xor_si256(_mm256_cmpeq_epi32(lo[v], hi), _mm256_set1_epi32(-1));
+      const __m256i neg = _mm256_castps_si256(_mm256_cmp_ps(lo_f, zero, _CMP_LT_OQ));
+      badm[v] = _mm256_or_si256(neq, neg);
+      bad_lanes += __builtin_popcount(static_cast<unsigned>(_mm256_movemask_ps(_mm256_castsi256_ps(badm[v]))));
+    }
+    // Flat neighbourhoods (every tap the same byte) sit exactly on the band. Where a block has several ambiguous
+    // values, they are almost always flat (synthetic and overexposed frames are full of them): resolve those here,
+    // 16 lanes per compare, from the table of exact flat results, instead of one by one in the caller.
+    if (flat != nullptr && bad_lanes >= 4) {
+      for (int c = 0; c < 4; ++c) {
+        const std::uint16_t* r0 = rows[0] + j0 + 16 * c;
+        const __m256i first = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(r0));
+        __m256i eq = _mm256_set1_epi16(-1);
+        for (int i = 1; i < taps; ++i) {
+          const __m256i x = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(rows[i] + j0 + 16 * c));
+          eq = _mm256_and_si256(eq, _mm256_cmpeq_epi16(x, first));
+        }
+        for (int h = 0; h < 2; ++h) {
+          const int v = 2 * c + h;
+          const __m256i flat_lane = _mm256_cvtepi16_epi32(h == 0 ? _mm256_castsi256_si128(eq)
+                                                                 : _mm256_extracti128_si256(eq, 1));
+          const __m256i use = _mm256_and_si256(flat_lane, badm[v]);
+          if (_mm256_testz_si256(use, use)) continue;
+          const __m256i byte = _mm256_cvttps_epi32(
+              _mm256_cvtph_ps(_mm_loadu_si128(reinterpret_cast<const __m128i*>(r0 + 8 * h))));
+          const __m256i exact = _mm256_mask_i32gather_epi32(lo[v], flat, byte, use, 4);
+          lo[v] = exact;
+          badm[v] = _mm256_andnot_si256(use, badm[v]);
+        }
+      }
+    }
+    // Values still ambiguous (near-flat: taps that differ only where the weight is ~1e-8 move the float64 sum across
+    // the integer) get the exact float64 sum here, 4 lanes at a time in the reference's order (product rounded,
+    // then added; this file is built without contraction), when there are enough of them to beat the caller's
+    // one-by-one path.
+    if (weights64 != nullptr) {
+      for (int v = 0; v < 8; ++v) {
+        const int m = _mm256_movemask_ps(_mm256_castsi256_ps(badm[v]));
+        if (__builtin_popcount(static_cast<unsigned>(m)) < 2) continue;
+        __m128i part[2];
+        for (int h = 0; h < 2; ++h) {
+          part[h] = h == 0 ? _mm256_castsi256_si128(lo[v]) : _mm256_extracti128_si256(lo[v], 1);
+          if (((m >> (4 * h)) & 0xF) == 0) continue;
+          __m256d acc = _mm256_setzero_pd();
+          for (int i = 0; i < taps; ++i) {
+            const __m128i h4 = _mm_loadl_epi64(reinterpret_cast<const __m128i*>(rows[i] + j0 + 8 * v + 4 * h));
+            const __m256d x = _mm256_cvtps_pd(_mm_cvtph_ps(h4));
+            acc = _mm256_add_pd(acc, _mm256_mul_pd(_mm256_set1_pd(weights64[i]), x));
+          }
+          acc = _mm256_min_pd(_mm256_max_pd(acc, _mm256_setzero_pd()), _mm256_set1_pd(255.0));
+          part[h] = _mm256_cvttpd_epi32(acc);
+        }
+        lo[v] = _mm256_set_m128i(part[1], part[0]);
+        badm[v] = _mm256_setzero_si256();
+      }
+    }
     for (int v = 0; v < 8; v += 2) {
       __m256i q[2];
-      __m256i badm[2];
-      for (int h = 0; h < 2; ++h) {
-        const __m256 lo_f = _mm256_sub_ps(a[v + h], vband);
-        const __m256 hi_f = _mm256_add_ps(a[v + h], vband);
-        const __m256i lo = _mm256_cvttps_epi32(lo_f);
-        const __m256i hi = _mm256_cvttps_epi32(hi_f);
-        const __m256i neq = _mm256_xor_si256(_mm256_cmpeq_epi32(lo, hi), _mm256_set1_epi32(-1));
-        const __m256i neg = _mm256_castps_si256(_mm256_cmp_ps(lo_f, zero, _CMP_LT_OQ));
-        badm[h] = _mm256_or_si256(neq, neg);
-        q[h] = _mm256_min_epi32(_mm256_max_epi32(lo, _mm256_setzero_si256()), max255);
-      }
+      for (int h = 0; h < 2; ++h) q[h] = _mm256_min_epi32(_mm256_max_epi32(lo[v + h], _mm256_setzero_si256()), max255);
       const __m256i w16 = _mm256_permute4x64_epi64(_mm256_packus_epi32(q[0], q[1]), 0xD8);
       const __m128i b8 = _mm_packus_epi16(_mm256_castsi256_si128(w16), _mm256_extracti128_si256(w16, 1));
       _mm_storeu_si128(reinterpret_cast<__m128i*>(dst + j0 + 8 * v), b8);
-      const __m256i m16 = _mm256_permute4x64_epi64(_mm256_packs_epi32(badm[0], badm[1]), 0xD8);
+      const __m256i m16 = _mm256_permute4x64_epi64(_mm256_packs_epi32(badm[v], badm[v + 1]), 0xD8);
       const __m128i m8 = _mm_packs_epi16(_mm256_castsi256_si128(m16), _mm256_extracti128_si256(m16, 1));
       _mm_storeu_si128(reinterpret_cast<__m128i*>(ambiguous + j0 + 8 * v), _mm_and_si128(m8, _mm_set1_epi8(1)));
       bad_total += static_cast<std::size_t>(__builtin_popcount(static_cast<unsigned>(_mm_movemask_epi8(m8))));
@@ -185,11 +237,14 @@ void u8_to_half(const std::uint8_t* src, std::uint16_t* dst, std::size_t n) {
   for (; j < n; ++j) dst[j] = half_of_byte(src[j]);
 }
 
-std::size_t weighted_rows_truncate(const std::uint16_t* const* rows, const float* weights, int taps, float band,
-                                   std::uint8_t* dst, std::uint8_t* ambiguous, std::size_t n) {
+std::size_t weighted_rows_truncate(const std::uint16_t* const* rows, const float* weights, const double* weights64,
+                                   int taps, float band, const std::int32_t* flat, std::uint8_t* dst, std::uint8_t* ambiguous,
+                                   std::size_t n) {
   std::size_t j0 = 0, count = 0;
 #if defined(__GNUC__) && defined(__x86_64__)
-  if (have_avx2_fma_f16c()) j0 = weighted_rows_truncate_f16_avx2(rows, weights, taps, band, dst, ambiguous, n, &count);
+  if (have_avx2_fma_f16c()) {
+    j0 = weighted_rows_truncate_f16_avx2(rows, weights, weights64, taps, band, flat, dst, ambiguous, n, &count);
+  }
 #endif
   for (std::size_t j = j0; j < n; ++j) {
     float a = 0.0f;
