@@ -162,5 +162,58 @@ TEST_F(TableStreamTest, FilterSkipsRejectedRecordsButChecksTheirStructure) {
       << s.message();
 }
 
+// Rejected records longer than one 64-byte block go through the block skipper: brackets inside strings, strings
+// and arrays across block boundaries, escapes, and errors deep inside a record must behave exactly as in the
+// byte-level path.
+TEST_F(TableStreamTest, BlockSkipperAgreesWithTheByteLevelPathOnLongRecords) {
+  const std::string path = dir_.file("long.json");
+  std::string json = "[";
+  std::vector<std::string> expected;
+  for (int i = 0; i < 300; ++i) {
+    const bool keep = i % 7 == 3;
+    if (i) json += ",\n";
+    json += "{\"token\": \"t" + std::to_string(i) + "\", \"sample\": \"" + (keep ? "keep" : "drop") + "\"";
+    json += ", \"filename\": \"" + std::string(static_cast<std::size_t>(i % 97), 'x') + "{[}]] \"";
+    json += ", \"nested\": [[" + std::to_string(i) + ", 2.5, [3]], {\"a\": \"}}}\", \"b\": [4]}]";
+    if (i % 50 == 10) json += ", \"escaped\": \"quote \\\" and backslash \\\\ }\"";
+    json += ", \"pad\": \"" + std::string(static_cast<std::size_t>((i * 13) % 131), ' ') + "\"}";
+    if (keep) expected.push_back("t" + std::to_string(i) + ":" + std::to_string(i));
+  }
+  json += "]";
+  write_text(path, json);
+  const RecordFilter filter{{{1, [](const std::string& v) { return v == "keep"; }}}};
+  std::vector<std::string> seen;
+  Status s = stream_table(
+      path, {"token", "sample", "nested"},
+      [&](const TableRecord& r, std::size_t) {
+        seen.push_back(r.fields[0].str + ":" + std::to_string(static_cast<int>(r.fields[2].nums.front())));
+        return Status::ok();
+      },
+      filter);
+  ASSERT_TRUE(s.is_ok()) << s.message();
+  EXPECT_EQ(seen, expected);
+
+  // Errors far inside a long rejected record, each reported at the offending byte.
+  const std::string head = R"([{"token": "b", "sample": "drop", "pad": ")" + std::string(150, 'p') + "\", ";
+  struct Case {
+    std::string body, needle, message;
+  };
+  const std::vector<Case> cases = {
+      {R"("x": [1, 2}, "y": "z"}])", "}, \"y", "missing ',' or ']' after an array element"},
+      {"\"x\": \"bad\x01zz\"}]", "\x01", "invalid control character in a string"},
+      {R"("x": "never closed})", "\"never", "missing a closing quotation mark"},
+  };
+  for (const auto& c : cases) {
+    const std::string doc = head + c.body + std::string(200, ' ');
+    write_text(path, doc);
+    s = stream_table(
+        path, {"token", "sample"}, [](const TableRecord&, std::size_t) { return Status::ok(); }, filter);
+    const std::size_t offset = doc.find(c.needle);
+    EXPECT_NE(s.message().find("malformed JSON at offset " + std::to_string(offset) + ": " + c.message),
+              std::string::npos)
+        << s.message();
+  }
+}
+
 }  // namespace
 }  // namespace faultline::scoring
