@@ -78,15 +78,70 @@ __attribute__((target("avx2,fma"))) std::size_t weighted_rows_avx2(float* acc, c
 // 64 outputs per block kept in registers across all taps (fused multiply-add over half-precision source rows:
 // integers 0..255 are exact in binary16, and half the bytes per load of float32 rows, measured ~1.5x faster), then
 // the band test and truncation on the registers (no accumulator row written or re-read).
+// eq[c] = lanes j0 + 16c .. j0 + 16c + 15 (as 16-bit masks) whose taps all hold the first tap's value.
+__attribute__((target("avx2"))) inline void flat_lanes(const std::uint16_t* const* rows, int taps, std::size_t j0,
+                                                       __m256i* eq) {
+  for (int c = 0; c < 4; ++c) {
+    const __m256i first = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(rows[0] + j0 + 16 * c));
+    eq[c] = _mm256_set1_epi16(-1);
+    for (int i = 1; i < taps; ++i) {
+      const __m256i x = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(rows[i] + j0 + 16 * c));
+      eq[c] = _mm256_and_si256(eq[c], _mm256_cmpeq_epi16(x, first));
+    }
+  }
+}
+
+__attribute__((target("avx2"))) inline bool all_ones(const __m256i* eq) {
+  const __m256i all = _mm256_and_si256(_mm256_and_si256(eq[0], eq[1]), _mm256_and_si256(eq[2], eq[3]));
+  return _mm256_testc_si256(all, _mm256_set1_epi32(-1)) != 0;
+}
+
+// Eight half-precision byte values as int32.
+__attribute__((target("avx2,f16c"))) inline __m256i first_bytes(const std::uint16_t* halves) {
+  return _mm256_cvttps_epi32(_mm256_cvtph_ps(_mm_loadu_si128(reinterpret_cast<const __m128i*>(halves))));
+}
+
+// Stores 64 results (clamped to 0..255) and their ambiguity flags; counts the ambiguous ones.
+__attribute__((target("avx2"))) inline void store_truncated(const __m256i* lo, const __m256i* badm, std::uint8_t* dst,
+                                                            std::uint8_t* ambiguous, std::size_t& bad_total) {
+  const __m256i max255 = _mm256_set1_epi32(255);
+  for (int v = 0; v < 8; v += 2) {
+    __m256i q[2];
+    for (int h = 0; h < 2; ++h) q[h] = _mm256_min_epi32(_mm256_max_epi32(lo[v + h], _mm256_setzero_si256()), max255);
+    const __m256i w16 = _mm256_permute4x64_epi64(_mm256_packus_epi32(q[0], q[1]), 0xD8);
+    const __m128i b8 = _mm_packus_epi16(_mm256_castsi256_si128(w16), _mm256_extracti128_si256(w16, 1));
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(dst + 8 * v), b8);
+    const __m256i m16 = _mm256_permute4x64_epi64(_mm256_packs_epi32(badm[v], badm[v + 1]), 0xD8);
+    const __m128i m8 = _mm_packs_epi16(_mm256_castsi256_si128(m16), _mm256_extracti128_si256(m16, 1));
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(ambiguous + 8 * v), _mm_and_si128(m8, _mm_set1_epi8(1)));
+    bad_total += static_cast<std::size_t>(__builtin_popcount(static_cast<unsigned>(_mm_movemask_epi8(m8))));
+  }
+}
+
 __attribute__((target("avx2,fma,f16c"))) std::size_t weighted_rows_truncate_f16_avx2(
     const std::uint16_t* const* rows, const float* weights, const double* weights64, int taps, float band,
     const std::int32_t* flat, std::uint8_t* dst, std::uint8_t* ambiguous, std::size_t n, std::size_t* count) {
   constexpr std::size_t kBlock = 64;
   const __m256 vband = _mm256_set1_ps(band);
   const __m256 zero = _mm256_setzero_ps();
-  const __m256i max255 = _mm256_set1_epi32(255);
   std::size_t j0 = 0, bad_total = 0;
+  bool prev_flat = false;  // flat regions span many blocks: after a wholly flat block, test flatness first
   for (; j0 + kBlock <= n; j0 += kBlock) {
+    __m256i eq[4];  // eq[c]: lanes j0 + 16c .. + 15 whose taps all equal the first tap's byte
+    bool have_eq = false;
+    __m256i lo[8], badm[8];
+    if (flat != nullptr && prev_flat) {
+      flat_lanes(rows, taps, j0, eq);
+      have_eq = true;
+      if (all_ones(eq)) {  // the whole block is tabulated: no sums needed
+        for (int v = 0; v < 8; ++v) {
+          lo[v] = _mm256_i32gather_epi32(flat, first_bytes(rows[0] + j0 + 8 * v), 4);
+          badm[v] = _mm256_setzero_si256();
+        }
+        store_truncated(lo, badm, dst + j0, ambiguous + j0, bad_total);
+        continue;
+      }
+    }
     __m256 a[8];
     for (auto& v : a) v = _mm256_setzero_ps();
     for (int i = 0; i < taps; ++i) {
@@ -97,7 +152,6 @@ __attribute__((target("avx2,fma,f16c"))) std::size_t weighted_rows_truncate_f16_
         a[v] = _mm256_fmadd_ps(k, x, a[v]);
       }
     }
-    __m256i lo[8], badm[8];
     int bad_lanes = 0;
     for (int v = 0; v < 8; ++v) {
       const __m256 lo_f = _mm256_sub_ps(a[v], vband);
@@ -111,27 +165,18 @@ __attribute__((target("avx2,fma,f16c"))) std::size_t weighted_rows_truncate_f16_
     // Flat neighbourhoods (every tap the same byte) sit exactly on the band. Where a block has several ambiguous
     // values, they are almost always flat (synthetic and overexposed frames are full of them): resolve those here,
     // 16 lanes per compare, from the table of exact flat results, instead of one by one in the caller.
+    prev_flat = false;
     if (flat != nullptr && bad_lanes >= 4) {
-      for (int c = 0; c < 4; ++c) {
-        const std::uint16_t* r0 = rows[0] + j0 + 16 * c;
-        const __m256i first = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(r0));
-        __m256i eq = _mm256_set1_epi16(-1);
-        for (int i = 1; i < taps; ++i) {
-          const __m256i x = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(rows[i] + j0 + 16 * c));
-          eq = _mm256_and_si256(eq, _mm256_cmpeq_epi16(x, first));
-        }
-        for (int h = 0; h < 2; ++h) {
-          const int v = 2 * c + h;
-          const __m256i flat_lane = _mm256_cvtepi16_epi32(h == 0 ? _mm256_castsi256_si128(eq)
-                                                                 : _mm256_extracti128_si256(eq, 1));
-          const __m256i use = _mm256_and_si256(flat_lane, badm[v]);
-          if (_mm256_testz_si256(use, use)) continue;
-          const __m256i byte = _mm256_cvttps_epi32(
-              _mm256_cvtph_ps(_mm_loadu_si128(reinterpret_cast<const __m128i*>(r0 + 8 * h))));
-          const __m256i exact = _mm256_mask_i32gather_epi32(lo[v], flat, byte, use, 4);
-          lo[v] = exact;
-          badm[v] = _mm256_andnot_si256(use, badm[v]);
-        }
+      if (!have_eq) flat_lanes(rows, taps, j0, eq);
+      prev_flat = all_ones(eq);
+      for (int v = 0; v < 8; ++v) {
+        const __m256i e = eq[v / 2];
+        const __m256i flat_lane =
+            _mm256_cvtepi16_epi32(v % 2 == 0 ? _mm256_castsi256_si128(e) : _mm256_extracti128_si256(e, 1));
+        const __m256i use = _mm256_and_si256(flat_lane, badm[v]);
+        if (_mm256_testz_si256(use, use)) continue;
+        lo[v] = _mm256_mask_i32gather_epi32(lo[v], flat, first_bytes(rows[0] + j0 + 8 * v), use, 4);
+        badm[v] = _mm256_andnot_si256(use, badm[v]);
       }
     }
     // Values still ambiguous (near-flat: taps that differ only where the weight is ~1e-8 move the float64 sum across
@@ -159,17 +204,7 @@ __attribute__((target("avx2,fma,f16c"))) std::size_t weighted_rows_truncate_f16_
         badm[v] = _mm256_setzero_si256();
       }
     }
-    for (int v = 0; v < 8; v += 2) {
-      __m256i q[2];
-      for (int h = 0; h < 2; ++h) q[h] = _mm256_min_epi32(_mm256_max_epi32(lo[v + h], _mm256_setzero_si256()), max255);
-      const __m256i w16 = _mm256_permute4x64_epi64(_mm256_packus_epi32(q[0], q[1]), 0xD8);
-      const __m128i b8 = _mm_packus_epi16(_mm256_castsi256_si128(w16), _mm256_extracti128_si256(w16, 1));
-      _mm_storeu_si128(reinterpret_cast<__m128i*>(dst + j0 + 8 * v), b8);
-      const __m256i m16 = _mm256_permute4x64_epi64(_mm256_packs_epi32(badm[v], badm[v + 1]), 0xD8);
-      const __m128i m8 = _mm_packs_epi16(_mm256_castsi256_si128(m16), _mm256_extracti128_si256(m16, 1));
-      _mm_storeu_si128(reinterpret_cast<__m128i*>(ambiguous + j0 + 8 * v), _mm_and_si128(m8, _mm_set1_epi8(1)));
-      bad_total += static_cast<std::size_t>(__builtin_popcount(static_cast<unsigned>(_mm_movemask_epi8(m8))));
-    }
+    store_truncated(lo, badm, dst + j0, ambiguous + j0, bad_total);
   }
   *count = bad_total;
   return j0;
