@@ -322,6 +322,11 @@ TEST(BenchExportTest, JsonHasEveryConditionWithConsistentRatiosAndHours) {
   ASSERT_FALSE(d.HasParseError()) << text;
   ASSERT_TRUE(d["conditions"].IsArray());
   ASSERT_EQ(d["conditions"].Size(), 8u);
+  // The reference's own imread + imwrite q95 is timed with Debian's python3-opencv (installed by the CI) and added
+  // to its end-to-end time.
+  ASSERT_TRUE(d["reference"]["imread_imwrite_ms"].IsNumber()) << text;
+  const double ref_jpeg_ms = d["reference"]["imread_imwrite_ms"].GetDouble();
+  EXPECT_GT(ref_jpeg_ms, 0);
   std::set<std::string> names;
   for (const auto& r : d["conditions"].GetArray()) {
     const std::string name = r["condition"].GetString();
@@ -333,7 +338,8 @@ TEST(BenchExportTest, JsonHasEveryConditionWithConsistentRatiosAndHours) {
     EXPECT_NEAR(r["img_s_cores_cpu"].GetDouble(), 2e3 / cpu_ms, 1e-3 * 2e3 / cpu_ms) << name;
     const auto c = condition_from_string(name);
     ASSERT_TRUE(c) << name;
-    EXPECT_NEAR(r["ref_e2e_ms"].GetDouble(), reference_end_to_end_ms(*c), 1e-2) << name;
+    EXPECT_NEAR(r["ref_e2e_ms"].GetDouble(), reference_end_to_end_ms(*c) + ref_jpeg_ms, 1e-2) << name;
+    EXPECT_NEAR(r["ref_e2e_without_jpeg_ms"].GetDouble(), reference_end_to_end_ms(*c), 1e-2) << name;
     EXPECT_NEAR(r["ratio_cores_cpu"].GetDouble(), r["img_s_cores_cpu"].GetDouble() / r["ref_img_s"].GetDouble(),
                 1e-3 * r["ratio_cores_cpu"].GetDouble())
         << name;
@@ -345,7 +351,6 @@ TEST(BenchExportTest, JsonHasEveryConditionWithConsistentRatiosAndHours) {
     EXPECT_GT(h["cores_cpu"].GetDouble(), 0);
     EXPECT_NEAR(h["cluster_cpu"].GetDouble(), h["cores_cpu"].GetDouble() * 2 / 16, 1e-3 * h["cores_cpu"].GetDouble());
   }
-  EXPECT_TRUE(d["reference"]["imread_imwrite_ms"].IsNull());
 }
 
 }  // namespace
