@@ -11,6 +11,9 @@
 #include <utility>
 #include <vector>
 
+#include "corruption/dark_sampler.hpp"
+#include "rng/lane_rng.hpp"
+
 namespace faultline::corruption {
 
 DarkParams dark_params(int severity) {
@@ -106,13 +109,9 @@ void noise_row(double y, double sigma, double* prob) {
 }
 
 // Walker alias table over 256 outcomes with 23-bit thresholds, packed as threshold << 8 | alias so one load serves
-// a sample (two samples per 64-bit draw; each outcome's probability is quantised below 2^-31, far under the spec's
-// statistical tolerances).
-struct Alias {
-  std::array<std::uint32_t, 256> entry;
-};
-
-void build_alias(const double* prob, Alias& a) {
+// a sample (one 32-bit random value per sample; each outcome's probability is quantised below 2^-31, far under the
+// spec's statistical tolerances). Writes 256 entries.
+void build_alias(const double* prob, std::uint32_t* entry) {
   std::array<double, 256> scaled{};
   double total = 0.0;
   for (int j = 0; j < 256; ++j) total += prob[j];
@@ -126,14 +125,14 @@ void build_alias(const double* prob, Alias& a) {
       large[static_cast<std::size_t>(nl++)] = j;
     }
   }
-  constexpr double kOne = 8388608.0;  // 2^23: u < threshold keeps the bucket
-  constexpr std::uint32_t kKeep = 1u << 23;
-  for (int j = 0; j < 256; ++j) a.entry[static_cast<std::size_t>(j)] = (kKeep << 8) | static_cast<std::uint32_t>(j);
+  constexpr std::uint32_t kKeep = 1u << kDarkAliasThresholdBits;  // u < threshold keeps the bucket
+  constexpr double kOne = kKeep;
+  for (int j = 0; j < 256; ++j) entry[j] = (kKeep << 8) | static_cast<std::uint32_t>(j);
   while (ns > 0 && nl > 0) {
     const int s = small[static_cast<std::size_t>(--ns)];
     const int l = large[static_cast<std::size_t>(nl - 1)];
     const auto threshold = static_cast<std::uint32_t>(std::llround(scaled[static_cast<std::size_t>(s)] * kOne));
-    a.entry[static_cast<std::size_t>(s)] = (threshold << 8) | static_cast<std::uint32_t>(l);
+    entry[s] = (threshold << 8) | static_cast<std::uint32_t>(l);
     scaled[static_cast<std::size_t>(l)] -= 1.0 - scaled[static_cast<std::size_t>(s)];
     if (scaled[static_cast<std::size_t>(l)] < 1.0) {
       --nl;
@@ -147,7 +146,8 @@ void build_alias(const double* prob, Alias& a) {
 // most frames of a stream, so the last few table sets are kept for reuse.
 struct DarkTables {
   int severity = 0, lo = 0, hi = 0;
-  std::vector<Alias> levels;  // indexed by v - lo, for lo <= v <= hi (no other level occurs in the image)
+  // 256 packed alias entries per input level v, row v - lo, for lo <= v <= hi (no other level occurs in the image).
+  std::vector<std::uint32_t> entries;
 };
 
 std::shared_ptr<const DarkTables> build_tables(int severity, int lo, int hi) {
@@ -164,7 +164,7 @@ std::shared_ptr<const DarkTables> build_tables(int severity, int lo, int hi) {
   }
   auto t = std::make_shared<DarkTables>();
   t->severity = severity, t->lo = lo, t->hi = hi;
-  t->levels.resize(static_cast<std::size_t>(hi - lo + 1));
+  t->entries.resize(static_cast<std::size_t>(hi - lo + 1) * 256);
   std::array<double, 256> mix{};
   for (int v = lo; v <= hi; ++v) {
     mix.fill(0.0);
@@ -177,7 +177,7 @@ std::shared_ptr<const DarkTables> build_tables(int severity, int lo, int hi) {
       const double* row = rows.data() + static_cast<std::size_t>(k) * 256;
       for (int j = 0; j < 256; ++j) mix[static_cast<std::size_t>(j)] += pk * row[j];
     }
-    build_alias(mix.data(), t->levels[static_cast<std::size_t>(v - lo)]);
+    build_alias(mix.data(), t->entries.data() + static_cast<std::size_t>(v - lo) * 256);
   }
   return t;
 }
@@ -198,37 +198,16 @@ std::shared_ptr<const DarkTables> tables_for(int severity, int lo, int hi) {
   return t;
 }
 
-inline std::uint8_t sample(const Alias& a, std::uint32_t bits) {
-  const std::uint32_t bucket = bits >> 24;
-  const std::uint32_t u = bits & 0x7FFFFFu;
-  const std::uint32_t e = a.entry[bucket];
-  // Branch-free select: the outcome is random, so a branch would mispredict half the time.
-  const std::uint32_t keep = 0u - static_cast<std::uint32_t>(u < (e >> 8));
-  return static_cast<std::uint8_t>((bucket & keep) | (e & ~keep));
-}
-
 }  // namespace
 
 cv::Mat dark_fast(const cv::Mat& bgr, int severity, rng::FastRng& rng) {
   const cv::Mat in = bgr.isContinuous() ? bgr : bgr.clone();
-  double lo_u8 = 0.0, hi_u8 = 0.0;
-  cv::minMaxLoc(in.reshape(1), &lo_u8, &hi_u8);
-  const int lo = static_cast<int>(lo_u8), hi = static_cast<int>(hi_u8);
-  const auto tables = tables_for(severity, lo, hi);
-  const Alias* level = tables->levels.data() - lo;  // level[v] for lo <= v <= hi
   const std::size_t n = in.total() * 3;
+  const auto [lo, hi] = dark_min_max(in.data, n);
+  const auto tables = tables_for(severity, lo, hi);
   cv::Mat out(in.size(), in.type());
-  std::uint8_t* dst = out.data;
-  const std::uint8_t* src = in.data;
-  rng::FastRng local = rng;  // a local copy keeps the generator state in registers
-  std::size_t i = 0;
-  for (; i + 2 <= n; i += 2) {
-    const std::uint64_t r = local.next_u64();
-    dst[i] = sample(level[src[i]], static_cast<std::uint32_t>(r >> 32));
-    dst[i + 1] = sample(level[src[i + 1]], static_cast<std::uint32_t>(r));
-  }
-  if (i < n) dst[i] = sample(level[src[i]], static_cast<std::uint32_t>(local.next_u64() >> 32));
-  rng = local;
+  rng::LaneRng lanes(rng);
+  dark_sample(tables->entries.data(), lo, in.data, out.data, n, lanes);
   return out;
 }
 

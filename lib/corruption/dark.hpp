@@ -29,7 +29,8 @@ void dark_lambdas(const cv::Mat& bgr, int severity, double lambdas[256]);
 cv::Mat dark_exact(const cv::Mat& bgr, int severity, rng::NumpyRandomState& rng);
 
 // Fast mode: per input value a sampling table of the output value (Poisson and read noise folded into one
-// discrete distribution), one table lookup per element.
+// discrete distribution), one table lookup per element with one 32-bit value from lock-step xoshiro lanes seeded by
+// one draw of `rng` (AVX2 where available; the same bytes on every CPU for a seed).
 cv::Mat dark_fast(const cv::Mat& bgr, int severity, rng::FastRng& rng);
 
 }  // namespace faultline::corruption

@@ -5,16 +5,6 @@
 #include <cstdlib>
 
 namespace faultline::rng {
-namespace {
-
-std::uint64_t splitmix64(std::uint64_t& x) {
-  std::uint64_t z = (x += 0x9e3779b97f4a7c15ULL);
-  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
-  z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
-  return z ^ (z >> 31);
-}
-
-}  // namespace
 
 FastRng::FastRng(std::uint64_t seed) {
   std::uint64_t x = seed;

@@ -7,6 +7,14 @@
 
 namespace faultline::rng {
 
+// splitmix64: advances `x` by one step and returns the next output (seeds xoshiro states).
+inline std::uint64_t splitmix64(std::uint64_t& x) {
+  std::uint64_t z = (x += 0x9e3779b97f4a7c15ULL);
+  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
+  z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
+  return z ^ (z >> 31);
+}
+
 // Not thread-safe; one instance per stream. Copyable, so a stream can be forked deterministically.
 class FastRng {
  public:
