@@ -1,4 +1,5 @@
 // The devkit's accumulate(): score-ordered greedy matching, cumulative curves, numpy resampling.
+#include <array>
 #include "scoring/accumulate.hpp"
 
 #include <algorithm>
@@ -107,6 +108,11 @@ struct ClassInputs {
   std::vector<std::size_t> order;     // processing order
   std::vector<double> pred_yaw;       // per pred, computed once for the four thresholds
   std::vector<std::vector<double>> gt_yaw;  // parallel to gt_of_class
+  // The matching loop's working set, compact: a box is ~150 bytes and the score order visits them at random, so the
+  // centres are copied once. pred_xy is in processing order; gt_xy[gt_start[s] + ci] is candidate ci of sample s.
+  std::vector<std::array<double, 2>> pred_xy;
+  std::vector<std::array<double, 2>> gt_xy;
+  std::vector<std::size_t> gt_start;
 };
 
 ClassInputs prepare(const EvalBoxes& gt, const EvalBoxes& pred, int cls) {
@@ -139,6 +145,18 @@ ClassInputs prepare(const EvalBoxes& gt, const EvalBoxes& pred, int cls) {
     const double sa = preds[a]->score, sb = preds[b]->score;
     return sa > sb || (sa == sb && a > b);
   });
+  in.pred_xy.reserve(in.order.size());
+  for (std::size_t oi : in.order) in.pred_xy.push_back({preds[oi]->translation[0], preds[oi]->translation[1]});
+  in.gt_start.resize(gt.boxes.size() + 1);
+  in.gt_xy.reserve(in.npos);
+  for (std::size_t s = 0; s < gt.boxes.size(); ++s) {
+    in.gt_start[s] = in.gt_xy.size();
+    for (int gi : in.gt_of_class[s]) {
+      const EvalBox& g = gt.boxes[s][static_cast<std::size_t>(gi)];
+      in.gt_xy.push_back({g.translation[0], g.translation[1]});
+    }
+  }
+  in.gt_start[gt.boxes.size()] = in.gt_xy.size();
   return in;
 }
 
@@ -148,8 +166,7 @@ Result<MetricData> match_and_curves(const EvalBoxes& gt, const ClassInputs& in, 
   const auto& preds = in.preds;
   const auto& order = in.order;
   const std::size_t npos = in.npos;
-  std::vector<std::vector<char>> taken(gt.boxes.size());
-  for (std::size_t s = 0; s < gt.boxes.size(); ++s) taken[s].assign(gt.boxes[s].size(), 0);
+  std::vector<char> taken(in.gt_xy.size(), 0);  // parallel to in.gt_xy
   std::vector<double> tp_cum, fp_cum, conf;
   tp_cum.reserve(order.size());
   fp_cum.reserve(order.size());
@@ -158,37 +175,38 @@ Result<MetricData> match_and_curves(const EvalBoxes& gt, const ClassInputs& in, 
   std::vector<double> match_conf;
   const double period = cls == kClassBarrier ? M_PI : 2 * M_PI;
   double tp = 0, fp = 0;
-  for (std::size_t oi : order) {
+  for (std::size_t k = 0; k < order.size(); ++k) {
+    const std::size_t oi = order[k];
     const EvalBox& p = *preds[oi];
     double min_dist = std::numeric_limits<double>::infinity();
     int match = -1;
     std::size_t match_pos = 0;
     if (p.match_sample >= 0) {
       const auto s = static_cast<std::size_t>(p.match_sample);
-      const auto& cands = gt_of_class[s];
-      for (std::size_t ci = 0; ci < cands.size(); ++ci) {
-        const int gi = cands[ci];
-        if (taken[s][static_cast<std::size_t>(gi)]) continue;
-        const EvalBox& g = gt.boxes[s][static_cast<std::size_t>(gi)];
-        const double dx = p.translation[0] - g.translation[0], dy = p.translation[1] - g.translation[1];
+      const std::size_t first = in.gt_start[s], count = in.gt_start[s + 1] - first;
+      const auto& pxy = in.pred_xy[k];
+      for (std::size_t ci = 0; ci < count; ++ci) {
+        if (taken[first + ci]) continue;
+        const auto& gxy = in.gt_xy[first + ci];
+        const double dx = pxy[0] - gxy[0], dy = pxy[1] - gxy[1];
         const double d = std::sqrt(dx * dx + dy * dy);
         if (d < min_dist) {
           min_dist = d;
-          match = gi;
+          match = gt_of_class[s][ci];
           match_pos = ci;
         }
       }
     }
     if (match >= 0 && min_dist < dist_th) {
       const auto s = static_cast<std::size_t>(p.match_sample);
-      taken[s][static_cast<std::size_t>(match)] = 1;
+      taken[in.gt_start[s] + match_pos] = 1;
       tp += 1;
       const EvalBox& g = gt.boxes[s][static_cast<std::size_t>(match)];
       errs[kTrans].push_back(min_dist);
       const double vx = p.velocity[0] - g.velocity[0], vy = p.velocity[1] - g.velocity[1];
       errs[kVel].push_back(std::sqrt(vx * vx + vy * vy));
-      for (int k = 0; k < 3; ++k) {
-        if (!(g.size[static_cast<std::size_t>(k)] > 0) || !(p.size[static_cast<std::size_t>(k)] > 0)) {
+      for (std::size_t axis = 0; axis < 3; ++axis) {
+        if (!(g.size[axis] > 0) || !(p.size[axis] > 0)) {
           return Status(StatusCode::kInvalidArgument,
                         std::string("a matched ") + kClassNames[static_cast<std::size_t>(cls)] +
                             " box has a size <= 0 (score " + std::to_string(p.score) +

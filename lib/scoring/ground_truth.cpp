@@ -9,6 +9,7 @@
 
 #include "scoring/detection_config.hpp"
 #include "scoring/table_stream.hpp"
+#include "scoring/token_set.hpp"
 
 namespace faultline::scoring {
 namespace {
@@ -125,9 +126,8 @@ Result<GroundTruth> load_ground_truth(const std::string& dataroot, const std::st
   if (!s) return s;
 
   // Records of other samples are skipped undecoded.
-  const auto in_split = [&gt](const std::string& token) {
-    return gt.sample_index.count(token) != 0;
-  };
+  const TokenSet split_set(gt.boxes.sample_tokens);
+  const auto in_split = [&split_set](const std::string& token) { return split_set.contains(token); };
   // Annotations of the split's samples, in file order: the biggest scan after sample_data, so it
   // runs on a second thread while sample_data and ego_pose are read (it needs only the sample
   // index).
@@ -192,6 +192,7 @@ Result<GroundTruth> load_ground_truth(const std::string& dataroot, const std::st
     return Status::ok();
   });
   if (!s) return join(s);
+  const TokenSet lidar_calib_set(lidar_calibs);
   std::vector<std::string> pose_token(n);
   const std::string sd_path = table_path(dataroot, version, "sample_data");
   s = stream_table(
@@ -205,8 +206,8 @@ Result<GroundTruth> load_ground_truth(const std::string& dataroot, const std::st
         pose_token[static_cast<std::size_t>(it->second)] = r.fields[1].str;  // last wins
         return Status::ok();
       },
-      RecordFilter{{{0, in_split}, {2, [&lidar_calibs](const std::string& calib) {
-                                      return lidar_calibs.count(calib) != 0;
+      RecordFilter{{{0, in_split}, {2, [&lidar_calib_set](const std::string& calib) {
+                                      return lidar_calib_set.contains(calib);
                                     }}}});
   if (!s) return join(s);
   TokenMap<std::vector<int>> pose_users;
@@ -218,6 +219,7 @@ Result<GroundTruth> load_ground_truth(const std::string& dataroot, const std::st
     }
     pose_users[pose_token[i]].push_back(static_cast<int>(i));
   }
+  const TokenSet wanted_poses(pose_token);
   std::size_t poses_found = 0;
   const std::string pose_path = table_path(dataroot, version, "ego_pose");
   s = stream_table(
@@ -237,7 +239,7 @@ Result<GroundTruth> load_ground_truth(const std::string& dataroot, const std::st
         return Status::ok();
       },
       RecordFilter{
-          {{0, [&pose_users](const std::string& token) { return pose_users.count(token) != 0; }}}});
+          {{0, [&wanted_poses](const std::string& token) { return wanted_poses.contains(token); }}}});
   if (!s) return join(s);
   if (poses_found < n) {
     return join(Status(StatusCode::kNotFound,
