@@ -346,6 +346,19 @@ TEST(BenchExportTest, JsonHasEveryConditionWithConsistentRatiosAndHours) {
   }
   EXPECT_EQ(names.size(), 8u);
   ASSERT_EQ(d["all_conditions_run"].Size(), 1u);
+  // The all-24 run broken down per condition: every condition, own CPU plus its share of the shared work, and the
+  // shares add up to the run's CPU per image.
+  ASSERT_EQ(d["all_conditions_run_per_condition"].Size(), 8u);
+  double sum_ms = 0;
+  for (const auto& r : d["all_conditions_run_per_condition"].GetArray()) {
+    const double cpu_ms = r["cpu_ms_per_img"].GetDouble();
+    EXPECT_GT(cpu_ms, 0);
+    sum_ms += cpu_ms;
+    EXPECT_NEAR(r["ratio_cores_cpu"].GetDouble(), r["img_s_cores_cpu"].GetDouble() / r["ref_img_s"].GetDouble(),
+                1e-3 * r["ratio_cores_cpu"].GetDouble());
+  }
+  EXPECT_NEAR(sum_ms / 8, d["all_conditions_run"][0]["cpu_ms_per_img"].GetDouble(),
+              0.02 * d["all_conditions_run"][0]["cpu_ms_per_img"].GetDouble());
   ASSERT_EQ(d["full_val_hours"].Size(), 2u);  // per-condition sum and the all-24 run
   for (const auto& h : d["full_val_hours"].GetArray()) {
     EXPECT_GT(h["cores_cpu"].GetDouble(), 0);
