@@ -2,9 +2,9 @@
 // run time, scalar body otherwise and for the tail.
 #include "corruption/dark_sampler.hpp"
 
-#include <immintrin.h>
-
 #include <utility>
+
+#include "rng/lane_rng_avx2.hpp"
 
 namespace faultline::corruption {
 namespace {
@@ -35,26 +35,6 @@ void sample_scalar(const std::uint32_t* tables, int lo, const std::uint8_t* src,
 #if defined(__GNUC__) && defined(__x86_64__)
 #define FAULTLINE_DARK_AVX2 1
 
-__attribute__((target("avx2"))) inline __m256i rotl64(__m256i x, int k) {
-  return _mm256_or_si256(_mm256_slli_epi64(x, k), _mm256_srli_epi64(x, 64 - k));
-}
-
-struct Xoshiro4 {
-  __m256i s0, s1, s2, s3;
-};
-
-__attribute__((target("avx2"))) inline __m256i step(Xoshiro4& g) {
-  const __m256i result = _mm256_add_epi64(rotl64(_mm256_add_epi64(g.s0, g.s3), 23), g.s0);
-  const __m256i t = _mm256_slli_epi64(g.s1, 17);
-  g.s2 = _mm256_xor_si256(g.s2, g.s0);
-  g.s3 = _mm256_xor_si256(g.s3, g.s1);
-  g.s1 = _mm256_xor_si256(g.s1, g.s2);
-  g.s0 = _mm256_xor_si256(g.s0, g.s3);
-  g.s2 = _mm256_xor_si256(g.s2, t);
-  g.s3 = rotl64(g.s3, 45);
-  return result;
-}
-
 // Eight samples: levels (8 x int32, already minus lo) and random bits -> 8 x int32 outcomes.
 __attribute__((target("avx2"))) inline __m256i sample8(const std::uint32_t* tables, __m256i level, __m256i bits) {
   const __m256i bucket = _mm256_srli_epi32(bits, 24);
@@ -69,15 +49,7 @@ __attribute__((target("avx2"))) inline __m256i sample8(const std::uint32_t* tabl
 __attribute__((target("avx2"))) std::size_t sample_avx2(const std::uint32_t* tables, int lo,
                                                         const std::uint8_t* src, std::uint8_t* dst, std::size_t n,
                                                         rng::LaneRng& rng) {
-  // (No lambdas here: they would not inherit the target attribute.)
-  __m256i* state[2][4];
-  for (int k = 0; k < 4; ++k) {
-    for (int half = 0; half < 2; ++half) state[half][k] = reinterpret_cast<__m256i*>(&rng.s[k][4 * half]);
-  }
-  Xoshiro4 a{_mm256_load_si256(state[0][0]), _mm256_load_si256(state[0][1]), _mm256_load_si256(state[0][2]),
-             _mm256_load_si256(state[0][3])};
-  Xoshiro4 b{_mm256_load_si256(state[1][0]), _mm256_load_si256(state[1][1]), _mm256_load_si256(state[1][2]),
-             _mm256_load_si256(state[1][3])};
+  rng::avx2::Xoshiro4 a = rng::avx2::load_half(rng, 0), b = rng::avx2::load_half(rng, 1);
   const __m256i vlo = _mm256_set1_epi32(lo);
   const __m256i order = _mm256_setr_epi32(0, 4, 1, 5, 2, 6, 3, 7);
   std::size_t i = 0;
@@ -88,7 +60,8 @@ __attribute__((target("avx2"))) std::size_t sample_avx2(const std::uint32_t* tab
     const __m256i l1 = _mm256_sub_epi32(_mm256_cvtepu8_epi32(_mm_srli_si128(in, 8)), vlo);
     const __m256i l2 = _mm256_sub_epi32(_mm256_cvtepu8_epi32(in2), vlo);
     const __m256i l3 = _mm256_sub_epi32(_mm256_cvtepu8_epi32(_mm_srli_si128(in2, 8)), vlo);
-    const __m256i r0 = step(a), r1 = step(b), r2 = step(a), r3 = step(b);
+    const __m256i r0 = rng::avx2::step(a), r1 = rng::avx2::step(b);
+    const __m256i r2 = rng::avx2::step(a), r3 = rng::avx2::step(b);
     const __m256i o0 = sample8(tables, l0, r0);
     const __m256i o1 = sample8(tables, l1, r1);
     const __m256i o2 = sample8(tables, l2, r2);
@@ -97,10 +70,8 @@ __attribute__((target("avx2"))) std::size_t sample_avx2(const std::uint32_t* tab
     const __m256i p = _mm256_packus_epi16(_mm256_packus_epi32(o0, o1), _mm256_packus_epi32(o2, o3));
     _mm256_storeu_si256(reinterpret_cast<__m256i*>(dst + i), _mm256_permutevar8x32_epi32(p, order));
   }
-  _mm256_store_si256(state[0][0], a.s0), _mm256_store_si256(state[0][1], a.s1);
-  _mm256_store_si256(state[0][2], a.s2), _mm256_store_si256(state[0][3], a.s3);
-  _mm256_store_si256(state[1][0], b.s0), _mm256_store_si256(state[1][1], b.s1);
-  _mm256_store_si256(state[1][2], b.s2), _mm256_store_si256(state[1][3], b.s3);
+  rng::avx2::store_half(a, rng, 0);
+  rng::avx2::store_half(b, rng, 1);
   return i;
 }
 

@@ -12,6 +12,8 @@
 #include "corruption/motion_blur.hpp"
 #include "corruption/motion_kernel.hpp"
 #include "corruption/simd_kernels.hpp"
+#include "corruption/snow_kernels.hpp"
+#include "rng/lane_rng.hpp"
 
 namespace faultline::corruption {
 namespace {
@@ -174,46 +176,11 @@ cv::Mat snow_exact(const cv::Mat& bgr, int severity, rng::NumpyRandomState& rng)
   return snow_blend_exact(bgr, snow_layer_exact(normals, severity, angle), severity);
 }
 
-namespace {
-
-#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__)
-#define FAULTLINE_AVX2_CLONES __attribute__((target_clones("avx2", "default")))
-#else
-#define FAULTLINE_AVX2_CLONES
-#endif
-
-// round-half-even(v * 255) for v in [0, 1]: adding and removing 1.5 * 2^23 rounds to an integer in the default
-// rounding mode (the same result as nearbyint, without a libm call per value, and vectorisable).
-FAULTLINE_AVX2_CLONES void quantise_row_fast(const float* __restrict s, std::uint8_t* __restrict d, int cols) {
-  constexpr float kMagic = 12582912.0f;  // 1.5 * 2^23
-  for (int x = 0; x < cols; ++x) {
-    const float r = (s[x] * 255.0f + kMagic) - kMagic;
-    d[x] = static_cast<std::uint8_t>(static_cast<int>(std::min(std::max(r, 0.0f), 255.0f)));
-  }
-}
-
-}  // namespace
-
-namespace {
-
-// Row pass of the fast zoom, fused with threshold and clip, written into a padded row (row-major, vectorises).
-FAULTLINE_AVX2_CLONES void lerp_threshold_row(const float* __restrict a, const float* __restrict b, float w,
-                                              float thr, float* __restrict d, int n) {
-  const float w0 = 1.0f - w;
-  for (int x = 0; x < n; ++x) {
-    float v = w0 * a[x] + w * b[x];
-    v = v < thr ? 0.0f : v;
-    d[x] = std::min(std::max(v, 0.0f), 1.0f);
-  }
-}
-
-}  // namespace
-
 cv::Mat snow_layer_fast(const cv::Mat& crop_field, int rows, int cols, int severity, double blur_angle_deg) {
-  // Same stages as the exact layer in float32, reordered for speed: the zoom interpolates columns first (on the
-  // few crop rows, where the per-column gathers are cheap) and then rows (contiguous, vectorised); bilinear zoom
-  // is separable, so only float rounding differs. The zoomed layer goes straight into an edge-padded buffer, and
-  // each blurred row is quantised as soon as it is summed; only the top-left rows x cols are computed.
+  // Same stages as the exact layer in float32, reordered for speed: the zoom interpolates columns first (on the few
+  // crop rows) and then rows (contiguous); bilinear zoom is separable, so only float rounding differs. The zoomed
+  // layer goes straight into an edge-padded buffer, and each blurred row is quantised as soon as it is summed; only
+  // the top-left rows x cols are computed.
   const SnowParams p = snow_params(severity);
   const cv::Size size = snow_layer_size(rows, cols, p.zoom);
   const int lh = size.height, lw = size.width;
@@ -230,29 +197,25 @@ cv::Mat snow_layer_fast(const cv::Mat& crop_field, int rows, int cols, int sever
     pad = std::max(pad, std::abs(offsets[static_cast<std::size_t>(i)].dx));
   }
   // Column pass on the crop rows.
-  const AxisMap cm = axis_map(crop_field.cols, lw);
-  thread_local std::vector<float> colz, padded;  // reused per thread: fresh multi-MB buffers cost page faults
-  colz.resize(static_cast<std::size_t>(crop_field.rows) * static_cast<std::size_t>(lw));
-  std::vector<float> cw(static_cast<std::size_t>(lw));
-  for (int o = 0; o < lw; ++o) cw[static_cast<std::size_t>(o)] = static_cast<float>(cm.w[static_cast<std::size_t>(o)]);
+  const snow_kernels::ColumnZoom column_zoom(crop_field.cols, lw);
+  thread_local std::vector<float> colz;  // reused per thread: fresh multi-MB buffers cost page faults
+  thread_local std::vector<float> padded;
+  const auto lw_u = static_cast<std::size_t>(lw);
+  colz.resize(static_cast<std::size_t>(crop_field.rows) * lw_u);
   for (int r = 0; r < crop_field.rows; ++r) {
-    const float* s = crop_field.ptr<float>(r);
-    float* d = colz.data() + static_cast<std::size_t>(r) * static_cast<std::size_t>(lw);
-    for (int o = 0; o < lw; ++o) {
-      const float wo = cw[static_cast<std::size_t>(o)];
-      d[o] = (1.0f - wo) * s[cm.i0[static_cast<std::size_t>(o)]] + wo * s[cm.i1[static_cast<std::size_t>(o)]];
-    }
+    column_zoom.run(crop_field.ptr<float>(r), colz.data() + static_cast<std::size_t>(r) * lw_u);
   }
   // Row pass + threshold into the padded layer.
-  const AxisMap rm = axis_map(crop_field.rows, lh);
+  const snow_kernels::ZoomAxis rm = snow_kernels::zoom_axis(crop_field.rows, lh);
   const std::size_t stride = static_cast<std::size_t>(lw + 2 * pad);
   padded.resize(stride * static_cast<std::size_t>(lh));
   const float thr = static_cast<float>(p.threshold);
   for (int o = 0; o < lh; ++o) {
-    const float* a = colz.data() + static_cast<std::size_t>(rm.i0[static_cast<std::size_t>(o)]) * static_cast<std::size_t>(lw);
-    const float* b = colz.data() + static_cast<std::size_t>(rm.i1[static_cast<std::size_t>(o)]) * static_cast<std::size_t>(lw);
-    float* d = padded.data() + static_cast<std::size_t>(o) * stride;
-    lerp_threshold_row(a, b, static_cast<float>(rm.w[static_cast<std::size_t>(o)]), thr, d + pad, lw);
+    const auto ou = static_cast<std::size_t>(o);
+    const float* a = colz.data() + static_cast<std::size_t>(rm.i0[ou]) * lw_u;
+    const float* b = colz.data() + static_cast<std::size_t>(rm.i1[ou]) * lw_u;
+    float* d = padded.data() + ou * stride;
+    snow_kernels::lerp_threshold(a, b, rm.w[ou], thr, d + pad, lw);
     std::fill(d, d + pad, d[pad]);
     std::fill(d + pad + lw, d + stride, d[pad + lw - 1]);
   }
@@ -267,38 +230,25 @@ cv::Mat snow_layer_fast(const cv::Mat& crop_field, int rows, int cols, int sever
           padded.data() + static_cast<std::size_t>(std::clamp(y - o.dy, 0, lh - 1)) * stride + (pad - o.dx);
     }
     simd::weighted_rows(acc.data(), src.data(), w.data(), taps, static_cast<std::size_t>(cols));
-    quantise_row_fast(acc.data(), out.ptr<std::uint8_t>(y), cols);
+    snow_kernels::quantise_row(acc.data(), out.ptr<std::uint8_t>(y), cols);
   }
   return out;
 }
 
 cv::Mat snow_blend_fast(const cv::Mat& bgr, const cv::Mat& layer_u8, int severity) {
-  cv::Mat rot;
-  cv::flip(layer_u8, rot, -1);
-  return snow_blend_fast(bgr, layer_u8, rot, severity);
-}
-
-namespace {
-
-// One row of the fast blend in the 0..255 domain (the layer values are integers there). Written as straight-line
-// per-pixel code over three interleaved channels so that GCC vectorises it (interleaved loads/stores).
-FAULTLINE_AVX2_CLONES void snow_blend_fast_row(const std::uint8_t* __restrict src, const std::uint8_t* __restrict l,
-                                               const std::uint8_t* __restrict lr, std::uint8_t* __restrict dst,
-                                               int cols, float b, float one_minus_b) {
-  for (int x = 0; x < cols; ++x) {
-    const float c0 = src[3 * x], c1 = src[3 * x + 1], c2 = src[3 * x + 2];
-    const float bright = (0.299f * c0 + 0.587f * c1 + 0.114f * c2) * 1.5f + 127.5f;
-    const float snow = static_cast<float>(l[x] + lr[x]);
-    const float v0 = b * c0 + one_minus_b * std::max(c0, bright) + snow;
-    const float v1 = b * c1 + one_minus_b * std::max(c1, bright) + snow;
-    const float v2 = b * c2 + one_minus_b * std::max(c2, bright) + snow;
-    dst[3 * x] = static_cast<std::uint8_t>(static_cast<int>(std::min(std::max(v0, 0.0f), 255.0f)));
-    dst[3 * x + 1] = static_cast<std::uint8_t>(static_cast<int>(std::min(std::max(v1, 0.0f), 255.0f)));
-    dst[3 * x + 2] = static_cast<std::uint8_t>(static_cast<int>(std::min(std::max(v2, 0.0f), 255.0f)));
+  const SnowParams p = snow_params(severity);
+  const float b = static_cast<float>(p.blend);
+  const float one_minus_b = static_cast<float>(1.0 - p.blend);
+  const int rows = bgr.rows, cols = bgr.cols;
+  cv::Mat out(bgr.size(), bgr.type());
+  for (int y = 0; y < rows; ++y) {
+    // The rotated copy is row rows - 1 - y read backwards.
+    snow_kernels::blend_fast_row(bgr.ptr<std::uint8_t>(y), layer_u8.ptr<std::uint8_t>(y),
+                                 layer_u8.ptr<std::uint8_t>(rows - 1 - y), /*rot_reversed=*/true,
+                                 out.ptr<std::uint8_t>(y), cols, b, one_minus_b);
   }
+  return out;
 }
-
-}  // namespace
 
 cv::Mat snow_blend_fast(const cv::Mat& bgr, const cv::Mat& layer_u8, const cv::Mat& layer_rot_u8, int severity) {
   const SnowParams p = snow_params(severity);
@@ -307,8 +257,9 @@ cv::Mat snow_blend_fast(const cv::Mat& bgr, const cv::Mat& layer_u8, const cv::M
   const int rows = bgr.rows, cols = bgr.cols;
   cv::Mat out(bgr.size(), bgr.type());
   for (int y = 0; y < rows; ++y) {
-    snow_blend_fast_row(bgr.ptr<std::uint8_t>(y), layer_u8.ptr<std::uint8_t>(y), layer_rot_u8.ptr<std::uint8_t>(y),
-                        out.ptr<std::uint8_t>(y), cols, b, one_minus_b);
+    snow_kernels::blend_fast_row(bgr.ptr<std::uint8_t>(y), layer_u8.ptr<std::uint8_t>(y),
+                                 layer_rot_u8.ptr<std::uint8_t>(y), /*rot_reversed=*/false,
+                                 out.ptr<std::uint8_t>(y), cols, b, one_minus_b);
   }
   return out;
 }
@@ -316,11 +267,9 @@ cv::Mat snow_blend_fast(const cv::Mat& bgr, const cv::Mat& layer_u8, const cv::M
 cv::Mat snow_fast(const cv::Mat& bgr, int severity, rng::FastRng& rng) {
   const SnowParams p = snow_params(severity);
   const Crop c = centre_crop(bgr.rows, bgr.cols, p.zoom);
-  cv::Mat field(c.rows, c.cols, CV_32F);
-  for (int y = 0; y < c.rows; ++y) {
-    float* d = field.ptr<float>(y);
-    for (int x = 0; x < c.cols; ++x) d[x] = static_cast<float>(rng.normal(p.loc, p.scale));
-  }
+  cv::Mat field(c.rows, c.cols, CV_32F);  // continuous
+  rng::LaneRng lanes(rng);
+  rng::fill_normals(field.ptr<float>(), field.total(), p.loc, p.scale, lanes, rng);
   const double angle = rng.uniform(-135.0, -45.0);
   return snow_blend_fast(bgr, snow_layer_fast(field, bgr.rows, bgr.cols, severity, angle), severity);
 }

@@ -48,6 +48,12 @@ class FastRng {
   }
   double normal(double loc, double scale) { return loc + scale * standard_normal(); }
 
+  // The ziggurat's layer tables, and its slow path for a 32-bit draw hz with iz = hz & 127 that a vector sampler did
+  // not accept itself (continues exactly as standard_normal() does after failing |hz| < kn[iz]; draws from *this).
+  const std::array<std::uint32_t, 128>& ziggurat_kn() const { return kn_; }
+  const std::array<double, 128>& ziggurat_wn() const { return wn_; }
+  double standard_normal_slow(std::int32_t hz) { return normal_tail(hz, static_cast<std::uint32_t>(hz) & 127u); }
+
   // Poisson(lam): inversion for lam < 10, PTRS otherwise; lam <= 0 gives 0.
   std::int64_t poisson(double lam);
 

@@ -2,6 +2,7 @@
 // four 64-bit lanes, and a scalar definition of the same output so every CPU gives the same values for a seed.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 
 #include "rng/fast_rng.hpp"
@@ -23,5 +24,12 @@ struct LaneRng {
 
   alignas(32) std::uint64_t s[4][kLanes];  // s[k][l]: word k of lane l's xoshiro256++ state
 };
+
+// dst[i] = N(loc, scale) as float for i < n: element i takes value i % 16 of lane step i / 16 as the 32-bit draw hz
+// of `slow`'s ziggurat (layer hz & 127, accepted when kn > |hz| in wrapping int32, value loc + scale * (hz * wn) in
+// float32); draws the ziggurat rejects (about 1 %) go through slow.standard_normal_slow(hz) in element order. The
+// AVX2 body and the scalar body give the same floats. `allow_simd` = false forces the scalar body (tests).
+void fill_normals(float* dst, std::size_t n, double loc, double scale, LaneRng& lanes, FastRng& slow,
+                  bool allow_simd = true);
 
 }  // namespace faultline::rng

@@ -1,0 +1,261 @@
+// Fast Snow loops. The AVX2 bodies run whole blocks and the scalar bodies (same arithmetic, same rounding) the rest.
+#include "corruption/snow_kernels.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#if defined(__GNUC__) && defined(__x86_64__)
+#include <immintrin.h>
+#define FAULTLINE_SNOW_AVX2 1
+#endif
+
+namespace faultline::corruption::snow_kernels {
+namespace {
+
+#ifdef FAULTLINE_SNOW_AVX2
+bool has_avx2() {
+  static const bool yes = __builtin_cpu_supports("avx2");
+  return yes;
+}
+#endif
+
+bool use_avx2(bool allow_simd) {
+#ifdef FAULTLINE_SNOW_AVX2
+  return allow_simd && has_avx2();
+#else
+  (void)allow_simd;
+  return false;
+#endif
+}
+
+inline std::uint8_t blend_value(float c, float bright, float snow, float b, float one_minus_b) {
+  const float v = b * c + one_minus_b * std::max(c, bright) + snow;
+  return static_cast<std::uint8_t>(static_cast<int>(std::min(std::max(v, 0.0f), 255.0f)));
+}
+
+void blend_scalar(const std::uint8_t* src, const std::uint8_t* layer, const std::uint8_t* rot, bool rot_reversed,
+                  std::uint8_t* dst, int x0, int cols, float b, float one_minus_b) {
+  for (int x = x0; x < cols; ++x) {
+    const float c0 = src[3 * x], c1 = src[3 * x + 1], c2 = src[3 * x + 2];
+    const float bright = (0.299f * c0 + 0.587f * c1 + 0.114f * c2) * 1.5f + 127.5f;
+    const float snow = static_cast<float>(layer[x] + (rot_reversed ? rot[cols - 1 - x] : rot[x]));
+    dst[3 * x] = blend_value(c0, bright, snow, b, one_minus_b);
+    dst[3 * x + 1] = blend_value(c1, bright, snow, b, one_minus_b);
+    dst[3 * x + 2] = blend_value(c2, bright, snow, b, one_minus_b);
+  }
+}
+
+#ifdef FAULTLINE_SNOW_AVX2
+
+// pshufb masks: planar <-> interleaved for 16 three-byte pixels held in three 16-byte blocks.
+struct Shuffles {
+  alignas(16) std::int8_t split[3][3][16];  // [plane][block]: bytes of `plane` taken from `block`
+  alignas(16) std::int8_t merge[3][3][16];  // [block][plane]: bytes of `block` taken from `plane`
+  Shuffles() {
+    for (int k = 0; k < 3; ++k) {
+      for (int blk = 0; blk < 3; ++blk) {
+        for (int j = 0; j < 16; ++j) {
+          const int g = 3 * j + k;  // interleaved position of pixel j, plane k
+          split[k][blk][j] = static_cast<std::int8_t>(g / 16 == blk ? g % 16 : -128);
+          const int h = 16 * blk + j;  // interleaved position in block blk
+          merge[blk][k][j] = static_cast<std::int8_t>(h % 3 == k ? h / 3 : -128);
+        }
+      }
+    }
+  }
+};
+const Shuffles& shuffles() {
+  static const Shuffles s;
+  return s;
+}
+
+__attribute__((target("avx2"))) inline __m128i mask(const std::int8_t* m) {
+  return _mm_load_si128(reinterpret_cast<const __m128i*>(m));
+}
+
+__attribute__((target("avx2"))) void column_zoom_avx2(const float* src, float* dst, int n_out,
+                                                      const std::int32_t* base, const std::int32_t* rel0,
+                                                      const std::int32_t* rel1, const float* w,
+                                                      const float* one_minus_w) {
+  for (int blk = 0; blk * 8 < n_out; ++blk) {
+    if (base[blk] < 0) continue;  // left to the scalar body
+    const int o = 8 * blk;
+    const __m256 v = _mm256_loadu_ps(src + base[blk]);
+    const __m256 a = _mm256_permutevar8x32_ps(v, _mm256_loadu_si256(reinterpret_cast<const __m256i*>(rel0 + o)));
+    const __m256 b = _mm256_permutevar8x32_ps(v, _mm256_loadu_si256(reinterpret_cast<const __m256i*>(rel1 + o)));
+    const __m256 r = _mm256_add_ps(_mm256_mul_ps(_mm256_loadu_ps(one_minus_w + o), a),
+                                   _mm256_mul_ps(_mm256_loadu_ps(w + o), b));
+    _mm256_storeu_ps(dst + o, r);
+  }
+}
+
+// Sixteen bytes -> two vectors of eight floats.
+__attribute__((target("avx2"))) inline void widen(__m128i bytes, __m256& lo, __m256& hi) {
+  lo = _mm256_cvtepi32_ps(_mm256_cvtepu8_epi32(bytes));
+  hi = _mm256_cvtepi32_ps(_mm256_cvtepu8_epi32(_mm_srli_si128(bytes, 8)));
+}
+
+__attribute__((target("avx2"))) inline __m256i blend8(__m256 c, __m256 bright, __m256 snow, __m256 b,
+                                                      __m256 one_minus_b) {
+  __m256 v = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(b, c), _mm256_mul_ps(one_minus_b, _mm256_max_ps(c, bright))),
+                           snow);
+  v = _mm256_min_ps(_mm256_max_ps(v, _mm256_setzero_ps()), _mm256_set1_ps(255.0f));
+  return _mm256_cvttps_epi32(v);
+}
+
+// Two vectors of eight int32 in 0..255 -> sixteen bytes.
+__attribute__((target("avx2"))) inline __m128i narrow(__m256i lo, __m256i hi) {
+  const __m256i words = _mm256_permute4x64_epi64(_mm256_packus_epi32(lo, hi), 0xD8);
+  return _mm_packus_epi16(_mm256_castsi256_si128(words), _mm256_extracti128_si256(words, 1));
+}
+
+// Whole blocks of 16 pixels; returns how many pixels it wrote.
+__attribute__((target("avx2"))) int blend_avx2(const std::uint8_t* src, const std::uint8_t* layer,
+                                               const std::uint8_t* rot, bool rot_reversed, std::uint8_t* dst,
+                                               int cols, float b, float one_minus_b) {
+  const Shuffles& m = shuffles();
+  const __m256 bv = _mm256_set1_ps(b), omb = _mm256_set1_ps(one_minus_b);
+  const __m256 w0 = _mm256_set1_ps(0.299f), w1 = _mm256_set1_ps(0.587f), w2 = _mm256_set1_ps(0.114f);
+  const __m256 k15 = _mm256_set1_ps(1.5f), k1275 = _mm256_set1_ps(127.5f);
+  const __m128i reverse = _mm_setr_epi8(15, 14, 13, 12, 11, 10, 9, 8, 7, 6, 5, 4, 3, 2, 1, 0);
+  int x = 0;
+  for (; x + 16 <= cols; x += 16) {
+    __m128i blk[3];
+    for (int i = 0; i < 3; ++i) blk[i] = _mm_loadu_si128(reinterpret_cast<const __m128i*>(src + 3 * x + 16 * i));
+    __m128i plane[3];
+    for (int k = 0; k < 3; ++k) {
+      plane[k] = _mm_or_si128(_mm_or_si128(_mm_shuffle_epi8(blk[0], mask(m.split[k][0])),
+                                           _mm_shuffle_epi8(blk[1], mask(m.split[k][1]))),
+                              _mm_shuffle_epi8(blk[2], mask(m.split[k][2])));
+    }
+    const __m128i l = _mm_loadu_si128(reinterpret_cast<const __m128i*>(layer + x));
+    __m128i r;
+    if (rot_reversed) {
+      r = _mm_shuffle_epi8(_mm_loadu_si128(reinterpret_cast<const __m128i*>(rot + cols - 16 - x)), reverse);
+    } else {
+      r = _mm_loadu_si128(reinterpret_cast<const __m128i*>(rot + x));
+    }
+    const __m256i snow16 = _mm256_add_epi16(_mm256_cvtepu8_epi16(l), _mm256_cvtepu8_epi16(r));
+    const __m256 snow[2] = {_mm256_cvtepi32_ps(_mm256_cvtepu16_epi32(_mm256_castsi256_si128(snow16))),
+                            _mm256_cvtepi32_ps(_mm256_cvtepu16_epi32(_mm256_extracti128_si256(snow16, 1)))};
+    __m256 c[3][2];
+    for (int k = 0; k < 3; ++k) widen(plane[k], c[k][0], c[k][1]);
+    __m256i out[3][2];
+    for (int h = 0; h < 2; ++h) {
+      const __m256 grey = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(w0, c[0][h]), _mm256_mul_ps(w1, c[1][h])),
+                                        _mm256_mul_ps(w2, c[2][h]));
+      const __m256 bright = _mm256_add_ps(_mm256_mul_ps(grey, k15), k1275);
+      for (int k = 0; k < 3; ++k) out[k][h] = blend8(c[k][h], bright, snow[h], bv, omb);
+    }
+    __m128i res[3];
+    for (int k = 0; k < 3; ++k) res[k] = narrow(out[k][0], out[k][1]);
+    for (int i = 0; i < 3; ++i) {
+      const __m128i v = _mm_or_si128(_mm_or_si128(_mm_shuffle_epi8(res[0], mask(m.merge[i][0])),
+                                                  _mm_shuffle_epi8(res[1], mask(m.merge[i][1]))),
+                                     _mm_shuffle_epi8(res[2], mask(m.merge[i][2])));
+      _mm_storeu_si128(reinterpret_cast<__m128i*>(dst + 3 * x + 16 * i), v);
+    }
+  }
+  return x;
+}
+
+#endif  // FAULTLINE_SNOW_AVX2
+
+}  // namespace
+
+ZoomAxis zoom_axis(int n_in, int n_out) {
+  ZoomAxis m;
+  const auto n = static_cast<std::size_t>(n_out);
+  m.i0.resize(n);
+  m.i1.resize(n);
+  m.w.resize(n);
+  m.one_minus_w.resize(n);
+  const double ratio = n_out > 1 ? static_cast<double>(n_in - 1) / static_cast<double>(n_out - 1) : 0.0;
+  for (std::size_t o = 0; o < n; ++o) {
+    const double p = static_cast<double>(o) * ratio;
+    const int i = std::clamp(static_cast<int>(std::floor(p)), 0, n_in - 1);
+    m.i0[o] = i;
+    m.i1[o] = std::min(i + 1, n_in - 1);
+    m.w[o] = static_cast<float>(p - i);
+    m.one_minus_w[o] = 1.0f - m.w[o];
+  }
+  return m;
+}
+
+ColumnZoom::ColumnZoom(int n_in, int n_out) : n_in_(n_in), n_out_(n_out), map_(zoom_axis(n_in, n_out)) {
+  const int blocks = n_out / 8;  // whole blocks only; the tail is scalar
+  base_.assign(static_cast<std::size_t>(blocks), -1);
+  rel0_.assign(static_cast<std::size_t>(n_out), 0);
+  rel1_.assign(static_cast<std::size_t>(n_out), 0);
+  for (int blk = 0; blk < blocks; ++blk) {
+    const int base = map_.i0[static_cast<std::size_t>(8 * blk)];
+    const int last = map_.i1[static_cast<std::size_t>(8 * blk + 7)];
+    if (last - base > 7 || base + 8 > n_in) continue;  // outside one 8-float window: scalar
+    base_[static_cast<std::size_t>(blk)] = base;
+    for (int o = 8 * blk; o < 8 * blk + 8; ++o) {
+      rel0_[static_cast<std::size_t>(o)] = map_.i0[static_cast<std::size_t>(o)] - base;
+      rel1_[static_cast<std::size_t>(o)] = map_.i1[static_cast<std::size_t>(o)] - base;
+    }
+  }
+}
+
+void ColumnZoom::run(const float* src, float* dst, bool allow_simd) const {
+  auto scalar = [&](int o0, int o1) {
+    for (int o = o0; o < o1; ++o) {
+      const auto u = static_cast<std::size_t>(o);
+      dst[o] = map_.one_minus_w[u] * src[map_.i0[u]] + map_.w[u] * src[map_.i1[u]];
+    }
+  };
+  const int blocks = static_cast<int>(base_.size());
+  if (use_avx2(allow_simd)) {
+#ifdef FAULTLINE_SNOW_AVX2
+    column_zoom_avx2(src, dst, blocks * 8, base_.data(), rel0_.data(), rel1_.data(), map_.w.data(),
+                     map_.one_minus_w.data());
+#endif
+    for (int blk = 0; blk < blocks; ++blk) {
+      if (base_[static_cast<std::size_t>(blk)] < 0) scalar(8 * blk, 8 * blk + 8);
+    }
+    scalar(8 * blocks, n_out_);
+  } else {
+    scalar(0, n_out_);
+  }
+}
+
+#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__)
+#define FAULTLINE_SNOW_CLONES __attribute__((target_clones("avx2", "default")))
+#else
+#define FAULTLINE_SNOW_CLONES
+#endif
+
+// Element-wise float32 loops: vectorising them does not change any value, so the clones need no scalar twin.
+FAULTLINE_SNOW_CLONES void lerp_threshold(const float* __restrict a, const float* __restrict b, float w,
+                                          float threshold, float* __restrict dst, int n) {
+  const float w0 = 1.0f - w;
+  for (int x = 0; x < n; ++x) {
+    float v = w0 * a[x] + w * b[x];
+    v = v < threshold ? 0.0f : v;
+    dst[x] = std::min(std::max(v, 0.0f), 1.0f);
+  }
+}
+
+// Adding and removing 1.5 * 2^23 rounds half to even in the default rounding mode (nearbyint without a libm call).
+FAULTLINE_SNOW_CLONES void quantise_row(const float* __restrict src, std::uint8_t* __restrict dst, int n) {
+  constexpr float kMagic = 12582912.0f;
+  for (int x = 0; x < n; ++x) {
+    const float r = (src[x] * 255.0f + kMagic) - kMagic;
+    dst[x] = static_cast<std::uint8_t>(static_cast<int>(std::min(std::max(r, 0.0f), 255.0f)));
+  }
+}
+
+void blend_fast_row(const std::uint8_t* src, const std::uint8_t* layer, const std::uint8_t* rot, bool rot_reversed,
+                    std::uint8_t* dst, int cols, float b, float one_minus_b, bool allow_simd) {
+  int x = 0;
+#ifdef FAULTLINE_SNOW_AVX2
+  if (use_avx2(allow_simd)) x = blend_avx2(src, layer, rot, rot_reversed, dst, cols, b, one_minus_b);
+#else
+  (void)allow_simd;
+#endif
+  blend_scalar(src, layer, rot, rot_reversed, dst, x, cols, b, one_minus_b);
+}
+
+}  // namespace faultline::corruption::snow_kernels

@@ -1,0 +1,46 @@
+// Fast-mode Snow inner loops: corner-aligned column zoom, row zoom + threshold, quantisation and the whitening
+// blend, all in float32 with the arithmetic of numpy mode's stages where it can be kept. Each has an AVX2 body
+// (chosen at run time) and a scalar body giving the same values, so the output for a seed does not depend on the CPU
+// (`allow_simd` = false forces the scalar body, for tests).
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+namespace faultline::corruption::snow_kernels {
+
+// Corner-aligned linear resampling of one axis, o -> p = o * (n_in - 1) / (n_out - 1) (the reference's zoom), with
+// float32 weights: the value at o is (1 - w[o]) * a[i0[o]] + w[o] * a[i1[o]].
+struct ZoomAxis {
+  std::vector<int> i0, i1;
+  std::vector<float> w, one_minus_w;  // one_minus_w = 1.0f - w
+};
+ZoomAxis zoom_axis(int n_in, int n_out);
+
+// dst[o] = (1 - w[o]) * src[i0[o]] + w[o] * src[i1[o]] in float32 for o < n_out (src has n_in values).
+class ColumnZoom {
+ public:
+  ColumnZoom(int n_in, int n_out);
+  void run(const float* src, float* dst, bool allow_simd = true) const;
+
+ private:
+  int n_in_, n_out_;
+  ZoomAxis map_;
+  std::vector<std::int32_t> base_;         // per block of 8 outputs: first source index, or -1 (scalar block)
+  std::vector<std::int32_t> rel0_, rel1_;  // per output: i0 - base, i1 - base
+};
+
+// dst[x] = clip(t, 0, 1) with t = (1 - w) * a[x] + w * b[x] in float32, and t = 0 where it is below `threshold`.
+void lerp_threshold(const float* a, const float* b, float w, float threshold, float* dst, int n);
+
+// dst[x] = round-half-even(src[x] * 255) clamped to 0..255.
+void quantise_row(const float* src, std::uint8_t* dst, int n);
+
+// One row of the fast whitening blend in the 0..255 domain: per pixel bright = (0.299 c0 + 0.587 c1 + 0.114 c2) *
+// 1.5 + 127.5 and out_k = trunc(clip(b c_k + (1 - b) max(c_k, bright) + l + r, 0, 255)) in float32, where
+// l = layer[x] and r = rot[x], or rot[cols - 1 - x] when `rot_reversed` (rot is then the mirrored row itself).
+void blend_fast_row(const std::uint8_t* src, const std::uint8_t* layer, const std::uint8_t* rot, bool rot_reversed,
+                    std::uint8_t* dst, int cols, float b, float one_minus_b, bool allow_simd = true);
+
+}  // namespace faultline::corruption::snow_kernels
