@@ -300,7 +300,9 @@ TEST(ExportCodecReuseTest, ReusedEncoderAndDecoderMatchTheOneShotFunctions) {
     auto want = codec::decode_jpeg(one_shot->data(), one_shot->size());
     ASSERT_TRUE(want);
     EXPECT_EQ(cv::norm(shared, *want, cv::NORM_INF), 0) << size;
-    if (!held.empty()) EXPECT_EQ(cv::norm(held, held_copy, cv::NORM_INF), 0);
+    if (!held.empty()) {
+      EXPECT_EQ(cv::norm(held, held_copy, cv::NORM_INF), 0);
+    }
   }
   const std::uint8_t junk[100] = {0xFF, 0xD8, 0x01};
   EXPECT_FALSE(dec.decode(junk, sizeof junk, shared));
