@@ -9,7 +9,6 @@
 
 #include <opencv2/core.hpp>
 
-#include "corruption/motion_blur.hpp"
 #include "corruption/motion_kernel.hpp"
 #include "corruption/simd_kernels.hpp"
 #include "corruption/snow_kernels.hpp"
@@ -53,47 +52,6 @@ AxisMap axis_map(int n_in, int n_out) {
   return m;
 }
 
-// Zoom (rows first, then columns), threshold and clip. T is double (exact) or float (fast).
-template <typename T>
-cv::Mat zoom_threshold(const cv::Mat& crop, cv::Size out_size, double threshold) {
-  const int depth = cv::DataType<T>::depth;
-  const AxisMap rm = axis_map(crop.rows, out_size.height);
-  const AxisMap cm = axis_map(crop.cols, out_size.width);
-  thread_local cv::Mat tmp;  // reused per thread (avoids page faults on a fresh buffer every frame)
-  tmp.create(out_size.height, crop.cols, depth);
-  for (int o = 0; o < out_size.height; ++o) {
-    const T* a = crop.ptr<T>(rm.i0[static_cast<std::size_t>(o)]);
-    const T* b = crop.ptr<T>(rm.i1[static_cast<std::size_t>(o)]);
-    const T w = static_cast<T>(rm.w[static_cast<std::size_t>(o)]);
-    T* d = tmp.ptr<T>(o);
-    for (int x = 0; x < crop.cols; ++x) d[x] = (T(1) - w) * a[x] + w * b[x];
-  }
-  cv::Mat out(out_size, depth);
-  const T thr = static_cast<T>(threshold);
-  for (int y = 0; y < out_size.height; ++y) {
-    const T* s = tmp.ptr<T>(y);
-    T* d = out.ptr<T>(y);
-    for (int o = 0; o < out_size.width; ++o) {
-      const T w = static_cast<T>(cm.w[static_cast<std::size_t>(o)]);
-      T v = (T(1) - w) * s[cm.i0[static_cast<std::size_t>(o)]] + w * s[cm.i1[static_cast<std::size_t>(o)]];
-      if (v < thr) v = T(0);
-      d[o] = std::min(std::max(v, T(0)), T(1));
-    }
-  }
-  return out;
-}
-
-template <typename T>
-cv::Mat quantise_crop(const cv::Mat& blurred, int rows, int cols) {
-  cv::Mat out(rows, cols, CV_8U);
-  for (int y = 0; y < rows; ++y) {
-    const T* s = blurred.ptr<T>(y);
-    std::uint8_t* d = out.ptr<std::uint8_t>(y);
-    for (int x = 0; x < cols; ++x) d[x] = static_cast<std::uint8_t>(std::nearbyint(s[x] * T(255)));
-  }
-  return out;
-}
-
 }  // namespace
 
 SnowParams snow_params(int severity) {
@@ -110,47 +68,56 @@ cv::Size snow_layer_size(int rows, int cols, double zoom) {
   return {static_cast<int>(std::nearbyint(c.cols * zoom)), static_cast<int>(std::nearbyint(c.rows * zoom))};
 }
 
-cv::Mat snow_layer_exact(const cv::Mat& normals, int severity, double blur_angle_deg) {
-  const SnowParams p = snow_params(severity);
-  const int rows = normals.rows, cols = normals.cols;
-  const Crop c = centre_crop(rows, cols, p.zoom);
-  const cv::Mat zoomed = zoom_threshold<double>(normals(cv::Rect(c.left, c.top, c.cols, c.rows)),
-                                                snow_layer_size(rows, cols, p.zoom), p.threshold);
-  const cv::Mat blurred = blur_layer(zoomed, p.radius, p.sigma, blur_angle_deg);
-  return quantise_crop<double>(blurred, rows, cols);
-}
-
 namespace {
 
-#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__)
-#define FAULTLINE_FMA_CLONES __attribute__((target_clones("fma", "default")))
-#else
-#define FAULTLINE_FMA_CLONES
-#endif
-
-// One row of the exact blend. The FMA clone turns std::fma into one instruction (same result as the library
-// call); contraction stays off, so nothing else is fused.
-FAULTLINE_FMA_CLONES void snow_blend_row(const std::uint8_t* src, const std::uint8_t* l, const std::uint8_t* lr,
-                                         std::uint8_t* dst, int cols, float b, float one_minus_b) {
-  for (int x = 0; x < cols; ++x) {
-    const float c0 = static_cast<float>(src[3 * x]) / 255.0f;
-    const float c1 = static_cast<float>(src[3 * x + 1]) / 255.0f;
-    const float c2 = static_cast<float>(src[3 * x + 2]) / 255.0f;
-    // OpenCV's AVX2 RGB2GRAY: fma(ch2, 0.114, fma(ch1, 0.587, ch0 * 0.299)) in float32.
-    const float grey = std::fma(c2, 0.114f, std::fma(c1, 0.587f, c0 * 0.299f));
-    const float bright = grey * 1.5f + 0.5f;
-    const double snow = l[x] / 255.0;
-    const double snow_rot = lr[cols - 1 - x] / 255.0;
-    const float ch[3] = {c0, c1, c2};
-    for (int k = 0; k < 3; ++k) {
-      const float whitened = b * ch[k] + one_minus_b * std::max(ch[k], bright);
-      const double v = (static_cast<double>(whitened) + snow) + snow_rot;
-      dst[3 * x + k] = static_cast<std::uint8_t>(std::min(std::max(v, 0.0), 1.0) * 255.0);
-    }
+// The exact layer from the centre crop of the normal field (CV_64F, values N(loc, scale)) for an image of rows x
+// cols: zoom rows first and then columns (the reference's order), threshold and clip straight into an edge-padded
+// buffer, then blur with the tabulated kernel and round half to even to bytes, only for the top-left rows x cols.
+cv::Mat layer_exact_from_crop(const cv::Mat& crop, int rows, int cols, int severity, double blur_angle_deg) {
+  const SnowParams p = snow_params(severity);
+  const cv::Size size = snow_layer_size(rows, cols, p.zoom);
+  const int lh = size.height, lw = size.width;
+  const TabulatedKernel* k = find_tabulated_kernel(p.radius, p.sigma);
+  const auto offsets = motion_offsets(blur_angle_deg, k->width);
+  const int taps = usable_taps(offsets, lh, lw);
+  int pad = 0;
+  for (int i = 0; i < taps; ++i) pad = std::max(pad, std::abs(offsets[static_cast<std::size_t>(i)].dx));
+  const AxisMap rm = axis_map(crop.rows, lh);
+  const snow_kernels::ColumnZoom64 column_zoom(crop.cols, lw);
+  const std::size_t stride = static_cast<std::size_t>(lw + 2 * pad);
+  thread_local std::vector<double> row, padded;  // reused per thread: fresh multi-MB buffers cost page faults
+  row.resize(static_cast<std::size_t>(crop.cols));
+  padded.resize(stride * static_cast<std::size_t>(lh));
+  for (int o = 0; o < lh; ++o) {
+    const auto ou = static_cast<std::size_t>(o);
+    snow_kernels::lerp_row64(crop.ptr<double>(rm.i0[ou]), crop.ptr<double>(rm.i1[ou]), rm.w[ou], row.data(),
+                             crop.cols);
+    double* d = padded.data() + ou * stride;
+    column_zoom.run(row.data(), p.threshold, d + pad);
+    std::fill(d, d + pad, d[pad]);
+    std::fill(d + pad + lw, d + stride, d[pad + lw - 1]);
   }
+  cv::Mat out(rows, cols, CV_8U);
+  std::vector<const double*> src(static_cast<std::size_t>(taps));
+  for (int y = 0; y < rows; ++y) {
+    for (int i = 0; i < taps; ++i) {
+      const auto& o = offsets[static_cast<std::size_t>(i)];
+      src[static_cast<std::size_t>(i)] =
+          padded.data() + static_cast<std::size_t>(std::clamp(y - o.dy, 0, lh - 1)) * stride + (pad - o.dx);
+    }
+    snow_kernels::blur_quantise64(src.data(), k->weights, taps, out.ptr<std::uint8_t>(y),
+                                  static_cast<std::size_t>(cols));
+  }
+  return out;
 }
 
 }  // namespace
+
+cv::Mat snow_layer_exact(const cv::Mat& normals, int severity, double blur_angle_deg) {
+  const Crop c = centre_crop(normals.rows, normals.cols, snow_params(severity).zoom);
+  return layer_exact_from_crop(normals(cv::Rect(c.left, c.top, c.cols, c.rows)), normals.rows, normals.cols,
+                               severity, blur_angle_deg);
+}
 
 cv::Mat snow_blend_exact(const cv::Mat& bgr, const cv::Mat& layer_u8, int severity) {
   const SnowParams p = snow_params(severity);
@@ -159,21 +126,35 @@ cv::Mat snow_blend_exact(const cv::Mat& bgr, const cv::Mat& layer_u8, int severi
   const int rows = bgr.rows, cols = bgr.cols;
   cv::Mat out(bgr.size(), bgr.type());
   for (int y = 0; y < rows; ++y) {
-    snow_blend_row(bgr.ptr<std::uint8_t>(y), layer_u8.ptr<std::uint8_t>(y), layer_u8.ptr<std::uint8_t>(rows - 1 - y),
-                   out.ptr<std::uint8_t>(y), cols, b, one_minus_b);
+    // The rotated copy is row rows - 1 - y read backwards.
+    snow_kernels::blend_exact_row(bgr.ptr<std::uint8_t>(y), layer_u8.ptr<std::uint8_t>(y),
+                                  layer_u8.ptr<std::uint8_t>(rows - 1 - y), /*rot_reversed=*/true,
+                                  out.ptr<std::uint8_t>(y), cols, b, one_minus_b);
   }
   return out;
 }
 
 cv::Mat snow_exact(const cv::Mat& bgr, int severity, rng::NumpyRandomState& rng) {
   const SnowParams p = snow_params(severity);
-  cv::Mat normals(bgr.rows, bgr.cols, CV_64F);
-  for (int y = 0; y < bgr.rows; ++y) {
-    double* d = normals.ptr<double>(y);
-    for (int x = 0; x < bgr.cols; ++x) d[x] = rng.normal(p.loc, p.scale);
+  const int rows = bgr.rows, cols = bgr.cols;
+  const Crop c = centre_crop(rows, cols, p.zoom);
+  // The reference draws H x W normals in row-major order but reads only the centre crop: the others are drawn
+  // (same stream, same cache) without being evaluated.
+  thread_local cv::Mat crop;
+  crop.create(c.rows, c.cols, CV_64F);
+  rng.standard_normals(nullptr, static_cast<std::size_t>(c.top) * static_cast<std::size_t>(cols) +
+                                    static_cast<std::size_t>(c.left));
+  for (int r = 0; r < c.rows; ++r) {
+    double* d = crop.ptr<double>(r);
+    rng.standard_normals(d, static_cast<std::size_t>(c.cols));
+    for (int x = 0; x < c.cols; ++x) d[x] = p.loc + p.scale * d[x];
+    const std::size_t rest = r + 1 < c.rows ? static_cast<std::size_t>(cols - c.cols)
+                                            : static_cast<std::size_t>(rows - c.top - c.rows) * cols +
+                                                  static_cast<std::size_t>(cols - c.left - c.cols);
+    rng.standard_normals(nullptr, rest);
   }
   const double angle = rng.uniform(-135.0, -45.0);
-  return snow_blend_exact(bgr, snow_layer_exact(normals, severity, angle), severity);
+  return snow_blend_exact(bgr, layer_exact_from_crop(crop, rows, cols, severity, angle), severity);
 }
 
 cv::Mat snow_layer_fast(const cv::Mat& crop_field, int rows, int cols, int severity, double blur_angle_deg) {

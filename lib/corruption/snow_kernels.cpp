@@ -159,7 +159,156 @@ __attribute__((target("avx2"))) int blend_avx2(const std::uint8_t* src, const st
   return x;
 }
 
+__attribute__((target("avx2"))) void column_zoom64_avx2(const double* src, double threshold, double* dst,
+                                                        int blocks, const std::int32_t* base,
+                                                        const std::int32_t* idx0, const std::int32_t* idx1,
+                                                        const double* w) {
+  const __m256d one = _mm256_set1_pd(1.0), zero = _mm256_setzero_pd(), thr = _mm256_set1_pd(threshold);
+  for (int blk = 0; blk < blocks; ++blk) {
+    if (base[blk] < 0) continue;  // left to the scalar body
+    const int o = 4 * blk;
+    // Four doubles as eight float lanes: moving lane pairs (2r, 2r + 1) moves double r.
+    const __m256 v = _mm256_castpd_ps(_mm256_loadu_pd(src + base[blk]));
+    const __m256d a = _mm256_castps_pd(
+        _mm256_permutevar8x32_ps(v, _mm256_loadu_si256(reinterpret_cast<const __m256i*>(idx0 + 2 * o))));
+    const __m256d b = _mm256_castps_pd(
+        _mm256_permutevar8x32_ps(v, _mm256_loadu_si256(reinterpret_cast<const __m256i*>(idx1 + 2 * o))));
+    const __m256d wv = _mm256_loadu_pd(w + o);
+    __m256d t = _mm256_add_pd(_mm256_mul_pd(_mm256_sub_pd(one, wv), a), _mm256_mul_pd(wv, b));
+    t = _mm256_andnot_pd(_mm256_cmp_pd(t, thr, _CMP_LT_OQ), t);
+    _mm256_storeu_pd(dst + o, _mm256_min_pd(_mm256_max_pd(t, zero), one));
+  }
+}
+
+// Whole blocks of 32 outputs, sums kept in registers across all taps; returns how many outputs it wrote.
+__attribute__((target("avx2"))) std::size_t blur_quantise64_avx2(const double* const* rows, const double* weights,
+                                                                 int taps, std::uint8_t* dst, std::size_t n) {
+  constexpr int kVectors = 8;
+  const __m256d k255 = _mm256_set1_pd(255.0);
+  std::size_t j0 = 0;
+  for (; j0 + 4 * kVectors <= n; j0 += 4 * kVectors) {
+    __m256d s[kVectors];
+    for (auto& v : s) v = _mm256_setzero_pd();
+    for (int i = 0; i < taps; ++i) {
+      const double* r = rows[i] + j0;
+      const __m256d k = _mm256_set1_pd(weights[i]);
+      for (int v = 0; v < kVectors; ++v) s[v] = _mm256_add_pd(s[v], _mm256_mul_pd(k, _mm256_loadu_pd(r + 4 * v)));
+    }
+    __m128i q[kVectors];
+    for (int v = 0; v < kVectors; ++v) {
+      q[v] = _mm256_cvttpd_epi32(
+          _mm256_round_pd(_mm256_mul_pd(s[v], k255), _MM_FROUND_TO_NEAREST_INT | _MM_FROUND_NO_EXC));
+    }
+    for (int v = 0; v < kVectors; v += 4) {
+      const __m128i w0 = _mm_packus_epi32(q[v], q[v + 1]), w1 = _mm_packus_epi32(q[v + 2], q[v + 3]);
+      _mm_storeu_si128(reinterpret_cast<__m128i*>(dst + j0 + 4 * v), _mm_packus_epi16(w0, w1));
+    }
+  }
+  return j0;
+}
+
+// Four float32 values (the low or high half of an 8-lane vector) widened, plus the two snow terms, to bytes.
+__attribute__((target("avx2,fma"))) inline __m128i finish4(__m128 whitened, __m256d snow, __m256d snow_rot) {
+  __m256d v = _mm256_add_pd(_mm256_add_pd(_mm256_cvtps_pd(whitened), snow), snow_rot);
+  v = _mm256_min_pd(_mm256_max_pd(v, _mm256_setzero_pd()), _mm256_set1_pd(1.0));
+  return _mm256_cvttpd_epi32(_mm256_mul_pd(v, _mm256_set1_pd(255.0)));
+}
+
+// Whole blocks of 16 pixels; returns how many pixels it wrote.
+__attribute__((target("avx2,fma"))) int blend_exact_avx2(const std::uint8_t* src, const std::uint8_t* layer,
+                                                         const std::uint8_t* rot, bool rot_reversed,
+                                                         std::uint8_t* dst, int cols, float b, float one_minus_b) {
+  const Shuffles& m = shuffles();
+  const __m256 bv = _mm256_set1_ps(b), omb = _mm256_set1_ps(one_minus_b), k255f = _mm256_set1_ps(255.0f);
+  const __m256 w0 = _mm256_set1_ps(0.299f), w1 = _mm256_set1_ps(0.587f), w2 = _mm256_set1_ps(0.114f);
+  const __m256 k15 = _mm256_set1_ps(1.5f), k05 = _mm256_set1_ps(0.5f);
+  const __m256d k255 = _mm256_set1_pd(255.0);
+  const __m128i reverse = _mm_setr_epi8(15, 14, 13, 12, 11, 10, 9, 8, 7, 6, 5, 4, 3, 2, 1, 0);
+  int x = 0;
+  for (; x + 16 <= cols; x += 16) {
+    __m128i blk[3];
+    for (int i = 0; i < 3; ++i) blk[i] = _mm_loadu_si128(reinterpret_cast<const __m128i*>(src + 3 * x + 16 * i));
+    __m128i plane[3];
+    for (int k = 0; k < 3; ++k) {
+      plane[k] = _mm_or_si128(_mm_or_si128(_mm_shuffle_epi8(blk[0], mask(m.split[k][0])),
+                                           _mm_shuffle_epi8(blk[1], mask(m.split[k][1]))),
+                              _mm_shuffle_epi8(blk[2], mask(m.split[k][2])));
+    }
+    const __m128i l = _mm_loadu_si128(reinterpret_cast<const __m128i*>(layer + x));
+    const __m128i r = rot_reversed
+                          ? _mm_shuffle_epi8(_mm_loadu_si128(reinterpret_cast<const __m128i*>(rot + cols - 16 - x)),
+                                             reverse)
+                          : _mm_loadu_si128(reinterpret_cast<const __m128i*>(rot + x));
+    __m256i out[3][2];
+    for (int h = 0; h < 2; ++h) {
+      __m256 c[3];
+      for (int k = 0; k < 3; ++k) {
+        c[k] = _mm256_div_ps(_mm256_cvtepi32_ps(_mm256_cvtepu8_epi32(_mm_srli_si128(plane[k], 8 * h))), k255f);
+      }
+      const __m256 grey = _mm256_fmadd_ps(c[2], w2, _mm256_fmadd_ps(c[1], w1, _mm256_mul_ps(c[0], w0)));
+      const __m256 bright = _mm256_add_ps(_mm256_mul_ps(grey, k15), k05);
+      __m256d snow[2], snow_rot[2];
+      for (int q = 0; q < 2; ++q) {
+        const int shift = 8 * h + 4 * q;
+        const __m128i l4 = _mm_cvtepu8_epi32(_mm_srli_si128(l, shift));
+        const __m128i r4 = _mm_cvtepu8_epi32(_mm_srli_si128(r, shift));
+        snow[q] = _mm256_div_pd(_mm256_cvtepi32_pd(l4), k255);
+        snow_rot[q] = _mm256_div_pd(_mm256_cvtepi32_pd(r4), k255);
+      }
+      for (int k = 0; k < 3; ++k) {
+        const __m256 wf = _mm256_add_ps(_mm256_mul_ps(bv, c[k]), _mm256_mul_ps(omb, _mm256_max_ps(c[k], bright)));
+        const __m128i lo = finish4(_mm256_castps256_ps128(wf), snow[0], snow_rot[0]);
+        const __m128i hi = finish4(_mm256_extractf128_ps(wf, 1), snow[1], snow_rot[1]);
+        out[k][h] = _mm256_set_m128i(hi, lo);
+      }
+    }
+    __m128i res[3];
+    for (int k = 0; k < 3; ++k) res[k] = narrow(out[k][0], out[k][1]);
+    for (int i = 0; i < 3; ++i) {
+      const __m128i v = _mm_or_si128(_mm_or_si128(_mm_shuffle_epi8(res[0], mask(m.merge[i][0])),
+                                                  _mm_shuffle_epi8(res[1], mask(m.merge[i][1]))),
+                                     _mm_shuffle_epi8(res[2], mask(m.merge[i][2])));
+      _mm_storeu_si128(reinterpret_cast<__m128i*>(dst + 3 * x + 16 * i), v);
+    }
+  }
+  return x;
+}
+
+bool has_avx2_fma() {
+  static const bool yes = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
+  return yes;
+}
+
 #endif  // FAULTLINE_SNOW_AVX2
+
+#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__)
+#define FAULTLINE_SNOW_FMA_CLONES __attribute__((target_clones("fma", "default")))
+#else
+#define FAULTLINE_SNOW_FMA_CLONES
+#endif
+
+// The exact blend per pixel. The FMA clone turns std::fma into one instruction (same result as the library call);
+// contraction stays off, so nothing else is fused.
+FAULTLINE_SNOW_FMA_CLONES void blend_exact_scalar(const std::uint8_t* src, const std::uint8_t* l,
+                                                  const std::uint8_t* rot, bool rot_reversed, std::uint8_t* dst,
+                                                  int x0, int cols, float b, float one_minus_b) {
+  for (int x = x0; x < cols; ++x) {
+    const float c0 = static_cast<float>(src[3 * x]) / 255.0f;
+    const float c1 = static_cast<float>(src[3 * x + 1]) / 255.0f;
+    const float c2 = static_cast<float>(src[3 * x + 2]) / 255.0f;
+    // OpenCV's AVX2 RGB2GRAY: fma(ch2, 0.114, fma(ch1, 0.587, ch0 * 0.299)) in float32.
+    const float grey = std::fma(c2, 0.114f, std::fma(c1, 0.587f, c0 * 0.299f));
+    const float bright = grey * 1.5f + 0.5f;
+    const double snow = l[x] / 255.0;
+    const double snow_rot = (rot_reversed ? rot[cols - 1 - x] : rot[x]) / 255.0;
+    const float ch[3] = {c0, c1, c2};
+    for (int k = 0; k < 3; ++k) {
+      const float whitened = b * ch[k] + one_minus_b * std::max(ch[k], bright);
+      const double v = (static_cast<double>(whitened) + snow) + snow_rot;
+      dst[3 * x + k] = static_cast<std::uint8_t>(std::min(std::max(v, 0.0), 1.0) * 255.0);
+    }
+  }
+}
 
 }  // namespace
 
@@ -256,6 +405,91 @@ void blend_fast_row(const std::uint8_t* src, const std::uint8_t* layer, const st
   (void)allow_simd;
 #endif
   blend_scalar(src, layer, rot, rot_reversed, dst, x, cols, b, one_minus_b);
+}
+
+FAULTLINE_SNOW_CLONES void lerp_row64(const double* __restrict a, const double* __restrict b, double w,
+                                      double* __restrict dst, int n) {
+  const double w0 = 1.0 - w;
+  for (int x = 0; x < n; ++x) dst[x] = w0 * a[x] + w * b[x];
+}
+
+ColumnZoom64::ColumnZoom64(int n_in, int n_out) : n_in_(n_in), n_out_(n_out) {
+  const auto n = static_cast<std::size_t>(n_out);
+  i0_.resize(n);
+  i1_.resize(n);
+  w_.resize(n);
+  const double ratio = n_out > 1 ? static_cast<double>(n_in - 1) / static_cast<double>(n_out - 1) : 0.0;
+  for (std::size_t o = 0; o < n; ++o) {
+    const double p = static_cast<double>(o) * ratio;
+    const int i = std::clamp(static_cast<int>(std::floor(p)), 0, n_in - 1);
+    i0_[o] = i;
+    i1_[o] = std::min(i + 1, n_in - 1);
+    w_[o] = p - i;
+  }
+  const int blocks = n_out / 4;
+  base_.assign(static_cast<std::size_t>(blocks), -1);
+  idx0_.assign(2 * n, 0);
+  idx1_.assign(2 * n, 0);
+  for (int blk = 0; blk < blocks; ++blk) {
+    const int base = i0_[static_cast<std::size_t>(4 * blk)];
+    if (i1_[static_cast<std::size_t>(4 * blk + 3)] - base > 3 || base + 4 > n_in) continue;
+    base_[static_cast<std::size_t>(blk)] = base;
+    for (int o = 4 * blk; o < 4 * blk + 4; ++o) {
+      const auto u = static_cast<std::size_t>(o);
+      idx0_[2 * u] = 2 * (i0_[u] - base), idx0_[2 * u + 1] = 2 * (i0_[u] - base) + 1;
+      idx1_[2 * u] = 2 * (i1_[u] - base), idx1_[2 * u + 1] = 2 * (i1_[u] - base) + 1;
+    }
+  }
+}
+
+void ColumnZoom64::run(const double* src, double threshold, double* dst, bool allow_simd) const {
+  auto scalar = [&](int o0, int o1) {
+    for (int o = o0; o < o1; ++o) {
+      const auto u = static_cast<std::size_t>(o);
+      const double w = w_[u];
+      double v = (1.0 - w) * src[i0_[u]] + w * src[i1_[u]];
+      if (v < threshold) v = 0.0;
+      dst[o] = std::min(std::max(v, 0.0), 1.0);
+    }
+  };
+  const int blocks = static_cast<int>(base_.size());
+  if (use_avx2(allow_simd)) {
+#ifdef FAULTLINE_SNOW_AVX2
+    column_zoom64_avx2(src, threshold, dst, blocks, base_.data(), idx0_.data(), idx1_.data(), w_.data());
+#endif
+    for (int blk = 0; blk < blocks; ++blk) {
+      if (base_[static_cast<std::size_t>(blk)] < 0) scalar(4 * blk, 4 * blk + 4);
+    }
+    scalar(4 * blocks, n_out_);
+  } else {
+    scalar(0, n_out_);
+  }
+}
+
+void blur_quantise64(const double* const* rows, const double* weights, int taps, std::uint8_t* dst, std::size_t n,
+                     bool allow_simd) {
+  std::size_t j = 0;
+#ifdef FAULTLINE_SNOW_AVX2
+  if (use_avx2(allow_simd)) j = blur_quantise64_avx2(rows, weights, taps, dst, n);
+#else
+  (void)allow_simd;
+#endif
+  for (; j < n; ++j) {
+    double s = 0.0;
+    for (int i = 0; i < taps; ++i) s += weights[i] * rows[i][j];
+    dst[j] = static_cast<std::uint8_t>(std::nearbyint(s * 255.0));
+  }
+}
+
+void blend_exact_row(const std::uint8_t* src, const std::uint8_t* layer, const std::uint8_t* rot, bool rot_reversed,
+                     std::uint8_t* dst, int cols, float b, float one_minus_b, bool allow_simd) {
+  int x = 0;
+#ifdef FAULTLINE_SNOW_AVX2
+  if (allow_simd && has_avx2_fma()) x = blend_exact_avx2(src, layer, rot, rot_reversed, dst, cols, b, one_minus_b);
+#else
+  (void)allow_simd;
+#endif
+  blend_exact_scalar(src, layer, rot, rot_reversed, dst, x, cols, b, one_minus_b);
 }
 
 }  // namespace faultline::corruption::snow_kernels

@@ -1,7 +1,7 @@
-// Fast-mode Snow inner loops: corner-aligned column zoom, row zoom + threshold, quantisation and the whitening
-// blend, all in float32 with the arithmetic of numpy mode's stages where it can be kept. Each has an AVX2 body
-// (chosen at run time) and a scalar body giving the same values, so the output for a seed does not depend on the CPU
-// (`allow_simd` = false forces the scalar body, for tests).
+// Snow inner loops: corner-aligned zoom, threshold, layer blur + quantisation and the whitening blend, in float64 with
+// the reference's arithmetic (numpy mode, bit-exact) and in float32 (fast mode). Each has an AVX2 body (chosen at
+// run time) and a scalar body giving the same values, so no output depends on the CPU (`allow_simd` = false forces
+// the scalar body, for tests).
 #pragma once
 
 #include <cstddef>
@@ -42,5 +42,36 @@ void quantise_row(const float* src, std::uint8_t* dst, int n);
 // l = layer[x] and r = rot[x], or rot[cols - 1 - x] when `rot_reversed` (rot is then the mirrored row itself).
 void blend_fast_row(const std::uint8_t* src, const std::uint8_t* layer, const std::uint8_t* rot, bool rot_reversed,
                     std::uint8_t* dst, int cols, float b, float one_minus_b, bool allow_simd = true);
+
+// ---- numpy mode (float64, the reference's operations in its order; no FMA except the grey of the blend) ----
+
+// dst[x] = (1 - w) * a[x] + w * b[x] (the row pass of the zoom).
+void lerp_row64(const double* a, const double* b, double w, double* dst, int n);
+
+// Column pass of the zoom fused with threshold and clip: t = (1 - w[o]) * src[i0[o]] + w[o] * src[i1[o]], then 0
+// where t < threshold, then clip to [0, 1]; o < n_out.
+class ColumnZoom64 {
+ public:
+  ColumnZoom64(int n_in, int n_out);
+  void run(const double* src, double threshold, double* dst, bool allow_simd = true) const;
+
+ private:
+  int n_in_, n_out_;
+  std::vector<int> i0_, i1_;
+  std::vector<double> w_;
+  std::vector<std::int32_t> base_;  // per block of 4 outputs: first source index, or -1 (scalar block)
+  std::vector<std::int32_t> idx0_, idx1_;  // per output: float-lane pairs (2r, 2r + 1) of i0 - base, i1 - base
+};
+
+// dst[j] = round-half-even(255 * s) with s = 0 + weights[0] * rows[0][j] + weights[1] * rows[1][j] + ... (each
+// product rounded before its add, taps in order): the exact layer blur and quantisation. Sums must lie in [0, 1].
+void blur_quantise64(const double* const* rows, const double* weights, int taps, std::uint8_t* dst, std::size_t n,
+                     bool allow_simd = true);
+
+// One row of the exact whitening blend (spec corruptions.md §5 step 9-10): float32 x = c / 255, grey =
+// fma(x2, 0.114, fma(x1, 0.587, x0 * 0.299)), whitened = b x + (1 - b) max(x, 1.5 grey + 0.5), then in float64
+// out = trunc(255 * clip((whitened + l / 255) + r / 255, 0, 1)), with l and r as in blend_fast_row.
+void blend_exact_row(const std::uint8_t* src, const std::uint8_t* layer, const std::uint8_t* rot, bool rot_reversed,
+                     std::uint8_t* dst, int cols, float b, float one_minus_b, bool allow_simd = true);
 
 }  // namespace faultline::corruption::snow_kernels

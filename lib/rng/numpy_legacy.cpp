@@ -5,21 +5,87 @@
 
 namespace faultline::rng {
 
-double NumpyRandomState::standard_normal() {
-  if (has_gauss_) {
-    has_gauss_ = false;
-    return gauss_;
+namespace {
+
+inline double polar_factor(double r2) { return std::sqrt(-2.0 * std::log(r2) / r2); }
+
+}  // namespace
+
+double NumpyRandomState::cached_gauss() {
+  has_gauss_ = false;
+  if (gauss_deferred_) {
+    gauss_deferred_ = false;
+    gauss_ = polar_factor(r2_) * x1_;
   }
-  double x1 = 0.0, x2 = 0.0, r2 = 0.0;
-  do {
+  return gauss_;
+}
+
+void NumpyRandomState::polar_pair(double& x1, double& x2, double& r2) {
+  for (;;) {
+    // Whole attempts inside the current block: two precomputed doubles each, no per-draw bookkeeping.
+    std::size_t count = 0;
+    const double* d = mt_.block_doubles(count);
+    std::size_t j = 0;
+    for (; j + 2 <= count; j += 2) {
+      const double a = 2.0 * d[j] - 1.0;
+      const double b = 2.0 * d[j + 1] - 1.0;
+      const double r = a * a + b * b;
+      if (r < 1.0 && r != 0.0) {
+        mt_.advance_doubles(j + 2);
+        x1 = a, x2 = b, r2 = r;
+        return;
+      }
+    }
+    mt_.advance_doubles(j);
+    if (count >= 2) continue;
+    // An attempt straddling two blocks, or an odd stream position: one attempt the plain way.
     x1 = 2.0 * random_sample() - 1.0;
     x2 = 2.0 * random_sample() - 1.0;
     r2 = x1 * x1 + x2 * x2;
-  } while (r2 >= 1.0 || r2 == 0.0);
-  const double f = std::sqrt(-2.0 * std::log(r2) / r2);
+    if (r2 < 1.0 && r2 != 0.0) return;
+  }
+}
+
+double NumpyRandomState::standard_normal() {
+  if (has_gauss_) return cached_gauss();
+  double x1 = 0.0, x2 = 0.0, r2 = 0.0;
+  polar_pair(x1, x2, r2);
+  const double f = polar_factor(r2);
   gauss_ = f * x1;
   has_gauss_ = true;
   return f * x2;
+}
+
+void NumpyRandomState::standard_normals(double* out, std::size_t n) {
+  std::size_t i = 0;
+  if (n > 0 && has_gauss_) {
+    const double g = cached_gauss();  // evaluated even when skipped: cheap, and keeps one code path
+    if (out != nullptr) out[0] = g;
+    i = 1;
+  }
+  double x1 = 0.0, x2 = 0.0, r2 = 0.0;
+  if (out != nullptr) {
+    for (; i + 2 <= n; i += 2) {
+      polar_pair(x1, x2, r2);
+      const double f = polar_factor(r2);
+      out[i] = f * x2;
+      out[i + 1] = f * x1;
+    }
+  } else {
+    for (; i + 2 <= n; i += 2) polar_pair(x1, x2, r2);
+  }
+  if (i < n) {  // one value left: it opens a pair whose second value stays cached
+    polar_pair(x1, x2, r2);
+    has_gauss_ = true;
+    if (out != nullptr) {
+      const double f = polar_factor(r2);
+      out[i] = f * x2;
+      gauss_ = f * x1;
+    } else {
+      gauss_deferred_ = true;
+      x1_ = x1, r2_ = r2;
+    }
+  }
 }
 
 void Mt19937::seed(std::uint32_t seed) {

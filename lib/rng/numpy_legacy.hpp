@@ -2,6 +2,7 @@
 // Used by numpy mode so a corruption seeded with np.random.seed(s) reproduces the Python reference draw for draw.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 
 namespace faultline::rng {
@@ -33,6 +34,20 @@ class Mt19937 {
     return (a * 67108864.0 + b) / 9007199254740992.0;
   }
 
+  // Bulk access for tight loops: the precomputed next_double() values left in the current block (an exhausted
+  // block is refilled first), or nullptr with count 0 when the position is odd (then only next_double() applies).
+  // advance_doubles(k) consumes the first k of them (k <= count).
+  const double* block_doubles(std::size_t& count) {
+    if (index_ == kN) refill();
+    if ((index_ & 1) != 0) {
+      count = 0;
+      return nullptr;
+    }
+    count = static_cast<std::size_t>(kN - index_) / 2;
+    return pairs_ + index_ / 2;
+  }
+  void advance_doubles(std::size_t k) { index_ += 2 * static_cast<int>(k); }
+
  private:
   static constexpr int kN = 624;
   void refill();
@@ -60,6 +75,7 @@ class NumpyRandomState {
   void seed(std::uint32_t seed) {
     mt_.seed(seed);
     has_gauss_ = false;
+    gauss_deferred_ = false;
   }
 
   std::uint32_t next_u32() { return mt_(); }
@@ -72,6 +88,11 @@ class NumpyRandomState {
 
   // standard_normal(): legacy polar method with its one-value cache.
   double standard_normal();
+
+  // n standard_normal() draws in order into out[0..n), or, with out == nullptr, the same draws skipped: the state
+  // afterwards (stream position and cache) is the same either way, but skipping computes no logarithm (a value left
+  // in the cache is evaluated only if it is ever read).
+  void standard_normals(double* out, std::size_t n);
 
   // normal(loc, scale) = loc + scale * standard_normal().
   double normal(double loc, double scale) { return loc + scale * standard_normal(); }
@@ -93,10 +114,15 @@ class NumpyRandomState {
  private:
   std::int64_t poisson_mult(double enlam);
   std::int64_t poisson_ptrs(const PoissonParams& p);
+  // The next accepted polar pair (x1, x2 in draw order) and its r2 = x1^2 + x2^2.
+  void polar_pair(double& x1, double& x2, double& r2);
+  double cached_gauss();
 
   Mt19937 mt_;
   bool has_gauss_ = false;
+  bool gauss_deferred_ = false;  // the cached value is f(r2_) * x1_, not yet evaluated
   double gauss_ = 0.0;
+  double x1_ = 0.0, r2_ = 0.0;
 };
 
 // NumPy's random_loggam (log-gamma used by PTRS).

@@ -1,12 +1,20 @@
-// Fast Snow loops: the AVX2 and scalar bodies agree bit for bit on every width (whole blocks and tails).
+// Snow loops: the AVX2 and scalar bodies agree bit for bit on every width (whole blocks and tails), and the exact
+// layer equals the straightforward whole-layer pipeline.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <cstring>
 #include <vector>
 
+#include <opencv2/core.hpp>
+
+#include "corruption/motion_blur.hpp"
+#include "corruption/snow.hpp"
 #include "corruption/snow_kernels.hpp"
 #include "rng/fast_rng.hpp"
+#include "rng/numpy_legacy.hpp"
 
 namespace faultline::corruption::snow_kernels {
 namespace {
@@ -57,5 +65,123 @@ TEST(SnowKernelsTest, QuantiseRoundsHalfToEvenAndClamps) {
   EXPECT_EQ(out, (std::vector<std::uint8_t>{0, 0, 2, 2, 255, 255, 0, 102}));
 }
 
+TEST(SnowKernelsTest, ExactColumnZoomBodiesAgree) {
+  rng::FastRng rng(6);
+  for (const auto& [n_in, n_out] : std::vector<std::pair<int, int>>{{534, 1602}, {800, 1600}, {400, 1600},
+                                                                     {356, 1602}, {640, 1600}, {1, 7}, {5, 9},
+                                                                     {111, 333}, {13, 13}}) {
+    std::vector<double> src(static_cast<std::size_t>(n_in)), a(static_cast<std::size_t>(n_out)),
+        b(static_cast<std::size_t>(n_out));
+    for (auto& v : src) v = rng.normal(0.55, 0.3);
+    const ColumnZoom64 zoom(n_in, n_out);
+    zoom.run(src.data(), 0.5, a.data(), /*allow_simd=*/true);
+    zoom.run(src.data(), 0.5, b.data(), /*allow_simd=*/false);
+    EXPECT_EQ(std::memcmp(a.data(), b.data(), a.size() * sizeof(double)), 0) << n_in << " -> " << n_out;
+  }
+}
+
+TEST(SnowKernelsTest, ExactBlurBodiesAgree) {
+  rng::FastRng rng(7);
+  const int taps = 25;
+  std::vector<double> weights(taps), data(static_cast<std::size_t>(taps) * 1700);
+  double total = 0;
+  for (auto& w : weights) total += (w = rng.random_sample());
+  for (auto& w : weights) w /= total * 1.0000001;
+  for (auto& v : data) v = rng.random_sample() < 0.7 ? 0.0 : std::min(1.0, 0.5 + rng.random_sample());
+  for (std::size_t n : {0, 1, 31, 32, 33, 100, 1600, 1602}) {
+    std::vector<const double*> rows(taps);
+    for (int i = 0; i < taps; ++i) rows[static_cast<std::size_t>(i)] = data.data() + 1700 * i + (i * 7) % 50;
+    std::vector<std::uint8_t> a(n), b(n);
+    blur_quantise64(rows.data(), weights.data(), taps, a.data(), n, true);
+    blur_quantise64(rows.data(), weights.data(), taps, b.data(), n, false);
+    EXPECT_EQ(a, b) << n;
+  }
+}
+
+TEST(SnowKernelsTest, ExactBlendBodiesAgree) {
+  rng::FastRng rng(8);
+  for (int cols : {1, 15, 16, 17, 47, 64, 333, 1600, 1602}) {
+    std::vector<std::uint8_t> src(static_cast<std::size_t>(3 * cols)), layer(static_cast<std::size_t>(cols)),
+        rot(static_cast<std::size_t>(cols));
+    for (auto& v : src) v = static_cast<std::uint8_t>(rng.next_u32());
+    for (auto& v : layer) v = static_cast<std::uint8_t>(rng.next_u32() % 3 == 0 ? rng.next_u32() : 0);
+    for (auto& v : rot) v = static_cast<std::uint8_t>(rng.next_u32() % 3 == 0 ? rng.next_u32() : 0);
+    for (float b : {0.8f, 0.7f, 0.65f, 0.55f}) {
+      const auto one_minus_b = static_cast<float>(1.0 - static_cast<double>(b));
+      for (bool reversed : {false, true}) {
+        std::vector<std::uint8_t> x(src.size()), y(src.size());
+        blend_exact_row(src.data(), layer.data(), rot.data(), reversed, x.data(), cols, b, one_minus_b, true);
+        blend_exact_row(src.data(), layer.data(), rot.data(), reversed, y.data(), cols, b, one_minus_b, false);
+        EXPECT_EQ(x, y) << cols << " " << b << (reversed ? " reversed" : "");
+      }
+    }
+  }
+}
+
 }  // namespace
 }  // namespace faultline::corruption::snow_kernels
+
+namespace faultline::corruption {
+namespace {
+
+// The exact layer written the straightforward way: the whole H x W field zoomed (rows, then columns) in float64,
+// thresholded, blurred over the whole layer with blur_layer, rounded half to even and cropped.
+cv::Mat reference_layer(const cv::Mat& normals, int severity, double angle) {
+  const SnowParams p = snow_params(severity);
+  const int rows = normals.rows, cols = normals.cols;
+  const int cr = std::max(1, static_cast<int>(std::ceil(rows / p.zoom)));
+  const int cc = std::max(1, static_cast<int>(std::ceil(cols / p.zoom)));
+  const cv::Mat crop = normals(cv::Rect((cols - cc) / 2, (rows - cr) / 2, cc, cr));
+  const cv::Size size = snow_layer_size(rows, cols, p.zoom);
+  auto lerp = [](int n_in, int n_out, int o, int& i0, int& i1) {
+    const double ratio = n_out > 1 ? static_cast<double>(n_in - 1) / (n_out - 1) : 0.0;
+    const double pos = o * ratio;
+    i0 = std::clamp(static_cast<int>(std::floor(pos)), 0, n_in - 1);
+    i1 = std::min(i0 + 1, n_in - 1);
+    return pos - i0;
+  };
+  cv::Mat tmp(size.height, cc, CV_64F), zoomed(size, CV_64F);
+  for (int o = 0; o < size.height; ++o) {
+    int i0 = 0, i1 = 0;
+    const double w = lerp(cr, size.height, o, i0, i1);
+    for (int x = 0; x < cc; ++x) tmp.at<double>(o, x) = (1.0 - w) * crop.at<double>(i0, x) + w * crop.at<double>(i1, x);
+  }
+  for (int y = 0; y < size.height; ++y) {
+    for (int o = 0; o < size.width; ++o) {
+      int i0 = 0, i1 = 0;
+      const double w = lerp(cc, size.width, o, i0, i1);
+      double v = (1.0 - w) * tmp.at<double>(y, i0) + w * tmp.at<double>(y, i1);
+      if (v < p.threshold) v = 0.0;
+      zoomed.at<double>(y, o) = std::min(std::max(v, 0.0), 1.0);
+    }
+  }
+  const cv::Mat blurred = blur_layer(zoomed, p.radius, p.sigma, angle);
+  cv::Mat out(rows, cols, CV_8U);
+  for (int y = 0; y < rows; ++y) {
+    for (int x = 0; x < cols; ++x) {
+      out.at<std::uint8_t>(y, x) = static_cast<std::uint8_t>(std::nearbyint(blurred.at<double>(y, x) * 255.0));
+    }
+  }
+  return out;
+}
+
+TEST(SnowExactLayerTest, MatchesTheStraightforwardPipeline) {
+  rng::NumpyRandomState rng(12);
+  for (const cv::Size size : {cv::Size(333, 197), cv::Size(640, 360), cv::Size(161, 90)}) {
+    for (int severity = 1; severity <= 5; ++severity) {
+      const SnowParams p = snow_params(severity);
+      cv::Mat normals(size, CV_64F);
+      for (int y = 0; y < size.height; ++y) {
+        for (int x = 0; x < size.width; ++x) normals.at<double>(y, x) = rng.normal(p.loc, p.scale);
+      }
+      const double angle = rng.uniform(-135.0, -45.0);
+      const cv::Mat layer = snow_layer_exact(normals, severity, angle);
+      EXPECT_EQ(cv::norm(layer, reference_layer(normals, severity, angle), cv::NORM_INF), 0.0)
+          << size << " severity " << severity;
+      EXPECT_GT(cv::countNonZero(layer), 0);
+    }
+  }
+}
+
+}  // namespace
+}  // namespace faultline::corruption

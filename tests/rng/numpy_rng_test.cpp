@@ -2,7 +2,9 @@
 // Poisson on both sides of the lambda = 10 switch (with the uniforms consumed), choice(6).
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <random>
+#include <vector>
 
 #include "rng/golden_json.hpp"
 #include "rng/numpy_legacy.hpp"
@@ -98,6 +100,61 @@ TEST(NumpyRandomStateTest, SeedingClearsTheNormalCache) {
   EXPECT_FALSE(a.gauss_cache_pending());
   NumpyRandomState b(7);
   EXPECT_EQ(a.standard_normal(), b.standard_normal());
+}
+
+// The legacy polar method written out on random_sample(), independent of the block-access path.
+class ReferencePolar {
+ public:
+  explicit ReferencePolar(NumpyRandomState& rng) : rng_(rng) {}
+  double next() {
+    if (has_) {
+      has_ = false;
+      return cached_;
+    }
+    double x1 = 0, x2 = 0, r2 = 0;
+    do {
+      x1 = 2.0 * rng_.random_sample() - 1.0;
+      x2 = 2.0 * rng_.random_sample() - 1.0;
+      r2 = x1 * x1 + x2 * x2;
+    } while (r2 >= 1.0 || r2 == 0.0);
+    const double f = std::sqrt(-2.0 * std::log(r2) / r2);
+    cached_ = f * x1;
+    has_ = true;
+    return f * x2;
+  }
+  bool pending() const { return has_; }
+
+ private:
+  NumpyRandomState& rng_;
+  bool has_ = false;
+  double cached_ = 0;
+};
+
+TEST(NumpyRandomStateTest, BulkNormalsDrawAndSkipLikeSingleDraws) {
+  // Segments of draws and skips (odd and even, crossing block boundaries), from an aligned and from an odd
+  // stream position (one 32-bit draw first), each followed by single draws and a uniform.
+  for (bool odd_start : {false, true}) {
+    NumpyRandomState bulk(11), plain(11);
+    if (odd_start) {
+      EXPECT_EQ(bulk.next_u32(), plain.next_u32());
+    }
+    ReferencePolar ref(plain);
+    std::vector<double> out;
+    for (std::size_t n : {1, 2, 3, 1000, 313, 0, 7, 4096, 1, 1, 625}) {
+      const bool skip = n % 2 == 1 && n > 1;
+      out.assign(n, 0.0);
+      bulk.standard_normals(skip ? nullptr : out.data(), n);
+      for (std::size_t i = 0; i < n; ++i) {
+        const double expected = ref.next();
+        if (!skip) {
+          ASSERT_EQ(out[i], expected) << n << " " << i;
+        }
+      }
+      ASSERT_EQ(bulk.gauss_cache_pending(), ref.pending()) << n;
+      ASSERT_EQ(bulk.standard_normal(), ref.next()) << n;
+    }
+    EXPECT_EQ(bulk.random_sample(), plain.random_sample());
+  }
 }
 
 TEST(NumpyLoggamTest, MatchesLgammaAtIntegers) {
