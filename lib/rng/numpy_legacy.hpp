@@ -116,6 +116,8 @@ class NumpyRandomState {
   std::int64_t poisson_ptrs(const PoissonParams& p);
   // The next accepted polar pair (x1, x2 in draw order) and its r2 = x1^2 + x2^2.
   void polar_pair(double& x1, double& x2, double& r2);
+  // Consumes the next `pairs` accepted polar pairs without evaluating them.
+  void skip_polar_pairs(std::size_t pairs);
   double cached_gauss();
 
   Mt19937 mt_;

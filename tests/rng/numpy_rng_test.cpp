@@ -140,7 +140,7 @@ TEST(NumpyRandomStateTest, BulkNormalsDrawAndSkipLikeSingleDraws) {
     }
     ReferencePolar ref(plain);
     std::vector<double> out;
-    for (std::size_t n : {1, 2, 3, 1000, 313, 0, 7, 4096, 1, 1, 625}) {
+    for (std::size_t n : {1, 2, 3, 1000, 313, 0, 7, 4096, 1, 1, 625, 20001, 2}) {
       const bool skip = n % 2 == 1 && n > 1;
       out.assign(n, 0.0);
       bulk.standard_normals(skip ? nullptr : out.data(), n);
