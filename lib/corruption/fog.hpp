@@ -28,16 +28,26 @@ cv::Mat plasma_fractal(int mapsize, double decay, rng::FastRng& rng);
 // The same map's normalised top-left rows x cols crop, without materialising the normalised full map.
 cv::Mat plasma_fractal_crop(int mapsize, double decay, rng::NumpyRandomState& rng, int rows, int cols);
 
-// Exact blend: out = trunc(clip((x + a*F) * m / (m + a), 0, 1) * 255), x = u8/255. fractal: CV_64F, at least
-// as large as the image (top-left crop is used).
+// Exact blend: out = trunc(clip((x + a*F) * m / (m + a), 0, 1) * 255), x = u8/255. fractal: CV_64F, values in
+// [0, 1] (a normalised plasma map), at least as large as the image (top-left crop is used).
 cv::Mat fog_blend_exact(const cv::Mat& bgr, const cv::Mat& fractal, double strength);
+
+// numpy-mode fog in one call: the same draws and bytes as fog_blend_exact(bgr, plasma_fractal_crop(...)), without
+// materialising the normalised crop (the blend reads the fractal's finest level directly). CV_8UC3 input.
+cv::Mat fog_exact(const cv::Mat& bgr, int severity, rng::NumpyRandomState& rng);
 
 // float32 blend of a CV_32F field of the image's size (values in [0, 1]).
 cv::Mat fog_blend_fast(const cv::Mat& bgr, const cv::Mat& field, double strength);
 
 // A fast-mode fog field for rows x cols (CV_32F): the plasma fractal at a quarter of the resolution (the finest
-// two levels carry < 0.1 % of the amplitude), normalised over that map, bilinearly upsampled.
+// two levels carry < 0.1 % of the amplitude), normalised over the full map, bilinearly upsampled (corner-aligned:
+// low-resolution point i sits at full-resolution 4i, as in the full map). Only the crop's part of that map's
+// finest level is computed and drawn (its extremes stay exact).
 cv::Mat fog_field_fast(int rows, int cols, double decay, rng::FastRng& rng);
+
+// fast-mode fog in one call: the same bytes as fog_blend_fast(bgr, fog_field_fast(...)) without the full-size
+// field (each row is upsampled into a row buffer and blended).
+cv::Mat fog_fast(const cv::Mat& bgr, int severity, rng::FastRng& rng);
 
 // Upsamples a low-resolution toroidal map (CV_32F or CV_64F, values in [0, 1]) by `factor` and returns the
 // rows x cols window whose top-left corner is at (row0, col0) in upsampled coordinates (wrapping). CV_32F.

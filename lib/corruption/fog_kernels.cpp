@@ -1,0 +1,449 @@
+// Fog row kernels: AVX2 intrinsics bodies (no FMA: every product is rounded before its sum, like NumPy) and the
+// scalar bodies they must equal bit for bit. The library is compiled with -ffp-contract=off.
+#include "corruption/fog_kernels.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cstring>
+
+#if defined(__x86_64__) && defined(__GNUC__)
+#include <immintrin.h>
+#define FAULTLINE_FOG_AVX2 1
+#define FAULTLINE_TARGET_AVX2 __attribute__((target("avx2")))
+#define FAULTLINE_AVX2_INLINE __attribute__((target("avx2"), always_inline)) inline
+#else
+#define FAULTLINE_FOG_AVX2 0
+#endif
+
+namespace faultline::corruption {
+namespace {
+
+// k / 255.0 for every byte: the reference's x = u8 / 255 without a division per value.
+const std::array<double, 256>& inv255_table() {
+  static const std::array<double, 256> table = [] {
+    std::array<double, 256> t{};
+    for (int k = 0; k < 256; ++k) t[static_cast<std::size_t>(k)] = k / 255.0;
+    return t;
+  }();
+  return table;
+}
+
+inline double offset(const FogStep& s, double u) { return s.w * (s.lo + s.span * u); }
+
+void centre_scalar(const double* c0, const double* c1, const double* u, double* d, int j, int count,
+                   const FogStep& s) {
+  for (; j < count; ++j) d[j] = ((c0[j] + c1[j]) + (c0[j + 1] + c1[j + 1])) / 4 + offset(s, u[j]);
+}
+void hedge_scalar(const double* d0, const double* dp, const double* c0, const double* u, double* e, int j,
+                  int count, const FogStep& s) {
+  for (; j < count; ++j) e[j] = ((d0[j] + dp[j]) + (c0[j] + c0[j + 1])) / 4 + offset(s, u[j]);
+}
+void vedge_scalar(const double* d0, const double* c0, const double* c1, const double* u, double* e, int j,
+                  int count, const FogStep& s) {
+  for (; j < count; ++j) e[j] = ((d0[j] + d0[j - 1]) + (c0[j] + c1[j])) / 4 + offset(s, u[j]);
+}
+// The reference's expression for one value: byte k of a pixel whose raw fractal value is p.
+inline std::uint8_t exact_value(std::uint8_t k, double p, const FogBlendExact& b) {
+  const double f = (p - b.min) / b.range;
+  const double add = b.strength * f;
+  const double v = inv255_table()[k] + add;
+  const double r = (v * b.m) / b.denom;
+  return static_cast<std::uint8_t>(std::min(std::max(r, 0.0), 1.0) * 255.0);
+}
+// Pixels [x, cols) with raw values raw(x).
+template <typename Raw>
+void blend_exact_scalar(const std::uint8_t* src, std::uint8_t* dst, int x, int cols, const FogBlendExact& b,
+                        Raw raw) {
+  for (; x < cols; ++x) {
+    const double p = raw(x);
+    for (int c = 0; c < 3; ++c) dst[3 * x + c] = exact_value(src[3 * x + c], p, b);
+  }
+}
+void upsample4_scalar(const float* low, float* out, int x, int count) {
+  for (; x < count; ++x) {
+    const int c = x / 4;
+    const float t = static_cast<float>(x % 4) * 0.25f;
+    out[x] = x % 4 == 0 ? low[c] : low[c] * (1.0f - t) + low[c + 1] * t;
+  }
+}
+void blend_fast_scalar(const std::uint8_t* src, const float* f, std::uint8_t* dst, int x, int cols, float scale,
+                       float add_scale) {
+  for (; x < cols; ++x) {
+    const float a = add_scale * f[x];
+    for (int c = 0; c < 3; ++c) {
+      const float v = static_cast<float>(src[3 * x + c]) * scale + a;
+      dst[3 * x + c] = static_cast<std::uint8_t>(static_cast<int>(std::min(std::max(v, 0.0f), 255.0f)));
+    }
+  }
+}
+
+#if FAULTLINE_FOG_AVX2
+
+bool have_avx2() {
+  static const bool yes = __builtin_cpu_supports("avx2");
+  return yes;
+}
+
+struct StepVec {
+  __m256d w, lo, span;
+};
+FAULTLINE_AVX2_INLINE StepVec step_vec(const FogStep& s) {
+  return {_mm256_set1_pd(s.w), _mm256_set1_pd(s.lo), _mm256_set1_pd(s.span)};
+}
+// sum / 4 + w * (lo + span * u): x / 4 and x * 0.25 are the same correctly rounded value.
+FAULTLINE_AVX2_INLINE __m256d point(__m256d sum, const double* u, const StepVec& v) {
+  const __m256d off = _mm256_mul_pd(v.w, _mm256_add_pd(v.lo, _mm256_mul_pd(v.span, _mm256_loadu_pd(u))));
+  return _mm256_add_pd(_mm256_mul_pd(sum, _mm256_set1_pd(0.25)), off);
+}
+
+FAULTLINE_TARGET_AVX2 void centre_avx2(const double* c0, const double* c1, const double* u, double* d, int count,
+                                       const FogStep& s) {
+  const StepVec v = step_vec(s);
+  int j = 0;
+  for (; j + 4 <= count; j += 4) {
+    const __m256d a = _mm256_add_pd(_mm256_loadu_pd(c0 + j), _mm256_loadu_pd(c1 + j));
+    const __m256d b = _mm256_add_pd(_mm256_loadu_pd(c0 + j + 1), _mm256_loadu_pd(c1 + j + 1));
+    _mm256_storeu_pd(d + j, point(_mm256_add_pd(a, b), u + j, v));
+  }
+  centre_scalar(c0, c1, u, d, j, count, s);
+}
+
+FAULTLINE_TARGET_AVX2 void hedge_avx2(const double* d0, const double* dp, const double* c0, const double* u,
+                                      double* e, int count, const FogStep& s) {
+  const StepVec v = step_vec(s);
+  int j = 0;
+  for (; j + 4 <= count; j += 4) {
+    const __m256d a = _mm256_add_pd(_mm256_loadu_pd(d0 + j), _mm256_loadu_pd(dp + j));
+    const __m256d b = _mm256_add_pd(_mm256_loadu_pd(c0 + j), _mm256_loadu_pd(c0 + j + 1));
+    _mm256_storeu_pd(e + j, point(_mm256_add_pd(a, b), u + j, v));
+  }
+  hedge_scalar(d0, dp, c0, u, e, j, count, s);
+}
+
+FAULTLINE_TARGET_AVX2 void vedge_avx2(const double* d0, const double* c0, const double* c1, const double* u,
+                                      double* e, int count, const FogStep& s) {
+  const StepVec v = step_vec(s);
+  int j = 0;
+  for (; j + 4 <= count; j += 4) {
+    const __m256d a = _mm256_add_pd(_mm256_loadu_pd(d0 + j), _mm256_loadu_pd(d0 + j - 1));
+    const __m256d b = _mm256_add_pd(_mm256_loadu_pd(c0 + j), _mm256_loadu_pd(c1 + j));
+    _mm256_storeu_pd(e + j, point(_mm256_add_pd(a, b), u + j, v));
+  }
+  vedge_scalar(d0, c0, c1, u, e, j, count, s);
+}
+
+FAULTLINE_TARGET_AVX2 void interleave_avx2(const double* a, const double* b, double* out, int pairs) {
+  int j = 0;
+  for (; j + 4 <= pairs; j += 4) {
+    const __m256d va = _mm256_loadu_pd(a + j), vb = _mm256_loadu_pd(b + j);
+    const __m256d lo = _mm256_unpacklo_pd(va, vb), hi = _mm256_unpackhi_pd(va, vb);  // a0 b0 a2 b2 | a1 b1 a3 b3
+    _mm256_storeu_pd(out + 2 * j, _mm256_permute2f128_pd(lo, hi, 0x20));
+    _mm256_storeu_pd(out + 2 * j + 4, _mm256_permute2f128_pd(lo, hi, 0x31));
+  }
+  for (; j < pairs; ++j) {
+    out[2 * j] = a[j];
+    out[2 * j + 1] = b[j];
+  }
+}
+
+FAULTLINE_TARGET_AVX2 void minmax_avx2(const double* p, int count, double* mn, double* mx) {
+  int j = 0;
+  double lo = *mn, hi = *mx;
+  if (count >= 8) {
+    __m256d vlo0 = _mm256_set1_pd(lo), vhi0 = _mm256_set1_pd(hi), vlo1 = vlo0, vhi1 = vhi0;
+    for (; j + 8 <= count; j += 8) {
+      const __m256d a = _mm256_loadu_pd(p + j), b = _mm256_loadu_pd(p + j + 4);
+      vlo0 = _mm256_min_pd(vlo0, a);
+      vhi0 = _mm256_max_pd(vhi0, a);
+      vlo1 = _mm256_min_pd(vlo1, b);
+      vhi1 = _mm256_max_pd(vhi1, b);
+    }
+    alignas(32) double l[4], h[4];
+    _mm256_store_pd(l, _mm256_min_pd(vlo0, vlo1));
+    _mm256_store_pd(h, _mm256_max_pd(vhi0, vhi1));
+    lo = std::min({l[0], l[1], l[2], l[3]});
+    hi = std::max({h[0], h[1], h[2], h[3]});
+  }
+  for (; j < count; ++j) {
+    lo = std::min(lo, p[j]);
+    hi = std::max(hi, p[j]);
+  }
+  *mn = lo;
+  *mx = hi;
+}
+
+FAULTLINE_TARGET_AVX2 void interleave_normalise_avx2(const double* a, const double* b, double* out, int pairs,
+                                                    double mn, double range) {
+  const __m256d vmn = _mm256_set1_pd(mn), vr = _mm256_set1_pd(range);
+  int j = 0;
+  for (; j + 4 <= pairs; j += 4) {
+    const __m256d va = _mm256_div_pd(_mm256_sub_pd(_mm256_loadu_pd(a + j), vmn), vr);
+    const __m256d vb = _mm256_div_pd(_mm256_sub_pd(_mm256_loadu_pd(b + j), vmn), vr);
+    const __m256d lo = _mm256_unpacklo_pd(va, vb), hi = _mm256_unpackhi_pd(va, vb);
+    _mm256_storeu_pd(out + 2 * j, _mm256_permute2f128_pd(lo, hi, 0x20));
+    _mm256_storeu_pd(out + 2 * j + 4, _mm256_permute2f128_pd(lo, hi, 0x31));
+  }
+  for (; j < pairs; ++j) {
+    out[2 * j] = (a[j] - mn) / range;
+    out[2 * j + 1] = (b[j] - mn) / range;
+  }
+}
+
+// The exact blend without a division. With d = p - min (the reference's double), the ideal value is
+// Y = k * A + d * K, A = m / denom, K = 255 * m * a / (denom * range), all terms >= 0; the reference's
+// y = fl(fl(fl(fl(k / 255) + a * fl(d / range)) * m) / denom) * 255 is within 1e-12 of Y. The float32 candidate
+// y' = k * float(A) + float(d * K) is within 3.2 * 2^-24 * 255 < 5e-5 of Y (two roundings on the product, one on
+// the term, one on the sum). So wherever no integer lies in [y' - kNear, y' + kNear] (kNear = 2^-12, five times
+// the error, and far above the float rounding of y' +- kNear), trunc(y') is the reference's byte (clip included:
+// y <= 255 unless r > 1, and packus saturates at 255). Flagged values (about 2 * 24 * 2^-12 per 8 pixels) are
+// recomputed by the reference's expression.
+constexpr float kNear = 1.0f / 4096.0f;
+
+struct BlendVec {
+  __m256d min, k;
+  __m256 a;
+};
+
+// Eight pixels with raw values r0 (pixels 0..3) and r1 (4..7); returns the mask of values to recompute (bit t of
+// channel vector c is value 8c + t).
+FAULTLINE_AVX2_INLINE std::uint32_t blend8(const std::uint8_t* s, std::uint8_t* d, __m256d r0, __m256d r1,
+                                           const BlendVec& v) {
+  const __m128 b0 = _mm256_cvtpd_ps(_mm256_mul_pd(_mm256_sub_pd(r0, v.min), v.k));
+  const __m128 b1 = _mm256_cvtpd_ps(_mm256_mul_pd(_mm256_sub_pd(r1, v.min), v.k));
+  const __m256 bias = _mm256_set_m128(b1, b0);
+  const __m256 near = _mm256_set1_ps(kNear);
+  __m256i lo[3];
+  std::uint32_t flagged = 0;
+  static constexpr int kSpread[3][8] = {{0, 0, 0, 1, 1, 1, 2, 2}, {2, 3, 3, 3, 4, 4, 4, 5}, {5, 5, 6, 6, 6, 7, 7, 7}};
+  for (int c = 0; c < 3; ++c) {
+    const __m256 add = _mm256_permutevar8x32_ps(
+        bias, _mm256_loadu_si256(reinterpret_cast<const __m256i*>(kSpread[c])));
+    const __m256i k = _mm256_cvtepu8_epi32(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(s + 8 * c)));
+    const __m256 y = _mm256_add_ps(_mm256_mul_ps(_mm256_cvtepi32_ps(k), v.a), add);
+    lo[c] = _mm256_cvttps_epi32(_mm256_sub_ps(y, near));
+    const __m256i hi = _mm256_cvttps_epi32(_mm256_add_ps(y, near));
+    const auto same = static_cast<std::uint32_t>(_mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpeq_epi32(lo[c], hi))));
+    flagged |= (~same & 0xFFu) << (8 * c);
+  }
+  // packs work per 128-bit lane: fix the order with 64-bit permutes (negative lo of -kNear packs to 0).
+  const __m256i w01 = _mm256_permute4x64_epi64(_mm256_packs_epi32(lo[0], lo[1]), 0xD8);
+  const __m256i w2 = _mm256_permute4x64_epi64(_mm256_packs_epi32(lo[2], lo[2]), 0xD8);
+  const __m256i bytes = _mm256_permute4x64_epi64(_mm256_packus_epi16(w01, w2), 0xD8);
+  _mm_storeu_si128(reinterpret_cast<__m128i*>(d), _mm256_castsi256_si128(bytes));
+  _mm_storel_epi64(reinterpret_cast<__m128i*>(d + 16), _mm256_extracti128_si256(bytes, 1));
+  return flagged;
+}
+
+FAULTLINE_AVX2_INLINE BlendVec blend_vec(const FogBlendExact& b) {
+  const double a = b.m / b.denom;
+  const double k = (255.0 * b.m * b.strength) / (b.denom * b.range);
+  return {_mm256_set1_pd(b.min), _mm256_set1_pd(k), _mm256_set1_ps(static_cast<float>(a))};
+}
+
+inline void fix_flagged(const std::uint8_t* s, std::uint8_t* d, const double* raw8, std::uint32_t flagged,
+                        const FogBlendExact& b) {
+  while (flagged != 0) {
+    const int t = __builtin_ctz(flagged);
+    flagged &= flagged - 1;
+    d[t] = exact_value(s[t], raw8[t / 3], b);
+  }
+}
+
+FAULTLINE_TARGET_AVX2 void blend_exact_avx2(const std::uint8_t* src, const double* f, std::uint8_t* dst, int cols,
+                                            const FogBlendExact& b) {
+  const BlendVec v = blend_vec(b);
+  int x = 0;
+  for (; x + 8 <= cols; x += 8) {
+    const std::uint32_t flagged =
+        blend8(src + 3 * x, dst + 3 * x, _mm256_loadu_pd(f + x), _mm256_loadu_pd(f + x + 4), v);
+    if (flagged != 0) fix_flagged(src + 3 * x, dst + 3 * x, f + x, flagged, b);
+  }
+  blend_exact_scalar(src, dst, x, cols, b, [f](int i) { return f[i]; });
+}
+
+FAULTLINE_TARGET_AVX2 void blend_exact_pairs_avx2(const std::uint8_t* src, const double* even, const double* odd,
+                                                  std::uint8_t* dst, int cols, const FogBlendExact& b) {
+  const BlendVec v = blend_vec(b);
+  int x = 0;
+  for (; x + 8 <= cols; x += 8) {
+    const __m256d e = _mm256_loadu_pd(even + x / 2), o = _mm256_loadu_pd(odd + x / 2);
+    const __m256d lo = _mm256_unpacklo_pd(e, o), hi = _mm256_unpackhi_pd(e, o);  // e0 o0 e2 o2 | e1 o1 e3 o3
+    const __m256d r0 = _mm256_permute2f128_pd(lo, hi, 0x20), r1 = _mm256_permute2f128_pd(lo, hi, 0x31);
+    const std::uint32_t flagged = blend8(src + 3 * x, dst + 3 * x, r0, r1, v);
+    if (flagged != 0) {
+      alignas(32) double raw[8];
+      _mm256_store_pd(raw, r0);
+      _mm256_store_pd(raw + 4, r1);
+      fix_flagged(src + 3 * x, dst + 3 * x, raw, flagged, b);
+    }
+  }
+  blend_exact_scalar(src, dst, x, cols, b, [even, odd](int i) { return i % 2 ? odd[i / 2] : even[i / 2]; });
+}
+
+// trunc(clamp(src * scale + add, 0, 255)) for eight bytes.
+FAULTLINE_AVX2_INLINE __m256i fast_channel(const std::uint8_t* s, __m256 add, __m256 vscale) {
+  const __m256i b = _mm256_cvtepu8_epi32(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(s)));
+  const __m256 v = _mm256_add_ps(_mm256_mul_ps(_mm256_cvtepi32_ps(b), vscale), add);
+  return _mm256_cvttps_epi32(_mm256_min_ps(_mm256_max_ps(v, _mm256_setzero_ps()), _mm256_set1_ps(255.0f)));
+}
+
+// Eight pixels (24 values) per step.
+FAULTLINE_TARGET_AVX2 void blend_fast_avx2(const std::uint8_t* src, const float* f, std::uint8_t* dst, int cols,
+                                           float scale, float add_scale) {
+  const __m256 vscale = _mm256_set1_ps(scale), vadd = _mm256_set1_ps(add_scale);
+  const __m256i p0 = _mm256_setr_epi32(0, 0, 0, 1, 1, 1, 2, 2);
+  const __m256i p1 = _mm256_setr_epi32(2, 3, 3, 3, 4, 4, 4, 5);
+  const __m256i p2 = _mm256_setr_epi32(5, 5, 6, 6, 6, 7, 7, 7);
+  int x = 0;
+  for (; x + 8 <= cols; x += 8) {
+    const std::uint8_t* s = src + 3 * x;
+    const __m256 a = _mm256_mul_ps(vadd, _mm256_loadu_ps(f + x));
+    const __m256i i0 = fast_channel(s, _mm256_permutevar8x32_ps(a, p0), vscale);
+    const __m256i i1 = fast_channel(s + 8, _mm256_permutevar8x32_ps(a, p1), vscale);
+    const __m256i i2 = fast_channel(s + 16, _mm256_permutevar8x32_ps(a, p2), vscale);
+    // packs work per 128-bit lane: fix the order with 64-bit permutes.
+    const __m256i w01 = _mm256_permute4x64_epi64(_mm256_packs_epi32(i0, i1), 0xD8);  // 16 x int16, in order
+    const __m256i w2 = _mm256_permute4x64_epi64(_mm256_packs_epi32(i2, i2), 0xD8);   // 8 x int16 twice
+    const __m256i b = _mm256_permute4x64_epi64(_mm256_packus_epi16(w01, w2), 0xD8);  // 24 bytes in order
+    std::uint8_t* d = dst + 3 * x;
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(d), _mm256_castsi256_si128(b));
+    _mm_storel_epi64(reinterpret_cast<__m128i*>(d + 16), _mm256_extracti128_si256(b, 1));
+  }
+  blend_fast_scalar(src, f, dst, x, cols, scale, add_scale);
+}
+
+// Eight low values -> 32 outputs: the four phases as vectors, then a 4 x 8 transpose.
+FAULTLINE_TARGET_AVX2 void upsample4_avx2(const float* low, float* out, int count) {
+  const __m256 w1 = _mm256_set1_ps(0.25f), w2 = _mm256_set1_ps(0.5f), w3 = _mm256_set1_ps(0.75f);
+  int c = 0;
+  for (; 4 * c + 32 <= count; c += 8) {
+    const __m256 a = _mm256_loadu_ps(low + c), b = _mm256_loadu_ps(low + c + 1);
+    const __m256 v0 = a;
+    const __m256 v1 = _mm256_add_ps(_mm256_mul_ps(a, w3), _mm256_mul_ps(b, w1));
+    const __m256 v2 = _mm256_add_ps(_mm256_mul_ps(a, w2), _mm256_mul_ps(b, w2));
+    const __m256 v3 = _mm256_add_ps(_mm256_mul_ps(a, w1), _mm256_mul_ps(b, w3));
+    const __m256d t01lo = _mm256_castps_pd(_mm256_unpacklo_ps(v0, v1));  // (c0: t0 t1, c1: t0 t1 | c4, c5)
+    const __m256d t01hi = _mm256_castps_pd(_mm256_unpackhi_ps(v0, v1));  // (c2, c3 | c6, c7)
+    const __m256d t23lo = _mm256_castps_pd(_mm256_unpacklo_ps(v2, v3));
+    const __m256d t23hi = _mm256_castps_pd(_mm256_unpackhi_ps(v2, v3));
+    const __m256 q0 = _mm256_castpd_ps(_mm256_unpacklo_pd(t01lo, t23lo));  // c0 | c4, all four phases
+    const __m256 q1 = _mm256_castpd_ps(_mm256_unpackhi_pd(t01lo, t23lo));  // c1 | c5
+    const __m256 q2 = _mm256_castpd_ps(_mm256_unpacklo_pd(t01hi, t23hi));  // c2 | c6
+    const __m256 q3 = _mm256_castpd_ps(_mm256_unpackhi_pd(t01hi, t23hi));  // c3 | c7
+    float* o = out + 4 * c;
+    _mm256_storeu_ps(o, _mm256_permute2f128_ps(q0, q1, 0x20));
+    _mm256_storeu_ps(o + 8, _mm256_permute2f128_ps(q2, q3, 0x20));
+    _mm256_storeu_ps(o + 16, _mm256_permute2f128_ps(q0, q1, 0x31));
+    _mm256_storeu_ps(o + 24, _mm256_permute2f128_ps(q2, q3, 0x31));
+  }
+  upsample4_scalar(low, out, 4 * c, count);
+}
+
+FAULTLINE_TARGET_AVX2 void lerp_avx2(const float* a, const float* b, float* out, int count, float wa, float wb) {
+  const __m256 va = _mm256_set1_ps(wa), vb = _mm256_set1_ps(wb);
+  int j = 0;
+  for (; j + 8 <= count; j += 8) {
+    _mm256_storeu_ps(out + j, _mm256_add_ps(_mm256_mul_ps(_mm256_loadu_ps(a + j), va),
+                                            _mm256_mul_ps(_mm256_loadu_ps(b + j), vb)));
+  }
+  for (; j < count; ++j) out[j] = a[j] * wa + b[j] * wb;
+}
+
+#else
+constexpr bool have_avx2() { return false; }
+#endif
+
+}  // namespace
+
+void fog_centre_row(const double* c0, const double* c1, const double* u, double* d, int count, const FogStep& s) {
+#if FAULTLINE_FOG_AVX2
+  if (have_avx2()) return centre_avx2(c0, c1, u, d, count, s);
+#endif
+  centre_scalar(c0, c1, u, d, 0, count, s);
+}
+
+void fog_hedge_row(const double* d0, const double* dp, const double* c0, const double* u, double* e, int count,
+                   const FogStep& s) {
+#if FAULTLINE_FOG_AVX2
+  if (have_avx2()) return hedge_avx2(d0, dp, c0, u, e, count, s);
+#endif
+  hedge_scalar(d0, dp, c0, u, e, 0, count, s);
+}
+
+void fog_vedge_row(const double* d0, const double* c0, const double* c1, const double* u, double* e, int count,
+                   const FogStep& s) {
+#if FAULTLINE_FOG_AVX2
+  if (have_avx2()) return vedge_avx2(d0, c0, c1, u, e, count, s);
+#endif
+  vedge_scalar(d0, c0, c1, u, e, 0, count, s);
+}
+
+void fog_interleave_row(const double* a, const double* b, double* out, int pairs) {
+#if FAULTLINE_FOG_AVX2
+  if (have_avx2()) return interleave_avx2(a, b, out, pairs);
+#endif
+  for (int j = 0; j < pairs; ++j) {
+    out[2 * j] = a[j];
+    out[2 * j + 1] = b[j];
+  }
+}
+
+void fog_minmax_row(const double* p, int count, double* mn, double* mx) {
+#if FAULTLINE_FOG_AVX2
+  if (have_avx2()) return minmax_avx2(p, count, mn, mx);
+#endif
+  for (int j = 0; j < count; ++j) {
+    *mn = std::min(*mn, p[j]);
+    *mx = std::max(*mx, p[j]);
+  }
+}
+
+void fog_interleave_normalise_row(const double* a, const double* b, double* out, int pairs, double mn, double range) {
+#if FAULTLINE_FOG_AVX2
+  if (have_avx2()) return interleave_normalise_avx2(a, b, out, pairs, mn, range);
+#endif
+  for (int j = 0; j < pairs; ++j) {
+    out[2 * j] = (a[j] - mn) / range;
+    out[2 * j + 1] = (b[j] - mn) / range;
+  }
+}
+
+void fog_blend_exact_row(const std::uint8_t* src, const double* f, std::uint8_t* dst, int cols,
+                         const FogBlendExact& b) {
+#if FAULTLINE_FOG_AVX2
+  if (have_avx2()) return blend_exact_avx2(src, f, dst, cols, b);
+#endif
+  blend_exact_scalar(src, dst, 0, cols, b, [f](int i) { return f[i]; });
+}
+
+void fog_blend_exact_pairs(const std::uint8_t* src, const double* even, const double* odd, std::uint8_t* dst,
+                           int cols, const FogBlendExact& b) {
+#if FAULTLINE_FOG_AVX2
+  if (have_avx2()) return blend_exact_pairs_avx2(src, even, odd, dst, cols, b);
+#endif
+  blend_exact_scalar(src, dst, 0, cols, b, [even, odd](int i) { return i % 2 ? odd[i / 2] : even[i / 2]; });
+}
+
+void fog_blend_fast_row(const std::uint8_t* src, const float* f, std::uint8_t* dst, int cols, float scale,
+                        float add_scale) {
+#if FAULTLINE_FOG_AVX2
+  if (have_avx2()) return blend_fast_avx2(src, f, dst, cols, scale, add_scale);
+#endif
+  blend_fast_scalar(src, f, dst, 0, cols, scale, add_scale);
+}
+
+void fog_upsample4_row(const float* low, float* out, int count) {
+#if FAULTLINE_FOG_AVX2
+  if (have_avx2()) return upsample4_avx2(low, out, count);
+#endif
+  upsample4_scalar(low, out, 0, count);
+}
+
+void fog_lerp_row(const float* a, const float* b, float* out, int count, float wa, float wb) {
+#if FAULTLINE_FOG_AVX2
+  if (have_avx2()) return lerp_avx2(a, b, out, count, wa, wb);
+#endif
+  for (int j = 0; j < count; ++j) out[j] = a[j] * wa + b[j] * wb;
+}
+
+}  // namespace faultline::corruption

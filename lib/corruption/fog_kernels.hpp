@@ -1,0 +1,65 @@
+// Row kernels of the fog corruption: the diamond-square passes, min/max, normalisation and the two blends.
+// Each has an AVX2 body (picked at run time where the CPU has it) and a scalar body; both round every operation
+// exactly as the reference's float64 expression does (no FMA), so numpy mode stays bit-exact on either path.
+#pragma once
+
+#include <cstdint>
+
+namespace faultline::corruption {
+
+// The random offset of one level: w * (lo + span * u), lo = -w, span = w - (-w) (spec §4: U(-w, w) scaled by w).
+struct FogStep {
+  double w;
+  double lo;
+  double span;
+};
+
+// Centres: d[j] = ((c0[j] + c1[j]) + (c0[j+1] + c1[j+1])) / 4 + offset(u[j]), j < count. Reads c0/c1[0..count].
+void fog_centre_row(const double* c0, const double* c1, const double* u, double* d, int count, const FogStep& s);
+
+// Horizontal-edge points: e[j] = ((d0[j] + dp[j]) + (c0[j] + c0[j+1])) / 4 + offset(u[j]); dp is the centre row
+// above. Reads c0[0..count].
+void fog_hedge_row(const double* d0, const double* dp, const double* c0, const double* u, double* e, int count,
+                   const FogStep& s);
+
+// Vertical-edge points: e[j] = ((d0[j] + d0[j-1]) + (c0[j] + c1[j])) / 4 + offset(u[j]). Reads d0[-1..count-1].
+void fog_vedge_row(const double* d0, const double* c0, const double* c1, const double* u, double* e, int count,
+                   const FogStep& s);
+
+// out[2j] = a[j], out[2j+1] = b[j] for j < pairs.
+void fog_interleave_row(const double* a, const double* b, double* out, int pairs);
+
+// Folds p[0..count) into *mn / *mx (the values are never NaN).
+void fog_minmax_row(const double* p, int count, double* mn, double* mx);
+
+// out[2j] = (a[j] - mn) / range, out[2j+1] = (b[j] - mn) / range for j < pairs: the reference's normalisation.
+void fog_interleave_normalise_row(const double* a, const double* b, double* out, int pairs, double mn, double range);
+
+// The exact blend (spec §4 step 5) of a fractal given as raw map values p, F = (p - min) / range (min = 0 and
+// range = 1 pass a normalised fractal through unchanged): dst = trunc(clip(((src/255 + a*F) * m) / denom, 0, 1) *
+// 255), denom = m + a, BGR interleaved. F must lie in [0, 1].
+struct FogBlendExact {
+  double strength;  // a
+  double m;         // image maximum / 255
+  double denom;     // m + a, rounded as the reference rounds it
+  double min;
+  double range;
+};
+// Pixel x's raw value is f[x].
+void fog_blend_exact_row(const std::uint8_t* src, const double* f, std::uint8_t* dst, int cols, const FogBlendExact& b);
+// Pixel x's raw value is even[x / 2] for even x and odd[x / 2] for odd x (a row of the finest level's planes).
+void fog_blend_exact_pairs(const std::uint8_t* src, const double* even, const double* odd, std::uint8_t* dst,
+                           int cols, const FogBlendExact& b);
+
+// One row of the float32 blend: dst = trunc(clamp(src * scale + add_scale * f, 0, 255)).
+void fog_blend_fast_row(const std::uint8_t* src, const float* f, std::uint8_t* dst, int cols, float scale,
+                        float add_scale);
+
+// The horizontal step of the fast field's bilinear upsampling by 4 (corner-aligned): out[4c + t] =
+// low[c] * (1 - t/4) + low[c + 1] * (t/4) for 4c + t < count. Reads low[0 .. (count - 1) / 4 + 1].
+void fog_upsample4_row(const float* low, float* out, int count);
+
+// out[x] = a[x] * wa + b[x] * wb (float32), the vertical step of the fast field's bilinear upsampling.
+void fog_lerp_row(const float* a, const float* b, float* out, int count, float wa, float wb);
+
+}  // namespace faultline::corruption

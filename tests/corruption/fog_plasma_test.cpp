@@ -1,0 +1,208 @@
+// Fog's crop-aware plasma fractal and division-free exact blend against spec-verbatim implementations (§4): the
+// in-place N x N map with wrapped indices and the reference's blend expression, value for value.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "corruption/fog.hpp"
+#include "rng/fast_rng.hpp"
+#include "rng/numpy_legacy.hpp"
+
+namespace faultline::corruption {
+namespace {
+
+// Spec §4 verbatim: M[0,0] = 0, three passes of n x n draws per level, the reference's bracketing, then
+// M - min(M) and M / max(M) over the full map.
+cv::Mat ReferencePlasma(int size, double decay, rng::NumpyRandomState& rng) {
+  cv::Mat m(size, size, CV_64F, cv::Scalar(0.0));
+  auto at = [&](int r, int c) -> double& { return m.at<double>((r + size) % size, (c + size) % size); };
+  double w = 100.0;
+  for (int s = size; s >= 2; s /= 2) {
+    const int h = s / 2, n = size / s;
+    for (int i = 0; i < n; ++i) {
+      for (int j = 0; j < n; ++j) {
+        const double sum = (at(i * s, j * s) + at(i * s + s, j * s)) + (at(i * s, j * s + s) + at(i * s + s, j * s + s));
+        at(i * s + h, j * s + h) = sum / 4 + w * rng.uniform(-w, w);
+      }
+    }
+    for (int i = 0; i < n; ++i) {
+      for (int j = 0; j < n; ++j) {
+        const double sum = (at(i * s + h, j * s + h) + at(i * s - h, j * s + h)) + (at(i * s, j * s) + at(i * s, j * s + s));
+        at(i * s, j * s + h) = sum / 4 + w * rng.uniform(-w, w);
+      }
+    }
+    for (int i = 0; i < n; ++i) {
+      for (int j = 0; j < n; ++j) {
+        const double sum = (at(i * s + h, j * s + h) + at(i * s + h, j * s - h)) + (at(i * s, j * s) + at(i * s + s, j * s));
+        at(i * s + h, j * s) = sum / 4 + w * rng.uniform(-w, w);
+      }
+    }
+    w /= decay;
+  }
+  double lo = 0, hi = 0;
+  cv::minMaxLoc(m, &lo, nullptr);
+  m -= lo;
+  cv::minMaxLoc(m, nullptr, &hi);
+  // A true division per value (cv::Mat / double multiplies by the reciprocal, 1 ulp off NumPy's divide).
+  m.forEach<double>([hi](double& v, const int*) { v /= hi; });
+  return m;
+}
+
+// The reference's blend, one value at a time.
+cv::Mat ReferenceBlend(const cv::Mat& bgr, const cv::Mat& fractal, double strength) {
+  double max_u8 = 0;
+  cv::minMaxLoc(bgr.reshape(1), nullptr, &max_u8);
+  const double m = max_u8 / 255.0;
+  cv::Mat out(bgr.size(), bgr.type());
+  for (int y = 0; y < bgr.rows; ++y) {
+    for (int x = 0; x < bgr.cols; ++x) {
+      for (int c = 0; c < 3; ++c) {
+        const double v = bgr.at<cv::Vec3b>(y, x)[c] / 255.0 + strength * fractal.at<double>(y, x);
+        const double r = (v * m) / (m + strength);
+        out.at<cv::Vec3b>(y, x)[c] = static_cast<std::uint8_t>(std::min(std::max(r, 0.0), 1.0) * 255.0);
+      }
+    }
+  }
+  return out;
+}
+
+cv::Mat RandomImage(int rows, int cols, std::uint64_t seed) {
+  cv::Mat img(rows, cols, CV_8UC3);
+  cv::RNG(seed).fill(img, cv::RNG::UNIFORM, 0, 256);
+  return img;
+}
+
+double MaxAbsDiff(const cv::Mat& a, const cv::Mat& b) { return cv::norm(a, b, cv::NORM_INF); }
+
+struct CropCase {
+  int size, rows, cols;
+  double decay;
+  std::uint32_t seed;
+};
+
+class PlasmaCropTest : public ::testing::TestWithParam<CropCase> {};
+
+TEST_P(PlasmaCropTest, CropEqualsSpecMapCropAndConsumesTheSameDraws) {
+  const CropCase& c = GetParam();
+  rng::NumpyRandomState ref_rng(c.seed), rng(c.seed);
+  const cv::Mat full = ReferencePlasma(c.size, c.decay, ref_rng);
+  const cv::Mat crop = plasma_fractal_crop(c.size, c.decay, rng, c.rows, c.cols);
+  ASSERT_EQ(crop.size(), cv::Size(c.cols, c.rows));
+  EXPECT_EQ(MaxAbsDiff(full(cv::Rect(0, 0, c.cols, c.rows)), crop), 0.0);
+  EXPECT_EQ(ref_rng.random_sample(), rng.random_sample());
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Sizes, PlasmaCropTest,
+    ::testing::Values(CropCase{2, 1, 2, 2.0, 1}, CropCase{4, 3, 3, 2.0, 2}, CropCase{32, 32, 32, 1.7, 3},
+                      CropCase{64, 33, 17, 1.4, 4}, CropCase{128, 1, 128, 1.5, 5}, CropCase{128, 128, 1, 2.0, 6},
+                      CropCase{256, 197, 129, 1.4, 7}, CropCase{512, 270, 480, 1.5, 8},
+                      CropCase{512, 197, 333, 2.0, 9}, CropCase{1024, 360, 640, 1.7, 10},
+                      CropCase{2048, 900, 1600, 1.4, 11}));
+
+// The crop's extremes come from the full map even where they lie outside the crop (the skipped tiles).
+TEST(PlasmaCropTest, NormalisesWithTheFullMapsExtremesWhenTheyLieOutsideTheCrop) {
+  int outside = 0;
+  for (std::uint32_t seed = 20; seed < 30; ++seed) {
+    rng::NumpyRandomState ref_rng(seed), rng(seed);
+    const cv::Mat full = ReferencePlasma(256, 1.5, ref_rng);
+    const cv::Mat crop = plasma_fractal_crop(256, 1.5, rng, 40, 60);
+    EXPECT_EQ(MaxAbsDiff(full(cv::Rect(0, 0, 60, 40)), crop), 0.0) << seed;
+    cv::Point lo, hi;
+    cv::minMaxLoc(full, nullptr, nullptr, &lo, &hi);
+    outside += !cv::Rect(0, 0, 60, 40).contains(hi) && lo != cv::Point(0, 0);
+  }
+  EXPECT_GT(outside, 5);  // the case under test actually happens
+}
+
+TEST(FogExactTest, FusedEqualsCropThenBlendAndTheSpecBlend) {
+  for (const cv::Size size : {cv::Size(333, 197), cv::Size(640, 360), cv::Size(7, 5), cv::Size(64, 1)}) {
+    const cv::Mat img = RandomImage(size.height, size.width, static_cast<std::uint64_t>(size.area()));
+    for (int sev = 1; sev <= 5; ++sev) {
+      const FogParams p = fog_params(sev);
+      const int n = fog_map_size(img.rows, img.cols);
+      rng::NumpyRandomState a(static_cast<std::uint32_t>(sev)), b(static_cast<std::uint32_t>(sev)),
+          c(static_cast<std::uint32_t>(sev));
+      const cv::Mat ref = ReferenceBlend(img, ReferencePlasma(n, p.decay, a), p.strength);
+      const cv::Mat two_step = fog_blend_exact(img, plasma_fractal_crop(n, p.decay, b, img.rows, img.cols), p.strength);
+      const cv::Mat fused = fog_exact(img, sev, c);
+      EXPECT_EQ(MaxAbsDiff(two_step, ref), 0.0) << size << " sev " << sev;
+      EXPECT_EQ(MaxAbsDiff(fused, ref), 0.0) << size << " sev " << sev;
+      const double next = a.random_sample();
+      EXPECT_EQ(next, b.random_sample());
+      EXPECT_EQ(next, c.random_sample());
+    }
+  }
+}
+
+TEST(FogExactTest, BlackAndWhiteFramesMatchTheSpecBlend) {
+  for (const int value : {0, 255}) {
+    const cv::Mat img(90, 160, CV_8UC3, cv::Scalar::all(value));
+    rng::NumpyRandomState a(3), b(3);
+    const cv::Mat ref = ReferenceBlend(img, ReferencePlasma(256, 1.4, a), 3.0);
+    EXPECT_EQ(MaxAbsDiff(fog_exact(img, 5, b), ref), 0.0) << value;
+    EXPECT_EQ(a.random_sample(), b.random_sample());
+  }
+}
+
+// Fractal values placed on (and a hair beside) the blend's truncation boundaries, where a division-free candidate
+// must defer to the reference expression.
+TEST(FogBlendExactTest, MatchesTheSpecBlendOnTruncationBoundaries) {
+  const cv::Mat img = RandomImage(64, 96, 5);
+  double max_u8 = 0;
+  cv::minMaxLoc(img.reshape(1), nullptr, &max_u8);
+  const double m = max_u8 / 255.0;
+  for (const double strength : {1.5, 2.0, 2.5, 3.0}) {
+    cv::Mat f(img.size(), CV_64F);
+    cv::RNG pick(static_cast<std::uint64_t>(strength * 10));
+    for (int y = 0; y < f.rows; ++y) {
+      for (int x = 0; x < f.cols; ++x) {
+        // f such that channel 0 lands on level j exactly: (k/255 + a f) m / (m + a) = j / 255.
+        const int k = img.at<cv::Vec3b>(y, x)[0];
+        const double j = pick.uniform(0, 256);
+        double v = ((j / 255.0) * (m + strength) / m - k / 255.0) / strength;
+        v = std::nextafter(v, pick.uniform(0, 3) - 1.0);  // on it, or one ulp either side
+        f.at<double>(y, x) = std::min(std::max(v, 0.0), 1.0);
+      }
+    }
+    f.at<double>(0, 0) = 0.0;
+    f.at<double>(0, 1) = 1.0;
+    EXPECT_EQ(MaxAbsDiff(fog_blend_exact(img, f, strength), ReferenceBlend(img, f, strength)), 0.0) << strength;
+  }
+}
+
+TEST(FogFastTest, FusedEqualsFieldThenBlend) {
+  for (const cv::Size size : {cv::Size(1600, 900), cv::Size(333, 197), cv::Size(40, 33), cv::Size(63, 64)}) {
+    const cv::Mat img = RandomImage(size.height, size.width, 9);
+    for (int sev = 1; sev <= 5; ++sev) {
+      const FogParams p = fog_params(sev);
+      rng::FastRng a(static_cast<std::uint64_t>(sev)), b(static_cast<std::uint64_t>(sev));
+      const cv::Mat two_step = fog_blend_fast(img, fog_field_fast(img.rows, img.cols, p.decay, a), p.strength);
+      EXPECT_EQ(MaxAbsDiff(fog_fast(img, sev, b), two_step), 0.0) << size << " sev " << sev;
+    }
+  }
+}
+
+// The field is the quarter-resolution map, bilinear and corner-aligned: every fourth row and column are the map's
+// points. (509 x 510 needs the whole 128 x 128 map, so the fast stream draws every point, as plasma_fractal does.)
+TEST(FogFastTest, FieldPassesThroughTheLowResolutionMapsPoints) {
+  const int rows = 509, cols = 510, n = fog_map_size(rows, cols);
+  rng::FastRng a(4), b(4);
+  const cv::Mat full = plasma_fractal(n / 4, 1.7, a);
+  const cv::Mat field = fog_field_fast(rows, cols, 1.7, b);
+  double worst = 0;
+  for (int y = 0; y < rows; y += 4) {
+    for (int x = 0; x < cols; x += 4) {
+      worst = std::max(worst, std::fabs(field.at<float>(y, x) - full.at<double>(y / 4, x / 4)));
+    }
+  }
+  EXPECT_LT(worst, 1e-6);
+}
+
+}  // namespace
+}  // namespace faultline::corruption
