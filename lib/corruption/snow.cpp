@@ -119,19 +119,28 @@ cv::Mat snow_layer_exact(const cv::Mat& normals, int severity, double blur_angle
                                severity, blur_angle_deg);
 }
 
-cv::Mat snow_blend_exact(const cv::Mat& bgr, const cv::Mat& layer_u8, int severity) {
+namespace {
+
+// Blends every row with `blend_row` (snow_kernels::blend_exact_row or blend_fast_row): the layer's row y and its
+// rotated copy, which is row rows - 1 - y read backwards.
+template <typename BlendRow>
+cv::Mat blend_rows(const cv::Mat& bgr, const cv::Mat& layer_u8, int severity, BlendRow blend_row) {
   const SnowParams p = snow_params(severity);
   const float b = static_cast<float>(p.blend);
   const float one_minus_b = static_cast<float>(1.0 - p.blend);  // formed in double first, as NumPy does
   const int rows = bgr.rows, cols = bgr.cols;
   cv::Mat out(bgr.size(), bgr.type());
   for (int y = 0; y < rows; ++y) {
-    // The rotated copy is row rows - 1 - y read backwards.
-    snow_kernels::blend_exact_row(bgr.ptr<std::uint8_t>(y), layer_u8.ptr<std::uint8_t>(y),
-                                  layer_u8.ptr<std::uint8_t>(rows - 1 - y), /*rot_reversed=*/true,
-                                  out.ptr<std::uint8_t>(y), cols, b, one_minus_b);
+    blend_row(bgr.ptr<std::uint8_t>(y), layer_u8.ptr<std::uint8_t>(y), layer_u8.ptr<std::uint8_t>(rows - 1 - y),
+              /*rot_reversed=*/true, out.ptr<std::uint8_t>(y), cols, b, one_minus_b);
   }
   return out;
+}
+
+}  // namespace
+
+cv::Mat snow_blend_exact(const cv::Mat& bgr, const cv::Mat& layer_u8, int severity) {
+  return blend_rows(bgr, layer_u8, severity, [](auto... args) { snow_kernels::blend_exact_row(args...); });
 }
 
 cv::Mat snow_exact(const cv::Mat& bgr, int severity, rng::NumpyRandomState& rng) {
@@ -217,18 +226,7 @@ cv::Mat snow_layer_fast(const cv::Mat& crop_field, int rows, int cols, int sever
 }
 
 cv::Mat snow_blend_fast(const cv::Mat& bgr, const cv::Mat& layer_u8, int severity) {
-  const SnowParams p = snow_params(severity);
-  const float b = static_cast<float>(p.blend);
-  const float one_minus_b = static_cast<float>(1.0 - p.blend);
-  const int rows = bgr.rows, cols = bgr.cols;
-  cv::Mat out(bgr.size(), bgr.type());
-  for (int y = 0; y < rows; ++y) {
-    // The rotated copy is row rows - 1 - y read backwards.
-    snow_kernels::blend_fast_row(bgr.ptr<std::uint8_t>(y), layer_u8.ptr<std::uint8_t>(y),
-                                 layer_u8.ptr<std::uint8_t>(rows - 1 - y), /*rot_reversed=*/true,
-                                 out.ptr<std::uint8_t>(y), cols, b, one_minus_b);
-  }
-  return out;
+  return blend_rows(bgr, layer_u8, severity, [](auto... args) { snow_kernels::blend_fast_row(args...); });
 }
 
 cv::Mat snow_blend_fast(const cv::Mat& bgr, const cv::Mat& layer_u8, const cv::Mat& layer_rot_u8, int severity) {

@@ -109,6 +109,40 @@ __attribute__((target("avx2"))) inline __m128i narrow(__m256i lo, __m256i hi) {
   return _mm_packus_epi16(_mm256_castsi256_si128(words), _mm256_extracti128_si256(words, 1));
 }
 
+// The 16 BGR pixels at x split into B, G and R planes.
+__attribute__((target("avx2"))) inline void load_planes(const Shuffles& m, const std::uint8_t* src, int x,
+                                                       __m128i plane[3]) {
+  __m128i blk[3];
+  for (int i = 0; i < 3; ++i) blk[i] = _mm_loadu_si128(reinterpret_cast<const __m128i*>(src + 3 * x + 16 * i));
+  for (int k = 0; k < 3; ++k) {
+    plane[k] = _mm_or_si128(_mm_or_si128(_mm_shuffle_epi8(blk[0], mask(m.split[k][0])),
+                                         _mm_shuffle_epi8(blk[1], mask(m.split[k][1]))),
+                            _mm_shuffle_epi8(blk[2], mask(m.split[k][2])));
+  }
+}
+
+// The rotated layer's 16 bytes for pixels x..x+15: read backwards from the end of the row when rot_reversed.
+__attribute__((target("avx2"))) inline __m128i load_rotated(const std::uint8_t* rot, bool rot_reversed, int cols,
+                                                           int x) {
+  const __m128i reverse = _mm_setr_epi8(15, 14, 13, 12, 11, 10, 9, 8, 7, 6, 5, 4, 3, 2, 1, 0);
+  return rot_reversed
+             ? _mm_shuffle_epi8(_mm_loadu_si128(reinterpret_cast<const __m128i*>(rot + cols - 16 - x)), reverse)
+             : _mm_loadu_si128(reinterpret_cast<const __m128i*>(rot + x));
+}
+
+// Per plane two vectors of eight int32 in 0..255 -> 16 interleaved BGR pixels at x.
+__attribute__((target("avx2"))) inline void store_planes(const Shuffles& m, const __m256i out[3][2],
+                                                        std::uint8_t* dst, int x) {
+  __m128i res[3];
+  for (int k = 0; k < 3; ++k) res[k] = narrow(out[k][0], out[k][1]);
+  for (int i = 0; i < 3; ++i) {
+    const __m128i v = _mm_or_si128(_mm_or_si128(_mm_shuffle_epi8(res[0], mask(m.merge[i][0])),
+                                                _mm_shuffle_epi8(res[1], mask(m.merge[i][1]))),
+                                   _mm_shuffle_epi8(res[2], mask(m.merge[i][2])));
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(dst + 3 * x + 16 * i), v);
+  }
+}
+
 // Whole blocks of 16 pixels; returns how many pixels it wrote.
 __attribute__((target("avx2"))) int blend_avx2(const std::uint8_t* src, const std::uint8_t* layer,
                                                const std::uint8_t* rot, bool rot_reversed, std::uint8_t* dst,
@@ -117,24 +151,12 @@ __attribute__((target("avx2"))) int blend_avx2(const std::uint8_t* src, const st
   const __m256 bv = _mm256_set1_ps(b), omb = _mm256_set1_ps(one_minus_b);
   const __m256 w0 = _mm256_set1_ps(0.299f), w1 = _mm256_set1_ps(0.587f), w2 = _mm256_set1_ps(0.114f);
   const __m256 k15 = _mm256_set1_ps(1.5f), k1275 = _mm256_set1_ps(127.5f);
-  const __m128i reverse = _mm_setr_epi8(15, 14, 13, 12, 11, 10, 9, 8, 7, 6, 5, 4, 3, 2, 1, 0);
   int x = 0;
   for (; x + 16 <= cols; x += 16) {
-    __m128i blk[3];
-    for (int i = 0; i < 3; ++i) blk[i] = _mm_loadu_si128(reinterpret_cast<const __m128i*>(src + 3 * x + 16 * i));
     __m128i plane[3];
-    for (int k = 0; k < 3; ++k) {
-      plane[k] = _mm_or_si128(_mm_or_si128(_mm_shuffle_epi8(blk[0], mask(m.split[k][0])),
-                                           _mm_shuffle_epi8(blk[1], mask(m.split[k][1]))),
-                              _mm_shuffle_epi8(blk[2], mask(m.split[k][2])));
-    }
+    load_planes(m, src, x, plane);
     const __m128i l = _mm_loadu_si128(reinterpret_cast<const __m128i*>(layer + x));
-    __m128i r;
-    if (rot_reversed) {
-      r = _mm_shuffle_epi8(_mm_loadu_si128(reinterpret_cast<const __m128i*>(rot + cols - 16 - x)), reverse);
-    } else {
-      r = _mm_loadu_si128(reinterpret_cast<const __m128i*>(rot + x));
-    }
+    const __m128i r = load_rotated(rot, rot_reversed, cols, x);
     const __m256i snow16 = _mm256_add_epi16(_mm256_cvtepu8_epi16(l), _mm256_cvtepu8_epi16(r));
     const __m256 snow[2] = {_mm256_cvtepi32_ps(_mm256_cvtepu16_epi32(_mm256_castsi256_si128(snow16))),
                             _mm256_cvtepi32_ps(_mm256_cvtepu16_epi32(_mm256_extracti128_si256(snow16, 1)))};
@@ -147,14 +169,7 @@ __attribute__((target("avx2"))) int blend_avx2(const std::uint8_t* src, const st
       const __m256 bright = _mm256_add_ps(_mm256_mul_ps(grey, k15), k1275);
       for (int k = 0; k < 3; ++k) out[k][h] = blend8(c[k][h], bright, snow[h], bv, omb);
     }
-    __m128i res[3];
-    for (int k = 0; k < 3; ++k) res[k] = narrow(out[k][0], out[k][1]);
-    for (int i = 0; i < 3; ++i) {
-      const __m128i v = _mm_or_si128(_mm_or_si128(_mm_shuffle_epi8(res[0], mask(m.merge[i][0])),
-                                                  _mm_shuffle_epi8(res[1], mask(m.merge[i][1]))),
-                                     _mm_shuffle_epi8(res[2], mask(m.merge[i][2])));
-      _mm_storeu_si128(reinterpret_cast<__m128i*>(dst + 3 * x + 16 * i), v);
-    }
+    store_planes(m, out, dst, x);
   }
   return x;
 }
@@ -223,22 +238,12 @@ __attribute__((target("avx2,fma"))) int blend_exact_avx2(const std::uint8_t* src
   const __m256 w0 = _mm256_set1_ps(0.299f), w1 = _mm256_set1_ps(0.587f), w2 = _mm256_set1_ps(0.114f);
   const __m256 k15 = _mm256_set1_ps(1.5f), k05 = _mm256_set1_ps(0.5f);
   const __m256d k255 = _mm256_set1_pd(255.0);
-  const __m128i reverse = _mm_setr_epi8(15, 14, 13, 12, 11, 10, 9, 8, 7, 6, 5, 4, 3, 2, 1, 0);
   int x = 0;
   for (; x + 16 <= cols; x += 16) {
-    __m128i blk[3];
-    for (int i = 0; i < 3; ++i) blk[i] = _mm_loadu_si128(reinterpret_cast<const __m128i*>(src + 3 * x + 16 * i));
     __m128i plane[3];
-    for (int k = 0; k < 3; ++k) {
-      plane[k] = _mm_or_si128(_mm_or_si128(_mm_shuffle_epi8(blk[0], mask(m.split[k][0])),
-                                           _mm_shuffle_epi8(blk[1], mask(m.split[k][1]))),
-                              _mm_shuffle_epi8(blk[2], mask(m.split[k][2])));
-    }
+    load_planes(m, src, x, plane);
     const __m128i l = _mm_loadu_si128(reinterpret_cast<const __m128i*>(layer + x));
-    const __m128i r = rot_reversed
-                          ? _mm_shuffle_epi8(_mm_loadu_si128(reinterpret_cast<const __m128i*>(rot + cols - 16 - x)),
-                                             reverse)
-                          : _mm_loadu_si128(reinterpret_cast<const __m128i*>(rot + x));
+    const __m128i r = load_rotated(rot, rot_reversed, cols, x);
     __m256i out[3][2];
     for (int h = 0; h < 2; ++h) {
       __m256 c[3];
@@ -262,14 +267,7 @@ __attribute__((target("avx2,fma"))) int blend_exact_avx2(const std::uint8_t* src
         out[k][h] = _mm256_set_m128i(hi, lo);
       }
     }
-    __m128i res[3];
-    for (int k = 0; k < 3; ++k) res[k] = narrow(out[k][0], out[k][1]);
-    for (int i = 0; i < 3; ++i) {
-      const __m128i v = _mm_or_si128(_mm_or_si128(_mm_shuffle_epi8(res[0], mask(m.merge[i][0])),
-                                                  _mm_shuffle_epi8(res[1], mask(m.merge[i][1]))),
-                                     _mm_shuffle_epi8(res[2], mask(m.merge[i][2])));
-      _mm_storeu_si128(reinterpret_cast<__m128i*>(dst + 3 * x + 16 * i), v);
-    }
+    store_planes(m, out, dst, x);
   }
   return x;
 }
