@@ -121,18 +121,29 @@ cv::Mat motion_blur_exact(const cv::Mat& bgr, int severity, double angle_deg) {
 
 namespace {
 
-// Source rows (columns [px0, px1)) converted once to half precision (exact for bytes) with `pad` pixels of edge-replicated margin on both
-// sides, kept in a ring indexed by input row (slot r mod size): every output row reads at most `size` consecutive
-// input rows, so each row is converted once per frame.
+// Source rows (columns [px0, px1)) converted once to half precision (exact for bytes) with `pad` pixels of
+// edge-replicated margin on both sides, kept in a ring indexed by input row (slot r mod size): every output row reads
+// at most `size` consecutive input rows, so each row is converted once per frame. Each converted row also gets its
+// pixel-change bitmap (bit p set where element p differs from the same channel one pixel to the left), which lets
+// the blur find stretches where every tap reads one colour without touching the rows.
 class HalfRowRing {
  public:
   HalfRowRing(const cv::Mat& src, int pad, int size, int px0, int px1)
       : src_(src), pad_(pad), size_(size), px0_(px0), px1_(px1) {
     const int ch = src.channels();
     stride_ = static_cast<std::size_t>(px1 - px0 + 2 * pad) * static_cast<std::size_t>(ch);
+    // Bitmap words up to element stride + 128, everything from element `stride` on set: a scan for the next
+    // change always stops there.
+    words_ = (stride_ + 128) / 64 + 1;
     thread_local std::vector<std::uint16_t> storage;  // reused per thread: no fresh buffer (page faults) per frame
-    storage.resize(stride_ * static_cast<std::size_t>(size));
+    thread_local std::vector<std::uint64_t> bit_storage;
+    thread_local std::vector<std::uint32_t> skip_storage;
+    storage.resize(stride_ * static_cast<std::size_t>(size) + 8);  // + 8: pixel loads of 8 bytes at the row end
+    bit_storage.resize(words_ * static_cast<std::size_t>(size));
+    skip_storage.resize(words_ * static_cast<std::size_t>(size));
     data_ = storage.data();
+    bits_ = bit_storage.data();
+    skip_ = skip_storage.data();
     tags_.assign(static_cast<std::size_t>(size), -1);
     slot_of_.resize(static_cast<std::size_t>(src.rows));
     for (int r = 0; r < src.rows; ++r) slot_of_[static_cast<std::size_t>(r)] = r % size;
@@ -161,18 +172,50 @@ class HalfRowRing {
       for (; x < px1_ + pad_; ++x, o += ch) {
         for (int c = 0; c < ch; ++c) o[c] = simd::half_of_byte(last[c]);
       }
+      std::uint64_t* b = bits_ + slot * words_;
+      std::fill(b + stride_ / 64, b + words_, ~std::uint64_t{0});
+      simd::period_change_bits(d, stride_, static_cast<std::size_t>(ch), b);
+      if (stride_ % 64 != 0) b[stride_ / 64] |= ~std::uint64_t{0} << (stride_ % 64);
+      std::uint32_t* k = skip_ + slot * words_;
+      auto next = static_cast<std::uint32_t>(words_ - 1);
+      for (std::size_t w = words_; w-- > 0;) {
+        if (b[w] != 0) next = static_cast<std::uint32_t>(w);
+        k[w] = next;
+      }
     }
     return d;
+  }
+  // Change bitmap of row r (valid after row(r)), in the same element indices, and per word the first word at or
+  // after it with a set bit.
+  const std::uint64_t* bits(int r) const {
+    return bits_ + static_cast<std::size_t>(slot_of_[static_cast<std::size_t>(r)]) * words_;
+  }
+  const std::uint32_t* skips(int r) const {
+    return skip_ + static_cast<std::size_t>(slot_of_[static_cast<std::size_t>(r)]) * words_;
   }
 
  private:
   const cv::Mat& src_;
   int pad_, size_, px0_, px1_;
-  std::size_t stride_ = 0;
+  std::size_t stride_ = 0, words_ = 0;
   std::uint16_t* data_ = nullptr;
+  std::uint64_t* bits_ = nullptr;
+  std::uint32_t* skip_ = nullptr;
   std::vector<int> tags_;
   std::vector<int> slot_of_;  // r % size, precomputed (a division per tap and row is measurable)
 };
+
+// First set bit at or after position q, given skip[w] = first word at or after w with a set bit (the bitmap's last
+// word is all ones).
+inline std::size_t next_set_bit(const std::uint64_t* bits, const std::uint32_t* skip, std::size_t q) {
+  std::size_t w = q / 64;
+  std::uint64_t m = bits[w] & (~std::uint64_t{0} << (q % 64));
+  if (m == 0) {
+    w = skip[w + 1];
+    m = bits[w];
+  }
+  return 64 * w + static_cast<std::size_t>(__builtin_ctzll(m));
+}
 
 cv::Mat blur_banded(const cv::Mat& bgr, int severity, double angle_deg, bool renormalise) {
   // float32 sums (8 lanes per AVX2 FMA, register-blocked, over rows converted to half precision once) decide every value
@@ -215,43 +258,116 @@ cv::Mat blur_banded(const cv::Mat& bgr, int severity, double angle_deg, bool ren
     for (int i = 0; i < taps; ++i) sum += wd[static_cast<std::size_t>(i)] * v;
     flat[v] = static_cast<std::int32_t>(std::min(std::max(sum, 0.0), 255.0));
   }
+  // Ambiguous values left by the kernel on [j_begin, j_end) of row `dst`.
+  auto resolve = [&](const std::uint16_t* const* rows_at, std::uint8_t* dst, std::size_t j_begin, std::size_t j_end) {
+    for (std::size_t j = j_begin; j < j_end; ++j) {
+      if (!ambiguous[j]) {
+        // Skip 8 clear flags at a time (ambiguous values are rare).
+        while (j + 8 <= j_end) {
+          std::uint64_t word = 0;
+          std::memcpy(&word, ambiguous.data() + j, 8);
+          if (word != 0) break;
+          j += 8;
+        }
+        if (j >= j_end || !ambiguous[j]) continue;
+      }
+      // Flat neighbourhoods (all taps equal) land exactly on the band; their exact value is tabulated.
+      const std::uint16_t first = rows_at[0][j];
+      int i = 1;
+      while (i < taps && rows_at[i][j] == first) ++i;
+      if (i == taps) {
+        dst[j] = static_cast<std::uint8_t>(flat[static_cast<int>(simd::byte_of_half(first))]);
+        continue;
+      }
+      // The half values are the bytes exactly, so this is the reference's sum of k_i * u8 value.
+      double sum = 0.0;
+      for (i = 0; i < taps; ++i) {
+        sum += wd[static_cast<std::size_t>(i)] * static_cast<double>(simd::byte_of_half(rows_at[i][j]));
+      }
+      dst[j] = static_cast<std::uint8_t>(std::min(std::max(sum, 0.0), 255.0));
+    }
+  };
   // Whole rows (measured faster than vertical strips with an L2-sized ring: the long row streams prefetch well).
+  // Each row is cut into flat stretches, where every tap reads one and the same colour (so every value is the
+  // tabulated flat result: no sums, no reads of the taps' rows), and the rest, summed by the kernel in whole blocks.
+  constexpr std::size_t kBlock = 64;      // the kernel's block
+  constexpr std::size_t kMinFlat = 64;    // shorter flat stretches are left to the kernel
+  const auto uch = static_cast<std::size_t>(ch);
+  std::vector<std::size_t> tap_offset(static_cast<std::size_t>(taps));  // element j of tap i is ring element j + offset
+  for (int i = 0; i < taps; ++i) {
+    tap_offset[static_cast<std::size_t>(i)] = static_cast<std::size_t>(pad - offsets[static_cast<std::size_t>(i)].dx) * uch;
+  }
+  std::vector<const std::uint64_t*> change(static_cast<std::size_t>(taps));
+  std::vector<const std::uint32_t*> skip(static_cast<std::size_t>(taps));
+  std::vector<const std::uint16_t*> shifted(static_cast<std::size_t>(taps));
   {
     HalfRowRing ring(bgr, pad, dy_max - dy_min + 1, 0, cols);
     for (int y = 0; y < rows; ++y) {
       for (int i = 0; i < taps; ++i) {
         const auto& o = offsets[static_cast<std::size_t>(i)];
         const int sy = std::clamp(y - o.dy, 0, rows - 1);
-        src[static_cast<std::size_t>(i)] = ring.row(sy) + static_cast<std::ptrdiff_t>(pad - o.dx) * ch;
+        src[static_cast<std::size_t>(i)] = ring.row(sy) + tap_offset[static_cast<std::size_t>(i)];
+        change[static_cast<std::size_t>(i)] = ring.bits(sy);
+        skip[static_cast<std::size_t>(i)] = ring.skips(sy);
       }
       std::uint8_t* dst = out.ptr<std::uint8_t>(y);
-      if (simd::weighted_rows_truncate(src.data(), wf.data(), wd.data(), taps, band, flat, dst, ambiguous.data(), n) == 0) continue;
-      for (std::size_t j = 0; j < n; ++j) {
-        if (!ambiguous[j]) {
-          // Skip 8 clear flags at a time (ambiguous values are rare).
-          while (j + 8 <= n) {
-            std::uint64_t word = 0;
-            std::memcpy(&word, ambiguous.data() + j, 8);
-            if (word != 0) break;
-            j += 8;
+      // End of the flat stretch starting at element a (a if there is none of at least kMinFlat): every tap's
+      // first pixel there equals tap 0's, and no tap's row changes pixel before the end.
+      auto flat_end = [&](std::size_t a) {
+        std::size_t end = n;
+        const std::uint16_t* ref = src[0] + a;
+        for (int i = taps - 1; i >= 0; --i) {  // the farthest tap first: it is the likeliest to differ
+          const auto t = static_cast<std::size_t>(i);
+          const std::uint16_t* first = src[t] + a;
+          for (std::size_t c = 0; c < uch; ++c) {
+            if (first[c] != ref[c]) return a;
           }
-          if (j >= n || !ambiguous[j]) continue;
+          const std::size_t off = tap_offset[t];
+          end = std::min(end, next_set_bit(change[t], skip[t], a + off + uch) - off);
+          if (end < a + kMinFlat) return a;
         }
-        // Flat neighbourhoods (all taps equal) land exactly on the band; their exact value is tabulated.
-        const std::uint16_t first = src[0][j];
-        int i = 1;
-        while (i < taps && src[static_cast<std::size_t>(i)][j] == first) ++i;
-        if (i == taps) {
-          dst[j] = static_cast<std::uint8_t>(flat[static_cast<int>(simd::byte_of_half(first))]);
+        return end;
+      };
+      // Kernel sums over [g0, g1), widened to whole blocks (into neighbouring flat stretches, which it recomputes
+      // to the same values) where the row is long enough.
+      auto sum_range = [&](std::size_t g0, std::size_t g1) {
+        const std::size_t len = (g1 - g0 + kBlock - 1) / kBlock * kBlock;
+        if (len > n) {
+          g0 = 0, g1 = n;
+        } else {
+          g0 = std::min(g0, n - len);
+          g1 = g0 + len;
+        }
+        for (int i = 0; i < taps; ++i) shifted[static_cast<std::size_t>(i)] = src[static_cast<std::size_t>(i)] + g0;
+        if (simd::weighted_rows_truncate(shifted.data(), wf.data(), wd.data(), taps, band, flat, dst + g0,
+                                         ambiguous.data() + g0, g1 - g0) != 0) {
+          resolve(src.data(), dst, g0, g1);
+        }
+      };
+      std::size_t a = 0, pending = n;  // pending: start of the stretch not yet summed (n: none)
+      while (a < n) {
+        const std::size_t b = flat_end(a);
+        if (b == a) {
+          if (pending == n) pending = a;
+          a = std::min(a + kBlock, n);
           continue;
         }
-        // The half values are the bytes exactly, so this is the reference's sum of k_i * u8 value.
-        double sum = 0.0;
-        for (i = 0; i < taps; ++i) {
-          sum += wd[static_cast<std::size_t>(i)] * static_cast<double>(simd::byte_of_half(src[static_cast<std::size_t>(i)][j]));
+        if (pending != n) sum_range(pending, a);
+        pending = n;
+        // Fill [a, b) with the flat results of tap 0's pixel: one pixel, then doubling copies (whole pixels).
+        const std::size_t len = b - a;
+        std::size_t done = std::min(len, uch);
+        for (std::size_t c = 0; c < done; ++c) {
+          dst[a + c] = static_cast<std::uint8_t>(flat[static_cast<int>(simd::byte_of_half(src[0][a + c]))]);
         }
-        dst[j] = static_cast<std::uint8_t>(std::min(std::max(sum, 0.0), 255.0));
+        while (done < len) {
+          const std::size_t chunk = std::min(done, len - done);
+          std::memcpy(dst + a + done, dst + a, chunk);
+          done += chunk;
+        }
+        a = b;
       }
+      if (pending != n) sum_range(pending, n);
     }
   }
   return out;

@@ -221,6 +221,29 @@ __attribute__((target("avx2,f16c"))) void u8_to_half_avx2(const std::uint8_t* sr
   *done = j;
 }
 
+// Words [w_begin, w_end) (each wholly inside n, with p - period >= 0 for every lane): 64 elements per word, two
+// 16-lane compares per 32 bits packed to bytes (lane order restored) for movemask.
+__attribute__((target("avx2"))) void period_change_bits_avx2(const std::uint16_t* src, std::size_t period,
+                                                             std::uint64_t* bits, std::size_t w_begin,
+                                                             std::size_t w_end) {
+  for (std::size_t w = w_begin; w < w_end; ++w) {
+    std::uint64_t word = 0;
+    for (int h = 0; h < 2; ++h) {
+      const std::uint16_t* p = src + 64 * w + 32 * h;
+      __m256i eq[2];
+      for (int k = 0; k < 2; ++k) {
+        const __m256i x = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(p + 16 * k));
+        const __m256i y = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(p + 16 * k - period));
+        eq[k] = _mm256_cmpeq_epi16(x, y);
+      }
+      const __m256i packed = _mm256_permute4x64_epi64(_mm256_packs_epi16(eq[0], eq[1]), 0xD8);
+      const auto m = static_cast<std::uint32_t>(_mm256_movemask_epi8(packed));
+      word |= static_cast<std::uint64_t>(~m) << (32 * h);
+    }
+    bits[w] = word;
+  }
+}
+
 bool have_avx2_fma_f16c() {
   static const bool yes =
       __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma") && __builtin_cpu_supports("f16c");
@@ -270,6 +293,28 @@ void u8_to_half(const std::uint8_t* src, std::uint16_t* dst, std::size_t n) {
   if (have_avx2_fma_f16c()) u8_to_half_avx2(src, dst, n, &j);
 #endif
   for (; j < n; ++j) dst[j] = half_of_byte(src[j]);
+}
+
+void period_change_bits(const std::uint16_t* src, std::size_t n, std::size_t period, std::uint64_t* bits) {
+  const std::size_t words = (n + 63) / 64;
+  auto scalar_words = [&](std::size_t w_begin, std::size_t w_end) {
+    for (std::size_t w = w_begin; w < w_end; ++w) {
+      std::uint64_t word = 0;
+      for (std::size_t p = 64 * w; p < std::min(n, 64 * w + 64); ++p) {
+        if (p >= period && src[p] != src[p - period]) word |= std::uint64_t{1} << (p - 64 * w);
+      }
+      bits[w] = word;
+    }
+  };
+#if defined(__GNUC__) && defined(__x86_64__)
+  if (have_avx2() && period <= 64 && n >= 128) {
+    scalar_words(0, 1);
+    period_change_bits_avx2(src, period, bits, 1, n / 64);
+    scalar_words(n / 64, words);
+    return;
+  }
+#endif
+  scalar_words(0, words);
 }
 
 std::size_t weighted_rows_truncate(const std::uint16_t* const* rows, const float* weights, const double* weights64,

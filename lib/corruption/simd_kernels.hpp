@@ -32,6 +32,10 @@ constexpr float byte_of_half(std::uint16_t h) {
 }
 void u8_to_half(const std::uint8_t* src, std::uint16_t* dst, std::size_t n);
 
+// Bit p of `bits` (64 per word, ceil(n / 64) words written) is set where p >= period and src[p] != src[p - period]:
+// a run of clear bits marks a stretch of a row that repeats one pixel (period = channels).
+void period_change_bits(const std::uint16_t* src, std::size_t n, std::size_t period, std::uint64_t* bits);
+
 // Fused blur + truncation over half-precision source rows (byte values): s = sum_i weights[i] * rows[i][j]
 // (float32, taps in order, fused multiply-adds where the CPU has FMA), then dst[j] = floor(s) clamped to 0..255
 // where floor(s - band) == floor(s + band) and s >= band; ambiguous[j] = 1 elsewhere (dst[j] is then to be

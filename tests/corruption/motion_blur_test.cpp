@@ -119,6 +119,40 @@ TEST(MotionBlurPathsTest, BandedPathsEqualFloat64OnNearFlatContent) {
   }
 }
 
+TEST(MotionBlurPathsTest, FlatStretchesEqualFloat64) {
+  // Rows are cut into stretches where every tap reads one colour (filled from the flat table without sums) and the
+  // rest. Colours that differ in one channel by 1, horizontal bands that change every few rows (flat along a row,
+  // not along the streak), 1-pixel stripes, saturated regions and edge columns that differ from their neighbours,
+  // at widths that are not a multiple of the block, a narrow image and one channel.
+  auto scene = [](int rows, int cols, int channels) {
+    cv::Mat img(rows, cols, CV_8UC(channels));
+    for (int y = 0; y < rows; ++y) {
+      for (int x = 0; x < cols; ++x) {
+        int v[3] = {10, 20, 30};
+        if (x >= cols / 3) v[2] = 31;                                  // one channel one step apart
+        if (y >= rows / 4 && y < rows / 2) v[0] = (y / 3) % 2 ? 200 : 199;  // bands along the rows
+        if (y >= rows / 2 && x < cols / 2) v[1] = 255, v[0] = 0;         // saturated block
+        if (y >= rows / 2 && x >= cols / 2 && x < cols / 2 + 24) v[2] = x % 2 ? 90 : 91;  // 1-pixel stripes
+        if (x == 0 || x == cols - 1) v[0] = 77;                         // edge columns
+        if (y == rows - 1 && x % 50 < 25) v[1] = 254;                    // bottom edge row
+        for (int c = 0; c < channels; ++c) img.ptr<uchar>(y)[x * channels + c] = static_cast<uchar>(v[c]);
+      }
+    }
+    return img;
+  };
+  for (const cv::Mat& img : {scene(150, 517, 3), scene(64, 45, 3), scene(97, 301, 1)}) {
+    for (int sev = 1; sev <= 5; ++sev) {
+      for (double angle : {-45.0, -30.0, -3.0, 0.0, 10.0, 44.99}) {
+        const cv::Mat exact = corruption::motion_blur_exact(img, sev, angle);
+        EXPECT_EQ(max_abs_diff(corruption::motion_blur_numpy(img, sev, angle), exact), 0.0)
+            << img.cols << "x" << img.rows << "x" << img.channels() << " severity " << sev << " angle " << angle;
+        EXPECT_EQ(max_abs_diff(corruption::motion_blur_fast(img, sev, angle), exact), 0.0)
+            << img.cols << "x" << img.rows << "x" << img.channels() << " severity " << sev << " angle " << angle;
+      }
+    }
+  }
+}
+
 TEST(MotionBlurAngleTest, OffsetsMatchManifest) {
   const auto doc = load_golden_json("manifest.json");
   int checked = 0;
