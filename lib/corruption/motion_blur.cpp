@@ -157,21 +157,19 @@ class HalfRowRing {
       tags_[slot] = r;
       const int ch = src_.channels(), cols = src_.cols;
       const std::uint8_t* s = src_.ptr<std::uint8_t>(r);
+      const std::uint8_t* last = s + static_cast<std::ptrdiff_t>(cols - 1) * ch;
+      std::uint16_t first_px[4], last_px[4];  // the replicated edge pixels (channels() <= 4)
+      for (int c = 0; c < ch; ++c) first_px[c] = simd::half_of_byte(s[c]), last_px[c] = simd::half_of_byte(last[c]);
       int x = px0_ - pad_;
       std::uint16_t* o = d;
-      for (; x < 0; ++x, o += ch) {
-        for (int c = 0; c < ch; ++c) o[c] = simd::half_of_byte(s[c]);
-      }
+      for (; x < 0; ++x, o += ch) std::copy(first_px, first_px + ch, o);
       const int body_end = std::min(px1_ + pad_, cols);
       if (body_end > x) {
         simd::u8_to_half(s + static_cast<std::ptrdiff_t>(x) * ch, o, static_cast<std::size_t>(body_end - x) * ch);
         o += static_cast<std::ptrdiff_t>(body_end - x) * ch;
         x = body_end;
       }
-      const std::uint8_t* last = s + static_cast<std::ptrdiff_t>(cols - 1) * ch;
-      for (; x < px1_ + pad_; ++x, o += ch) {
-        for (int c = 0; c < ch; ++c) o[c] = simd::half_of_byte(last[c]);
-      }
+      for (; x < px1_ + pad_; ++x, o += ch) std::copy(last_px, last_px + ch, o);
       std::uint64_t* b = bits_ + slot * words_;
       std::fill(b + stride_ / 64, b + words_, ~std::uint64_t{0});
       simd::period_change_bits(d, stride_, static_cast<std::size_t>(ch), b);
@@ -225,6 +223,7 @@ cv::Mat blur_banded(const cv::Mat& bgr, int severity, double angle_deg, bool ren
   const TabulatedKernel* k = find_tabulated_kernel(p.radius, p.sigma);
   const auto offsets = motion_offsets(angle_deg, k->width);
   const int rows = bgr.rows, cols = bgr.cols, ch = bgr.channels();
+  if (ch > 4) return blur_u8<double>(bgr, severity, angle_deg, renormalise);  // the ring and fills assume <= 4
   const int taps = usable_taps(offsets, rows, cols);
   double used = 0.0;
   for (int i = 0; i < taps; ++i) used += k->weights[i];
@@ -249,7 +248,7 @@ cv::Mat blur_banded(const cv::Mat& bgr, int severity, double angle_deg, bool ren
   }
   cv::Mat out(bgr.size(), bgr.type());
   const std::size_t n = static_cast<std::size_t>(cols) * static_cast<std::size_t>(ch);
-  std::vector<std::uint8_t> ambiguous(n);
+  std::vector<std::uint64_t> ambiguous(n / 64 + 1);
   std::vector<const std::uint16_t*> src(static_cast<std::size_t>(taps));
   // The exact float64 result of a flat neighbourhood of value v (same summation order as the exact path).
   std::int32_t flat[256];
@@ -258,33 +257,43 @@ cv::Mat blur_banded(const cv::Mat& bgr, int severity, double angle_deg, bool ren
     for (int i = 0; i < taps; ++i) sum += wd[static_cast<std::size_t>(i)] * v;
     flat[v] = static_cast<std::int32_t>(std::min(std::max(sum, 0.0), 255.0));
   }
-  // Ambiguous values left by the kernel on [j_begin, j_end) of row `dst`.
-  auto resolve = [&](const std::uint16_t* const* rows_at, std::uint8_t* dst, std::size_t j_begin, std::size_t j_end) {
-    for (std::size_t j = j_begin; j < j_end; ++j) {
-      if (!ambiguous[j]) {
-        // Skip 8 clear flags at a time (ambiguous values are rare).
-        while (j + 8 <= j_end) {
-          std::uint64_t word = 0;
-          std::memcpy(&word, ambiguous.data() + j, 8);
-          if (word != 0) break;
-          j += 8;
+  // The exact float64 sums of `count` <= 4 values of row `dst` (the reference's order: products rounded, then added),
+  // as independent chains: the add latency, not the arithmetic, bounds one sum.
+  auto exact_sums = [&](const std::uint16_t* const* rows_at, std::uint8_t* dst, const std::size_t* lane, int count) {
+    double sum[4] = {0.0, 0.0, 0.0, 0.0};
+    for (int i = 0; i < taps; ++i) {
+      const double w = wd[static_cast<std::size_t>(i)];
+      for (int q = 0; q < 4; ++q) sum[q] += w * static_cast<double>(simd::byte_of_half(rows_at[i][lane[q]]));
+    }
+    for (int q = 0; q < count; ++q) dst[lane[q]] = static_cast<std::uint8_t>(std::min(std::max(sum[q], 0.0), 255.0));
+  };
+  // Ambiguous values the kernel left on [j_begin, j_begin + 64 * words) of row `dst` (bit k of word w: value
+  // j_begin + 64 w + k).
+  auto resolve = [&](const std::uint16_t* const* rows_at, std::uint8_t* dst, std::size_t j_begin, std::size_t words) {
+    std::size_t lane[4];
+    int pending_sums = 0;
+    for (std::size_t w = 0; w < words; ++w) {
+      for (std::uint64_t m = ambiguous[w]; m != 0; m &= m - 1) {
+        const std::size_t j = j_begin + 64 * w + static_cast<std::size_t>(__builtin_ctzll(m));
+        // Flat neighbourhoods (all taps equal) land exactly on the band; their exact value is tabulated.
+        const std::uint16_t first = rows_at[0][j];
+        int i = 1;
+        while (i < taps && rows_at[i][j] == first) ++i;
+        if (i == taps) {
+          dst[j] = static_cast<std::uint8_t>(flat[static_cast<int>(simd::byte_of_half(first))]);
+          continue;
         }
-        if (j >= j_end || !ambiguous[j]) continue;
+        // The half values are the bytes exactly, so this is the reference's sum of k_i * u8 value.
+        lane[pending_sums++] = j;
+        if (pending_sums == 4) {
+          exact_sums(rows_at, dst, lane, 4);
+          pending_sums = 0;
+        }
       }
-      // Flat neighbourhoods (all taps equal) land exactly on the band; their exact value is tabulated.
-      const std::uint16_t first = rows_at[0][j];
-      int i = 1;
-      while (i < taps && rows_at[i][j] == first) ++i;
-      if (i == taps) {
-        dst[j] = static_cast<std::uint8_t>(flat[static_cast<int>(simd::byte_of_half(first))]);
-        continue;
-      }
-      // The half values are the bytes exactly, so this is the reference's sum of k_i * u8 value.
-      double sum = 0.0;
-      for (i = 0; i < taps; ++i) {
-        sum += wd[static_cast<std::size_t>(i)] * static_cast<double>(simd::byte_of_half(rows_at[i][j]));
-      }
-      dst[j] = static_cast<std::uint8_t>(std::min(std::max(sum, 0.0), 255.0));
+    }
+    if (pending_sums > 0) {
+      for (int q = pending_sums; q < 4; ++q) lane[q] = lane[0];  // padding lanes: summed, not stored
+      exact_sums(rows_at, dst, lane, pending_sums);
     }
   };
   // Whole rows (measured faster than vertical strips with an L2-sized ring: the long row streams prefetch well).
@@ -293,9 +302,11 @@ cv::Mat blur_banded(const cv::Mat& bgr, int severity, double angle_deg, bool ren
   constexpr std::size_t kBlock = 64;      // the kernel's block
   constexpr std::size_t kMinFlat = 64;    // shorter flat stretches are left to the kernel
   const auto uch = static_cast<std::size_t>(ch);
+  constexpr std::size_t kPattern = 48;  // flat fills: a multiple of every channel count 1..4
   std::vector<std::size_t> tap_offset(static_cast<std::size_t>(taps));  // element j of tap i is ring element j + offset
   for (int i = 0; i < taps; ++i) {
-    tap_offset[static_cast<std::size_t>(i)] = static_cast<std::size_t>(pad - offsets[static_cast<std::size_t>(i)].dx) * uch;
+    const auto t = static_cast<std::size_t>(i);
+    tap_offset[t] = static_cast<std::size_t>(pad - offsets[t].dx) * uch;
   }
   std::vector<const std::uint64_t*> change(static_cast<std::size_t>(taps));
   std::vector<const std::uint32_t*> skip(static_cast<std::size_t>(taps));
@@ -340,8 +351,8 @@ cv::Mat blur_banded(const cv::Mat& bgr, int severity, double angle_deg, bool ren
         }
         for (int i = 0; i < taps; ++i) shifted[static_cast<std::size_t>(i)] = src[static_cast<std::size_t>(i)] + g0;
         if (simd::weighted_rows_truncate(shifted.data(), wf.data(), wd.data(), taps, band, flat, dst + g0,
-                                         ambiguous.data() + g0, g1 - g0) != 0) {
-          resolve(src.data(), dst, g0, g1);
+                                         ambiguous.data(), g1 - g0) != 0) {
+          resolve(src.data(), dst, g0, (g1 - g0 + 63) / 64);
         }
       };
       std::size_t a = 0, pending = n;  // pending: start of the stretch not yet summed (n: none)
@@ -354,17 +365,15 @@ cv::Mat blur_banded(const cv::Mat& bgr, int severity, double angle_deg, bool ren
         }
         if (pending != n) sum_range(pending, a);
         pending = n;
-        // Fill [a, b) with the flat results of tap 0's pixel: one pixel, then doubling copies (whole pixels).
-        const std::size_t len = b - a;
-        std::size_t done = std::min(len, uch);
-        for (std::size_t c = 0; c < done; ++c) {
-          dst[a + c] = static_cast<std::uint8_t>(flat[static_cast<int>(simd::byte_of_half(src[0][a + c]))]);
+        // Fill [a, b) with the flat results of tap 0's pixel, 48 bytes (a whole number of pixels) at a time.
+        std::uint8_t pattern[kPattern];
+        for (std::size_t c = 0; c < uch; ++c) {
+          pattern[c] = static_cast<std::uint8_t>(flat[static_cast<int>(simd::byte_of_half(src[0][a + c]))]);
         }
-        while (done < len) {
-          const std::size_t chunk = std::min(done, len - done);
-          std::memcpy(dst + a + done, dst + a, chunk);
-          done += chunk;
-        }
+        for (std::size_t c = uch; c < kPattern; ++c) pattern[c] = pattern[c - uch];
+        std::uint8_t* d = dst + a;
+        for (; d + kPattern <= dst + b; d += kPattern) std::memcpy(d, pattern, kPattern);
+        std::memcpy(d, pattern, static_cast<std::size_t>(dst + b - d));
         a = b;
       }
       if (pending != n) sum_range(pending, n);

@@ -101,10 +101,11 @@ __attribute__((target("avx2,f16c"))) inline __m256i first_bytes(const std::uint1
   return _mm256_cvttps_epi32(_mm256_cvtph_ps(_mm_loadu_si128(reinterpret_cast<const __m128i*>(halves))));
 }
 
-// Stores 64 results (clamped to 0..255) and their ambiguity flags; counts the ambiguous ones.
+// Stores 64 results (clamped to 0..255) and their ambiguity mask (bit k: lane k); counts the ambiguous ones.
 __attribute__((target("avx2"))) inline void store_truncated(const __m256i* lo, const __m256i* badm, std::uint8_t* dst,
-                                                            std::uint8_t* ambiguous, std::size_t& bad_total) {
+                                                            std::uint64_t* ambiguous, std::size_t& bad_total) {
   const __m256i max255 = _mm256_set1_epi32(255);
+  std::uint64_t mask = 0;
   for (int v = 0; v < 8; v += 2) {
     __m256i q[2];
     for (int h = 0; h < 2; ++h) q[h] = _mm256_min_epi32(_mm256_max_epi32(lo[v + h], _mm256_setzero_si256()), max255);
@@ -113,14 +114,15 @@ __attribute__((target("avx2"))) inline void store_truncated(const __m256i* lo, c
     _mm_storeu_si128(reinterpret_cast<__m128i*>(dst + 8 * v), b8);
     const __m256i m16 = _mm256_permute4x64_epi64(_mm256_packs_epi32(badm[v], badm[v + 1]), 0xD8);
     const __m128i m8 = _mm_packs_epi16(_mm256_castsi256_si128(m16), _mm256_extracti128_si256(m16, 1));
-    _mm_storeu_si128(reinterpret_cast<__m128i*>(ambiguous + 8 * v), _mm_and_si128(m8, _mm_set1_epi8(1)));
-    bad_total += static_cast<std::size_t>(__builtin_popcount(static_cast<unsigned>(_mm_movemask_epi8(m8))));
+    mask |= static_cast<std::uint64_t>(static_cast<unsigned>(_mm_movemask_epi8(m8))) << (8 * v);
   }
+  *ambiguous = mask;
+  bad_total += static_cast<std::size_t>(__builtin_popcountll(mask));
 }
 
 __attribute__((target("avx2,fma,f16c"))) std::size_t weighted_rows_truncate_f16_avx2(
     const std::uint16_t* const* rows, const float* weights, const double* weights64, int taps, float band,
-    const std::int32_t* flat, std::uint8_t* dst, std::uint8_t* ambiguous, std::size_t n, std::size_t* count) {
+    const std::int32_t* flat, std::uint8_t* dst, std::uint64_t* ambiguous, std::size_t n, std::size_t* count) {
   constexpr std::size_t kBlock = 64;
   const __m256 vband = _mm256_set1_ps(band);
   const __m256 zero = _mm256_setzero_ps();
@@ -138,7 +140,7 @@ __attribute__((target("avx2,fma,f16c"))) std::size_t weighted_rows_truncate_f16_
           lo[v] = _mm256_i32gather_epi32(flat, first_bytes(rows[0] + j0 + 8 * v), 4);
           badm[v] = _mm256_setzero_si256();
         }
-        store_truncated(lo, badm, dst + j0, ambiguous + j0, bad_total);
+        store_truncated(lo, badm, dst + j0, ambiguous + j0 / kBlock, bad_total);
         continue;
       }
     }
@@ -187,24 +189,24 @@ __attribute__((target("avx2,fma,f16c"))) std::size_t weighted_rows_truncate_f16_
       for (int v = 0; v < 8; ++v) {
         const int m = _mm256_movemask_ps(_mm256_castsi256_ps(badm[v]));
         if (__builtin_popcount(static_cast<unsigned>(m)) < 2) continue;
+        // Both halves at once: two independent add chains (the chain's latency, not the arithmetic, is the cost).
+        __m256d acc[2] = {_mm256_setzero_pd(), _mm256_setzero_pd()};
+        for (int i = 0; i < taps; ++i) {
+          const __m256 x8 = _mm256_cvtph_ps(_mm_loadu_si128(reinterpret_cast<const __m128i*>(rows[i] + j0 + 8 * v)));
+          const __m256d k = _mm256_set1_pd(weights64[i]);
+          acc[0] = _mm256_add_pd(acc[0], _mm256_mul_pd(k, _mm256_cvtps_pd(_mm256_castps256_ps128(x8))));
+          acc[1] = _mm256_add_pd(acc[1], _mm256_mul_pd(k, _mm256_cvtps_pd(_mm256_extractf128_ps(x8, 1))));
+        }
         __m128i part[2];
         for (int h = 0; h < 2; ++h) {
-          part[h] = h == 0 ? _mm256_castsi256_si128(lo[v]) : _mm256_extracti128_si256(lo[v], 1);
-          if (((m >> (4 * h)) & 0xF) == 0) continue;
-          __m256d acc = _mm256_setzero_pd();
-          for (int i = 0; i < taps; ++i) {
-            const __m128i h4 = _mm_loadl_epi64(reinterpret_cast<const __m128i*>(rows[i] + j0 + 8 * v + 4 * h));
-            const __m256d x = _mm256_cvtps_pd(_mm_cvtph_ps(h4));
-            acc = _mm256_add_pd(acc, _mm256_mul_pd(_mm256_set1_pd(weights64[i]), x));
-          }
-          acc = _mm256_min_pd(_mm256_max_pd(acc, _mm256_setzero_pd()), _mm256_set1_pd(255.0));
-          part[h] = _mm256_cvttpd_epi32(acc);
+          const __m256d c = _mm256_min_pd(_mm256_max_pd(acc[h], _mm256_setzero_pd()), _mm256_set1_pd(255.0));
+          part[h] = _mm256_cvttpd_epi32(c);
         }
         lo[v] = _mm256_set_m128i(part[1], part[0]);
         badm[v] = _mm256_setzero_si256();
       }
     }
-    store_truncated(lo, badm, dst + j0, ambiguous + j0, bad_total);
+    store_truncated(lo, badm, dst + j0, ambiguous + j0 / kBlock, bad_total);
   }
   *count = bad_total;
   return j0;
@@ -318,8 +320,8 @@ void period_change_bits(const std::uint16_t* src, std::size_t n, std::size_t per
 }
 
 std::size_t weighted_rows_truncate(const std::uint16_t* const* rows, const float* weights, const double* weights64,
-                                   int taps, float band, const std::int32_t* flat, std::uint8_t* dst, std::uint8_t* ambiguous,
-                                   std::size_t n) {
+                                   int taps, float band, const std::int32_t* flat, std::uint8_t* dst,
+                                   std::uint64_t* ambiguous, std::size_t n) {
   std::size_t j0 = 0, count = 0;
 #if defined(__GNUC__) && defined(__x86_64__)
   if (have_avx2_fma_f16c()) {
@@ -327,6 +329,7 @@ std::size_t weighted_rows_truncate(const std::uint16_t* const* rows, const float
   }
 #endif
   for (std::size_t j = j0; j < n; ++j) {
+    if (j % 64 == 0) ambiguous[j / 64] = 0;
     float a = 0.0f;
     for (int i = 0; i < taps; ++i) a += weights[i] * byte_of_half(rows[i][j]);
     const float lo_f = a - band;
@@ -334,7 +337,7 @@ std::size_t weighted_rows_truncate(const std::uint16_t* const* rows, const float
     const int hi = static_cast<int>(a + band);
     const bool bad = (lo != hi) | (lo_f < 0.0f);
     dst[j] = static_cast<std::uint8_t>(std::min(std::max(lo, 0), 255));
-    ambiguous[j] = static_cast<std::uint8_t>(bad);
+    ambiguous[j / 64] |= static_cast<std::uint64_t>(bad) << (j % 64);
     count += bad;
   }
   return count;

@@ -38,15 +38,16 @@ void period_change_bits(const std::uint16_t* src, std::size_t n, std::size_t per
 
 // Fused blur + truncation over half-precision source rows (byte values): s = sum_i weights[i] * rows[i][j]
 // (float32, taps in order, fused multiply-adds where the CPU has FMA), then dst[j] = floor(s) clamped to 0..255
-// where floor(s - band) == floor(s + band) and s >= band; ambiguous[j] = 1 elsewhere (dst[j] is then to be
-// overwritten). `band` must bound |s - exact sum| (FMA only lowers the error). `flat` (or nullptr) holds, per byte
-// value v, the exact result where every tap is v: ambiguous values whose taps are all equal (checked tap by tap:
-// a near-flat neighbourhood can truncate the other way) are resolved from it instead of flagged. Returns the number
-// of values left ambiguous. With `weights64` (the float64 weights, or nullptr), dense ambiguous values may also be
-// resolved with the exact float64 sum (products rounded before each add, taps in order).
+// where floor(s - band) == floor(s + band) and s >= band; elsewhere bit j % 64 of ambiguous[j / 64] is set (dst[j]
+// is then to be overwritten; ambiguous holds ceil(n / 64) words). `band` must bound |s - exact sum| (FMA only
+// lowers the error). `flat` (or nullptr) holds, per byte value v, the exact result where every tap is v: ambiguous
+// values whose taps are all equal (checked tap by tap: a near-flat neighbourhood can truncate the other way) are
+// resolved from it instead of flagged. Returns the number of values left ambiguous. With `weights64` (the float64
+// weights, or nullptr), dense ambiguous values may also be resolved with the exact float64 sum (products rounded
+// before each add, taps in order).
 std::size_t weighted_rows_truncate(const std::uint16_t* const* rows, const float* weights, const double* weights64,
-                                   int taps, float band, const std::int32_t* flat, std::uint8_t* dst, std::uint8_t* ambiguous,
-                                   std::size_t n);
+                                   int taps, float band, const std::int32_t* flat, std::uint8_t* dst,
+                                   std::uint64_t* ambiguous, std::size_t n);
 
 // dst[j] = floor(acc[j]) clamped to 0..255 where floor(acc[j] - band) == floor(acc[j] + band) and acc[j] >= band;
 // ambiguous[j] = 1 elsewhere (dst[j] is then to be overwritten). Returns the number of ambiguous values.
