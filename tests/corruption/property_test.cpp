@@ -4,6 +4,7 @@
 
 #include <string>
 #include <tuple>
+#include <vector>
 
 #include "corruption/brightness.hpp"
 #include "corruption/color_quant.hpp"
@@ -185,7 +186,7 @@ TEST(DegenerateBehaviourTest, FogOnBlackStaysBlack) {
 
 TEST(BrightnessPathsTest, TablePathEqualsHsvMirrorOnEveryColourClass) {
   // Random colours plus every tie pattern (ch0 == ch1, ch0 == ch2, ch1 == ch2, all three), at every severity: the
-  // fast path tabulates two-channel ties, so each pattern must match the HSV mirror.
+  // fast path reads tied channels from the max/min roles, so each pattern must match the HSV mirror.
   cv::Mat img(128, 128, CV_8UC3);
   std::uint32_t s = 99;
   for (int y = 0; y < img.rows; ++y) {
@@ -219,6 +220,101 @@ TEST(BrightnessPathsTest, TablePathEqualsHsvMirrorOnEveryColour) {
   for (int sev = 1; sev <= 5; ++sev) {
     EXPECT_EQ(cv::norm(brightness_fast(all, sev), brightness_exact(all, sev), cv::NORM_INF), 0.0) << sev;
     EXPECT_EQ(cv::norm(brightness_fast(odd, sev), brightness_exact(odd, sev), cv::NORM_INF), 0.0) << sev;
+  }
+}
+
+// Max abs difference between the fast and the exact brightness path at one severity.
+double BrightnessFastVsExact(const cv::Mat& img, int severity) {
+  return cv::norm(brightness_fast(img, severity), brightness_exact(img, severity), cv::NORM_INF);
+}
+
+TEST(BrightnessPathsTest, TiedPixelsMatchHsvMirrorForEveryValuePair) {
+  // Every pixel with two equal channels: 3 tie patterns x tied value x other value, which covers ties at the max,
+  // ties at the min (also where p lies on a truncation boundary) and greys; the fast path gives them the max and
+  // min roles without a table of their own. One row per (pattern, tied value), so each 8-pixel step mixes several
+  // other values and grey runs start mid-row.
+  cv::Mat img(3 * 256, 256, CV_8UC3);
+  for (int pattern = 0; pattern < 3; ++pattern) {
+    for (int tied = 0; tied < 256; ++tied) {
+      auto* row = img.ptr<cv::Vec3b>(pattern * 256 + tied);
+      for (int other = 0; other < 256; ++other) {
+        const auto a = static_cast<uchar>(tied), b = static_cast<uchar>(other);
+        row[other] = pattern == 0 ? cv::Vec3b(a, a, b) : (pattern == 1 ? cv::Vec3b(b, a, a) : cv::Vec3b(a, b, a));
+      }
+    }
+  }
+  // The transposed image puts the same pixels in steps where the tied value varies instead.
+  const cv::Mat across = img.t();
+  for (int sev = 1; sev <= 5; ++sev) {
+    EXPECT_EQ(BrightnessFastVsExact(img, sev), 0.0) << "severity " << sev;
+    EXPECT_EQ(BrightnessFastVsExact(across, sev), 0.0) << "severity " << sev;
+  }
+}
+
+TEST(BrightnessPathsTest, MiddleChannelsOnATruncationBoundaryMatchHsvMirror) {
+  // Distinct channels whose middle value m has an integer closed form m * V2 / V * 255 (float noise then decides
+  // the truncation, and the fast path reads the HSV path's result from its ambiguity table): every such (v, m) at
+  // each severity, with min values 0, m / 2 and m - 1, in all six channel orders.
+  const int orders[6][3] = {{0, 1, 2}, {0, 2, 1}, {1, 0, 2}, {1, 2, 0}, {2, 0, 1}, {2, 1, 0}};
+  for (int sev = 1; sev <= 5; ++sev) {
+    const int k = 51 * sev;  // 510 * c: V2 * 255 = v + k / 2, saturating at 255
+    std::vector<cv::Vec3b> pixels;
+    for (int v = 2; v < 256; ++v) {
+      for (int m = 1; m < v; ++m) {
+        const int num = m * std::min(2 * v + k, 510), den = 2 * v;
+        if (num % den != 0) continue;
+        for (const int mn : {0, m / 2, m - 1}) {
+          for (const auto& order : orders) {
+            cv::Vec3b px;
+            px[order[0]] = static_cast<uchar>(v);
+            px[order[1]] = static_cast<uchar>(m);
+            px[order[2]] = static_cast<uchar>(mn);
+            pixels.push_back(px);
+          }
+        }
+      }
+    }
+    ASSERT_GT(pixels.size(), 1000u) << "severity " << sev;
+    const cv::Mat img(1, static_cast<int>(pixels.size()), CV_8UC3, pixels.data());
+    EXPECT_EQ(BrightnessFastVsExact(img, sev), 0.0) << "severity " << sev;
+  }
+}
+
+TEST(BrightnessPathsTest, FlatRegionsOfRenderedFramesMatchHsvMirror) {
+  // A rendered-looking frame: flat rectangles whose edges fall anywhere within the 8-pixel steps (the fast path
+  // reuses a step's output when the next step repeats its input), in colours that hit every table entry kind: the
+  // middle channel exactly on a truncation boundary in all six channel orders ((1, 48, 102): 48 * 153 / 102 = 72
+  // at severity 2, as in flat regions of our synthetic nuScenes frames), ties at the max and at the min, greys,
+  // black (the repeat check's initial state) and white; plus a noisy band and a stripe pattern repeating every 8
+  // pixels.
+  const std::vector<cv::Vec3b> colours = {
+      {1, 48, 102}, {1, 102, 48}, {48, 1, 102}, {48, 102, 1}, {102, 1, 48}, {102, 48, 1}, {234, 215, 194},
+      {70, 70, 70}, {12, 12, 88}, {102, 102, 48}, {48, 102, 102}, {0, 0, 0}, {255, 255, 255}, {24, 72, 0},
+      {0, 79, 166}, {39, 119, 0}, {255, 0, 255}, {40, 200, 240}};
+  cv::Mat img(181, 997, CV_8UC3, cv::Scalar::all(0));
+  std::uint32_t s = 7;
+  auto next = [&s] { return s = s * 1664525u + 1013904223u; };
+  for (int k = 0; k < 60; ++k) {
+    const int x = static_cast<int>(next() % 900), y = static_cast<int>(next() % 160);
+    const int w = 1 + static_cast<int>(next() % 300), h = 1 + static_cast<int>(next() % 90);
+    const cv::Vec3b c = colours[next() % colours.size()];
+    img(cv::Rect(x, y, std::min(w, img.cols - x), std::min(h, img.rows - y))).setTo(cv::Scalar(c[0], c[1], c[2]));
+  }
+  for (int y = 150; y < 160; ++y) {
+    for (int x = 0; x < img.cols; ++x) {
+      const std::uint32_t r = next();
+      img.at<cv::Vec3b>(y, x) = cv::Vec3b(static_cast<uchar>(r >> 8), static_cast<uchar>(r >> 16),
+                                          static_cast<uchar>(r >> 24));
+    }
+  }
+  for (int y = 165; y < 181; ++y) {
+    for (int x = 0; x < img.cols; ++x) img.at<cv::Vec3b>(y, x) = colours[static_cast<std::size_t>(x % 8)];
+  }
+  const cv::Mat black(40, 64, CV_8UC3, cv::Scalar::all(0));
+  for (int sev = 1; sev <= 5; ++sev) {
+    EXPECT_EQ(BrightnessFastVsExact(img, sev), 0.0) << "severity " << sev;
+    EXPECT_EQ(BrightnessFastVsExact(img(cv::Rect(5, 3, 611, 170)), sev), 0.0) << "severity " << sev;
+    EXPECT_EQ(BrightnessFastVsExact(black, sev), 0.0) << "severity " << sev;
   }
 }
 
