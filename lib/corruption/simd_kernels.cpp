@@ -91,11 +91,6 @@ __attribute__((target("avx2"))) inline void flat_lanes(const std::uint16_t* cons
   }
 }
 
-__attribute__((target("avx2"))) inline bool all_ones(const __m256i* eq) {
-  const __m256i all = _mm256_and_si256(_mm256_and_si256(eq[0], eq[1]), _mm256_and_si256(eq[2], eq[3]));
-  return _mm256_testc_si256(all, _mm256_set1_epi32(-1)) != 0;
-}
-
 // Eight half-precision byte values as int32.
 __attribute__((target("avx2,f16c"))) inline __m256i first_bytes(const std::uint16_t* halves) {
   return _mm256_cvttps_epi32(_mm256_cvtph_ps(_mm_loadu_si128(reinterpret_cast<const __m128i*>(halves))));
@@ -127,23 +122,10 @@ __attribute__((target("avx2,fma,f16c"))) std::size_t weighted_rows_truncate_f16_
   const __m256 vband = _mm256_set1_ps(band);
   const __m256 zero = _mm256_setzero_ps();
   std::size_t j0 = 0, bad_total = 0;
-  bool prev_flat = false;  // flat regions span many blocks: after a wholly flat block, test flatness first
+  // Wholly flat stretches are the caller's (motion blur fills them without sums); the blocks here are mixed.
   for (; j0 + kBlock <= n; j0 += kBlock) {
     __m256i eq[4];  // eq[c]: lanes j0 + 16c .. + 15 whose taps all equal the first tap's byte
-    bool have_eq = false;
     __m256i lo[8], badm[8];
-    if (flat != nullptr && prev_flat) {
-      flat_lanes(rows, taps, j0, eq);
-      have_eq = true;
-      if (all_ones(eq)) {  // the whole block is tabulated: no sums needed
-        for (int v = 0; v < 8; ++v) {
-          lo[v] = _mm256_i32gather_epi32(flat, first_bytes(rows[0] + j0 + 8 * v), 4);
-          badm[v] = _mm256_setzero_si256();
-        }
-        store_truncated(lo, badm, dst + j0, ambiguous + j0 / kBlock, bad_total);
-        continue;
-      }
-    }
     __m256 a[8];
     for (auto& v : a) v = _mm256_setzero_ps();
     for (int i = 0; i < taps; ++i) {
@@ -167,10 +149,8 @@ __attribute__((target("avx2,fma,f16c"))) std::size_t weighted_rows_truncate_f16_
     // Flat neighbourhoods (every tap the same byte) sit exactly on the band. Where a block has several ambiguous
     // values, they are almost always flat (synthetic and overexposed frames are full of them): resolve those here,
     // 16 lanes per compare, from the table of exact flat results, instead of one by one in the caller.
-    prev_flat = false;
     if (flat != nullptr && bad_lanes >= 4) {
-      if (!have_eq) flat_lanes(rows, taps, j0, eq);
-      prev_flat = all_ones(eq);
+      flat_lanes(rows, taps, j0, eq);
       for (int v = 0; v < 8; ++v) {
         const __m256i e = eq[v / 2];
         const __m256i flat_lane =
