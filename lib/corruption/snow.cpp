@@ -10,7 +10,6 @@
 #include <opencv2/core.hpp>
 
 #include "corruption/motion_kernel.hpp"
-#include "corruption/simd_kernels.hpp"
 #include "corruption/snow_kernels.hpp"
 #include "rng/lane_rng.hpp"
 
@@ -210,18 +209,14 @@ cv::Mat snow_layer_fast(const cv::Mat& crop_field, int rows, int cols, int sever
     std::fill(d + pad + lw, d + stride, d[pad + lw - 1]);
   }
   // Blur (edge clamp at the layer's own size) and quantise the top-left rows x cols.
-  cv::Mat out(rows, cols, CV_8U);
-  std::vector<float> acc(static_cast<std::size_t>(cols));
-  std::vector<const float*> src(static_cast<std::size_t>(taps));
-  for (int y = 0; y < rows; ++y) {
-    for (int i = 0; i < taps; ++i) {
-      const auto& o = offsets[static_cast<std::size_t>(i)];
-      src[static_cast<std::size_t>(i)] =
-          padded.data() + static_cast<std::size_t>(std::clamp(y - o.dy, 0, lh - 1)) * stride + (pad - o.dx);
-    }
-    simd::weighted_rows(acc.data(), src.data(), w.data(), taps, static_cast<std::size_t>(cols));
-    snow_kernels::quantise_row(acc.data(), out.ptr<std::uint8_t>(y), cols);
+  std::vector<int> dx(static_cast<std::size_t>(taps)), dy(static_cast<std::size_t>(taps));
+  for (int i = 0; i < taps; ++i) {
+    dx[static_cast<std::size_t>(i)] = offsets[static_cast<std::size_t>(i)].dx;
+    dy[static_cast<std::size_t>(i)] = offsets[static_cast<std::size_t>(i)].dy;
   }
+  cv::Mat out(rows, cols, CV_8U);
+  snow_kernels::blur_quantise(padded.data(), stride, lh, pad, dx.data(), dy.data(), w.data(), taps,
+                              out.ptr<std::uint8_t>(), out.step[0], rows, cols);
   return out;
 }
 

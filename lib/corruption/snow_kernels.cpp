@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <vector>
 
 #if defined(__GNUC__) && defined(__x86_64__)
 #include <immintrin.h>
@@ -89,20 +90,6 @@ __attribute__((target("avx2"))) void column_zoom_avx2(const float* src, float* d
   }
 }
 
-// Sixteen bytes -> two vectors of eight floats.
-__attribute__((target("avx2"))) inline void widen(__m128i bytes, __m256& lo, __m256& hi) {
-  lo = _mm256_cvtepi32_ps(_mm256_cvtepu8_epi32(bytes));
-  hi = _mm256_cvtepi32_ps(_mm256_cvtepu8_epi32(_mm_srli_si128(bytes, 8)));
-}
-
-__attribute__((target("avx2"))) inline __m256i blend8(__m256 c, __m256 bright, __m256 snow, __m256 b,
-                                                      __m256 one_minus_b) {
-  __m256 v = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(b, c), _mm256_mul_ps(one_minus_b, _mm256_max_ps(c, bright))),
-                           snow);
-  v = _mm256_min_ps(_mm256_max_ps(v, _mm256_setzero_ps()), _mm256_set1_ps(255.0f));
-  return _mm256_cvttps_epi32(v);
-}
-
 // Two vectors of eight int32 in 0..255 -> sixteen bytes.
 __attribute__((target("avx2"))) inline __m128i narrow(__m256i lo, __m256i hi) {
   const __m256i words = _mm256_permute4x64_epi64(_mm256_packus_epi32(lo, hi), 0xD8);
@@ -143,33 +130,56 @@ __attribute__((target("avx2"))) inline void store_planes(const Shuffles& m, cons
   }
 }
 
-// Whole blocks of 16 pixels; returns how many pixels it wrote.
+// Blocks of 8 pixels while the 28 bytes a block reads and writes stay inside the row; returns how many pixels it
+// wrote. Each 128-bit half holds four BGR pixels (12 bytes), so one in-lane pshufb per channel widens it straight to
+// int32, and one pshufb interleaves the results back. The arithmetic is blend_value's without its clamps: every term
+// is >= 0, and the unsigned saturating packs clamp to 255 after truncation, which gives the same byte.
 __attribute__((target("avx2"))) int blend_avx2(const std::uint8_t* src, const std::uint8_t* layer,
                                                const std::uint8_t* rot, bool rot_reversed, std::uint8_t* dst,
                                                int cols, float b, float one_minus_b) {
-  const Shuffles& m = shuffles();
   const __m256 bv = _mm256_set1_ps(b), omb = _mm256_set1_ps(one_minus_b);
   const __m256 w0 = _mm256_set1_ps(0.299f), w1 = _mm256_set1_ps(0.587f), w2 = _mm256_set1_ps(0.114f);
   const __m256 k15 = _mm256_set1_ps(1.5f), k1275 = _mm256_set1_ps(127.5f);
+  // Channel k of pixel p (bytes 3p + k of a half) -> int32 lane p.
+  __m256i split[3];
+  for (int k = 0; k < 3; ++k) {
+    split[k] = _mm256_setr_epi8(static_cast<char>(k), -1, -1, -1, static_cast<char>(3 + k), -1, -1, -1,
+                                static_cast<char>(6 + k), -1, -1, -1, static_cast<char>(9 + k), -1, -1, -1,
+                                static_cast<char>(k), -1, -1, -1, static_cast<char>(3 + k), -1, -1, -1,
+                                static_cast<char>(6 + k), -1, -1, -1, static_cast<char>(9 + k), -1, -1, -1);
+  }
+  // After the packs a half holds c0 of pixels 0-3, c1 of pixels 0-3, c2 of pixels 0-3 (and c2 again): interleave.
+  const __m256i merge = _mm256_setr_epi8(0, 4, 8, 1, 5, 9, 2, 6, 10, 3, 7, 11, -1, -1, -1, -1,
+                                         0, 4, 8, 1, 5, 9, 2, 6, 10, 3, 7, 11, -1, -1, -1, -1);
+  const __m128i reverse8 = _mm_setr_epi8(7, 6, 5, 4, 3, 2, 1, 0, -1, -1, -1, -1, -1, -1, -1, -1);
   int x = 0;
-  for (; x + 16 <= cols; x += 16) {
-    __m128i plane[3];
-    load_planes(m, src, x, plane);
-    const __m128i l = _mm_loadu_si128(reinterpret_cast<const __m128i*>(layer + x));
-    const __m128i r = load_rotated(rot, rot_reversed, cols, x);
-    const __m256i snow16 = _mm256_add_epi16(_mm256_cvtepu8_epi16(l), _mm256_cvtepu8_epi16(r));
-    const __m256 snow[2] = {_mm256_cvtepi32_ps(_mm256_cvtepu16_epi32(_mm256_castsi256_si128(snow16))),
-                            _mm256_cvtepi32_ps(_mm256_cvtepu16_epi32(_mm256_extracti128_si256(snow16, 1)))};
-    __m256 c[3][2];
-    for (int k = 0; k < 3; ++k) widen(plane[k], c[k][0], c[k][1]);
-    __m256i out[3][2];
-    for (int h = 0; h < 2; ++h) {
-      const __m256 grey = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(w0, c[0][h]), _mm256_mul_ps(w1, c[1][h])),
-                                        _mm256_mul_ps(w2, c[2][h]));
-      const __m256 bright = _mm256_add_ps(_mm256_mul_ps(grey, k15), k1275);
-      for (int k = 0; k < 3; ++k) out[k][h] = blend8(c[k][h], bright, snow[h], bv, omb);
+  for (; x + 10 <= cols; x += 8) {
+    const std::uint8_t* s = src + 3 * x;
+    const __m256i pix = _mm256_inserti128_si256(
+        _mm256_castsi128_si256(_mm_loadu_si128(reinterpret_cast<const __m128i*>(s))),
+        _mm_loadu_si128(reinterpret_cast<const __m128i*>(s + 12)), 1);
+    __m256 c[3];
+    for (int k = 0; k < 3; ++k) c[k] = _mm256_cvtepi32_ps(_mm256_shuffle_epi8(pix, split[k]));
+    const __m128i l = _mm_loadl_epi64(reinterpret_cast<const __m128i*>(layer + x));
+    const __m128i r = rot_reversed
+                          ? _mm_shuffle_epi8(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(rot + cols - 8 - x)),
+                                             reverse8)
+                          : _mm_loadl_epi64(reinterpret_cast<const __m128i*>(rot + x));
+    const __m256 snow = _mm256_cvtepi32_ps(_mm256_add_epi32(_mm256_cvtepu8_epi32(l), _mm256_cvtepu8_epi32(r)));
+    const __m256 grey =
+        _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(w0, c[0]), _mm256_mul_ps(w1, c[1])), _mm256_mul_ps(w2, c[2]));
+    const __m256 bright = _mm256_add_ps(_mm256_mul_ps(grey, k15), k1275);
+    __m256i v[3];
+    for (int k = 0; k < 3; ++k) {
+      v[k] = _mm256_cvttps_epi32(_mm256_add_ps(
+          _mm256_add_ps(_mm256_mul_ps(bv, c[k]), _mm256_mul_ps(omb, _mm256_max_ps(c[k], bright))), snow));
     }
-    store_planes(m, out, dst, x);
+    const __m256i bytes =
+        _mm256_packus_epi16(_mm256_packus_epi32(v[0], v[1]), _mm256_packus_epi32(v[2], v[2]));
+    const __m256i out = _mm256_shuffle_epi8(bytes, merge);
+    std::uint8_t* d = dst + 3 * x;
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(d), _mm256_castsi256_si128(out));
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(d + 12), _mm256_extracti128_si256(out, 1));
   }
   return x;
 }
@@ -272,6 +282,47 @@ __attribute__((target("avx2,fma"))) int blend_exact_avx2(const std::uint8_t* src
   return x;
 }
 
+// Whole blocks of 64 columns, row by row: sums in registers across all taps, then quantised as quantise_row does
+// (no accumulator row). Returns how many columns it wrote. (Strips of columns walked top to bottom, to keep the taps'
+// rows in L1, measured no faster.)
+__attribute__((target("avx2,fma"))) int blur_quantise_avx2(const float* padded, std::size_t stride, int lh, int pad,
+                                                           const int* dx, const int* dy, const float* w, int taps,
+                                                           std::uint8_t* dst, std::size_t dst_stride, int rows,
+                                                           int cols) {
+  constexpr int kVectors = 8, kBlock = 8 * kVectors;
+  const __m256 k255 = _mm256_set1_ps(255.0f), magic = _mm256_set1_ps(12582912.0f), zero = _mm256_setzero_ps();
+  const __m256i order = _mm256_setr_epi32(0, 4, 1, 5, 2, 6, 3, 7);
+  std::vector<const float*> row(static_cast<std::size_t>(taps));
+  const int whole = cols / kBlock * kBlock;
+  for (int y = 0; y < rows; ++y) {
+    for (int i = 0; i < taps; ++i) {
+      row[static_cast<std::size_t>(i)] =
+          padded + static_cast<std::size_t>(std::clamp(y - dy[i], 0, lh - 1)) * stride + (pad - dx[i]);
+    }
+    std::uint8_t* d = dst + static_cast<std::size_t>(y) * dst_stride;
+    for (int j0 = 0; j0 < whole; j0 += kBlock) {
+      __m256 s[kVectors];
+      for (auto& v : s) v = _mm256_setzero_ps();
+      for (int i = 0; i < taps; ++i) {
+        const float* r = row[static_cast<std::size_t>(i)] + j0;
+        const __m256 k = _mm256_broadcast_ss(w + i);
+        for (int v = 0; v < kVectors; ++v) s[v] = _mm256_fmadd_ps(k, _mm256_loadu_ps(r + 8 * v), s[v]);
+      }
+      __m256i q[kVectors];
+      for (int v = 0; v < kVectors; ++v) {
+        const __m256 r = _mm256_sub_ps(_mm256_add_ps(_mm256_mul_ps(s[v], k255), magic), magic);
+        q[v] = _mm256_cvttps_epi32(_mm256_min_ps(_mm256_max_ps(r, zero), k255));
+      }
+      for (int v = 0; v < kVectors; v += 4) {
+        const __m256i bytes = _mm256_packus_epi16(_mm256_packus_epi32(q[v], q[v + 1]),
+                                                  _mm256_packus_epi32(q[v + 2], q[v + 3]));
+        _mm256_storeu_si256(reinterpret_cast<__m256i*>(d + j0 + 8 * v), _mm256_permutevar8x32_epi32(bytes, order));
+      }
+    }
+  }
+  return whole;
+}
+
 bool has_avx2_fma() {
   static const bool yes = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
   return yes;
@@ -304,6 +355,30 @@ FAULTLINE_SNOW_FMA_CLONES void blend_exact_scalar(const std::uint8_t* src, const
       const float whitened = b * ch[k] + one_minus_b * std::max(ch[k], bright);
       const double v = (static_cast<double>(whitened) + snow) + snow_rot;
       dst[3 * x + k] = static_cast<std::uint8_t>(std::min(std::max(v, 0.0), 1.0) * 255.0);
+    }
+  }
+}
+
+inline std::uint8_t quantise_value(float v) {
+  constexpr float kMagic = 12582912.0f;  // adding and removing 1.5 * 2^23 rounds half to even
+  const float r = (v * 255.0f + kMagic) - kMagic;
+  return static_cast<std::uint8_t>(static_cast<int>(std::min(std::max(r, 0.0f), 255.0f)));
+}
+
+// Columns x0..cols of every row; std::fma is one instruction in the FMA clone (same value as the library call).
+FAULTLINE_SNOW_FMA_CLONES void blur_quantise_scalar(const float* padded, std::size_t stride, int lh, int pad,
+                                                    const int* dx, const int* dy, const float* w, int taps,
+                                                    std::uint8_t* dst, std::size_t dst_stride, int rows, int x0,
+                                                    int cols) {
+  for (int y = 0; y < rows; ++y) {
+    for (int x = x0; x < cols; ++x) {
+      float s = 0.0f;
+      for (int i = 0; i < taps; ++i) {
+        const float v = padded[static_cast<std::size_t>(std::clamp(y - dy[i], 0, lh - 1)) * stride +
+                               static_cast<std::size_t>(pad - dx[i] + x)];
+        s = std::fma(w[i], v, s);
+      }
+      dst[static_cast<std::size_t>(y) * dst_stride + static_cast<std::size_t>(x)] = quantise_value(s);
     }
   }
 }
@@ -387,11 +462,21 @@ FAULTLINE_SNOW_CLONES void lerp_threshold(const float* __restrict a, const float
 
 // Adding and removing 1.5 * 2^23 rounds half to even in the default rounding mode (nearbyint without a libm call).
 FAULTLINE_SNOW_CLONES void quantise_row(const float* __restrict src, std::uint8_t* __restrict dst, int n) {
-  constexpr float kMagic = 12582912.0f;
-  for (int x = 0; x < n; ++x) {
-    const float r = (src[x] * 255.0f + kMagic) - kMagic;
-    dst[x] = static_cast<std::uint8_t>(static_cast<int>(std::min(std::max(r, 0.0f), 255.0f)));
+  for (int x = 0; x < n; ++x) dst[x] = quantise_value(src[x]);
+}
+
+void blur_quantise(const float* padded, std::size_t stride, int lh, int pad, const int* dx, const int* dy,
+                   const float* w, int taps, std::uint8_t* dst, std::size_t dst_stride, int rows, int cols,
+                   bool allow_simd) {
+  int x0 = 0;
+#ifdef FAULTLINE_SNOW_AVX2
+  if (allow_simd && has_avx2_fma()) {
+    x0 = blur_quantise_avx2(padded, stride, lh, pad, dx, dy, w, taps, dst, dst_stride, rows, cols);
   }
+#else
+  (void)allow_simd;
+#endif
+  blur_quantise_scalar(padded, stride, lh, pad, dx, dy, w, taps, dst, dst_stride, rows, x0, cols);
 }
 
 void blend_fast_row(const std::uint8_t* src, const std::uint8_t* layer, const std::uint8_t* rot, bool rot_reversed,
