@@ -55,8 +55,7 @@ Result<cv::Mat> corrupt(const cv::Mat& bgr, Corruption type, int severity, rng::
       return motion_blur_fast(bgr, severity, angle);
     }
     case Corruption::Fog: {
-      const FogParams p = fog_params(severity);
-      return fog_blend_fast(bgr, fog_field_fast(bgr.rows, bgr.cols, p.decay, rng), p.strength);
+      return fog_fast(bgr, severity, rng);
     }
     case Corruption::Snow: return snow_fast(bgr, severity, rng);
     case Corruption::Dark: return dark_fast(bgr, severity, rng);

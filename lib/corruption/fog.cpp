@@ -15,10 +15,13 @@
 namespace faultline::corruption {
 namespace {
 
+// The largest byte of a CV_8UC3 image (a vector scan that stops at the first 255).
 double image_max(const cv::Mat& bgr) {
-  double max_u8 = 0.0;
-  cv::minMaxLoc(bgr.reshape(1), nullptr, &max_u8);
-  return max_u8;
+  const std::size_t row_bytes = static_cast<std::size_t>(bgr.cols) * 3;
+  if (bgr.isContinuous()) return fog_max_u8(bgr.data, row_bytes * static_cast<std::size_t>(bgr.rows), 0);
+  std::uint8_t mx = 0;
+  for (int y = 0; y < bgr.rows && mx < 255; ++y) mx = fog_max_u8(bgr.ptr<std::uint8_t>(y), row_bytes, mx);
+  return mx;
 }
 
 // The blend constants of the float32 blend, in the 0..255 domain.
@@ -62,12 +65,23 @@ class FastField {
       }
     }
   }
+  // Row y of the field as a * wa + b * wb, or a alone (b == nullptr) on a stored row.
+  struct Lerp {
+    const float* a;
+    const float* b;
+    float wa, wb;
+  };
+  Lerp lerp(int y) const {
+    const int r = y / factor_, k = y % factor_;
+    if (k == 0) return {horiz_.ptr<float>(r), nullptr, 1.0f, 0.0f};
+    const float t = static_cast<float>(k) / static_cast<float>(factor_);
+    return {horiz_.ptr<float>(r), horiz_.ptr<float>(r + 1 == lr_ ? 0 : r + 1), 1.0f - t, t};
+  }
   // Row y of the field: a stored row, or the lerp of two into out (cols floats).
   const float* row(int y, float* out) const {
-    const int r = y / factor_, k = y % factor_;
-    if (k == 0) return horiz_.ptr<float>(r);
-    const float t = static_cast<float>(k) / static_cast<float>(factor_);
-    fog_lerp_row(horiz_.ptr<float>(r), horiz_.ptr<float>(r + 1 == lr_ ? 0 : r + 1), out, cols_, 1.0f - t, t);
+    const Lerp l = lerp(y);
+    if (!l.b) return l.a;
+    fog_lerp_row(l.a, l.b, out, cols_, l.wa, l.wb);
     return out;
   }
 
@@ -150,11 +164,16 @@ cv::Mat fog_fast(const cv::Mat& bgr, int severity, rng::FastRng& rng) {
   const FogParams p = fog_params(severity);
   const FastField field(bgr.rows, bgr.cols, p.decay, rng);
   const FastBlend b = fast_blend(bgr, p.strength);
-  std::vector<float> row(static_cast<std::size_t>(bgr.cols));
   cv::Mat out(bgr.size(), bgr.type());
   for (int y = 0; y < bgr.rows; ++y) {
-    fog_blend_fast_row(bgr.ptr<std::uint8_t>(y), field.row(y, row.data()), out.ptr<std::uint8_t>(y), bgr.cols,
-                       b.scale, b.add_scale);
+    const std::uint8_t* src = bgr.ptr<std::uint8_t>(y);
+    std::uint8_t* dst = out.ptr<std::uint8_t>(y);
+    const auto l = field.lerp(y);
+    if (l.b) {
+      fog_blend_fast_lerp_row(src, l.a, l.b, dst, bgr.cols, l.wa, l.wb, b.scale, b.add_scale);
+    } else {
+      fog_blend_fast_row(src, l.a, dst, bgr.cols, b.scale, b.add_scale);
+    }
   }
   return out;
 }

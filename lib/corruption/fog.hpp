@@ -46,7 +46,7 @@ cv::Mat fog_blend_fast(const cv::Mat& bgr, const cv::Mat& field, double strength
 cv::Mat fog_field_fast(int rows, int cols, double decay, rng::FastRng& rng);
 
 // fast-mode fog in one call: the same bytes as fog_blend_fast(bgr, fog_field_fast(...)) without the full-size
-// field (each row is upsampled into a row buffer and blended).
+// field (the vertical lerp of two horizontally upsampled rows happens inside the blend, in registers).
 cv::Mat fog_fast(const cv::Mat& bgr, int severity, rng::FastRng& rng);
 
 // Upsamples a low-resolution toroidal map (CV_32F or CV_64F, values in [0, 1]) by `factor` and returns the

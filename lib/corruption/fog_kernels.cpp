@@ -11,6 +11,7 @@
 #define FAULTLINE_FOG_AVX2 1
 #define FAULTLINE_TARGET_AVX2 __attribute__((target("avx2")))
 #define FAULTLINE_AVX2_INLINE __attribute__((target("avx2"), always_inline)) inline
+#define FAULTLINE_AVX2_LAMBDA __attribute__((target("avx2"), always_inline))
 #else
 #define FAULTLINE_FOG_AVX2 0
 #endif
@@ -66,15 +67,29 @@ void upsample4_scalar(const float* low, float* out, int x, int count) {
     out[x] = x % 4 == 0 ? low[c] : low[c] * (1.0f - t) + low[c + 1] * t;
   }
 }
-void blend_fast_scalar(const std::uint8_t* src, const float* f, std::uint8_t* dst, int x, int cols, float scale,
-                       float add_scale) {
+// Pixels [x, cols) with field values field(x).
+template <typename Field>
+void blend_fast_scalar(const std::uint8_t* src, std::uint8_t* dst, int x, int cols, float scale, float add_scale,
+                       Field field) {
   for (; x < cols; ++x) {
-    const float a = add_scale * f[x];
+    const float a = add_scale * field(x);
     for (int c = 0; c < 3; ++c) {
       const float v = static_cast<float>(src[3 * x + c]) * scale + a;
       dst[3 * x + c] = static_cast<std::uint8_t>(static_cast<int>(std::min(std::max(v, 0.0f), 255.0f)));
     }
   }
+}
+void blend_fast_scalar(const std::uint8_t* src, const float* f, std::uint8_t* dst, int x, int cols, float scale,
+                       float add_scale) {
+  blend_fast_scalar(src, dst, x, cols, scale, add_scale, [f](int i) { return f[i]; });
+}
+void blend_fast_lerp_scalar(const std::uint8_t* src, const float* fa, const float* fb, std::uint8_t* dst, int x,
+                            int cols, float wa, float wb, float scale, float add_scale) {
+  blend_fast_scalar(src, dst, x, cols, scale, add_scale, [=](int i) { return fa[i] * wa + fb[i] * wb; });
+}
+std::uint8_t max_u8_scalar(const std::uint8_t* p, std::size_t count, std::uint8_t mx) {
+  for (std::size_t i = 0; i < count; ++i) mx = std::max(mx, p[i]);
+  return mx;
 }
 
 #if FAULTLINE_FOG_AVX2
@@ -280,16 +295,17 @@ FAULTLINE_TARGET_AVX2 void blend_exact_pairs_avx2(const std::uint8_t* src, const
   blend_exact_scalar(src, dst, x, cols, b, [even, odd](int i) { return i % 2 ? odd[i / 2] : even[i / 2]; });
 }
 
-// trunc(clamp(src * scale + add, 0, 255)) for eight bytes.
+// trunc(src * scale + add) for eight bytes, as int32. No clamps: scale, add >= 0 keep v >= 0 and v stays far
+// below 2^31, and the caller's saturating packs turn every v >= 255 into 255, as clamping first would.
 FAULTLINE_AVX2_INLINE __m256i fast_channel(const std::uint8_t* s, __m256 add, __m256 vscale) {
   const __m256i b = _mm256_cvtepu8_epi32(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(s)));
-  const __m256 v = _mm256_add_ps(_mm256_mul_ps(_mm256_cvtepi32_ps(b), vscale), add);
-  return _mm256_cvttps_epi32(_mm256_min_ps(_mm256_max_ps(v, _mm256_setzero_ps()), _mm256_set1_ps(255.0f)));
+  return _mm256_cvttps_epi32(_mm256_add_ps(_mm256_mul_ps(_mm256_cvtepi32_ps(b), vscale), add));
 }
 
-// Eight pixels (24 values) per step.
-FAULTLINE_TARGET_AVX2 void blend_fast_avx2(const std::uint8_t* src, const float* f, std::uint8_t* dst, int cols,
-                                           float scale, float add_scale) {
+// Eight pixels (24 values) per step; field(x) loads the field values of pixels x .. x + 7.
+template <typename Field>
+FAULTLINE_AVX2_INLINE void blend_fast_body(const std::uint8_t* src, std::uint8_t* dst, int cols, float scale,
+                                           float add_scale, Field field, int* done) {
   const __m256 vscale = _mm256_set1_ps(scale), vadd = _mm256_set1_ps(add_scale);
   const __m256i p0 = _mm256_setr_epi32(0, 0, 0, 1, 1, 1, 2, 2);
   const __m256i p1 = _mm256_setr_epi32(2, 3, 3, 3, 4, 4, 4, 5);
@@ -297,7 +313,7 @@ FAULTLINE_TARGET_AVX2 void blend_fast_avx2(const std::uint8_t* src, const float*
   int x = 0;
   for (; x + 8 <= cols; x += 8) {
     const std::uint8_t* s = src + 3 * x;
-    const __m256 a = _mm256_mul_ps(vadd, _mm256_loadu_ps(f + x));
+    const __m256 a = _mm256_mul_ps(vadd, field(x));
     const __m256i i0 = fast_channel(s, _mm256_permutevar8x32_ps(a, p0), vscale);
     const __m256i i1 = fast_channel(s + 8, _mm256_permutevar8x32_ps(a, p1), vscale);
     const __m256i i2 = fast_channel(s + 16, _mm256_permutevar8x32_ps(a, p2), vscale);
@@ -309,7 +325,54 @@ FAULTLINE_TARGET_AVX2 void blend_fast_avx2(const std::uint8_t* src, const float*
     _mm_storeu_si128(reinterpret_cast<__m128i*>(d), _mm256_castsi256_si128(b));
     _mm_storel_epi64(reinterpret_cast<__m128i*>(d + 16), _mm256_extracti128_si256(b, 1));
   }
+  *done = x;
+}
+
+FAULTLINE_TARGET_AVX2 void blend_fast_avx2(const std::uint8_t* src, const float* f, std::uint8_t* dst, int cols,
+                                           float scale, float add_scale) {
+  int x = 0;
+  blend_fast_body(
+      src, dst, cols, scale, add_scale, [f](int i) FAULTLINE_AVX2_LAMBDA { return _mm256_loadu_ps(f + i); }, &x);
   blend_fast_scalar(src, f, dst, x, cols, scale, add_scale);
+}
+
+// The field row as fa * wa + fb * wb (two products, then the sum: lerp_avx2's rounding), never stored.
+FAULTLINE_TARGET_AVX2 void blend_fast_lerp_avx2(const std::uint8_t* src, const float* fa, const float* fb,
+                                                std::uint8_t* dst, int cols, float wa, float wb, float scale,
+                                                float add_scale) {
+  const __m256 va = _mm256_set1_ps(wa), vb = _mm256_set1_ps(wb);
+  int x = 0;
+  blend_fast_body(
+      src, dst, cols, scale, add_scale,
+      [=](int i) FAULTLINE_AVX2_LAMBDA {
+        return _mm256_add_ps(_mm256_mul_ps(_mm256_loadu_ps(fa + i), va), _mm256_mul_ps(_mm256_loadu_ps(fb + i), vb));
+      },
+      &x);
+  blend_fast_lerp_scalar(src, fa, fb, dst, x, cols, wa, wb, scale, add_scale);
+}
+
+// Byte maximum, 128 bytes per step; stops at the first 4 KB block that reaches 255 (nothing is larger).
+FAULTLINE_TARGET_AVX2 std::uint8_t max_u8_avx2(const std::uint8_t* p, std::size_t count, std::uint8_t mx) {
+  const __m256i all = _mm256_set1_epi8(static_cast<char>(0xFF));
+  __m256i m = _mm256_set1_epi8(static_cast<char>(mx));
+  std::size_t i = 0;
+  while (i + 128 <= count) {
+    const std::size_t end = std::min(count - count % 128, i + 4096);
+    __m256i m0 = m, m1 = m, m2 = m, m3 = m;
+    for (; i < end; i += 128) {
+      const auto* v = reinterpret_cast<const __m256i*>(p + i);
+      m0 = _mm256_max_epu8(m0, _mm256_loadu_si256(v));
+      m1 = _mm256_max_epu8(m1, _mm256_loadu_si256(v + 1));
+      m2 = _mm256_max_epu8(m2, _mm256_loadu_si256(v + 2));
+      m3 = _mm256_max_epu8(m3, _mm256_loadu_si256(v + 3));
+    }
+    m = _mm256_max_epu8(_mm256_max_epu8(m0, m1), _mm256_max_epu8(m2, m3));
+    if (_mm256_movemask_epi8(_mm256_cmpeq_epi8(m, all)) != 0) return 0xFF;
+  }
+  alignas(32) std::uint8_t lanes[32];
+  _mm256_store_si256(reinterpret_cast<__m256i*>(lanes), m);
+  for (std::uint8_t v : lanes) mx = std::max(mx, v);
+  return max_u8_scalar(p + i, count - i, mx);
 }
 
 // Eight low values -> 32 outputs: the four phases as vectors, then a 4 x 8 transpose.
@@ -430,6 +493,21 @@ void fog_blend_fast_row(const std::uint8_t* src, const float* f, std::uint8_t* d
   if (have_avx2()) return blend_fast_avx2(src, f, dst, cols, scale, add_scale);
 #endif
   blend_fast_scalar(src, f, dst, 0, cols, scale, add_scale);
+}
+
+void fog_blend_fast_lerp_row(const std::uint8_t* src, const float* fa, const float* fb, std::uint8_t* dst, int cols,
+                             float wa, float wb, float scale, float add_scale) {
+#if FAULTLINE_FOG_AVX2
+  if (have_avx2()) return blend_fast_lerp_avx2(src, fa, fb, dst, cols, wa, wb, scale, add_scale);
+#endif
+  blend_fast_lerp_scalar(src, fa, fb, dst, 0, cols, wa, wb, scale, add_scale);
+}
+
+std::uint8_t fog_max_u8(const std::uint8_t* p, std::size_t count, std::uint8_t mx) {
+#if FAULTLINE_FOG_AVX2
+  if (have_avx2()) return max_u8_avx2(p, count, mx);
+#endif
+  return max_u8_scalar(p, count, mx);
 }
 
 void fog_upsample4_row(const float* low, float* out, int count) {

@@ -3,6 +3,7 @@
 // exactly as the reference's float64 expression does (no FMA), so numpy mode stays bit-exact on either path.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 
 namespace faultline::corruption {
@@ -54,6 +55,14 @@ void fog_blend_exact_pairs(const std::uint8_t* src, const double* even, const do
 // One row of the float32 blend: dst = trunc(clamp(src * scale + add_scale * f, 0, 255)).
 void fog_blend_fast_row(const std::uint8_t* src, const float* f, std::uint8_t* dst, int cols, float scale,
                         float add_scale);
+
+// fog_blend_fast_row with the field row f = fa * wa + fb * wb computed as fog_lerp_row computes it (the same
+// bytes as fog_lerp_row into a buffer, then fog_blend_fast_row), without storing it.
+void fog_blend_fast_lerp_row(const std::uint8_t* src, const float* fa, const float* fb, std::uint8_t* dst, int cols,
+                             float wa, float wb, float scale, float add_scale);
+
+// max(mx, p[0], ..., p[count - 1]); may return 255 as soon as it has seen one.
+std::uint8_t fog_max_u8(const std::uint8_t* p, std::size_t count, std::uint8_t mx);
 
 // The horizontal step of the fast field's bilinear upsampling by 4 (corner-aligned): out[4c + t] =
 // low[c] * (1 - t/4) + low[c + 1] * (t/4) for 4c + t < count. Reads low[0 .. (count - 1) / 4 + 1].

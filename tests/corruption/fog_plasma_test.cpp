@@ -10,6 +10,7 @@
 #include <opencv2/core.hpp>
 
 #include "corruption/fog.hpp"
+#include "corruption/fog_kernels.hpp"
 #include "rng/fast_rng.hpp"
 #include "rng/numpy_legacy.hpp"
 
@@ -177,7 +178,8 @@ TEST(FogBlendExactTest, MatchesTheSpecBlendOnTruncationBoundaries) {
 }
 
 TEST(FogFastTest, FusedEqualsFieldThenBlend) {
-  for (const cv::Size size : {cv::Size(1600, 900), cv::Size(333, 197), cv::Size(40, 33), cv::Size(63, 64)}) {
+  for (const cv::Size size :
+       {cv::Size(1600, 900), cv::Size(333, 197), cv::Size(40, 33), cv::Size(63, 64), cv::Size(7, 70)}) {
     const cv::Mat img = RandomImage(size.height, size.width, 9);
     for (int sev = 1; sev <= 5; ++sev) {
       const FogParams p = fog_params(sev);
@@ -185,6 +187,67 @@ TEST(FogFastTest, FusedEqualsFieldThenBlend) {
       const cv::Mat two_step = fog_blend_fast(img, fog_field_fast(img.rows, img.cols, p.decay, a), p.strength);
       EXPECT_EQ(MaxAbsDiff(fog_fast(img, sev, b), two_step), 0.0) << size << " sev " << sev;
     }
+  }
+}
+
+// The float32 blend against its scalar expression, trunc(clamp(src * scale + add_scale * f, 0, 255)) with
+// scale = m / (m + a) and m the image maximum / 255 (the vector body drops the clamps and lets the packs saturate).
+// The images' maxima stay below 255, and one sits in the last row, so the max scan cannot stop early.
+TEST(FogFastTest, BlendMatchesItsScalarExpression) {
+  for (const cv::Size size : {cv::Size(1600, 900), cv::Size(333, 197), cv::Size(7, 5)}) {
+    for (int top : {0, 1, 200, 254}) {
+      cv::Mat img = RandomImage(size.height, size.width, static_cast<std::uint64_t>(top + size.width));
+      img = img * (top / 255.0);  // saturate_cast rounds: values in 0 .. top
+      img.at<cv::Vec3b>(size.height - 1, size.width - 1)[2] = static_cast<std::uint8_t>(top);
+      cv::Mat field(size, CV_32F);
+      cv::RNG(5).fill(field, cv::RNG::UNIFORM, 0.0f, 1.0f);
+      field.at<float>(0, 0) = 1.0f;
+      for (double strength : {1.5, 3.0}) {
+        const float m = static_cast<float>(top / 255.0);
+        const float scale = m / (m + static_cast<float>(strength));
+        const float add_scale = static_cast<float>(strength) * 255.0f * scale;
+        cv::Mat want(size, CV_8UC3);
+        for (int y = 0; y < size.height; ++y) {
+          for (int x = 0; x < size.width; ++x) {
+            const float a = add_scale * field.at<float>(y, x);
+            for (int c = 0; c < 3; ++c) {
+              const float v = static_cast<float>(img.at<cv::Vec3b>(y, x)[c]) * scale + a;
+              want.at<cv::Vec3b>(y, x)[c] = static_cast<std::uint8_t>(std::min(std::max(v, 0.0f), 255.0f));
+            }
+          }
+        }
+        EXPECT_EQ(MaxAbsDiff(fog_blend_fast(img, field, strength), want), 0.0) << size << " top " << top;
+      }
+    }
+  }
+}
+
+// The image maximum scan: every length and alignment around the 128-byte steps and 4 KB blocks, with and without
+// a 255 (which may end the scan), against std::max_element; and a non-continuous view gives its own maximum.
+TEST(FogFastTest, ByteMaximumMatchesMaxElement) {
+  std::vector<std::uint8_t> buf(9008);
+  cv::RNG rng(3);
+  for (int len : {0, 1, 31, 127, 128, 129, 4095, 4096, 4097, 4224, 8191, 8999}) {
+    for (int off : {0, 1, 7}) {
+      for (auto& v : buf) v = static_cast<std::uint8_t>(rng.uniform(0, 200));
+      const auto* p = buf.data() + off;
+      if (len > 0) buf[static_cast<std::size_t>(off + rng.uniform(0, len))] = 231;
+      EXPECT_EQ(fog_max_u8(p, static_cast<std::size_t>(len), 0), len ? 231 : 0) << len << " " << off;
+      EXPECT_EQ(fog_max_u8(p, static_cast<std::size_t>(len), 240), 240) << len << " " << off;
+      if (len > 0) {
+        buf[static_cast<std::size_t>(off + len - 1)] = 255;
+        EXPECT_EQ(fog_max_u8(p, static_cast<std::size_t>(len), 0), 255) << len << " " << off;
+      }
+    }
+  }
+  // The parent's 255 lies outside the view; the view's maximum is 254, in its last row.
+  cv::Mat parent(300, 500, CV_8UC3, cv::Scalar(10, 20, 30));
+  parent.at<cv::Vec3b>(0, 499)[0] = 255;
+  const cv::Mat view = parent(cv::Rect(0, 0, 400, 300));
+  parent.at<cv::Vec3b>(299, 399)[1] = 254;
+  for (int sev : {1, 5}) {
+    rng::FastRng a(2), b(2);
+    EXPECT_EQ(MaxAbsDiff(fog_fast(view, sev, a), fog_fast(view.clone(), sev, b)), 0.0) << sev;
   }
 }
 
