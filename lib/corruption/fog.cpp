@@ -37,11 +37,12 @@ FastBlend fast_blend(const cv::Mat& bgr, double strength) {
 // Fast mode's field source: the quarter-resolution plasma map's crop, normalised to float32 and upsampled
 // horizontally (factor 4) or not at all (factor 1, maps under 64). Full-resolution row y sits at low row
 // y / factor, as in the full map (corner-aligned); the last output row and column also read the low row and
-// column after them (wrapping on the torus). The stored rows live in per-thread scratch: one FastField at a time
-// per thread.
+// column after them (wrapping on the torus). With an add_scale, the rows are stored instead as the fixed-point
+// blend's tripled 16-bit terms (fog_fixed_field_row) and only fixed() may be used. The stored rows live in
+// per-thread scratch: one FastField at a time per thread.
 class FastField {
  public:
-  FastField(int rows, int cols, double decay, rng::FastRng& rng) : cols_(cols) {
+  FastField(int rows, int cols, double decay, rng::FastRng& rng, const float* add_scale = nullptr) : cols_(cols) {
     const int n = fog_map_size(rows, cols);
     factor_ = n >= 64 ? 4 : 1;
     const int nl = n / factor_;
@@ -49,21 +50,43 @@ class FastField {
     const int lc = std::min(nl, (cols - 1) / factor_ + 2);
     const PlasmaLevels p = plasma_levels(nl, decay, rng, lr_, lc);
     const double inv_range = 1.0 / (p.max - p.min);
-    thread_local cv::Mat horiz;
+    thread_local cv::Mat horiz, fixed;
     thread_local std::vector<float> low;
-    horiz.create(lr_, cols, CV_32F);  // no-op when the size is unchanged
+    horiz.create(add_scale ? 1 : lr_, cols, CV_32F);  // no-op when the size is unchanged
     horiz_ = horiz;
+    if (add_scale) {
+      fixed.create(lr_, 3 * cols, CV_16U);
+      fixed_ = fixed;
+    }
     low.resize(static_cast<std::size_t>(lc) + 1);
     for (int r = 0; r < lr_; ++r) {
       const double* even = p.even(r);
       const double* odd = p.odd(r);
-      float* l = factor_ == 1 ? horiz_.ptr<float>(r) : low.data();
-      for (int c = 0; c < lc; ++c) l[c] = static_cast<float>(((c % 2 ? odd[c / 2] : even[c / 2]) - p.min) * inv_range);
+      float* h = horiz_.ptr<float>(add_scale ? 0 : r);
+      float* l = factor_ == 1 ? h : low.data();
+      // Column c is even[c / 2] or odd[c / 2]: pairs first (a loop the compiler vectorises), then an odd tail.
+      const int pairs = lc / 2;
+      for (int j = 0; j < pairs; ++j) {
+        l[2 * j] = static_cast<float>((even[j] - p.min) * inv_range);
+        l[2 * j + 1] = static_cast<float>((odd[j] - p.min) * inv_range);
+      }
+      if (lc % 2) l[lc - 1] = static_cast<float>((even[pairs] - p.min) * inv_range);
       if (factor_ == 4) {
         low[static_cast<std::size_t>(lc)] = low[0];  // read only when lc == nl (the torus wraps)
-        fog_upsample4_row(low.data(), horiz_.ptr<float>(r), cols);
+        fog_upsample4_row(low.data(), h, cols);
       }
+      if (add_scale) fog_fixed_field_row(h, fixed_.ptr<std::uint16_t>(r), cols, *add_scale);
     }
+  }
+  // Row y of the fixed-point terms: the stored rows a and b and the lerp weight k (fog_blend_fixed_row).
+  struct Fixed {
+    const std::uint16_t* a;
+    const std::uint16_t* b;
+    int k;
+  };
+  Fixed fixed(int y) const {
+    const int r = y / factor_, k = y % factor_;
+    return {fixed_.ptr<std::uint16_t>(r), fixed_.ptr<std::uint16_t>(r + 1 == lr_ ? 0 : r + 1), k};
   }
   // Row y of the field as a * wa + b * wb, or a alone (b == nullptr) on a stored row.
   struct Lerp {
@@ -87,7 +110,7 @@ class FastField {
 
  private:
   int cols_, factor_ = 1, lr_ = 0;
-  cv::Mat horiz_;
+  cv::Mat horiz_, fixed_;
 };
 
 }  // namespace
@@ -162,18 +185,13 @@ cv::Mat fog_field_fast(int rows, int cols, double decay, rng::FastRng& rng) {
 
 cv::Mat fog_fast(const cv::Mat& bgr, int severity, rng::FastRng& rng) {
   const FogParams p = fog_params(severity);
-  const FastField field(bgr.rows, bgr.cols, p.decay, rng);
   const FastBlend b = fast_blend(bgr, p.strength);
+  const FastField field(bgr.rows, bgr.cols, p.decay, rng, &b.add_scale);
+  const auto scale16 = static_cast<std::uint16_t>(std::min(std::lround(b.scale * 65536.0f), 65535L));
   cv::Mat out(bgr.size(), bgr.type());
   for (int y = 0; y < bgr.rows; ++y) {
-    const std::uint8_t* src = bgr.ptr<std::uint8_t>(y);
-    std::uint8_t* dst = out.ptr<std::uint8_t>(y);
-    const auto l = field.lerp(y);
-    if (l.b) {
-      fog_blend_fast_lerp_row(src, l.a, l.b, dst, bgr.cols, l.wa, l.wb, b.scale, b.add_scale);
-    } else {
-      fog_blend_fast_row(src, l.a, dst, bgr.cols, b.scale, b.add_scale);
-    }
+    const auto f = field.fixed(y);
+    fog_blend_fixed_row(bgr.ptr<std::uint8_t>(y), f.a, f.b, f.k, out.ptr<std::uint8_t>(y), bgr.cols, scale16);
   }
   return out;
 }

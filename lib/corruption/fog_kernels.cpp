@@ -91,6 +91,32 @@ std::uint8_t max_u8_scalar(const std::uint8_t* p, std::size_t count, std::uint8_
   for (std::size_t i = 0; i < count; ++i) mx = std::max(mx, p[i]);
   return mx;
 }
+// Fixed-point fast blend (8 fraction bits): g = trunc(f * add256 + 1) (round to nearest, plus half a unit that
+// offsets the product's truncation below), the vertical lerp by rounding averages, out = (((src << 8) * scale16)
+// >> 16 + g) >> 8, saturating at 255.
+void fixed_field_scalar(const float* f, std::uint16_t* g, int x, int cols, float add256) {
+  for (; x < cols; ++x) {
+    const int v = std::min(static_cast<int>(f[x] * add256 + 0.5f), 65535);
+    for (int c = 0; c < 3; ++c) g[3 * x + c] = static_cast<std::uint16_t>(v);
+  }
+}
+inline unsigned avg_u16(unsigned a, unsigned b) { return (a + b + 1) >> 1; }
+inline unsigned lerp_u16(unsigned a, unsigned b, int k) {
+  switch (k) {
+    case 0: return a;
+    case 1: return avg_u16(avg_u16(a, b), a);
+    case 2: return avg_u16(a, b);
+    default: return avg_u16(avg_u16(a, b), b);
+  }
+}
+void blend_fixed_scalar(const std::uint8_t* src, const std::uint16_t* ga, const std::uint16_t* gb, int k,
+                        std::uint8_t* dst, int i, int count, std::uint16_t scale16) {
+  for (; i < count; ++i) {
+    const unsigned p = ((static_cast<unsigned>(src[i]) << 8) * scale16) >> 16;
+    const unsigned v = std::min(p + lerp_u16(ga[i], k ? gb[i] : ga[i], k), 65535u);
+    dst[i] = static_cast<std::uint8_t>(v >> 8);
+  }
+}
 
 #if FAULTLINE_FOG_AVX2
 
@@ -375,6 +401,60 @@ FAULTLINE_TARGET_AVX2 std::uint8_t max_u8_avx2(const std::uint8_t* p, std::size_
   return max_u8_scalar(p + i, count - i, mx);
 }
 
+// Eight field values -> 24 fixed-point values (each tripled for the three channels).
+FAULTLINE_TARGET_AVX2 void fixed_field_avx2(const float* f, std::uint16_t* g, int cols, float add256) {
+  const __m256 vmul = _mm256_set1_ps(add256), one = _mm256_set1_ps(0.5f);
+  const __m128i t0 = _mm_setr_epi8(0, 1, 0, 1, 0, 1, 2, 3, 2, 3, 2, 3, 4, 5, 4, 5);
+  const __m128i t1 = _mm_setr_epi8(4, 5, 6, 7, 6, 7, 6, 7, 8, 9, 8, 9, 8, 9, 10, 11);
+  const __m128i t2 = _mm_setr_epi8(10, 11, 10, 11, 12, 13, 12, 13, 12, 13, 14, 15, 14, 15, 14, 15);
+  int x = 0;
+  for (; x + 8 <= cols; x += 8) {
+    const __m256i v = _mm256_cvttps_epi32(_mm256_add_ps(_mm256_mul_ps(_mm256_loadu_ps(f + x), vmul), one));
+    const __m128i w = _mm256_castsi256_si128(_mm256_permute4x64_epi64(_mm256_packus_epi32(v, v), 0x08));
+    auto* o = reinterpret_cast<__m128i*>(g + 3 * x);
+    _mm_storeu_si128(o, _mm_shuffle_epi8(w, t0));
+    _mm_storeu_si128(o + 1, _mm_shuffle_epi8(w, t1));
+    _mm_storeu_si128(o + 2, _mm_shuffle_epi8(w, t2));
+  }
+  fixed_field_scalar(f, g, x, cols, add256);
+}
+
+template <int K>
+FAULTLINE_AVX2_INLINE __m256i fixed_lerp(const std::uint16_t* ga, const std::uint16_t* gb) {
+  const __m256i a = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(ga));
+  if constexpr (K == 0) {
+    return a;
+  } else {
+    const __m256i b = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(gb));
+    const __m256i mid = _mm256_avg_epu16(a, b);
+    if constexpr (K == 1) return _mm256_avg_epu16(mid, a);
+    if constexpr (K == 2) return mid;
+    return _mm256_avg_epu16(mid, b);
+  }
+}
+// 16 values: ((src << 8) * scale16 >> 16 + g) >> 8, as 16-bit lanes.
+template <int K>
+FAULTLINE_AVX2_INLINE __m256i fixed_half(const std::uint8_t* s, const std::uint16_t* ga, const std::uint16_t* gb,
+                                         __m256i vscale) {
+  const __m256i x = _mm256_cvtepu8_epi16(_mm_loadu_si128(reinterpret_cast<const __m128i*>(s)));
+  const __m256i p = _mm256_mulhi_epu16(_mm256_slli_epi16(x, 8), vscale);
+  return _mm256_srli_epi16(_mm256_adds_epu16(p, fixed_lerp<K>(ga, gb)), 8);
+}
+template <int K>
+FAULTLINE_TARGET_AVX2 void blend_fixed_avx2(const std::uint8_t* src, const std::uint16_t* ga,
+                                            const std::uint16_t* gb, std::uint8_t* dst, int count,
+                                            std::uint16_t scale16) {
+  const __m256i vscale = _mm256_set1_epi16(static_cast<short>(scale16));
+  int i = 0;
+  for (; i + 32 <= count; i += 32) {
+    const __m256i lo = fixed_half<K>(src + i, ga + i, gb + i, vscale);
+    const __m256i hi = fixed_half<K>(src + i + 16, ga + i + 16, gb + i + 16, vscale);
+    _mm256_storeu_si256(reinterpret_cast<__m256i*>(dst + i),
+                        _mm256_permute4x64_epi64(_mm256_packus_epi16(lo, hi), 0xD8));
+  }
+  blend_fixed_scalar(src, ga, gb, K, dst, i, count, scale16);
+}
+
 // Eight low values -> 32 outputs: the four phases as vectors, then a 4 x 8 transpose.
 FAULTLINE_TARGET_AVX2 void upsample4_avx2(const float* low, float* out, int count) {
   const __m256 w1 = _mm256_set1_ps(0.25f), w2 = _mm256_set1_ps(0.5f), w3 = _mm256_set1_ps(0.75f);
@@ -508,6 +588,30 @@ std::uint8_t fog_max_u8(const std::uint8_t* p, std::size_t count, std::uint8_t m
   if (have_avx2()) return max_u8_avx2(p, count, mx);
 #endif
   return max_u8_scalar(p, count, mx);
+}
+
+void fog_fixed_field_row(const float* f, std::uint16_t* g, int cols, float add_scale) {
+  const float add256 = add_scale * 256.0f;
+#if FAULTLINE_FOG_AVX2
+  if (have_avx2()) return fixed_field_avx2(f, g, cols, add256);
+#endif
+  fixed_field_scalar(f, g, 0, cols, add256);
+}
+
+void fog_blend_fixed_row(const std::uint8_t* src, const std::uint16_t* ga, const std::uint16_t* gb, int k,
+                         std::uint8_t* dst, int cols, std::uint16_t scale16) {
+  const int count = 3 * cols;
+#if FAULTLINE_FOG_AVX2
+  if (have_avx2()) {
+    switch (k) {
+      case 0: return blend_fixed_avx2<0>(src, ga, gb, dst, count, scale16);
+      case 1: return blend_fixed_avx2<1>(src, ga, gb, dst, count, scale16);
+      case 2: return blend_fixed_avx2<2>(src, ga, gb, dst, count, scale16);
+      default: return blend_fixed_avx2<3>(src, ga, gb, dst, count, scale16);
+    }
+  }
+#endif
+  blend_fixed_scalar(src, ga, gb, k, dst, 0, count, scale16);
 }
 
 void fog_upsample4_row(const float* low, float* out, int count) {

@@ -61,6 +61,16 @@ void fog_blend_fast_row(const std::uint8_t* src, const float* f, std::uint8_t* d
 void fog_blend_fast_lerp_row(const std::uint8_t* src, const float* fa, const float* fb, std::uint8_t* dst, int cols,
                              float wa, float wb, float scale, float add_scale);
 
+// The fast mode's fixed-point blend (8 fraction bits; within 1 of the float32 blend, on a small fraction of values).
+// fog_fixed_field_row: g[3x + c] = min(trunc(f[x] * (add_scale * 256) + 1), 65535) for the three channels c
+// (rounded to nearest plus half a unit, which offsets the truncating product below).
+void fog_fixed_field_row(const float* f, std::uint16_t* g, int cols, float add_scale);
+// dst[i] = min((((src[i] << 8) * scale16) >> 16) + g[i], 65535) >> 8 for i < 3 * cols, where g = ga for k = 0 and
+// otherwise the lerp of ga and gb at weight k / 4 by rounding averages: avg(avg(a, b), a) for k = 1, avg(a, b) for
+// k = 2, avg(avg(a, b), b) for k = 3 (avg(a, b) = (a + b + 1) >> 1). scale16 = the float blend's scale * 65536.
+void fog_blend_fixed_row(const std::uint8_t* src, const std::uint16_t* ga, const std::uint16_t* gb, int k,
+                         std::uint8_t* dst, int cols, std::uint16_t scale16);
+
 // max(mx, p[0], ..., p[count - 1]); may return 255 as soon as it has seen one.
 std::uint8_t fog_max_u8(const std::uint8_t* p, std::size_t count, std::uint8_t mx);
 

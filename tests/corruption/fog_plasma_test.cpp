@@ -177,7 +177,10 @@ TEST(FogBlendExactTest, MatchesTheSpecBlendOnTruncationBoundaries) {
   }
 }
 
-TEST(FogFastTest, FusedEqualsFieldThenBlend) {
+// fog_fast blends in 16-bit fixed point (fog_blend_fixed_row): against the float32 blend of the float field
+// (fog_blend_fast(fog_field_fast)) every value is within 1, few values differ at all (measured ~0.1-0.3 % at
+// 1600 x 900, up to ~0.5 % on the small sizes) and the differences carry no visible bias.
+TEST(FogFastTest, FusedIsWithinOneOfFieldThenBlendOnFewValues) {
   for (const cv::Size size :
        {cv::Size(1600, 900), cv::Size(333, 197), cv::Size(40, 33), cv::Size(63, 64), cv::Size(7, 70)}) {
     const cv::Mat img = RandomImage(size.height, size.width, 9);
@@ -185,7 +188,54 @@ TEST(FogFastTest, FusedEqualsFieldThenBlend) {
       const FogParams p = fog_params(sev);
       rng::FastRng a(static_cast<std::uint64_t>(sev)), b(static_cast<std::uint64_t>(sev));
       const cv::Mat two_step = fog_blend_fast(img, fog_field_fast(img.rows, img.cols, p.decay, a), p.strength);
-      EXPECT_EQ(MaxAbsDiff(fog_fast(img, sev, b), two_step), 0.0) << size << " sev " << sev;
+      const cv::Mat fused = fog_fast(img, sev, b);
+      cv::Mat diff;
+      cv::subtract(fused, two_step, diff, cv::noArray(), CV_32S);
+      diff = diff.reshape(1);
+      const double values = static_cast<double>(diff.total());
+      EXPECT_LE(MaxAbsDiff(fused, two_step), 1.0) << size << " sev " << sev;
+      const double differ = cv::countNonZero(diff) / values;
+      EXPECT_LE(differ, size.area() > 100000 ? 0.004 : 0.007) << size << " sev " << sev;
+      EXPECT_LE(std::fabs(cv::sum(diff)[0] / values), 0.005) << size << " sev " << sev;
+    }
+  }
+}
+
+// The fixed-point kernels against their documented expressions, for every lerp weight and row tails.
+TEST(FogFastTest, FixedPointKernelsMatchTheirExpressions) {
+  cv::RNG rng(12);
+  for (int cols : {1, 5, 8, 10, 11, 16, 33, 1600}) {
+    const int n = 3 * cols;
+    std::vector<float> f(static_cast<std::size_t>(cols));
+    for (auto& v : f) v = rng.uniform(0.0f, 1.0f);
+    f[0] = 1.0f;
+    for (float add_scale : {0.0f, 37.5f, 191.25f}) {
+      std::vector<std::uint16_t> g(static_cast<std::size_t>(n));
+      fog_fixed_field_row(f.data(), g.data(), cols, add_scale);
+      for (int i = 0; i < n; ++i) {
+        const int want = std::min(static_cast<int>(f[static_cast<std::size_t>(i / 3)] * (add_scale * 256.0f) + 0.5f),
+                                  65535);
+        ASSERT_EQ(g[static_cast<std::size_t>(i)], want) << cols << " " << i;
+      }
+    }
+    std::vector<std::uint8_t> src(static_cast<std::size_t>(n)), dst(src.size());
+    std::vector<std::uint16_t> ga(src.size()), gb(src.size());
+    for (int i = 0; i < n; ++i) {
+      src[static_cast<std::size_t>(i)] = static_cast<std::uint8_t>(rng.uniform(0, 256));
+      ga[static_cast<std::size_t>(i)] = static_cast<std::uint16_t>(rng.uniform(0, 65536));
+      gb[static_cast<std::size_t>(i)] = static_cast<std::uint16_t>(rng.uniform(0, 65536));
+    }
+    auto avg = [](unsigned a, unsigned b) { return (a + b + 1) >> 1; };
+    for (std::uint16_t scale16 : {std::uint16_t{0}, std::uint16_t{12345}, std::uint16_t{65535}}) {
+      for (int k = 0; k < 4; ++k) {
+        fog_blend_fixed_row(src.data(), ga.data(), gb.data(), k, dst.data(), cols, scale16);
+        for (std::size_t i = 0; i < src.size(); ++i) {
+          const unsigned a = ga[i], b = gb[i];
+          const unsigned g = k == 0 ? a : k == 1 ? avg(avg(a, b), a) : k == 2 ? avg(a, b) : avg(avg(a, b), b);
+          const unsigned p = ((static_cast<unsigned>(src[i]) << 8) * scale16) >> 16;
+          ASSERT_EQ(dst[i], std::min(p + g, 65535u) >> 8) << cols << " k " << k << " i " << i;
+        }
+      }
     }
   }
 }
