@@ -37,56 +37,46 @@ FastBlend fast_blend(const cv::Mat& bgr, double strength) {
 // Fast mode's field source: the quarter-resolution plasma map's crop, normalised to float32 and upsampled
 // horizontally (factor 4) or not at all (factor 1, maps under 64). Full-resolution row y sits at low row
 // y / factor, as in the full map (corner-aligned); the last output row and column also read the low row and
-// column after them (wrapping on the torus). With an add_scale, the rows are stored instead as the fixed-point
-// blend's tripled 16-bit terms (fog_fixed_field_row) and only fixed() may be used. The stored rows live in
-// per-thread scratch: one FastField at a time per thread.
+// column after them (wrapping on the torus). With an add_scale, the rows become the fixed-point blend's tripled
+// 16-bit terms (fog_fixed_field_row), built as fixed() reaches them, and only fixed() may be used. The rows (and
+// the plasma planes they read) live in per-thread scratch: one FastField at a time per thread.
 class FastField {
  public:
-  FastField(int rows, int cols, double decay, rng::FastRng& rng, const float* add_scale = nullptr) : cols_(cols) {
+  FastField(int rows, int cols, double decay, rng::FastRng& rng, const float* add_scale = nullptr)
+      : cols_(cols), add_scale_(add_scale) {
     const int n = fog_map_size(rows, cols);
     factor_ = n >= 64 ? 4 : 1;
     const int nl = n / factor_;
     lr_ = std::min(nl, (rows - 1) / factor_ + 2);
-    const int lc = std::min(nl, (cols - 1) / factor_ + 2);
-    const PlasmaLevels p = plasma_levels(nl, decay, rng, lr_, lc);
-    const double inv_range = 1.0 / (p.max - p.min);
+    lc_ = std::min(nl, (cols - 1) / factor_ + 2);
+    p_ = plasma_levels(nl, decay, rng, lr_, lc_);
+    inv_range_ = 1.0 / (p_.max - p_.min);
     thread_local cv::Mat horiz, fixed;
     thread_local std::vector<float> low;
     horiz.create(add_scale ? 1 : lr_, cols, CV_32F);  // no-op when the size is unchanged
     horiz_ = horiz;
+    low.resize(static_cast<std::size_t>(lc_) + 1);
+    low_ = low.data();
     if (add_scale) {
-      fixed.create(lr_, 3 * cols, CV_16U);
+      // Three fixed-point rows, built as the blend reaches them (they stay in cache): slots 0 and 1 take the
+      // even and odd low rows, slot 2 the wrapped row lr_ (row 0 again).
+      fixed.create(3, 3 * cols, CV_16U);
       fixed_ = fixed;
+      return;
     }
-    low.resize(static_cast<std::size_t>(lc) + 1);
-    for (int r = 0; r < lr_; ++r) {
-      const double* even = p.even(r);
-      const double* odd = p.odd(r);
-      float* h = horiz_.ptr<float>(add_scale ? 0 : r);
-      float* l = factor_ == 1 ? h : low.data();
-      // Column c is even[c / 2] or odd[c / 2]: pairs first (a loop the compiler vectorises), then an odd tail.
-      const int pairs = lc / 2;
-      for (int j = 0; j < pairs; ++j) {
-        l[2 * j] = static_cast<float>((even[j] - p.min) * inv_range);
-        l[2 * j + 1] = static_cast<float>((odd[j] - p.min) * inv_range);
-      }
-      if (lc % 2) l[lc - 1] = static_cast<float>((even[pairs] - p.min) * inv_range);
-      if (factor_ == 4) {
-        low[static_cast<std::size_t>(lc)] = low[0];  // read only when lc == nl (the torus wraps)
-        fog_upsample4_row(low.data(), h, cols);
-      }
-      if (add_scale) fog_fixed_field_row(h, fixed_.ptr<std::uint16_t>(r), cols, *add_scale);
-    }
+    for (int r = 0; r < lr_; ++r) build(r, horiz_.ptr<float>(r));
   }
-  // Row y of the fixed-point terms: the stored rows a and b and the lerp weight k (fog_blend_fixed_row).
+  // Row y of the fixed-point terms: the stored rows a and b and the lerp weight k (fog_blend_fixed_row). Rows are
+  // built on first use, so call it with y increasing.
   struct Fixed {
     const std::uint16_t* a;
     const std::uint16_t* b;
     int k;
   };
-  Fixed fixed(int y) const {
+  Fixed fixed(int y) {
     const int r = y / factor_, k = y % factor_;
-    return {fixed_.ptr<std::uint16_t>(r), fixed_.ptr<std::uint16_t>(r + 1 == lr_ ? 0 : r + 1), k};
+    const std::uint16_t* a = fixed_row(r);
+    return {a, k ? fixed_row(r + 1) : a, k};
   }
   // Row y of the field as a * wa + b * wb, or a alone (b == nullptr) on a stored row.
   struct Lerp {
@@ -109,7 +99,41 @@ class FastField {
   }
 
  private:
-  int cols_, factor_ = 1, lr_ = 0;
+  // Low row r, normalised and upsampled horizontally into h (cols floats).
+  void build(int r, float* h) const {
+    const double* even = p_.even(r);
+    const double* odd = p_.odd(r);
+    float* l = factor_ == 1 ? h : low_;
+    // Column c is even[c / 2] or odd[c / 2]: pairs first (a loop the compiler vectorises), then an odd tail.
+    const int pairs = lc_ / 2;
+    for (int j = 0; j < pairs; ++j) {
+      l[2 * j] = static_cast<float>((even[j] - p_.min) * inv_range_);
+      l[2 * j + 1] = static_cast<float>((odd[j] - p_.min) * inv_range_);
+    }
+    if (lc_ % 2) l[lc_ - 1] = static_cast<float>((even[pairs] - p_.min) * inv_range_);
+    if (factor_ == 4) {
+      low_[lc_] = low_[0];  // read only when lc == nl (the torus wraps)
+      fog_upsample4_row(low_, h, cols_);
+    }
+  }
+  // Fixed-point row r (0 .. lr_, lr_ wrapping to row 0).
+  const std::uint16_t* fixed_row(int r) {
+    const int slot = r == lr_ ? 2 : r % 2;
+    auto* g = fixed_.ptr<std::uint16_t>(slot);
+    if (tag_[slot] != r) {
+      build(r == lr_ ? 0 : r, horiz_.ptr<float>(0));
+      fog_fixed_field_row(horiz_.ptr<float>(0), g, cols_, *add_scale_);
+      tag_[slot] = r;
+    }
+    return g;
+  }
+
+  int cols_, factor_ = 1, lr_ = 0, lc_ = 0;
+  const float* add_scale_;
+  PlasmaLevels p_;
+  double inv_range_ = 0.0;
+  float* low_ = nullptr;
+  int tag_[3] = {-1, -1, -1};
   cv::Mat horiz_, fixed_;
 };
 
@@ -186,7 +210,7 @@ cv::Mat fog_field_fast(int rows, int cols, double decay, rng::FastRng& rng) {
 cv::Mat fog_fast(const cv::Mat& bgr, int severity, rng::FastRng& rng) {
   const FogParams p = fog_params(severity);
   const FastBlend b = fast_blend(bgr, p.strength);
-  const FastField field(bgr.rows, bgr.cols, p.decay, rng, &b.add_scale);
+  FastField field(bgr.rows, bgr.cols, p.decay, rng, &b.add_scale);
   const auto scale16 = static_cast<std::uint16_t>(std::min(std::lround(b.scale * 65536.0f), 65535L));
   cv::Mat out(bgr.size(), bgr.type());
   for (int y = 0; y < bgr.rows; ++y) {
