@@ -49,7 +49,8 @@ class FastField {
     const int nl = n / factor_;
     lr_ = std::min(nl, (rows - 1) / factor_ + 2);
     lc_ = std::min(nl, (cols - 1) / factor_ + 2);
-    p_ = plasma_levels(nl, decay, rng, lr_, lc_);
+    rng::LaneRng lanes(rng);  // one draw of rng seeds the vector-stepped lanes that give the plasma's uniforms
+    p_ = plasma_levels(nl, decay, lanes, lr_, lc_);
     inv_range_ = 1.0 / (p_.max - p_.min);
     thread_local cv::Mat horiz, fixed;
     thread_local std::vector<float> low;

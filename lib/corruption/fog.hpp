@@ -42,7 +42,8 @@ cv::Mat fog_blend_fast(const cv::Mat& bgr, const cv::Mat& field, double strength
 // A fast-mode fog field for rows x cols (CV_32F): the plasma fractal at a quarter of the resolution (the finest
 // two levels carry < 0.1 % of the amplitude), normalised over the full map, bilinearly upsampled (corner-aligned:
 // low-resolution point i sits at full-resolution 4i, as in the full map). Only the crop's part of that map's
-// finest level is computed and drawn (its extremes stay exact).
+// finest level is computed and drawn (its extremes stay exact). The uniforms come from an rng::LaneRng seeded by
+// one draw of rng (rng advances by exactly one draw per call).
 cv::Mat fog_field_fast(int rows, int cols, double decay, rng::FastRng& rng);
 
 // fast-mode fog in one call: the same field as fog_field_fast(...) (same draws), blended in 16-bit fixed point

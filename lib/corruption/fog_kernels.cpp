@@ -6,6 +6,8 @@
 #include <array>
 #include <cstring>
 
+#include "rng/lane_rng_avx2.hpp"
+
 #if defined(__x86_64__) && defined(__GNUC__)
 #include <immintrin.h>
 #define FAULTLINE_FOG_AVX2 1
@@ -98,6 +100,22 @@ void fixed_field_scalar(const float* f, std::uint16_t* g, int x, int cols, float
   for (; x < cols; ++x) {
     const int v = std::min(static_cast<int>(f[x] * add256 + 0.5f), 65535);
     for (int c = 0; c < 3; ++c) g[3 * x + c] = static_cast<std::uint16_t>(v);
+  }
+}
+// A uniform on [0, 1) from 64 random bits: the top 52 as the mantissa of a double in [1, 2), minus 1 (exact).
+inline double uniform52(std::uint64_t bits) {
+  const std::uint64_t v = (bits >> 12) | 0x3FF0000000000000ULL;
+  double d;
+  std::memcpy(&d, &v, sizeof d);
+  return d - 1.0;
+}
+void fill_uniforms_scalar(rng::LaneRng& lanes, double* u, int i, int count) {
+  std::uint32_t r[rng::LaneRng::kValuesPerStep];
+  for (; i < count; i += rng::LaneRng::kLanes) {
+    lanes.next_values(r);
+    for (int l = 0; l < rng::LaneRng::kLanes && i + l < count; ++l) {
+      u[i + l] = uniform52(static_cast<std::uint64_t>(r[2 * l]) | static_cast<std::uint64_t>(r[2 * l + 1]) << 32);
+    }
   }
 }
 inline unsigned avg_u16(unsigned a, unsigned b) { return (a + b + 1) >> 1; }
@@ -401,6 +419,24 @@ FAULTLINE_TARGET_AVX2 std::uint8_t max_u8_avx2(const std::uint8_t* p, std::size_
   return max_u8_scalar(p + i, count - i, mx);
 }
 
+FAULTLINE_AVX2_INLINE __m256d uniform52_avx2(__m256i bits) {
+  const __m256i v = _mm256_or_si256(_mm256_srli_epi64(bits, 12), _mm256_set1_epi64x(0x3FF0000000000000LL));
+  return _mm256_sub_pd(_mm256_castsi256_pd(v), _mm256_set1_pd(1.0));
+}
+// Both halves of the lanes stepped together (two independent chains); a partial last step goes through the scalar
+// definition (same values).
+FAULTLINE_TARGET_AVX2 void fill_uniforms_avx2(rng::LaneRng& lanes, double* u, int count) {
+  rng::avx2::Xoshiro4 a = rng::avx2::load_half(lanes, 0), b = rng::avx2::load_half(lanes, 1);
+  int i = 0;
+  for (; i + rng::LaneRng::kLanes <= count; i += rng::LaneRng::kLanes) {
+    _mm256_storeu_pd(u + i, uniform52_avx2(rng::avx2::step(a)));
+    _mm256_storeu_pd(u + i + 4, uniform52_avx2(rng::avx2::step(b)));
+  }
+  rng::avx2::store_half(a, lanes, 0);
+  rng::avx2::store_half(b, lanes, 1);
+  fill_uniforms_scalar(lanes, u, i, count);
+}
+
 // Eight field values -> 24 fixed-point values (each tripled for the three channels).
 FAULTLINE_TARGET_AVX2 void fixed_field_avx2(const float* f, std::uint16_t* g, int cols, float add256) {
   const __m256 vmul = _mm256_set1_ps(add256), one = _mm256_set1_ps(0.5f);
@@ -588,6 +624,13 @@ std::uint8_t fog_max_u8(const std::uint8_t* p, std::size_t count, std::uint8_t m
   if (have_avx2()) return max_u8_avx2(p, count, mx);
 #endif
   return max_u8_scalar(p, count, mx);
+}
+
+void fog_fill_uniforms(rng::LaneRng& lanes, double* u, int count) {
+#if FAULTLINE_FOG_AVX2
+  if (have_avx2()) return fill_uniforms_avx2(lanes, u, count);
+#endif
+  fill_uniforms_scalar(lanes, u, 0, count);
 }
 
 void fog_fixed_field_row(const float* f, std::uint16_t* g, int cols, float add_scale) {

@@ -6,6 +6,8 @@
 #include <cstddef>
 #include <cstdint>
 
+#include "rng/lane_rng.hpp"
+
 namespace faultline::corruption {
 
 // The random offset of one level: w * (lo + span * u), lo = -w, span = w - (-w) (spec §4: U(-w, w) scaled by w).
@@ -60,6 +62,10 @@ void fog_blend_fast_row(const std::uint8_t* src, const float* f, std::uint8_t* d
 // bytes as fog_lerp_row into a buffer, then fog_blend_fast_row), without storing it.
 void fog_blend_fast_lerp_row(const std::uint8_t* src, const float* fa, const float* fb, std::uint8_t* dst, int cols,
                              float wa, float wb, float scale, float add_scale);
+
+// Fast mode's plasma draws: u[i] for i < count from lane i % 8 of step i / 8 (a partial last step leaves its other
+// lanes' values unused), u = (bits >> 12) * 2^-52 of the lane's 64-bit output (the 52-bit grid on [0, 1)).
+void fog_fill_uniforms(rng::LaneRng& lanes, double* u, int count);
 
 // The fast mode's fixed-point blend (8 fraction bits; within 1 of the float32 blend, on a small fraction of values).
 // fog_fixed_field_row: g[3x + c] = min(trunc(f[x] * (add_scale * 256) + 1), 65535) for the three channels c

@@ -20,6 +20,8 @@ template <typename Rng>
 __attribute__((noinline)) void draw(Rng& rng, double* u, int count) {
   for (int j = 0; j < count; ++j) u[j] = rng.random_sample();
 }
+// Fast mode draws from eight lock-step xoshiro256++ lanes (vector stepped).
+void draw(rng::LaneRng& lanes, double* u, int count) { fog_fill_uniforms(lanes, u, count); }
 // Draws that nobody reads (numpy mode keeps the stream aligned).
 template <typename Rng>
 __attribute__((noinline)) void discard(Rng& rng, int count) {
@@ -133,7 +135,7 @@ void refine_last(const double* corner, int n, const FogStep& step, Rng& rng, Scr
   double lo = cmin, hi = cmax;
   auto blocks = [&](const std::vector<unsigned char>& need, int i, auto&& fn) {
     const unsigned char* row_need = need.data() + at(i, nb);
-    if (kDrawAll) {
+    if constexpr (kDrawAll) {
       if (std::find(row_need, row_need + nb, 1) == row_need + nb) return discard(rng, n);
       draw(rng, u, n);
     }
@@ -216,6 +218,9 @@ PlasmaLevels plasma_levels(int mapsize, double decay, rng::NumpyRandomState& rng
 }
 PlasmaLevels plasma_levels(int mapsize, double decay, rng::FastRng& rng, int rows, int cols) {
   return plasma_levels_impl(mapsize, decay, rng, rows, cols);
+}
+PlasmaLevels plasma_levels(int mapsize, double decay, rng::LaneRng& lanes, int rows, int cols) {
+  return plasma_levels_impl(mapsize, decay, lanes, rows, cols);
 }
 
 cv::Mat plasma_normalised(const PlasmaLevels& levels) {

@@ -7,6 +7,7 @@
 #include <opencv2/core.hpp>
 
 #include "rng/fast_rng.hpp"
+#include "rng/lane_rng.hpp"
 #include "rng/numpy_legacy.hpp"
 
 namespace faultline::corruption {
@@ -40,10 +41,12 @@ struct PlasmaLevels {
 // points (and the centres they read) are computed, plus the tiles whose bound from the level below could reach
 // outside the extremes known so far; the rest are provably neither the minimum nor the maximum.
 // NumpyRandomState: consumes exactly mapsize^2 - 1 uniforms in the reference's order, and every value is the
-// reference's double. FastRng: uniforms of points that are not computed are not drawn.
+// reference's double. FastRng: uniforms of points that are not computed are not drawn. LaneRng (fast fog): the
+// same with the uniforms from eight lock-step xoshiro256++ lanes stepped as vectors (fog_fill_uniforms).
 // mapsize: a power of two >= 2; rows, cols: 1..mapsize.
 PlasmaLevels plasma_levels(int mapsize, double decay, rng::NumpyRandomState& rng, int rows, int cols);
 PlasmaLevels plasma_levels(int mapsize, double decay, rng::FastRng& rng, int rows, int cols);
+PlasmaLevels plasma_levels(int mapsize, double decay, rng::LaneRng& lanes, int rows, int cols);
 
 // The reference's normalised crop (CV_64F rows x cols), bit for bit.
 cv::Mat plasma_normalised(const PlasmaLevels& levels);

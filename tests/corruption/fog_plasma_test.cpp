@@ -11,6 +11,8 @@
 
 #include "corruption/fog.hpp"
 #include "corruption/fog_kernels.hpp"
+#include "corruption/fog_plasma.hpp"
+#include "rng/lane_rng.hpp"
 #include "rng/fast_rng.hpp"
 #include "rng/numpy_legacy.hpp"
 
@@ -272,6 +274,28 @@ TEST(FogFastTest, BlendMatchesItsScalarExpression) {
   }
 }
 
+// Fast fog's uniforms against their definition: lane i % 8 of step i / 8, (bits >> 12) * 2^-52, for every count
+// around the 8-value steps; a partial step drops its other lanes' values.
+TEST(FogFastTest, LaneUniformsMatchTheirDefinition) {
+  for (int count : {0, 1, 7, 8, 9, 31, 32, 1000}) {
+    rng::FastRng a(6), b(6);
+    rng::LaneRng fast(a), ref(b);
+    for (int call = 0; call < 3; ++call) {
+      std::vector<double> u(static_cast<std::size_t>(count) + 1, -1.0);
+      fog_fill_uniforms(fast, u.data(), count);
+      std::uint32_t r[rng::LaneRng::kValuesPerStep];
+      for (int i = 0; i < count; ++i) {
+        const int l = i % rng::LaneRng::kLanes;
+        if (l == 0) ref.next_values(r);
+        const std::uint64_t bits = static_cast<std::uint64_t>(r[2 * l]) | static_cast<std::uint64_t>(r[2 * l + 1]) << 32;
+        const double want = static_cast<double>(bits >> 12) * 0x1.0p-52;
+        ASSERT_EQ(u[static_cast<std::size_t>(i)], want) << count << " call " << call << " i " << i;
+      }
+      EXPECT_EQ(u[static_cast<std::size_t>(count)], -1.0) << count;
+    }
+  }
+}
+
 // The image maximum scan: every length and alignment around the 128-byte steps and 4 KB blocks, with and without
 // a 255 (which may end the scan), against std::max_element; and a non-continuous view gives its own maximum.
 TEST(FogFastTest, ByteMaximumMatchesMaxElement) {
@@ -302,12 +326,15 @@ TEST(FogFastTest, ByteMaximumMatchesMaxElement) {
 }
 
 // The field is the quarter-resolution map, bilinear and corner-aligned: every fourth row and column are the map's
-// points. (509 x 510 needs the whole 128 x 128 map, so the fast stream draws every point, as plasma_fractal does.)
+// points. (509 x 510 needs the whole 128 x 128 map, so the fast stream draws every point, as the full map does.)
+// The field's draws come from lanes seeded by one draw of its rng, which advances by exactly that one draw.
 TEST(FogFastTest, FieldPassesThroughTheLowResolutionMapsPoints) {
   const int rows = 509, cols = 510, n = fog_map_size(rows, cols);
   rng::FastRng a(4), b(4);
-  const cv::Mat full = plasma_fractal(n / 4, 1.7, a);
+  rng::LaneRng lanes(a);
+  const cv::Mat full = plasma_normalised(plasma_levels(n / 4, 1.7, lanes, n / 4, n / 4));
   const cv::Mat field = fog_field_fast(rows, cols, 1.7, b);
+  EXPECT_EQ(a.next_u64(), b.next_u64());
   double worst = 0;
   for (int y = 0; y < rows; y += 4) {
     for (int x = 0; x < cols; x += 4) {
