@@ -32,11 +32,8 @@ Result<cv::Mat> corrupt(const cv::Mat& bgr, Corruption type, int severity, rng::
       const double angle = options.angle_deg ? *options.angle_deg : rng.uniform(-45.0, 45.0);
       return motion_blur_numpy(bgr, severity, angle);
     }
-    case Corruption::Fog: {
-      const FogParams p = fog_params(severity);
-      const cv::Mat fractal = plasma_fractal_crop(fog_map_size(bgr.rows, bgr.cols), p.decay, rng, bgr.rows, bgr.cols);
-      return fog_blend_exact(bgr, fractal, p.strength);
-    }
+    // Blends straight from the plasma map's finest level (tested equal to plasma_fractal_crop + fog_blend_exact).
+    case Corruption::Fog: return fog_exact(bgr, severity, rng);
     case Corruption::Snow: return snow_exact(bgr, severity, rng);
     case Corruption::Dark: return dark_exact(bgr, severity, rng);
   }
