@@ -22,11 +22,14 @@ __attribute__((noinline)) void draw(Rng& rng, double* u, int count) {
 }
 // Fast mode draws from eight lock-step xoshiro256++ lanes (vector stepped).
 void draw(rng::LaneRng& lanes, double* u, int count) { fog_fill_uniforms(lanes, u, count); }
-// Draws that nobody reads (numpy mode keeps the stream aligned).
+// numpy mode copies whole runs of the engine's precomputed doubles.
+void draw(rng::NumpyRandomState& rng, double* u, int count) { rng.random_samples(u, static_cast<std::size_t>(count)); }
+// Draws that nobody reads (numpy mode keeps the stream aligned without making the values).
 template <typename Rng>
 __attribute__((noinline)) void discard(Rng& rng, int count) {
   for (int j = 0; j < count; ++j) static_cast<void>(rng.random_sample());
 }
+void discard(rng::NumpyRandomState& rng, int count) { rng.skip_samples(static_cast<std::size_t>(count)); }
 
 // One full level: corners (n x (n+1), padded) -> corners of the next level (2n x (2n+1), padded).
 template <typename Rng>

@@ -1,7 +1,9 @@
 // NumPy legacy transforms: polar normal, Poisson (multiplication and PTRS), loggam. Compiled without FP contraction.
 #include "rng/numpy_legacy.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <cstring>
 
 #if defined(__GNUC__) && defined(__x86_64__)
 #include <immintrin.h>
@@ -167,10 +169,9 @@ namespace {
 #define FAULTLINE_RNG_CLONES
 #endif
 
-// The twist, tempering and pair conversion as three straight loops the compiler vectorises (the first twist loop
-// reads only words it has not yet rewritten; the second reads words at distance 227, more than a vector apart).
-FAULTLINE_RNG_CLONES void twist_temper(std::uint32_t* __restrict state, std::uint32_t* __restrict out,
-                                       double* __restrict pairs) {
+// The twist as two straight loops the compiler vectorises (the first reads only words it has not yet rewritten; the
+// second reads words at distance 227, more than a vector apart).
+FAULTLINE_RNG_CLONES void twist(std::uint32_t* __restrict state) {
   constexpr int kN = 624, kM = 397;
   constexpr std::uint32_t kUpper = 0x80000000u, kLower = 0x7fffffffu, kMatrix = 0x9908b0dfu;
   int i = 0;
@@ -184,6 +185,12 @@ FAULTLINE_RNG_CLONES void twist_temper(std::uint32_t* __restrict state, std::uin
   }
   const std::uint32_t y = (state[kN - 1] & kUpper) | (state[0] & kLower);
   state[kN - 1] = state[kM - 1] ^ (y >> 1) ^ ((0u - (y & 1u)) & kMatrix);
+}
+
+// Tempering and pair conversion of a freshly twisted state, also as straight vectorisable loops.
+FAULTLINE_RNG_CLONES void temper(const std::uint32_t* __restrict state, std::uint32_t* __restrict out,
+                                 double* __restrict pairs) {
+  constexpr int kN = 624;
   for (int k = 0; k < kN; ++k) {
     std::uint32_t t = state[k];
     t ^= t >> 11;
@@ -204,8 +211,45 @@ FAULTLINE_RNG_CLONES void twist_temper(std::uint32_t* __restrict state, std::uin
 }  // namespace
 
 void Mt19937::refill() {
-  twist_temper(state_, out_, pairs_);
+  twist(state_);
+  temper(state_, out_, pairs_);
   index_ = 0;
+}
+
+void Mt19937::fill_doubles(double* out, std::size_t n) {
+  while (n > 0) {
+    std::size_t avail = 0;
+    const double* d = block_doubles(avail);
+    if (d == nullptr) {  // odd position: one value by hand, then aligned again
+      *out++ = next_double();
+      --n;
+      continue;
+    }
+    const std::size_t k = std::min(avail, n);
+    std::memcpy(out, d, k * sizeof(double));
+    advance_doubles(k);
+    out += k;
+    n -= k;
+  }
+}
+
+void Mt19937::skip_doubles(std::size_t n) {
+  if ((index_ & 1) != 0) {
+    for (; n > 0 && (index_ & 1) != 0; --n) static_cast<void>(next_double());
+  }
+  const auto left = static_cast<std::size_t>(kN - index_) / 2;  // whole doubles left in this block
+  if (n <= left) {
+    index_ += 2 * static_cast<int>(n);
+    return;
+  }
+  n -= left;
+  constexpr std::size_t kPerBlock = kN / 2;
+  for (; n >= kPerBlock; n -= kPerBlock) twist(state_);  // a block consumed whole: its words are never read
+  index_ = kN;
+  if (n > 0) {
+    refill();
+    index_ = 2 * static_cast<int>(n);
+  }
 }
 
 PoissonParams prepare_poisson(double lam) {

@@ -48,6 +48,12 @@ class Mt19937 {
   }
   void advance_doubles(std::size_t k) { index_ += 2 * static_cast<int>(k); }
 
+  // n next_double() values in order into out[0..n).
+  void fill_doubles(double* out, std::size_t n);
+  // The state after n next_double() calls, without making the values: blocks passed over whole are only twisted
+  // (no tempering, no conversion).
+  void skip_doubles(std::size_t n);
+
  private:
   static constexpr int kN = 624;
   void refill();
@@ -82,6 +88,9 @@ class NumpyRandomState {
 
   // random_sample(): 53-bit double in [0, 1) from two consecutive outputs.
   double random_sample() { return mt_.next_double(); }
+  // n random_sample() draws in order into out[0..n); skip_samples(n) leaves the stream where they would have.
+  void random_samples(double* out, std::size_t n) { mt_.fill_doubles(out, n); }
+  void skip_samples(std::size_t n) { mt_.skip_doubles(n); }
 
   // uniform(lo, hi) = lo + (hi - lo) * u.
   double uniform(double lo, double hi) { return lo + (hi - lo) * random_sample(); }

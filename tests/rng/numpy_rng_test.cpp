@@ -157,6 +157,36 @@ TEST(NumpyRandomStateTest, BulkNormalsDrawAndSkipLikeSingleDraws) {
   }
 }
 
+// random_samples / skip_samples against one random_sample() at a time: from an aligned start, after an odd number
+// of 32-bit draws, at a block's last doubles, and across many whole blocks (which skip_samples only twists).
+TEST(NumpyRandomStateTest, BulkSamplesFillAndSkipLikeSingleDraws) {
+  for (const int u32_first : {0, 1, 3, 620, 623, 624, 1247}) {
+    for (const std::size_t n : {std::size_t{0}, std::size_t{1}, std::size_t{2}, std::size_t{311}, std::size_t{312},
+                                std::size_t{313}, std::size_t{5000}, std::size_t{100001}}) {
+      NumpyRandomState one(77), bulk(77), skip(77);
+      for (int i = 0; i < u32_first; ++i) {
+        one.next_u32();
+        bulk.next_u32();
+        skip.next_u32();
+      }
+      std::vector<double> want(n), got(n);
+      for (auto& v : want) v = one.random_sample();
+      bulk.random_samples(got.data(), n);
+      ASSERT_EQ(got, want) << u32_first << " " << n;
+      skip.skip_samples(n);
+      // The streams continue identically (both 32-bit and double draws).
+      const std::uint32_t next = one.next_u32();
+      ASSERT_EQ(bulk.next_u32(), next) << u32_first << " " << n;
+      ASSERT_EQ(skip.next_u32(), next) << u32_first << " " << n;
+      for (int k = 0; k < 700; ++k) {
+        const double v = one.random_sample();
+        ASSERT_EQ(bulk.random_sample(), v);
+        ASSERT_EQ(skip.random_sample(), v) << u32_first << " " << n << " " << k;
+      }
+    }
+  }
+}
+
 TEST(NumpyLoggamTest, MatchesLgammaAtIntegers) {
   EXPECT_EQ(numpy_loggam(1.0), 0.0);
   EXPECT_EQ(numpy_loggam(2.0), 0.0);
