@@ -36,14 +36,27 @@ TEST(SnowKernelsTest, ColumnZoomBodiesAgreeAndInterpolateCornerAligned) {
   }
 }
 
+// One row of a blend's inputs: random BGR pixels and snow layers that are two thirds zero, as real ones mostly are.
+struct BlendRows {
+  std::vector<std::uint8_t> src, layer, rot;
+};
+BlendRows random_blend_rows(rng::FastRng& rng, int cols) {
+  BlendRows r{std::vector<std::uint8_t>(static_cast<std::size_t>(3 * cols)),
+              std::vector<std::uint8_t>(static_cast<std::size_t>(cols)),
+              std::vector<std::uint8_t>(static_cast<std::size_t>(cols))};
+  for (auto& v : r.src) v = static_cast<std::uint8_t>(rng.next_u32());
+  for (auto& v : r.layer) v = static_cast<std::uint8_t>(rng.next_u32() % 3 == 0 ? rng.next_u32() : 0);
+  for (auto& v : r.rot) v = static_cast<std::uint8_t>(rng.next_u32() % 3 == 0 ? rng.next_u32() : 0);
+  return r;
+}
+
 TEST(SnowKernelsTest, BlendBodiesAgreeForBothRotationLayouts) {
   rng::FastRng rng(3);
   for (int cols : {1, 15, 16, 17, 47, 64, 333, 1600, 1602}) {
-    std::vector<std::uint8_t> src(static_cast<std::size_t>(3 * cols)), layer(static_cast<std::size_t>(cols)),
-        rot(static_cast<std::size_t>(cols));
-    for (auto& v : src) v = static_cast<std::uint8_t>(rng.next_u32());
-    for (auto& v : layer) v = static_cast<std::uint8_t>(rng.next_u32() % 3 == 0 ? rng.next_u32() : 0);
-    for (auto& v : rot) v = static_cast<std::uint8_t>(rng.next_u32() % 3 == 0 ? rng.next_u32() : 0);
+    const BlendRows rows = random_blend_rows(rng, cols);
+    const std::vector<std::uint8_t>& src = rows.src;
+    const std::vector<std::uint8_t>& layer = rows.layer;
+    const std::vector<std::uint8_t>& rot = rows.rot;
     for (bool reversed : {false, true}) {
       std::vector<std::uint8_t> a(src.size()), b(src.size());
       blend_fast_row(src.data(), layer.data(), rot.data(), reversed, a.data(), cols, 0.7f, 0.3f, true);
@@ -143,11 +156,10 @@ TEST(SnowKernelsTest, ExactBlurBodiesAgree) {
 TEST(SnowKernelsTest, ExactBlendBodiesAgree) {
   rng::FastRng rng(8);
   for (int cols : {1, 15, 16, 17, 47, 64, 333, 1600, 1602}) {
-    std::vector<std::uint8_t> src(static_cast<std::size_t>(3 * cols)), layer(static_cast<std::size_t>(cols)),
-        rot(static_cast<std::size_t>(cols));
-    for (auto& v : src) v = static_cast<std::uint8_t>(rng.next_u32());
-    for (auto& v : layer) v = static_cast<std::uint8_t>(rng.next_u32() % 3 == 0 ? rng.next_u32() : 0);
-    for (auto& v : rot) v = static_cast<std::uint8_t>(rng.next_u32() % 3 == 0 ? rng.next_u32() : 0);
+    const BlendRows rows = random_blend_rows(rng, cols);
+    const std::vector<std::uint8_t>& src = rows.src;
+    const std::vector<std::uint8_t>& layer = rows.layer;
+    const std::vector<std::uint8_t>& rot = rows.rot;
     for (float b : {0.8f, 0.7f, 0.65f, 0.55f}) {
       const auto one_minus_b = static_cast<float>(1.0 - static_cast<double>(b));
       for (bool reversed : {false, true}) {

@@ -16,12 +16,14 @@
 #include "dataset/synth_render.hpp"
 #include "dataset/synth_world.hpp"
 #include "detector/color_lut.hpp"
+#include "detector/test_camera.hpp"
 #include "rng/fast_rng.hpp"
 
 namespace faultline::detector {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
+using test_support::camera;
+
 
 void expect_same_blobs(const cv::Mat& labels, double scale, const std::string& what, const BlobConfig& config = {}) {
   const auto want = find_blobs_per_class(labels, scale, config);
@@ -51,14 +53,6 @@ BlobConfig keep_all() {
   c.min_area_px = 0;
   c.min_side_px = 0;
   return c;
-}
-
-dataset::CameraModel camera(double yaw_deg) {
-  dataset::CameraModel cam;
-  const dataset::Mat3 axes{0, 0, 1, -1, 0, 0, 0, -1, 0};
-  const dataset::Mat3 yaw = dataset::quat_to_matrix(dataset::yaw_quat(yaw_deg * kPi / 180));
-  cam.sensor_to_ego = {dataset::mat_mul(yaw, axes), {1.5, 0.0, 1.5}};
-  return cam;
 }
 
 cv::Mat random_labels(int rows, int cols, int classes, double background, std::uint64_t seed) {

@@ -7,21 +7,14 @@
 
 #include "dataset/synth_render.hpp"
 #include "dataset/synth_world.hpp"
+#include "detector/test_camera.hpp"
 
 namespace faultline::detector {
 namespace {
 
-using dataset::SynthClass;
-constexpr double kPi = 3.14159265358979323846;
+using test_support::camera;
 
-// nuScenes-like camera mounted at `yaw_deg` (0 = forward, + = left); camera axes x right, y down, z forward.
-dataset::CameraModel camera(double yaw_deg) {
-  dataset::CameraModel cam;
-  const dataset::Mat3 axes{0, 0, 1, -1, 0, 0, 0, -1, 0};
-  const dataset::Mat3 yaw = dataset::quat_to_matrix(dataset::yaw_quat(yaw_deg * kPi / 180));
-  cam.sensor_to_ego = {dataset::mat_mul(yaw, axes), {1.5, 0.0, 1.5}};
-  return cam;
-}
+using dataset::SynthClass;
 
 // A straight road along world +x through the origin; the ego stands still at the origin (lane d = 0).
 dataset::SynthWorld empty_world() {
