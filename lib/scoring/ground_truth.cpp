@@ -145,7 +145,7 @@ Result<GroundTruth> load_ground_truth(const std::string& dataroot, const std::st
         "token", "sample_token", "instance_token", "attribute_tokens", "translation",
         "size",  "rotation",     "num_lidar_pts",  "num_radar_pts",    "prev",
         "next"};
-    Status s = stream_table(
+    Status scan = stream_table(
         ann_path, ann_fields,
         [&](const TableRecord& r, std::size_t i) {
           auto it = gt.sample_index.find(r.fields[1].str);
@@ -171,7 +171,7 @@ Result<GroundTruth> load_ground_truth(const std::string& dataroot, const std::st
           return Status::ok();
         },
         RecordFilter{{{1, in_split}}});
-    return s;
+    return scan;
   });
   // Every early return waits for the annotation thread (it references this frame).
   auto join = [&](Status first) {

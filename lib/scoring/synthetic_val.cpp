@@ -197,7 +197,6 @@ Result<SyntheticValStats> write_synthetic_val(const std::string& dir,
     const std::string scene_tok = tok.next(), log_tok = tok.next();
     std::vector<std::string> calib_toks;
     for (std::size_t c = 0; c < std::size(channels); ++c) calib_toks.push_back(tok.next());
-    const std::string& calib_tok = calib_toks[6];  // LIDAR_TOP
     log_tokens.push_back(log_tok);
     std::vector<std::string> sample_toks(static_cast<std::size_t>(n_samples));
     for (auto& t : sample_toks) t = tok.next();

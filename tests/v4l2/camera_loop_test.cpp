@@ -120,7 +120,9 @@ TEST_P(CameraPublishTest, PublishesEveryRecordedBufferAsACameraFrame) {
     EXPECT_EQ(f.intrinsics(0), 500);
     EXPECT_EQ(f.sensor_to_ego().translation().x(), 1.5);
     EXPECT_EQ(f.sensor_to_ego().rotation().w(), 0.5);
-    if (i > 0) EXPECT_GT(f.header().capture_stamp_ns(), got[static_cast<std::size_t>(i - 1)].header().capture_stamp_ns());
+    if (i > 0) {
+      EXPECT_GT(f.header().capture_stamp_ns(), got[static_cast<std::size_t>(i - 1)].header().capture_stamp_ns());
+    }
   }
 }
 
