@@ -69,18 +69,37 @@ cv::Size snow_layer_size(int rows, int cols, double zoom) {
 
 namespace {
 
+// What both layer paths share: the zoomed layer's size, the blur kernel, its taps that fit in the layer and the edge
+// padding they need.
+struct LayerGeometry {
+  SnowParams p;
+  int lh = 0, lw = 0;
+  const TabulatedKernel* kernel = nullptr;
+  std::vector<TapOffset> offsets;
+  int taps = 0, pad = 0;
+};
+LayerGeometry layer_geometry(int rows, int cols, int severity, double blur_angle_deg) {
+  LayerGeometry g;
+  g.p = snow_params(severity);
+  const cv::Size size = snow_layer_size(rows, cols, g.p.zoom);
+  g.lh = size.height;
+  g.lw = size.width;
+  g.kernel = find_tabulated_kernel(g.p.radius, g.p.sigma);
+  g.offsets = motion_offsets(blur_angle_deg, g.kernel->width);
+  g.taps = usable_taps(g.offsets, g.lh, g.lw);
+  for (int i = 0; i < g.taps; ++i) g.pad = std::max(g.pad, std::abs(g.offsets[static_cast<std::size_t>(i)].dx));
+  return g;
+}
+
 // The exact layer from the centre crop of the normal field (CV_64F, values N(loc, scale)) for an image of rows x
 // cols: zoom rows first and then columns (the reference's order), threshold and clip straight into an edge-padded
 // buffer, then blur with the tabulated kernel and round half to even to bytes, only for the top-left rows x cols.
 cv::Mat layer_exact_from_crop(const cv::Mat& crop, int rows, int cols, int severity, double blur_angle_deg) {
-  const SnowParams p = snow_params(severity);
-  const cv::Size size = snow_layer_size(rows, cols, p.zoom);
-  const int lh = size.height, lw = size.width;
-  const TabulatedKernel* k = find_tabulated_kernel(p.radius, p.sigma);
-  const auto offsets = motion_offsets(blur_angle_deg, k->width);
-  const int taps = usable_taps(offsets, lh, lw);
-  int pad = 0;
-  for (int i = 0; i < taps; ++i) pad = std::max(pad, std::abs(offsets[static_cast<std::size_t>(i)].dx));
+  const LayerGeometry g = layer_geometry(rows, cols, severity, blur_angle_deg);
+  const SnowParams& p = g.p;
+  const int lh = g.lh, lw = g.lw, taps = g.taps, pad = g.pad;
+  const TabulatedKernel* k = g.kernel;
+  const auto& offsets = g.offsets;
   const AxisMap rm = axis_map(crop.rows, lh);
   const snow_kernels::ColumnZoom64 column_zoom(crop.cols, lw);
   const std::size_t stride = static_cast<std::size_t>(lw + 2 * pad);
@@ -120,26 +139,31 @@ cv::Mat snow_layer_exact(const cv::Mat& normals, int severity, double blur_angle
 
 namespace {
 
-// Blends every row with `blend_row` (snow_kernels::blend_exact_row or blend_fast_row): the layer's row y and its
-// rotated copy, which is row rows - 1 - y read backwards.
+// Blends every row with `blend_row` (snow_kernels::blend_exact_row or blend_fast_row). The rotated layer's row y is
+// rot's row y, or, when rot_reversed (rot is the layer itself), its row rows - 1 - y read backwards.
 template <typename BlendRow>
-cv::Mat blend_rows(const cv::Mat& bgr, const cv::Mat& layer_u8, int severity, BlendRow blend_row) {
+cv::Mat blend_rows(const cv::Mat& bgr, const cv::Mat& layer_u8, const cv::Mat& rot, bool rot_reversed, int severity,
+                   BlendRow blend_row) {
   const SnowParams p = snow_params(severity);
   const float b = static_cast<float>(p.blend);
   const float one_minus_b = static_cast<float>(1.0 - p.blend);  // formed in double first, as NumPy does
   const int rows = bgr.rows, cols = bgr.cols;
   cv::Mat out(bgr.size(), bgr.type());
   for (int y = 0; y < rows; ++y) {
-    blend_row(bgr.ptr<std::uint8_t>(y), layer_u8.ptr<std::uint8_t>(y), layer_u8.ptr<std::uint8_t>(rows - 1 - y),
-              /*rot_reversed=*/true, out.ptr<std::uint8_t>(y), cols, b, one_minus_b);
+    blend_row(bgr.ptr<std::uint8_t>(y), layer_u8.ptr<std::uint8_t>(y),
+              rot.ptr<std::uint8_t>(rot_reversed ? rows - 1 - y : y), rot_reversed, out.ptr<std::uint8_t>(y), cols, b,
+              one_minus_b);
   }
   return out;
 }
 
+const auto kExactRow = [](auto... args) { snow_kernels::blend_exact_row(args...); };
+const auto kFastRow = [](auto... args) { snow_kernels::blend_fast_row(args...); };
+
 }  // namespace
 
 cv::Mat snow_blend_exact(const cv::Mat& bgr, const cv::Mat& layer_u8, int severity) {
-  return blend_rows(bgr, layer_u8, severity, [](auto... args) { snow_kernels::blend_exact_row(args...); });
+  return blend_rows(bgr, layer_u8, layer_u8, /*rot_reversed=*/true, severity, kExactRow);
 }
 
 cv::Mat snow_exact(const cv::Mat& bgr, int severity, rng::NumpyRandomState& rng) {
@@ -170,20 +194,17 @@ cv::Mat snow_layer_fast(const cv::Mat& crop_field, int rows, int cols, int sever
   // crop rows) and then rows (contiguous); bilinear zoom is separable, so only float rounding differs. The zoomed
   // layer goes straight into an edge-padded buffer, and each blurred row is quantised as soon as it is summed; only
   // the top-left rows x cols are computed.
-  const SnowParams p = snow_params(severity);
-  const cv::Size size = snow_layer_size(rows, cols, p.zoom);
-  const int lh = size.height, lw = size.width;
-  const TabulatedKernel* k = find_tabulated_kernel(p.radius, p.sigma);
-  const auto offsets = motion_offsets(blur_angle_deg, k->width);
-  const int taps = usable_taps(offsets, lh, lw);
+  const LayerGeometry g = layer_geometry(rows, cols, severity, blur_angle_deg);
+  const SnowParams& p = g.p;
+  const int lh = g.lh, lw = g.lw, taps = g.taps, pad = g.pad;
+  const TabulatedKernel* k = g.kernel;
+  const auto& offsets = g.offsets;
   double used = 0.0;
   for (int i = 0; i < taps; ++i) used += k->weights[i];
   const bool scale = taps < k->width && used > 0.0;
   std::vector<float> w(static_cast<std::size_t>(taps));
-  int pad = 0;
   for (int i = 0; i < taps; ++i) {
     w[static_cast<std::size_t>(i)] = static_cast<float>(scale ? k->weights[i] / used : k->weights[i]);
-    pad = std::max(pad, std::abs(offsets[static_cast<std::size_t>(i)].dx));
   }
   // Column pass on the crop rows.
   const snow_kernels::ColumnZoom column_zoom(crop_field.cols, lw);
@@ -221,21 +242,11 @@ cv::Mat snow_layer_fast(const cv::Mat& crop_field, int rows, int cols, int sever
 }
 
 cv::Mat snow_blend_fast(const cv::Mat& bgr, const cv::Mat& layer_u8, int severity) {
-  return blend_rows(bgr, layer_u8, severity, [](auto... args) { snow_kernels::blend_fast_row(args...); });
+  return blend_rows(bgr, layer_u8, layer_u8, /*rot_reversed=*/true, severity, kFastRow);
 }
 
 cv::Mat snow_blend_fast(const cv::Mat& bgr, const cv::Mat& layer_u8, const cv::Mat& layer_rot_u8, int severity) {
-  const SnowParams p = snow_params(severity);
-  const float b = static_cast<float>(p.blend);
-  const float one_minus_b = static_cast<float>(1.0 - p.blend);
-  const int rows = bgr.rows, cols = bgr.cols;
-  cv::Mat out(bgr.size(), bgr.type());
-  for (int y = 0; y < rows; ++y) {
-    snow_kernels::blend_fast_row(bgr.ptr<std::uint8_t>(y), layer_u8.ptr<std::uint8_t>(y),
-                                 layer_rot_u8.ptr<std::uint8_t>(y), /*rot_reversed=*/false,
-                                 out.ptr<std::uint8_t>(y), cols, b, one_minus_b);
-  }
-  return out;
+  return blend_rows(bgr, layer_u8, layer_rot_u8, /*rot_reversed=*/false, severity, kFastRow);
 }
 
 cv::Mat snow_fast(const cv::Mat& bgr, int severity, rng::FastRng& rng) {
