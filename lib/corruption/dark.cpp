@@ -42,56 +42,14 @@ void lambdas_for_range(double lo_u8, double hi_u8, int severity, double lambdas[
 
 }  // namespace
 
+void dark_lambdas(int lo_u8, int hi_u8, int severity, double lambdas[256]) {
+  lambdas_for_range(lo_u8, hi_u8, severity, lambdas);
+}
+
 void dark_lambdas(const cv::Mat& bgr, int severity, double lambdas[256]) {
   double lo_u8 = 0.0, hi_u8 = 0.0;
   cv::minMaxLoc(bgr.reshape(1), &lo_u8, &hi_u8);
   lambdas_for_range(lo_u8, hi_u8, severity, lambdas);
-}
-
-cv::Mat dark_exact(const cv::Mat& bgr, int severity, rng::NumpyRandomState& rng) {
-  const DarkParams p = dark_params(severity);
-  double lam[256];
-  dark_lambdas(bgr, severity, lam);
-  rng::PoissonParams prepared[256];
-  for (int v = 0; v < 256; ++v) prepared[v] = rng::prepare_poisson(lam[v]);
-  // y as a function of the count k, with the reference's arithmetic, for the counts that occur in practice.
-  constexpr std::int64_t kTable = 1024;
-  std::vector<double> y_of_k(kTable);
-  auto y_for = [&](std::int64_t k) {
-    return (std::min(std::max(static_cast<double>(k) / p.poisson_scale, 0.0), 1.0) * 255.0) / 255.0;
-  };
-  for (std::int64_t k = 0; k < kTable; ++k) y_of_k[static_cast<std::size_t>(k)] = y_for(k);
-  const cv::Mat in = bgr.isContinuous() ? bgr : bgr.clone();
-  const std::size_t n = in.total() * 3;
-  // All Poisson draws come before all normal draws, so the counts are kept: as uint16 (a per-thread buffer, 8.6 MB
-  // at 1600x900 instead of 35 MB of doubles), with counts >= kTable (never seen in practice) kept aside exactly.
-  thread_local std::vector<std::uint16_t> counts;
-  counts.resize(n);
-  std::vector<std::pair<std::size_t, std::int64_t>> large;
-  const std::uint8_t* src = in.data;
-  for (std::size_t i = 0; i < n; ++i) {
-    const std::int64_t k = rng.poisson(prepared[src[i]]);
-    if (k < kTable) {
-      counts[i] = static_cast<std::uint16_t>(k);
-    } else {
-      counts[i] = static_cast<std::uint16_t>(kTable);
-      large.emplace_back(i, k);
-    }
-  }
-  cv::Mat out(in.size(), in.type());
-  std::uint8_t* dst = out.data;
-  std::size_t next_large = 0;
-  for (std::size_t i = 0; i < n; ++i) {
-    double y = 0.0;
-    if (counts[i] < kTable) {
-      y = y_of_k[counts[i]];
-    } else {
-      y = y_for(large[next_large++].second);
-    }
-    const double v = y + rng.normal(0.0, p.sigma);
-    dst[i] = static_cast<std::uint8_t>(std::min(std::max(v, 0.0), 1.0) * 255.0);
-  }
-  return out;
 }
 
 namespace {

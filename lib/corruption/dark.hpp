@@ -24,8 +24,10 @@ DarkParams dark_params(int severity);
 
 // lambda per input value v (0..255): ((v/255 - lo)/(hi - lo))^2 * c * 255 / 255 * P, the reference's arithmetic.
 void dark_lambdas(const cv::Mat& bgr, int severity, double lambdas[256]);
+// The same for an image whose minimum and maximum byte are lo_u8 and hi_u8.
+void dark_lambdas(int lo_u8, int hi_u8, int severity, double lambdas[256]);
 
-// Bit-exact: H*W*3 Poissons then H*W*3 normals, in B,G,R memory order.
+// Bit-exact: H*W*3 Poissons then H*W*3 normals, in B,G,R memory order (dark_exact.cpp).
 cv::Mat dark_exact(const cv::Mat& bgr, int severity, rng::NumpyRandomState& rng);
 
 // Fast mode: per input value a sampling table of the output value (Poisson and read noise folded into one

@@ -2,6 +2,7 @@
 #include "rng/numpy_legacy.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstring>
 
@@ -12,8 +13,6 @@
 namespace faultline::rng {
 
 namespace {
-
-inline double polar_factor(double r2) { return std::sqrt(-2.0 * std::log(r2) / r2); }
 
 // The polar method's acceptance test, r2 in (0, 1).
 inline bool polar_accepts(double a, double b) {
@@ -153,6 +152,30 @@ void NumpyRandomState::standard_normals(double* out, std::size_t n) {
   }
 }
 
+void NumpyRandomState::polar_pairs(double* x, double* r2, std::size_t pairs) {
+  std::size_t got = 0;
+  while (got < pairs) {
+    std::size_t count = 0;
+    const double* d = mt_.block_doubles(count);
+    std::size_t j = 0;
+    // Every attempt is written at slot `got`, which moves on only when it was accepted (no branch on acceptance).
+    for (; j + 2 <= count && got < pairs; j += 2) {
+      const double a = 2.0 * d[j] - 1.0;
+      const double b = 2.0 * d[j + 1] - 1.0;
+      const double r = a * a + b * b;
+      x[2 * got] = b;
+      x[2 * got + 1] = a;
+      r2[got] = r;
+      got += static_cast<std::size_t>(r < 1.0 && r != 0.0);
+    }
+    mt_.advance_doubles(j);
+    if (got < pairs && count - j < 2) {  // straddling two blocks, or an odd stream position
+      polar_pair(x[2 * got + 1], x[2 * got], r2[got]);
+      ++got;
+    }
+  }
+}
+
 void Mt19937::seed(std::uint32_t seed) {
   state_[0] = seed;
   for (int i = 1; i < kN; ++i) {
@@ -256,14 +279,17 @@ PoissonParams prepare_poisson(double lam) {
   PoissonParams p;
   p.lam = lam;
   if (lam >= 10.0) {
+    p.method = PoissonMethod::Ptrs;
     p.slam = std::sqrt(lam);
     p.loglam = std::log(lam);
     p.b = 0.931 + 2.53 * p.slam;
     p.a = -0.059 + 0.02483 * p.b;
     p.invalpha = 1.1239 + 1.1328 / (p.b - 3.4);
     p.vr = 0.9277 - 3.6224 / (p.b - 2);
-  } else if (lam > 0.0) {
-    p.enlam = std::exp(-lam);
+    p.log_invalpha = std::log(p.invalpha);
+  } else if (lam != 0.0) {  // negative or NaN lambdas (invalid in NumPy) keep the old one-uniform behaviour
+    p.method = PoissonMethod::Multiplication;
+    if (lam > 0.0) p.enlam = std::exp(-lam);
   }
   return p;
 }
@@ -271,9 +297,12 @@ PoissonParams prepare_poisson(double lam) {
 std::int64_t NumpyRandomState::poisson(double lam) { return poisson(prepare_poisson(lam)); }
 
 std::int64_t NumpyRandomState::poisson(const PoissonParams& p) {
-  if (p.lam >= 10.0) return poisson_ptrs(p);
-  if (p.lam == 0.0) return 0;
-  return poisson_mult(p.enlam);
+  switch (p.method) {
+    case PoissonMethod::Ptrs: return poisson_ptrs(p);
+    case PoissonMethod::Multiplication: return poisson_mult(p.enlam);
+    case PoissonMethod::Zero: break;
+  }
+  return 0;
 }
 
 std::int64_t NumpyRandomState::poisson_mult(double enlam) {
@@ -289,17 +318,92 @@ std::int64_t NumpyRandomState::poisson_mult(double enlam) {
   }
 }
 
+namespace {
+
+// numpy_loggam(k + 1) for the counts PTRS proposes in practice (same doubles, computed once).
+constexpr std::int64_t kLoggamTable = 1024;
+double loggam_of_count_plus_one(std::int64_t k) {
+  static const std::array<double, kLoggamTable> table = [] {
+    std::array<double, kLoggamTable> t{};
+    for (std::int64_t j = 0; j < kLoggamTable; ++j) t[static_cast<std::size_t>(j)] = numpy_loggam(static_cast<double>(j + 1));
+    return t;
+  }();
+  return k < kLoggamTable ? table[static_cast<std::size_t>(k)] : numpy_loggam(static_cast<double>(k + 1));
+}
+
+// One PTRS attempt on (u + 0.5, v) = two uniforms: true with k set when it accepts.
+inline bool ptrs_attempt(const PoissonParams& p, double uniform_u, double v, std::int64_t& k) {
+  const double u = uniform_u - 0.5;
+  const double us = 0.5 - std::fabs(u);
+  k = static_cast<std::int64_t>(std::floor((2 * p.a / us + p.b) * u + p.lam + 0.43));
+  if (us >= 0.07 && v <= p.vr) return true;
+  if (k < 0 || (us < 0.013 && v > us)) return false;
+  return (std::log(v) + p.log_invalpha - std::log(p.a / (us * us) + p.b)) <=
+         (-p.lam + static_cast<double>(k) * p.loglam - loggam_of_count_plus_one(k));
+}
+
+}  // namespace
+
 std::int64_t NumpyRandomState::poisson_ptrs(const PoissonParams& p) {
+  std::int64_t k = 0;
   for (;;) {
-    const double u = random_sample() - 0.5;
+    const double u = random_sample();
     const double v = random_sample();
-    const double us = 0.5 - std::fabs(u);
-    const auto k = static_cast<std::int64_t>(std::floor((2 * p.a / us + p.b) * u + p.lam + 0.43));
-    if (us >= 0.07 && v <= p.vr) return k;
-    if (k < 0 || (us < 0.013 && v > us)) continue;
-    if ((std::log(v) + std::log(p.invalpha) - std::log(p.a / (us * us) + p.b)) <=
-        (-p.lam + static_cast<double>(k) * p.loglam - numpy_loggam(static_cast<double>(k + 1)))) {
-      return k;
+    if (ptrs_attempt(p, u, v, k)) return k;
+  }
+}
+
+void NumpyRandomState::poissons(const PoissonParams* params, const std::uint8_t* level, std::size_t n,
+                                std::uint8_t* counts, std::vector<LargeCount>& large) {
+  auto store = [&](std::size_t i, std::int64_t k) {
+    if (k < 255) {
+      counts[i] = static_cast<std::uint8_t>(k);
+    } else {
+      counts[i] = 255;
+      large.push_back({i, k});
+    }
+  };
+  // The block's doubles are copied with zeros behind them: a product chain always ends on a zero, so the
+  // multiplication loop needs no bounds test; a chain that ran into the padding is redone the plain way.
+  constexpr std::size_t kBlockDoubles = 312, kPad = 4;
+  alignas(32) double buf[kBlockDoubles + kPad];
+  std::size_t i = 0;
+  while (i < n) {
+    std::size_t count = 0;
+    const double* d = mt_.block_doubles(count);
+    if (d == nullptr) {  // odd stream position: one element the plain way (it realigns on its first uniform)
+      store(i, poisson(params[level[i]]));
+      ++i;
+      continue;
+    }
+    std::memcpy(buf, d, count * sizeof(double));
+    std::fill(buf + count, buf + count + kPad, 0.0);
+    std::size_t t = 0;  // doubles consumed from the block
+    for (; i < n; ++i) {
+      const PoissonParams& p = params[level[i]];
+      std::int64_t k = 0;
+      if (p.method == PoissonMethod::Multiplication) {
+        const std::size_t start = t;
+        double prod = buf[t];
+        while (prod > p.enlam) prod *= buf[++t];
+        if (t >= count) {
+          t = start;
+          break;
+        }
+        ++t;
+        k = static_cast<std::int64_t>(t - start - 1);
+      } else if (p.method == PoissonMethod::Ptrs) {
+        std::size_t s = t;
+        while (s + 2 <= count && !ptrs_attempt(p, buf[s], buf[s + 1], k)) s += 2;
+        if (s + 2 > count) break;
+        t = s + 2;
+      }
+      store(i, k);
+    }
+    mt_.advance_doubles(t);
+    if (i < n) {  // this element's draws straddle the block end
+      store(i, poisson(params[level[i]]));
+      ++i;
     }
   }
 }

@@ -2,8 +2,11 @@
 // Used by numpy mode so a corruption seeded with np.random.seed(s) reproduces the Python reference draw for draw.
 #pragma once
 
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <utility>
+#include <vector>
 
 namespace faultline::rng {
 
@@ -65,12 +68,24 @@ class Mt19937 {
 
 // Poisson(lam) constants precomputed once per lambda with the reference's arithmetic (Dark has at most 256
 // distinct lambdas per image). Drawing from them is bit-identical to drawing with lam.
+enum class PoissonMethod : std::uint8_t { Zero, Multiplication, Ptrs };
 struct PoissonParams {
   double lam = 0;
+  PoissonMethod method = PoissonMethod::Zero;
   double enlam = 1;  // exp(-lam), multiplication method
   double slam = 0, loglam = 0, b = 0, a = 0, invalpha = 0, vr = 0;  // PTRS
+  double log_invalpha = 0;  // log(invalpha), the same double PTRS would compute per attempt
 };
 PoissonParams prepare_poisson(double lam);
+
+// A Poisson count too large for a byte, kept aside by NumpyRandomState::poissons.
+struct LargeCount {
+  std::size_t index;
+  std::int64_t count;
+};
+
+// The legacy polar method's scale for an accepted r2: sqrt(-2 ln(r2) / r2) with glibc's log.
+inline double polar_factor(double r2) { return std::sqrt(-2.0 * std::log(r2) / r2); }
 
 // Not thread-safe; one instance per image (numpy mode) or per sequence (temporal draws).
 class NumpyRandomState {
@@ -109,6 +124,29 @@ class NumpyRandomState {
   // poisson(lam): 0 consumes nothing; lam < 10 multiplication method; lam >= 10 PTRS (Hormann).
   std::int64_t poisson(double lam);
   std::int64_t poisson(const PoissonParams& p);
+
+  // n Poisson draws in order, element i from params[level[i]] (a table indexed by a byte): the same counts and
+  // stream as n poisson() calls, in one loop over the generator's blocks. counts[i] = min(k, 255); counts of 255
+  // and more are also appended to `large` in index order.
+  void poissons(const PoissonParams* params, const std::uint8_t* level, std::size_t n, std::uint8_t* counts,
+                std::vector<LargeCount>& large);
+
+  // For callers that evaluate the polar method themselves. polar_pairs draws the next `pairs` accepted pairs as
+  // standard_normal() would (ignoring the cache): x[2q] = x2 and x[2q + 1] = x1 of pair q (the order their normals
+  // come out: f * x2, then f * x1) and r2[q], f = polar_factor(r2[q]).
+  void polar_pairs(double* x, double* r2, std::size_t pairs);
+  // Takes the cached normal into z (and clears the cache) if there is one.
+  bool take_cached_normal(double& z) {
+    if (!has_gauss_) return false;
+    z = cached_gauss();
+    return true;
+  }
+  // Leaves f(r2) * x1 of a pair whose f * x2 the caller used as the cached normal, evaluated only when read.
+  void cache_pair_half(double x1, double r2) {
+    has_gauss_ = true;
+    gauss_deferred_ = true;
+    x1_ = x1, r2_ = r2;
+  }
 
   // choice(6) with replacement: masked rejection on 32-bit outputs.
   int choice6() {

@@ -2,6 +2,7 @@
 // Poisson on both sides of the lambda = 10 switch (with the uniforms consumed), choice(6).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 #include <vector>
@@ -183,6 +184,77 @@ TEST(NumpyRandomStateTest, BulkSamplesFillAndSkipLikeSingleDraws) {
         ASSERT_EQ(bulk.random_sample(), v);
         ASSERT_EQ(skip.random_sample(), v) << u32_first << " " << n << " " << k;
       }
+    }
+  }
+}
+
+// poissons() against one poisson() call per element: a level table mixing lambda 0, the multiplication method,
+// PTRS and lambdas whose counts pass 255 (kept aside), over many blocks, from aligned and odd stream positions.
+TEST(NumpyRandomStateTest, BulkPoissonsEqualSingleDraws) {
+  PoissonParams table[256];
+  for (int v = 0; v < 256; ++v) {
+    const double lam = v < 20 ? 0.0 : v < 120 ? (v - 20) * 0.1 : v < 250 ? 10.0 + (v - 120) * 0.7 : 300.0 + v;
+    table[v] = prepare_poisson(lam);
+  }
+  std::vector<std::uint8_t> level(60001);
+  std::uint32_t s = 12345u;
+  for (auto& l : level) {
+    s ^= s << 13, s ^= s >> 17, s ^= s << 5;
+    l = static_cast<std::uint8_t>((s >> 8) % 256u < 6u ? 250u + s % 6u : (s >> 16) % 250u);  // few large lambdas
+  }
+  for (const int u32_first : {0, 1, 623}) {
+    for (const std::size_t n : {std::size_t{0}, std::size_t{1}, std::size_t{97}, level.size()}) {
+      NumpyRandomState bulk(5), one(5);
+      for (int i = 0; i < u32_first; ++i) ASSERT_EQ(bulk.next_u32(), one.next_u32());
+      std::vector<std::uint8_t> counts(n);
+      std::vector<LargeCount> large;
+      bulk.poissons(table, level.data(), n, counts.data(), large);
+      std::size_t next_large = 0;
+      for (std::size_t i = 0; i < n; ++i) {
+        const std::int64_t k = one.poisson(table[level[i]]);
+        ASSERT_EQ(counts[i], std::min<std::int64_t>(k, 255)) << u32_first << " " << i;
+        if (k >= 255) {
+          ASSERT_LT(next_large, large.size());
+          EXPECT_EQ(large[next_large].index, i);
+          EXPECT_EQ(large[next_large].count, k);
+          ++next_large;
+        }
+      }
+      EXPECT_EQ(next_large, large.size());
+      if (n == level.size()) {
+        EXPECT_GT(large.size(), 100u);  // the large-count path was exercised
+      }
+      EXPECT_EQ(bulk.random_sample(), one.random_sample()) << u32_first << " " << n;
+    }
+  }
+}
+
+// polar_pairs + cache_pair_half against standard_normal(): the same values (f * x2, then f * x1), the same cache
+// and the same stream afterwards, from aligned and odd positions and with a cached value already pending.
+TEST(NumpyRandomStateTest, PolarPairsGiveTheNormalsOfSingleDraws) {
+  for (const int u32_first : {0, 1}) {
+    for (const std::size_t pairs : {std::size_t{1}, std::size_t{3}, std::size_t{155}, std::size_t{4000}}) {
+      NumpyRandomState bulk(21), one(21);
+      for (int i = 0; i < u32_first; ++i) ASSERT_EQ(bulk.next_u32(), one.next_u32());
+      double z = 0.0;
+      EXPECT_FALSE(bulk.take_cached_normal(z));
+      std::vector<double> x(2 * pairs), r2(pairs);
+      bulk.polar_pairs(x.data(), r2.data(), pairs);
+      for (std::size_t q = 0; q < pairs; ++q) {
+        const double f = polar_factor(r2[q]);
+        ASSERT_EQ(f * x[2 * q], one.standard_normal()) << pairs << " " << q;
+        ASSERT_EQ(f * x[2 * q + 1], one.standard_normal()) << pairs << " " << q;
+      }
+      // One more pair whose second half is left cached, as an odd normal count leaves it.
+      bulk.polar_pairs(x.data(), r2.data(), 1);
+      ASSERT_EQ(polar_factor(r2[0]) * x[0], one.standard_normal());
+      bulk.cache_pair_half(x[1], r2[0]);
+      ASSERT_TRUE(bulk.gauss_cache_pending());
+      ASSERT_TRUE(one.gauss_cache_pending());
+      ASSERT_TRUE(bulk.take_cached_normal(z));
+      EXPECT_EQ(z, one.standard_normal());
+      EXPECT_FALSE(bulk.take_cached_normal(z));
+      EXPECT_EQ(bulk.random_sample(), one.random_sample());
     }
   }
 }
