@@ -365,7 +365,7 @@ void NumpyRandomState::poissons(const PoissonParams* params, const std::uint8_t*
   };
   // The block's doubles are copied with zeros behind them: a product chain always ends on a zero, so the
   // multiplication loop needs no bounds test; a chain that ran into the padding is redone the plain way.
-  constexpr std::size_t kBlockDoubles = 312, kPad = 4;
+  constexpr std::size_t kBlockDoubles = 312, kPad = 8;
   alignas(32) double buf[kBlockDoubles + kPad];
   std::size_t i = 0;
   while (i < n) {
@@ -383,15 +383,20 @@ void NumpyRandomState::poissons(const PoissonParams* params, const std::uint8_t*
       const PoissonParams& p = params[level[i]];
       std::int64_t k = 0;
       if (p.method == PoissonMethod::Multiplication) {
-        const std::size_t start = t;
-        double prod = buf[t];
-        while (prod > p.enlam) prod *= buf[++t];
-        if (t >= count) {
-          t = start;
-          break;
+        // The products never grow (each factor is < 1), so the count of the first four above exp(-lam) is k
+        // when the chain ends among them: no branch on k's value unless it is 4 or more.
+        const double* b = buf + t;
+        const double e = p.enlam;
+        const double p1 = b[0], p2 = p1 * b[1], p3 = p2 * b[2], p4 = p3 * b[3];
+        std::size_t above = static_cast<std::size_t>(p1 > e) + static_cast<std::size_t>(p2 > e) +
+                            static_cast<std::size_t>(p3 > e) + static_cast<std::size_t>(p4 > e);
+        if (above == 4) {
+          double prod = p4;
+          while ((prod *= b[above]) > e) ++above;
         }
-        ++t;
-        k = static_cast<std::int64_t>(t - start - 1);
+        if (t + above >= count) break;  // the chain ended in the padding: redone the plain way
+        t += above + 1;
+        k = static_cast<std::int64_t>(above);
       } else if (p.method == PoissonMethod::Ptrs) {
         std::size_t s = t;
         while (s + 2 <= count && !ptrs_attempt(p, buf[s], buf[s + 1], k)) s += 2;
