@@ -2,6 +2,7 @@
 #include "corruption/simd_kernels.hpp"
 
 #include <algorithm>
+#include <cmath>
 
 #if defined(__GNUC__) && defined(__x86_64__)
 #include <immintrin.h>
@@ -192,6 +193,89 @@ __attribute__((target("avx2,fma,f16c"))) std::size_t weighted_rows_truncate_f16_
   return j0;
 }
 
+// Fast mode: 8 * V outputs kept in registers across all taps, each fused multiply-add taking its float32 row operand
+// straight from memory (no conversion per tap), then truncation by the saturating packs. Only vectors with a sum
+// within `band` of an integer go over the taps again.
+template <int V>
+__attribute__((target("avx2,fma"), always_inline)) inline void fast_block(
+    const float* const* rows, const float* weights, int taps32, const double* weights64, int taps, float band,
+    const std::int32_t* flat, std::uint8_t* dst, std::size_t j0) {
+  __m256 a[V];
+  for (auto& v : a) v = _mm256_setzero_ps();
+  for (int i = 0; i < taps32; ++i) {
+    const float* r = rows[i] + j0;
+    // Keeps r as one base register with constant displacements (GCC otherwise holds j0 + 8 v in V registers and
+    // spills).
+    __asm__("" : "+r"(r));
+    const __m256 k = _mm256_broadcast_ss(weights + i);
+    for (int v = 0; v < V; ++v) a[v] = _mm256_fmadd_ps(k, _mm256_loadu_ps(r + 8 * v), a[v]);
+  }
+  const __m256 vband = _mm256_set1_ps(band);
+  const __m256 abs_mask = _mm256_castsi256_ps(_mm256_set1_epi32(0x7FFFFFFF));
+  __m256i q[V];
+  __m256 near[V];
+  int near_bits = 0;
+  for (int v = 0; v < V; ++v) {
+    q[v] = _mm256_cvttps_epi32(a[v]);  // negatives (> -1e-3) truncate to 0; the packs clamp at 255
+    const __m256 nearest = _mm256_round_ps(a[v], _MM_FROUND_TO_NEAREST_INT | _MM_FROUND_NO_EXC);
+    near[v] = _mm256_cmp_ps(_mm256_and_ps(_mm256_sub_ps(a[v], nearest), abs_mask), vband, _CMP_LT_OQ);
+    near_bits |= (_mm256_movemask_ps(near[v]) != 0) << v;
+  }
+  // Near-integer sums, where float32 may truncate the other way: flat lanes take the tabulated exact result, the
+  // others the float64 sum (one pass over the taps for both).
+  for (int v = 0; v < V; ++v) {
+    if (!(near_bits >> v & 1)) continue;
+    const __m256 first = _mm256_loadu_ps(rows[0] + j0 + 8 * v);
+    __m256 eq = near[v];
+    __m256d sum[2] = {_mm256_setzero_pd(), _mm256_setzero_pd()};
+    for (int i = 0; i < taps; ++i) {
+      const __m256 x = _mm256_loadu_ps(rows[i] + j0 + 8 * v);
+      eq = _mm256_and_ps(eq, _mm256_cmp_ps(x, first, _CMP_EQ_OQ));
+      const __m256d k = _mm256_broadcast_sd(weights64 + i);
+      sum[0] = _mm256_fmadd_pd(k, _mm256_cvtps_pd(_mm256_castps256_ps128(x)), sum[0]);
+      sum[1] = _mm256_fmadd_pd(k, _mm256_cvtps_pd(_mm256_extractf128_ps(x, 1)), sum[1]);
+    }
+    const __m256i exact = _mm256_set_m128i(_mm256_cvttpd_epi32(_mm256_max_pd(sum[1], _mm256_setzero_pd())),
+                                           _mm256_cvttpd_epi32(_mm256_max_pd(sum[0], _mm256_setzero_pd())));
+    q[v] = _mm256_blendv_epi8(q[v], exact, _mm256_castps_si256(near[v]));
+    q[v] = _mm256_mask_i32gather_epi32(q[v], flat, _mm256_cvttps_epi32(first), _mm256_castps_si256(eq), 4);
+  }
+  const __m256i byte_order = _mm256_setr_epi32(0, 4, 1, 5, 2, 6, 3, 7);
+  for (int v = 0; v < V; v += 4) {
+    const __m256i w01 = _mm256_packus_epi32(q[v], q[v + 1]);
+    const __m256i w23 = _mm256_packus_epi32(q[v + 2], q[v + 3]);
+    const __m256i b = _mm256_permutevar8x32_epi32(_mm256_packus_epi16(w01, w23), byte_order);
+    _mm256_storeu_si256(reinterpret_cast<__m256i*>(dst + j0 + 8 * v), b);
+  }
+}
+
+// Blocks of 96 outputs (12 accumulators: more independent chains than the FMA latency needs), then 64 or 32.
+__attribute__((target("avx2,fma"))) std::size_t weighted_rows_truncate_fast_avx2(
+    const float* const* rows, const float* weights, int taps32, const double* weights64, int taps, float band,
+    const std::int32_t* flat, std::uint8_t* dst, std::size_t n) {
+  std::size_t j0 = 0;
+  for (; j0 + 96 <= n; j0 += 96) fast_block<12>(rows, weights, taps32, weights64, taps, band, flat, dst, j0);
+  if (j0 + 64 <= n) {
+    fast_block<8>(rows, weights, taps32, weights64, taps, band, flat, dst, j0);
+    j0 += 64;
+  }
+  if (j0 + 32 <= n) {
+    fast_block<4>(rows, weights, taps32, weights64, taps, band, flat, dst, j0);
+    j0 += 32;
+  }
+  return j0;
+}
+
+__attribute__((target("avx2"))) void u8_to_float_avx2(const std::uint8_t* src, float* dst, std::size_t n,
+                                                      std::size_t* done) {
+  std::size_t j = 0;
+  for (; j + 8 <= n; j += 8) {
+    const __m128i bytes = _mm_loadl_epi64(reinterpret_cast<const __m128i*>(src + j));
+    _mm256_storeu_ps(dst + j, _mm256_cvtepi32_ps(_mm256_cvtepu8_epi32(bytes)));
+  }
+  *done = j;
+}
+
 __attribute__((target("avx2,f16c"))) void u8_to_half_avx2(const std::uint8_t* src, std::uint16_t* dst,
                                                           std::size_t n, std::size_t* done) {
   std::size_t j = 0;
@@ -221,6 +305,20 @@ __attribute__((target("avx2"))) void period_change_bits_avx2(const std::uint16_t
       const __m256i packed = _mm256_permute4x64_epi64(_mm256_packs_epi16(eq[0], eq[1]), 0xD8);
       const auto m = static_cast<std::uint32_t>(_mm256_movemask_epi8(packed));
       word |= static_cast<std::uint64_t>(~m) << (32 * h);
+    }
+    bits[w] = word;
+  }
+}
+
+// Same for float32 rows: 8 lanes per compare, 8 compares per word.
+__attribute__((target("avx2"))) void period_change_bits_avx2(const float* src, std::size_t period, std::uint64_t* bits,
+                                                             std::size_t w_begin, std::size_t w_end) {
+  for (std::size_t w = w_begin; w < w_end; ++w) {
+    std::uint64_t word = 0;
+    for (int k = 0; k < 8; ++k) {
+      const float* p = src + 64 * w + 8 * k;
+      const __m256 eq = _mm256_cmp_ps(_mm256_loadu_ps(p), _mm256_loadu_ps(p - period), _CMP_EQ_OQ);
+      word |= static_cast<std::uint64_t>(~static_cast<unsigned>(_mm256_movemask_ps(eq)) & 0xFFu) << (8 * k);
     }
     bits[w] = word;
   }
@@ -277,7 +375,10 @@ void u8_to_half(const std::uint8_t* src, std::uint16_t* dst, std::size_t n) {
   for (; j < n; ++j) dst[j] = half_of_byte(src[j]);
 }
 
-void period_change_bits(const std::uint16_t* src, std::size_t n, std::size_t period, std::uint64_t* bits) {
+namespace {
+
+template <typename T>
+void period_change_bits_any(const T* src, std::size_t n, std::size_t period, std::uint64_t* bits) {
   const std::size_t words = (n + 63) / 64;
   auto scalar_words = [&](std::size_t w_begin, std::size_t w_end) {
     for (std::size_t w = w_begin; w < w_end; ++w) {
@@ -297,6 +398,49 @@ void period_change_bits(const std::uint16_t* src, std::size_t n, std::size_t per
   }
 #endif
   scalar_words(0, words);
+}
+
+}  // namespace
+
+void period_change_bits(const std::uint16_t* src, std::size_t n, std::size_t period, std::uint64_t* bits) {
+  period_change_bits_any(src, n, period, bits);
+}
+
+void period_change_bits(const float* src, std::size_t n, std::size_t period, std::uint64_t* bits) {
+  period_change_bits_any(src, n, period, bits);
+}
+
+void u8_to_float(const std::uint8_t* src, float* dst, std::size_t n) {
+  std::size_t j = 0;
+#if defined(__GNUC__) && defined(__x86_64__)
+  if (have_avx2()) u8_to_float_avx2(src, dst, n, &j);
+#endif
+  for (; j < n; ++j) dst[j] = static_cast<float>(src[j]);
+}
+
+void weighted_rows_truncate_fast(const float* const* rows, const float* weights, int taps32, const double* weights64,
+                                 int taps, float band, const std::int32_t* flat, std::uint8_t* dst, std::size_t n) {
+  std::size_t j0 = 0;
+#if defined(__GNUC__) && defined(__x86_64__)
+  if (have_avx2_fma()) {
+    j0 = weighted_rows_truncate_fast_avx2(rows, weights, taps32, weights64, taps, band, flat, dst, n);
+  }
+#endif
+  for (std::size_t j = j0; j < n; ++j) {
+    float a = 0.0f;
+    for (int i = 0; i < taps32; ++i) a += weights[i] * rows[i][j];
+    int v = std::min(std::max(static_cast<int>(a), 0), 255);
+    if (std::fabs(a - std::nearbyint(a)) < band) {
+      bool all_equal = true;
+      double exact = 0.0;
+      for (int i = 0; i < taps; ++i) {
+        exact += weights64[i] * rows[i][j];
+        all_equal = all_equal && rows[i][j] == rows[0][j];
+      }
+      v = all_equal ? flat[static_cast<int>(rows[0][j])] : static_cast<int>(std::min(std::max(exact, 0.0), 255.0));
+    }
+    dst[j] = static_cast<std::uint8_t>(v);
+  }
 }
 
 std::size_t weighted_rows_truncate(const std::uint16_t* const* rows, const float* weights, const double* weights64,

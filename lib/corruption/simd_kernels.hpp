@@ -31,10 +31,12 @@ constexpr float byte_of_half(std::uint16_t h) {
   return static_cast<float>((0x400u | (h & 0x3FFu)) >> (10 - e));
 }
 void u8_to_half(const std::uint8_t* src, std::uint16_t* dst, std::size_t n);
+void u8_to_float(const std::uint8_t* src, float* dst, std::size_t n);
 
 // Bit p of `bits` (64 per word, ceil(n / 64) words written) is set where p >= period and src[p] != src[p - period]:
 // a run of clear bits marks a stretch of a row that repeats one pixel (period = channels).
 void period_change_bits(const std::uint16_t* src, std::size_t n, std::size_t period, std::uint64_t* bits);
+void period_change_bits(const float* src, std::size_t n, std::size_t period, std::uint64_t* bits);
 
 // Fused blur + truncation over half-precision source rows (byte values): s = sum_i weights[i] * rows[i][j]
 // (float32, taps in order, fused multiply-adds where the CPU has FMA), then dst[j] = floor(s) clamped to 0..255
@@ -48,6 +50,15 @@ void period_change_bits(const std::uint16_t* src, std::size_t n, std::size_t per
 std::size_t weighted_rows_truncate(const std::uint16_t* const* rows, const float* weights, const double* weights64,
                                    int taps, float band, const std::int32_t* flat, std::uint8_t* dst,
                                    std::uint64_t* ambiguous, std::size_t n);
+
+// Fast-mode blur + truncation over float32 source rows (byte values): s = sum_{i < taps32} weights[i] * rows[i][j]
+// (float32, taps in order, fused multiply-adds where the CPU has FMA; taps32 <= taps leaves out a negligible tail),
+// dst[j] = floor(s) clamped to 0..255. Where s lies within `band` of an integer (its truncation may differ from the
+// exact one; band must cover the float32 error and the left-out tail), the value is taken from flat[v] (the exact
+// result where every tap holds byte v) if all `taps` taps are equal, else from the float64 sum over all `taps` with
+// weights64. So it differs from the reference only where that float64 sum (other tap order) truncates differently.
+void weighted_rows_truncate_fast(const float* const* rows, const float* weights, int taps32, const double* weights64,
+                                 int taps, float band, const std::int32_t* flat, std::uint8_t* dst, std::size_t n);
 
 // dst[j] = floor(acc[j]) clamped to 0..255 where floor(acc[j] - band) == floor(acc[j] + band) and acc[j] >= band;
 // ambiguous[j] = 1 elsewhere (dst[j] is then to be overwritten). Returns the number of ambiguous values.

@@ -61,10 +61,13 @@ TEST_P(FastGoldenTest, MatchesGoldenExactlyOrWithinSeedToSeedRange) {
     case Corruption::Brightness:
     case Corruption::ColorQuant: EXPECT_EQ(max_abs_diff(*out, ref), 0.0); return;
     case Corruption::MotionBlur: {
+      // Angle injected: within fast mode's allowance (at most 1 off on at most 0.2 % of the values).
       rng::FastRng r2(1);
       corruption::CorruptOptions opt;
       opt.angle_deg = c.angle_deg;
-      EXPECT_EQ(max_abs_diff(*corruption::corrupt(in, c.type, c.severity, r2, opt), ref), 0.0);
+      const cv::Mat blurred = *corruption::corrupt(in, c.type, c.severity, r2, opt);
+      EXPECT_LE(max_abs_diff(blurred, ref), 1.0);
+      EXPECT_LE(fraction_different(blurred, ref), 0.002);
       return;
     }
     case Corruption::Fog: {
