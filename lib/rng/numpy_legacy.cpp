@@ -210,33 +210,73 @@ FAULTLINE_RNG_CLONES void twist(std::uint32_t* __restrict state) {
   state[kN - 1] = state[kM - 1] ^ (y >> 1) ^ ((0u - (y & 1u)) & kMatrix);
 }
 
-// Tempering and pair conversion of a freshly twisted state, also as straight vectorisable loops.
-FAULTLINE_RNG_CLONES void temper(const std::uint32_t* __restrict state, std::uint32_t* __restrict out,
-                                 double* __restrict pairs) {
-  constexpr int kN = 624;
-  for (int k = 0; k < kN; ++k) {
-    std::uint32_t t = state[k];
-    t ^= t >> 11;
-    t ^= (t << 7) & 0x9d2c5680u;
-    t ^= (t << 15) & 0xefc60000u;
-    t ^= t >> 18;
-    out[k] = t;
-  }
-  // (a >> 5) < 2^27 and (b >> 6) < 2^26 convert exactly through int32; the sum is exact and the division by 2^53
-  // is exact scaling, so this is the scalar formula's double.
-  for (int k = 0; k < kN / 2; ++k) {
-    const auto a = static_cast<std::int32_t>(out[2 * k] >> 5);
-    const auto b = static_cast<std::int32_t>(out[2 * k + 1] >> 6);
-    pairs[k] = (static_cast<double>(a) * 67108864.0 + static_cast<double>(b)) / 9007199254740992.0;
+inline std::uint32_t temper_word(std::uint32_t t) {
+  t ^= t >> 11;
+  t ^= (t << 7) & 0x9d2c5680u;
+  t ^= (t << 15) & 0xefc60000u;
+  return t ^ (t >> 18);
+}
+
+// random_sample() of the tempered pair (a, b): (a >> 5) < 2^27 and (b >> 6) < 2^26 convert exactly, the sum is
+// exact and the division by 2^53 is exact scaling.
+inline double pair_double(std::uint32_t a, std::uint32_t b) {
+  return (static_cast<double>(a >> 5) * 67108864.0 + static_cast<double>(b >> 6)) / 9007199254740992.0;
+}
+
+void temper_pairs_scalar(const std::uint32_t* state, double* pairs) {
+  for (int k = 0; k < 312; ++k) pairs[k] = pair_double(temper_word(state[2 * k]), temper_word(state[2 * k + 1]));
+}
+
+#if defined(__GNUC__) && defined(__x86_64__)
+// Four pairs per step, each pair as one 64-bit lane (a low, b high): a >> 5 and b >> 6 become doubles by OR-ing
+// them into 2^52's mantissa and subtracting 2^52 (exact below 2^52), then the scalar formula.
+__attribute__((target("avx2"))) void temper_pairs_avx2(const std::uint32_t* state, double* pairs) {
+  const __m256i m1 = _mm256_set1_epi32(static_cast<int>(0x9d2c5680u));
+  const __m256i m2 = _mm256_set1_epi32(static_cast<int>(0xefc60000u));
+  const __m256i low32 = _mm256_set1_epi64x(0xFFFFFFFFll);
+  const __m256d two52 = _mm256_set1_pd(4503599627370496.0);
+  const __m256i two52_bits = _mm256_castpd_si256(two52);
+  const __m256d two26 = _mm256_set1_pd(67108864.0), inv_two53 = _mm256_set1_pd(1.0 / 9007199254740992.0);
+  for (int k = 0; k < 624; k += 8) {
+    __m256i t = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(state + k));
+    t = _mm256_xor_si256(t, _mm256_srli_epi32(t, 11));
+    t = _mm256_xor_si256(t, _mm256_and_si256(_mm256_slli_epi32(t, 7), m1));
+    t = _mm256_xor_si256(t, _mm256_and_si256(_mm256_slli_epi32(t, 15), m2));
+    t = _mm256_xor_si256(t, _mm256_srli_epi32(t, 18));
+    const __m256i a = _mm256_srli_epi64(_mm256_and_si256(t, low32), 5);
+    const __m256i b = _mm256_srli_epi64(t, 38);
+    const __m256d ad = _mm256_sub_pd(_mm256_castsi256_pd(_mm256_or_si256(a, two52_bits)), two52);
+    const __m256d bd = _mm256_sub_pd(_mm256_castsi256_pd(_mm256_or_si256(b, two52_bits)), two52);
+    _mm256_storeu_pd(pairs + k / 2, _mm256_mul_pd(_mm256_add_pd(_mm256_mul_pd(ad, two26), bd), inv_two53));
   }
 }
+
+bool mt_has_avx2() {
+  static const bool yes = __builtin_cpu_supports("avx2");
+  return yes;
+}
+#endif
 
 }  // namespace
 
 void Mt19937::refill() {
   twist(state_);
-  temper(state_, out_, pairs_);
+#if defined(__GNUC__) && defined(__x86_64__)
+  if (mt_has_avx2()) {
+    temper_pairs_avx2(state_, pairs_);
+  } else {
+    temper_pairs_scalar(state_, pairs_);
+  }
+#else
+  temper_pairs_scalar(state_, pairs_);
+#endif
+  words_ready_ = false;
   index_ = 0;
+}
+
+void Mt19937::temper_words() {
+  for (int k = 0; k < kN; ++k) out_[k] = temper_word(state_[k]);
+  words_ready_ = true;
 }
 
 void Mt19937::fill_doubles(double* out, std::size_t n) {

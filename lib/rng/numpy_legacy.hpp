@@ -10,16 +10,17 @@
 
 namespace faultline::rng {
 
-// MT19937 with the reference's init_genrand seeding (== std::mt19937(seed) output for output). It twists and
-// tempers 624 words at a time into a buffer (vectorised, with an AVX2 clone), and converts the 312 aligned pairs
-// to random_sample() doubles in the same pass; faster than std::mt19937's per-call tempering on the millions of
-// draws Dark, Fog and Snow make.
+// MT19937 with the reference's init_genrand seeding (== std::mt19937(seed) output for output). It twists 624
+// words at a time and tempers them straight into the block's 312 random_sample() doubles (AVX2 where available);
+// the tempered 32-bit words themselves are made only if a single 32-bit draw asks for them. Faster than
+// std::mt19937's per-call tempering on the millions of draws Dark, Fog and Snow make.
 class Mt19937 {
  public:
   explicit Mt19937(std::uint32_t seed) { this->seed(seed); }
   void seed(std::uint32_t seed);
   std::uint32_t operator()() {
     if (index_ == kN) refill();
+    if (!words_ready_) temper_words();
     return out_[index_++];
   }
 
@@ -27,7 +28,8 @@ class Mt19937 {
   // aligned pair of the current block (always, unless single 32-bit draws made the position odd) the double was
   // precomputed with the block (vectorised), which is the same value.
   double next_double() {
-    if ((index_ & 1) == 0 && index_ < kN) {
+    if (index_ == kN) refill();
+    if ((index_ & 1) == 0) {
       const double u = pairs_[index_ >> 1];
       index_ += 2;
       return u;
@@ -60,9 +62,11 @@ class Mt19937 {
  private:
   static constexpr int kN = 624;
   void refill();
+  void temper_words();
   std::uint32_t state_[kN];
-  std::uint32_t out_[kN];
-  double pairs_[kN / 2];  // pairs_[k] = the double from out_[2k], out_[2k + 1]
+  std::uint32_t out_[kN];  // the block's tempered words, valid when words_ready_
+  bool words_ready_ = false;
+  double pairs_[kN / 2];  // pairs_[k] = the double from tempered words 2k, 2k + 1
   int index_ = kN;
 };
 
