@@ -371,11 +371,22 @@ double loggam_of_count_plus_one(std::int64_t k) {
   return k < kLoggamTable ? table[static_cast<std::size_t>(k)] : numpy_loggam(static_cast<double>(k + 1));
 }
 
+// static_cast<int64_t>(std::floor(q)) without a libm call (the baseline ISA has no rounding instruction); values
+// outside +-2^62 (us = 0 gives -inf) take std::floor's path.
+inline std::int64_t floor_to_int64(double q) {
+  if (!(q > -0x1p62 && q < 0x1p62)) return static_cast<std::int64_t>(std::floor(q));
+  const auto k = static_cast<std::int64_t>(q);  // truncation: one above the floor for negative non-integers
+  return static_cast<double>(k) > q ? k - 1 : k;
+}
+
+// exp(-2): from lambda 2 on, k >= 4 is common enough (P > 0.14) that the multiplication loop looks eight deep.
+constexpr double kLongChainEnlam = 0.1353352832366127;
+
 // One PTRS attempt on (u + 0.5, v) = two uniforms: true with k set when it accepts.
 inline bool ptrs_attempt(const PoissonParams& p, double uniform_u, double v, std::int64_t& k) {
   const double u = uniform_u - 0.5;
   const double us = 0.5 - std::fabs(u);
-  k = static_cast<std::int64_t>(std::floor((2 * p.a / us + p.b) * u + p.lam + 0.43));
+  k = floor_to_int64((2 * p.a / us + p.b) * u + p.lam + 0.43);
   if (us >= 0.07 && v <= p.vr) return true;
   if (k < 0 || (us < 0.013 && v > us)) return false;
   return (std::log(v) + p.log_invalpha - std::log(p.a / (us * us) + p.b)) <=
@@ -405,7 +416,7 @@ void NumpyRandomState::poissons(const PoissonParams* params, const std::uint8_t*
   };
   // The block's doubles are copied with zeros behind them: a product chain always ends on a zero, so the
   // multiplication loop needs no bounds test; a chain that ran into the padding is redone the plain way.
-  constexpr std::size_t kBlockDoubles = 312, kPad = 8;
+  constexpr std::size_t kBlockDoubles = 312, kPad = 12;
   alignas(32) double buf[kBlockDoubles + kPad];
   std::size_t i = 0;
   while (i < n) {
@@ -430,8 +441,17 @@ void NumpyRandomState::poissons(const PoissonParams* params, const std::uint8_t*
         const double p1 = b[0], p2 = p1 * b[1], p3 = p2 * b[2], p4 = p3 * b[3];
         std::size_t above = static_cast<std::size_t>(p1 > e) + static_cast<std::size_t>(p2 > e) +
                             static_cast<std::size_t>(p3 > e) + static_cast<std::size_t>(p4 > e);
-        if (above == 4) {
-          double prod = p4;
+        double prod = p4;
+        std::size_t depth = 4;
+        if (p.enlam < kLongChainEnlam) {  // larger lambdas: four more products before any branch on k
+          const double p5 = p4 * b[4], p6 = p5 * b[5], p7 = p6 * b[6], p8 = p7 * b[7];
+          above += static_cast<std::size_t>(p5 > e) + static_cast<std::size_t>(p6 > e) +
+                   static_cast<std::size_t>(p7 > e) + static_cast<std::size_t>(p8 > e);
+          prod = p8;
+          depth = 8;
+        }
+        if (above == depth) {
+          // Every product so far was above: continue the chain from the last one.
           while ((prod *= b[above]) > e) ++above;
         }
         if (t + above >= count) break;  // the chain ended in the padding: redone the plain way
