@@ -191,12 +191,12 @@ cv::Mat snow_exact(const cv::Mat& bgr, int severity, rng::NumpyRandomState& rng)
 
 cv::Mat snow_layer_fast(const cv::Mat& crop_field, int rows, int cols, int severity, double blur_angle_deg) {
   // Same stages as the exact layer in float32, reordered for speed: the zoom interpolates columns first (on the few
-  // crop rows) and then rows (contiguous); bilinear zoom is separable, so only float rounding differs. The zoomed
-  // layer goes straight into an edge-padded buffer, and each blurred row is quantised as soon as it is summed; only
-  // the top-left rows x cols are computed.
+  // crop rows) and then rows (contiguous); bilinear zoom is separable, so only float rounding differs. The blur
+  // makes the layer's rows as it needs them (never the whole layer) and quantises each sum at once; only the
+  // top-left rows x cols are computed.
   const LayerGeometry g = layer_geometry(rows, cols, severity, blur_angle_deg);
   const SnowParams& p = g.p;
-  const int lh = g.lh, lw = g.lw, taps = g.taps, pad = g.pad;
+  const int lh = g.lh, lw = g.lw, taps = g.taps;
   const TabulatedKernel* k = g.kernel;
   const auto& offsets = g.offsets;
   double used = 0.0;
@@ -209,35 +209,29 @@ cv::Mat snow_layer_fast(const cv::Mat& crop_field, int rows, int cols, int sever
   // Column pass on the crop rows.
   const snow_kernels::ColumnZoom column_zoom(crop_field.cols, lw);
   thread_local std::vector<float> colz;  // reused per thread: fresh multi-MB buffers cost page faults
-  thread_local std::vector<float> padded;
   const auto lw_u = static_cast<std::size_t>(lw);
   colz.resize(static_cast<std::size_t>(crop_field.rows) * lw_u);
   for (int r = 0; r < crop_field.rows; ++r) {
     column_zoom.run(crop_field.ptr<float>(r), colz.data() + static_cast<std::size_t>(r) * lw_u);
   }
-  // Row pass + threshold into the padded layer.
+  // Row pass + threshold, made as the blur needs the rows; blur with the edge clamp at the layer's own size, and
+  // quantise the top-left rows x cols.
   const snow_kernels::ZoomAxis rm = snow_kernels::zoom_axis(crop_field.rows, lh);
-  const std::size_t stride = static_cast<std::size_t>(lw + 2 * pad);
-  padded.resize(stride * static_cast<std::size_t>(lh));
   const float thr = static_cast<float>(p.threshold);
-  for (int o = 0; o < lh; ++o) {
+  const snow_kernels::LayerRowMaker make_row = [&](int o, float* d) {
     const auto ou = static_cast<std::size_t>(o);
     const float* a = colz.data() + static_cast<std::size_t>(rm.i0[ou]) * lw_u;
     const float* b = colz.data() + static_cast<std::size_t>(rm.i1[ou]) * lw_u;
-    float* d = padded.data() + ou * stride;
-    snow_kernels::lerp_threshold(a, b, rm.w[ou], thr, d + pad, lw);
-    std::fill(d, d + pad, d[pad]);
-    std::fill(d + pad + lw, d + stride, d[pad + lw - 1]);
-  }
-  // Blur (edge clamp at the layer's own size) and quantise the top-left rows x cols.
+    snow_kernels::lerp_threshold(a, b, rm.w[ou], thr, d, lw);
+  };
   std::vector<int> dx(static_cast<std::size_t>(taps)), dy(static_cast<std::size_t>(taps));
   for (int i = 0; i < taps; ++i) {
     dx[static_cast<std::size_t>(i)] = offsets[static_cast<std::size_t>(i)].dx;
     dy[static_cast<std::size_t>(i)] = offsets[static_cast<std::size_t>(i)].dy;
   }
   cv::Mat out(rows, cols, CV_8U);
-  snow_kernels::blur_quantise(padded.data(), stride, lh, pad, dx.data(), dy.data(), w.data(), taps,
-                              out.ptr<std::uint8_t>(), out.step[0], rows, cols);
+  snow_kernels::blur_quantise(make_row, lh, lw, dx.data(), dy.data(), w.data(), taps, out.ptr<std::uint8_t>(),
+                              out.step[0], rows, cols);
   return out;
 }
 

@@ -282,45 +282,36 @@ __attribute__((target("avx2,fma"))) int blend_exact_avx2(const std::uint8_t* src
   return x;
 }
 
-// Whole blocks of 64 columns, row by row: sums in registers across all taps, then quantised as quantise_row does
-// (no accumulator row). Returns how many columns it wrote. (Strips of columns walked top to bottom, to keep the taps'
-// rows in L1, measured no faster.)
-__attribute__((target("avx2,fma"))) int blur_quantise_avx2(const float* padded, std::size_t stride, int lh, int pad,
-                                                           const int* dx, const int* dy, const float* w, int taps,
-                                                           std::uint8_t* dst, std::size_t dst_stride, int rows,
-                                                           int cols) {
+// Eight float32 sums -> eight bytes, rounded half to even as quantise_value does.
+__attribute__((target("avx2"))) inline __m128i quantise8(__m256 s) {
+  const __m256 k255 = _mm256_set1_ps(255.0f), magic = _mm256_set1_ps(12582912.0f);
+  const __m256 r = _mm256_sub_ps(_mm256_add_ps(_mm256_mul_ps(s, k255), magic), magic);
+  const __m256i q = _mm256_cvttps_epi32(_mm256_min_ps(_mm256_max_ps(r, _mm256_setzero_ps()), k255));
+  const __m128i words = _mm_packus_epi32(_mm256_castsi256_si128(q), _mm256_extracti128_si256(q, 1));
+  return _mm_packus_epi16(words, words);
+}
+
+// dst[j] = quantise(fma chain over src[i][j]) for j < n rounded up to 8 (dst and src sized for it): blocks of 64
+// columns, then single vectors, sums in registers across all taps.
+__attribute__((target("avx2,fma"))) void blur_row_avx2(const float* const* src, const float* w, int taps,
+                                                       std::uint8_t* dst, int n) {
   constexpr int kVectors = 8, kBlock = 8 * kVectors;
-  const __m256 k255 = _mm256_set1_ps(255.0f), magic = _mm256_set1_ps(12582912.0f), zero = _mm256_setzero_ps();
-  const __m256i order = _mm256_setr_epi32(0, 4, 1, 5, 2, 6, 3, 7);
-  std::vector<const float*> row(static_cast<std::size_t>(taps));
-  const int whole = cols / kBlock * kBlock;
-  for (int y = 0; y < rows; ++y) {
+  int j0 = 0;
+  for (; j0 + kBlock <= n; j0 += kBlock) {
+    __m256 s[kVectors];
+    for (auto& v : s) v = _mm256_setzero_ps();
     for (int i = 0; i < taps; ++i) {
-      row[static_cast<std::size_t>(i)] =
-          padded + static_cast<std::size_t>(std::clamp(y - dy[i], 0, lh - 1)) * stride + (pad - dx[i]);
+      const float* r = src[i] + j0;
+      const __m256 k = _mm256_broadcast_ss(w + i);
+      for (int v = 0; v < kVectors; ++v) s[v] = _mm256_fmadd_ps(k, _mm256_loadu_ps(r + 8 * v), s[v]);
     }
-    std::uint8_t* d = dst + static_cast<std::size_t>(y) * dst_stride;
-    for (int j0 = 0; j0 < whole; j0 += kBlock) {
-      __m256 s[kVectors];
-      for (auto& v : s) v = _mm256_setzero_ps();
-      for (int i = 0; i < taps; ++i) {
-        const float* r = row[static_cast<std::size_t>(i)] + j0;
-        const __m256 k = _mm256_broadcast_ss(w + i);
-        for (int v = 0; v < kVectors; ++v) s[v] = _mm256_fmadd_ps(k, _mm256_loadu_ps(r + 8 * v), s[v]);
-      }
-      __m256i q[kVectors];
-      for (int v = 0; v < kVectors; ++v) {
-        const __m256 r = _mm256_sub_ps(_mm256_add_ps(_mm256_mul_ps(s[v], k255), magic), magic);
-        q[v] = _mm256_cvttps_epi32(_mm256_min_ps(_mm256_max_ps(r, zero), k255));
-      }
-      for (int v = 0; v < kVectors; v += 4) {
-        const __m256i bytes = _mm256_packus_epi16(_mm256_packus_epi32(q[v], q[v + 1]),
-                                                  _mm256_packus_epi32(q[v + 2], q[v + 3]));
-        _mm256_storeu_si256(reinterpret_cast<__m256i*>(d + j0 + 8 * v), _mm256_permutevar8x32_epi32(bytes, order));
-      }
-    }
+    for (int v = 0; v < kVectors; ++v) _mm_storel_epi64(reinterpret_cast<__m128i*>(dst + j0 + 8 * v), quantise8(s[v]));
   }
-  return whole;
+  for (; j0 < n; j0 += 8) {
+    __m256 s = _mm256_setzero_ps();
+    for (int i = 0; i < taps; ++i) s = _mm256_fmadd_ps(_mm256_broadcast_ss(w + i), _mm256_loadu_ps(src[i] + j0), s);
+    _mm_storel_epi64(reinterpret_cast<__m128i*>(dst + j0), quantise8(s));
+  }
 }
 
 bool has_avx2_fma() {
@@ -365,21 +356,14 @@ inline std::uint8_t quantise_value(float v) {
   return static_cast<std::uint8_t>(static_cast<int>(std::min(std::max(r, 0.0f), 255.0f)));
 }
 
-// Columns x0..cols of every row; std::fma is one instruction in the FMA clone (same value as the library call).
-FAULTLINE_SNOW_FMA_CLONES void blur_quantise_scalar(const float* padded, std::size_t stride, int lh, int pad,
-                                                    const int* dx, const int* dy, const float* w, int taps,
-                                                    std::uint8_t* dst, std::size_t dst_stride, int rows, int x0,
-                                                    int cols) {
-  for (int y = 0; y < rows; ++y) {
-    for (int x = x0; x < cols; ++x) {
-      float s = 0.0f;
-      for (int i = 0; i < taps; ++i) {
-        const float v = padded[static_cast<std::size_t>(std::clamp(y - dy[i], 0, lh - 1)) * stride +
-                               static_cast<std::size_t>(pad - dx[i] + x)];
-        s = std::fma(w[i], v, s);
-      }
-      dst[static_cast<std::size_t>(y) * dst_stride + static_cast<std::size_t>(x)] = quantise_value(s);
-    }
+// dst[j] = quantise(fma chain over src[i][j]) for j < n; std::fma is one instruction in the FMA clone (same value
+// as the library call).
+FAULTLINE_SNOW_FMA_CLONES void blur_row_scalar(const float* const* src, const float* w, int taps, std::uint8_t* dst,
+                                               int n) {
+  for (int j = 0; j < n; ++j) {
+    float s = 0.0f;
+    for (int i = 0; i < taps; ++i) s = std::fma(w[i], src[i][j], s);
+    dst[j] = quantise_value(s);
   }
 }
 
@@ -465,18 +449,53 @@ FAULTLINE_SNOW_CLONES void quantise_row(const float* __restrict src, std::uint8_
   for (int x = 0; x < n; ++x) dst[x] = quantise_value(src[x]);
 }
 
-void blur_quantise(const float* padded, std::size_t stride, int lh, int pad, const int* dx, const int* dy,
-                   const float* w, int taps, std::uint8_t* dst, std::size_t dst_stride, int rows, int cols,
-                   bool allow_simd) {
-  int x0 = 0;
+void blur_quantise(const LayerRowMaker& make_row, int lh, int lw, const int* dx, const int* dy, const float* w,
+                   int taps, std::uint8_t* dst, std::size_t dst_stride, int rows, int cols, bool allow_simd) {
 #ifdef FAULTLINE_SNOW_AVX2
-  if (allow_simd && has_avx2_fma()) {
-    x0 = blur_quantise_avx2(padded, stride, lh, pad, dx, dy, w, taps, dst, dst_stride, rows, cols);
-  }
+  const bool simd = allow_simd && has_avx2_fma();
 #else
   (void)allow_simd;
+  const bool simd = false;
 #endif
-  blur_quantise_scalar(padded, stride, lh, pad, dx, dy, w, taps, dst, dst_stride, rows, x0, cols);
+  int pad = 0, dy_min = 0, dy_max = 0;  // tap 0 is (0, 0)
+  for (int i = 0; i < taps; ++i) {
+    pad = std::max(pad, std::abs(dx[i]));
+    dy_min = std::min(dy_min, dy[i]), dy_max = std::max(dy_max, dy[i]);
+  }
+  // Ring slot r & (ring_rows - 1) holds layer row r, edge-padded by `pad`, and 8 spare floats so the last output
+  // vector's lanes past cols read inside the row. The ring (~200 KB at 1600 columns) stays in L2, where the whole
+  // layer (~6 MB) did not.
+  int ring_rows = 1;
+  while (ring_rows < dy_max - dy_min + 1) ring_rows *= 2;
+  const int stride = lw + 2 * pad, ring_stride = (stride + 8 + 7) / 8 * 8;
+  thread_local std::vector<float> ring;
+  thread_local std::vector<std::uint8_t> out_row;
+  ring.assign(static_cast<std::size_t>(ring_rows) * static_cast<std::size_t>(ring_stride), 0.0f);
+  out_row.resize(static_cast<std::size_t>((cols + 7) / 8 * 8));
+  auto slot = [&](int r) { return static_cast<std::size_t>(r & (ring_rows - 1)); };
+  std::vector<const float*> src(static_cast<std::size_t>(taps));
+  int made = 0;  // layer rows [0, made) have been made
+  for (int y = 0; y < rows; ++y) {
+    for (const int last = std::clamp(y - dy_min, 0, lh - 1); made <= last; ++made) {
+      float* d = ring.data() + slot(made) * static_cast<std::size_t>(ring_stride);
+      make_row(made, d + pad);
+      std::fill(d, d + pad, d[pad]);
+      std::fill(d + pad + lw, d + stride, d[pad + lw - 1]);
+    }
+    for (int i = 0; i < taps; ++i) {
+      const int r = std::clamp(y - dy[i], 0, lh - 1);
+      src[static_cast<std::size_t>(i)] = ring.data() + slot(r) * static_cast<std::size_t>(ring_stride) + (pad - dx[i]);
+    }
+    std::uint8_t* d = dst + static_cast<std::size_t>(y) * dst_stride;
+    if (!simd) {
+      blur_row_scalar(src.data(), w, taps, d, cols);
+      continue;
+    }
+#ifdef FAULTLINE_SNOW_AVX2
+    blur_row_avx2(src.data(), w, taps, out_row.data(), cols);
+    std::copy(out_row.begin(), out_row.begin() + cols, d);
+#endif
+  }
 }
 
 void blend_fast_row(const std::uint8_t* src, const std::uint8_t* layer, const std::uint8_t* rot, bool rot_reversed,

@@ -6,6 +6,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 namespace faultline::corruption::snow_kernels {
@@ -37,13 +38,15 @@ void lerp_threshold(const float* a, const float* b, float w, float threshold, fl
 // dst[x] = round-half-even(src[x] * 255) clamped to 0..255.
 void quantise_row(const float* src, std::uint8_t* dst, int n);
 
+// Writes the `lw` values of layer row `row` to out[0, lw).
+using LayerRowMaker = std::function<void(int row, float* out)>;
+
 // The fast layer blur fused with quantise_row: dst(y, x) = quantise(s) for y < rows, x < cols, where s = fma chain
-// from 0 over the taps in order, s = fma(w[i], v_i, s), v_i = layer(clamp(y - dy[i], 0, lh - 1), x - dx[i]). Layer
-// row r, column c is padded[r * stride + pad + c] (edge-replicated, pad >= max |dx|). Both bodies use fused
-// multiply-adds (the old scalar tail did not), so they agree on every CPU.
-void blur_quantise(const float* padded, std::size_t stride, int lh, int pad, const int* dx, const int* dy,
-                   const float* w, int taps, std::uint8_t* dst, std::size_t dst_stride, int rows, int cols,
-                   bool allow_simd = true);
+// from 0 over the taps in order, s = fma(w[i], v_i, s), v_i = layer(clamp(y - dy[i], 0, lh - 1), clamp(x - dx[i], 0,
+// lw - 1)) on an lh x lw layer. The layer is never stored whole: its rows are made as the first output row needs
+// them, into a ring holding every row the taps read. Both bodies use fused multiply-adds, so they agree on every CPU.
+void blur_quantise(const LayerRowMaker& make_row, int lh, int lw, const int* dx, const int* dy, const float* w,
+                   int taps, std::uint8_t* dst, std::size_t dst_stride, int rows, int cols, bool allow_simd = true);
 
 // One row of the fast whitening blend in the 0..255 domain: per pixel bright = (0.299 c0 + 0.587 c1 + 0.114 c2) *
 // 1.5 + 127.5 and out_k = trunc(clip(b c_k + (1 - b) max(c_k, bright) + l + r, 0, 255)) in float32, where

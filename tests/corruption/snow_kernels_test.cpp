@@ -78,39 +78,49 @@ TEST(SnowKernelsTest, QuantiseRoundsHalfToEvenAndClamps) {
   EXPECT_EQ(out, (std::vector<std::uint8_t>{0, 0, 2, 2, 255, 255, 0, 102}));
 }
 
-// The fused fast blur: both bodies equal an fma chain over edge-clamped taps, then round-half-even, on widths with
-// and without a tail of the 64-column blocks.
+// The fused fast blur: both bodies equal an fma chain over edge-clamped taps, then round-half-even, on sparse,
+// dense and all-zero layers, widths with and without a partial last vector, taps reaching rows below and above and
+// columns either side; each layer row is made once.
 TEST(SnowKernelsTest, BlurQuantiseBodiesAgreeWithFmaChain) {
   rng::FastRng rng(4);
-  const std::vector<int> dx = {-3, -2, -1, -1, 0, 0, 1, 2, 3}, dy = {-4, -3, -2, -1, 0, 1, 2, 3, 4};
+  const std::vector<int> dx = {0, -3, -2, -1, -1, 0, 1, 2, 3, 4, -12, 9},
+                         dy = {0, -4, -3, -2, -1, 1, 2, 3, 4, 9, 5, -2};
   std::vector<float> w(dx.size());
   for (auto& v : w) v = static_cast<float>(0.05 + 0.2 * rng.random_sample());
-  const int pad = 3;
-  for (const auto& [rows, cols] : std::vector<std::pair<int, int>>{{7, 64}, {9, 130}, {5, 200}, {3, 17}}) {
+  const int taps = static_cast<int>(dx.size());
+  struct Case {
+    int rows, cols, percent_nonzero;
+  };
+  for (const Case& t : std::vector<Case>{{7, 64, 33}, {9, 130, 2}, {5, 200, 100}, {3, 17, 33}, {12, 300, 1},
+                                         {4, 1, 50}, {6, 257, 5}, {2, 5, 0}, {30, 1602, 2}}) {
+    const int rows = t.rows, cols = t.cols;
     const int lh = rows + 2, lw = cols + 1;  // the layer is larger than the output, as for snow
-    const std::size_t stride = static_cast<std::size_t>(lw + 2 * pad);
-    std::vector<float> padded(stride * static_cast<std::size_t>(lh));
+    cv::Mat layer(lh, lw, CV_32F);
     for (int r = 0; r < lh; ++r) {
-      float* d = padded.data() + static_cast<std::size_t>(r) * stride;
       for (int c = 0; c < lw; ++c) {
-        d[pad + c] = rng.next_u32() % 3 == 0 ? static_cast<float>(0.5 + 0.5 * rng.random_sample()) : 0.0f;
+        const bool nonzero = static_cast<int>(rng.next_u32() % 100) < t.percent_nonzero;
+        layer.at<float>(r, c) = nonzero ? static_cast<float>(0.5 + 0.5 * rng.random_sample()) : 0.0f;
       }
-      std::fill(d, d + pad, d[pad]);
-      std::fill(d + pad + lw, d + stride, d[pad + lw - 1]);
     }
+    int made = 0;
+    const LayerRowMaker make_row = [&](int row, float* out) {
+      ASSERT_TRUE(row >= 0 && row < lh);
+      std::copy(layer.ptr<float>(row), layer.ptr<float>(row) + lw, out);
+      ++made;
+    };
     std::vector<std::uint8_t> a(static_cast<std::size_t>(rows * cols)), b(a.size()), ref(a.size());
-    const int taps = static_cast<int>(dx.size());
-    blur_quantise(padded.data(), stride, lh, pad, dx.data(), dy.data(), w.data(), taps, a.data(),
-                  static_cast<std::size_t>(cols), rows, cols, /*allow_simd=*/true);
-    blur_quantise(padded.data(), stride, lh, pad, dx.data(), dy.data(), w.data(), taps, b.data(),
-                  static_cast<std::size_t>(cols), rows, cols, /*allow_simd=*/false);
+    blur_quantise(make_row, lh, lw, dx.data(), dy.data(), w.data(), taps, a.data(), static_cast<std::size_t>(cols),
+                  rows, cols, /*allow_simd=*/true);
+    EXPECT_LE(made, lh);
+    blur_quantise(make_row, lh, lw, dx.data(), dy.data(), w.data(), taps, b.data(), static_cast<std::size_t>(cols),
+                  rows, cols, /*allow_simd=*/false);
     for (int y = 0; y < rows; ++y) {
       for (int x = 0; x < cols; ++x) {
         float s = 0.0f;
         for (int i = 0; i < taps; ++i) {
           const int r = std::clamp(y - dy[static_cast<std::size_t>(i)], 0, lh - 1);
           const int c = std::clamp(x - dx[static_cast<std::size_t>(i)], 0, lw - 1);
-          s = std::fma(w[static_cast<std::size_t>(i)], padded[static_cast<std::size_t>(r) * stride + pad + c], s);
+          s = std::fma(w[static_cast<std::size_t>(i)], layer.at<float>(r, c), s);
         }
         quantise_row(&s, &ref[static_cast<std::size_t>(y * cols + x)], 1);
       }
