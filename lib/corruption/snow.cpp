@@ -190,10 +190,10 @@ cv::Mat snow_exact(const cv::Mat& bgr, int severity, rng::NumpyRandomState& rng)
 }
 
 cv::Mat snow_layer_fast(const cv::Mat& crop_field, int rows, int cols, int severity, double blur_angle_deg) {
-  // Same stages as the exact layer in float32, reordered for speed: the zoom interpolates columns first (on the few
-  // crop rows) and then rows (contiguous); bilinear zoom is separable, so only float rounding differs. The blur
-  // makes the layer's rows as it needs them (never the whole layer) and quantises each sum at once; only the
-  // top-left rows x cols are computed.
+  // Same stages as the exact layer, reordered for speed: the zoom interpolates columns first (on the few crop rows)
+  // and then rows (contiguous) in float32; bilinear zoom is separable, so only float rounding differs. The blur runs
+  // in 16-bit fixed point (within 1 level of the float sum), makes the layer's rows as it needs them (never the
+  // whole layer) and quantises each sum at once; only the top-left rows x cols are computed.
   const LayerGeometry g = layer_geometry(rows, cols, severity, blur_angle_deg);
   const SnowParams& p = g.p;
   const int lh = g.lh, lw = g.lw, taps = g.taps;

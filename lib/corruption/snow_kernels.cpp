@@ -291,27 +291,58 @@ __attribute__((target("avx2"))) inline __m128i quantise8(__m256 s) {
   return _mm_packus_epi16(words, words);
 }
 
-// dst[j] = quantise(fma chain over src[i][j]) for j < n rounded up to 8 (dst and src sized for it): blocks of 64
-// columns, then single vectors, sums in registers across all taps.
-__attribute__((target("avx2,fma"))) void blur_row_avx2(const float* const* src, const float* w, int taps,
-                                                       std::uint8_t* dst, int n) {
-  constexpr int kVectors = 8, kBlock = 8 * kVectors;
+// Sixteen 16-bit layer sums (65535 = 1.0) -> bytes round(s / 257) (= round(255 * s / 65535)); `bias` (+128 for the
+// rounding, plus half an LSB per tap for the truncating products) is added with saturation.
+__attribute__((target("avx2"))) inline __m256i quantise16(__m256i s, __m256i bias) {
+  const __m256i t = _mm256_adds_epu16(s, bias);
+  return _mm256_srli_epi16(_mm256_sub_epi16(t, _mm256_srli_epi16(t, 8)), 8);
+}
+
+// dst[j] = quantise16(sum over taps of mulhi(w[i], src[i][j]), saturating) for j < n rounded up to 16 (dst and src
+// sized for it): blocks of 128 columns, then single vectors, sums in registers across all taps.
+__attribute__((target("avx2"))) void blur_row_u16_avx2(const std::uint16_t* const* src, const std::uint16_t* w,
+                                                       int taps, std::uint16_t bias, std::uint8_t* dst, int n) {
+  constexpr int kVectors = 8, kBlock = 16 * kVectors;
+  const __m256i biasv = _mm256_set1_epi16(static_cast<short>(bias));
   int j0 = 0;
   for (; j0 + kBlock <= n; j0 += kBlock) {
-    __m256 s[kVectors];
-    for (auto& v : s) v = _mm256_setzero_ps();
+    __m256i s[kVectors];
+    for (auto& v : s) v = _mm256_setzero_si256();
     for (int i = 0; i < taps; ++i) {
-      const float* r = src[i] + j0;
-      const __m256 k = _mm256_broadcast_ss(w + i);
-      for (int v = 0; v < kVectors; ++v) s[v] = _mm256_fmadd_ps(k, _mm256_loadu_ps(r + 8 * v), s[v]);
+      const std::uint16_t* r = src[i] + j0;
+      const __m256i k = _mm256_set1_epi16(static_cast<short>(w[i]));
+      for (int v = 0; v < kVectors; ++v) {
+        const __m256i x = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(r + 16 * v));
+        s[v] = _mm256_adds_epu16(s[v], _mm256_mulhi_epu16(k, x));
+      }
     }
-    for (int v = 0; v < kVectors; ++v) _mm_storel_epi64(reinterpret_cast<__m128i*>(dst + j0 + 8 * v), quantise8(s[v]));
+    for (int v = 0; v < kVectors; v += 2) {
+      const __m256i bytes = _mm256_packus_epi16(quantise16(s[v], biasv), quantise16(s[v + 1], biasv));
+      _mm256_storeu_si256(reinterpret_cast<__m256i*>(dst + j0 + 16 * v), _mm256_permute4x64_epi64(bytes, 0xD8));
+    }
   }
-  for (; j0 < n; j0 += 8) {
-    __m256 s = _mm256_setzero_ps();
-    for (int i = 0; i < taps; ++i) s = _mm256_fmadd_ps(_mm256_broadcast_ss(w + i), _mm256_loadu_ps(src[i] + j0), s);
-    _mm_storel_epi64(reinterpret_cast<__m128i*>(dst + j0), quantise8(s));
+  for (; j0 < n; j0 += 16) {
+    __m256i s = _mm256_setzero_si256();
+    for (int i = 0; i < taps; ++i) {
+      const __m256i x = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(src[i] + j0));
+      s = _mm256_adds_epu16(s, _mm256_mulhi_epu16(_mm256_set1_epi16(static_cast<short>(w[i])), x));
+    }
+    const __m256i q = quantise16(s, biasv);
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(dst + j0),
+                     _mm_packus_epi16(_mm256_castsi256_si128(q), _mm256_extracti128_si256(q, 1)));
   }
+}
+
+// dst[x] = round(src[x] * 65535) for floats in [0, 1].
+__attribute__((target("avx2"))) int to_u16_avx2(const float* src, std::uint16_t* dst, int n) {
+  const __m256 k = _mm256_set1_ps(65535.0f);
+  int x = 0;
+  for (; x + 16 <= n; x += 16) {
+    const __m256i a = _mm256_cvtps_epi32(_mm256_mul_ps(_mm256_loadu_ps(src + x), k));
+    const __m256i b = _mm256_cvtps_epi32(_mm256_mul_ps(_mm256_loadu_ps(src + x + 8), k));
+    _mm256_storeu_si256(reinterpret_cast<__m256i*>(dst + x), _mm256_permute4x64_epi64(_mm256_packus_epi32(a, b), 0xD8));
+  }
+  return x;
 }
 
 bool has_avx2_fma() {
@@ -356,14 +387,17 @@ inline std::uint8_t quantise_value(float v) {
   return static_cast<std::uint8_t>(static_cast<int>(std::min(std::max(r, 0.0f), 255.0f)));
 }
 
-// dst[j] = quantise(fma chain over src[i][j]) for j < n; std::fma is one instruction in the FMA clone (same value
-// as the library call).
-FAULTLINE_SNOW_FMA_CLONES void blur_row_scalar(const float* const* src, const float* w, int taps, std::uint8_t* dst,
-                                               int n) {
+inline std::uint8_t quantise_u16(std::uint32_t s, std::uint32_t bias) {
+  const std::uint32_t t = std::min<std::uint32_t>(s + bias, 65535);
+  return static_cast<std::uint8_t>((t - (t >> 8)) >> 8);
+}
+
+void blur_row_u16_scalar(const std::uint16_t* const* src, const std::uint16_t* w, int taps, std::uint16_t bias,
+                         std::uint8_t* dst, int n) {
   for (int j = 0; j < n; ++j) {
-    float s = 0.0f;
-    for (int i = 0; i < taps; ++i) s = std::fma(w[i], src[i][j], s);
-    dst[j] = quantise_value(s);
+    std::uint32_t s = 0;
+    for (int i = 0; i < taps; ++i) s = std::min<std::uint32_t>(65535, s + ((std::uint32_t{w[i]} * src[i][j]) >> 16));
+    dst[j] = quantise_u16(s, bias);
   }
 }
 
@@ -451,34 +485,41 @@ FAULTLINE_SNOW_CLONES void quantise_row(const float* __restrict src, std::uint8_
 
 void blur_quantise(const LayerRowMaker& make_row, int lh, int lw, const int* dx, const int* dy, const float* w,
                    int taps, std::uint8_t* dst, std::size_t dst_stride, int rows, int cols, bool allow_simd) {
-#ifdef FAULTLINE_SNOW_AVX2
-  const bool simd = allow_simd && has_avx2_fma();
-#else
-  (void)allow_simd;
-  const bool simd = false;
-#endif
+  const bool simd = use_avx2(allow_simd);
   int pad = 0, dy_min = 0, dy_max = 0;  // tap 0 is (0, 0)
+  std::vector<std::uint16_t> w16(static_cast<std::size_t>(taps));
   for (int i = 0; i < taps; ++i) {
     pad = std::max(pad, std::abs(dx[i]));
     dy_min = std::min(dy_min, dy[i]), dy_max = std::max(dy_max, dy[i]);
+    w16[static_cast<std::size_t>(i)] = static_cast<std::uint16_t>(std::min(65535L, std::lround(w[i] * 65536.0)));
   }
-  // Ring slot r & (ring_rows - 1) holds layer row r, edge-padded by `pad`, and 8 spare floats so the last output
-  // vector's lanes past cols read inside the row. The ring (~200 KB at 1600 columns) stays in L2, where the whole
-  // layer (~6 MB) did not.
+  const auto bias = static_cast<std::uint16_t>(128 + taps / 2);
+  // Ring slot r & (ring_rows - 1) holds layer row r, edge-padded by `pad`, and 16 spare values so the last output
+  // vector's lanes past cols read inside the row. The ring (~110 KB at 1600 columns) stays in L2, where the whole
+  // float layer (~6 MB) did not.
   int ring_rows = 1;
   while (ring_rows < dy_max - dy_min + 1) ring_rows *= 2;
-  const int stride = lw + 2 * pad, ring_stride = (stride + 8 + 7) / 8 * 8;
-  thread_local std::vector<float> ring;
+  const int stride = lw + 2 * pad, ring_stride = (stride + 16 + 15) / 16 * 16;
+  thread_local std::vector<std::uint16_t> ring;
+  thread_local std::vector<float> layer_row;
   thread_local std::vector<std::uint8_t> out_row;
-  ring.assign(static_cast<std::size_t>(ring_rows) * static_cast<std::size_t>(ring_stride), 0.0f);
-  out_row.resize(static_cast<std::size_t>((cols + 7) / 8 * 8));
+  ring.assign(static_cast<std::size_t>(ring_rows) * static_cast<std::size_t>(ring_stride), 0);
+  layer_row.resize(static_cast<std::size_t>(lw));
+  out_row.resize(static_cast<std::size_t>((cols + 15) / 16 * 16));
   auto slot = [&](int r) { return static_cast<std::size_t>(r & (ring_rows - 1)); };
-  std::vector<const float*> src(static_cast<std::size_t>(taps));
+  std::vector<const std::uint16_t*> src(static_cast<std::size_t>(taps));
   int made = 0;  // layer rows [0, made) have been made
   for (int y = 0; y < rows; ++y) {
     for (const int last = std::clamp(y - dy_min, 0, lh - 1); made <= last; ++made) {
-      float* d = ring.data() + slot(made) * static_cast<std::size_t>(ring_stride);
-      make_row(made, d + pad);
+      std::uint16_t* d = ring.data() + slot(made) * static_cast<std::size_t>(ring_stride);
+      make_row(made, layer_row.data());
+      int x = 0;
+#ifdef FAULTLINE_SNOW_AVX2
+      if (simd) x = to_u16_avx2(layer_row.data(), d + pad, lw);
+#endif
+      for (; x < lw; ++x) {
+        d[pad + x] = static_cast<std::uint16_t>(std::nearbyint(layer_row[static_cast<std::size_t>(x)] * 65535.0f));
+      }
       std::fill(d, d + pad, d[pad]);
       std::fill(d + pad + lw, d + stride, d[pad + lw - 1]);
     }
@@ -488,11 +529,11 @@ void blur_quantise(const LayerRowMaker& make_row, int lh, int lw, const int* dx,
     }
     std::uint8_t* d = dst + static_cast<std::size_t>(y) * dst_stride;
     if (!simd) {
-      blur_row_scalar(src.data(), w, taps, d, cols);
+      blur_row_u16_scalar(src.data(), w16.data(), taps, bias, d, cols);
       continue;
     }
 #ifdef FAULTLINE_SNOW_AVX2
-    blur_row_avx2(src.data(), w, taps, out_row.data(), cols);
+    blur_row_u16_avx2(src.data(), w16.data(), taps, bias, out_row.data(), cols);
     std::copy(out_row.begin(), out_row.begin() + cols, d);
 #endif
   }

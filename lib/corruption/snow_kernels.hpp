@@ -41,10 +41,12 @@ void quantise_row(const float* src, std::uint8_t* dst, int n);
 // Writes the `lw` values of layer row `row` to out[0, lw).
 using LayerRowMaker = std::function<void(int row, float* out)>;
 
-// The fast layer blur fused with quantise_row: dst(y, x) = quantise(s) for y < rows, x < cols, where s = fma chain
-// from 0 over the taps in order, s = fma(w[i], v_i, s), v_i = layer(clamp(y - dy[i], 0, lh - 1), clamp(x - dx[i], 0,
-// lw - 1)) on an lh x lw layer. The layer is never stored whole: its rows are made as the first output row needs
-// them, into a ring holding every row the taps read. Both bodies use fused multiply-adds, so they agree on every CPU.
+// The fast layer blur fused with quantisation, in 16-bit fixed point: each layer value v is stored as V =
+// round(65535 v) and each weight as W = round(65536 w); dst(y, x) = round(S / 257) with S = the saturating sum over
+// the taps of (W_i * V_i) >> 16, V_i = layer(clamp(y - dy[i], 0, lh - 1), clamp(x - dx[i], 0, lw - 1)) on an lh x lw
+// layer, and half an LSB per tap added back for the truncated products. Within 1 of round-half-even(255 * float
+// sum), and 0 wherever every tap reads 0. The layer is never stored whole: its rows are made as the first output row
+// needs them, into a ring holding every row the taps read. Both bodies give the same bytes.
 void blur_quantise(const LayerRowMaker& make_row, int lh, int lw, const int* dx, const int* dy, const float* w,
                    int taps, std::uint8_t* dst, std::size_t dst_stride, int rows, int cols, bool allow_simd = true);
 
