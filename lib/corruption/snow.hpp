@@ -34,8 +34,8 @@ cv::Mat snow_layer_exact(const cv::Mat& normals, int severity, double blur_angle
 cv::Mat snow_blend_exact(const cv::Mat& bgr, const cv::Mat& layer_u8, int severity);
 
 // Fast mode: normals only where the centre crop reads them (lock-step lanes seeded by one draw of `rng`, which also
-// serves ziggurat rejections and the angle), float32 zoom and blend, 16-bit fixed-point blur (layer within 1 level
-// of the float32 one; injected-field outputs are no longer bit-exact, see snow_kernels::blur_quantise).
+// serves ziggurat rejections and the angle), float32 zoom, 16-bit fixed-point blur and blend (each within 1 level of
+// its float32 form, so injected-field outputs are close to numpy mode's but not bit-exact; see snow_kernels.hpp).
 cv::Mat snow_fast(const cv::Mat& bgr, int severity, rng::FastRng& rng);
 // Fast layer from a crop-sized CV_32F field (rows x cols is the image size).
 cv::Mat snow_layer_fast(const cv::Mat& crop_field, int rows, int cols, int severity, double blur_angle_deg);

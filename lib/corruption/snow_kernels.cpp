@@ -29,20 +29,30 @@ bool use_avx2(bool allow_simd) {
 #endif
 }
 
-inline std::uint8_t blend_value(float c, float bright, float snow, float b, float one_minus_b) {
-  const float v = b * c + one_minus_b * std::max(c, bright) + snow;
-  return static_cast<std::uint8_t>(static_cast<int>(std::min(std::max(v, 0.0f), 255.0f)));
-}
+// The fast blend's fixed-point constants: values carry 6 fraction bits (x64); products are (x * k) >> 16 with the
+// multiplicand scaled to use the 16 bits.
+struct BlendFixed {
+  static constexpr std::uint32_t kGrey0 = 7348, kGrey1 = 14426, kGrey2 = 2802;  // 1.5 * (0.299, 0.587, 0.114) * 2^14
+  static constexpr std::uint32_t kBrightOffset = 8160;                       // 127.5 * 64
+  std::uint32_t b14, one_minus_b15;                                          // b * 2^14, (1 - b) * 2^15
+  BlendFixed(float b, float one_minus_b)
+      : b14(static_cast<std::uint32_t>(std::lround(b * 16384.0f))),
+        one_minus_b15(static_cast<std::uint32_t>(std::lround(one_minus_b * 32768.0f))) {}
+};
 
 void blend_scalar(const std::uint8_t* src, const std::uint8_t* layer, const std::uint8_t* rot, bool rot_reversed,
-                  std::uint8_t* dst, int x0, int cols, float b, float one_minus_b) {
+                  std::uint8_t* dst, int x0, int cols, const BlendFixed& f) {
   for (int x = x0; x < cols; ++x) {
-    const float c0 = src[3 * x], c1 = src[3 * x + 1], c2 = src[3 * x + 2];
-    const float bright = (0.299f * c0 + 0.587f * c1 + 0.114f * c2) * 1.5f + 127.5f;
-    const float snow = static_cast<float>(layer[x] + (rot_reversed ? rot[cols - 1 - x] : rot[x]));
-    dst[3 * x] = blend_value(c0, bright, snow, b, one_minus_b);
-    dst[3 * x + 1] = blend_value(c1, bright, snow, b, one_minus_b);
-    dst[3 * x + 2] = blend_value(c2, bright, snow, b, one_minus_b);
+    const std::uint32_t c8[3] = {std::uint32_t{src[3 * x]} << 8, std::uint32_t{src[3 * x + 1]} << 8,
+                                 std::uint32_t{src[3 * x + 2]} << 8};
+    const std::uint32_t bright = ((c8[0] * BlendFixed::kGrey0) >> 16) + ((c8[1] * BlendFixed::kGrey1) >> 16) +
+                                 ((c8[2] * BlendFixed::kGrey2) >> 16) + BlendFixed::kBrightOffset;
+    const std::uint32_t snow = (std::uint32_t{layer[x]} + (rot_reversed ? rot[cols - 1 - x] : rot[x])) << 6;
+    for (int k = 0; k < 3; ++k) {
+      const std::uint32_t m = std::max(c8[k] >> 2, bright);
+      const std::uint32_t v = ((c8[k] * f.b14) >> 16) + (((m << 1) * f.one_minus_b15) >> 16) + snow;
+      dst[3 * x + k] = static_cast<std::uint8_t>(std::min<std::uint32_t>(255, v >> 6));
+    }
   }
 }
 
@@ -117,11 +127,9 @@ __attribute__((target("avx2"))) inline __m128i load_rotated(const std::uint8_t* 
              : _mm_loadu_si128(reinterpret_cast<const __m128i*>(rot + x));
 }
 
-// Per plane two vectors of eight int32 in 0..255 -> 16 interleaved BGR pixels at x.
-__attribute__((target("avx2"))) inline void store_planes(const Shuffles& m, const __m256i out[3][2],
-                                                        std::uint8_t* dst, int x) {
-  __m128i res[3];
-  for (int k = 0; k < 3; ++k) res[k] = narrow(out[k][0], out[k][1]);
+// B, G and R planes of 16 bytes -> 16 interleaved BGR pixels at x.
+__attribute__((target("avx2"))) inline void merge_planes(const Shuffles& m, const __m128i res[3], std::uint8_t* dst,
+                                                        int x) {
   for (int i = 0; i < 3; ++i) {
     const __m128i v = _mm_or_si128(_mm_or_si128(_mm_shuffle_epi8(res[0], mask(m.merge[i][0])),
                                                 _mm_shuffle_epi8(res[1], mask(m.merge[i][1]))),
@@ -130,56 +138,48 @@ __attribute__((target("avx2"))) inline void store_planes(const Shuffles& m, cons
   }
 }
 
-// Blocks of 8 pixels while the 28 bytes a block reads and writes stay inside the row; returns how many pixels it
-// wrote. Each 128-bit half holds four BGR pixels (12 bytes), so one in-lane pshufb per channel widens it straight to
-// int32, and one pshufb interleaves the results back. The arithmetic is blend_value's without its clamps: every term
-// is >= 0, and the unsigned saturating packs clamp to 255 after truncation, which gives the same byte.
+// Per plane two vectors of eight int32 in 0..255 -> 16 interleaved BGR pixels at x.
+__attribute__((target("avx2"))) inline void store_planes(const Shuffles& m, const __m256i out[3][2],
+                                                        std::uint8_t* dst, int x) {
+  __m128i res[3];
+  for (int k = 0; k < 3; ++k) res[k] = narrow(out[k][0], out[k][1]);
+  merge_planes(m, res, dst, x);
+}
+
+__attribute__((target("avx2"))) inline __m256i set16(std::uint32_t v) {
+  return _mm256_set1_epi16(static_cast<short>(static_cast<std::uint16_t>(v)));
+}
+
+// Whole blocks of 16 pixels, as blend_scalar in 16-bit lanes (every intermediate stays below 2^16); returns how many
+// pixels it wrote.
 __attribute__((target("avx2"))) int blend_avx2(const std::uint8_t* src, const std::uint8_t* layer,
                                                const std::uint8_t* rot, bool rot_reversed, std::uint8_t* dst,
-                                               int cols, float b, float one_minus_b) {
-  const __m256 bv = _mm256_set1_ps(b), omb = _mm256_set1_ps(one_minus_b);
-  const __m256 w0 = _mm256_set1_ps(0.299f), w1 = _mm256_set1_ps(0.587f), w2 = _mm256_set1_ps(0.114f);
-  const __m256 k15 = _mm256_set1_ps(1.5f), k1275 = _mm256_set1_ps(127.5f);
-  // Channel k of pixel p (bytes 3p + k of a half) -> int32 lane p.
-  __m256i split[3];
-  for (int k = 0; k < 3; ++k) {
-    split[k] = _mm256_setr_epi8(static_cast<char>(k), -1, -1, -1, static_cast<char>(3 + k), -1, -1, -1,
-                                static_cast<char>(6 + k), -1, -1, -1, static_cast<char>(9 + k), -1, -1, -1,
-                                static_cast<char>(k), -1, -1, -1, static_cast<char>(3 + k), -1, -1, -1,
-                                static_cast<char>(6 + k), -1, -1, -1, static_cast<char>(9 + k), -1, -1, -1);
-  }
-  // After the packs a half holds c0 of pixels 0-3, c1 of pixels 0-3, c2 of pixels 0-3 (and c2 again): interleave.
-  const __m256i merge = _mm256_setr_epi8(0, 4, 8, 1, 5, 9, 2, 6, 10, 3, 7, 11, -1, -1, -1, -1,
-                                         0, 4, 8, 1, 5, 9, 2, 6, 10, 3, 7, 11, -1, -1, -1, -1);
-  const __m128i reverse8 = _mm_setr_epi8(7, 6, 5, 4, 3, 2, 1, 0, -1, -1, -1, -1, -1, -1, -1, -1);
+                                               int cols, const BlendFixed& f) {
+  const Shuffles& m = shuffles();
+  const __m256i grey0 = set16(BlendFixed::kGrey0), grey1 = set16(BlendFixed::kGrey1);
+  const __m256i grey2 = set16(BlendFixed::kGrey2), offset = set16(BlendFixed::kBrightOffset);
+  const __m256i bv = set16(f.b14), omb = set16(f.one_minus_b15);
   int x = 0;
-  for (; x + 10 <= cols; x += 8) {
-    const std::uint8_t* s = src + 3 * x;
-    const __m256i pix = _mm256_inserti128_si256(
-        _mm256_castsi128_si256(_mm_loadu_si128(reinterpret_cast<const __m128i*>(s))),
-        _mm_loadu_si128(reinterpret_cast<const __m128i*>(s + 12)), 1);
-    __m256 c[3];
-    for (int k = 0; k < 3; ++k) c[k] = _mm256_cvtepi32_ps(_mm256_shuffle_epi8(pix, split[k]));
-    const __m128i l = _mm_loadl_epi64(reinterpret_cast<const __m128i*>(layer + x));
-    const __m128i r = rot_reversed
-                          ? _mm_shuffle_epi8(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(rot + cols - 8 - x)),
-                                             reverse8)
-                          : _mm_loadl_epi64(reinterpret_cast<const __m128i*>(rot + x));
-    const __m256 snow = _mm256_cvtepi32_ps(_mm256_add_epi32(_mm256_cvtepu8_epi32(l), _mm256_cvtepu8_epi32(r)));
-    const __m256 grey =
-        _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(w0, c[0]), _mm256_mul_ps(w1, c[1])), _mm256_mul_ps(w2, c[2]));
-    const __m256 bright = _mm256_add_ps(_mm256_mul_ps(grey, k15), k1275);
-    __m256i v[3];
+  for (; x + 16 <= cols; x += 16) {
+    __m128i plane[3];
+    load_planes(m, src, x, plane);
+    __m256i c8[3];
+    for (int k = 0; k < 3; ++k) c8[k] = _mm256_slli_epi16(_mm256_cvtepu8_epi16(plane[k]), 8);
+    const __m256i bright =
+        _mm256_add_epi16(_mm256_add_epi16(_mm256_mulhi_epu16(c8[0], grey0), _mm256_mulhi_epu16(c8[1], grey1)),
+                         _mm256_add_epi16(_mm256_mulhi_epu16(c8[2], grey2), offset));
+    const __m128i l = _mm_loadu_si128(reinterpret_cast<const __m128i*>(layer + x));
+    const __m128i r = load_rotated(rot, rot_reversed, cols, x);
+    const __m256i snow = _mm256_slli_epi16(_mm256_add_epi16(_mm256_cvtepu8_epi16(l), _mm256_cvtepu8_epi16(r)), 6);
+    __m128i res[3];
     for (int k = 0; k < 3; ++k) {
-      v[k] = _mm256_cvttps_epi32(_mm256_add_ps(
-          _mm256_add_ps(_mm256_mul_ps(bv, c[k]), _mm256_mul_ps(omb, _mm256_max_ps(c[k], bright))), snow));
+      const __m256i mx = _mm256_max_epu16(_mm256_srli_epi16(c8[k], 2), bright);
+      const __m256i v = _mm256_add_epi16(
+          _mm256_add_epi16(_mm256_mulhi_epu16(c8[k], bv), _mm256_mulhi_epu16(_mm256_slli_epi16(mx, 1), omb)), snow);
+      const __m256i o = _mm256_srli_epi16(v, 6);
+      res[k] = _mm_packus_epi16(_mm256_castsi256_si128(o), _mm256_extracti128_si256(o, 1));
     }
-    const __m256i bytes =
-        _mm256_packus_epi16(_mm256_packus_epi32(v[0], v[1]), _mm256_packus_epi32(v[2], v[2]));
-    const __m256i out = _mm256_shuffle_epi8(bytes, merge);
-    std::uint8_t* d = dst + 3 * x;
-    _mm_storeu_si128(reinterpret_cast<__m128i*>(d), _mm256_castsi256_si128(out));
-    _mm_storeu_si128(reinterpret_cast<__m128i*>(d + 12), _mm256_extracti128_si256(out, 1));
+    merge_planes(m, res, dst, x);
   }
   return x;
 }
@@ -541,13 +541,14 @@ void blur_quantise(const LayerRowMaker& make_row, int lh, int lw, const int* dx,
 
 void blend_fast_row(const std::uint8_t* src, const std::uint8_t* layer, const std::uint8_t* rot, bool rot_reversed,
                     std::uint8_t* dst, int cols, float b, float one_minus_b, bool allow_simd) {
+  const BlendFixed f(b, one_minus_b);
   int x = 0;
 #ifdef FAULTLINE_SNOW_AVX2
-  if (use_avx2(allow_simd)) x = blend_avx2(src, layer, rot, rot_reversed, dst, cols, b, one_minus_b);
+  if (use_avx2(allow_simd)) x = blend_avx2(src, layer, rot, rot_reversed, dst, cols, f);
 #else
   (void)allow_simd;
 #endif
-  blend_scalar(src, layer, rot, rot_reversed, dst, x, cols, b, one_minus_b);
+  blend_scalar(src, layer, rot, rot_reversed, dst, x, cols, f);
 }
 
 FAULTLINE_SNOW_CLONES void lerp_row64(const double* __restrict a, const double* __restrict b, double w,

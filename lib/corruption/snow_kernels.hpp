@@ -51,8 +51,9 @@ void blur_quantise(const LayerRowMaker& make_row, int lh, int lw, const int* dx,
                    int taps, std::uint8_t* dst, std::size_t dst_stride, int rows, int cols, bool allow_simd = true);
 
 // One row of the fast whitening blend in the 0..255 domain: per pixel bright = (0.299 c0 + 0.587 c1 + 0.114 c2) *
-// 1.5 + 127.5 and out_k = trunc(clip(b c_k + (1 - b) max(c_k, bright) + l + r, 0, 255)) in float32, where
-// l = layer[x] and r = rot[x], or rot[cols - 1 - x] when `rot_reversed` (rot is then the mirrored row itself).
+// 1.5 + 127.5 and out_k = trunc(min(b c_k + (1 - b) max(c_k, bright) + l + r, 255)), where l = layer[x] and r =
+// rot[x], or rot[cols - 1 - x] when `rot_reversed` (rot is then the mirrored row itself). In 16-bit fixed point with
+// 6 fraction bits and truncating products (snow_kernels.cpp BlendFixed): within 1 of the float32 formula.
 void blend_fast_row(const std::uint8_t* src, const std::uint8_t* layer, const std::uint8_t* rot, bool rot_reversed,
                     std::uint8_t* dst, int cols, float b, float one_minus_b, bool allow_simd = true);
 
