@@ -53,6 +53,8 @@ double approx_log(double x) {
 
 namespace {
 
+constexpr std::size_t kChunkPairs = 512;  // polar pairs drawn and evaluated per step of the noise stage
+
 // The reference's byte for read noise z on top of y: trunc(clip(y + normal(0, sigma), 0, 1) * 255).
 inline std::uint8_t noise_byte(double y, double sigma, double z) {
   const double v = y + (0.0 + sigma * z);
@@ -97,9 +99,15 @@ __attribute__((target("avx2"))) std::size_t noise_groups_avx2(const double* x, c
   const __m256d sig = _mm256_set1_pd(sigma);
   const __m256d lo_scale = _mm256_set1_pd(1.0 - bracket), hi_scale = _mm256_set1_pd(1.0 + bracket);
   const __m256d minus_two = _mm256_set1_pd(-2.0);
+  // The factors first, in a loop of their own: its iterations are independent, so the long divide and square
+  // root latencies of several groups overlap.
+  alignas(32) double factors[kChunkPairs];
   for (std::size_t g = 0; g < groups; ++g) {
     const __m256d r = _mm256_loadu_pd(r2 + 4 * g);
-    const __m256d f = _mm256_sqrt_pd(_mm256_div_pd(_mm256_mul_pd(minus_two, approx_log4(r)), r));
+    _mm256_store_pd(factors + 4 * g, _mm256_sqrt_pd(_mm256_div_pd(_mm256_mul_pd(minus_two, approx_log4(r)), r)));
+  }
+  for (std::size_t g = 0; g < groups; ++g) {
+    const __m256d f = _mm256_load_pd(factors + 4 * g);
     const __m256d flo = _mm256_mul_pd(f, lo_scale), fhi = _mm256_mul_pd(f, hi_scale);
     // Element 2q uses pair q's factor on x2, element 2q + 1 on x1: each factor twice, in order.
     const __m256d flo_a = _mm256_permute4x64_pd(flo, 0x50), flo_b = _mm256_permute4x64_pd(flo, 0xFA);
@@ -187,7 +195,6 @@ cv::Mat dark_exact_bracketed(const cv::Mat& bgr, int severity, rng::NumpyRandomS
     dst[0] = noise_byte(y_at(0), sigma, cached);
     i = 1;
   }
-  constexpr std::size_t kChunkPairs = 512;
   alignas(32) double x[2 * kChunkPairs];
   alignas(32) double r2[kChunkPairs];
   std::uint16_t flagged[2 * kChunkPairs];
