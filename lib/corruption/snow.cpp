@@ -218,11 +218,11 @@ cv::Mat snow_layer_fast(const cv::Mat& crop_field, int rows, int cols, int sever
   // quantise the top-left rows x cols.
   const snow_kernels::ZoomAxis rm = snow_kernels::zoom_axis(crop_field.rows, lh);
   const float thr = static_cast<float>(p.threshold);
-  const snow_kernels::LayerRowMaker make_row = [&](int o, float* d) {
+  const snow_kernels::LayerRowMaker make_row = [&](int o, std::uint16_t* d) {
     const auto ou = static_cast<std::size_t>(o);
     const float* a = colz.data() + static_cast<std::size_t>(rm.i0[ou]) * lw_u;
     const float* b = colz.data() + static_cast<std::size_t>(rm.i1[ou]) * lw_u;
-    snow_kernels::lerp_threshold(a, b, rm.w[ou], thr, d, lw);
+    snow_kernels::lerp_threshold_u16(a, b, rm.w[ou], thr, d, lw);
   };
   std::vector<int> dx(static_cast<std::size_t>(taps)), dy(static_cast<std::size_t>(taps));
   for (int i = 0; i < taps; ++i) {

@@ -298,8 +298,8 @@ __attribute__((target("avx2"))) inline __m256i quantise16(__m256i s, __m256i bia
   return _mm256_srli_epi16(_mm256_sub_epi16(t, _mm256_srli_epi16(t, 8)), 8);
 }
 
-// dst[j] = quantise16(sum over taps of mulhi(w[i], src[i][j]), saturating) for j < n rounded up to 16 (dst and src
-// sized for it): blocks of 128 columns, then single vectors, sums in registers across all taps.
+// dst[j] = quantise16(sum over taps of mulhi(w[i], src[i][j]), saturating) for j < n (src readable up to n rounded
+// up to 16): blocks of 128 columns, then single vectors, sums in registers across all taps.
 __attribute__((target("avx2"))) void blur_row_u16_avx2(const std::uint16_t* const* src, const std::uint16_t* w,
                                                        int taps, std::uint16_t bias, std::uint8_t* dst, int n) {
   constexpr int kVectors = 8, kBlock = 16 * kVectors;
@@ -328,19 +328,32 @@ __attribute__((target("avx2"))) void blur_row_u16_avx2(const std::uint16_t* cons
       s = _mm256_adds_epu16(s, _mm256_mulhi_epu16(_mm256_set1_epi16(static_cast<short>(w[i])), x));
     }
     const __m256i q = quantise16(s, biasv);
-    _mm_storeu_si128(reinterpret_cast<__m128i*>(dst + j0),
-                     _mm_packus_epi16(_mm256_castsi256_si128(q), _mm256_extracti128_si256(q, 1)));
+    const __m128i bytes = _mm_packus_epi16(_mm256_castsi256_si128(q), _mm256_extracti128_si256(q, 1));
+    if (j0 + 16 <= n) {
+      _mm_storeu_si128(reinterpret_cast<__m128i*>(dst + j0), bytes);
+    } else {
+      alignas(16) std::uint8_t tail[16];
+      _mm_store_si128(reinterpret_cast<__m128i*>(tail), bytes);
+      std::copy(tail, tail + (n - j0), dst + j0);
+    }
   }
 }
 
-// dst[x] = round(src[x] * 65535) for floats in [0, 1].
-__attribute__((target("avx2"))) int to_u16_avx2(const float* src, std::uint16_t* dst, int n) {
-  const __m256 k = _mm256_set1_ps(65535.0f);
+// lerp_threshold_u16 in whole blocks of 16; returns how many values it wrote.
+__attribute__((target("avx2"))) int lerp_threshold_u16_avx2(const float* a, const float* b, float w, float threshold,
+                                                            std::uint16_t* dst, int n) {
+  const __m256 w0 = _mm256_set1_ps(1.0f - w), w1 = _mm256_set1_ps(w), thr = _mm256_set1_ps(threshold);
+  const __m256 zero = _mm256_setzero_ps(), one = _mm256_set1_ps(1.0f), k = _mm256_set1_ps(65535.0f);
   int x = 0;
   for (; x + 16 <= n; x += 16) {
-    const __m256i a = _mm256_cvtps_epi32(_mm256_mul_ps(_mm256_loadu_ps(src + x), k));
-    const __m256i b = _mm256_cvtps_epi32(_mm256_mul_ps(_mm256_loadu_ps(src + x + 8), k));
-    _mm256_storeu_si256(reinterpret_cast<__m256i*>(dst + x), _mm256_permute4x64_epi64(_mm256_packus_epi32(a, b), 0xD8));
+    __m256i q[2];
+    for (int h = 0; h < 2; ++h) {
+      const int o = x + 8 * h;
+      __m256 v = _mm256_add_ps(_mm256_mul_ps(w0, _mm256_loadu_ps(a + o)), _mm256_mul_ps(w1, _mm256_loadu_ps(b + o)));
+      v = _mm256_andnot_ps(_mm256_cmp_ps(v, thr, _CMP_LT_OQ), v);
+      q[h] = _mm256_cvtps_epi32(_mm256_mul_ps(_mm256_min_ps(_mm256_max_ps(v, zero), one), k));
+    }
+    _mm256_storeu_si256(reinterpret_cast<__m256i*>(dst + x), _mm256_permute4x64_epi64(_mm256_packus_epi32(q[0], q[1]), 0xD8));
   }
   return x;
 }
@@ -467,17 +480,23 @@ void ColumnZoom::run(const float* src, float* dst, bool allow_simd) const {
 #define FAULTLINE_SNOW_CLONES
 #endif
 
-// Element-wise float32 loops: vectorising them does not change any value, so the clones need no scalar twin.
-FAULTLINE_SNOW_CLONES void lerp_threshold(const float* __restrict a, const float* __restrict b, float w,
-                                          float threshold, float* __restrict dst, int n) {
+void lerp_threshold_u16(const float* a, const float* b, float w, float threshold, std::uint16_t* dst, int n,
+                        bool allow_simd) {
+  int x = 0;
+#ifdef FAULTLINE_SNOW_AVX2
+  if (use_avx2(allow_simd)) x = lerp_threshold_u16_avx2(a, b, w, threshold, dst, n);
+#else
+  (void)allow_simd;
+#endif
   const float w0 = 1.0f - w;
-  for (int x = 0; x < n; ++x) {
+  for (; x < n; ++x) {
     float v = w0 * a[x] + w * b[x];
     v = v < threshold ? 0.0f : v;
-    dst[x] = std::min(std::max(v, 0.0f), 1.0f);
+    dst[x] = static_cast<std::uint16_t>(std::nearbyint(std::min(std::max(v, 0.0f), 1.0f) * 65535.0f));
   }
 }
 
+// Element-wise float32 loop: vectorising it does not change any value, so the clones need no scalar twin.
 // Adding and removing 1.5 * 2^23 rounds half to even in the default rounding mode (nearbyint without a libm call).
 FAULTLINE_SNOW_CLONES void quantise_row(const float* __restrict src, std::uint8_t* __restrict dst, int n) {
   for (int x = 0; x < n; ++x) dst[x] = quantise_value(src[x]);
@@ -501,25 +520,14 @@ void blur_quantise(const LayerRowMaker& make_row, int lh, int lw, const int* dx,
   while (ring_rows < dy_max - dy_min + 1) ring_rows *= 2;
   const int stride = lw + 2 * pad, ring_stride = (stride + 16 + 15) / 16 * 16;
   thread_local std::vector<std::uint16_t> ring;
-  thread_local std::vector<float> layer_row;
-  thread_local std::vector<std::uint8_t> out_row;
   ring.assign(static_cast<std::size_t>(ring_rows) * static_cast<std::size_t>(ring_stride), 0);
-  layer_row.resize(static_cast<std::size_t>(lw));
-  out_row.resize(static_cast<std::size_t>((cols + 15) / 16 * 16));
   auto slot = [&](int r) { return static_cast<std::size_t>(r & (ring_rows - 1)); };
   std::vector<const std::uint16_t*> src(static_cast<std::size_t>(taps));
   int made = 0;  // layer rows [0, made) have been made
   for (int y = 0; y < rows; ++y) {
     for (const int last = std::clamp(y - dy_min, 0, lh - 1); made <= last; ++made) {
       std::uint16_t* d = ring.data() + slot(made) * static_cast<std::size_t>(ring_stride);
-      make_row(made, layer_row.data());
-      int x = 0;
-#ifdef FAULTLINE_SNOW_AVX2
-      if (simd) x = to_u16_avx2(layer_row.data(), d + pad, lw);
-#endif
-      for (; x < lw; ++x) {
-        d[pad + x] = static_cast<std::uint16_t>(std::nearbyint(layer_row[static_cast<std::size_t>(x)] * 65535.0f));
-      }
+      make_row(made, d + pad);
       std::fill(d, d + pad, d[pad]);
       std::fill(d + pad + lw, d + stride, d[pad + lw - 1]);
     }
@@ -533,8 +541,7 @@ void blur_quantise(const LayerRowMaker& make_row, int lh, int lw, const int* dx,
       continue;
     }
 #ifdef FAULTLINE_SNOW_AVX2
-    blur_row_u16_avx2(src.data(), w16.data(), taps, bias, out_row.data(), cols);
-    std::copy(out_row.begin(), out_row.begin() + cols, d);
+    blur_row_u16_avx2(src.data(), w16.data(), taps, bias, d, cols);
 #endif
   }
 }

@@ -32,17 +32,19 @@ class ColumnZoom {
   std::vector<std::int32_t> rel0_, rel1_;  // per output: i0 - base, i1 - base
 };
 
-// dst[x] = clip(t, 0, 1) with t = (1 - w) * a[x] + w * b[x] in float32, and t = 0 where it is below `threshold`.
-void lerp_threshold(const float* a, const float* b, float w, float threshold, float* dst, int n);
+// dst[x] = round(65535 * clip(t, 0, 1)) with t = (1 - w) * a[x] + w * b[x] in float32, and t = 0 where it is below
+// `threshold`: the zoom's row pass, the threshold and the blur's 16-bit layer values in one pass.
+void lerp_threshold_u16(const float* a, const float* b, float w, float threshold, std::uint16_t* dst, int n,
+                        bool allow_simd = true);
 
 // dst[x] = round-half-even(src[x] * 255) clamped to 0..255.
 void quantise_row(const float* src, std::uint8_t* dst, int n);
 
-// Writes the `lw` values of layer row `row` to out[0, lw).
-using LayerRowMaker = std::function<void(int row, float* out)>;
+// Writes the `lw` values v of layer row `row` to out[0, lw) as round(65535 v).
+using LayerRowMaker = std::function<void(int row, std::uint16_t* out)>;
 
-// The fast layer blur fused with quantisation, in 16-bit fixed point: each layer value v is stored as V =
-// round(65535 v) and each weight as W = round(65536 w); dst(y, x) = round(S / 257) with S = the saturating sum over
+// The fast layer blur fused with quantisation, in 16-bit fixed point: each layer value v comes as V = round(65535 v)
+// and each weight is stored as W = round(65536 w); dst(y, x) = round(S / 257) with S = the saturating sum over
 // the taps of (W_i * V_i) >> 16, V_i = layer(clamp(y - dy[i], 0, lh - 1), clamp(x - dx[i], 0, lw - 1)) on an lh x lw
 // layer, and half an LSB per tap added back for the truncated products. Within 1 of round-half-even(255 * float
 // sum), and 0 wherever every tap reads 0. The layer is never stored whole: its rows are made as the first output row

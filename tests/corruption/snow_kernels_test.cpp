@@ -102,6 +102,26 @@ TEST(SnowKernelsTest, BlendStaysWithinOneOfTheFloatFormula) {
   EXPECT_LT(differing / values, 0.05);
 }
 
+TEST(SnowKernelsTest, LerpThresholdBodiesAgreeAndRoundTo16Bits) {
+  rng::FastRng rng(11);
+  for (int n : {1, 15, 16, 17, 333, 1602}) {
+    std::vector<float> a(static_cast<std::size_t>(n)), b(a.size());
+    for (auto& v : a) v = static_cast<float>(rng.normal(0.55, 0.4));
+    for (auto& v : b) v = static_cast<float>(rng.normal(0.55, 0.4));
+    for (float w : {0.0f, 0.25f, 0.6f}) {
+      std::vector<std::uint16_t> x(a.size()), y(a.size());
+      lerp_threshold_u16(a.data(), b.data(), w, 0.85f, x.data(), n, true);
+      lerp_threshold_u16(a.data(), b.data(), w, 0.85f, y.data(), n, false);
+      EXPECT_EQ(x, y) << n;
+      for (std::size_t k = 0; k < a.size(); ++k) {
+        const float t = (1.0f - w) * a[k] + w * b[k];
+        const double expected = t < 0.85f ? 0.0 : std::min(1.0f, t) * 65535.0;
+        EXPECT_NEAR(x[k], expected, 0.5 + 1e-3) << n << " " << k;
+      }
+    }
+  }
+}
+
 TEST(SnowKernelsTest, QuantiseRoundsHalfToEvenAndClamps) {
   const std::vector<float> v = {0.0f, 0.5f / 255, 1.5f / 255, 2.5f / 255, 1.0f, 1.2f, -0.1f, 0.4f};
   std::vector<std::uint8_t> out(v.size());
@@ -139,9 +159,11 @@ TEST(SnowKernelsTest, BlurQuantiseBodiesAgreeAndStayWithinOneOfTheFloatSum) {
       }
     }
     int made = 0;
-    const LayerRowMaker make_row = [&](int row, float* out) {
+    const LayerRowMaker make_row = [&](int row, std::uint16_t* out) {
       ASSERT_TRUE(row >= 0 && row < lh);
-      std::copy(layer.ptr<float>(row), layer.ptr<float>(row) + lw, out);
+      for (int c = 0; c < lw; ++c) {
+        out[c] = static_cast<std::uint16_t>(std::nearbyint(layer.at<float>(row, c) * 65535.0f));
+      }
       ++made;
     };
     std::vector<std::uint8_t> a(static_cast<std::size_t>(rows * cols)), b(a.size()), ref(a.size());
@@ -179,9 +201,9 @@ TEST(SnowKernelsTest, BlurQuantiseBodiesAgreeAndStayWithinOneOfTheFloatSum) {
 TEST(SnowKernelsTest, BlurQuantisationDividesBy257WithRounding) {
   const std::vector<int> dx = {0}, dy = {0};
   const std::vector<float> w = {1.0f};  // W = 65535 after the clamp: S = (65535 V) >> 16 = V - 1 for V > 0
-  std::vector<float> values(65536);
-  for (int v = 0; v < 65536; ++v) values[static_cast<std::size_t>(v)] = static_cast<float>(v) / 65535.0f;
-  const LayerRowMaker make_row = [&](int, float* out) { std::copy(values.begin(), values.end(), out); };
+  std::vector<std::uint16_t> values(65536);
+  for (int v = 0; v < 65536; ++v) values[static_cast<std::size_t>(v)] = static_cast<std::uint16_t>(v);
+  const LayerRowMaker make_row = [&](int, std::uint16_t* out) { std::copy(values.begin(), values.end(), out); };
   for (bool simd : {true, false}) {
     std::vector<std::uint8_t> out(values.size());
     blur_quantise(make_row, 1, 65536, dx.data(), dy.data(), w.data(), 1, out.data(), out.size(), 1, 65536, simd);
