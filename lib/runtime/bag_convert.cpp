@@ -281,6 +281,7 @@ Result<ConvertCounts> BagConverter::run(const std::atomic<bool>& stop, const Con
       b.set_timestamp_us(t_us);
       b.set_frames_sent(keys_sent[f.sample_token]);
       b.set_last_in_run(i == last_boundary);
+      b.set_stream_end_follows(b.last_in_run());  // `bag play` sends the StreamEnd after the bag's last frame
       auto* hdr = b.mutable_header();
       hdr->set_capture_stamp_ns(t_ns);
       hdr->set_frame_id("base_link");

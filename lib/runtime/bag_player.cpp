@@ -7,6 +7,7 @@
 #include <thread>
 
 #include "bag/reader.hpp"
+#include "camera_frame.pb.h"
 #include "common/clock.hpp"
 #include "common/config.hpp"
 #include "detection.pb.h"
@@ -190,6 +191,7 @@ int BagPlayer::run(const std::atomic<bool>& stop) {
     }
   }
   if (m.cfg.start_paused) m.log->info("paused: waiting for resume or step");
+  bool end_owed = false;  // a played last_in_run boundary announced a StreamEnd that has not been played
   do {
     m.base_log_ns = -1;
     for (const auto& file : m.cfg.files) {
@@ -275,6 +277,15 @@ int BagPlayer::run(const std::atomic<bool>& stop) {
         }
         ++counts_.messages_sent;
         sent_.store(counts_.messages_sent);
+        if (topic == m.cfg.end_topic) {
+          end_owed = false;
+        } else if (topic == m.cfg.sync_topic) {
+          msgs::SampleBoundary b;
+          if (b.ParseFromArray(v.data.data(), static_cast<int>(v.data.size())) && b.last_in_run() &&
+              b.stream_end_follows()) {
+            end_owed = true;
+          }
+        }
         counts_.bytes_sent += v.data.size();
         counts_.bag_seconds = static_cast<double>(rel) / 1e9;
         if (m.cfg.progress && monotonic_now_ns() - m.last_progress_ns > 200 * kNsPerMs) {
@@ -302,6 +313,15 @@ int BagPlayer::run(const std::atomic<bool>& stop) {
       if (stop.load() || ended) break;
     }
   } while (m.cfg.loop && !stop.load() && !ended);
+  if (!stop.load() && end_owed) {
+    // Converted bags (and recordings without /sync/end, or played without it) announce a stream end on their
+    // last boundary; this is it.
+    msgs::StreamEnd end;
+    end.mutable_header()->set_publisher("bag_player");
+    end.mutable_header()->set_publish_stamp_ns(realtime_now_ns());
+    end.mutable_header()->set_publish_mono_ns(monotonic_now_ns());
+    if (transport::send_message(*m.pub, m.cfg.end_topic, end).is_ok()) m.log->debug("stream end sent");
+  }
   if (m.cfg.progress) std::fprintf(stderr, "\n");
   m.log->info("played {} messages ({} bytes, {:.2f} s of bag time), {} send failures, {} ack timeouts",
               counts_.messages_sent, counts_.bytes_sent, counts_.bag_seconds, counts_.send_failures,

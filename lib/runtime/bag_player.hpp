@@ -37,6 +37,9 @@ struct BagPlayerConfig {
   int wait_timeout_ms = 10000;
   bool lockstep = false;
   std::string sync_topic = "/sync/sample";
+  std::string end_topic = "/sync/end";      // when playback ends, a StreamEnd goes here if a played last_in_run
+                                            // boundary announced one that was not played, so an injector behind
+                                            // the player finishes
   std::string ack_endpoint = "tcp://127.0.0.1:5603";  // PULL bind address for SampleAck
   int ack_timeout_ms = 30000;
   int linger_ms = 1000;

@@ -76,6 +76,7 @@ struct InjectorLoop::Impl {
   std::map<std::string, std::string> out_topics;  // input topic -> output topic
   transport::LogLimiter bad_limiter;
   std::string sync_out;
+  std::string end_out;
   std::string faults_topic;
   struct Delayed {
     std::string topic;
@@ -101,6 +102,7 @@ struct InjectorLoop::Impl {
               static_cast<DurationNs>(cfg.stats_log_period_s * 1e9)),
         registry(node),
         sync_out(remap_topic(cfg.remap, cfg.sync_topic)),
+        end_out(remap_topic(cfg.remap, cfg.end_topic)),
         faults_topic(remap_topic(cfg.remap, cfg.faults_topic)) {}
 
   void stamp(msgs::Header* h, const std::string& topic) {
@@ -167,6 +169,7 @@ std::string InjectorLoop::output_endpoint() const { return impl_->pub.endpoint()
 int InjectorLoop::run(const std::atomic<bool>& stop) {
   Impl& m = *impl_;
   (void)m.registry.advertise(m.sync_out, "faultline.msgs.SampleBoundary", m.pub.endpoint());
+  (void)m.registry.advertise(m.end_out, "faultline.msgs.StreamEnd", m.pub.endpoint());
   (void)m.registry.advertise(m.faults_topic, "faultline.msgs.FaultEvent", m.pub.endpoint());
   (void)m.registry.advertise(m.stats.stats_topic(), "faultline.msgs.TopicStats", m.pub.endpoint());
   if (m.cfg.wait_subscribers > 0) {
@@ -179,6 +182,10 @@ int InjectorLoop::run(const std::atomic<bool>& stop) {
   transport::SubscriberConfig sc;
   sc.endpoints = m.cfg.input_endpoints;
   sc.topics = m.cfg.input_topics;
+  const bool end_covered = std::any_of(sc.topics.begin(), sc.topics.end(), [&](const std::string& prefix) {
+    return m.cfg.end_topic.compare(0, prefix.size(), prefix) == 0;
+  });
+  if (!end_covered) sc.topics.push_back(m.cfg.end_topic);
   sc.rcv_hwm = m.cfg.input_hwm;
   sc.latest_only = m.cfg.latest_only;
   sc.max_msg_bytes = m.cfg.max_msg_bytes;
@@ -222,7 +229,32 @@ int InjectorLoop::run(const std::atomic<bool>& stop) {
       if (!transport::send_message(m.pub, m.sync_out, b).is_ok()) m.log->warn("boundary forward failed");
       ++counts_.boundaries;
       if (b.last_in_run() && m.cfg.exit_on_last) {
-        m.log->info("last sample {} forwarded; run complete", b.sample_token());
+        if (b.stream_end_follows()) {
+          m.log->info("last sample {} forwarded; waiting for the stream end", b.sample_token());
+        } else {
+          m.log->info("last sample {} forwarded; run complete", b.sample_token());
+          finished = true;
+        }
+      }
+      continue;
+    }
+    if (in_topic == m.cfg.end_topic) {
+      msgs::StreamEnd e;
+      if (!transport::parse_message(msg, &e).is_ok()) {
+        ++counts_.malformed;
+        m.stats.collector().add_malformed(in_topic, 1);
+        continue;
+      }
+      // Frames held back by a delay fault go out first: the end marker stays last.
+      if (Status s = m.flush_delayed(std::numeric_limits<StampNs>::max()); !s.is_ok()) {
+        rc = s.code() == StatusCode::kCancelled ? 0 : 1;
+        break;
+      }
+      m.stamp(e.mutable_header(), m.end_out);
+      if (!transport::send_message(m.pub, m.end_out, e).is_ok()) m.log->warn("stream end forward failed");
+      ++counts_.stream_ends;
+      if (m.cfg.exit_on_last) {
+        m.log->info("stream end forwarded ({} frames sent upstream); run complete", e.frames_sent());
         finished = true;
       }
       continue;

@@ -1,7 +1,7 @@
 // The fault injector: subscribes to camera topics, asks a FramePolicy what to do with each frame and
 // republishes on the faulted namespace (/faulty/cam_front/image_rect_compressed for JPEG passthrough,
-// /faulty/cam_front/image_raw when decoding to bgr8). /sync/sample boundaries are forwarded in order
-// on the same socket; every source frame also yields a FaultEvent on /faultline/faults, including
+// /faulty/cam_front/image_raw when decoding to bgr8). /sync/sample boundaries and the /sync/end stream end
+// are forwarded in order on the same socket; every source frame also yields a FaultEvent on /faultline/faults, including
 // frames dropped on purpose or because their JPEG did not decode. Output is numbered with the
 // injector's own seq per topic; source_seq is kept. Cost: decoding a 1600x900 JPEG is ~10 ms of CPU.
 #pragma once
@@ -31,10 +31,11 @@ struct InjectorConfig {
   std::string output_prefix = "/faulty";             // faulted topic = prefix + input topic
   bool decode = false;                               // true: publish decoded bgr8 (image_raw)
   std::string sync_topic = "/sync/sample";           // forwarded unchanged in name
+  std::string end_topic = "/sync/end";               // StreamEnd: forwarded; always subscribed
   std::string faults_topic = "/faultline/faults";    // FaultEvent per source frame
   int wait_subscribers = 0;                          // wait for this many subscribers of sync_topic
   int wait_timeout_ms = 10000;                       // ... at most this long before subscribing upstream
-  bool exit_on_last = true;                          // stop after forwarding a last_in_run boundary
+  bool exit_on_last = true;                          // stop at the end of the run (see run())
   int linger_ms = 1000;                              // end of run: time to deliver queued messages
   std::int64_t max_msg_bytes = 16 << 20;             // ZMQ_MAXMSGSIZE on the input; -1 = unlimited
   double stats_window_s = 1.0;                       // statistics window (s)
@@ -55,10 +56,11 @@ struct InjectorConfig {
     v("output_prefix", output_prefix, "namespace of the faulted topics");
     v("decode", decode, "publish decoded bgr8 instead of the JPEG");
     v("sync_topic", sync_topic, "SampleBoundary topic");
+    v("end_topic", end_topic, "StreamEnd topic (end of the source's run; always subscribed)");
     v("faults_topic", faults_topic, "FaultEvent topic");
     v("wait_subscribers", wait_subscribers, "subscribers of sync_topic to wait for");
     v("wait_timeout_ms", wait_timeout_ms, "how long to wait for them (ms)");
-    v("exit_on_last", exit_on_last, "stop after forwarding the last_in_run boundary");
+    v("exit_on_last", exit_on_last, "stop at the end of the run (StreamEnd, or last_in_run from sources without one)");
     v("linger_ms", linger_ms, "end of run: time to deliver queued messages (ms)");
     v("max_msg_bytes", max_msg_bytes, "largest accepted input frame (bytes)");
     v("stats_window_s", stats_window_s, "statistics window (s)");
@@ -75,6 +77,7 @@ struct InjectorCounts {
   std::uint64_t frames_in = 0;
   std::uint64_t frames_out = 0;
   std::uint64_t boundaries = 0;
+  std::uint64_t stream_ends = 0;
   std::uint64_t injected_drops = 0;
   std::uint64_t corrupt_jpeg = 0;
   std::uint64_t malformed = 0;
@@ -93,8 +96,9 @@ class InjectorLoop {
                std::shared_ptr<spdlog::logger> log);
   ~InjectorLoop();
   std::string output_endpoint() const;
-  // Runs until `stop` (0), a forwarded last_in_run boundary with exit_on_last (0), or a fatal
-  // socket error (1).
+  // Runs until `stop` (0), the end of the run with exit_on_last (0), or a fatal socket error (1). The end of
+  // the run is a forwarded StreamEnd when the last_in_run boundary announced one (stream_end_follows: the
+  // sweeps after the last sample are still corrupted and forwarded), else that boundary itself.
   int run(const std::atomic<bool>& stop);
   const InjectorCounts& counts() const { return counts_; }
   // Whole-run statistics per topic (inputs: hop latency; injector outputs: receive -> publish).

@@ -43,6 +43,7 @@ struct PlayerLoop::Impl {
   std::map<std::string, std::uint64_t> seq;  // per topic
   transport::LogLimiter missing_limiter;
   std::string sync_topic;
+  std::string end_topic;
 
   Impl(PlayerConfig c, std::string n, std::unique_ptr<FrameSource> s, Clock& cl, std::shared_ptr<spdlog::logger> l)
       : cfg(std::move(c)),
@@ -60,7 +61,8 @@ struct PlayerLoop::Impl {
         stats(node, log, static_cast<DurationNs>(cfg.stats_window_s * 1e9),
               static_cast<DurationNs>(cfg.stats_log_period_s * 1e9)),
         registry(node),
-        sync_topic(remap_topic(cfg.remap, cfg.sync_topic)) {
+        sync_topic(remap_topic(cfg.remap, cfg.sync_topic)),
+        end_topic(remap_topic(cfg.remap, cfg.end_topic)) {
     if (cfg.lockstep) {
       transport::SubscriberConfig sc;
       sc.endpoints = {cfg.ack_endpoint};
@@ -147,6 +149,7 @@ int PlayerLoop::run(const std::atomic<bool>& stop) {
   }
   for (const auto& t : topics) (void)m.registry.advertise(t, "faultline.msgs.CameraFrame", m.pub.endpoint());
   (void)m.registry.advertise(m.sync_topic, "faultline.msgs.SampleBoundary", m.pub.endpoint());
+  (void)m.registry.advertise(m.end_topic, "faultline.msgs.StreamEnd", m.pub.endpoint());
   (void)m.registry.advertise(m.stats.stats_topic(), "faultline.msgs.TopicStats", m.pub.endpoint());
 
   if (m.cfg.wait_subscribers > 0) {
@@ -222,6 +225,7 @@ int PlayerLoop::run(const std::atomic<bool>& stop) {
         b.set_timestamp_us(sample_time[f.sample_token]);
         b.set_frames_sent(keys_sent[f.sample_token]);
         b.set_last_in_run(!m.cfg.loop && i == last_boundary);
+        b.set_stream_end_follows(b.last_in_run());
         b.mutable_header()->set_capture_stamp_ns(sample_time[f.sample_token] * 1000);
         b.mutable_header()->set_frame_id("base_link");
         m.stamp(b.mutable_header(), m.sync_topic);
@@ -240,6 +244,15 @@ int PlayerLoop::run(const std::atomic<bool>& stop) {
       m.stats.tick(monotonic_now_ns(), &m.pub);
     }
   } while (m.cfg.loop && !stopped && !stop.load());
+  if (!m.cfg.loop && !stopped && !stop.load()) {
+    // Consumers that want every frame (the injector) wait for this, not for last_in_run: sweeps after the last
+    // sample's key frames come between the two.
+    msgs::StreamEnd end;
+    end.set_frames_sent(counts_.frames_sent);
+    end.set_boundaries_sent(static_cast<std::uint32_t>(counts_.boundaries_sent));
+    m.stamp(end.mutable_header(), m.end_topic);
+    if (transport::send_message(m.pub, m.end_topic, end).code() == StatusCode::kCancelled) return 0;
+  }
   m.stats.tick(monotonic_now_ns() + static_cast<DurationNs>(m.cfg.stats_window_s * 1e9), &m.pub);
   m.stats.log_totals(monotonic_now_ns());
   if (stopped || stop.load()) m.pub.set_linger(0);  // shutdown: exit promptly, do not flush

@@ -1,6 +1,7 @@
 // The nuScenes camera player: publishes every camera frame (sweeps and key frames) of the chosen
 // scenes in timestamp order as [topic][CameraFrame][JPEG bytes as stored], plus a SampleBoundary on
-// /sync/sample right after the last key frame of each sample.
+// /sync/sample right after the last key frame of each sample. At the end of a run (not looping, not
+// stopped) the sweeps after the last sample follow its last_in_run boundary, then a StreamEnd on /sync/end.
 //
 // Pacing: real time scaled by `rate` (2 = twice as fast), or unpaced with rate 0. In lockstep the
 // player waits after each boundary for the sink's SampleAck of that sample (PULL socket bound at
@@ -34,6 +35,7 @@ struct PlayerConfig {
   std::string endpoint = "tcp://127.0.0.1:5600";    // PUB bind address
   int hwm = 8;                                      // send queue per subscriber (messages); ~64 in lockstep
   std::string sync_topic = "/sync/sample";          // SampleBoundary topic
+  std::string end_topic = "/sync/end";              // StreamEnd topic, after the run's last frame
   bool lockstep = false;                            // wait for a SampleAck per sample
   std::string ack_endpoint = "tcp://127.0.0.1:5603";  // PULL bind address for SampleAck (lockstep)
   int ack_timeout_ms = 30000;                       // lockstep: give up waiting (warn) after this; 0 = never
@@ -55,6 +57,7 @@ struct PlayerConfig {
     v("endpoint", endpoint, "PUB bind address");
     v("hwm", hwm, "send queue per subscriber (messages)");
     v("sync_topic", sync_topic, "SampleBoundary topic");
+    v("end_topic", end_topic, "StreamEnd topic (sent after the run's last frame)");
     v("lockstep", lockstep, "wait for the sink's SampleAck per sample");
     v("ack_endpoint", ack_endpoint, "PULL bind address for SampleAck");
     v("ack_timeout_ms", ack_timeout_ms, "lockstep ack timeout (ms); 0 = wait forever");

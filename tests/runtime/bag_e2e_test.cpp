@@ -260,13 +260,16 @@ TEST_F(BagProcessTest, BagPlayThroughInjectorGivesTheSameDetectionsAsTheLiveRun)
   ASSERT_TRUE(std::regex_search(la, ma, done) && std::regex_search(lb, mb, done));
   EXPECT_EQ(ma[1], mb[1]);
   EXPECT_GT(std::stoull(ma[1]), 0u);
-  // The recording holds every frame the player sent (the injectors stop at the last boundary, so
-  // sweeps after it are recorded but not injected).
+  // The recording holds every frame the player sent, and both injectors saw every one of them: they stop at the
+  // stream end, after the sweeps that follow the last sample.
   std::uint64_t frames_in_bag = 0;
   for (const auto& [topic, seqs] : bag.seqs) {
     if (topic.find("/image_rect_compressed") != std::string::npos) frames_in_bag += seqs.size();
   }
   EXPECT_EQ(frames_in_bag, frames);
+  EXPECT_EQ(std::stoull(ma[1]), frames);
+  ASSERT_EQ(bag.seqs.count("/sync/end"), 1u);
+  EXPECT_EQ(bag.seqs.at("/sync/end").size(), 1u);
 }
 
 TEST_F(BagProcessTest, ConvertedBagPlaysStartPausedUnderBagControl) {

@@ -10,11 +10,14 @@
 #include <sstream>
 #include <thread>
 
+#include "camera_frame.pb.h"
 #include "common/logging.hpp"
 #include "fake_detector.hpp"
 #include "runtime/injector_loop.hpp"
 #include "runtime/player_loop.hpp"
 #include "runtime/sink_loop.hpp"
+#include "transport/subscriber.hpp"
+#include "transport/typed.hpp"
 
 namespace faultline::runtime {
 namespace {
@@ -203,6 +206,82 @@ TEST_P(PipelineTest, SamplesWithoutDetectionsGetEmptyListsOnShutdown) {
   ASSERT_EQ(doc["results"].MemberCount(), 2u);
   EXPECT_EQ(doc["results"]["sample-0"].Size(), 0u);
   EXPECT_EQ(doc["results"]["sample-1"].Size(), 0u);
+}
+
+// Sweeps recorded after a run's last key frame come after its last_in_run boundary; the injector still corrupts
+// and forwards them, then the stream end, and only then stops.
+TEST_P(PipelineTest, TrailingSweepsAfterTheLastSampleReachTheInjectorOutput) {
+  Scenario sc = MakeScenario(/*samples=*/2, /*sweeps=*/1);  // 24 frames
+  std::int64_t t = sc.frames.back().timestamp_us + 80'000;
+  for (int j = 0; j < 2; ++j) {  // two trailing sweeps per camera, after sample-1's key frames
+    for (const char* cam : kCameras) {
+      dataset::CameraFrameRecord f = sc.frames.back();
+      f.channel = cam;
+      f.filename = "trailing" + std::to_string(j) + cam + ".jpg";
+      f.sample_data_token = "sd-" + f.filename;
+      f.is_key_frame = false;
+      f.timestamp_us = t;
+      t += 1000;
+      sc.images[f.filename] = TinyJpeg(50 + j);
+      sc.frames.push_back(f);
+    }
+    t += 80'000;
+  }
+  const std::size_t total = sc.frames.size();  // 36
+
+  PlayerConfig pc;
+  pc.rate = 0;
+  pc.hwm = 64;
+  pc.endpoint = Endpoint("player");
+  pc.wait_subscribers = 1;
+  SystemClock clock;
+  PlayerLoop player(pc, "nusc_player", std::make_unique<MemoryFrameSource>(sc.frames, sc.images), clock, log_);
+  InjectorConfig ic;
+  ic.input_endpoints = {player.endpoint()};
+  ic.output_endpoint = Endpoint("injector");
+  ic.input_hwm = ic.output_hwm = 64;
+  ic.wait_subscribers = 1;
+  InjectorLoop injector(ic, "fault_injector", std::make_unique<PassThroughPolicy>(), log_);
+  transport::SubscriberConfig oc;
+  oc.endpoints = {injector.output_endpoint()};
+  oc.topics = {"/faulty/", "/sync/"};
+  oc.rcv_hwm = 1000;
+  transport::RawSubscriber out(oc);
+
+  std::atomic<bool> stop{false};
+  auto injector_rc = std::async(std::launch::async, [&] { return injector.run(stop); });
+  auto player_rc = std::async(std::launch::async, [&] { return player.run(stop); });
+  std::vector<std::string> seen;  // "F" frame, "B" boundary, "L" last boundary, "E" stream end
+  const StampNs deadline = monotonic_now_ns() + 30 * kNsPerSec;
+  while (monotonic_now_ns() < deadline && (seen.empty() || seen.back() != "E")) {
+    auto r = out.receive(50 * kNsPerMs);
+    if (!r.is_ok()) continue;
+    const std::string topic(r->topic());
+    if (topic == "/sync/end") {
+      msgs::StreamEnd e;
+      ASSERT_TRUE(transport::parse_message(*r, &e).is_ok());
+      EXPECT_EQ(e.frames_sent(), total);
+      seen.push_back("E");
+    } else if (topic == "/sync/sample") {
+      msgs::SampleBoundary b;
+      ASSERT_TRUE(transport::parse_message(*r, &b).is_ok());
+      EXPECT_EQ(b.stream_end_follows(), b.last_in_run());
+      seen.push_back(b.last_in_run() ? "L" : "B");
+    } else {
+      seen.push_back("F");
+    }
+  }
+  ASSERT_EQ(injector_rc.wait_for(std::chrono::seconds(10)), std::future_status::ready) << "injector did not stop";
+  stop = true;
+  EXPECT_EQ(player_rc.get(), 0);
+  EXPECT_EQ(injector_rc.get(), 0);
+  EXPECT_EQ(injector.counts().frames_in, total);
+  EXPECT_EQ(injector.counts().frames_out, total);
+  EXPECT_EQ(injector.counts().stream_ends, 1u);
+  // 12 frames, boundary, 12 frames, last boundary, the 12 trailing sweeps, end.
+  std::string order;
+  for (const auto& s : seen) order += s;
+  EXPECT_EQ(order, std::string(12, 'F') + "B" + std::string(12, 'F') + "L" + std::string(12, 'F') + "E");
 }
 
 INSTANTIATE_TEST_SUITE_P(Transports, PipelineTest, ::testing::Values("tcp", "ipc"));

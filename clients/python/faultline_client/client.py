@@ -110,13 +110,15 @@ class FaultlineClient:
 
     def __init__(self, frames_endpoint: Optional[str] = None, detections_endpoint: Optional[str] = None,
                  frame_prefix: Optional[str] = None, sync_topic: str = "/sync/sample",
-                 detector_name: str = "python", rcv_hwm: int = 256, msgs_dir: Optional[str] = None):
+                 end_topic: str = "/sync/end", end_wait_s: float = 10.0, detector_name: str = "python", rcv_hwm: int = 256, msgs_dir: Optional[str] = None):
         self.msgs = load_messages(msgs_dir)
         self.frames_endpoint = frames_endpoint or os.environ.get("FAULTLINE_FRAMES", "tcp://127.0.0.1:5601")
         self.detections_endpoint = detections_endpoint or os.environ.get("FAULTLINE_DETECTIONS",
                                                                          "tcp://127.0.0.1:5602")
         self.frame_prefix = (frame_prefix or os.environ.get("FAULTLINE_FRAME_PREFIX", "/faulty/")).encode()
         self.sync_topic = sync_topic.encode()
+        self.end_topic = end_topic.encode()
+        self.end_wait_s = end_wait_s
         self.detector_name = detector_name
         self.ctx = zmq.Context.instance()
         self.sub = self.ctx.socket(zmq.SUB)
@@ -125,6 +127,7 @@ class FaultlineClient:
         self.sub.setsockopt(zmq.MAXMSGSIZE, 64 << 20)
         self.sub.setsockopt(zmq.SUBSCRIBE, self.frame_prefix)
         self.sub.setsockopt(zmq.SUBSCRIBE, self.sync_topic)
+        self.sub.setsockopt(zmq.SUBSCRIBE, self.end_topic)
         self.sub.connect(self.frames_endpoint)
         self.push = self.ctx.socket(zmq.PUSH)
         self.push.setsockopt(zmq.LINGER, 2000)
@@ -148,12 +151,21 @@ class FaultlineClient:
         self._last_seq[key] = header.seq
 
     def samples(self, timeout_s: Optional[float] = None, decode: bool = True) -> Iterator[Sample]:
-        """Yields one Sample per SampleBoundary; stops after last_in_run or timeout_s without traffic."""
+        """Yields one Sample per SampleBoundary; stops after last_in_run or timeout_s without traffic.
+
+        When the last boundary announces a stream end (stream_end_follows), the frames still coming (sweeps after the
+        last sample) are read and counted up to /sync/end, for at most end_wait_s, so frames_received and
+        transport_drops account for every frame the injector sent."""
         pending: Dict[str, Frame] = {}
         poller = zmq.Poller()
         poller.register(self.sub, zmq.POLLIN)
+        draining_until = None  # monotonic deadline once the last sample was yielded
         while True:
-            events = dict(poller.poll(None if timeout_s is None else int(timeout_s * 1000)))
+            wait_s = timeout_s
+            if draining_until is not None:
+                left = max(0.0, draining_until - time.monotonic())
+                wait_s = left if wait_s is None else min(wait_s, left)
+            events = dict(poller.poll(None if wait_s is None else int(wait_s * 1000)))
             if self.sub not in events:
                 return
             parts = self.sub.recv_multipart(copy=False)
@@ -165,7 +177,12 @@ class FaultlineClient:
                     pending = {c: f for c, f in pending.items() if f.sample_token != b.sample_token}
                     yield Sample(b.sample_token, b.scene_name, b.timestamp_us, frames, b.last_in_run)
                     if b.last_in_run:
-                        return
+                        if not b.stream_end_follows:
+                            return
+                        draining_until = time.monotonic() + self.end_wait_s
+                elif topic == self.end_topic and len(parts) == 2:
+                    self.msgs.StreamEnd.FromString(parts[1].bytes)
+                    return
                 elif len(parts) == 3:
                     h = self.msgs.CameraFrame.FromString(parts[1].bytes)
                     payload = parts[2].buffer
@@ -173,7 +190,7 @@ class FaultlineClient:
                         raise ValueError("payload size mismatch")
                     self._count_gap(topic, h.header)
                     self.frames_received += 1
-                    if not h.is_key_frame:
+                    if not h.is_key_frame or draining_until is not None:
                         continue  # sweeps: a temporal model would consume them here
                     image = decode_payload(h, payload) if decode else None
                     pending[h.camera] = Frame(
