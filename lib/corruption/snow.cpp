@@ -206,22 +206,29 @@ cv::Mat snow_layer_fast(const cv::Mat& crop_field, int rows, int cols, int sever
   for (int i = 0; i < taps; ++i) {
     w[static_cast<std::size_t>(i)] = static_cast<float>(scale ? k->weights[i] / used : k->weights[i]);
   }
-  // Column pass on the crop rows.
+  // Column pass on a crop row when a layer row first reads it, into one of two slots by the row's parity (a layer
+  // row reads crop rows i and i + 1, and i never decreases).
   const snow_kernels::ColumnZoom column_zoom(crop_field.cols, lw);
-  thread_local std::vector<float> colz;  // reused per thread: fresh multi-MB buffers cost page faults
   const auto lw_u = static_cast<std::size_t>(lw);
-  colz.resize(static_cast<std::size_t>(crop_field.rows) * lw_u);
-  for (int r = 0; r < crop_field.rows; ++r) {
-    column_zoom.run(crop_field.ptr<float>(r), colz.data() + static_cast<std::size_t>(r) * lw_u);
-  }
+  thread_local std::vector<float> colz;
+  colz.resize(2 * lw_u);
+  int zoomed_row[2] = {-1, -1};
+  auto column_zoomed = [&](int r) {
+    float* d = colz.data() + static_cast<std::size_t>(r & 1) * lw_u;
+    if (zoomed_row[r & 1] != r) {
+      column_zoom.run(crop_field.ptr<float>(r), d);
+      zoomed_row[r & 1] = r;
+    }
+    return d;
+  };
   // Row pass + threshold, made as the blur needs the rows; blur with the edge clamp at the layer's own size, and
   // quantise the top-left rows x cols.
   const snow_kernels::ZoomAxis rm = snow_kernels::zoom_axis(crop_field.rows, lh);
   const float thr = static_cast<float>(p.threshold);
   const snow_kernels::LayerRowMaker make_row = [&](int o, std::uint16_t* d) {
     const auto ou = static_cast<std::size_t>(o);
-    const float* a = colz.data() + static_cast<std::size_t>(rm.i0[ou]) * lw_u;
-    const float* b = colz.data() + static_cast<std::size_t>(rm.i1[ou]) * lw_u;
+    const float* a = column_zoomed(rm.i0[ou]);
+    const float* b = column_zoomed(rm.i1[ou]);
     snow_kernels::lerp_threshold_u16(a, b, rm.w[ou], thr, d, lw);
   };
   std::vector<int> dx(static_cast<std::size_t>(taps)), dy(static_cast<std::size_t>(taps));
