@@ -97,6 +97,15 @@ class PipelineTest : public ::testing::TestWithParam<std::string> {
     if (GetParam() == "tcp") return "tcp://127.0.0.1:*";
     return "ipc://" + dir_ + "/" + name + ".sock";
   }
+  // Unpaced, no lockstep, waits for one subscriber.
+  PlayerConfig UnpacedPlayer() const {
+    PlayerConfig pc;
+    pc.rate = 0;
+    pc.hwm = 64;
+    pc.endpoint = Endpoint("player");
+    pc.wait_subscribers = 1;
+    return pc;
+  }
   std::string dir_;
   std::shared_ptr<spdlog::logger> log_;
 };
@@ -183,13 +192,9 @@ TEST_P(PipelineTest, LockstepRunDeliversEveryFrameAndWritesAllSamples) {
 
 TEST_P(PipelineTest, SamplesWithoutDetectionsGetEmptyListsOnShutdown) {
   Scenario sc = MakeScenario(2, 1);
-  PlayerConfig pc;
-  pc.rate = 0;
-  pc.hwm = 64;
-  pc.endpoint = Endpoint("player");
-  pc.wait_subscribers = 1;
   SystemClock clock;
-  PlayerLoop player(pc, "nusc_player", std::make_unique<MemoryFrameSource>(sc.frames, sc.images), clock, log_);
+  PlayerLoop player(UnpacedPlayer(), "nusc_player", std::make_unique<MemoryFrameSource>(sc.frames, sc.images), clock,
+                    log_);
   SinkConfig kc;
   kc.detections_endpoint = Endpoint("sink");
   kc.sync_endpoints = {player.endpoint()};
@@ -229,13 +234,9 @@ TEST_P(PipelineTest, TrailingSweepsAfterTheLastSampleReachTheInjectorOutput) {
   }
   const std::size_t total = sc.frames.size();  // 36
 
-  PlayerConfig pc;
-  pc.rate = 0;
-  pc.hwm = 64;
-  pc.endpoint = Endpoint("player");
-  pc.wait_subscribers = 1;
   SystemClock clock;
-  PlayerLoop player(pc, "nusc_player", std::make_unique<MemoryFrameSource>(sc.frames, sc.images), clock, log_);
+  PlayerLoop player(UnpacedPlayer(), "nusc_player", std::make_unique<MemoryFrameSource>(sc.frames, sc.images), clock,
+                    log_);
   InjectorConfig ic;
   ic.input_endpoints = {player.endpoint()};
   ic.output_endpoint = Endpoint("injector");
