@@ -505,14 +505,21 @@ FAULTLINE_SNOW_CLONES void quantise_row(const float* __restrict src, std::uint8_
 void blur_quantise(const LayerRowMaker& make_row, int lh, int lw, const int* dx, const int* dy, const float* w,
                    int taps, std::uint8_t* dst, std::size_t dst_stride, int rows, int cols, bool allow_simd) {
   const bool simd = use_avx2(allow_simd);
+  // Taps whose 16-bit weight is 0 add exactly 0 (the Gaussian tails of the sigma-4 kernels: 6 of 25), so they are
+  // dropped; the rounding bias still counts every tap.
   int pad = 0, dy_min = 0, dy_max = 0;  // tap 0 is (0, 0)
-  std::vector<std::uint16_t> w16(static_cast<std::size_t>(taps));
+  std::vector<std::uint16_t> w16;
+  std::vector<int> tap_dx, tap_dy;
   for (int i = 0; i < taps; ++i) {
+    const auto wi = static_cast<std::uint16_t>(std::min(65535L, std::lround(w[i] * 65536.0)));
+    if (wi == 0) continue;
+    w16.push_back(wi), tap_dx.push_back(dx[i]), tap_dy.push_back(dy[i]);
     pad = std::max(pad, std::abs(dx[i]));
     dy_min = std::min(dy_min, dy[i]), dy_max = std::max(dy_max, dy[i]);
-    w16[static_cast<std::size_t>(i)] = static_cast<std::uint16_t>(std::min(65535L, std::lround(w[i] * 65536.0)));
   }
   const auto bias = static_cast<std::uint16_t>(128 + taps / 2);
+  taps = static_cast<int>(w16.size());
+  dx = tap_dx.data(), dy = tap_dy.data();
   // Ring slot r & (ring_rows - 1) holds layer row r, edge-padded by `pad`, and 16 spare values so the last output
   // vector's lanes past cols read inside the row. The ring (~110 KB at 1600 columns) stays in L2, where the whole
   // float layer (~6 MB) did not.

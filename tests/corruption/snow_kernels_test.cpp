@@ -197,6 +197,28 @@ TEST(SnowKernelsTest, BlurQuantiseBodiesAgreeAndStayWithinOneOfTheFloatSum) {
   EXPECT_LT(differing / values, 0.02);
 }
 
+// A tap whose 16-bit weight is 0 changes nothing, however far it reaches (it is dropped, ring and padding included).
+TEST(SnowKernelsTest, BlurDropsTapsWithZeroFixedPointWeight) {
+  rng::FastRng rng(12);
+  const int lh = 40, lw = 70;
+  std::vector<std::uint16_t> layer(static_cast<std::size_t>(lh * lw));
+  for (auto& v : layer) v = rng.next_u32() % 4 == 0 ? static_cast<std::uint16_t>(rng.next_u32()) : 0;
+  const LayerRowMaker make_row = [&](int row, std::uint16_t* out) {
+    std::copy(layer.begin() + row * lw, layer.begin() + (row + 1) * lw, out);
+  };
+  const std::vector<int> dx = {0, -1, -2, 30}, dy = {0, 2, 3, 25};
+  const std::vector<float> with_tail = {0.5f, 0.3f, 0.2f, 1e-7f};
+  for (bool simd : {true, false}) {
+    std::vector<std::uint8_t> a(static_cast<std::size_t>(35 * 64)), b(a.size());
+    blur_quantise(make_row, lh, lw, dx.data(), dy.data(), with_tail.data(), 4, a.data(), 64, 35, 64, simd);
+    // Same rounding bias (half an LSB per tap, 4 taps) through a fourth tap that repeats tap 0 with weight 0.
+    const std::vector<int> dx3 = {0, -1, -2, 0}, dy3 = {0, 2, 3, 0};
+    const std::vector<float> w3 = {0.5f, 0.3f, 0.2f, 0.0f};
+    blur_quantise(make_row, lh, lw, dx3.data(), dy3.data(), w3.data(), 4, b.data(), 64, 35, 64, simd);
+    EXPECT_EQ(a, b) << (simd ? "simd" : "scalar");
+  }
+}
+
 // 16-bit rounding: round(S / 257) through (t - (t >> 8)) >> 8 with t = S + 128, for every 16-bit sum.
 TEST(SnowKernelsTest, BlurQuantisationDividesBy257WithRounding) {
   const std::vector<int> dx = {0}, dy = {0};
