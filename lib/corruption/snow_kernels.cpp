@@ -353,7 +353,8 @@ __attribute__((target("avx2"))) int lerp_threshold_u16_avx2(const float* a, cons
       v = _mm256_andnot_ps(_mm256_cmp_ps(v, thr, _CMP_LT_OQ), v);
       q[h] = _mm256_cvtps_epi32(_mm256_mul_ps(_mm256_min_ps(_mm256_max_ps(v, zero), one), k));
     }
-    _mm256_storeu_si256(reinterpret_cast<__m256i*>(dst + x), _mm256_permute4x64_epi64(_mm256_packus_epi32(q[0], q[1]), 0xD8));
+    const __m256i words = _mm256_permute4x64_epi64(_mm256_packus_epi32(q[0], q[1]), 0xD8);
+    _mm256_storeu_si256(reinterpret_cast<__m256i*>(dst + x), words);
   }
   return x;
 }

@@ -87,7 +87,8 @@ TEST(SnowKernelsTest, BlendStaysWithinOneOfTheFloatFormula) {
       for (int x = 0; x < cols; ++x) {
         const auto c = [&](int k) { return static_cast<float>(rows.src[static_cast<std::size_t>(3 * x + k)]); };
         const float bright = (0.299f * c(0) + 0.587f * c(1) + 0.114f * c(2)) * 1.5f + 127.5f;
-        const float snow = static_cast<float>(rows.layer[static_cast<std::size_t>(x)] + rows.rot[static_cast<std::size_t>(x)]);
+        const auto xu = static_cast<std::size_t>(x);
+        const float snow = static_cast<float>(rows.layer[xu] + rows.rot[xu]);
         for (int k = 0; k < 3; ++k) {
           const float v = b * c(k) + one_minus_b * std::max(c(k), bright) + snow;
           const int expected = static_cast<int>(std::min(v, 255.0f));
@@ -398,7 +399,8 @@ TEST(SnowFastTest, MeetsTheStatisticalTolerancesAt1600x900) {
       for (int x = 0; x < normals.cols; ++x) normals.at<double>(y, x) = np.normal(p.loc, p.scale);
     }
     const double angle = np.uniform(-135.0, -45.0);
-    const int cr = static_cast<int>(std::ceil(frame.rows / p.zoom)), cc = static_cast<int>(std::ceil(frame.cols / p.zoom));
+    const int cr = static_cast<int>(std::ceil(frame.rows / p.zoom));
+    const int cc = static_cast<int>(std::ceil(frame.cols / p.zoom));
     cv::Mat crop;
     normals(cv::Rect((frame.cols - cc) / 2, (frame.rows - cr) / 2, cc, cr)).convertTo(crop, CV_32F);
     const cv::Mat exact_layer = snow_layer_exact(normals, severity, angle);
