@@ -223,6 +223,25 @@ TEST(BrightnessPathsTest, TablePathEqualsHsvMirrorOnEveryColour) {
   }
 }
 
+TEST(ColorQuantTest, MatchesABitwiseAndOnCropsAndDeeperImages) {
+  // A crop of a wider frame (rows not contiguous: the per-row path) and 16-bit data (OpenCV's AND) at every severity.
+  const cv::Mat wide = faultline::testing::scene(97, 211);
+  const cv::Mat crop = wide(cv::Rect(5, 3, 131, 77));
+  ASSERT_FALSE(crop.isContinuous());
+  cv::Mat deep;
+  wide.convertTo(deep, CV_16UC3, 257.0);
+  for (int sev = 1; sev <= 5; ++sev) {
+    const int m = color_quant_mask(sev);
+    for (const cv::Mat& in : {wide, crop, deep}) {
+      cv::Mat expected;
+      cv::bitwise_and(in, cv::Scalar::all(m), expected);
+      const cv::Mat out = color_quant(in, sev);
+      ASSERT_EQ(out.type(), in.type());
+      EXPECT_EQ(cv::norm(out, expected, cv::NORM_INF), 0.0) << sev << " " << in.cols << "x" << in.rows;
+    }
+  }
+}
+
 // Max abs difference between the fast and the exact brightness path at one severity.
 double BrightnessFastVsExact(const cv::Mat& img, int severity) {
   return cv::norm(brightness_fast(img, severity), brightness_exact(img, severity), cv::NORM_INF);
