@@ -277,15 +277,12 @@ int BagPlayer::run(const std::atomic<bool>& stop) {
         }
         ++counts_.messages_sent;
         sent_.store(counts_.messages_sent);
-        if (topic == m.cfg.end_topic) {
-          end_owed = false;
-        } else if (topic == m.cfg.sync_topic) {
-          msgs::SampleBoundary b;
-          if (b.ParseFromArray(v.data.data(), static_cast<int>(v.data.size())) && b.last_in_run() &&
-              b.stream_end_follows()) {
-            end_owed = true;
-          }
-        }
+        // A boundary is parsed once: for the stream end it may announce and for the lockstep ack below.
+        msgs::SampleBoundary boundary;
+        const bool is_boundary = topic == m.cfg.sync_topic &&
+                                 boundary.ParseFromArray(v.data.data(), static_cast<int>(v.data.size()));
+        if (topic == m.cfg.end_topic) end_owed = false;
+        if (is_boundary && boundary.last_in_run() && boundary.stream_end_follows()) end_owed = true;
         counts_.bytes_sent += v.data.size();
         counts_.bag_seconds = static_cast<double>(rel) / 1e9;
         if (m.cfg.progress && monotonic_now_ns() - m.last_progress_ns > 200 * kNsPerMs) {
@@ -293,11 +290,7 @@ int BagPlayer::run(const std::atomic<bool>& stop) {
           m.print_progress(counts_, paused_.load());
         }
         if (m.cfg.lockstep && topic == m.cfg.sync_topic) {
-          msgs::SampleBoundary b;
-          if (b.ParseFromArray(v.data.data(), static_cast<int>(v.data.size())) &&
-              !m.wait_ack(b.sample_token(), stop, counts_)) {
-            return false;
-          }
+          if (is_boundary && !m.wait_ack(boundary.sample_token(), stop, counts_)) return false;
           m.base_log_ns = -1;  // pacing restarts after the sink caught up
         }
         return true;
