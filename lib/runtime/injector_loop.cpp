@@ -218,13 +218,16 @@ int InjectorLoop::run(const std::atomic<bool>& stop) {
       counts_.superseded += m.sub->superseded() - superseded_seen;
       superseded_seen = m.sub->superseded();
     }
+    // Control messages (boundary, stream end): a malformed one is counted and skipped.
+    auto parse_control = [&](google::protobuf::MessageLite* out) {
+      if (transport::parse_message(msg, out).is_ok()) return true;
+      ++counts_.malformed;
+      m.stats.collector().add_malformed(in_topic, 1);
+      return false;
+    };
     if (in_topic == m.cfg.sync_topic) {
       msgs::SampleBoundary b;
-      if (!transport::parse_message(msg, &b).is_ok()) {
-        ++counts_.malformed;
-        m.stats.collector().add_malformed(in_topic, 1);
-        continue;
-      }
+      if (!parse_control(&b)) continue;
       m.stamp(b.mutable_header(), m.sync_out);
       if (!transport::send_message(m.pub, m.sync_out, b).is_ok()) m.log->warn("boundary forward failed");
       ++counts_.boundaries;
@@ -240,11 +243,7 @@ int InjectorLoop::run(const std::atomic<bool>& stop) {
     }
     if (in_topic == m.cfg.end_topic) {
       msgs::StreamEnd e;
-      if (!transport::parse_message(msg, &e).is_ok()) {
-        ++counts_.malformed;
-        m.stats.collector().add_malformed(in_topic, 1);
-        continue;
-      }
+      if (!parse_control(&e)) continue;
       // Frames held back by a delay fault go out first: the end marker stays last.
       if (Status s = m.flush_delayed(std::numeric_limits<StampNs>::max()); !s.is_ok()) {
         rc = s.code() == StatusCode::kCancelled ? 0 : 1;
