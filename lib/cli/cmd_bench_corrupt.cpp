@@ -20,6 +20,7 @@
 
 #include "cli/command.hpp"
 #include "codec/jpeg.hpp"
+#include "common/cpu_features.hpp"
 #include "corruption/corrupt.hpp"
 #include "corruption/dark.hpp"
 #include "corruption/fog.hpp"
@@ -311,7 +312,8 @@ int run(int argc, char** argv) {
     }
     s += "  {\"type\": \"jpeg_decode\", \"ms\": " + num(jpeg_ms, 3) + ", \"cpu_ms\": " + num(jpeg_t.cpu_ms, 3) + ", \"width\": " + std::to_string(width) +
          ", \"height\": " + std::to_string(height) + ", \"jpeg_bytes\": " + std::to_string(jpeg->size()) +
-         ", \"reps\": " + std::to_string(reps) + ", \"threads\": 1}\n]\n";
+         ", \"reps\": " + std::to_string(reps) + ", \"threads\": 1, \"vector_paths\": " +
+         (common::scalar_forced() ? "false" : "true") + "}\n]\n";
     return s;
   };
   if (!out_path.empty()) {
@@ -328,6 +330,7 @@ int run(int argc, char** argv) {
   }
   std::printf("frame %dx%d, single-threaded, median of %d runs; TurboJPEG decode (q95 4:2:0): %.3f ms (cpu %.3f)\n",
               width, height, reps, jpeg_ms, jpeg_t.cpu_ms);
+  if (common::scalar_forced()) std::printf("FAULTLINE_SCALAR is set: the corruptions' vector paths are off\n");
   std::printf("%-12s %-5s %-6s %10s %10s %9s %9s %10s", "type", "level", "mode", "ms", "cpu_ms", "xJPEG", "ref_ms",
               "speedup");
   if (fidelity) std::printf(" %-11s %9s %7s", "fidelity", "psnr_db", "maxdiff");

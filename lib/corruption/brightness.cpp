@@ -8,6 +8,8 @@
 #include <stdexcept>
 #include <vector>
 
+#include "common/cpu_features.hpp"
+
 #if defined(__GNUC__) && defined(__x86_64__)
 #include <immintrin.h>
 #endif
@@ -251,10 +253,7 @@ __attribute__((target("avx2"))) std::size_t brightness_avx2(const std::uint8_t* 
   return i;
 }
 
-bool have_avx2() {
-  static const bool yes = __builtin_cpu_supports("avx2");
-  return yes;
-}
+bool have_avx2() { return common::cpu_has_avx2(); }
 #endif
 
 }  // namespace

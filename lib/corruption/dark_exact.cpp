@@ -9,6 +9,7 @@
 #include <cstring>
 #include <vector>
 
+#include "common/cpu_features.hpp"
 #include "corruption/dark.hpp"
 #include "corruption/dark_sampler.hpp"
 
@@ -140,10 +141,7 @@ __attribute__((target("avx2"))) void store_approx_log4(const double* x, double* 
   _mm256_storeu_pd(out, approx_log4(_mm256_loadu_pd(x)));
 }
 
-bool has_avx2() {
-  static const bool yes = __builtin_cpu_supports("avx2");
-  return yes;
-}
+bool has_avx2() { return common::cpu_has_avx2(); }
 
 #endif
 

@@ -4,6 +4,7 @@
 
 #include <utility>
 
+#include "common/cpu_features.hpp"
 #include "rng/lane_rng_avx2.hpp"
 
 namespace faultline::corruption {
@@ -75,10 +76,7 @@ __attribute__((target("avx2"))) std::size_t sample_avx2(const std::uint32_t* tab
   return i;
 }
 
-bool has_avx2() {
-  static const bool yes = __builtin_cpu_supports("avx2");
-  return yes;
-}
+bool has_avx2() { return common::cpu_has_avx2(); }
 #endif
 
 #if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__)

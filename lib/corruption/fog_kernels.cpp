@@ -6,6 +6,7 @@
 #include <array>
 #include <cstring>
 
+#include "common/cpu_features.hpp"
 #include "rng/lane_rng_avx2.hpp"
 
 #if defined(__x86_64__) && defined(__GNUC__)
@@ -138,10 +139,7 @@ void blend_fixed_scalar(const std::uint8_t* src, const std::uint16_t* ga, const 
 
 #if FAULTLINE_FOG_AVX2
 
-bool have_avx2() {
-  static const bool yes = __builtin_cpu_supports("avx2");
-  return yes;
-}
+bool have_avx2() { return common::cpu_has_avx2(); }
 
 struct StepVec {
   __m256d w, lo, span;

@@ -4,6 +4,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "common/cpu_features.hpp"
+
 #if defined(__GNUC__) && defined(__x86_64__)
 #include <immintrin.h>
 #endif
@@ -324,21 +326,11 @@ __attribute__((target("avx2"))) void period_change_bits_avx2(const float* src, s
   }
 }
 
-bool have_avx2_fma_f16c() {
-  static const bool yes =
-      __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma") && __builtin_cpu_supports("f16c");
-  return yes;
-}
+bool have_avx2_fma_f16c() { return common::cpu_has_avx2_fma_f16c(); }
 
-bool have_avx2() {
-  static const bool yes = __builtin_cpu_supports("avx2");
-  return yes;
-}
+bool have_avx2() { return common::cpu_has_avx2(); }
 
-bool have_avx2_fma() {
-  static const bool yes = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
-  return yes;
-}
+bool have_avx2_fma() { return common::cpu_has_avx2_fma(); }
 #endif
 
 }  // namespace

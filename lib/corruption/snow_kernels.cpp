@@ -5,6 +5,8 @@
 #include <cmath>
 #include <vector>
 
+#include "common/cpu_features.hpp"
+
 #if defined(__GNUC__) && defined(__x86_64__)
 #include <immintrin.h>
 #define FAULTLINE_SNOW_AVX2 1
@@ -14,10 +16,7 @@ namespace faultline::corruption::snow_kernels {
 namespace {
 
 #ifdef FAULTLINE_SNOW_AVX2
-bool has_avx2() {
-  static const bool yes = __builtin_cpu_supports("avx2");
-  return yes;
-}
+bool has_avx2() { return common::cpu_has_avx2(); }
 #endif
 
 bool use_avx2(bool allow_simd) {
@@ -359,10 +358,7 @@ __attribute__((target("avx2"))) int lerp_threshold_u16_avx2(const float* a, cons
   return x;
 }
 
-bool has_avx2_fma() {
-  static const bool yes = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
-  return yes;
-}
+bool has_avx2_fma() { return common::cpu_has_avx2_fma(); }
 
 #endif  // FAULTLINE_SNOW_AVX2
 

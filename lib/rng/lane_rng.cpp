@@ -1,6 +1,7 @@
 // Lock-step xoshiro256++ lanes: seeding, the scalar step, and normals (AVX2 ziggurat with a scalar twin).
 #include "rng/lane_rng.hpp"
 
+#include "common/cpu_features.hpp"
 #include "rng/lane_rng_avx2.hpp"
 
 namespace faultline::rng {
@@ -114,7 +115,7 @@ void fill_normals(float* dst, std::size_t n, double loc, double scale, LaneRng& 
   const ZigguratF z(slow);
   std::size_t done = 0;
 #ifdef FAULTLINE_LANE_AVX2
-  static const bool has_avx2 = __builtin_cpu_supports("avx2");
+  const bool has_avx2 = common::cpu_has_avx2();
   if (allow_simd && has_avx2) done = fill_normals_avx2(dst, n, loc, scale, z, lanes, slow);
 #else
   (void)allow_simd;

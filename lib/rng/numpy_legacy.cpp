@@ -6,6 +6,8 @@
 #include <cmath>
 #include <cstring>
 
+#include "common/cpu_features.hpp"
+
 #if defined(__GNUC__) && defined(__x86_64__)
 #include <immintrin.h>
 #endif
@@ -47,10 +49,7 @@ __attribute__((target("avx2,popcnt"))) std::size_t skip_chunks_avx2(const double
   return j;
 }
 
-bool has_avx2_popcnt() {
-  static const bool yes = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("popcnt");
-  return yes;
-}
+bool has_avx2_popcnt() { return common::cpu_has_avx2_popcnt(); }
 #endif
 
 }  // namespace
@@ -251,10 +250,7 @@ __attribute__((target("avx2"))) void temper_pairs_avx2(const std::uint32_t* stat
   }
 }
 
-bool mt_has_avx2() {
-  static const bool yes = __builtin_cpu_supports("avx2");
-  return yes;
-}
+bool mt_has_avx2() { return common::cpu_has_avx2(); }
 #endif
 
 }  // namespace

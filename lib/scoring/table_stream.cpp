@@ -10,6 +10,8 @@
 #include <unistd.h>
 
 #include <charconv>
+
+#include "common/cpu_features.hpp"
 #ifdef __SSE2__
 #include <emmintrin.h>
 #endif
@@ -199,10 +201,7 @@ class Scanner {
   }
 
 #ifdef FAULTLINE_BLOCK_SKIP
-  static bool have_block_skip() {
-    static const bool yes = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("pclmul");
-    return yes;
-  }
+  static bool have_block_skip() { return common::cpu_has_avx2_pclmul(); }
 
   // Bit i set where byte i of the 64 at q equals c.
   __attribute__((target("avx2"))) static std::uint64_t eq_mask(__m256i lo, __m256i hi, char c) {

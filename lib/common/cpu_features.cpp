@@ -1,0 +1,59 @@
+#include "common/cpu_features.hpp"
+
+#include <cstdlib>
+#include <cstring>
+
+namespace faultline::common {
+
+bool scalar_forced() {
+  static const bool forced = [] {
+    const char* v = std::getenv("FAULTLINE_SCALAR");
+    return v != nullptr && v[0] != '\0' && std::strcmp(v, "0") != 0;
+  }();
+  return forced;
+}
+
+namespace {
+
+#if defined(__GNUC__) && defined(__x86_64__)
+bool supports_avx2() { return __builtin_cpu_supports("avx2"); }
+bool supports_fma() { return __builtin_cpu_supports("fma"); }
+bool supports_f16c() { return __builtin_cpu_supports("f16c"); }
+bool supports_popcnt() { return __builtin_cpu_supports("popcnt"); }
+bool supports_pclmul() { return __builtin_cpu_supports("pclmul"); }
+#else
+bool supports_avx2() { return false; }
+bool supports_fma() { return false; }
+bool supports_f16c() { return false; }
+bool supports_popcnt() { return false; }
+bool supports_pclmul() { return false; }
+#endif
+
+}  // namespace
+
+bool cpu_has_avx2() {
+  static const bool yes = !scalar_forced() && supports_avx2();
+  return yes;
+}
+
+bool cpu_has_avx2_fma() {
+  static const bool yes = cpu_has_avx2() && supports_fma();
+  return yes;
+}
+
+bool cpu_has_avx2_fma_f16c() {
+  static const bool yes = cpu_has_avx2_fma() && supports_f16c();
+  return yes;
+}
+
+bool cpu_has_avx2_popcnt() {
+  static const bool yes = cpu_has_avx2() && supports_popcnt();
+  return yes;
+}
+
+bool cpu_has_avx2_pclmul() {
+  static const bool yes = cpu_has_avx2() && supports_pclmul();
+  return yes;
+}
+
+}  // namespace faultline::common
