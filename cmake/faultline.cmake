@@ -22,9 +22,12 @@ function(faultline_add_library concern)
   faultline_warnings(faultline_${concern})
 endfunction()
 
-# faultline_add_test(<name> SOURCES ... LIBS ... [LABELS ...]): one GoogleTest executable, discovered by CTest.
+# faultline_add_test(<name> SOURCES ... LIBS ... [LABELS ...] [SCALAR_TOO]): one GoogleTest executable, discovered by
+# CTest. SCALAR_TOO registers every test a second time as scalar.<test> with FAULTLINE_SCALAR=1, so the portable
+# fallbacks of the hand-dispatched SIMD kernels are held to the same assertions (goldens included) on a CPU that has
+# the vector units.
 function(faultline_add_test name)
-  cmake_parse_arguments(ARG "" "" "SOURCES;LIBS;LABELS" ${ARGN})
+  cmake_parse_arguments(ARG "SCALAR_TOO" "" "SOURCES;LIBS;LABELS" ${ARGN})
   add_executable(${name} ${ARG_SOURCES})
   target_link_libraries(${name} PRIVATE ${ARG_LIBS} GTest::gtest GTest::gmock GTest::gtest_main)
   target_compile_definitions(${name} PRIVATE
@@ -33,6 +36,10 @@ function(faultline_add_test name)
     FAULTLINE_BIN_DIR="${CMAKE_RUNTIME_OUTPUT_DIRECTORY}")
   faultline_warnings(${name})
   gtest_discover_tests(${name} DISCOVERY_TIMEOUT 60 PROPERTIES LABELS "${ARG_LABELS}")
+  if(ARG_SCALAR_TOO)
+    gtest_discover_tests(${name} DISCOVERY_TIMEOUT 60 TEST_PREFIX "scalar."
+      PROPERTIES LABELS "${ARG_LABELS};scalar" ENVIRONMENT "FAULTLINE_SCALAR=1")
+  endif()
 endfunction()
 
 # faultline_add_node(<name> LIBS ...): nodes/<name>/main.cpp -> bin/<name>.
