@@ -252,8 +252,6 @@ __attribute__((target("avx2"))) std::size_t brightness_avx2(const std::uint8_t* 
   }
   return i;
 }
-
-bool have_avx2() { return common::cpu_has_avx2(); }
 #endif
 
 }  // namespace
@@ -267,7 +265,7 @@ cv::Mat brightness_fast(const cv::Mat& bgr, int severity) {
   std::uint8_t* dst = out.data;
   std::size_t i = 0;
 #if defined(__GNUC__) && defined(__x86_64__)
-  if (have_avx2()) i = brightness_avx2(src, dst, n, t);
+  if (common::cpu_has_avx2()) i = brightness_avx2(src, dst, n, t);
 #endif
   for (; i < n; ++i) table_pixel(t, src + 3 * i, dst + 3 * i);
   return out;

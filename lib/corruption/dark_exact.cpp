@@ -141,8 +141,6 @@ __attribute__((target("avx2"))) void store_approx_log4(const double* x, double* 
   _mm256_storeu_pd(out, approx_log4(_mm256_loadu_pd(x)));
 }
 
-bool has_avx2() { return common::cpu_has_avx2(); }
-
 #endif
 
 }  // namespace
@@ -150,7 +148,7 @@ bool has_avx2() { return common::cpu_has_avx2(); }
 void approx_logs(const double* x, double* out, std::size_t n) {
   std::size_t i = 0;
 #ifdef FAULTLINE_DARK_AVX2
-  if (has_avx2()) {
+  if (common::cpu_has_avx2()) {
     for (; i + 4 <= n; i += 4) store_approx_log4(x + i, out + i);
   }
 #endif
@@ -205,7 +203,7 @@ cv::Mat dark_exact_bracketed(const cv::Mat& bgr, int severity, rng::NumpyRandomS
     rng.polar_pairs(x, r2, pairs);
     std::size_t done_pairs = 0, nflag = 0;
 #ifdef FAULTLINE_DARK_AVX2
-    if (has_avx2()) {
+    if (common::cpu_has_avx2()) {
       const std::size_t groups = pairs / 4;
       nflag = noise_groups_avx2(x, r2, groups, counts.data() + i, y_of_k, sigma, bracket, dst + i, flagged, 0);
       done_pairs = 4 * groups;

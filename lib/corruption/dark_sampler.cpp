@@ -75,8 +75,6 @@ __attribute__((target("avx2"))) std::size_t sample_avx2(const std::uint32_t* tab
   rng::avx2::store_half(b, rng, 1);
   return i;
 }
-
-bool has_avx2() { return common::cpu_has_avx2(); }
 #endif
 
 #if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__)
@@ -110,7 +108,7 @@ void dark_sample(const std::uint32_t* tables, int lo, const std::uint8_t* src, s
                  rng::LaneRng& rng, bool allow_simd) {
   std::size_t done = 0;
 #ifdef FAULTLINE_DARK_AVX2
-  if (allow_simd && has_avx2()) done = sample_avx2(tables, lo, src, dst, n, rng);
+  if (allow_simd && common::cpu_has_avx2()) done = sample_avx2(tables, lo, src, dst, n, rng);
 #else
   (void)allow_simd;
 #endif

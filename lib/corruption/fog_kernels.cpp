@@ -139,8 +139,6 @@ void blend_fixed_scalar(const std::uint8_t* src, const std::uint16_t* ga, const 
 
 #if FAULTLINE_FOG_AVX2
 
-bool have_avx2() { return common::cpu_has_avx2(); }
-
 struct StepVec {
   __m256d w, lo, span;
 };
@@ -526,15 +524,13 @@ FAULTLINE_TARGET_AVX2 void lerp_avx2(const float* a, const float* b, float* out,
   for (; j < count; ++j) out[j] = a[j] * wa + b[j] * wb;
 }
 
-#else
-constexpr bool have_avx2() { return false; }
 #endif
 
 }  // namespace
 
 void fog_centre_row(const double* c0, const double* c1, const double* u, double* d, int count, const FogStep& s) {
 #if FAULTLINE_FOG_AVX2
-  if (have_avx2()) return centre_avx2(c0, c1, u, d, count, s);
+  if (common::cpu_has_avx2()) return centre_avx2(c0, c1, u, d, count, s);
 #endif
   centre_scalar(c0, c1, u, d, 0, count, s);
 }
@@ -542,7 +538,7 @@ void fog_centre_row(const double* c0, const double* c1, const double* u, double*
 void fog_hedge_row(const double* d0, const double* dp, const double* c0, const double* u, double* e, int count,
                    const FogStep& s) {
 #if FAULTLINE_FOG_AVX2
-  if (have_avx2()) return hedge_avx2(d0, dp, c0, u, e, count, s);
+  if (common::cpu_has_avx2()) return hedge_avx2(d0, dp, c0, u, e, count, s);
 #endif
   hedge_scalar(d0, dp, c0, u, e, 0, count, s);
 }
@@ -550,14 +546,14 @@ void fog_hedge_row(const double* d0, const double* dp, const double* c0, const d
 void fog_vedge_row(const double* d0, const double* c0, const double* c1, const double* u, double* e, int count,
                    const FogStep& s) {
 #if FAULTLINE_FOG_AVX2
-  if (have_avx2()) return vedge_avx2(d0, c0, c1, u, e, count, s);
+  if (common::cpu_has_avx2()) return vedge_avx2(d0, c0, c1, u, e, count, s);
 #endif
   vedge_scalar(d0, c0, c1, u, e, 0, count, s);
 }
 
 void fog_interleave_row(const double* a, const double* b, double* out, int pairs) {
 #if FAULTLINE_FOG_AVX2
-  if (have_avx2()) return interleave_avx2(a, b, out, pairs);
+  if (common::cpu_has_avx2()) return interleave_avx2(a, b, out, pairs);
 #endif
   for (int j = 0; j < pairs; ++j) {
     out[2 * j] = a[j];
@@ -567,7 +563,7 @@ void fog_interleave_row(const double* a, const double* b, double* out, int pairs
 
 void fog_minmax_row(const double* p, int count, double* mn, double* mx) {
 #if FAULTLINE_FOG_AVX2
-  if (have_avx2()) return minmax_avx2(p, count, mn, mx);
+  if (common::cpu_has_avx2()) return minmax_avx2(p, count, mn, mx);
 #endif
   for (int j = 0; j < count; ++j) {
     *mn = std::min(*mn, p[j]);
@@ -577,7 +573,7 @@ void fog_minmax_row(const double* p, int count, double* mn, double* mx) {
 
 void fog_interleave_normalise_row(const double* a, const double* b, double* out, int pairs, double mn, double range) {
 #if FAULTLINE_FOG_AVX2
-  if (have_avx2()) return interleave_normalise_avx2(a, b, out, pairs, mn, range);
+  if (common::cpu_has_avx2()) return interleave_normalise_avx2(a, b, out, pairs, mn, range);
 #endif
   for (int j = 0; j < pairs; ++j) {
     out[2 * j] = (a[j] - mn) / range;
@@ -588,7 +584,7 @@ void fog_interleave_normalise_row(const double* a, const double* b, double* out,
 void fog_blend_exact_row(const std::uint8_t* src, const double* f, std::uint8_t* dst, int cols,
                          const FogBlendExact& b) {
 #if FAULTLINE_FOG_AVX2
-  if (have_avx2()) return blend_exact_avx2(src, f, dst, cols, b);
+  if (common::cpu_has_avx2()) return blend_exact_avx2(src, f, dst, cols, b);
 #endif
   blend_exact_scalar(src, dst, 0, cols, b, [f](int i) { return f[i]; });
 }
@@ -596,7 +592,7 @@ void fog_blend_exact_row(const std::uint8_t* src, const double* f, std::uint8_t*
 void fog_blend_exact_pairs(const std::uint8_t* src, const double* even, const double* odd, std::uint8_t* dst,
                            int cols, const FogBlendExact& b) {
 #if FAULTLINE_FOG_AVX2
-  if (have_avx2()) return blend_exact_pairs_avx2(src, even, odd, dst, cols, b);
+  if (common::cpu_has_avx2()) return blend_exact_pairs_avx2(src, even, odd, dst, cols, b);
 #endif
   blend_exact_scalar(src, dst, 0, cols, b, [even, odd](int i) { return i % 2 ? odd[i / 2] : even[i / 2]; });
 }
@@ -604,7 +600,7 @@ void fog_blend_exact_pairs(const std::uint8_t* src, const double* even, const do
 void fog_blend_fast_row(const std::uint8_t* src, const float* f, std::uint8_t* dst, int cols, float scale,
                         float add_scale) {
 #if FAULTLINE_FOG_AVX2
-  if (have_avx2()) return blend_fast_avx2(src, f, dst, cols, scale, add_scale);
+  if (common::cpu_has_avx2()) return blend_fast_avx2(src, f, dst, cols, scale, add_scale);
 #endif
   blend_fast_scalar(src, f, dst, 0, cols, scale, add_scale);
 }
@@ -612,21 +608,21 @@ void fog_blend_fast_row(const std::uint8_t* src, const float* f, std::uint8_t* d
 void fog_blend_fast_lerp_row(const std::uint8_t* src, const float* fa, const float* fb, std::uint8_t* dst, int cols,
                              float wa, float wb, float scale, float add_scale) {
 #if FAULTLINE_FOG_AVX2
-  if (have_avx2()) return blend_fast_lerp_avx2(src, fa, fb, dst, cols, wa, wb, scale, add_scale);
+  if (common::cpu_has_avx2()) return blend_fast_lerp_avx2(src, fa, fb, dst, cols, wa, wb, scale, add_scale);
 #endif
   blend_fast_lerp_scalar(src, fa, fb, dst, 0, cols, wa, wb, scale, add_scale);
 }
 
 std::uint8_t fog_max_u8(const std::uint8_t* p, std::size_t count, std::uint8_t mx) {
 #if FAULTLINE_FOG_AVX2
-  if (have_avx2()) return max_u8_avx2(p, count, mx);
+  if (common::cpu_has_avx2()) return max_u8_avx2(p, count, mx);
 #endif
   return max_u8_scalar(p, count, mx);
 }
 
 void fog_fill_uniforms(rng::LaneRng& lanes, double* u, int count) {
 #if FAULTLINE_FOG_AVX2
-  if (have_avx2()) return fill_uniforms_avx2(lanes, u, count);
+  if (common::cpu_has_avx2()) return fill_uniforms_avx2(lanes, u, count);
 #endif
   fill_uniforms_scalar(lanes, u, 0, count);
 }
@@ -634,7 +630,7 @@ void fog_fill_uniforms(rng::LaneRng& lanes, double* u, int count) {
 void fog_fixed_field_row(const float* f, std::uint16_t* g, int cols, float add_scale) {
   const float add256 = add_scale * 256.0f;
 #if FAULTLINE_FOG_AVX2
-  if (have_avx2()) return fixed_field_avx2(f, g, cols, add256);
+  if (common::cpu_has_avx2()) return fixed_field_avx2(f, g, cols, add256);
 #endif
   fixed_field_scalar(f, g, 0, cols, add256);
 }
@@ -643,7 +639,7 @@ void fog_blend_fixed_row(const std::uint8_t* src, const std::uint16_t* ga, const
                          std::uint8_t* dst, int cols, std::uint16_t scale16) {
   const int count = 3 * cols;
 #if FAULTLINE_FOG_AVX2
-  if (have_avx2()) {
+  if (common::cpu_has_avx2()) {
     switch (k) {
       case 0: return blend_fixed_avx2<0>(src, ga, gb, dst, count, scale16);
       case 1: return blend_fixed_avx2<1>(src, ga, gb, dst, count, scale16);
@@ -657,14 +653,14 @@ void fog_blend_fixed_row(const std::uint8_t* src, const std::uint16_t* ga, const
 
 void fog_upsample4_row(const float* low, float* out, int count) {
 #if FAULTLINE_FOG_AVX2
-  if (have_avx2()) return upsample4_avx2(low, out, count);
+  if (common::cpu_has_avx2()) return upsample4_avx2(low, out, count);
 #endif
   upsample4_scalar(low, out, 0, count);
 }
 
 void fog_lerp_row(const float* a, const float* b, float* out, int count, float wa, float wb) {
 #if FAULTLINE_FOG_AVX2
-  if (have_avx2()) return lerp_avx2(a, b, out, count, wa, wb);
+  if (common::cpu_has_avx2()) return lerp_avx2(a, b, out, count, wa, wb);
 #endif
   for (int j = 0; j < count; ++j) out[j] = a[j] * wa + b[j] * wb;
 }

@@ -325,12 +325,6 @@ __attribute__((target("avx2"))) void period_change_bits_avx2(const float* src, s
     bits[w] = word;
   }
 }
-
-bool have_avx2_fma_f16c() { return common::cpu_has_avx2_fma_f16c(); }
-
-bool have_avx2() { return common::cpu_has_avx2(); }
-
-bool have_avx2_fma() { return common::cpu_has_avx2_fma(); }
 #endif
 
 }  // namespace
@@ -338,7 +332,7 @@ bool have_avx2_fma() { return common::cpu_has_avx2_fma(); }
 void weighted_rows(float* acc, const std::uint8_t* const* rows, const float* weights, int taps, std::size_t n) {
   std::size_t j0 = 0;
 #if defined(__GNUC__) && defined(__x86_64__)
-  if (have_avx2()) j0 = weighted_rows_avx2(acc, rows, weights, taps, n);
+  if (common::cpu_has_avx2()) j0 = weighted_rows_avx2(acc, rows, weights, taps, n);
 #endif
   for (std::size_t j = j0; j < n; ++j) {
     float a = 0.0f;
@@ -350,7 +344,7 @@ void weighted_rows(float* acc, const std::uint8_t* const* rows, const float* wei
 void weighted_rows(float* acc, const float* const* rows, const float* weights, int taps, std::size_t n) {
   std::size_t j0 = 0;
 #if defined(__GNUC__) && defined(__x86_64__)
-  if (have_avx2_fma()) j0 = weighted_rows_avx2(acc, rows, weights, taps, n);
+  if (common::cpu_has_avx2_fma()) j0 = weighted_rows_avx2(acc, rows, weights, taps, n);
 #endif
   for (std::size_t j = j0; j < n; ++j) {
     float a = 0.0f;
@@ -362,7 +356,7 @@ void weighted_rows(float* acc, const float* const* rows, const float* weights, i
 void u8_to_half(const std::uint8_t* src, std::uint16_t* dst, std::size_t n) {
   std::size_t j = 0;
 #if defined(__GNUC__) && defined(__x86_64__)
-  if (have_avx2_fma_f16c()) u8_to_half_avx2(src, dst, n, &j);
+  if (common::cpu_has_avx2_fma_f16c()) u8_to_half_avx2(src, dst, n, &j);
 #endif
   for (; j < n; ++j) dst[j] = half_of_byte(src[j]);
 }
@@ -382,7 +376,7 @@ void period_change_bits_any(const T* src, std::size_t n, std::size_t period, std
     }
   };
 #if defined(__GNUC__) && defined(__x86_64__)
-  if (have_avx2() && period <= 64 && n >= 128) {
+  if (common::cpu_has_avx2() && period <= 64 && n >= 128) {
     scalar_words(0, 1);
     period_change_bits_avx2(src, period, bits, 1, n / 64);
     scalar_words(n / 64, words);
@@ -405,7 +399,7 @@ void period_change_bits(const float* src, std::size_t n, std::size_t period, std
 void u8_to_float(const std::uint8_t* src, float* dst, std::size_t n) {
   std::size_t j = 0;
 #if defined(__GNUC__) && defined(__x86_64__)
-  if (have_avx2()) u8_to_float_avx2(src, dst, n, &j);
+  if (common::cpu_has_avx2()) u8_to_float_avx2(src, dst, n, &j);
 #endif
   for (; j < n; ++j) dst[j] = static_cast<float>(src[j]);
 }
@@ -414,7 +408,7 @@ void weighted_rows_truncate_fast(const float* const* rows, const float* weights,
                                  int taps, float band, const std::int32_t* flat, std::uint8_t* dst, std::size_t n) {
   std::size_t j0 = 0;
 #if defined(__GNUC__) && defined(__x86_64__)
-  if (have_avx2_fma()) {
+  if (common::cpu_has_avx2_fma()) {
     j0 = weighted_rows_truncate_fast_avx2(rows, weights, taps32, weights64, taps, band, flat, dst, n);
   }
 #endif
@@ -440,7 +434,7 @@ std::size_t weighted_rows_truncate(const std::uint16_t* const* rows, const float
                                    std::uint64_t* ambiguous, std::size_t n) {
   std::size_t j0 = 0, count = 0;
 #if defined(__GNUC__) && defined(__x86_64__)
-  if (have_avx2_fma_f16c()) {
+  if (common::cpu_has_avx2_fma_f16c()) {
     j0 = weighted_rows_truncate_f16_avx2(rows, weights, weights64, taps, band, flat, dst, ambiguous, n, &count);
   }
 #endif

@@ -15,13 +15,9 @@
 namespace faultline::corruption::snow_kernels {
 namespace {
 
-#ifdef FAULTLINE_SNOW_AVX2
-bool has_avx2() { return common::cpu_has_avx2(); }
-#endif
-
 bool use_avx2(bool allow_simd) {
 #ifdef FAULTLINE_SNOW_AVX2
-  return allow_simd && has_avx2();
+  return allow_simd && common::cpu_has_avx2();
 #else
   (void)allow_simd;
   return false;
@@ -358,8 +354,6 @@ __attribute__((target("avx2"))) int lerp_threshold_u16_avx2(const float* a, cons
   return x;
 }
 
-bool has_avx2_fma() { return common::cpu_has_avx2_fma(); }
-
 #endif  // FAULTLINE_SNOW_AVX2
 
 #if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__)
@@ -640,7 +634,7 @@ void blend_exact_row(const std::uint8_t* src, const std::uint8_t* layer, const s
                      std::uint8_t* dst, int cols, float b, float one_minus_b, bool allow_simd) {
   int x = 0;
 #ifdef FAULTLINE_SNOW_AVX2
-  if (allow_simd && has_avx2_fma()) x = blend_exact_avx2(src, layer, rot, rot_reversed, dst, cols, b, one_minus_b);
+  if (allow_simd && common::cpu_has_avx2_fma()) x = blend_exact_avx2(src, layer, rot, rot_reversed, dst, cols, b, one_minus_b);
 #else
   (void)allow_simd;
 #endif

@@ -48,8 +48,6 @@ __attribute__((target("avx2,popcnt"))) std::size_t skip_chunks_avx2(const double
   }
   return j;
 }
-
-bool has_avx2_popcnt() { return common::cpu_has_avx2_popcnt(); }
 #endif
 
 }  // namespace
@@ -60,7 +58,7 @@ void NumpyRandomState::skip_polar_pairs(std::size_t pairs) {
     const double* d = mt_.block_doubles(count);
     std::size_t j = 0;
 #ifdef FAULTLINE_POLAR_AVX2
-    if (has_avx2_popcnt()) j = skip_chunks_avx2(d, j, count, pairs);
+    if (common::cpu_has_avx2_popcnt()) j = skip_chunks_avx2(d, j, count, pairs);
 #endif
     for (; pairs > 0 && j + 2 <= count; j += 2) pairs -= polar_accepts(2.0 * d[j] - 1.0, 2.0 * d[j + 1] - 1.0);
     mt_.advance_doubles(j);
@@ -249,8 +247,6 @@ __attribute__((target("avx2"))) void temper_pairs_avx2(const std::uint32_t* stat
     _mm256_storeu_pd(pairs + k / 2, _mm256_mul_pd(_mm256_add_pd(_mm256_mul_pd(ad, two26), bd), inv_two53));
   }
 }
-
-bool mt_has_avx2() { return common::cpu_has_avx2(); }
 #endif
 
 }  // namespace
@@ -258,7 +254,7 @@ bool mt_has_avx2() { return common::cpu_has_avx2(); }
 void Mt19937::refill() {
   twist(state_);
 #if defined(__GNUC__) && defined(__x86_64__)
-  if (mt_has_avx2()) {
+  if (common::cpu_has_avx2()) {
     temper_pairs_avx2(state_, pairs_);
   } else {
     temper_pairs_scalar(state_, pairs_);

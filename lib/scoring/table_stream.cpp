@@ -187,7 +187,7 @@ class Scanner {
   // most of a big table's records are rejected, so this is where the scan spends its time.
   Status skip_rest_of_record() {
 #ifdef FAULTLINE_BLOCK_SKIP
-    if (have_block_skip()) {
+    if (common::cpu_has_avx2_pclmul()) {
       // 64 bytes per step; anything unusual (an escape, a control character, a mismatched bracket,
       // the last 64 bytes of the file) falls through to the character-level path below, which
       // re-reads the record's rest from p_ and reports errors precisely.
@@ -201,8 +201,6 @@ class Scanner {
   }
 
 #ifdef FAULTLINE_BLOCK_SKIP
-  static bool have_block_skip() { return common::cpu_has_avx2_pclmul(); }
-
   // Bit i set where byte i of the 64 at q equals c.
   __attribute__((target("avx2"))) static std::uint64_t eq_mask(__m256i lo, __m256i hi, char c) {
     const __m256i v = _mm256_set1_epi8(c);
