@@ -23,17 +23,20 @@ function(faultline_add_library concern)
 endfunction()
 
 # faultline_add_test(<name> SOURCES ... LIBS ... [LABELS ...] [SCALAR_TOO]): one GoogleTest executable, discovered by
-# CTest. SCALAR_TOO registers every test a second time as scalar.<test> with FAULTLINE_SCALAR=1, so the portable
-# fallbacks of the hand-dispatched SIMD kernels are held to the same assertions (goldens included) on a CPU that has
-# the vector units.
+# CTest, built after the fixtures are unpacked (tests/test_data.hpp says where they are). SCALAR_TOO registers every
+# test a second time as scalar.<test> with FAULTLINE_SCALAR=1, so the portable fallbacks of the hand-dispatched SIMD
+# kernels are held to the same assertions (goldens included) on a CPU that has the vector units.
 function(faultline_add_test name)
   cmake_parse_arguments(ARG "SCALAR_TOO" "" "SOURCES;LIBS;LABELS" ${ARGN})
   add_executable(${name} ${ARG_SOURCES})
   target_link_libraries(${name} PRIVATE ${ARG_LIBS} GTest::gtest GTest::gmock GTest::gtest_main)
   target_compile_definitions(${name} PRIVATE
     FAULTLINE_SOURCE_DIR="${PROJECT_SOURCE_DIR}"
-    FAULTLINE_SHARED_DIR="${PROJECT_SOURCE_DIR}/../shared"
+    FAULTLINE_TEST_DATA_DIR="${PROJECT_SOURCE_DIR}/tests/data"
+    FAULTLINE_UNPACKED_TEST_DATA_DIR="${FAULTLINE_UNPACKED_TEST_DATA_DIR}"
     FAULTLINE_BIN_DIR="${CMAKE_RUNTIME_OUTPUT_DIRECTORY}")
+  target_include_directories(${name} PRIVATE ${PROJECT_SOURCE_DIR}/tests)
+  add_dependencies(${name} faultline_test_data)
   faultline_warnings(${name})
   gtest_discover_tests(${name} DISCOVERY_TIMEOUT 60 PROPERTIES LABELS "${ARG_LABELS}")
   if(ARG_SCALAR_TOO)

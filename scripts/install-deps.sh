@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Installs Faultline's build and test dependencies from Debian packages (idempotent: only what is missing).
-# Usage: scripts/install-deps.sh [--with-browser]   (--with-browser adds chromium for the report render test)
+# Usage: scripts/install-deps.sh [--with-browser]   (--with-browser adds what only the tests need: chromium for the
+#                                                   report render test, and nodejs + npm for the MCAP validator)
 set -euo pipefail
 
 packages=(
@@ -15,9 +16,12 @@ packages=(
   libzstd-dev liblz4-dev zlib1g-dev      # MCAP chunk compression and CRC
   libv4l-dev                             # V4L2 capture
   libgtest-dev libgmock-dev libbenchmark-dev
+  libssl-dev                             # tests: SHA-256 of golden outputs
   python3-zmq python3-protobuf python3-numpy python3-opencv
 )
 if [[ "${1:-}" == "--with-browser" ]]; then packages+=(chromium); fi
+# Node.js runs the independent MCAP validator (tests/mcap_js); a node already on PATH (any install) is kept.
+if [[ "${1:-}" == "--with-browser" ]] && ! command -v node >/dev/null; then packages+=(nodejs npm); fi
 
 missing=()
 for p in "${packages[@]}"; do

@@ -1,17 +1,16 @@
 // `faultline corrupt` end to end: golden reproduction through files, --level and --angle, and clear errors.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <array>
 #include <cstdio>
 #include <memory>
-#include <string>
-
-#include <unistd.h>
-
 #include <opencv2/imgcodecs.hpp>
+#include <string>
 
 #include "corruption/golden_cases.hpp"
 #include "rng/golden_json.hpp"
+#include "test_data.hpp"
 
 namespace faultline::testing {
 namespace {
@@ -48,11 +47,13 @@ TEST(CorruptCliTest, NumpyModeReproducesGoldenFilesBitExactly) {
                                  "brightness_chart_333x197_sev5"}) {
     const GoldenCase& c = find_case(cases, name);
     const std::string out = temp_png(name);
-    const auto r = run_faultline("corrupt --type " + std::string(corruption::to_string(c.type)) + " --severity " +
-                                 std::to_string(c.severity) + " --seed " + std::to_string(c.seed.value_or(0)) +
-                                 " --rng numpy --in " + golden_dir() + "/" + c.input_file + " --out " + out);
+    const auto r =
+        run_faultline("corrupt --type " + std::string(corruption::to_string(c.type)) +
+                      " --severity " + std::to_string(c.severity) + " --seed " +
+                      std::to_string(c.seed.value_or(0)) + " --rng numpy --in " +
+                      test_data::fixture(golden_dir() + "/" + c.input_file) + " --out " + out);
     ASSERT_EQ(r.exit_code, 0) << r.output;
-    EXPECT_EQ(max_abs_diff(cv::imread(out, cv::IMREAD_COLOR), read_golden_png(c.file)), 0.0) << name;
+    EXPECT_EQ(compare_with_reference(cv::imread(out, cv::IMREAD_COLOR), c), "");
     std::remove(out.c_str());
   }
 }
@@ -63,15 +64,17 @@ TEST(CorruptCliTest, AngleInjectionAndLevelGiveTheGoldenMotionBlur) {
   char angle[64];
   std::snprintf(angle, sizeof angle, "%.17g", *c.angle_deg);
   const std::string out = temp_png("mb");
-  const auto r = run_faultline("corrupt --type motion_blur --level mid --angle " + std::string(angle) +
-                               " --rng fast --seed 999 --in " + golden_dir() + "/" + c.input_file + " --out " + out);
+  const auto r =
+      run_faultline("corrupt --type motion_blur --level mid --angle " + std::string(angle) +
+                    " --rng fast --seed 999 --in " +
+                    test_data::fixture(golden_dir() + "/" + c.input_file) + " --out " + out);
   ASSERT_EQ(r.exit_code, 0) << r.output;
-  EXPECT_EQ(max_abs_diff(cv::imread(out, cv::IMREAD_COLOR), read_golden_png(c.file)), 0.0);
+  EXPECT_EQ(compare_with_reference(cv::imread(out, cv::IMREAD_COLOR), c), "");
   std::remove(out.c_str());
 }
 
 TEST(CorruptCliTest, BadTypeSeverityAndFilesAreNamedErrors) {
-  const std::string in = golden_dir() + "/inputs/chart_333x197.png";
+  const std::string in = test_data::fixture(golden_dir() + "/inputs/chart_333x197.png");
   const std::string out = temp_png("err");
   auto r = run_faultline("corrupt --type rain --severity 2 --in " + in + " --out " + out);
   EXPECT_NE(r.exit_code, 0);

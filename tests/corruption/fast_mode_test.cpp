@@ -1,5 +1,6 @@
-// fast mode against the goldens: exact where there is no randomness or the random field is injected, and within
-// the seed-to-seed ranges of seed_to_seed_stats.json (golden README margins) where it is not.
+// fast mode against the goldens (the reference's arrays, see reference_output): exact where there
+// is no randomness or the random field is injected, and within the seed-to-seed ranges of
+// seed_to_seed_stats.json (golden README margins) where it is not.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -51,9 +52,9 @@ class FastGoldenTest : public ::testing::TestWithParam<GoldenCase> {
 rapidjson::Document* FastGoldenTest::stats_ = nullptr;
 
 TEST_P(FastGoldenTest, MatchesGoldenExactlyOrWithinSeedToSeedRange) {
-  const GoldenCase& c = GetParam();
+  const GoldenCase c = load_golden_case(GetParam());
   const cv::Mat in = read_golden_png(c.input_file);
-  const cv::Mat ref = read_golden_png(c.file);
+  const cv::Mat ref = reference_output(c);
   rng::FastRng rng(1000 + c.seed.value_or(0));
   auto out = corruption::corrupt(in, c.type, c.severity, rng);
   ASSERT_TRUE(out.is_ok());
@@ -116,19 +117,9 @@ TEST_P(FastGoldenTest, MatchesGoldenExactlyOrWithinSeedToSeedRange) {
   }
 }
 
-INSTANTIATE_TEST_SUITE_P(Manifest, FastGoldenTest, ::testing::ValuesIn(load_golden_cases()),
+INSTANTIATE_TEST_SUITE_P(Manifest, FastGoldenTest, ::testing::ValuesIn(golden_case_ids()),
                          [](const ::testing::TestParamInfo<GoldenCase>& param_info) {
-                           std::string out;
-                           bool up = true;
-                           for (char ch : param_info.param.name) {
-                             if (ch == '_') {
-                               up = true;
-                               continue;
-                             }
-                             out += up ? static_cast<char>(std::toupper(static_cast<unsigned char>(ch))) : ch;
-                             up = false;
-                           }
-                           return out;
+                           return pascal_case(param_info.param.name);
                          });
 
 // Fog without injection: per-frame crop statistics of the fast field over 120 draws against numpy's fractal.

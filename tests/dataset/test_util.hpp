@@ -11,12 +11,16 @@
 #include <string>
 
 #include "dataset/json_table.hpp"
+#include "test_data.hpp"
 
 namespace faultline::dataset::testing_util {
 
 namespace fs = std::filesystem;
 
-inline fs::path golden_dataroot() { return fs::path(FAULTLINE_SHARED_DIR) / "golden" / "nusc_eval" / "dataset"; }
+// The devkit goldens' v1.0-mini dataroot, unpacked by the build (tests/test_data.hpp).
+inline fs::path golden_dataroot() {
+  return test_data::fixture(test_data::nusc_eval_dir() + "/dataset");
+}
 
 // A fresh folder under the system temp dir, unique per process and name.
 inline fs::path scratch_dir(const std::string& name) {

@@ -1,4 +1,5 @@
-// Reads the golden JSON files of shared/golden/corruptions (read in place, never copied into the repo).
+// Reads the golden JSON files of tests/data/corruptions (the reference's outputs; see
+// tests/data/README.md).
 #pragma once
 
 #include <rapidjson/document.h>
@@ -9,18 +10,21 @@
 #include <stdexcept>
 #include <string>
 
+#include "test_data.hpp"
+
 namespace faultline::testing {
 
-inline std::string golden_dir() { return std::string(FAULTLINE_SHARED_DIR) + "/golden/corruptions"; }
+inline std::string golden_dir() { return test_data::corruptions_dir(); }
 
 inline rapidjson::Document load_golden_json(const std::string& name) {
-  std::ifstream in(golden_dir() + "/" + name);
-  if (!in) throw std::runtime_error("cannot open golden file " + golden_dir() + "/" + name);
+  const std::string path = test_data::fixture(golden_dir() + "/" + name);
+  std::ifstream in(path);
+  if (!in) throw std::runtime_error("cannot open golden file " + path);
   std::stringstream ss;
   ss << in.rdbuf();
   rapidjson::Document doc;
   doc.Parse<rapidjson::kParseNanAndInfFlag>(ss.str().c_str());
-  if (doc.HasParseError()) throw std::runtime_error("bad JSON in " + name);
+  if (doc.HasParseError()) throw std::runtime_error("bad JSON in " + path);
   return doc;
 }
 

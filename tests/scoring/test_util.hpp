@@ -6,14 +6,20 @@
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <stdexcept>
 #include <string>
+
+#include "test_data.hpp"
 
 namespace faultline::scoring::testing {
 
-inline std::string golden_dir() { return std::string(FAULTLINE_SHARED_DIR) + "/golden/nusc_eval"; }
+// The devkit goldens, unpacked by the build (tests/test_data.hpp).
+inline std::string golden_dir() { return test_data::fixture(test_data::nusc_eval_dir()); }
 
+// The whole file; throws naming the path when it cannot be read.
 inline std::string read_text(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
+  if (!in) throw std::runtime_error("cannot read " + path);
   std::stringstream ss;
   ss << in.rdbuf();
   return ss.str();
