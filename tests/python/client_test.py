@@ -72,6 +72,21 @@ class ClientTest(unittest.TestCase):
         self.assertEqual(self.client.transport_drops, 2)
         self.assertEqual(self.client.malformed, 1)
 
+    def test_stream_end_ends_the_run_at_once_and_is_not_malformed(self):
+        # The end wait is long, so only the StreamEnd can end the iteration before the timeout.
+        self.client.end_wait_s = 30
+        img = np.zeros((2, 2, 3), dtype=np.uint8)
+        self.send_frame("CAM_FRONT", 1, "s1", img)
+        b = self.msgs.SampleBoundary(sample_token="s1", scene_name="scene-0103", last_in_run=True,
+                                     stream_end_follows=True)
+        self.pub.send_multipart([b"/sync/sample", b.SerializeToString()])
+        self.send_frame("CAM_FRONT", 2, "s1", img, key=False)  # a trailing sweep of the last sample
+        self.pub.send_multipart([b"/sync/end", self.msgs.StreamEnd().SerializeToString()])
+        samples = list(self.client.samples(timeout_s=20))
+        self.assertEqual([s.token for s in samples], ["s1"])
+        self.assertEqual(self.client.malformed, 0)
+        self.assertEqual(self.client.frames_received, 2)
+
     def test_publish_sends_a_detection_array(self):
         self.client.publish("s1", [{"translation": [1, 2, 0.5], "size": [1.9, 4.6, 1.7], "rotation": [1, 0, 0, 0],
                                     "velocity": [0.5, 0], "detection_name": "car", "detection_score": 0.8,

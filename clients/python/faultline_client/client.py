@@ -34,7 +34,7 @@ def load_messages(msgs_dir: Optional[str] = None):
             if path not in sys.path:
                 sys.path.insert(0, path)  # generated modules import each other by bare name
             ns = type("Messages", (), {})()
-            for module, names in (("camera_frame_pb2", ("CameraFrame", "SampleBoundary")),
+            for module, names in (("camera_frame_pb2", ("CameraFrame", "SampleBoundary", "StreamEnd")),
                                   ("detection_pb2", ("Detection", "DetectionArray", "SampleAck")),
                                   ("fault_pb2", ("FaultEvent", "FaultState")),
                                   ("header_pb2", ("Header",))):
