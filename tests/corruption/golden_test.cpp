@@ -236,6 +236,11 @@ TEST(GoldenManifestTest, ComparisonReportsADifferenceAgainstAKeptPng) {
   const std::string message = compare_with_reference(wrong, c);
   EXPECT_NE(message.find("fog_chart_333x197_sev3"), std::string::npos) << message;
   EXPECT_NE(message.find("max diff 1"), std::string::npos) << message;
+  const std::string stem =
+      ::testing::TempDir() + "/faultline_" + c.name + "_" + std::to_string(::getpid());
+  for (const char* suffix : {"_ours.png", "_diff.png"}) {
+    EXPECT_TRUE(std::filesystem::remove(stem + suffix)) << stem + suffix;  // saved, and cleaned up
+  }
 }
 
 }  // namespace
