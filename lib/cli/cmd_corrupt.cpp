@@ -1,17 +1,47 @@
 // `faultline corrupt`: applies one image corruption to a file (OpenCV I/O, BGR array as loaded).
 #include <CLI/CLI.hpp>
-
+#include <cmath>
 #include <cstdio>
+#include <fstream>
+#include <iterator>
+#include <opencv2/imgcodecs.hpp>
 #include <optional>
 #include <string>
-
-#include <opencv2/imgcodecs.hpp>
+#include <vector>
 
 #include "cli/command.hpp"
+#include "codec/jpeg.hpp"
 #include "corruption/corrupt.hpp"
 
 namespace faultline::cli {
 namespace {
+
+// Reads the input image. A JPEG goes through TurboJPEG first, which notices a truncated or corrupt
+// file that OpenCV would silently render half grey; `allow_partial` then keeps OpenCV's partial
+// rendering, with a warning.
+Result<cv::Mat> read_input(const std::string& path, bool allow_partial) {
+  std::ifstream file(path, std::ios::binary);
+  if (!file) return Status(StatusCode::kNotFound, "cannot read input image '" + path + "'");
+  const std::vector<std::uint8_t> bytes((std::istreambuf_iterator<char>(file)),
+                                        std::istreambuf_iterator<char>());
+  const bool is_jpeg = bytes.size() >= 2 && bytes[0] == 0xFF && bytes[1] == 0xD8;
+  if (is_jpeg) {
+    auto decoded = codec::decode_jpeg(bytes.data(), bytes.size());
+    if (decoded) return decoded;
+    if (!allow_partial) {
+      return Status(decoded.status().code(),
+                    "input image '" + path + "': " + decoded.status().message() +
+                        " (--allow-partial corrupts what a decoder renders of it)");
+    }
+    std::fprintf(stderr,
+                 "faultline corrupt: warning: input image '%s': %s; using the partial decode\n",
+                 path.c_str(), decoded.status().message().c_str());
+  }
+  cv::Mat image = cv::imdecode(bytes, cv::IMREAD_COLOR);
+  if (image.empty())
+    return Status(StatusCode::kCorruptData, "cannot decode input image '" + path + "'");
+  return image;
+}
 
 int run(int argc, char** argv) {
   CLI::App app("Apply a nuScenes-C camera corruption to an image (read and written with OpenCV, BGR order).",
@@ -20,6 +50,7 @@ int run(int argc, char** argv) {
   int severity = -1;
   std::uint32_t seed = 0;
   std::optional<double> angle;
+  bool allow_partial = false;
   app.add_option("--type", type_name, "brightness, dark, fog, snow, motion_blur or color_quant")->required();
   auto* sev_opt = app.add_option("--severity", severity, "1..5 as the reference numbers them (0 = off)");
   auto* level_opt = app.add_option("--level", level_name, "easy, mid or hard (nuScenes-C's mapping)");
@@ -29,6 +60,9 @@ int run(int argc, char** argv) {
   app.add_option("--angle", angle, "motion_blur: inject the blur angle in degrees instead of drawing it");
   app.add_option("--in", in_path, "input image")->required();
   app.add_option("--out", out_path, "output image (use .png for lossless)")->required();
+  app.add_flag("--allow-partial", allow_partial,
+               "corrupt a truncated or damaged JPEG as a decoder renders it, with a warning "
+               "(default: refuse it)");
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -58,16 +92,22 @@ int run(int argc, char** argv) {
     std::fprintf(stderr, "faultline corrupt: --severity %d is invalid: expected 1..5 (0 = off)\n", severity);
     return 2;
   }
+  if (angle && !std::isfinite(*angle)) {
+    std::fprintf(stderr, "faultline corrupt: --angle must be a finite number of degrees, got %g\n",
+                 *angle);
+    return 2;
+  }
   const auto mode = corruption::rng_mode_from_string(rng_name);
   if (!mode) {
     std::fprintf(stderr, "faultline corrupt: unknown --rng '%s' (expected numpy or fast)\n", rng_name.c_str());
     return 2;
   }
-  const cv::Mat in = cv::imread(in_path, cv::IMREAD_COLOR);
-  if (in.empty()) {
-    std::fprintf(stderr, "faultline corrupt: cannot read input image '%s'\n", in_path.c_str());
+  const auto input = read_input(in_path, allow_partial);
+  if (!input) {
+    std::fprintf(stderr, "faultline corrupt: %s\n", input.status().message().c_str());
     return 1;
   }
+  const cv::Mat& in = *input;
   corruption::CorruptOptions options;
   options.angle_deg = angle;
   Result<cv::Mat> out = Status(StatusCode::kInternal, "not run");

@@ -1,6 +1,9 @@
 // Dispatch from (type, severity, mode) to the corruption stages.
 #include "corruption/corrupt.hpp"
 
+#include <cmath>
+#include <string>
+
 #include "corruption/brightness.hpp"
 #include "corruption/color_quant.hpp"
 #include "corruption/dark.hpp"
@@ -20,9 +23,24 @@ Status validate_input(const cv::Mat& bgr, int severity) {
   return validate_severity(severity);
 }
 
+namespace {
+
+// An injected angle must be a number: the tap geometry of a NaN or infinite angle is undefined.
+Status validate_options(const CorruptOptions& options) {
+  if (options.angle_deg && !std::isfinite(*options.angle_deg)) {
+    return {StatusCode::kInvalidArgument,
+            "motion blur angle must be a finite number of degrees, got " +
+                std::to_string(*options.angle_deg)};
+  }
+  return Status::ok();
+}
+
+}  // namespace
+
 Result<cv::Mat> corrupt(const cv::Mat& bgr, Corruption type, int severity, rng::NumpyRandomState& rng,
                         const CorruptOptions& options) {
   if (Status s = validate_input(bgr, severity); !s) return s;
+  if (Status s = validate_options(options); !s) return s;
   if (severity == 0) return bgr.clone();
   switch (type) {
     // The table path is bit-identical to the HSV mirror (it falls back to it near truncation ties).
@@ -43,6 +61,7 @@ Result<cv::Mat> corrupt(const cv::Mat& bgr, Corruption type, int severity, rng::
 Result<cv::Mat> corrupt(const cv::Mat& bgr, Corruption type, int severity, rng::FastRng& rng,
                         const CorruptOptions& options) {
   if (Status s = validate_input(bgr, severity); !s) return s;
+  if (Status s = validate_options(options); !s) return s;
   if (severity == 0) return bgr.clone();
   switch (type) {
     case Corruption::Brightness: return brightness_fast(bgr, severity);

@@ -4,9 +4,12 @@
 
 #include <array>
 #include <cstdio>
+#include <filesystem>
+#include <fstream>
 #include <memory>
 #include <opencv2/imgcodecs.hpp>
 #include <string>
+#include <vector>
 
 #include "corruption/golden_cases.hpp"
 #include "rng/golden_json.hpp"
@@ -91,6 +94,45 @@ TEST(CorruptCliTest, BadTypeSeverityAndFilesAreNamedErrors) {
   r = run_faultline("corrupt --type fog --severity 2 --rng mersenne --in " + in + " --out " + out);
   EXPECT_NE(r.exit_code, 0);
   EXPECT_NE(r.output.find("mersenne"), std::string::npos) << r.output;
+}
+
+TEST(CorruptCliTest, NonFiniteAngleIsAnErrorNamingTheOption) {
+  const std::string in = test_data::fixture(golden_dir() + "/inputs/chart_333x197.png");
+  const std::string out = temp_png("angle");
+  for (const char* angle : {"nan", "inf", "-inf"}) {
+    const auto r = run_faultline("corrupt --type motion_blur --severity 3 --angle " +
+                                 std::string(angle) + " --in " + in + " --out " + out);
+    EXPECT_EQ(r.exit_code, 2) << angle << ": " << r.output;
+    EXPECT_NE(r.output.find("--angle must be a finite number"), std::string::npos) << r.output;
+  }
+  EXPECT_FALSE(std::filesystem::exists(out));
+}
+
+// A JPEG cut in half: refused with the reason and the file (OpenCV alone renders it half grey and
+// exits 0);
+// --allow-partial corrupts the partial decode and says so.
+TEST(CorruptCliTest, TruncatedJpegIsRefusedUnlessPartialIsAllowed) {
+  std::vector<std::uint8_t> jpeg;
+  ASSERT_TRUE(cv::imencode(".jpg", read_golden_png("inputs/night_street.png"), jpeg));
+  const std::string in =
+      ::testing::TempDir() + "/faultline_truncated_" + std::to_string(::getpid()) + ".jpg";
+  {
+    std::ofstream f(in, std::ios::binary);
+    f.write(reinterpret_cast<const char*>(jpeg.data()),
+            static_cast<std::streamsize>(jpeg.size() / 2));
+  }
+  const std::string out = temp_png("truncated");
+  auto r = run_faultline("corrupt --type fog --severity 2 --in " + in + " --out " + out);
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("truncated"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find(in), std::string::npos) << r.output;
+  EXPECT_FALSE(std::filesystem::exists(out));
+  r = run_faultline("corrupt --type fog --severity 2 --allow-partial --in " + in + " --out " + out);
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("warning"), std::string::npos) << r.output;
+  EXPECT_EQ(cv::imread(out, cv::IMREAD_COLOR).size(), cv::Size(640, 360));
+  std::remove(out.c_str());
+  std::remove(in.c_str());
 }
 
 }  // namespace

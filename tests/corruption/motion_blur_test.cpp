@@ -1,12 +1,15 @@
 // Motion blur with the manifest's exact angle injected: exact in numpy mode, float32 within the spec's bound.
+#include "corruption/motion_blur.hpp"
+
+#include <gtest/gtest.h>
+
 #include <algorithm>
+#include <cmath>
 #include <string>
 #include <vector>
-#include <gtest/gtest.h>
 
 #include "corruption/corrupt.hpp"
 #include "corruption/golden_cases.hpp"
-#include "corruption/motion_blur.hpp"
 #include "corruption/motion_kernel.hpp"
 #include "corruption/simd_kernels.hpp"
 #include "rng/golden_json.hpp"
@@ -166,6 +169,22 @@ TEST(MotionBlurAngleTest, OffsetsMatchManifest) {
     ++checked;
   }
   EXPECT_EQ(checked, 15);
+}
+
+TEST(MotionBlurAngleTest, NonFiniteInjectedAngleIsInvalidInBothModes) {
+  const cv::Mat in(8, 8, CV_8UC3, cv::Scalar(10, 20, 30));
+  for (const double angle : {std::nan(""), HUGE_VAL, -HUGE_VAL}) {
+    corruption::CorruptOptions opt;
+    opt.angle_deg = angle;
+    rng::NumpyRandomState numpy(1);
+    rng::FastRng fast(1);
+    const auto a = corruption::corrupt(in, corruption::Corruption::MotionBlur, 3, numpy, opt);
+    const auto b = corruption::corrupt(in, corruption::Corruption::MotionBlur, 3, fast, opt);
+    ASSERT_FALSE(a.is_ok());
+    ASSERT_FALSE(b.is_ok());
+    EXPECT_EQ(a.status().code(), StatusCode::kInvalidArgument);
+    EXPECT_EQ(b.status().code(), StatusCode::kInvalidArgument);
+  }
 }
 
 TEST(MotionBlurKernelTest, TablesExistForEveryUsedPairAndSumToOne) {
