@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstdio>
 
+#include "report/label_layout.hpp"
 #include "report/svg.hpp"
 
 namespace faultline::report {
@@ -181,10 +182,27 @@ std::string scatter(const std::string& title, const std::string& xlabel, const s
     s += svg::text(x, h - bottom + 16, lab, "middle", 11);
   }
   s += svg::text((left + w - right) / 2.0, h - 14, xlabel + (log_x ? " (log)" : ""), "middle", 12);
+  std::vector<LabelAnchor> anchors;
   for (const auto& p : pts) {
     const double x = ax.map(xv(p.x)), y = ay.map(p.y);
     s += svg::circle(x, y, 6, svg::colour(p.colour), p.label);
-    s += svg::text(x + 8, y - 8, p.label, "start", 10);
+    anchors.push_back({x, y, p.label});
+  }
+  // Labels never overlap: those with no free place are left out (the circle's tooltip and the
+  // tables keep them).
+  const auto boxes = place_labels(anchors, 10, 6, left, top, w - right, h - bottom);
+  std::size_t hidden = 0;
+  for (std::size_t i = 0; i < boxes.size(); ++i) {
+    if (!boxes[i]) {
+      ++hidden;
+      continue;
+    }
+    s += svg::text(boxes[i]->x, boxes[i]->y - 1, anchors[i].text, "start", 10);
+  }
+  if (hidden > 0) {
+    s += svg::text(w - right, top - 6,
+                   std::to_string(hidden) + " label(s) hidden to stay legible: hover a point",
+                   "end", 10, "fill=\"#666666\"");
   }
   return s + "</svg>";
 }
@@ -294,9 +312,10 @@ std::string render_html(const ReportData& data) {
     if (it == types.end()) types.push_back(p.type);
     const auto ci =
         static_cast<std::size_t>(std::find(types.begin(), types.end(), p.type) - types.begin());
-    engine.push_back({p.ms, p.psnr_db,
-                      p.type + "/" + std::to_string(p.level) + (p.mode.empty() ? "" : " " + p.mode),
-                      ci});
+    engine.push_back(
+        {p.ms, p.psnr_db,
+         p.type + (p.level.empty() ? "" : "/" + p.level) + (p.mode.empty() ? "" : " " + p.mode),
+         ci});
   }
   // Detector configurations: NDS against fps on the clean condition (input scales), and temporal vs
   // single-frame NDS per condition.
@@ -337,7 +356,7 @@ std::string render_html(const ReportData& data) {
       h += "<table><tr><th>type</th><th>level</th><th>mode</th><th>ms</th><th>PSNR dB</th><th>max "
            "|diff|</th></tr>";
       for (const auto& p : data.corrupt_bench) {
-        h += "<tr><td>" + svg::esc(p.type) + "</td><td>" + std::to_string(p.level) + "</td><td>" +
+        h += "<tr><td>" + svg::esc(p.type) + "</td><td>" + svg::esc(p.level) + "</td><td>" +
              svg::esc(p.mode) + "</td><td>" + fmt("%.3f", p.ms) + "</td><td>" +
              (p.psnr_db >= 0 ? fmt("%.2f", p.psnr_db) : "&ndash;") + "</td><td>" +
              (p.max_abs_diff >= 0 ? fmt("%.4g", p.max_abs_diff) : "&ndash;") + "</td></tr>";
@@ -395,8 +414,9 @@ Result<std::vector<CorruptBenchPoint>> parse_corrupt_bench(const std::string& te
     CorruptBenchPoint p;
     p.type = r["type"].GetString();
     p.ms = r["ms"].GetDouble();
-    if (r.HasMember("level") && r["level"].IsNumber())
-      p.level = static_cast<int>(r["level"].GetDouble());
+    // `faultline bench corrupt` writes the nuScenes-C level ("mid"); older files a severity number.
+    if (r.HasMember("level") && r["level"].IsString()) p.level = r["level"].GetString();
+    if (r.HasMember("level") && r["level"].IsNumber()) p.level = fmt("%g", r["level"].GetDouble());
     if (r.HasMember("mode") && r["mode"].IsString()) p.mode = r["mode"].GetString();
     if (r.HasMember("psnr_db") && r["psnr_db"].IsNumber()) p.psnr_db = r["psnr_db"].GetDouble();
     if (r.HasMember("max_abs_diff") && r["max_abs_diff"].IsNumber())

@@ -15,7 +15,8 @@ namespace faultline::report {
 // One record of bench/results/corrupt.json.
 struct CorruptBenchPoint {
   std::string type;
-  int level = 0;
+  std::string
+      level;  // as the file gives it: "easy"/"mid"/"hard", or a severity number ("3"); "" if absent
   std::string mode;
   double ms = 0.0;
   double psnr_db = -1.0;       // -1 = absent

@@ -11,6 +11,8 @@
 #include <opencv2/imgcodecs.hpp>
 #include <set>
 
+#include "report/label_layout.hpp"
+
 namespace faultline::report {
 namespace {
 
@@ -57,6 +59,56 @@ TEST(ReportTest, HtmlIsSelfContainedWithAllViews) {
     EXPECT_NE(html.find(view), std::string::npos) << view;
   }
   EXPECT_NE(html.find("70.77"), std::string::npos);  // DETR3D mRR in the summary table
+}
+
+// bench/results/corrupt.json names levels ("mid"); the table and the scatter show them as written
+// (they showed 0).
+TEST(ReportTest, CorruptionEngineShowsTheLevelsOfTheBenchFile) {
+  auto bench = parse_corrupt_bench(
+      R"([{"type":"fog","level":"mid","mode":"fast","ms":1.2,"psnr_db":97.0},
+          {"type":"fog","level":"hard","mode":"numpy","ms":20.5,"psnr_db":99.0},
+          {"type":"snow","level":3,"mode":"fast","ms":3.0,"psnr_db":60.0}])",
+      "corrupt.json");
+  ASSERT_TRUE(bench.is_ok()) << bench.status().message();
+  EXPECT_EQ((*bench)[0].level, "mid");
+  EXPECT_EQ((*bench)[2].level, "3");
+  ReportData data;
+  data.corrupt_bench = *bench;
+  const std::string html = render_html(data);
+  EXPECT_NE(html.find("<td>fog</td><td>mid</td>"), std::string::npos);
+  EXPECT_NE(html.find("<td>fog</td><td>hard</td>"), std::string::npos);
+  EXPECT_NE(html.find(">fog/mid fast<"), std::string::npos);
+  EXPECT_NE(html.find(">snow/3 fast<"), std::string::npos);
+  EXPECT_EQ(html.find("fog/0"), std::string::npos);
+}
+
+// Points on top of each other (the engine chart's fast and numpy runs of one kernel often are):
+// every label that is drawn has a place of its own inside the plot.
+TEST(LabelLayoutTest, LabelsNeverOverlapAndStayInsideThePlot) {
+  std::vector<LabelAnchor> anchors;
+  for (int i = 0; i < 24; ++i) {
+    anchors.push_back(
+        {200.0 + (i % 3), 150.0 + (i % 2), "motion_blur/hard numpy " + std::to_string(i)});
+  }
+  anchors.push_back({480.0, 60.0, "far away"});
+  const auto boxes = place_labels(anchors, 10, 6, 64, 40, 516, 324);
+  ASSERT_EQ(boxes.size(), anchors.size());
+  int drawn = 0;
+  for (std::size_t i = 0; i < boxes.size(); ++i) {
+    if (!boxes[i]) continue;
+    ++drawn;
+    EXPECT_GE(boxes[i]->x, 64);
+    EXPECT_LE(boxes[i]->x + boxes[i]->width, 516);
+    EXPECT_GE(boxes[i]->y - boxes[i]->height, 40);
+    EXPECT_LE(boxes[i]->y, 324);
+    for (std::size_t j = 0; j < i; ++j) {
+      if (boxes[j]) {
+        EXPECT_FALSE(boxes[i]->overlaps(*boxes[j])) << i << " and " << j;
+      }
+    }
+  }
+  EXPECT_GE(drawn, 12);       // a crowd still gets most of its labels
+  EXPECT_TRUE(boxes.back());  // a lone point always does
 }
 
 TEST(ReportTest, BadBenchFileIsRejectedWithPlace) {
