@@ -12,7 +12,7 @@
 
 #include "dataset/synth.hpp"
 
-namespace faultline::benchmark {
+namespace faultline::campaign {
 namespace {
 namespace fs = std::filesystem;
 
@@ -26,7 +26,7 @@ std::string read_text(const fs::path& p) {
 class RunTest : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
-    root_ = fs::temp_directory_path() / ("faultline_benchmark_" + std::to_string(::getpid()));
+    root_ = fs::temp_directory_path() / ("faultline_campaign_" + std::to_string(::getpid()));
     fs::remove_all(root_);
     dataset::SynthOptions so;
     so.out_dir = (root_ / "data").string();
@@ -147,4 +147,4 @@ TEST_F(RunTest, BenchInjectorStreamsGivenImagesAndNamesAMissingOne) {
 }
 
 }  // namespace
-}  // namespace faultline::benchmark
+}  // namespace faultline::campaign
