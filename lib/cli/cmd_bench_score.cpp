@@ -7,7 +7,7 @@
 
 #include "cli/command.hpp"
 #include "scoring/evaluate.hpp"
-#include "scoring/synthetic_val.hpp"
+#include "bench/synthetic_val.hpp"
 
 namespace faultline::cli {
 namespace {
@@ -34,7 +34,7 @@ int run(int argc, char** argv) {
   }
   if (!make_dir.empty()) {
     const auto t0 = std::chrono::steady_clock::now();
-    auto stats = scoring::write_synthetic_val(make_dir);
+    auto stats = bench::write_synthetic_val(make_dir);
     if (!stats) {
       std::fprintf(stderr, "faultline bench score: error: %s\n", stats.status().message().c_str());
       return 1;
