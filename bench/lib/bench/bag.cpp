@@ -1,6 +1,6 @@
 // `faultline bench bag`: write/read throughput of a 6-camera recording and compressed size per
 // compression, measured on synthetic 1600x900 frames (JPEG ~400 KB and raw bgr8).
-#include <CLI/CLI.hpp>
+#include "bench/bag.hpp"
 
 #include <time.h>
 #include <unistd.h>
@@ -18,9 +18,8 @@
 #include "bag/foxglove.hpp"
 #include "bag/reader.hpp"
 #include "bag/writer.hpp"
-#include "cli/command.hpp"
 
-namespace faultline::cli {
+namespace faultline::bench {
 namespace {
 
 const char* const kCameras[] = {"CAM_FRONT", "CAM_FRONT_LEFT", "CAM_FRONT_RIGHT",
@@ -140,18 +139,11 @@ RunFigures run_once(const std::string& path, bag::Compression compression, int f
   return f;
 }
 
-int run(int argc, char** argv) {
-  CLI::App app{"Bag throughput: 6 cameras x 12 Hz of ~400 KB JPEGs written as fast as possible "
-               "(CPU per second of data), linear read speed (x real time), and stored vs raw size "
-               "for JPEG and raw bgr8 frames with each compression. Medians over --repeats runs."};
-  int seconds = 60, repeats = 3, raw_seconds = 1;
-  std::string dir = std::filesystem::temp_directory_path().string();
-  app.add_option("--seconds", seconds, "seconds of JPEG data per run")->check(CLI::Range(1, 3600));
-  app.add_option("--raw-seconds", raw_seconds, "seconds of raw bgr8 data per run")->check(CLI::Range(1, 600));
-  app.add_option("--repeats", repeats, "runs per configuration (median reported)")->check(CLI::Range(1, 50));
-  app.add_option("--dir", dir, "scratch directory for the bags (deleted after each run)");
-  CLI11_PARSE(app, argc, argv);
+}  // namespace
 
+int run_bag(const BagOptions& o) {
+  const int seconds = o.seconds, repeats = o.repeats, raw_seconds = o.raw_seconds;
+  const std::string dir = o.dir.empty() ? std::filesystem::temp_directory_path().string() : o.dir;
   std::vector<cv::Mat> frames;
   std::vector<std::string> jpegs, raws;
   for (int s = 0; s < 12; ++s) {
@@ -199,6 +191,4 @@ int run(int argc, char** argv) {
   return 0;
 }
 
-}  // namespace
-FAULTLINE_COMMAND(bench_bag, "bench bag", "bag write/read throughput and compressed size", &run);
-}  // namespace faultline::cli
+}  // namespace faultline::bench

@@ -2,7 +2,8 @@
 // (pass-through policy, optionally decoded to bgr8) -> subscriber, as loops in threads of this process
 // over ipc, in real time. Prints frames per second, per-hop and end-to-end latency p50/p99, CPU per
 // frame (getrusage per loop thread and for the whole process) and unintended drops (must be 0).
-#include <CLI/CLI.hpp>
+#include "bench/transport.hpp"
+
 #include <sys/resource.h>
 #include <unistd.h>
 
@@ -15,7 +16,6 @@
 #include <string>
 #include <vector>
 
-#include "cli/command.hpp"
 #include "common/logging.hpp"
 #include "runtime/injector_loop.hpp"
 #include "runtime/player_loop.hpp"
@@ -24,7 +24,7 @@
 #include "transport/subscriber.hpp"
 #include "transport/typed.hpp"
 
-namespace faultline::cli {
+namespace faultline::bench {
 namespace {
 
 const char* const kCameras[] = {"CAM_FRONT", "CAM_FRONT_RIGHT", "CAM_FRONT_LEFT",
@@ -110,17 +110,12 @@ Tap run_tap(transport::RawSubscriber& faulty, transport::RawSubscriber& clean, c
   return tap;
 }
 
-int run(int argc, char** argv) {
-  CLI::App app{"6 cameras x 12 Hz of 1600x900 JPEG frames through player -> injector -> subscriber (ipc)"};
-  double seconds = 10;
-  bool json = false;
-  std::string mode = "bgr8";
-  app.add_option("--seconds", seconds, "run length in seconds (real time)")->check(CLI::PositiveNumber);
-  app.add_option("--mode", mode, "injector output: bgr8 (decode) or jpeg (passthrough)")
-      ->check(CLI::IsMember({"bgr8", "jpeg"}));
-  app.add_flag("--json", json, "print one JSON object");
-  CLI11_PARSE(app, argc, argv);
+}  // namespace
 
+int run_transport(const TransportOptions& o) {
+  const double seconds = o.seconds;
+  const bool json = o.json;
+  const std::string& mode = o.mode;
   auto log = logging::make_node_logger("bench_transport", "warn");
   char tmpl[] = "/tmp/faultline-bench-XXXXXX";
   const std::string dir = ::mkdtemp(tmpl);
@@ -240,7 +235,4 @@ int run(int argc, char** argv) {
   return unintended == 0 ? 0 : 1;
 }
 
-}  // namespace
-FAULTLINE_COMMAND(bench_transport, "bench transport", "throughput, latency and CPU of player -> injector -> subscriber",
-                  &run);
-}  // namespace faultline::cli
+}  // namespace faultline::bench

@@ -2,7 +2,8 @@
 // decode + one corruption per run (each type at one level, fast mode), paced in real time for N seconds. Reports
 // the injector thread's CPU (CLOCK_THREAD_CPUTIME_ID, % of one core), p50/p99 added latency per frame (capture ->
 // received downstream, and the injector's own receive -> publish), and unintended drops.
-#include <CLI/CLI.hpp>
+#include "bench/injector.hpp"
+
 #include <time.h>
 #include <unistd.h>
 
@@ -18,7 +19,6 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "cli/command.hpp"
 #include "codec/jpeg.hpp"
 #include "common/logging.hpp"
 #include "dataset/nuscenes.hpp"
@@ -29,7 +29,7 @@
 #include "transport/subscriber.hpp"
 #include "transport/typed.hpp"
 
-namespace faultline::cli {
+namespace faultline::bench {
 namespace {
 
 // This thread's CPU time (ns resolution; getrusage(RUSAGE_THREAD) ticks in 4 ms steps here).
@@ -183,31 +183,14 @@ Row run_one(const std::string& spec, double seconds, double rate_hz, bool decode
   return row;
 }
 
-int run(int argc, char** argv) {
-  CLI::App app("Real-time injector benchmark: 6 cameras x 12 Hz of 1600x900 JPEGs, decode + one corruption.", argv[0]);
-  double seconds = 10, rate_hz = 12;
-  std::string level = "mid", output = "bgr8";
-  std::vector<std::string> types = {"none", "brightness", "dark", "fog", "snow", "motion_blur", "color_quant"};
-  std::vector<std::string> images;
-  bool json = false;
-  app.add_option("--seconds", seconds, "real-time duration of each run (s)");
-  app.add_option("--images", images,
-                 "JPEG files to stream instead of the built-in road scene (camera k sends file k mod count), e.g. "
-                 "one frame per camera from a dataset's samples/CAM_*/");
-  app.add_option("--rate-hz", rate_hz, "frames per second per camera");
-  app.add_option("--level", level, "easy|mid|hard");
-  app.add_option("--types", types, "corruptions to run (\"none\" = decode only)");
-  app.add_option("--output", output, "bgr8 (republish decoded) or jpeg (re-encode q95)")->check(CLI::IsMember({"bgr8", "jpeg"}));
-  app.add_flag("--json", json, "print a JSON array");
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    return app.exit(e);
-  }
-  if (seconds <= 0 || rate_hz <= 0) {
-    std::fprintf(stderr, "faultline bench injector: --seconds and --rate-hz must be > 0\n");
-    return 2;
-  }
+}  // namespace
+
+int run_injector(const InjectorOptions& o) {
+  const double seconds = o.seconds, rate_hz = o.rate_hz;
+  const std::string &level = o.level, &output = o.output;
+  const std::vector<std::string>& types = o.types;
+  const std::vector<std::string>& images = o.images;
+  const bool json = o.json;
   cv::setNumThreads(0);  // all corruption work on the injector thread, so its CPU clock sees all of it
   std::vector<Frame> frames;
   if (images.empty()) {
@@ -303,9 +286,4 @@ int run(int argc, char** argv) {
   return 0;
 }
 
-}  // namespace
-
-FAULTLINE_COMMAND(bench_injector, "bench injector",
-                  "real-time injector benchmark: CPU, added latency and drops per corruption", &run);
-
-}  // namespace faultline::cli
+}  // namespace faultline::bench

@@ -3,7 +3,7 @@
 // reference's per-image times (spec corruptions.md §12). Reports wall-clock images/s as measured and the CPU time
 // per image (getrusage), from which the CPU-bound rate on C cores is C / (CPU s per image): on a shared, loaded
 // machine the wall-clock rate understates the pipeline, the CPU time does not (much).
-#include <CLI/CLI.hpp>
+#include "bench/export.hpp"
 
 #include <algorithm>
 #include <cstdio>
@@ -16,12 +16,11 @@
 #include <sys/resource.h>
 #include <unistd.h>
 
-#include "cli/command.hpp"
 #include "dataset/synth.hpp"
 #include "export/exporter.hpp"
 #include "export/stats_table.hpp"
 
-namespace faultline::cli {
+namespace faultline::bench {
 namespace {
 
 namespace fs = std::filesystem;
@@ -156,37 +155,15 @@ std::string json_number(double v) {
   return buf;
 }
 
-int run(int argc, char** argv) {
-  CLI::App app("Measure `faultline export` images/s per corruption on a synthetic dataset vs the Python reference.",
-               argv[0]);
-  std::string work_dir, rng = "both", json_path;
-  int threads = 2, reps = 3, scenes = 1, width = 1600, height = 900, cores = 2, cluster_cores = 16;
-  double seconds = 2.0;
-  bool skip_all = false;
-  std::string python = "/usr/bin/python3";
-  bool no_reference_codec = false;
-  app.add_option("--work-dir", work_dir, "scratch folder (default: a fresh folder under the system temp dir)");
-  app.add_option("--threads", threads, "export threads (default 2)");
-  app.add_option("--reps", reps, "runs per condition; medians are reported (default 3)");
-  app.add_option("--scenes", scenes, "synthetic scenes (default 1)");
-  app.add_option("--seconds", seconds, "seconds per scene, key frames at 2 Hz (default 2)");
-  app.add_option("--rng", rng, "numpy, fast or both (default)");
-  app.add_option("--cores", cores, "cores for the CPU-bound rate cores / (CPU s per image) (default 2)");
-  app.add_option("--cluster-cores", cluster_cores, "cores of the extrapolated machine (default 16)");
-  app.add_option("--width", width, "image width (default 1600; smaller only for quick checks)");
-  app.add_option("--height", height, "image height (default 900)");
-  app.add_flag("--skip-all", skip_all, "skip the single all-conditions run (one decode for 24 outputs)");
-  app.add_option("--json", json_path, "also write the figures as JSON to this file ('-' = stdout)");
-  app.add_option("--python", python,
-                 "Python with OpenCV (Debian's python3-opencv) that times the reference's own cv2.imread + "
-                 "cv2.imwrite q95 per image on the same files (default /usr/bin/python3)");
-  app.add_flag("--no-reference-codec", no_reference_codec,
-               "leave the reference's JPEG decode/encode out of its end-to-end time (a lower bound, as in spec §12)");
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    return app.exit(e);
-  }
+}  // namespace
+
+int run_export(const ExportOptions& o) {
+  std::string work_dir = o.work_dir;
+  const std::string &rng = o.rng, &json_path = o.json_path, &python = o.python;
+  const int threads = o.threads, reps = o.reps, scenes = o.scenes, width = o.width, height = o.height,
+            cores = o.cores, cluster_cores = o.cluster_cores;
+  const double seconds = o.seconds;
+  const bool skip_all = o.skip_all, no_reference_codec = o.no_reference_codec;
   std::vector<corruption::RngMode> modes;
   if (rng == "both") {
     modes = {corruption::RngMode::Numpy, corruption::RngMode::Fast};
@@ -412,7 +389,4 @@ int run(int argc, char** argv) {
   return 0;
 }
 
-}  // namespace
-FAULTLINE_COMMAND(bench_export, "bench export",
-                  "measure export images/s and CPU ms per image per corruption vs the Python reference", &run);
-}  // namespace faultline::cli
+}  // namespace faultline::bench

@@ -1,15 +1,16 @@
 // `faultline bench score`: scorer throughput on a val-sized synthetic set (wall time, peak RSS).
-#include <CLI/CLI.hpp>
+#include "bench/score.hpp"
+
 #include <sys/resource.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 
-#include "cli/command.hpp"
-#include "scoring/evaluate.hpp"
 #include "bench/synthetic_val.hpp"
+#include "scoring/evaluate.hpp"
 
-namespace faultline::cli {
+namespace faultline::bench {
 namespace {
 
 double peak_rss_mb() {
@@ -18,23 +19,14 @@ double peak_rss_mb() {
   return static_cast<double>(ru.ru_maxrss) / 1024.0;  // ru_maxrss is in KiB on Linux
 }
 
-int run(int argc, char** argv) {
-  CLI::App app{"Benchmarks `faultline score` on a val-sized synthetic dataset (150 val scenes, 6,019 samples, "
-               "~50 boxes each). First `--make DIR` writes the tables and a submission, then `DIR` scores it."};
-  std::string make_dir, dir;
-  int repeats = 1;
-  app.add_option("--make", make_dir, "write the synthetic tables + results.json into this folder");
-  app.add_option("dir", dir, "folder written by --make: score it and report wall time and peak RSS");
-  app.add_option("--repeats", repeats, "score this many times in one process (median reported)")
-      ->capture_default_str();
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    return app.exit(e);
-  }
+}  // namespace
+
+int run_score(const ScoreOptions& o) {
+  const std::string &make_dir = o.make_dir, &dir = o.dir;
+  const int repeats = o.repeats;
   if (!make_dir.empty()) {
     const auto t0 = std::chrono::steady_clock::now();
-    auto stats = bench::write_synthetic_val(make_dir);
+    auto stats = write_synthetic_val(make_dir);
     if (!stats) {
       std::fprintf(stderr, "faultline bench score: error: %s\n", stats.status().message().c_str());
       return 1;
@@ -80,6 +72,5 @@ int run(int argc, char** argv) {
               times[times.size() / 2], times.front(), times.back(), times.size(), peak_rss_mb());
   return 0;
 }
-}  // namespace
-FAULTLINE_COMMAND(bench_score, "bench score", "benchmark the scorer on a val-sized synthetic set", &run);
-}  // namespace faultline::cli
+
+}  // namespace faultline::bench

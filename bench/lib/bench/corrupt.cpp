@@ -1,7 +1,7 @@
 // `faultline bench corrupt`: single-threaded median ms of every corruption x level in fast and numpy modes on a
 // synthetic 1600x900 frame, the TurboJPEG decode ms of the same frame measured in the same run, and fidelity
 // (PSNR, max abs diff) of fast mode against numpy mode.
-#include <CLI/CLI.hpp>
+#include "bench/corrupt.hpp"
 
 #include <algorithm>
 #include <chrono>
@@ -18,7 +18,6 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "cli/command.hpp"
 #include "codec/jpeg.hpp"
 #include "common/cpu_features.hpp"
 #include "corruption/corrupt.hpp"
@@ -27,7 +26,7 @@
 #include "corruption/motion_blur.hpp"
 #include "corruption/snow.hpp"
 
-namespace faultline::cli {
+namespace faultline::bench {
 namespace {
 
 using corruption::Corruption;
@@ -193,34 +192,17 @@ std::string num(std::optional<double> v, int prec = 4) {
   return buf;
 }
 
-int run(int argc, char** argv) {
-  CLI::App app("Benchmark the corruptions (single-threaded) against a TurboJPEG decode of the same frame.", argv[0]);
-  int reps = 9, width = 1600, height = 900;
-  std::uint32_t seed = 130;
-  bool json = false, fidelity = false;
-  std::string out_path, image_path;
-  std::vector<std::string> only;
-  app.add_option("--reps", reps, "timed repetitions per case (median reported; one warm-up run first)");
-  app.add_option("--image", image_path,
-                 "benchmark on this image (read with OpenCV, BGR) instead of the built-in road scene; "
-                 "--width/--height are then ignored");
-  app.add_option("--width", width, "frame width");
-  app.add_option("--height", height, "frame height");
-  app.add_option("--seed", seed, "seed for the random corruptions");
-  app.add_option("--only", only, "restrict to these corruption types");
-  app.add_flag("--json", json, "print a JSON array");
-  app.add_flag("--fidelity", fidelity, "also compute PSNR / max abs diff of fast mode against numpy mode");
-  app.add_option("--out", out_path, "also write the JSON array (with fidelity) to this file");
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    return app.exit(e);
-  }
-  if (reps < 1 || width < 1 || height < 1) {
-    std::fprintf(stderr, "faultline bench corrupt: --reps, --width and --height must be >= 1\n");
-    return 2;
-  }
-  if (!out_path.empty()) fidelity = true;
+}  // namespace
+
+int run_corrupt(const CorruptOptions& o) {
+  int width = o.width, height = o.height;
+  const int reps = o.reps;
+  const std::uint32_t seed = o.seed;
+  const bool json = o.json;
+  const bool fidelity = o.fidelity || !o.out_path.empty();
+  const std::string& out_path = o.out_path;
+  const std::string& image_path = o.image_path;
+  const std::vector<std::string>& only = o.only;
   cv::setNumThreads(0);
   cv::Mat frame;
   if (image_path.empty()) {
@@ -346,6 +328,4 @@ int run(int argc, char** argv) {
   return 0;
 }
 
-}  // namespace
-FAULTLINE_COMMAND(bench_corrupt, "bench corrupt", "benchmark corruptions vs a JPEG decode (single-threaded)", &run);
-}  // namespace faultline::cli
+}  // namespace faultline::bench

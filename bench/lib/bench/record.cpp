@@ -3,7 +3,7 @@
 // (rate 0 into a draining subscriber) and bag size versus the raw message bytes. Frames: JPEGs from
 // --images DIR (e.g. nuScenes samples/CAM_FRONT), else a synthetic nuScenes-like scene rendered by
 // the dataset generator, else (--noise) a gradient-plus-noise image.
-#include <CLI/CLI.hpp>
+#include "bench/record.hpp"
 
 #include <spdlog/sinks/null_sink.h>
 #include <spdlog/spdlog.h>
@@ -24,7 +24,6 @@
 
 #include "bag/foxglove.hpp"
 #include "camera_frame.pb.h"
-#include "cli/command.hpp"
 #include "dataset/nuscenes.hpp"
 #include "dataset/synth.hpp"
 #include "runtime/bag_player.hpp"
@@ -33,7 +32,7 @@
 #include "transport/subscriber.hpp"
 #include "transport/typed.hpp"
 
-namespace faultline::cli {
+namespace faultline::bench {
 namespace {
 
 const char* const kCameras[] = {"CAM_FRONT", "CAM_FRONT_LEFT", "CAM_FRONT_RIGHT",
@@ -217,21 +216,13 @@ RunFigures run_once(const std::vector<std::vector<std::uint8_t>>& jpegs, double 
   return fig;
 }
 
-int run(int argc, char** argv) {
-  CLI::App app{"Recorder CPU, player speed and bag size for N cameras of JPEG frames over ipc."};
-  double seconds = 5, rate_hz = 12;
-  int cameras = 6, reps = 3;
-  bool view = true, noise = false;
-  std::string images, compression = "lz4";  // the recorder default
-  app.add_option("--seconds", seconds, "recording length per rep")->capture_default_str();
-  app.add_option("--rate", rate_hz, "frames per second per camera")->capture_default_str();
-  app.add_option("--cameras", cameras, "1..6")->check(CLI::Range(1, 6))->capture_default_str();
-  app.add_option("--reps", reps, "repetitions (medians printed)")->check(CLI::PositiveNumber)->capture_default_str();
-  app.add_flag("!--no-foxglove-view", view, "replay channels only");
-  app.add_option("--images", images, "folder of JPEGs to send (first N files, one per camera)");
-  app.add_flag("--noise", noise, "gradient-plus-noise JPEGs instead of a rendered synthetic scene");
-  app.add_option("--compression", compression, "recorder compression: none | zstd | lz4")->capture_default_str();
-  CLI11_PARSE(app, argc, argv);
+}  // namespace
+
+int run_record(const RecordOptions& o) {
+  const double seconds = o.seconds, rate_hz = o.rate_hz;
+  const int cameras = o.cameras, reps = o.reps;
+  const bool view = o.foxglove_view, noise = o.noise;
+  const std::string &images = o.images, &compression = o.compression;
   const std::string dir = std::filesystem::temp_directory_path().string();
   std::vector<std::vector<std::uint8_t>> jpegs;
   std::string source = "rendered synthetic scene";
@@ -267,6 +258,4 @@ int run(int argc, char** argv) {
   return 0;
 }
 
-}  // namespace
-FAULTLINE_COMMAND(bench_record, "bench record", "recorder CPU, player speed and bag size", &run);
-}  // namespace faultline::cli
+}  // namespace faultline::bench
