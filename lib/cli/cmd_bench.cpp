@@ -130,7 +130,7 @@ int run_record(int argc, char** argv) {
   app.add_option("--reps", o.reps, "repetitions (medians printed)")->check(CLI::PositiveNumber)->capture_default_str();
   app.add_flag("!--no-foxglove-view", o.foxglove_view, "replay channels only");
   app.add_option("--images", o.images, "folder of JPEGs to send (first N files, one per camera)");
-  app.add_flag("--noise", o.noise, "gradient-plus-noise JPEGs instead of a rendered synthetic scene");
+  app.add_flag("--noise", o.noise, "noisy built-in road scene JPEGs instead of a rendered synthetic scene");
   app.add_option("--compression", o.compression, "recorder compression: none | zstd | lz4")->capture_default_str();
   CLI11_PARSE(app, argc, argv);
   return bench::run_record(o);

@@ -11,13 +11,13 @@
 #include <filesystem>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
-#include <opencv2/imgproc.hpp>
 #include <string>
 #include <vector>
 
 #include "bag/foxglove.hpp"
 #include "bag/reader.hpp"
 #include "bag/writer.hpp"
+#include "bench/frames.hpp"
 
 namespace faultline::bench {
 namespace {
@@ -38,31 +38,6 @@ double wall_seconds() {
 double median(std::vector<double> v) {
   std::sort(v.begin(), v.end());
   return v.empty() ? 0.0 : v[v.size() / 2];
-}
-
-// A street-like synthetic frame: smooth gradients, blocks of texture and sensor noise.
-cv::Mat synthetic_frame(int seed) {
-  cv::Mat img(900, 1600, CV_8UC3);
-  for (int y = 0; y < img.rows; ++y) {
-    for (int x = 0; x < img.cols; ++x) {
-      img.at<cv::Vec3b>(y, x) = cv::Vec3b(static_cast<uchar>((x / 7 + seed * 20) % 256),
-                                          static_cast<uchar>((y / 4 + 60) % 256),
-                                          static_cast<uchar>((x + y) / 10 % 256));
-    }
-  }
-  cv::RNG rng(static_cast<std::uint64_t>(seed) + 1);
-  for (int i = 0; i < 120; ++i) {
-    const cv::Point p(rng.uniform(0, 1600), rng.uniform(0, 900));
-    cv::rectangle(img, p, p + cv::Point(rng.uniform(20, 200), rng.uniform(20, 150)),
-                  cv::Scalar(rng.uniform(0, 255), rng.uniform(0, 255), rng.uniform(0, 255)), cv::FILLED);
-  }
-  cv::Mat noise(img.size(), CV_16SC3);
-  rng.fill(noise, cv::RNG::NORMAL, 0, 9);
-  cv::Mat out;
-  img.convertTo(out, CV_16SC3);
-  out += noise;
-  out.convertTo(img, CV_8UC3);
-  return img;
 }
 
 // JPEG whose size is closest to target_bytes over a few qualities.
@@ -147,7 +122,10 @@ int run_bag(const BagOptions& o) {
   std::vector<cv::Mat> frames;
   std::vector<std::string> jpegs, raws;
   for (int s = 0; s < 12; ++s) {
-    frames.push_back(synthetic_frame(s));
+    FrameSpec spec;
+    spec.seed = static_cast<std::uint64_t>(s);
+    spec.noise = 32;  // heavy: the decoded frames stay noisy, so lz4 gains nothing on them and zstd ~13%
+    frames.push_back(synthetic_frame(spec));
     jpegs.push_back(jpeg_near(frames.back(), 400 * 1024));
     // Raw frames are decoded JPEGs, as the injector produces them from nuScenes images.
     const cv::Mat decoded = cv::imdecode(cv::Mat(1, static_cast<int>(jpegs.back().size()), CV_8UC1,

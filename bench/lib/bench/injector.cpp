@@ -17,8 +17,8 @@
 #include <vector>
 
 #include <opencv2/core.hpp>
-#include <opencv2/imgproc.hpp>
 
+#include "bench/frames.hpp"
 #include "codec/jpeg.hpp"
 #include "common/logging.hpp"
 #include "dataset/nuscenes.hpp"
@@ -37,25 +37,6 @@ double thread_cpu_s() {
   timespec ts{};
   ::clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
   return static_cast<double>(ts.tv_sec) + static_cast<double>(ts.tv_nsec) * 1e-9;
-}
-
-// A road-like scene with edges and mild texture, so the JPEG has a realistic size.
-cv::Mat scene(int width, int height, int variant) {
-  cv::Mat img(height, width, CV_8UC3);
-  for (int y = 0; y < height; ++y) {
-    const double t = static_cast<double>(y) / height;
-    img.row(y).setTo(cv::Scalar(220 - 90 * t, 190 - 60 * t, 140 + 40 * t));
-  }
-  cv::rectangle(img, cv::Rect(0, height / 2, width, height / 2), cv::Scalar(70, 72, 75), cv::FILLED);
-  for (int b = 0; b < 12; ++b) {
-    const int x0 = b * width / 12, h = 120 + (b * 37 + variant * 53) % 240;
-    cv::rectangle(img, cv::Rect(x0, height / 2 - h, width / 12 - 10, h),
-                  cv::Scalar(60 + (b * 29) % 120, 80 + (b * 17) % 100, 70 + (b * 41 + variant) % 140), cv::FILLED);
-  }
-  cv::Mat noise(height, width, CV_8UC3);
-  cv::randn(noise, cv::Scalar::all(0), cv::Scalar::all(6));
-  cv::add(img, noise, img);
-  return img;
 }
 
 struct Row {
@@ -195,7 +176,10 @@ int run_injector(const InjectorOptions& o) {
   std::vector<Frame> frames;
   if (images.empty()) {
     for (int cam = 0; cam < policy::kNumCameras; ++cam) {
-      auto bytes = codec::encode_jpeg(scene(1600, 900, cam), 95);
+      FrameSpec spec;
+      spec.seed = static_cast<std::uint64_t>(cam);
+      spec.noise = 2;  // q95 JPEGs of ~360 KB, as nuScenes' CAM_* frames
+      auto bytes = codec::encode_jpeg(synthetic_frame(spec), 95);
       if (!bytes) {
         std::fprintf(stderr, "faultline bench injector: %s\n", bytes.status().message().c_str());
         return 1;

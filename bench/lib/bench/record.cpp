@@ -2,7 +2,7 @@
 // thread, and the whole process for honesty: publisher and zmq I/O threads included), player speed
 // (rate 0 into a draining subscriber) and bag size versus the raw message bytes. Frames: JPEGs from
 // --images DIR (e.g. nuScenes samples/CAM_FRONT), else a synthetic nuScenes-like scene rendered by
-// the dataset generator, else (--noise) a gradient-plus-noise image.
+// the dataset generator, else (--noise) the benchmarks' noisy road scene (frames.hpp).
 #include "bench/record.hpp"
 
 #include <spdlog/sinks/null_sink.h>
@@ -23,6 +23,7 @@
 #include <vector>
 
 #include "bag/foxglove.hpp"
+#include "bench/frames.hpp"
 #include "camera_frame.pb.h"
 #include "dataset/nuscenes.hpp"
 #include "dataset/synth.hpp"
@@ -56,20 +57,13 @@ double median(std::vector<double> v) {
   return v.empty() ? 0.0 : v[v.size() / 2];
 }
 
-// 1600x900 gradient plus noise, JPEG quality 90 (~nuScenes-sized frames).
-std::vector<std::uint8_t> make_jpeg(int seed) {
-  cv::Mat img(900, 1600, CV_8UC3);
-  for (int y = 0; y < img.rows; ++y) {
-    for (int x = 0; x < img.cols; ++x) {
-      img.at<cv::Vec3b>(y, x) = cv::Vec3b(static_cast<uchar>((x / 5 + seed * 40) % 256),
-                                          static_cast<uchar>((y / 3) % 256), static_cast<uchar>((x + y) / 9 % 256));
-    }
-  }
-  cv::Mat noise(img.size(), CV_8UC3);
-  cv::randu(noise, 0, 40);
-  img += noise;
+// The built-in road scene with heavy noise, JPEG quality 90: ~470 KB, like the busiest nuScenes frames.
+std::vector<std::uint8_t> noisy_jpeg(int seed) {
+  FrameSpec spec;
+  spec.seed = static_cast<std::uint64_t>(seed);
+  spec.noise = 13;
   std::vector<std::uint8_t> out;
-  cv::imencode(".jpg", img, out, {cv::IMWRITE_JPEG_QUALITY, 90});
+  cv::imencode(".jpg", synthetic_frame(spec), out, {cv::IMWRITE_JPEG_QUALITY, 90});
   return out;
 }
 
@@ -234,8 +228,8 @@ int run_record(const RecordOptions& o) {
   }
   if (jpegs.empty() || noise) {
     jpegs.clear();
-    for (int c = 0; c < cameras; ++c) jpegs.push_back(make_jpeg(c));
-    source = "gradient plus noise";
+    for (int c = 0; c < cameras; ++c) jpegs.push_back(noisy_jpeg(c));
+    source = "noisy road scene";
   }
   while (static_cast<int>(jpegs.size()) < cameras) jpegs.push_back(jpegs.front());
   std::size_t jpeg_bytes = 0;

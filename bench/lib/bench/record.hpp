@@ -13,7 +13,7 @@ struct RecordOptions {
   int reps = 3;              // repetitions; medians are printed
   bool foxglove_view = true; // also the recorder's foxglove view channels (false = replay channels only)
   std::string images;        // folder of JPEGs to send (first N files, one per camera); "" = a rendered synthetic scene
-  bool noise = false;        // gradient-plus-noise JPEGs instead of a rendered synthetic scene
+  bool noise = false;        // the noisy built-in road scene (frames.hpp) instead of a rendered synthetic scene
   std::string compression = "lz4";  // recorder compression: none | zstd | lz4 (the recorder's default)
 };
 

@@ -12,10 +12,10 @@
 #include <future>
 #include <map>
 #include <opencv2/imgcodecs.hpp>
-#include <opencv2/imgproc.hpp>
 #include <string>
 #include <vector>
 
+#include "bench/frames.hpp"
 #include "common/logging.hpp"
 #include "runtime/injector_loop.hpp"
 #include "runtime/player_loop.hpp"
@@ -44,21 +44,13 @@ double process_cpu_s() {
          static_cast<double>(u.ru_utime.tv_usec + u.ru_stime.tv_usec) * 1e-6;
 }
 
-// A textured street-like frame per camera, JPEG-encoded once (quality 90, like nuScenes' ~300-600 KB).
+// The road scene per camera, JPEG-encoded once (quality 90: ~440 KB, within nuScenes' ~300-600 KB).
 runtime::ImageBytes make_jpeg(int index) {
-  cv::Mat small(90, 160, CV_8UC3);
-  cv::randu(small, cv::Scalar::all(0), cv::Scalar::all(255));
-  cv::Mat img;
-  cv::resize(small, img, cv::Size(1600, 900), 0, 0, cv::INTER_CUBIC);
-  cv::Mat noise(900, 1600, CV_8UC3);
-  cv::randu(noise, cv::Scalar::all(0), cv::Scalar::all(12));  // mild sensor noise: ~nuScenes JPEG sizes
-  img += noise;
-  for (int i = 0; i < 40; ++i) {
-    cv::rectangle(img, cv::Rect((i * 97 + index * 31) % 1500, (i * 53) % 800, 60, 90),
-                  cv::Scalar(30 * (i % 8), 200 - 20 * (i % 9), 100), 3);
-  }
+  FrameSpec spec;
+  spec.seed = static_cast<std::uint64_t>(index);
+  spec.noise = 11;
   std::vector<std::uint8_t> bytes;
-  cv::imencode(".jpg", img, bytes, {cv::IMWRITE_JPEG_QUALITY, 90});
+  cv::imencode(".jpg", synthetic_frame(spec), bytes, {cv::IMWRITE_JPEG_QUALITY, 90});
   return std::make_shared<const std::vector<std::uint8_t>>(std::move(bytes));
 }
 
