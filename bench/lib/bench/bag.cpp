@@ -2,7 +2,6 @@
 // compression, measured on synthetic 1600x900 frames (JPEG ~400 KB and raw bgr8).
 #include "bench/bag.hpp"
 
-#include <time.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -17,7 +16,9 @@
 #include "bag/foxglove.hpp"
 #include "bag/reader.hpp"
 #include "bag/writer.hpp"
+#include "bench/cpu_time.hpp"
 #include "bench/frames.hpp"
+#include "stats/percentile.hpp"
 
 namespace faultline::bench {
 namespace {
@@ -25,20 +26,12 @@ namespace {
 const char* const kCameras[] = {"CAM_FRONT", "CAM_FRONT_LEFT", "CAM_FRONT_RIGHT",
                                 "CAM_BACK", "CAM_BACK_LEFT", "CAM_BACK_RIGHT"};
 
-double cpu_seconds() {
-  timespec ts{};
-  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
-  return static_cast<double>(ts.tv_sec) + static_cast<double>(ts.tv_nsec) * 1e-9;
-}
-
 double wall_seconds() {
   return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
 }
 
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  return v.empty() ? 0.0 : v[v.size() / 2];
-}
+// The upper median, as this benchmark has always reported it.
+double median(std::vector<double> v) { return stats::median(std::move(v), stats::Interpolation::NearestHalfUp); }
 
 // JPEG whose size is closest to target_bytes over a few qualities.
 std::string jpeg_near(const cv::Mat& img, std::size_t target_bytes) {
@@ -65,7 +58,7 @@ RunFigures run_once(const std::string& path, bag::Compression compression, int f
   RunFigures f;
   bag::WriterOptions opts;
   opts.compression = compression;
-  const double cpu0 = cpu_seconds(), wall0 = wall_seconds();
+  const double cpu0 = process_cpu_s(), wall0 = wall_seconds();
   {
     auto w = bag::Writer::open(path, opts);
     if (!w) return f;
@@ -100,15 +93,15 @@ RunFigures run_once(const std::string& path, bag::Compression compression, int f
     f.chunks_stored_raw = (*w)->stats().chunks_stored_raw;
     f.messages = (*w)->stats().messages;
   }
-  f.cpu_s = cpu_seconds() - cpu0;
+  f.cpu_s = process_cpu_s() - cpu0;
   f.wall_s = wall_seconds() - wall0;
-  const double rcpu0 = cpu_seconds(), rwall0 = wall_seconds();
+  const double rcpu0 = process_cpu_s(), rwall0 = wall_seconds();
   auto reader = bag::Reader::open(path);
   if (reader) {
     std::uint64_t n = 0;
     (void)(*reader)->read_linear({}, [&](const bag::MessageView&) { return ++n > 0; });
   }
-  f.read_cpu_s = cpu_seconds() - rcpu0;
+  f.read_cpu_s = process_cpu_s() - rcpu0;
   f.read_wall_s = wall_seconds() - rwall0;
   std::filesystem::remove(path);
   return f;

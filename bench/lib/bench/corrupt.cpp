@@ -6,7 +6,6 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <ctime>
 #include <cstdio>
 #include <fstream>
 #include <functional>
@@ -17,6 +16,7 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 
+#include "bench/cpu_time.hpp"
 #include "bench/frames.hpp"
 #include "codec/jpeg.hpp"
 #include "common/cpu_features.hpp"
@@ -25,6 +25,7 @@
 #include "corruption/fog.hpp"
 #include "corruption/motion_blur.hpp"
 #include "corruption/snow.hpp"
+#include "stats/percentile.hpp"
 
 namespace faultline::bench {
 namespace {
@@ -32,13 +33,7 @@ namespace {
 using corruption::Corruption;
 using corruption::Level;
 
-double thread_cpu_ms() {
-  timespec ts{};
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
-  return static_cast<double>(ts.tv_sec) * 1e3 + static_cast<double>(ts.tv_nsec) * 1e-6;
-}
-
-// Median wall-clock ms and median thread-CPU ms of `reps` runs after one warm-up. On a shared, loaded machine the
+// Median (the upper one) wall-clock ms and thread-CPU ms of `reps` runs after one warm-up. On a shared, loaded machine the
 // CPU time is the steadier figure (wall time also counts time the thread waited for a core).
 struct Timing {
   double wall_ms;
@@ -48,16 +43,14 @@ Timing median_ms(int reps, const std::function<void()>& fn) {
   fn();  // warm-up
   std::vector<double> wall, cpu;
   for (int i = 0; i < reps; ++i) {
-    const double c0 = thread_cpu_ms();
+    const double c0 = 1e3 * thread_cpu_s();
     const auto t0 = std::chrono::steady_clock::now();
     fn();
     const auto t1 = std::chrono::steady_clock::now();
-    cpu.push_back(thread_cpu_ms() - c0);
+    cpu.push_back(1e3 * thread_cpu_s() - c0);
     wall.push_back(std::chrono::duration<double, std::milli>(t1 - t0).count());
   }
-  std::sort(wall.begin(), wall.end());
-  std::sort(cpu.begin(), cpu.end());
-  return {wall[wall.size() / 2], cpu[cpu.size() / 2]};
+  return {stats::median(wall, stats::Interpolation::NearestHalfUp), stats::median(cpu, stats::Interpolation::NearestHalfUp)};
 }
 
 double psnr(const cv::Mat& a, const cv::Mat& b) {

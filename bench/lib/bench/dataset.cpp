@@ -18,6 +18,7 @@
 #include "dataset/json_table.hpp"
 #include "dataset/nuscenes.hpp"
 #include "dataset/synth.hpp"
+#include "stats/percentile.hpp"
 
 namespace faultline::bench {
 namespace {
@@ -117,11 +118,8 @@ Measurement measure(Mode mode, const std::string& dataroot, const std::string& v
   return m;
 }
 
-template <typename T>
-T median(std::vector<T> v) {
-  std::sort(v.begin(), v.end());
-  return v[v.size() / 2];
-}
+// The upper median, as this benchmark has always reported it.
+double median(std::vector<double> v) { return stats::median(std::move(v), stats::Interpolation::NearestHalfUp); }
 
 int make_dataset(const std::string& dir, int scenes, double seconds, const std::string& version) {
   dataset::SynthOptions opt;

@@ -13,31 +13,18 @@
 #include <string>
 #include <vector>
 
-#include <sys/resource.h>
 #include <unistd.h>
 
+#include "bench/cpu_time.hpp"
 #include "dataset/synth.hpp"
 #include "export/exporter.hpp"
 #include "export/stats_table.hpp"
+#include "stats/percentile.hpp"
 
 namespace faultline::bench {
 namespace {
 
 namespace fs = std::filesystem;
-
-double median(std::vector<double> v) {
-  if (v.empty()) return 0;
-  std::sort(v.begin(), v.end());
-  const std::size_t n = v.size();
-  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
-
-double process_cpu_seconds() {
-  rusage u{};
-  ::getrusage(RUSAGE_SELF, &u);
-  return static_cast<double>(u.ru_utime.tv_sec + u.ru_stime.tv_sec) +
-         1e-6 * static_cast<double>(u.ru_utime.tv_usec + u.ru_stime.tv_usec);
-}
 
 double load_1m() {
   double l[1] = {-1};
@@ -107,9 +94,9 @@ bool measure(const exporter::ExportConfig& base, const std::vector<exporter::Con
     fs::remove_all(cfg.out_dir);  // left over from an earlier benchmark in the same --work-dir
     cfg.conditions = conditions;
     cfg.seed = static_cast<std::uint64_t>(r);
-    const double cpu0 = process_cpu_seconds();
+    const double cpu0 = process_cpu_s();
     auto s = exporter::run_export(cfg);
-    const double cpu = process_cpu_seconds() - cpu0;
+    const double cpu = process_cpu_s() - cpu0;
     if (!s) {
       std::fprintf(stderr, "faultline bench export: %s\n", s.status().to_string().c_str());
       return false;
@@ -131,9 +118,9 @@ bool measure(const exporter::ExportConfig& base, const std::vector<exporter::Con
       }
     }
   }
-  out.img_s = median(rates);
-  out.cpu_ms = median(cpus);
-  for (auto& [name, v] : per_condition) out.condition_cpu_ms[name] = median(v);
+  out.img_s = stats::median(rates);
+  out.cpu_ms = stats::median(cpus);
+  for (auto& [name, v] : per_condition) out.condition_cpu_ms[name] = stats::median(v);
   return true;
 }
 

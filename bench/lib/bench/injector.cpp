@@ -4,7 +4,6 @@
 // received downstream, and the injector's own receive -> publish), and unintended drops.
 #include "bench/injector.hpp"
 
-#include <time.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -18,6 +17,7 @@
 
 #include <opencv2/core.hpp>
 
+#include "bench/cpu_time.hpp"
 #include "bench/frames.hpp"
 #include "codec/jpeg.hpp"
 #include "common/logging.hpp"
@@ -25,19 +25,13 @@
 #include "policy/injector_policy.hpp"
 #include "policy/temporal_draws.hpp"
 #include "runtime/injector_loop.hpp"
+#include "stats/percentile.hpp"
 #include "transport/publisher.hpp"
 #include "transport/subscriber.hpp"
 #include "transport/typed.hpp"
 
 namespace faultline::bench {
 namespace {
-
-// This thread's CPU time (ns resolution; getrusage(RUSAGE_THREAD) ticks in 4 ms steps here).
-double thread_cpu_s() {
-  timespec ts{};
-  ::clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
-  return static_cast<double>(ts.tv_sec) + static_cast<double>(ts.tv_nsec) * 1e-9;
-}
 
 struct Row {
   std::string corruption;
@@ -47,10 +41,9 @@ struct Row {
   double e2e_p50_ms = 0, e2e_p99_ms = 0, inj_p50_ms = 0, inj_p99_ms = 0;
 };
 
+// Percentiles of measured values (no interpolation), as this benchmark has always reported them.
 double pct(std::vector<double> v, double q) {
-  if (v.empty()) return 0;
-  std::sort(v.begin(), v.end());
-  return v[static_cast<std::size_t>(std::min<double>(v.size() - 1, q * (v.size() - 1) + 0.5))];
+  return stats::percentile(std::move(v), q, stats::Interpolation::NearestHalfUp);
 }
 
 // One camera's JPEG, sent on every tick.

@@ -7,8 +7,6 @@
 
 #include <spdlog/sinks/null_sink.h>
 #include <spdlog/spdlog.h>
-#include <sys/resource.h>
-#include <time.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -23,12 +21,14 @@
 #include <vector>
 
 #include "bag/foxglove.hpp"
+#include "bench/cpu_time.hpp"
 #include "bench/frames.hpp"
 #include "camera_frame.pb.h"
 #include "dataset/nuscenes.hpp"
 #include "dataset/synth.hpp"
 #include "runtime/bag_player.hpp"
 #include "runtime/bag_recorder.hpp"
+#include "stats/percentile.hpp"
 #include "transport/publisher.hpp"
 #include "transport/subscriber.hpp"
 #include "transport/typed.hpp"
@@ -39,23 +39,8 @@ namespace {
 const char* const kCameras[] = {"CAM_FRONT", "CAM_FRONT_LEFT", "CAM_FRONT_RIGHT",
                                 "CAM_BACK", "CAM_BACK_LEFT", "CAM_BACK_RIGHT"};
 
-double thread_cpu_s() {
-  timespec ts{};
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
-  return static_cast<double>(ts.tv_sec) + static_cast<double>(ts.tv_nsec) * 1e-9;
-}
-
-double process_cpu_s() {
-  rusage ru{};
-  getrusage(RUSAGE_SELF, &ru);
-  return static_cast<double>(ru.ru_utime.tv_sec + ru.ru_stime.tv_sec) +
-         static_cast<double>(ru.ru_utime.tv_usec + ru.ru_stime.tv_usec) * 1e-6;
-}
-
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  return v.empty() ? 0.0 : v[v.size() / 2];
-}
+// The upper median, as this benchmark has always reported it.
+double median(std::vector<double> v) { return stats::median(std::move(v), stats::Interpolation::NearestHalfUp); }
 
 // The built-in road scene with heavy noise, JPEG quality 90: ~470 KB, like the busiest nuScenes frames.
 std::vector<std::uint8_t> noisy_jpeg(int seed) {

@@ -1,25 +1,16 @@
 // `faultline bench score`: scorer throughput on a val-sized synthetic set (wall time, peak RSS).
 #include "bench/score.hpp"
 
-#include <sys/resource.h>
-
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
 
+#include "bench/cpu_time.hpp"
 #include "bench/synthetic_val.hpp"
 #include "scoring/evaluate.hpp"
+#include "stats/percentile.hpp"
 
 namespace faultline::bench {
-namespace {
-
-double peak_rss_mb() {
-  rusage ru{};
-  getrusage(RUSAGE_SELF, &ru);
-  return static_cast<double>(ru.ru_maxrss) / 1024.0;  // ru_maxrss is in KiB on Linux
-}
-
-}  // namespace
 
 int run_score(const ScoreOptions& o) {
   const std::string &make_dir = o.make_dir, &dir = o.dir;
@@ -67,9 +58,9 @@ int run_score(const ScoreOptions& o) {
                 "accumulate %.3f s\n",
                 r + 1, t.submission_s, t.ground_truth_s, t.ground_truth_wait_s, t.filter_s, t.accumulate_s);
   }
-  std::sort(times.begin(), times.end());
   std::printf("score wall time: median %.3f s (min %.3f, max %.3f, n=%zu), peak RSS %.1f MB\n",
-              times[times.size() / 2], times.front(), times.back(), times.size(), peak_rss_mb());
+              stats::median(times, stats::Interpolation::NearestHalfUp), *std::min_element(times.begin(), times.end()),
+              *std::max_element(times.begin(), times.end()), times.size(), peak_rss_mb());
   return 0;
 }
 

@@ -11,6 +11,7 @@
 #include <unistd.h>
 
 #include "common/shutdown.hpp"
+#include "stats/percentile.hpp"
 #include "stats/topic_meter.hpp"
 #include "transport/registry.hpp"
 #include "transport/typed.hpp"
@@ -98,12 +99,6 @@ RoundResult run_round(const TopicHzOptions& o, const std::string& endpoint, bool
   return rr;
 }
 
-double median(std::vector<double> v) {
-  if (v.empty()) return 0;
-  std::sort(v.begin(), v.end());
-  return v.size() % 2 ? v[v.size() / 2] : (v[v.size() / 2 - 1] + v[v.size() / 2]) / 2;
-}
-
 int serve(const TopicHzOptions& o) {
   transport::PublisherConfig pc;
   pc.endpoint = o.endpoint.empty() ? "tcp://127.0.0.1:*" : o.endpoint;
@@ -147,8 +142,8 @@ int run_topic_hz(const TopicHzOptions& o) {
     }
     if (received != sent) ++failures;
     std::printf("%-10s %8llu %8llu %12.3f %12.3f %10.1f %10.3f\n", copy ? "copying" : "in-place",
-                static_cast<unsigned long long>(sent), static_cast<unsigned long long>(received), median(published),
-                median(measured), median(bw), median(std_ms));
+                static_cast<unsigned long long>(sent), static_cast<unsigned long long>(received), stats::median(published),
+                stats::median(measured), stats::median(bw), stats::median(std_ms));
   }
   std::printf("summary rounds=%d lost_rounds=%d (medians over rounds; counts summed)\n", repeat, failures);
   return failures == 0 ? 0 : 1;
