@@ -4,23 +4,15 @@
 #include <rapidjson/document.h>
 #include <unistd.h>
 
-#include <cstdlib>
 #include <filesystem>
-#include <fstream>
-#include <sstream>
 
 #include "dataset/synth.hpp"
+#include "faultline_tool.hpp"  // tests/
 
 namespace faultline::campaign {
 namespace {
 namespace fs = std::filesystem;
-
-std::string read_text(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
+using test_tool::read_text;
 
 class RunTest : public ::testing::Test {
  protected:
@@ -37,11 +29,7 @@ class RunTest : public ::testing::Test {
   }
   static void TearDownTestSuite() { fs::remove_all(root_); }
 
-  static int run(const std::string& args, const fs::path& log) {
-    const std::string cmd =
-        std::string(FAULTLINE_BIN_DIR) + "/faultline " + args + " > " + log.string() + " 2>&1";
-    return std::system(cmd.c_str());
-  }
+  static int run(const std::string& args, const fs::path& log) { return test_tool::run_faultline(args, log); }
   static fs::path root_;
 };
 fs::path RunTest::root_;
