@@ -19,6 +19,8 @@ double percentile(std::vector<double> values, double q, Interpolation how) {
   return (1.0 - frac) * values[lo] + frac * values[hi];
 }
 
-double median(std::vector<double> values, Interpolation how) { return percentile(std::move(values), 0.5, how); }
+double median(std::vector<double> values, Interpolation how) {
+  return percentile(std::move(values), 0.5, how);
+}
 
 }  // namespace faultline::stats

@@ -1,5 +1,6 @@
-// The benchmarks' synthetic frame: deterministic per spec, varied by seed, noise bounded by FrameSpec::noise, and
-// the default spec still the frame the published `bench corrupt` figures were measured on.
+// The benchmarks' synthetic frame: deterministic per spec, varied by seed, noise bounded by
+// FrameSpec::noise, and the default spec still the frame the published `bench corrupt` figures were
+// measured on.
 #include "bench/frames.hpp"
 
 #include <gtest/gtest.h>
@@ -14,7 +15,8 @@ std::uint64_t fingerprint(const cv::Mat& m) {
   std::uint64_t h = 14695981039346656037ull;
   for (int y = 0; y < m.rows; ++y) {
     const auto* p = m.ptr<std::uint8_t>(y);
-    for (std::size_t i = 0; i < static_cast<std::size_t>(m.cols) * m.elemSize(); ++i) h = (h ^ p[i]) * 1099511628211ull;
+    const std::size_t row_bytes = static_cast<std::size_t>(m.cols) * m.elemSize();
+    for (std::size_t i = 0; i < row_bytes; ++i) h = (h ^ p[i]) * 1099511628211ull;
   }
   return h;
 }
@@ -50,7 +52,8 @@ TEST(SyntheticFrameTest, NoiseMovesEachValueByAtMostItsAmplitude) {
   }
 }
 
-// docs/performance.md and bench/results/corrupt.json were measured on this frame (`bench corrupt` without --image).
+// docs/performance.md and bench/results/corrupt.json were measured on this frame (`bench corrupt`
+// without --image).
 TEST(SyntheticFrameTest, DefaultSpecIsTheCorruptBenchmarksFrame) {
   const cv::Mat f = synthetic_frame();
   ASSERT_EQ(f.cols, 1600);

@@ -17,18 +17,20 @@ class PercentileTest : public ::testing::TestWithParam<PercentileRow> {};
 TEST_P(PercentileTest, MatchesTable) {
   const auto& row = GetParam();
   EXPECT_DOUBLE_EQ(percentile(row.values, row.q), row.linear);
-  EXPECT_DOUBLE_EQ(percentile(row.values, row.q, Interpolation::NearestHalfUp), row.nearest_half_up);
+  EXPECT_DOUBLE_EQ(percentile(row.values, row.q, Interpolation::NearestHalfUp),
+                   row.nearest_half_up);
 }
 
 INSTANTIATE_TEST_SUITE_P(
     Rows, PercentileTest,
-    ::testing::Values(PercentileRow{{}, 0.5, 0, 0}, PercentileRow{{3}, 0.99, 3, 3},
-                      PercentileRow{{5, 1, 3}, 0.5, 3, 3},           // odd count: the middle value either way
-                      PercentileRow{{4, 1, 3, 2}, 0.5, 2.5, 3},      // even count: mean or upper of the middle two
-                      PercentileRow{{4, 1, 3, 2}, 0.0, 1, 1}, PercentileRow{{4, 1, 3, 2}, 1.0, 4, 4},
-                      PercentileRow{{4, 1, 3, 2}, 0.25, 1.75, 2},    // position 0.75
-                      PercentileRow{{10, 20, 30, 40, 50}, 0.99, 49.6, 50},  // position 3.96
-                      PercentileRow{{4, 1, 3, 2}, 1.5, 4, 4}));      // q clamped to [0, 1]
+    ::testing::Values(
+        PercentileRow{{}, 0.5, 0, 0}, PercentileRow{{3}, 0.99, 3, 3},
+        PercentileRow{{5, 1, 3}, 0.5, 3, 3},       // odd count: the middle value either way
+        PercentileRow{{4, 1, 3, 2}, 0.5, 2.5, 3},  // even count: mean or upper of the middle two
+        PercentileRow{{4, 1, 3, 2}, 0.0, 1, 1}, PercentileRow{{4, 1, 3, 2}, 1.0, 4, 4},
+        PercentileRow{{4, 1, 3, 2}, 0.25, 1.75, 2},           // position 0.75
+        PercentileRow{{10, 20, 30, 40, 50}, 0.99, 49.6, 50},  // position 3.96
+        PercentileRow{{4, 1, 3, 2}, 1.5, 4, 4}));             // q clamped to [0, 1]
 
 TEST(MedianTest, IsThePercentileAtOneHalfAndKeepsTheCallersOrder) {
   const std::vector<double> v = {0.3, 0.1, 0.4, 0.2};

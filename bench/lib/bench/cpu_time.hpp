@@ -1,9 +1,11 @@
-// CPU time and peak memory of this thread or process, as the benchmarks report them. Thread-safe; never fail on Linux.
+// CPU time and peak memory of this thread or process, as the benchmarks report them. Thread-safe;
+// they do not fail on Linux.
 #pragma once
 
 namespace faultline::bench {
 
-// This thread's CPU time in seconds (CLOCK_THREAD_CPUTIME_ID: ns resolution, where getrusage(RUSAGE_THREAD) ticks).
+// This thread's CPU time in seconds (CLOCK_THREAD_CPUTIME_ID: ns resolution, where
+// getrusage(RUSAGE_THREAD) ticks in ms).
 double thread_cpu_s();
 
 // CPU time of every thread of this process, ended ones included, user + system, in seconds.
