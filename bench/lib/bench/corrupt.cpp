@@ -95,6 +95,22 @@ Row make_row(Corruption c, Level l, const char* mode) {
   return r;
 }
 
+// The row of one mode: `reps` timed runs of the corruption, each with a fresh Rng(seed); the last
+// run's output in `out`.
+template <typename Rng>
+Row timed_row(const cv::Mat& frame, Corruption c, Level l, const char* mode, int reps,
+              std::uint32_t seed, cv::Mat& out) {
+  Row row = make_row(c, l, mode);
+  const int sev = corruption::severity_for(c, l);
+  const Timing t = median_ms(reps, [&] {
+    Rng rng(seed);
+    out = *corruption::corrupt(frame, c, sev, rng);
+  });
+  row.ms = t.wall_ms;
+  row.cpu_ms = t.cpu_ms;
+  return row;
+}
+
 double reference_ms(Corruption c, Level l) {
   const int i = static_cast<int>(l);
   switch (c) {
@@ -184,20 +200,8 @@ int run_corrupt(const CorruptOptions& o) {
     for (Level l : corruption::kAllLevels) {
       const int sev = corruption::severity_for(c, l);
       cv::Mat numpy_out, numpy_other, fast_out;
-      Row fast_row = make_row(c, l, "fast");
-      const Timing ft = median_ms(reps, [&] {
-        rng::FastRng rng(seed);
-        fast_out = *corruption::corrupt(frame, c, sev, rng);
-      });
-      fast_row.ms = ft.wall_ms;
-      fast_row.cpu_ms = ft.cpu_ms;
-      Row numpy_row = make_row(c, l, "numpy");
-      const Timing nt = median_ms(reps, [&] {
-        rng::NumpyRandomState rng(seed);
-        numpy_out = *corruption::corrupt(frame, c, sev, rng);
-      });
-      numpy_row.ms = nt.wall_ms;
-      numpy_row.cpu_ms = nt.cpu_ms;
+      Row fast_row = timed_row<rng::FastRng>(frame, c, l, "fast", reps, seed, fast_out);
+      Row numpy_row = timed_row<rng::NumpyRandomState>(frame, c, l, "numpy", reps, seed, numpy_out);
       fast_row.reference_ms = numpy_row.reference_ms = reference_ms(c, l);
       if (fidelity) {
         numpy_row.fidelity = "reference";
