@@ -3,7 +3,7 @@
 #include <cstdio>
 #include <filesystem>
 
-#include "benchmark/benchmark.hpp"
+#include "campaign/benchmark.hpp"
 #include "cli/command.hpp"
 #include "cli/live_run.hpp"
 #include "common/shutdown.hpp"
@@ -22,7 +22,7 @@ int run(int argc, char** argv) {
       "and an HTML report. Without --dataroot it uses (and if needed generates) the embedded "
       "synthetic "
       "dataset. The default matrix is reduced (mid level only); --full runs all three levels."};
-  benchmark::BenchmarkOptions o;
+  campaign::BenchmarkOptions o;
   std::string corruptions = "all", levels;
   bool full = false;
   std::string synth_dir = "data/synth";
@@ -124,7 +124,7 @@ int run(int argc, char** argv) {
                "benchmark: %zu corruption(s) x %zu level(s) x %d seed(s) + clean on %s (%s, %s)\n",
                o.corruptions.size(), o.levels.size(), o.seeds, o.dataroot.c_str(),
                o.version.c_str(), o.eval_set.c_str());
-  auto result = benchmark::run_benchmark(o, stop, stderr);
+  auto result = campaign::run_benchmark(o, stop, stderr);
   if (!result) {
     std::fprintf(stderr, "faultline benchmark: %s\n", result.status().message().c_str());
     return 1;

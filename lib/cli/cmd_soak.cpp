@@ -1,11 +1,11 @@
 // `faultline soak`: the pipeline in real time for a long while, reported per period (see
-// benchmark/soak.hpp).
+// campaign/soak.hpp).
 
 #include <CLI/CLI.hpp>
 #include <cstdio>
 #include <filesystem>
 
-#include "benchmark/soak.hpp"
+#include "campaign/soak.hpp"
 #include "cli/command.hpp"
 #include "cli/live_run.hpp"
 #include "common/shutdown.hpp"
@@ -27,7 +27,7 @@ int run(int argc, char** argv) {
       "Writes soak.json, periods.csv, loops/*.json and nodes.log. Exit code 1 when a node failed "
       "or "
       "memory grew by more than --max-rss-growth."};
-  benchmark::SoakOptions o;
+  campaign::SoakOptions o;
   double minutes = 30, period_s = 60, max_growth_mb = 50;
   std::string synth_dir = "data/synth";
   app.add_option("--out", o.out_dir, "output folder")->required();
@@ -81,7 +81,7 @@ int run(int argc, char** argv) {
       "soak: %.1f min on %s (%s), rate %.2f, corruption '%s', faults '%s'; rows every %.0f s\n",
       minutes, o.dataroot.c_str(), o.version.c_str(), o.rate, o.corruption.c_str(),
       o.injector_params_file.c_str(), period_s);
-  auto result = benchmark::run_soak(o, shutdown_requested(), stderr);
+  auto result = campaign::run_soak(o, shutdown_requested(), stderr);
   if (!result) {
     std::fprintf(stderr, "faultline soak: %s\n", result.status().message().c_str());
     return 1;

@@ -1,6 +1,6 @@
-// The `faultline` tool's subcommands. Each lib/cli/cmd_<stem>.cpp defines one
-//   const Command kCommand_<stem>{"name", "one-line summary", &run};
-// and CMake generates the registry from the file names, so adding a command touches one file.
+// The `faultline` tool's subcommands. A lib/cli/cmd_*.cpp file defines one (or a group, as cmd_bench.cpp does) with
+//   FAULTLINE_COMMAND(stem, "name", "one-line summary", &run);
+// at the start of a line, and CMake generates the registry from those lines, so adding a command touches one file.
 // Names may have two words ("bench corrupt", "topic hz"); the dispatcher matches the longest.
 #pragma once
 

@@ -1,5 +1,5 @@
 // Synthetic val-sized tables and submission, written with stdio for speed.
-#include "scoring/synthetic_val.hpp"
+#include "bench/synthetic_val.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -12,9 +12,13 @@
 #include "scoring/detection_config.hpp"
 #include "scoring/splits.hpp"
 
-namespace faultline::scoring {
+namespace faultline::bench {
 namespace {
 
+using scoring::kAttributeNames;
+using scoring::kClassNames;
+using scoring::kNumClasses;
+using scoring::predefined_split_scenes;
 using File = std::unique_ptr<std::FILE, int (*)(std::FILE*)>;
 
 class Tokens {
@@ -382,4 +386,4 @@ Result<SyntheticValStats> write_synthetic_val(const std::string& dir,
   return stats;
 }
 
-}  // namespace faultline::scoring
+}  // namespace faultline::bench

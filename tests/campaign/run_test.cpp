@@ -1,32 +1,23 @@
-// `faultline soak`, `faultline benchmark --detector-cmd` and `faultline bench injector` run for real: node executables as
-// processes, on a tiny generated dataset, checked through the files they write.
+// `faultline soak` and `faultline benchmark --detector-cmd` run for real: node executables as processes, on a tiny
+// generated dataset, checked through the files they write.
 #include <gtest/gtest.h>
-#include <sys/wait.h>
 #include <rapidjson/document.h>
 #include <unistd.h>
 
-#include <cstdlib>
 #include <filesystem>
-#include <fstream>
-#include <sstream>
 
 #include "dataset/synth.hpp"
+#include "faultline_tool.hpp"  // tests/
 
-namespace faultline::benchmark {
+namespace faultline::campaign {
 namespace {
 namespace fs = std::filesystem;
-
-std::string read_text(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
+using test_tool::read_text;
 
 class RunTest : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
-    root_ = fs::temp_directory_path() / ("faultline_benchmark_" + std::to_string(::getpid()));
+    root_ = fs::temp_directory_path() / ("faultline_campaign_" + std::to_string(::getpid()));
     fs::remove_all(root_);
     dataset::SynthOptions so;
     so.out_dir = (root_ / "data").string();
@@ -38,11 +29,7 @@ class RunTest : public ::testing::Test {
   }
   static void TearDownTestSuite() { fs::remove_all(root_); }
 
-  static int run(const std::string& args, const fs::path& log) {
-    const std::string cmd =
-        std::string(FAULTLINE_BIN_DIR) + "/faultline " + args + " > " + log.string() + " 2>&1";
-    return std::system(cmd.c_str());
-  }
+  static int run(const std::string& args, const fs::path& log) { return test_tool::run_faultline(args, log); }
   static fs::path root_;
 };
 fs::path RunTest::root_;
@@ -117,34 +104,5 @@ TEST_F(RunTest, BenchmarkScoresAnExternalPythonDetector) {
   EXPECT_TRUE(fs::exists(out / "robustness.md"));
 }
 
-// `bench injector --images` streams the given JPEGs (their own size, here a 1600x900 dataset frame) through the real
-// injector and reports every frame received; a missing file is an error naming it.
-TEST_F(RunTest, BenchInjectorStreamsGivenImagesAndNamesAMissingOne) {
-  fs::path frame;
-  for (const auto& e : fs::directory_iterator(root_ / "data" / "samples" / "CAM_FRONT")) frame = e.path();
-  ASSERT_FALSE(frame.empty());
-  const int rc = run("bench injector --json --seconds 1 --rate-hz 4 --types none color_quant --images " +
-                         frame.string(),
-                     root_ / "inj.log");
-  const std::string log = read_text(root_ / "inj.log");
-  ASSERT_EQ(rc, 0) << log;
-  EXPECT_NE(log.find("frames: 1 JPEG(s) (--images), 1600x900"), std::string::npos) << log;
-  const auto json_at = log.find('[');
-  ASSERT_NE(json_at, std::string::npos) << log;
-  rapidjson::Document d;
-  d.Parse(log.c_str() + json_at);
-  ASSERT_FALSE(d.HasParseError()) << log;
-  ASSERT_EQ(d.Size(), 2u);
-  for (const auto& row : d.GetArray()) {
-    EXPECT_EQ(row["sent"].GetUint64(), 24u);  // 4 ticks x 6 cameras
-    EXPECT_EQ(row["received"].GetUint64(), 24u);
-    EXPECT_EQ(row["unintended_drops"].GetUint64(), 0u);
-    EXPECT_GT(row["cpu_pct_one_core"].GetDouble(), 0.0);
-  }
-  const std::string missing = (root_ / "no_such_frame.jpg").string();
-  EXPECT_EQ(WEXITSTATUS(run("bench injector --seconds 1 --images " + missing, root_ / "inj_missing.log")), 2);
-  EXPECT_NE(read_text(root_ / "inj_missing.log").find(missing), std::string::npos);
-}
-
 }  // namespace
-}  // namespace faultline::benchmark
+}  // namespace faultline::campaign

@@ -8,7 +8,7 @@
 
 #include "common/status.hpp"
 
-namespace faultline::scoring {
+namespace faultline::bench {
 
 struct SyntheticValConfig {
   int samples = 6019;             // total key frames over the 150 val scenes
@@ -30,4 +30,4 @@ struct SyntheticValStats {
 // Writes <dir>/v1.0-trainval/*.json and <dir>/results.json.
 Result<SyntheticValStats> write_synthetic_val(const std::string& dir, const SyntheticValConfig& cfg = {});
 
-}  // namespace faultline::scoring
+}  // namespace faultline::bench

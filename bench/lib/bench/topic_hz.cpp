@@ -2,30 +2,22 @@
 // probe loop in one process; prints sent/received counts and the measured vs the publisher's rate, for
 // a receiver that uses payloads in place and one that copies each payload (what a copying client does).
 // `--serve` only publishes (advertised in the registry) so the topic commands can be tried by hand.
-#include <CLI/CLI.hpp>
+#include "bench/topic_hz.hpp"
+
 #include <algorithm>
 #include <cstdio>
 #include <cstring>
 #include <thread>
 #include <unistd.h>
 
-#include "cli/command.hpp"
 #include "common/shutdown.hpp"
+#include "stats/percentile.hpp"
 #include "stats/topic_meter.hpp"
 #include "transport/registry.hpp"
 #include "transport/typed.hpp"
 
-namespace faultline::cli {
+namespace faultline::bench {
 namespace {
-
-struct BenchOptions {
-  std::string endpoint;
-  std::string topic = "/bench/image_raw";
-  double rate_hz = 72;
-  std::uint32_t width = 1600, height = 900;  // rgb8: 4.32 MB per frame
-  double duration_s = 2;
-  int hwm = 8;
-};
 
 struct RoundResult {
   std::uint64_t sent = 0, received = 0;
@@ -34,7 +26,7 @@ struct RoundResult {
 };
 
 // Sends frames on an absolute schedule until `count` are sent or `stop`; records send times.
-void publish(const BenchOptions& o, transport::Publisher& pub, std::uint64_t count, const std::atomic<bool>& stop,
+void publish(const TopicHzOptions& o, transport::Publisher& pub, std::uint64_t count, const std::atomic<bool>& stop,
              std::vector<StampNs>* send_ns) {
   const std::size_t bytes = static_cast<std::size_t>(o.width) * o.height * 3;
   const auto pixels = std::make_shared<const std::vector<std::uint8_t>>(bytes, std::uint8_t{0x42});
@@ -60,7 +52,7 @@ void publish(const BenchOptions& o, transport::Publisher& pub, std::uint64_t cou
   }
 }
 
-RoundResult run_round(const BenchOptions& o, const std::string& endpoint, bool copy_payload) {
+RoundResult run_round(const TopicHzOptions& o, const std::string& endpoint, bool copy_payload) {
   const auto frames = static_cast<std::uint64_t>(o.duration_s * o.rate_hz);
   // Bound here (so a tcp port can be OS-chosen), then handed to the publisher thread for good.
   transport::PublisherConfig pc;
@@ -107,13 +99,7 @@ RoundResult run_round(const BenchOptions& o, const std::string& endpoint, bool c
   return rr;
 }
 
-double median(std::vector<double> v) {
-  if (v.empty()) return 0;
-  std::sort(v.begin(), v.end());
-  return v.size() % 2 ? v[v.size() / 2] : (v[v.size() / 2 - 1] + v[v.size() / 2]) / 2;
-}
-
-int serve(const BenchOptions& o) {
+int serve(const TopicHzOptions& o) {
   transport::PublisherConfig pc;
   pc.endpoint = o.endpoint.empty() ? "tcp://127.0.0.1:*" : o.endpoint;
   pc.snd_hwm = o.hwm;
@@ -128,25 +114,12 @@ int serve(const BenchOptions& o) {
   return 0;
 }
 
-int run(int argc, char** argv) {
-  CLI::App app{"Check `topic hz` counting on large frames: paced publisher + probe loop, side by side.", argv[0]};
-  BenchOptions o;
-  int repeat = 3;
-  bool serve_only = false;
-  std::string transport_kind = "ipc";
-  app.add_option("--rate", o.rate_hz, "publisher rate, Hz")->check(CLI::PositiveNumber);
-  app.add_option("--width", o.width, "frame width (rgb8)");
-  app.add_option("--height", o.height, "frame height (rgb8)");
-  app.add_option("--duration", o.duration_s, "seconds per round (with --serve: 0 = until Ctrl-C)");
-  app.add_option("--repeat", repeat, "rounds per receiver mode; medians are printed")->check(CLI::Range(1, 50));
-  app.add_option("--transport", transport_kind, "ipc, tcp or inproc")->check(CLI::IsMember({"ipc", "tcp", "inproc"}));
-  app.add_option("--hwm", o.hwm, "send and receive queue depth");
-  app.add_option("--topic", o.topic, "topic name");
-  app.add_flag("--serve", serve_only, "only publish (registered in the topic registry)");
-  app.add_option("--endpoint", o.endpoint, "with --serve: endpoint to bind (default tcp://127.0.0.1:*)");
-  CLI11_PARSE(app, argc, argv);
-  if (serve_only) return serve(o);
+}  // namespace
 
+int run_topic_hz(const TopicHzOptions& o) {
+  if (o.serve) return serve(o);
+  const int repeat = o.repeat;
+  const std::string& transport_kind = o.transport;
   std::printf("bench topic-hz: %ux%u rgb8 (%.2f MB) at %.1f Hz for %.1f s over %s, %d rounds per mode\n", o.width,
               o.height, o.width * o.height * 3 / 1e6, o.rate_hz, o.duration_s, transport_kind.c_str(), repeat);
   std::printf("%-10s %8s %8s %12s %12s %10s %10s\n", "receiver", "sent", "recv", "pub_hz", "measured_hz", "MB/s",
@@ -169,13 +142,11 @@ int run(int argc, char** argv) {
     }
     if (received != sent) ++failures;
     std::printf("%-10s %8llu %8llu %12.3f %12.3f %10.1f %10.3f\n", copy ? "copying" : "in-place",
-                static_cast<unsigned long long>(sent), static_cast<unsigned long long>(received), median(published),
-                median(measured), median(bw), median(std_ms));
+                static_cast<unsigned long long>(sent), static_cast<unsigned long long>(received), stats::median(published),
+                stats::median(measured), stats::median(bw), stats::median(std_ms));
   }
   std::printf("summary rounds=%d lost_rounds=%d (medians over rounds; counts summed)\n", repeat, failures);
   return failures == 0 ? 0 : 1;
 }
 
-}  // namespace
-FAULTLINE_COMMAND(bench_topic_hz, "bench topic-hz", "topic hz counting on large frames (measured vs sent)", &run);
-}  // namespace faultline::cli
+}  // namespace faultline::bench

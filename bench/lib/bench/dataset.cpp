@@ -1,6 +1,7 @@
 // `faultline bench dataset`: time and peak RSS of loading one scene with the streaming reader versus a naive full
 // DOM load of the same tables. Each measurement runs in a forked child so getrusage/wait4 gives its own peak RSS.
-#include <CLI/CLI.hpp>
+#include "bench/dataset.hpp"
+
 #include <malloc.h>
 #include <rapidjson/document.h>
 #include <sys/resource.h>
@@ -14,12 +15,12 @@
 #include <unordered_map>
 #include <vector>
 
-#include "cli/command.hpp"
 #include "dataset/json_table.hpp"
 #include "dataset/nuscenes.hpp"
 #include "dataset/synth.hpp"
+#include "stats/percentile.hpp"
 
-namespace faultline::cli {
+namespace faultline::bench {
 namespace {
 
 enum class Mode { kBaseline, kStreaming, kFullDom };
@@ -117,11 +118,8 @@ Measurement measure(Mode mode, const std::string& dataroot, const std::string& v
   return m;
 }
 
-template <typename T>
-T median(std::vector<T> v) {
-  std::sort(v.begin(), v.end());
-  return v[v.size() / 2];
-}
+// The upper median, as this benchmark has always reported it.
+double median(std::vector<double> v) { return stats::median(std::move(v), stats::Interpolation::NearestHalfUp); }
 
 int make_dataset(const std::string& dir, int scenes, double seconds, const std::string& version) {
   dataset::SynthOptions opt;
@@ -144,29 +142,15 @@ int make_dataset(const std::string& dir, int scenes, double seconds, const std::
   return 0;
 }
 
-int run(int argc, char** argv) {
-  CLI::App app{"Benchmark: load one scene's camera frames with the streaming reader vs a naive full DOM load of the "
-               "same tables (wall time, peak RSS per forked child; medians over --repeat runs).",
-               "faultline bench dataset"};
-  std::string dataroot, make_dir, scene, version = "v1.0-trainval";
-  int repeat = 3, scenes = 850;
-  double seconds = 20;
-  bool skip_dom = false;
-  app.add_option("dataroot", dataroot, "dataroot to measure");
-  app.add_option("--make", make_dir, "generate a trainval-sized metadata-only dataset here and exit");
-  app.add_option("--scenes", scenes, "scenes for --make")->check(CLI::Range(1, 9999));
-  app.add_option("--seconds", seconds, "seconds per scene for --make")->check(CLI::Range(0.5, 600.0));
-  app.add_option("--version", version, "table folder name");
-  app.add_option("--scene", scene, "scene to load (default: the last one in scene.json)");
-  app.add_option("--repeat", repeat, "runs per mode; medians are printed")->check(CLI::Range(1, 50));
-  app.add_flag("--skip-dom", skip_dom, "measure the streaming reader only");
-  CLI11_PARSE(app, argc, argv);
+}  // namespace
 
-  if (!make_dir.empty()) return make_dataset(make_dir, scenes, seconds, version);
-  if (dataroot.empty()) {
-    std::fprintf(stderr, "bench dataset: give a dataroot or --make DIR\n");
-    return 2;
-  }
+int run_dataset(const DatasetOptions& o) {
+  if (!o.make_dir.empty()) return make_dataset(o.make_dir, o.scenes, o.seconds, o.version);
+  const std::string& dataroot = o.dataroot;
+  const std::string& version = o.version;
+  std::string scene = o.scene;
+  const int repeat = o.repeat;
+  const bool skip_dom = o.skip_dom;
   std::size_t scene_count = 0;
   {  // scoped so the parent holds no tables while the children are measured (a fork child inherits its RSS)
     auto reader = dataset::NuScenesReader::open(dataroot, version);
@@ -212,6 +196,4 @@ int run(int argc, char** argv) {
   return 0;
 }
 
-}  // namespace
-FAULTLINE_COMMAND(bench_dataset, "bench dataset", "time + peak RSS of a one-scene load vs a full DOM load", &run);
-}  // namespace faultline::cli
+}  // namespace faultline::bench

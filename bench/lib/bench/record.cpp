@@ -2,13 +2,11 @@
 // thread, and the whole process for honesty: publisher and zmq I/O threads included), player speed
 // (rate 0 into a draining subscriber) and bag size versus the raw message bytes. Frames: JPEGs from
 // --images DIR (e.g. nuScenes samples/CAM_FRONT), else a synthetic nuScenes-like scene rendered by
-// the dataset generator, else (--noise) a gradient-plus-noise image.
-#include <CLI/CLI.hpp>
+// the dataset generator, else (--noise) the benchmarks' noisy road scene (frames.hpp).
+#include "bench/record.hpp"
 
 #include <spdlog/sinks/null_sink.h>
 #include <spdlog/spdlog.h>
-#include <sys/resource.h>
-#include <time.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -23,54 +21,34 @@
 #include <vector>
 
 #include "bag/foxglove.hpp"
+#include "bench/cpu_time.hpp"
+#include "bench/frames.hpp"
 #include "camera_frame.pb.h"
-#include "cli/command.hpp"
 #include "dataset/nuscenes.hpp"
 #include "dataset/synth.hpp"
 #include "runtime/bag_player.hpp"
 #include "runtime/bag_recorder.hpp"
+#include "stats/percentile.hpp"
 #include "transport/publisher.hpp"
 #include "transport/subscriber.hpp"
 #include "transport/typed.hpp"
 
-namespace faultline::cli {
+namespace faultline::bench {
 namespace {
 
 const char* const kCameras[] = {"CAM_FRONT", "CAM_FRONT_LEFT", "CAM_FRONT_RIGHT",
                                 "CAM_BACK", "CAM_BACK_LEFT", "CAM_BACK_RIGHT"};
 
-double thread_cpu_s() {
-  timespec ts{};
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
-  return static_cast<double>(ts.tv_sec) + static_cast<double>(ts.tv_nsec) * 1e-9;
-}
+// The upper median, as this benchmark has always reported it.
+double median(std::vector<double> v) { return stats::median(std::move(v), stats::Interpolation::NearestHalfUp); }
 
-double process_cpu_s() {
-  rusage ru{};
-  getrusage(RUSAGE_SELF, &ru);
-  return static_cast<double>(ru.ru_utime.tv_sec + ru.ru_stime.tv_sec) +
-         static_cast<double>(ru.ru_utime.tv_usec + ru.ru_stime.tv_usec) * 1e-6;
-}
-
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  return v.empty() ? 0.0 : v[v.size() / 2];
-}
-
-// 1600x900 gradient plus noise, JPEG quality 90 (~nuScenes-sized frames).
-std::vector<std::uint8_t> make_jpeg(int seed) {
-  cv::Mat img(900, 1600, CV_8UC3);
-  for (int y = 0; y < img.rows; ++y) {
-    for (int x = 0; x < img.cols; ++x) {
-      img.at<cv::Vec3b>(y, x) = cv::Vec3b(static_cast<uchar>((x / 5 + seed * 40) % 256),
-                                          static_cast<uchar>((y / 3) % 256), static_cast<uchar>((x + y) / 9 % 256));
-    }
-  }
-  cv::Mat noise(img.size(), CV_8UC3);
-  cv::randu(noise, 0, 40);
-  img += noise;
+// The built-in road scene with heavy noise, JPEG quality 90: ~470 KB, like the busiest nuScenes frames.
+std::vector<std::uint8_t> noisy_jpeg(int seed) {
+  FrameSpec spec;
+  spec.seed = static_cast<std::uint64_t>(seed);
+  spec.noise = 13;
   std::vector<std::uint8_t> out;
-  cv::imencode(".jpg", img, out, {cv::IMWRITE_JPEG_QUALITY, 90});
+  cv::imencode(".jpg", synthetic_frame(spec), out, {cv::IMWRITE_JPEG_QUALITY, 90});
   return out;
 }
 
@@ -217,21 +195,13 @@ RunFigures run_once(const std::vector<std::vector<std::uint8_t>>& jpegs, double 
   return fig;
 }
 
-int run(int argc, char** argv) {
-  CLI::App app{"Recorder CPU, player speed and bag size for N cameras of JPEG frames over ipc."};
-  double seconds = 5, rate_hz = 12;
-  int cameras = 6, reps = 3;
-  bool view = true, noise = false;
-  std::string images, compression = "lz4";  // the recorder default
-  app.add_option("--seconds", seconds, "recording length per rep")->capture_default_str();
-  app.add_option("--rate", rate_hz, "frames per second per camera")->capture_default_str();
-  app.add_option("--cameras", cameras, "1..6")->check(CLI::Range(1, 6))->capture_default_str();
-  app.add_option("--reps", reps, "repetitions (medians printed)")->check(CLI::PositiveNumber)->capture_default_str();
-  app.add_flag("!--no-foxglove-view", view, "replay channels only");
-  app.add_option("--images", images, "folder of JPEGs to send (first N files, one per camera)");
-  app.add_flag("--noise", noise, "gradient-plus-noise JPEGs instead of a rendered synthetic scene");
-  app.add_option("--compression", compression, "recorder compression: none | zstd | lz4")->capture_default_str();
-  CLI11_PARSE(app, argc, argv);
+}  // namespace
+
+int run_record(const RecordOptions& o) {
+  const double seconds = o.seconds, rate_hz = o.rate_hz;
+  const int cameras = o.cameras, reps = o.reps;
+  const bool view = o.foxglove_view, noise = o.noise;
+  const std::string &images = o.images, &compression = o.compression;
   const std::string dir = std::filesystem::temp_directory_path().string();
   std::vector<std::vector<std::uint8_t>> jpegs;
   std::string source = "rendered synthetic scene";
@@ -243,8 +213,8 @@ int run(int argc, char** argv) {
   }
   if (jpegs.empty() || noise) {
     jpegs.clear();
-    for (int c = 0; c < cameras; ++c) jpegs.push_back(make_jpeg(c));
-    source = "gradient plus noise";
+    for (int c = 0; c < cameras; ++c) jpegs.push_back(noisy_jpeg(c));
+    source = "noisy road scene";
   }
   while (static_cast<int>(jpegs.size()) < cameras) jpegs.push_back(jpegs.front());
   std::size_t jpeg_bytes = 0;
@@ -267,6 +237,4 @@ int run(int argc, char** argv) {
   return 0;
 }
 
-}  // namespace
-FAULTLINE_COMMAND(bench_record, "bench record", "recorder CPU, player speed and bag size", &run);
-}  // namespace faultline::cli
+}  // namespace faultline::bench

@@ -1,4 +1,4 @@
-#include "benchmark/benchmark.hpp"
+#include "campaign/benchmark.hpp"
 
 #include <unistd.h>
 
@@ -15,7 +15,7 @@
 #include "scoring/evaluate.hpp"
 #include "scoring/run_manifest.hpp"
 
-namespace faultline::benchmark {
+namespace faultline::campaign {
 namespace fs = std::filesystem;
 namespace {
 
@@ -473,4 +473,4 @@ Result<BenchmarkResult> run_benchmark(const BenchmarkOptions& o, const std::atom
   return b;
 }
 
-}  // namespace faultline::benchmark
+}  // namespace faultline::campaign

@@ -2,8 +2,8 @@
 // (pass-through policy, optionally decoded to bgr8) -> subscriber, as loops in threads of this process
 // over ipc, in real time. Prints frames per second, per-hop and end-to-end latency p50/p99, CPU per
 // frame (getrusage per loop thread and for the whole process) and unintended drops (must be 0).
-#include <CLI/CLI.hpp>
-#include <sys/resource.h>
+#include "bench/transport.hpp"
+
 #include <unistd.h>
 
 #include <cstdio>
@@ -11,11 +11,11 @@
 #include <future>
 #include <map>
 #include <opencv2/imgcodecs.hpp>
-#include <opencv2/imgproc.hpp>
 #include <string>
 #include <vector>
 
-#include "cli/command.hpp"
+#include "bench/cpu_time.hpp"
+#include "bench/frames.hpp"
 #include "common/logging.hpp"
 #include "runtime/injector_loop.hpp"
 #include "runtime/player_loop.hpp"
@@ -24,41 +24,19 @@
 #include "transport/subscriber.hpp"
 #include "transport/typed.hpp"
 
-namespace faultline::cli {
+namespace faultline::bench {
 namespace {
 
 const char* const kCameras[] = {"CAM_FRONT", "CAM_FRONT_RIGHT", "CAM_FRONT_LEFT",
                                 "CAM_BACK",  "CAM_BACK_LEFT",   "CAM_BACK_RIGHT"};
 
-double thread_cpu_s() {
-  rusage u{};
-  getrusage(RUSAGE_THREAD, &u);
-  return static_cast<double>(u.ru_utime.tv_sec + u.ru_stime.tv_sec) +
-         static_cast<double>(u.ru_utime.tv_usec + u.ru_stime.tv_usec) * 1e-6;
-}
-
-double process_cpu_s() {
-  rusage u{};
-  getrusage(RUSAGE_SELF, &u);
-  return static_cast<double>(u.ru_utime.tv_sec + u.ru_stime.tv_sec) +
-         static_cast<double>(u.ru_utime.tv_usec + u.ru_stime.tv_usec) * 1e-6;
-}
-
-// A textured street-like frame per camera, JPEG-encoded once (quality 90, like nuScenes' ~300-600 KB).
+// The road scene per camera, JPEG-encoded once (quality 90: ~440 KB, within nuScenes' ~300-600 KB).
 runtime::ImageBytes make_jpeg(int index) {
-  cv::Mat small(90, 160, CV_8UC3);
-  cv::randu(small, cv::Scalar::all(0), cv::Scalar::all(255));
-  cv::Mat img;
-  cv::resize(small, img, cv::Size(1600, 900), 0, 0, cv::INTER_CUBIC);
-  cv::Mat noise(900, 1600, CV_8UC3);
-  cv::randu(noise, cv::Scalar::all(0), cv::Scalar::all(12));  // mild sensor noise: ~nuScenes JPEG sizes
-  img += noise;
-  for (int i = 0; i < 40; ++i) {
-    cv::rectangle(img, cv::Rect((i * 97 + index * 31) % 1500, (i * 53) % 800, 60, 90),
-                  cv::Scalar(30 * (i % 8), 200 - 20 * (i % 9), 100), 3);
-  }
+  FrameSpec spec;
+  spec.seed = static_cast<std::uint64_t>(index);
+  spec.noise = 11;
   std::vector<std::uint8_t> bytes;
-  cv::imencode(".jpg", img, bytes, {cv::IMWRITE_JPEG_QUALITY, 90});
+  cv::imencode(".jpg", synthetic_frame(spec), bytes, {cv::IMWRITE_JPEG_QUALITY, 90});
   return std::make_shared<const std::vector<std::uint8_t>>(std::move(bytes));
 }
 
@@ -110,17 +88,12 @@ Tap run_tap(transport::RawSubscriber& faulty, transport::RawSubscriber& clean, c
   return tap;
 }
 
-int run(int argc, char** argv) {
-  CLI::App app{"6 cameras x 12 Hz of 1600x900 JPEG frames through player -> injector -> subscriber (ipc)"};
-  double seconds = 10;
-  bool json = false;
-  std::string mode = "bgr8";
-  app.add_option("--seconds", seconds, "run length in seconds (real time)")->check(CLI::PositiveNumber);
-  app.add_option("--mode", mode, "injector output: bgr8 (decode) or jpeg (passthrough)")
-      ->check(CLI::IsMember({"bgr8", "jpeg"}));
-  app.add_flag("--json", json, "print one JSON object");
-  CLI11_PARSE(app, argc, argv);
+}  // namespace
 
+int run_transport(const TransportOptions& o) {
+  const double seconds = o.seconds;
+  const bool json = o.json;
+  const std::string& mode = o.mode;
   auto log = logging::make_node_logger("bench_transport", "warn");
   char tmpl[] = "/tmp/faultline-bench-XXXXXX";
   const std::string dir = ::mkdtemp(tmpl);
@@ -240,7 +213,4 @@ int run(int argc, char** argv) {
   return unintended == 0 ? 0 : 1;
 }
 
-}  // namespace
-FAULTLINE_COMMAND(bench_transport, "bench transport", "throughput, latency and CPU of player -> injector -> subscriber",
-                  &run);
-}  // namespace faultline::cli
+}  // namespace faultline::bench

@@ -1,40 +1,23 @@
 // `faultline bench score`: scorer throughput on a val-sized synthetic set (wall time, peak RSS).
-#include <CLI/CLI.hpp>
-#include <sys/resource.h>
+#include "bench/score.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 
-#include "cli/command.hpp"
+#include "bench/cpu_time.hpp"
+#include "bench/synthetic_val.hpp"
 #include "scoring/evaluate.hpp"
-#include "scoring/synthetic_val.hpp"
+#include "stats/percentile.hpp"
 
-namespace faultline::cli {
-namespace {
+namespace faultline::bench {
 
-double peak_rss_mb() {
-  rusage ru{};
-  getrusage(RUSAGE_SELF, &ru);
-  return static_cast<double>(ru.ru_maxrss) / 1024.0;  // ru_maxrss is in KiB on Linux
-}
-
-int run(int argc, char** argv) {
-  CLI::App app{"Benchmarks `faultline score` on a val-sized synthetic dataset (150 val scenes, 6,019 samples, "
-               "~50 boxes each). First `--make DIR` writes the tables and a submission, then `DIR` scores it."};
-  std::string make_dir, dir;
-  int repeats = 1;
-  app.add_option("--make", make_dir, "write the synthetic tables + results.json into this folder");
-  app.add_option("dir", dir, "folder written by --make: score it and report wall time and peak RSS");
-  app.add_option("--repeats", repeats, "score this many times in one process (median reported)")
-      ->capture_default_str();
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    return app.exit(e);
-  }
+int run_score(const ScoreOptions& o) {
+  const std::string &make_dir = o.make_dir, &dir = o.dir;
+  const int repeats = o.repeats;
   if (!make_dir.empty()) {
     const auto t0 = std::chrono::steady_clock::now();
-    auto stats = scoring::write_synthetic_val(make_dir);
+    auto stats = write_synthetic_val(make_dir);
     if (!stats) {
       std::fprintf(stderr, "faultline bench score: error: %s\n", stats.status().message().c_str());
       return 1;
@@ -75,11 +58,10 @@ int run(int argc, char** argv) {
                 "accumulate %.3f s\n",
                 r + 1, t.submission_s, t.ground_truth_s, t.ground_truth_wait_s, t.filter_s, t.accumulate_s);
   }
-  std::sort(times.begin(), times.end());
   std::printf("score wall time: median %.3f s (min %.3f, max %.3f, n=%zu), peak RSS %.1f MB\n",
-              times[times.size() / 2], times.front(), times.back(), times.size(), peak_rss_mb());
+              stats::median(times, stats::Interpolation::NearestHalfUp), *std::min_element(times.begin(), times.end()),
+              *std::max_element(times.begin(), times.end()), times.size(), peak_rss_mb());
   return 0;
 }
-}  // namespace
-FAULTLINE_COMMAND(bench_score, "bench score", "benchmark the scorer on a val-sized synthetic set", &run);
-}  // namespace faultline::cli
+
+}  // namespace faultline::bench

@@ -16,7 +16,7 @@
 
 #include "common/status.hpp"
 
-namespace faultline::benchmark {
+namespace faultline::campaign {
 
 struct SoakOptions {
   std::string out_dir;  // soak.json, minutes.csv, loops/, nodes.log
@@ -95,4 +95,4 @@ double process_rss_mb(int pid);
 // Direct children of `parent` (from /proc/*/stat), with their command names.
 std::vector<NodeMemory> child_processes(int parent);
 
-}  // namespace faultline::benchmark
+}  // namespace faultline::campaign

@@ -3,7 +3,7 @@
 // reference's per-image times (spec corruptions.md §12). Reports wall-clock images/s as measured and the CPU time
 // per image (getrusage), from which the CPU-bound rate on C cores is C / (CPU s per image): on a shared, loaded
 // machine the wall-clock rate understates the pipeline, the CPU time does not (much).
-#include <CLI/CLI.hpp>
+#include "bench/export.hpp"
 
 #include <algorithm>
 #include <cstdio>
@@ -13,32 +13,18 @@
 #include <string>
 #include <vector>
 
-#include <sys/resource.h>
 #include <unistd.h>
 
-#include "cli/command.hpp"
+#include "bench/cpu_time.hpp"
 #include "dataset/synth.hpp"
 #include "export/exporter.hpp"
 #include "export/stats_table.hpp"
+#include "stats/percentile.hpp"
 
-namespace faultline::cli {
+namespace faultline::bench {
 namespace {
 
 namespace fs = std::filesystem;
-
-double median(std::vector<double> v) {
-  if (v.empty()) return 0;
-  std::sort(v.begin(), v.end());
-  const std::size_t n = v.size();
-  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
-
-double process_cpu_seconds() {
-  rusage u{};
-  ::getrusage(RUSAGE_SELF, &u);
-  return static_cast<double>(u.ru_utime.tv_sec + u.ru_stime.tv_sec) +
-         1e-6 * static_cast<double>(u.ru_utime.tv_usec + u.ru_stime.tv_usec);
-}
 
 double load_1m() {
   double l[1] = {-1};
@@ -108,9 +94,9 @@ bool measure(const exporter::ExportConfig& base, const std::vector<exporter::Con
     fs::remove_all(cfg.out_dir);  // left over from an earlier benchmark in the same --work-dir
     cfg.conditions = conditions;
     cfg.seed = static_cast<std::uint64_t>(r);
-    const double cpu0 = process_cpu_seconds();
+    const double cpu0 = process_cpu_s();
     auto s = exporter::run_export(cfg);
-    const double cpu = process_cpu_seconds() - cpu0;
+    const double cpu = process_cpu_s() - cpu0;
     if (!s) {
       std::fprintf(stderr, "faultline bench export: %s\n", s.status().to_string().c_str());
       return false;
@@ -132,9 +118,9 @@ bool measure(const exporter::ExportConfig& base, const std::vector<exporter::Con
       }
     }
   }
-  out.img_s = median(rates);
-  out.cpu_ms = median(cpus);
-  for (auto& [name, v] : per_condition) out.condition_cpu_ms[name] = median(v);
+  out.img_s = stats::median(rates);
+  out.cpu_ms = stats::median(cpus);
+  for (auto& [name, v] : per_condition) out.condition_cpu_ms[name] = stats::median(v);
   return true;
 }
 
@@ -156,37 +142,15 @@ std::string json_number(double v) {
   return buf;
 }
 
-int run(int argc, char** argv) {
-  CLI::App app("Measure `faultline export` images/s per corruption on a synthetic dataset vs the Python reference.",
-               argv[0]);
-  std::string work_dir, rng = "both", json_path;
-  int threads = 2, reps = 3, scenes = 1, width = 1600, height = 900, cores = 2, cluster_cores = 16;
-  double seconds = 2.0;
-  bool skip_all = false;
-  std::string python = "/usr/bin/python3";
-  bool no_reference_codec = false;
-  app.add_option("--work-dir", work_dir, "scratch folder (default: a fresh folder under the system temp dir)");
-  app.add_option("--threads", threads, "export threads (default 2)");
-  app.add_option("--reps", reps, "runs per condition; medians are reported (default 3)");
-  app.add_option("--scenes", scenes, "synthetic scenes (default 1)");
-  app.add_option("--seconds", seconds, "seconds per scene, key frames at 2 Hz (default 2)");
-  app.add_option("--rng", rng, "numpy, fast or both (default)");
-  app.add_option("--cores", cores, "cores for the CPU-bound rate cores / (CPU s per image) (default 2)");
-  app.add_option("--cluster-cores", cluster_cores, "cores of the extrapolated machine (default 16)");
-  app.add_option("--width", width, "image width (default 1600; smaller only for quick checks)");
-  app.add_option("--height", height, "image height (default 900)");
-  app.add_flag("--skip-all", skip_all, "skip the single all-conditions run (one decode for 24 outputs)");
-  app.add_option("--json", json_path, "also write the figures as JSON to this file ('-' = stdout)");
-  app.add_option("--python", python,
-                 "Python with OpenCV (Debian's python3-opencv) that times the reference's own cv2.imread + "
-                 "cv2.imwrite q95 per image on the same files (default /usr/bin/python3)");
-  app.add_flag("--no-reference-codec", no_reference_codec,
-               "leave the reference's JPEG decode/encode out of its end-to-end time (a lower bound, as in spec §12)");
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    return app.exit(e);
-  }
+}  // namespace
+
+int run_export(const ExportOptions& o) {
+  std::string work_dir = o.work_dir;
+  const std::string &rng = o.rng, &json_path = o.json_path, &python = o.python;
+  const int threads = o.threads, reps = o.reps, scenes = o.scenes, width = o.width, height = o.height,
+            cores = o.cores, cluster_cores = o.cluster_cores;
+  const double seconds = o.seconds;
+  const bool skip_all = o.skip_all, no_reference_codec = o.no_reference_codec;
   std::vector<corruption::RngMode> modes;
   if (rng == "both") {
     modes = {corruption::RngMode::Numpy, corruption::RngMode::Fast};
@@ -412,7 +376,4 @@ int run(int argc, char** argv) {
   return 0;
 }
 
-}  // namespace
-FAULTLINE_COMMAND(bench_export, "bench export",
-                  "measure export images/s and CPU ms per image per corruption vs the Python reference", &run);
-}  // namespace faultline::cli
+}  // namespace faultline::bench

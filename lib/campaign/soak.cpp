@@ -1,4 +1,4 @@
-#include "benchmark/soak.hpp"
+#include "campaign/soak.hpp"
 
 #include <dirent.h>
 #include <unistd.h>
@@ -14,7 +14,7 @@
 #include <thread>
 #include <unordered_map>
 
-#include "benchmark/benchmark.hpp"
+#include "campaign/benchmark.hpp"
 #include "camera_frame.pb.h"
 #include "detection.pb.h"
 #include "launch/supervisor.hpp"
@@ -25,7 +25,7 @@
 #include "transport/subscriber.hpp"
 #include "transport/typed.hpp"
 
-namespace faultline::benchmark {
+namespace faultline::campaign {
 namespace fs = std::filesystem;
 
 double track_continuity(const std::vector<TrackPoint>& previous,
@@ -597,4 +597,4 @@ Result<SoakResult> run_soak(const SoakOptions& o, const std::atomic<bool>& stop,
   return result;
 }
 
-}  // namespace faultline::benchmark
+}  // namespace faultline::campaign

@@ -1,12 +1,11 @@
 // `faultline bench corrupt`: single-threaded median ms of every corruption x level in fast and numpy modes on a
 // synthetic 1600x900 frame, the TurboJPEG decode ms of the same frame measured in the same run, and fidelity
 // (PSNR, max abs diff) of fast mode against numpy mode.
-#include <CLI/CLI.hpp>
+#include "bench/corrupt.hpp"
 
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <ctime>
 #include <cstdio>
 #include <fstream>
 #include <functional>
@@ -16,9 +15,9 @@
 
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
-#include <opencv2/imgproc.hpp>
 
-#include "cli/command.hpp"
+#include "bench/cpu_time.hpp"
+#include "bench/frames.hpp"
 #include "codec/jpeg.hpp"
 #include "common/cpu_features.hpp"
 #include "corruption/corrupt.hpp"
@@ -26,61 +25,15 @@
 #include "corruption/fog.hpp"
 #include "corruption/motion_blur.hpp"
 #include "corruption/snow.hpp"
+#include "stats/percentile.hpp"
 
-namespace faultline::cli {
+namespace faultline::bench {
 namespace {
 
 using corruption::Corruption;
 using corruption::Level;
 
-// A road scene: sky gradient, buildings with windows (edges), road with lane marks, textured noise.
-cv::Mat synthetic_frame(int width, int height) {
-  cv::Mat img(height, width, CV_8UC3);
-  for (int y = 0; y < height; ++y) {
-    auto* row = img.ptr<cv::Vec3b>(y);
-    for (int x = 0; x < width; ++x) {
-      const double t = static_cast<double>(y) / height;
-      row[x] = cv::Vec3b(static_cast<uchar>(230 - 80 * t), static_cast<uchar>(200 - 60 * t),
-                         static_cast<uchar>(150 + 40 * t * (x % 400) / 400.0));
-    }
-  }
-  rng::FastRng rng(7);
-  for (int b = 0; b < 14; ++b) {
-    const int x0 = b * width / 14, w = width / 14 - 8;
-    const int h = 150 + static_cast<int>(rng.next_u32() % 250);
-    const cv::Scalar c(60 + rng.next_u32() % 120, 60 + rng.next_u32() % 120, 60 + rng.next_u32() % 120);
-    cv::rectangle(img, cv::Rect(x0, height / 2 - h, w, h), c, cv::FILLED);
-    for (int wy = height / 2 - h + 10; wy < height / 2 - 20; wy += 30) {
-      for (int wx = x0 + 8; wx < x0 + w - 16; wx += 24) {
-        cv::rectangle(img, cv::Rect(wx, wy, 12, 16), cv::Scalar(40, 200, 240), cv::FILLED);
-      }
-    }
-  }
-  cv::rectangle(img, cv::Rect(0, height / 2, width, height / 2), cv::Scalar(70, 72, 75), cv::FILLED);
-  for (int i = 0; i < 8; ++i) {
-    cv::line(img, cv::Point(width / 2 + (i - 4) * 40, height / 2), cv::Point(width / 2 + (i - 4) * 260, height),
-             cv::Scalar(235, 235, 235), 6, cv::LINE_AA);
-  }
-  cv::circle(img, cv::Point(width / 3, height * 3 / 4), 60, cv::Scalar(20, 20, 200), cv::FILLED, cv::LINE_AA);
-  cv::putText(img, "FAULTLINE 1600x900", cv::Point(80, 120), cv::FONT_HERSHEY_SIMPLEX, 3.0,
-              cv::Scalar(255, 0, 255), 6, cv::LINE_AA);
-  cv::Mat noise(img.size(), CV_8UC3);
-  for (int y = 0; y < height; ++y) {
-    auto* p = noise.ptr<uchar>(y);
-    for (int x = 0; x < width * 3; ++x) p[x] = static_cast<uchar>(rng.next_u32() % 13);
-  }
-  cv::add(img, noise, img);
-  cv::subtract(img, cv::Scalar::all(6), img);
-  return img;
-}
-
-double thread_cpu_ms() {
-  timespec ts{};
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
-  return static_cast<double>(ts.tv_sec) * 1e3 + static_cast<double>(ts.tv_nsec) * 1e-6;
-}
-
-// Median wall-clock ms and median thread-CPU ms of `reps` runs after one warm-up. On a shared, loaded machine the
+// Median (the upper one) wall-clock ms and thread-CPU ms of `reps` runs after one warm-up. On a shared, loaded machine the
 // CPU time is the steadier figure (wall time also counts time the thread waited for a core).
 struct Timing {
   double wall_ms;
@@ -90,16 +43,14 @@ Timing median_ms(int reps, const std::function<void()>& fn) {
   fn();  // warm-up
   std::vector<double> wall, cpu;
   for (int i = 0; i < reps; ++i) {
-    const double c0 = thread_cpu_ms();
+    const double c0 = 1e3 * thread_cpu_s();
     const auto t0 = std::chrono::steady_clock::now();
     fn();
     const auto t1 = std::chrono::steady_clock::now();
-    cpu.push_back(thread_cpu_ms() - c0);
+    cpu.push_back(1e3 * thread_cpu_s() - c0);
     wall.push_back(std::chrono::duration<double, std::milli>(t1 - t0).count());
   }
-  std::sort(wall.begin(), wall.end());
-  std::sort(cpu.begin(), cpu.end());
-  return {wall[wall.size() / 2], cpu[cpu.size() / 2]};
+  return {stats::median(wall, stats::Interpolation::NearestHalfUp), stats::median(cpu, stats::Interpolation::NearestHalfUp)};
 }
 
 double psnr(const cv::Mat& a, const cv::Mat& b) {
@@ -142,6 +93,22 @@ Row make_row(Corruption c, Level l, const char* mode) {
   r.level = corruption::to_string(l);
   r.mode = mode;
   return r;
+}
+
+// The row of one mode: `reps` timed runs of the corruption, each with a fresh Rng(seed); the last
+// run's output in `out`.
+template <typename Rng>
+Row timed_row(const cv::Mat& frame, Corruption c, Level l, const char* mode, int reps,
+              std::uint32_t seed, cv::Mat& out) {
+  Row row = make_row(c, l, mode);
+  const int sev = corruption::severity_for(c, l);
+  const Timing t = median_ms(reps, [&] {
+    Rng rng(seed);
+    out = *corruption::corrupt(frame, c, sev, rng);
+  });
+  row.ms = t.wall_ms;
+  row.cpu_ms = t.cpu_ms;
+  return row;
 }
 
 double reference_ms(Corruption c, Level l) {
@@ -193,38 +160,24 @@ std::string num(std::optional<double> v, int prec = 4) {
   return buf;
 }
 
-int run(int argc, char** argv) {
-  CLI::App app("Benchmark the corruptions (single-threaded) against a TurboJPEG decode of the same frame.", argv[0]);
-  int reps = 9, width = 1600, height = 900;
-  std::uint32_t seed = 130;
-  bool json = false, fidelity = false;
-  std::string out_path, image_path;
-  std::vector<std::string> only;
-  app.add_option("--reps", reps, "timed repetitions per case (median reported; one warm-up run first)");
-  app.add_option("--image", image_path,
-                 "benchmark on this image (read with OpenCV, BGR) instead of the built-in road scene; "
-                 "--width/--height are then ignored");
-  app.add_option("--width", width, "frame width");
-  app.add_option("--height", height, "frame height");
-  app.add_option("--seed", seed, "seed for the random corruptions");
-  app.add_option("--only", only, "restrict to these corruption types");
-  app.add_flag("--json", json, "print a JSON array");
-  app.add_flag("--fidelity", fidelity, "also compute PSNR / max abs diff of fast mode against numpy mode");
-  app.add_option("--out", out_path, "also write the JSON array (with fidelity) to this file");
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    return app.exit(e);
-  }
-  if (reps < 1 || width < 1 || height < 1) {
-    std::fprintf(stderr, "faultline bench corrupt: --reps, --width and --height must be >= 1\n");
-    return 2;
-  }
-  if (!out_path.empty()) fidelity = true;
+}  // namespace
+
+int run_corrupt(const CorruptOptions& o) {
+  int width = o.width, height = o.height;
+  const int reps = o.reps;
+  const std::uint32_t seed = o.seed;
+  const bool json = o.json;
+  const bool fidelity = o.fidelity || !o.out_path.empty();
+  const std::string& out_path = o.out_path;
+  const std::string& image_path = o.image_path;
+  const std::vector<std::string>& only = o.only;
   cv::setNumThreads(0);
   cv::Mat frame;
   if (image_path.empty()) {
-    frame = synthetic_frame(width, height);
+    FrameSpec spec;  // the default seed and noise: the frame this benchmark has always measured
+    spec.width = width;
+    spec.height = height;
+    frame = synthetic_frame(spec);
   } else {
     frame = cv::imread(image_path, cv::IMREAD_COLOR);
     if (frame.empty()) {
@@ -247,20 +200,8 @@ int run(int argc, char** argv) {
     for (Level l : corruption::kAllLevels) {
       const int sev = corruption::severity_for(c, l);
       cv::Mat numpy_out, numpy_other, fast_out;
-      Row fast_row = make_row(c, l, "fast");
-      const Timing ft = median_ms(reps, [&] {
-        rng::FastRng rng(seed);
-        fast_out = *corruption::corrupt(frame, c, sev, rng);
-      });
-      fast_row.ms = ft.wall_ms;
-      fast_row.cpu_ms = ft.cpu_ms;
-      Row numpy_row = make_row(c, l, "numpy");
-      const Timing nt = median_ms(reps, [&] {
-        rng::NumpyRandomState rng(seed);
-        numpy_out = *corruption::corrupt(frame, c, sev, rng);
-      });
-      numpy_row.ms = nt.wall_ms;
-      numpy_row.cpu_ms = nt.cpu_ms;
+      Row fast_row = timed_row<rng::FastRng>(frame, c, l, "fast", reps, seed, fast_out);
+      Row numpy_row = timed_row<rng::NumpyRandomState>(frame, c, l, "numpy", reps, seed, numpy_out);
       fast_row.reference_ms = numpy_row.reference_ms = reference_ms(c, l);
       if (fidelity) {
         numpy_row.fidelity = "reference";
@@ -346,6 +287,4 @@ int run(int argc, char** argv) {
   return 0;
 }
 
-}  // namespace
-FAULTLINE_COMMAND(bench_corrupt, "bench corrupt", "benchmark corruptions vs a JPEG decode (single-threaded)", &run);
-}  // namespace faultline::cli
+}  // namespace faultline::bench

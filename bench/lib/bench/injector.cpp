@@ -2,8 +2,8 @@
 // decode + one corruption per run (each type at one level, fast mode), paced in real time for N seconds. Reports
 // the injector thread's CPU (CLOCK_THREAD_CPUTIME_ID, % of one core), p50/p99 added latency per frame (capture ->
 // received downstream, and the injector's own receive -> publish), and unintended drops.
-#include <CLI/CLI.hpp>
-#include <time.h>
+#include "bench/injector.hpp"
+
 #include <unistd.h>
 
 #include <algorithm>
@@ -16,47 +16,22 @@
 #include <vector>
 
 #include <opencv2/core.hpp>
-#include <opencv2/imgproc.hpp>
 
-#include "cli/command.hpp"
+#include "bench/cpu_time.hpp"
+#include "bench/frames.hpp"
 #include "codec/jpeg.hpp"
 #include "common/logging.hpp"
 #include "dataset/nuscenes.hpp"
 #include "policy/injector_policy.hpp"
 #include "policy/temporal_draws.hpp"
 #include "runtime/injector_loop.hpp"
+#include "stats/percentile.hpp"
 #include "transport/publisher.hpp"
 #include "transport/subscriber.hpp"
 #include "transport/typed.hpp"
 
-namespace faultline::cli {
+namespace faultline::bench {
 namespace {
-
-// This thread's CPU time (ns resolution; getrusage(RUSAGE_THREAD) ticks in 4 ms steps here).
-double thread_cpu_s() {
-  timespec ts{};
-  ::clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
-  return static_cast<double>(ts.tv_sec) + static_cast<double>(ts.tv_nsec) * 1e-9;
-}
-
-// A road-like scene with edges and mild texture, so the JPEG has a realistic size.
-cv::Mat scene(int width, int height, int variant) {
-  cv::Mat img(height, width, CV_8UC3);
-  for (int y = 0; y < height; ++y) {
-    const double t = static_cast<double>(y) / height;
-    img.row(y).setTo(cv::Scalar(220 - 90 * t, 190 - 60 * t, 140 + 40 * t));
-  }
-  cv::rectangle(img, cv::Rect(0, height / 2, width, height / 2), cv::Scalar(70, 72, 75), cv::FILLED);
-  for (int b = 0; b < 12; ++b) {
-    const int x0 = b * width / 12, h = 120 + (b * 37 + variant * 53) % 240;
-    cv::rectangle(img, cv::Rect(x0, height / 2 - h, width / 12 - 10, h),
-                  cv::Scalar(60 + (b * 29) % 120, 80 + (b * 17) % 100, 70 + (b * 41 + variant) % 140), cv::FILLED);
-  }
-  cv::Mat noise(height, width, CV_8UC3);
-  cv::randn(noise, cv::Scalar::all(0), cv::Scalar::all(6));
-  cv::add(img, noise, img);
-  return img;
-}
 
 struct Row {
   std::string corruption;
@@ -66,10 +41,9 @@ struct Row {
   double e2e_p50_ms = 0, e2e_p99_ms = 0, inj_p50_ms = 0, inj_p99_ms = 0;
 };
 
+// Percentiles of measured values (no interpolation), as this benchmark has always reported them.
 double pct(std::vector<double> v, double q) {
-  if (v.empty()) return 0;
-  std::sort(v.begin(), v.end());
-  return v[static_cast<std::size_t>(std::min<double>(v.size() - 1, q * (v.size() - 1) + 0.5))];
+  return stats::percentile(std::move(v), q, stats::Interpolation::NearestHalfUp);
 }
 
 // One camera's JPEG, sent on every tick.
@@ -183,36 +157,22 @@ Row run_one(const std::string& spec, double seconds, double rate_hz, bool decode
   return row;
 }
 
-int run(int argc, char** argv) {
-  CLI::App app("Real-time injector benchmark: 6 cameras x 12 Hz of 1600x900 JPEGs, decode + one corruption.", argv[0]);
-  double seconds = 10, rate_hz = 12;
-  std::string level = "mid", output = "bgr8";
-  std::vector<std::string> types = {"none", "brightness", "dark", "fog", "snow", "motion_blur", "color_quant"};
-  std::vector<std::string> images;
-  bool json = false;
-  app.add_option("--seconds", seconds, "real-time duration of each run (s)");
-  app.add_option("--images", images,
-                 "JPEG files to stream instead of the built-in road scene (camera k sends file k mod count), e.g. "
-                 "one frame per camera from a dataset's samples/CAM_*/");
-  app.add_option("--rate-hz", rate_hz, "frames per second per camera");
-  app.add_option("--level", level, "easy|mid|hard");
-  app.add_option("--types", types, "corruptions to run (\"none\" = decode only)");
-  app.add_option("--output", output, "bgr8 (republish decoded) or jpeg (re-encode q95)")->check(CLI::IsMember({"bgr8", "jpeg"}));
-  app.add_flag("--json", json, "print a JSON array");
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    return app.exit(e);
-  }
-  if (seconds <= 0 || rate_hz <= 0) {
-    std::fprintf(stderr, "faultline bench injector: --seconds and --rate-hz must be > 0\n");
-    return 2;
-  }
+}  // namespace
+
+int run_injector(const InjectorOptions& o) {
+  const double seconds = o.seconds, rate_hz = o.rate_hz;
+  const std::string &level = o.level, &output = o.output;
+  const std::vector<std::string>& types = o.types;
+  const std::vector<std::string>& images = o.images;
+  const bool json = o.json;
   cv::setNumThreads(0);  // all corruption work on the injector thread, so its CPU clock sees all of it
   std::vector<Frame> frames;
   if (images.empty()) {
     for (int cam = 0; cam < policy::kNumCameras; ++cam) {
-      auto bytes = codec::encode_jpeg(scene(1600, 900, cam), 95);
+      FrameSpec spec;
+      spec.seed = static_cast<std::uint64_t>(cam);
+      spec.noise = 2;  // q95 JPEGs of ~360 KB, as nuScenes' CAM_* frames
+      auto bytes = codec::encode_jpeg(synthetic_frame(spec), 95);
       if (!bytes) {
         std::fprintf(stderr, "faultline bench injector: %s\n", bytes.status().message().c_str());
         return 1;
@@ -303,9 +263,4 @@ int run(int argc, char** argv) {
   return 0;
 }
 
-}  // namespace
-
-FAULTLINE_COMMAND(bench_injector, "bench injector",
-                  "real-time injector benchmark: CPU, added latency and drops per corruption", &run);
-
-}  // namespace faultline::cli
+}  // namespace faultline::bench

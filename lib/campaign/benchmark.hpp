@@ -14,7 +14,7 @@
 #include "launch/supervisor.hpp"
 #include "scoring/robustness.hpp"
 
-namespace faultline::benchmark {
+namespace faultline::campaign {
 
 struct BenchmarkOptions {
   std::string out_dir;   // DIR: runs/, summary.json, robustness.*, report.html
@@ -68,4 +68,4 @@ launch::ChildSpec node_child(const std::string& bin_dir, const std::string& name
 // The injector's corruption name for a RoboBEV name (low_light -> dark).
 std::string injector_corruption_name(const std::string& robobev_name);
 
-}  // namespace faultline::benchmark
+}  // namespace faultline::campaign

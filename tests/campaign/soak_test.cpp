@@ -1,5 +1,5 @@
 // Soak helpers: track continuity, process memory, child discovery.
-#include "benchmark/soak.hpp"
+#include "campaign/soak.hpp"
 
 #include <gtest/gtest.h>
 #include <sys/wait.h>
@@ -8,7 +8,7 @@
 #include <csignal>
 #include <vector>
 
-namespace faultline::benchmark {
+namespace faultline::campaign {
 namespace {
 
 TEST(TrackContinuityTest, CountsBoxesNearASameClassBoxOfThePreviousSample) {
@@ -39,4 +39,4 @@ TEST(ProcessMemoryTest, ReadsOwnRssAndFindsAChild) {
 }
 
 }  // namespace
-}  // namespace faultline::benchmark
+}  // namespace faultline::campaign

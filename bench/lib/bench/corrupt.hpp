@@ -1,0 +1,27 @@
+// `faultline bench corrupt`: single-threaded median ms of every corruption x level in fast and
+// numpy modes on the synthetic frame (or a given image), against the TurboJPEG decode of the same
+// frame, and optionally the fidelity of fast mode against numpy mode.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace faultline::bench {
+
+struct CorruptOptions {
+  int reps = 9;                    // timed runs per case after one warm-up; the median is reported
+  std::string image_path;          // "" = the built-in road scene (frames.hpp) at width x height
+  int width = 1600, height = 900;  // pixels of the built-in scene
+  std::uint32_t seed = 130;        // seed of the random corruptions
+  std::vector<std::string> only;   // corruption types to run; empty = all
+  bool json = false;               // print a JSON array instead of the table
+  bool fidelity = false;           // also PSNR / max abs diff of fast mode against numpy mode
+  std::string out_path;            // also write the JSON array (with fidelity) here; "" = none
+};
+
+// Prints the table (or the JSON array) on stdout. Returns the exit code: 0, or 1 (message on
+// stderr) when the image cannot be read, the frame cannot be encoded or out_path cannot be written.
+int run_corrupt(const CorruptOptions& o);
+
+}  // namespace faultline::bench

@@ -1,0 +1,28 @@
+// `faultline bench injector`: 6 cameras x rate_hz of JPEG frames through the real InjectorLoop
+// (ipc), decode + one corruption per run, paced in real time: the injector thread's CPU, p50/p99
+// added latency and unintended drops.
+#pragma once
+
+#include <string>
+#include <vector>
+
+namespace faultline::bench {
+
+struct InjectorOptions {
+  double seconds = 10;          // real-time duration of each run (> 0)
+  double rate_hz = 12;          // frames per second per camera (> 0)
+  std::string level = "mid";    // easy | mid | hard
+  std::string output = "bgr8";  // bgr8 (republish decoded) or jpeg (re-encode q95)
+  bool json = false;            // print a JSON array (the frames line then goes to stderr)
+  // Corruptions, one run each; "none" = decode only.
+  std::vector<std::string> types = {"none", "brightness",  "dark",       "fog",
+                                    "snow", "motion_blur", "color_quant"};
+  // JPEG files to stream (camera k sends file k mod count); empty = the built-in road scene.
+  std::vector<std::string> images;
+};
+
+// Prints one line per run (or the JSON array) on stdout. Returns the exit code: 0; 2 when an
+// images file cannot be read or decoded; 1 when a run fails; 3 when a run had unintended drops.
+int run_injector(const InjectorOptions& o);
+
+}  // namespace faultline::bench

@@ -1,0 +1,247 @@
+// `faultline bench ...`: the performance measurements' arguments. What they measure and print lives
+// in bench/lib (faultline_bench); each command here fills its options struct and calls it.
+#include <CLI/CLI.hpp>
+#include <cstdio>
+
+#include "bench/bag.hpp"
+#include "bench/corrupt.hpp"
+#include "bench/dataset.hpp"
+#include "bench/export.hpp"
+#include "bench/injector.hpp"
+#include "bench/record.hpp"
+#include "bench/score.hpp"
+#include "bench/topic_hz.hpp"
+#include "bench/transport.hpp"
+#include "cli/command.hpp"
+
+namespace faultline::cli {
+namespace {
+
+int run_bag(int argc, char** argv) {
+  CLI::App app{
+      "Bag throughput: 6 cameras x 12 Hz of ~400 KB JPEGs written as fast as possible "
+      "(CPU per second of data), linear read speed (x real time), and stored vs raw size "
+      "for JPEG and raw bgr8 frames with each compression. Medians over --repeats runs.",
+      argv[0]};
+  bench::BagOptions o;
+  app.add_option("--seconds", o.seconds, "seconds of JPEG data per run")
+      ->check(CLI::Range(1, 3600));
+  app.add_option("--raw-seconds", o.raw_seconds, "seconds of raw bgr8 data per run")
+      ->check(CLI::Range(1, 600));
+  app.add_option("--repeats", o.repeats, "runs per configuration (median reported)")
+      ->check(CLI::Range(1, 50));
+  app.add_option("--dir", o.dir, "scratch directory for the bags (deleted after each run)");
+  CLI11_PARSE(app, argc, argv);
+  return bench::run_bag(o);
+}
+
+int run_corrupt(int argc, char** argv) {
+  CLI::App app{
+      "Benchmark the corruptions (single-threaded) against a TurboJPEG decode of the same frame.",
+      argv[0]};
+  bench::CorruptOptions o;
+  app.add_option("--reps", o.reps,
+                 "timed repetitions per case (median reported; one warm-up run first)");
+  app.add_option(
+      "--image", o.image_path,
+      "benchmark on this image (read with OpenCV, BGR) instead of the built-in road scene; "
+      "--width/--height are then ignored");
+  app.add_option("--width", o.width, "frame width");
+  app.add_option("--height", o.height, "frame height");
+  app.add_option("--seed", o.seed, "seed for the random corruptions");
+  app.add_option("--only", o.only, "restrict to these corruption types");
+  app.add_flag("--json", o.json, "print a JSON array");
+  app.add_flag("--fidelity", o.fidelity,
+               "also compute PSNR / max abs diff of fast mode against numpy mode");
+  app.add_option("--out", o.out_path, "also write the JSON array (with fidelity) to this file");
+  CLI11_PARSE(app, argc, argv);
+  if (o.reps < 1 || o.width < 1 || o.height < 1) {
+    std::fprintf(stderr, "faultline bench corrupt: --reps, --width and --height must be >= 1\n");
+    return 2;
+  }
+  return bench::run_corrupt(o);
+}
+
+int run_dataset(int argc, char** argv) {
+  CLI::App app{
+      "Benchmark: load one scene's camera frames with the streaming reader vs a naive full DOM "
+      "load of the same tables (wall time, peak RSS per forked child; medians over --repeat "
+      "runs).",
+      argv[0]};
+  bench::DatasetOptions o;
+  app.add_option("dataroot", o.dataroot, "dataroot to measure");
+  app.add_option("--make", o.make_dir,
+                 "generate a trainval-sized metadata-only dataset here and exit");
+  app.add_option("--scenes", o.scenes, "scenes for --make")->check(CLI::Range(1, 9999));
+  app.add_option("--seconds", o.seconds, "seconds per scene for --make")
+      ->check(CLI::Range(0.5, 600.0));
+  app.add_option("--version", o.version, "table folder name");
+  app.add_option("--scene", o.scene, "scene to load (default: the last one in scene.json)");
+  app.add_option("--repeat", o.repeat, "runs per mode; medians are printed")
+      ->check(CLI::Range(1, 50));
+  app.add_flag("--skip-dom", o.skip_dom, "measure the streaming reader only");
+  CLI11_PARSE(app, argc, argv);
+  if (o.make_dir.empty() && o.dataroot.empty()) {
+    std::fprintf(stderr, "bench dataset: give a dataroot or --make DIR\n");
+    return 2;
+  }
+  return bench::run_dataset(o);
+}
+
+int run_export(int argc, char** argv) {
+  CLI::App app{
+      "Measure `faultline export` images/s per corruption on a synthetic dataset vs the Python "
+      "reference.",
+      argv[0]};
+  bench::ExportOptions o;
+  app.add_option("--work-dir", o.work_dir,
+                 "scratch folder (default: a fresh folder under the system temp dir)");
+  app.add_option("--threads", o.threads, "export threads (default 2)");
+  app.add_option("--reps", o.reps, "runs per condition; medians are reported (default 3)");
+  app.add_option("--scenes", o.scenes, "synthetic scenes (default 1)");
+  app.add_option("--seconds", o.seconds, "seconds per scene, key frames at 2 Hz (default 2)");
+  app.add_option("--rng", o.rng, "numpy, fast or both (default)");
+  app.add_option("--cores", o.cores,
+                 "cores for the CPU-bound rate cores / (CPU s per image) (default 2)");
+  app.add_option("--cluster-cores", o.cluster_cores,
+                 "cores of the extrapolated machine (default 16)");
+  app.add_option("--width", o.width, "image width (default 1600; smaller only for quick checks)");
+  app.add_option("--height", o.height, "image height (default 900)");
+  app.add_flag("--skip-all", o.skip_all,
+               "skip the single all-conditions run (one decode for 24 outputs)");
+  app.add_option("--json", o.json_path,
+                 "also write the figures as JSON to this file ('-' = stdout)");
+  app.add_option(
+      "--python", o.python,
+      "Python with OpenCV (Debian's python3-opencv) that times the reference's own cv2.imread + "
+      "cv2.imwrite q95 per image on the same files (default /usr/bin/python3)");
+  app.add_flag("--no-reference-codec", o.no_reference_codec,
+               "leave the reference's JPEG decode/encode out of its end-to-end time (a lower "
+               "bound, as in spec §12)");
+  CLI11_PARSE(app, argc, argv);
+  return bench::run_export(o);
+}
+
+int run_injector(int argc, char** argv) {
+  CLI::App app{
+      "Real-time injector benchmark: 6 cameras x 12 Hz of 1600x900 JPEGs, decode + one corruption.",
+      argv[0]};
+  bench::InjectorOptions o;
+  app.add_option("--seconds", o.seconds, "real-time duration of each run (s)");
+  app.add_option("--images", o.images,
+                 "JPEG files to stream instead of the built-in road scene (camera k sends file k "
+                 "mod count), e.g. one frame per camera from a dataset's samples/CAM_*/");
+  app.add_option("--rate-hz", o.rate_hz, "frames per second per camera");
+  app.add_option("--level", o.level, "easy|mid|hard");
+  app.add_option("--types", o.types, "corruptions to run (\"none\" = decode only)");
+  app.add_option("--output", o.output, "bgr8 (republish decoded) or jpeg (re-encode q95)")
+      ->check(CLI::IsMember({"bgr8", "jpeg"}));
+  app.add_flag("--json", o.json, "print a JSON array");
+  CLI11_PARSE(app, argc, argv);
+  if (o.seconds <= 0 || o.rate_hz <= 0) {
+    std::fprintf(stderr, "faultline bench injector: --seconds and --rate-hz must be > 0\n");
+    return 2;
+  }
+  return bench::run_injector(o);
+}
+
+int run_record(int argc, char** argv) {
+  CLI::App app{"Recorder CPU, player speed and bag size for N cameras of JPEG frames over ipc.",
+               argv[0]};
+  bench::RecordOptions o;
+  app.add_option("--seconds", o.seconds, "recording length per rep")->capture_default_str();
+  app.add_option("--rate", o.rate_hz, "frames per second per camera")->capture_default_str();
+  app.add_option("--cameras", o.cameras, "1..6")->check(CLI::Range(1, 6))->capture_default_str();
+  app.add_option("--reps", o.reps, "repetitions (medians printed)")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  app.add_flag("!--no-foxglove-view", o.foxglove_view, "replay channels only");
+  app.add_option("--images", o.images, "folder of JPEGs to send (first N files, one per camera)");
+  app.add_flag("--noise", o.noise,
+               "noisy built-in road scene JPEGs instead of a rendered synthetic scene");
+  app.add_option("--compression", o.compression, "recorder compression: none | zstd | lz4")
+      ->capture_default_str();
+  CLI11_PARSE(app, argc, argv);
+  return bench::run_record(o);
+}
+
+int run_score(int argc, char** argv) {
+  CLI::App app{
+      "Benchmarks `faultline score` on a val-sized synthetic dataset (150 val scenes, 6,019 "
+      "samples, ~50 boxes each). First `--make DIR` writes the tables and a submission, then "
+      "`DIR` scores it.",
+      argv[0]};
+  bench::ScoreOptions o;
+  app.add_option("--make", o.make_dir,
+                 "write the synthetic tables + results.json into this folder");
+  app.add_option("dir", o.dir,
+                 "folder written by --make: score it and report wall time and peak RSS");
+  app.add_option("--repeats", o.repeats, "score this many times in one process (median reported)")
+      ->capture_default_str();
+  CLI11_PARSE(app, argc, argv);
+  return bench::run_score(o);
+}
+
+int run_topic_hz(int argc, char** argv) {
+  CLI::App app{
+      "Check `topic hz` counting on large frames: paced publisher + probe loop, side by side.",
+      argv[0]};
+  bench::TopicHzOptions o;
+  app.add_option("--rate", o.rate_hz, "publisher rate, Hz")->check(CLI::PositiveNumber);
+  app.add_option("--width", o.width, "frame width (rgb8)");
+  app.add_option("--height", o.height, "frame height (rgb8)");
+  app.add_option("--duration", o.duration_s, "seconds per round (with --serve: 0 = until Ctrl-C)");
+  app.add_option("--repeat", o.repeat, "rounds per receiver mode; medians are printed")
+      ->check(CLI::Range(1, 50));
+  app.add_option("--transport", o.transport, "ipc, tcp or inproc")
+      ->check(CLI::IsMember({"ipc", "tcp", "inproc"}));
+  app.add_option("--hwm", o.hwm, "send and receive queue depth");
+  app.add_option("--topic", o.topic, "topic name");
+  app.add_flag("--serve", o.serve, "only publish (registered in the topic registry)");
+  app.add_option("--endpoint", o.endpoint,
+                 "with --serve: endpoint to bind (default tcp://127.0.0.1:*)");
+  CLI11_PARSE(app, argc, argv);
+  return bench::run_topic_hz(o);
+}
+
+int run_transport(int argc, char** argv) {
+  CLI::App app{
+      "6 cameras x 12 Hz of 1600x900 JPEG frames through player -> injector -> subscriber (ipc)",
+      argv[0]};
+  bench::TransportOptions o;
+  app.add_option("--seconds", o.seconds, "run length in seconds (real time)")
+      ->check(CLI::PositiveNumber);
+  app.add_option("--mode", o.mode, "injector output: bgr8 (decode) or jpeg (passthrough)")
+      ->check(CLI::IsMember({"bgr8", "jpeg"}));
+  app.add_flag("--json", o.json, "print one JSON object");
+  CLI11_PARSE(app, argc, argv);
+  return bench::run_transport(o);
+}
+
+}  // namespace
+
+// In `faultline --help` order.
+FAULTLINE_COMMAND(bench_bag, "bench bag", "bag write/read throughput and compressed size",
+                  &run_bag);
+FAULTLINE_COMMAND(bench_corrupt, "bench corrupt",
+                  "benchmark corruptions vs a JPEG decode (single-threaded)", &run_corrupt);
+FAULTLINE_COMMAND(bench_dataset, "bench dataset",
+                  "time + peak RSS of a one-scene load vs a full DOM load", &run_dataset);
+FAULTLINE_COMMAND(
+    bench_export, "bench export",
+    "measure export images/s and CPU ms per image per corruption vs the Python reference",
+    &run_export);
+FAULTLINE_COMMAND(bench_injector, "bench injector",
+                  "real-time injector benchmark: CPU, added latency and drops per corruption",
+                  &run_injector);
+FAULTLINE_COMMAND(bench_record, "bench record", "recorder CPU, player speed and bag size",
+                  &run_record);
+FAULTLINE_COMMAND(bench_score, "bench score", "benchmark the scorer on a val-sized synthetic set",
+                  &run_score);
+FAULTLINE_COMMAND(bench_topic_hz, "bench topic-hz",
+                  "topic hz counting on large frames (measured vs sent)", &run_topic_hz);
+FAULTLINE_COMMAND(bench_transport, "bench transport",
+                  "throughput, latency and CPU of player -> injector -> subscriber",
+                  &run_transport);
+
+}  // namespace faultline::cli
