@@ -32,12 +32,14 @@ int run(int argc, char** argv) {
   std::vector<std::string> scenes;
   double scale = 1.0;
   int temporal = 1;
+  bool no_normalise = false;
   std::uint64_t seed = 0;
   app.add_option("--dataroot", dataroot, "dataset root")->required();
   app.add_option("--version", version, "table folder")->capture_default_str();
   app.add_option("--out", out, "results JSON path")->required();
   app.add_option("--scale", scale, "input scale 1.0, 0.5 or 0.25")->capture_default_str();
   app.add_option("--temporal", temporal, "1 = track over all frames, 0 = single key frame")->capture_default_str();
+  app.add_flag("--no-normalise", no_normalise, "skip the exposure/contrast normalisation (docs/detector.md)");
   app.add_option("--corrupt", corrupt_spec, "corruption as type/level, e.g. fog/mid (fast RNG mode)");
   app.add_option("--seed", seed, "corruption seed (per frame: seed + frame index)")->capture_default_str();
   app.add_option("--scene", scenes, "scene names (default: all)");
@@ -68,6 +70,7 @@ int run(int argc, char** argv) {
   detector::DetectorConfig cfg;
   cfg.scale = scale;
   cfg.temporal = temporal != 0;
+  cfg.photometric.enabled = !no_normalise;
   // The detector is reset per scene: tracks never cross scene boundaries.
   std::map<std::string, std::vector<detector::Box3d>> results;
   for (const auto& s : *samples) results[s.token];

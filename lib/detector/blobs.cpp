@@ -5,10 +5,37 @@
 #include <algorithm>
 #include <array>
 #include <cstdint>
+#include <vector>
 
 #include "dataset/synth_palette.hpp"
 
 namespace faultline::detector {
+
+void bridge_label_gaps(cv::Mat& labels, int max_gap) {
+  CV_Assert(labels.type() == CV_8UC1);
+  if (max_gap < 1) return;
+  for (int y = 0; y < labels.rows; ++y) {
+    std::uint8_t* row = labels.ptr<std::uint8_t>(y);
+    int last_x = -1;
+    for (int x = 0; x < labels.cols; ++x) {
+      if (row[x] == kNoClass) continue;
+      if (last_x >= 0 && row[last_x] == row[x] && x - last_x - 1 >= 1 && x - last_x - 1 <= max_gap)
+        std::fill(row + last_x + 1, row + x, row[x]);
+      last_x = x;
+    }
+  }
+  std::vector<int> last_y(static_cast<std::size_t>(labels.cols), -1);
+  for (int y = 0; y < labels.rows; ++y) {
+    const std::uint8_t* row = labels.ptr<std::uint8_t>(y);
+    for (int x = 0; x < labels.cols; ++x) {
+      if (row[x] == kNoClass) continue;
+      int& ly = last_y[static_cast<std::size_t>(x)];
+      if (ly >= 0 && labels.ptr<std::uint8_t>(ly)[x] == row[x] && y - ly - 1 >= 1 && y - ly - 1 <= max_gap)
+        for (int k = ly + 1; k < y; ++k) labels.ptr<std::uint8_t>(k)[x] = row[x];
+      ly = y;
+    }
+  }
+}
 namespace {
 
 // The Blob for one kept component at (x, y, w, h) with `area` pixels; `member(cy, cx)` tells whether a pixel

@@ -21,7 +21,13 @@ struct Blob {
 struct BlobConfig {
   double min_area_px = 60;   // full-resolution pixels; scaled with the input scale
   int min_side_px = 3;       // at the processed scale
+  double max_gap_px = 4;     // bridge_label_gaps, full-resolution pixels; scaled with the input scale
 };
+
+// Fills runs of at most `max_gap` unlabelled pixels between two pixels of the same class, first along rows, then
+// along columns. Snow flakes, speckle and JPEG fringes cut one object into fragments that each look like a small,
+// distant object; bridging short gaps keeps it whole without merging objects of different classes.
+void bridge_label_gaps(cv::Mat& labels, int max_gap);
 
 // `labels` is a CV_8UC1 class-label image at `scale` of the full `full_width` x `full_height` image.
 // One 8-connected labelling pass over all classes at once; blobs ordered by class, then in the order

@@ -11,6 +11,7 @@ namespace faultline::detector {
 std::string DetectorConfig::describe() const {
   std::ostringstream s;
   s << "synth_color scale=" << scale << " temporal=" << (temporal ? 1 : 0);
+  if (!photometric.enabled) s << " normalise=0";
   return s.str();
 }
 
@@ -70,26 +71,10 @@ std::vector<Box3d> Detector::detect_camera(const CameraInput& frame) const {
     cv::resize(img, small, cv::Size(target_w, target_h), 0, 0, cv::INTER_AREA);
     img = small;
   }
-  // Low light: a frame whose brightest pixels (normally the sky, ~235) are dark is stretched back, so the
-  // colour directions survive; the gain is capped because it amplifies noise too.
-  std::vector<std::uint8_t> peaks;
-  peaks.reserve(static_cast<std::size_t>(img.rows / 8 + 1) * static_cast<std::size_t>(img.cols / 8 + 1));
-  for (int y = 0; y < img.rows; y += 8) {
-    const std::uint8_t* p = img.ptr<std::uint8_t>(y);
-    for (int x = 0; x < img.cols; x += 8) peaks.push_back(std::max({p[3 * x], p[3 * x + 1], p[3 * x + 2]}));
-  }
-  if (!peaks.empty()) {
-    auto q = peaks.begin() + static_cast<std::ptrdiff_t>(peaks.size() * 98 / 100);
-    std::nth_element(peaks.begin(), q, peaks.end());
-    const double gain = std::min(config_.max_gain, 220.0 / std::max<int>(1, *q));
-    if (gain > 1.15) {
-      cv::Mat bright;
-      img.convertTo(bright, CV_8UC3, gain);
-      img = bright;
-    }
-  }
-  const cv::Mat labels = lut_.label_image(img);
+  img = normalise_photometric(img, config_.photometric);
+  cv::Mat labels = lut_.label_image(img);
   const double scale_used = static_cast<double>(img.cols) / frame.geometry.width;
+  bridge_label_gaps(labels, std::max(1, static_cast<int>(std::lround(config_.blobs.max_gap_px * scale_used))));
   std::vector<Box3d> out;
   RoadPrior road = road_;
   const auto& r = frame.geometry.ego_to_world.rotation;
@@ -142,7 +127,12 @@ std::vector<Box3d> Detector::finish_sample(std::int64_t timestamp_us) {
     }
     latest_.clear();
   }
-  return merge_duplicates(std::move(boxes));
+  boxes = merge_duplicates(std::move(boxes));
+  if (boxes.size() > kMaxBoxesPerSample) {
+    std::stable_sort(boxes.begin(), boxes.end(), [](const Box3d& a, const Box3d& b) { return a.score > b.score; });
+    boxes.resize(kMaxBoxesPerSample);
+  }
+  return boxes;
 }
 
 }  // namespace faultline::detector

@@ -13,6 +13,7 @@
 #include "detector/box.hpp"
 #include "detector/color_lut.hpp"
 #include "detector/lift.hpp"
+#include "detector/photometric.hpp"
 #include "detector/tracker.hpp"
 
 namespace faultline::detector {
@@ -20,13 +21,16 @@ namespace faultline::detector {
 struct DetectorConfig {
   double scale = 1.0;     // input scale: 1.0, 0.5 or 0.25 of the full image
   bool temporal = true;   // track over every frame (velocity, smoothing, coasting) vs single key frame
-  double max_gain = 4.0;  // low-light stretch limit (98th-percentile brightness -> 220)
+  PhotometricConfig photometric;
   ColorLutConfig colors;
   BlobConfig blobs;
   LiftConfig lift;
   TrackerConfig tracker;
   std::string describe() const;  // "synth_color scale=0.5 temporal=1"
 };
+
+// The nuScenes devkit rejects a sample with more boxes; finish_sample keeps the highest-scoring ones.
+constexpr std::size_t kMaxBoxesPerSample = 500;
 
 struct CameraInput {
   std::string camera;        // "CAM_FRONT"
@@ -50,7 +54,8 @@ class Detector {
   // keeps it as the latest frame of its camera for the current sample.
   void add_frame(const CameraInput& frame);
 
-  // Boxes of the sample whose key frames were added last, at `timestamp_us`; clears the per-sample frames.
+  // Boxes of the sample whose key frames were added last, at `timestamp_us` (at most kMaxBoxesPerSample, the
+  // highest scores); clears the per-sample frames.
   std::vector<Box3d> finish_sample(std::int64_t timestamp_us);
 
   const DetectorConfig& config() const { return config_; }

@@ -93,6 +93,7 @@ struct DetectorLoop::Impl {
           DetectorConfig d;
           d.scale = cfg.scale;
           d.temporal = cfg.temporal;
+          d.photometric.enabled = cfg.normalise;
           return d;
         }()) {}
 };

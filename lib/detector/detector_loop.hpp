@@ -21,6 +21,7 @@ struct DetectorLoopConfig {
   std::string detections_topic = "/detections";        // DetectionArray topic
   double scale = 1.0;                                  // input scale: 1.0, 0.5 or 0.25
   bool temporal = true;                                // track over every frame vs single key frame
+  bool normalise = true;                               // exposure/contrast normalisation (docs/detector.md)
   bool exit_on_last = true;                            // stop after the last_in_run boundary
   int linger_ms = 2000;                                // time to deliver the last DetectionArrays
 
@@ -34,6 +35,7 @@ struct DetectorLoopConfig {
     v("detections_topic", detections_topic, "DetectionArray topic");
     v("scale", scale, "input scale 1.0, 0.5 or 0.25");
     v("temporal", temporal, "track over every frame (true) or single key frame (false)");
+    v("normalise", normalise, "exposure and contrast normalisation before segmentation (docs/detector.md)");
     v("exit_on_last", exit_on_last, "stop after the last sample");
     v("linger_ms", linger_ms, "end of run: time to deliver queued detections (ms)");
   }

@@ -152,5 +152,31 @@ TEST(BlobsTest, SinglePixelAndBorderComponents) {
   expect_same_blobs(u, 1.0, "u shape", keep_all());
 }
 
+cv::Mat label_row(const std::vector<int>& values) {
+  cv::Mat m(1, static_cast<int>(values.size()), CV_8UC1);
+  for (std::size_t i = 0; i < values.size(); ++i)
+    m.at<std::uint8_t>(0, static_cast<int>(i)) = values[i] < 0 ? kNoClass : static_cast<std::uint8_t>(values[i]);
+  return m;
+}
+
+TEST(BlobsTest, BridgeLabelGapsFillsShortSameClassGapsOnly) {
+  const int n = -1;
+  cv::Mat row = label_row({1, n, n, n, 1, n, n, n, n, n, 1, n, 2, n, 2});
+  bridge_label_gaps(row, 4);
+  // 3 pixels between 1s: filled; 5: kept; 1 between 1 and 2: kept; 1 between 2s: filled.
+  const cv::Mat want = label_row({1, 1, 1, 1, 1, n, n, n, n, n, 1, n, 2, 2, 2});
+  EXPECT_EQ(cv::norm(row, want, cv::NORM_INF), 0.0);
+
+  cv::Mat column = label_row({3, n, n, 3, n, n, n, n, n, 3}).t();
+  column = column.clone();
+  bridge_label_gaps(column, 4);
+  const cv::Mat want_column = label_row({3, 3, 3, 3, n, n, n, n, n, 3}).t();
+  EXPECT_EQ(cv::norm(column, want_column, cv::NORM_INF), 0.0);
+
+  cv::Mat untouched = label_row({1, n, 1});
+  bridge_label_gaps(untouched, 0);
+  EXPECT_EQ(untouched.at<std::uint8_t>(0, 1), kNoClass);
+}
+
 }  // namespace
 }  // namespace faultline::detector
