@@ -40,14 +40,19 @@ ColorLut::ColorLut(const ColorLutConfig& config) {
 }
 
 cv::Mat ColorLut::label_image(const cv::Mat& bgr) const {
+  cv::Mat labels;
+  label_image(bgr, labels);
+  return labels;
+}
+
+void ColorLut::label_image(const cv::Mat& bgr, cv::Mat& labels) const {
   CV_Assert(bgr.type() == CV_8UC3);
-  cv::Mat labels(bgr.rows, bgr.cols, CV_8UC1);
+  labels.create(bgr.rows, bgr.cols, CV_8UC1);
   for (int y = 0; y < bgr.rows; ++y) {
     const std::uint8_t* p = bgr.ptr<std::uint8_t>(y);
     std::uint8_t* out = labels.ptr<std::uint8_t>(y);
     for (int x = 0; x < bgr.cols; ++x, p += 3) out[x] = classify(p[0], p[1], p[2]);
   }
-  return labels;
 }
 
 }  // namespace faultline::detector

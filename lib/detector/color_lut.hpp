@@ -30,6 +30,8 @@ class ColorLut {
   static std::uint8_t classify_exact(double b, double g, double r, const ColorLutConfig& config);
   // CV_8UC3 BGR -> CV_8UC1 class labels.
   cv::Mat label_image(const cv::Mat& bgr) const;
+  // The same into `labels`, whose buffer is reused when it has the right size.
+  void label_image(const cv::Mat& bgr, cv::Mat& labels) const;
 
  private:
   std::array<std::uint8_t, 32 * 32 * 32> table_{};

@@ -71,8 +71,9 @@ std::vector<Box3d> Detector::detect_camera(const CameraInput& frame) const {
     cv::resize(img, small, cv::Size(target_w, target_h), 0, 0, cv::INTER_AREA);
     img = small;
   }
-  img = normalise_photometric(img, config_.photometric);
-  cv::Mat labels = lut_.label_image(img);
+  img = normalise_photometric(img, config_.photometric, nullptr, &scratch_.normalised);
+  cv::Mat& labels = scratch_.labels;
+  lut_.label_image(img, labels);
   const double scale_used = static_cast<double>(img.cols) / frame.geometry.width;
   bridge_label_gaps(labels, std::max(1, static_cast<int>(std::lround(config_.blobs.max_gap_px * scale_used))));
   std::vector<Box3d> out;

@@ -48,6 +48,7 @@ class Detector {
   explicit Detector(const DetectorConfig& config);
 
   // Per-camera detections (global frame), no merging. Uses the road prior learnt from earlier ego poses.
+  // Not thread-safe: it reuses the detector's image buffers.
   std::vector<Box3d> detect_camera(const CameraInput& frame) const;
 
   // Every camera frame in capture order (sweeps and key frames). Temporal mode tracks it; single-frame mode
@@ -65,6 +66,10 @@ class Detector {
 
   DetectorConfig config_;
   ColorLut lut_;
+  struct Scratch {  // per-frame images whose buffers are reused (their page faults cost more than the work)
+    cv::Mat normalised, labels;
+  };
+  mutable Scratch scratch_;
   Tracker tracker_;
   std::map<std::string, CameraInput> latest_;  // single-frame mode: per camera
   RoadPrior road_;

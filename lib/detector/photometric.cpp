@@ -24,20 +24,35 @@ int percentile(const Histogram& h, int total, double p) {
   return 255;
 }
 
-// Blacks out over-exposed pixels, judged on the input (before any stretch).
-void black_out_clipped(const cv::Mat& input, cv::Mat& out, int clip_level, PhotometricStats& s) {
+bool over_exposed(const std::uint8_t* p, int clip_level) {
+  return std::max({p[0], p[1], p[2]}) >= clip_level;
+}
+
+// Byte-wise first (vectorised): most rows of most frames have no channel at the clip level.
+bool row_has_over_exposed(const std::uint8_t* row, int bytes, int clip_level) {
+  std::uint8_t brightest = 0;
+  for (int i = 0; i < bytes; ++i) brightest = std::max(brightest, row[i]);
+  return brightest >= clip_level;
+}
+
+long count_over_exposed(const cv::Mat& input, int clip_level) {
   long clipped = 0;
   for (int y = 0; y < input.rows; ++y) {
     const std::uint8_t* p = input.ptr<std::uint8_t>(y);
-    std::uint8_t* o = out.ptr<std::uint8_t>(y);
-    for (int x = 0; x < input.cols; ++x) {
-      if (std::max({p[3 * x], p[3 * x + 1], p[3 * x + 2]}) >= clip_level) {
-        o[3 * x] = o[3 * x + 1] = o[3 * x + 2] = 0;
-        ++clipped;
-      }
-    }
+    if (!row_has_over_exposed(p, 3 * input.cols, clip_level)) continue;
+    for (int x = 0; x < input.cols; ++x) clipped += over_exposed(p + 3 * x, clip_level);
   }
-  s.clipped_fraction = input.total() ? static_cast<double>(clipped) / static_cast<double>(input.total()) : 0.0;
+  return clipped;
+}
+
+// Blacks out in `out` the pixels over-exposed in `input` (same size), judged before any stretch.
+void black_out_over_exposed(const cv::Mat& input, cv::Mat& out, int clip_level) {
+  for (int y = 0; y < input.rows; ++y) {
+    const std::uint8_t* p = input.ptr<std::uint8_t>(y);
+    std::uint8_t* o = out.ptr<std::uint8_t>(y);
+    for (int x = 0; x < input.cols; ++x)
+      if (over_exposed(p + 3 * x, clip_level)) o[3 * x] = o[3 * x + 1] = o[3 * x + 2] = 0;
+  }
 }
 
 }  // namespace
@@ -63,7 +78,8 @@ double estimate_noise_sigma(const cv::Mat& bgr) {
   return *mid / (0.6745 * 6.0) / std::sqrt(3.0);
 }
 
-cv::Mat normalise_photometric(const cv::Mat& bgr, const PhotometricConfig& config, PhotometricStats* stats) {
+cv::Mat normalise_photometric(const cv::Mat& bgr, const PhotometricConfig& config, PhotometricStats* stats,
+                              cv::Mat* scratch) {
   CV_Assert(bgr.type() == CV_8UC3);
   PhotometricStats s;
   if (!config.enabled || bgr.empty()) {
@@ -91,17 +107,24 @@ cv::Mat normalise_photometric(const cv::Mat& bgr, const PhotometricConfig& confi
     s.bin = 2;
     cv::resize(bgr, input, cv::Size(bgr.cols / 2, bgr.rows / 2), 0, 0, cv::INTER_AREA);
   }
-  cv::Mat out;
-  if (s.black < 0.5 && s.gain <= 1.15) {
-    out = input.clone();  // close enough to identity: keep the exact pixels
+  const long clipped = count_over_exposed(input, config.clip_level);
+  s.clipped_fraction = input.total() ? static_cast<double>(clipped) / static_cast<double>(input.total()) : 0.0;
+  if (stats) *stats = s;
+  const bool identity = s.black < 0.5 && s.gain <= 1.15;  // close enough: keep the exact pixels
+  if (identity && clipped == 0) return input;
+
+  cv::Mat local;
+  cv::Mat& out = scratch ? *scratch : local;
+  if (identity) {
+    input.copyTo(out);
   } else {
     std::array<std::uint8_t, 256> curve{};
     for (int v = 0; v < 256; ++v)
-      curve[static_cast<std::size_t>(v)] = cv::saturate_cast<std::uint8_t>(std::clamp((v - s.black) * s.gain, 0.0, 255.0));
+      curve[static_cast<std::size_t>(v)] =
+          cv::saturate_cast<std::uint8_t>(std::clamp((v - s.black) * s.gain, 0.0, 255.0));
     cv::LUT(input, cv::Mat(1, 256, CV_8U, curve.data()), out);
   }
-  black_out_clipped(input, out, config.clip_level, s);
-  if (stats) *stats = s;
+  if (clipped > 0) black_out_over_exposed(input, out, config.clip_level);
   return out;
 }
 

@@ -40,7 +40,10 @@ struct PhotometricStats {
 };
 
 // CV_8UC3 BGR in, CV_8UC3 BGR out: the same size, or half of it (rounded down) when the frame was averaged 2x2.
-cv::Mat normalise_photometric(const cv::Mat& bgr, const PhotometricConfig& config, PhotometricStats* stats = nullptr);
+// The result is `bgr` itself when nothing needs changing, else written into `*scratch` when given (its buffer is reused
+// from frame to frame: a fresh 4 MB image per frame costs more in page faults than the normalisation itself).
+cv::Mat normalise_photometric(const cv::Mat& bgr, const PhotometricConfig& config, PhotometricStats* stats = nullptr,
+                              cv::Mat* scratch = nullptr);
 
 // The per-channel noise sigma of a BGR frame, from the median absolute Laplacian-like response of Immerkaer's
 // mask on a sparse grid (robust to edges and to sparse speckle).
