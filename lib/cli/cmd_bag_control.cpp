@@ -4,6 +4,7 @@
 #include <cstdio>
 
 #include "cli/command.hpp"
+#include "cli/parse.hpp"
 #include "transport/context.hpp"
 #include "transport/publisher.hpp"
 
@@ -19,7 +20,7 @@ int run(int argc, char** argv) {
       ->required()
       ->check(CLI::IsMember({"pause", "resume", "toggle", "step"}));
   app.add_option("count", count, "messages per step")->check(CLI::PositiveNumber);
-  CLI11_PARSE(app, argc, argv);
+  FAULTLINE_PARSE(app, argc, argv);
   if (command == "step" && count > 1) command += " " + std::to_string(count);
   int rc = 0;
   {

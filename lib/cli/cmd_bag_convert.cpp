@@ -10,6 +10,7 @@
 #include <sstream>
 
 #include "cli/command.hpp"
+#include "cli/parse.hpp"
 #include "common/config.hpp"
 #include "common/logging.hpp"
 #include "common/shutdown.hpp"
@@ -58,7 +59,7 @@ int run(int argc, char** argv) {
   app.add_flag("!--no-foxglove-view", cfg.foxglove_view, "replay channels only");
   app.add_flag("!--no-ground-truth", gt, "no /markers/annotations boxes");
   app.add_flag("-q,--quiet", quiet, "no progress line");
-  CLI11_PARSE(app, argc, argv);
+  FAULTLINE_PARSE(app, argc, argv);
   if (cfg.run_metadata["seed"].empty()) cfg.run_metadata["seed"] = "0";
   try {
     auto log = logging::make_node_logger("bag_convert", "info");

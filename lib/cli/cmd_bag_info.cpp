@@ -6,6 +6,7 @@
 
 #include "bag/inspect.hpp"
 #include "cli/command.hpp"
+#include "cli/parse.hpp"
 
 namespace faultline::cli {
 namespace {
@@ -30,7 +31,7 @@ int run(int argc, char** argv) {
                "section CRC, the summary CRC). Exit 0 when intact, 1 when broken or unreadable."};
   std::string path;
   app.add_option("file", path, "bag (.mcap)")->required();
-  CLI11_PARSE(app, argc, argv);
+  FAULTLINE_PARSE(app, argc, argv);
 
   auto result = bag::inspect_bag(path);
   if (!result) {

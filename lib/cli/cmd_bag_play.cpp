@@ -9,6 +9,7 @@
 #include <thread>
 
 #include "cli/command.hpp"
+#include "cli/parse.hpp"
 #include "common/config.hpp"
 #include "common/logging.hpp"
 #include "common/shutdown.hpp"
@@ -92,7 +93,7 @@ int run(int argc, char** argv) {
       ->capture_default_str();
   bool keys = true;
   app.add_flag("!--no-keys", keys, "ignore the keyboard even when stdin is a terminal");
-  CLI11_PARSE(app, argc, argv);
+  FAULTLINE_PARSE(app, argc, argv);
   for (const auto& r : remaps) {
     const auto sep = r.find(":=");
     if (sep == std::string::npos || sep == 0 || sep + 2 >= r.size()) {

@@ -4,6 +4,7 @@
 #include <cstdio>
 
 #include "cli/command.hpp"
+#include "cli/parse.hpp"
 #include "common/config.hpp"
 #include "common/logging.hpp"
 #include "common/shutdown.hpp"
@@ -34,7 +35,7 @@ int run(int argc, char** argv) {
   app.add_option("--meta", meta, "KEY=VALUE added to the faultline.run metadata (repeatable)");
   std::string level = "info";
   app.add_option("--log-level", level, "trace|debug|info|warn|error");
-  CLI11_PARSE(app, argc, argv);
+  FAULTLINE_PARSE(app, argc, argv);
   cfg.split_bytes = static_cast<std::uint64_t>(split_mb * 1024 * 1024);
   for (const auto& kv : meta) {
     const auto eq = kv.find('=');

@@ -8,6 +8,7 @@
 
 #include "bag/recover.hpp"
 #include "cli/command.hpp"
+#include "cli/parse.hpp"
 
 namespace faultline::cli {
 namespace {
@@ -19,7 +20,7 @@ int run(int argc, char** argv) {
   app.add_option("file", in, "damaged bag (.mcap)")->required();
   app.add_option("-o,--output", out, "output bag (default: FILE with .recovered.mcap)");
   app.add_option("--compression", compression, "none, zstd or lz4 (default: as the input's chunks)");
-  CLI11_PARSE(app, argc, argv);
+  FAULTLINE_PARSE(app, argc, argv);
   if (out.empty()) {
     const auto dot = in.rfind(".mcap");
     out = (dot == std::string::npos ? in : in.substr(0, dot)) + ".recovered.mcap";

@@ -13,6 +13,7 @@
 #include "bench/topic_hz.hpp"
 #include "bench/transport.hpp"
 #include "cli/command.hpp"
+#include "cli/parse.hpp"
 
 namespace faultline::cli {
 namespace {
@@ -31,7 +32,7 @@ int run_bag(int argc, char** argv) {
   app.add_option("--repeats", o.repeats, "runs per configuration (median reported)")
       ->check(CLI::Range(1, 50));
   app.add_option("--dir", o.dir, "scratch directory for the bags (deleted after each run)");
-  CLI11_PARSE(app, argc, argv);
+  FAULTLINE_PARSE(app, argc, argv);
   return bench::run_bag(o);
 }
 
@@ -54,7 +55,7 @@ int run_corrupt(int argc, char** argv) {
   app.add_flag("--fidelity", o.fidelity,
                "also compute PSNR / max abs diff of fast mode against numpy mode");
   app.add_option("--out", o.out_path, "also write the JSON array (with fidelity) to this file");
-  CLI11_PARSE(app, argc, argv);
+  FAULTLINE_PARSE(app, argc, argv);
   if (o.reps < 1 || o.width < 1 || o.height < 1) {
     std::fprintf(stderr, "faultline bench corrupt: --reps, --width and --height must be >= 1\n");
     return 2;
@@ -80,7 +81,7 @@ int run_dataset(int argc, char** argv) {
   app.add_option("--repeat", o.repeat, "runs per mode; medians are printed")
       ->check(CLI::Range(1, 50));
   app.add_flag("--skip-dom", o.skip_dom, "measure the streaming reader only");
-  CLI11_PARSE(app, argc, argv);
+  FAULTLINE_PARSE(app, argc, argv);
   if (o.make_dir.empty() && o.dataroot.empty()) {
     std::fprintf(stderr, "bench dataset: give a dataroot or --make DIR\n");
     return 2;
@@ -118,7 +119,7 @@ int run_export(int argc, char** argv) {
   app.add_flag("--no-reference-codec", o.no_reference_codec,
                "leave the reference's JPEG decode/encode out of its end-to-end time (a lower "
                "bound, as in spec §12)");
-  CLI11_PARSE(app, argc, argv);
+  FAULTLINE_PARSE(app, argc, argv);
   return bench::run_export(o);
 }
 
@@ -137,7 +138,7 @@ int run_injector(int argc, char** argv) {
   app.add_option("--output", o.output, "bgr8 (republish decoded) or jpeg (re-encode q95)")
       ->check(CLI::IsMember({"bgr8", "jpeg"}));
   app.add_flag("--json", o.json, "print a JSON array");
-  CLI11_PARSE(app, argc, argv);
+  FAULTLINE_PARSE(app, argc, argv);
   if (o.seconds <= 0 || o.rate_hz <= 0) {
     std::fprintf(stderr, "faultline bench injector: --seconds and --rate-hz must be > 0\n");
     return 2;
@@ -161,7 +162,7 @@ int run_record(int argc, char** argv) {
                "noisy built-in road scene JPEGs instead of a rendered synthetic scene");
   app.add_option("--compression", o.compression, "recorder compression: none | zstd | lz4")
       ->capture_default_str();
-  CLI11_PARSE(app, argc, argv);
+  FAULTLINE_PARSE(app, argc, argv);
   return bench::run_record(o);
 }
 
@@ -178,7 +179,7 @@ int run_score(int argc, char** argv) {
                  "folder written by --make: score it and report wall time and peak RSS");
   app.add_option("--repeats", o.repeats, "score this many times in one process (median reported)")
       ->capture_default_str();
-  CLI11_PARSE(app, argc, argv);
+  FAULTLINE_PARSE(app, argc, argv);
   return bench::run_score(o);
 }
 
@@ -200,7 +201,7 @@ int run_topic_hz(int argc, char** argv) {
   app.add_flag("--serve", o.serve, "only publish (registered in the topic registry)");
   app.add_option("--endpoint", o.endpoint,
                  "with --serve: endpoint to bind (default tcp://127.0.0.1:*)");
-  CLI11_PARSE(app, argc, argv);
+  FAULTLINE_PARSE(app, argc, argv);
   return bench::run_topic_hz(o);
 }
 
@@ -214,7 +215,7 @@ int run_transport(int argc, char** argv) {
   app.add_option("--mode", o.mode, "injector output: bgr8 (decode) or jpeg (passthrough)")
       ->check(CLI::IsMember({"bgr8", "jpeg"}));
   app.add_flag("--json", o.json, "print one JSON object");
-  CLI11_PARSE(app, argc, argv);
+  FAULTLINE_PARSE(app, argc, argv);
   return bench::run_transport(o);
 }
 

@@ -5,6 +5,7 @@
 
 #include "campaign/benchmark.hpp"
 #include "cli/command.hpp"
+#include "cli/parse.hpp"
 #include "cli/live_run.hpp"
 #include "common/shutdown.hpp"
 #include "scoring/robustness.hpp"
@@ -69,7 +70,7 @@ int run(int argc, char** argv) {
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    return app.exit(e);
+    return usage_exit(app, e);
   }
   o.variants = !no_variants;
   auto split = [](const std::string& s) {

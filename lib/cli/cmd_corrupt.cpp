@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "cli/command.hpp"
+#include "cli/parse.hpp"
 #include "codec/jpeg.hpp"
 #include "corruption/corrupt.hpp"
 
@@ -66,7 +67,7 @@ int run(int argc, char** argv) {
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    return app.exit(e);
+    return usage_exit(app, e);
   }
   const auto type = corruption::corruption_from_string(type_name);
   if (!type) {

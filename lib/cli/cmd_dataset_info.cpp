@@ -4,6 +4,7 @@
 #include <cstdio>
 
 #include "cli/command.hpp"
+#include "cli/parse.hpp"
 #include "dataset/nuscenes.hpp"
 
 namespace faultline::cli {
@@ -16,7 +17,7 @@ int run(int argc, char** argv) {
   std::string dataroot, version = "v1.0-mini";
   app.add_option("--dataroot", dataroot, "folder holding <version>/, samples/, sweeps/")->required();
   app.add_option("--version", version, "v1.0-mini, v1.0-trainval or v1.0-test");
-  CLI11_PARSE(app, argc, argv);
+  FAULTLINE_PARSE(app, argc, argv);
 
   auto reader = dataset::NuScenesReader::open(dataroot, version);
   if (!reader) {

@@ -4,6 +4,7 @@
 #include <cstdio>
 
 #include "cli/command.hpp"
+#include "cli/parse.hpp"
 #include "dataset/synth.hpp"
 
 namespace faultline::cli {
@@ -27,7 +28,7 @@ int run(int argc, char** argv) {
   app.add_option("--threads", opt.threads, "render/encode threads")->check(CLI::Range(1, 64));
   bool no_annotations = false;
   app.add_flag("--no-annotations", no_annotations, "write empty sample_annotation/instance tables (like v1.0-test)");
-  CLI11_PARSE(app, argc, argv);
+  FAULTLINE_PARSE(app, argc, argv);
   opt.annotations = !no_annotations;
 
   auto result = dataset::write_synthetic_dataset(opt, [](const std::string& stage, std::int64_t done,

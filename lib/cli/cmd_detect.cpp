@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "cli/command.hpp"
+#include "cli/parse.hpp"
 #include "codec/jpeg.hpp"
 #include "corruption/corrupt.hpp"
 #include "dataset/nuscenes.hpp"
@@ -46,7 +47,7 @@ int run(int argc, char** argv) {
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    return app.exit(e);
+    return usage_exit(app, e);
   }
   if (scale != 1.0 && scale != 0.5 && scale != 0.25) return fail("--scale must be 1.0, 0.5 or 0.25");
   std::optional<corruption::Corruption> ctype;

@@ -9,6 +9,7 @@
 #include <unistd.h>
 
 #include "cli/command.hpp"
+#include "cli/parse.hpp"
 #include "export/exporter.hpp"
 #include "export/merge.hpp"
 #include "export/progress.hpp"
@@ -78,7 +79,7 @@ int run(int argc, char** argv) {
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    return app.exit(e);
+    return usage_exit(app, e);
   }
   cfg.tool_version = FAULTLINE_VERSION;
 

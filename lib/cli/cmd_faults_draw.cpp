@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "cli/command.hpp"
+#include "cli/parse.hpp"
 #include "policy/temporal_draws.hpp"
 
 namespace faultline::cli {
@@ -38,7 +39,7 @@ int run(int argc, char** argv) {
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    return app.exit(e);
+    return usage_exit(app, e);
   }
   if (type != "camera_crash" && type != "frame_lost") {
     std::fprintf(stderr, "faultline faults draw: unknown --type '%s' (expected camera_crash or frame_lost)\n",

@@ -8,6 +8,7 @@
 #include <fstream>
 
 #include "cli/command.hpp"
+#include "cli/parse.hpp"
 #include "common/config.hpp"
 #include "common/shutdown.hpp"
 #include "launch/launch_file.hpp"
@@ -86,7 +87,7 @@ int run(int argc, char** argv) {
       "forwarded to all nodes; when a required node exits the others get SIGTERM, then SIGKILL after\n"
       "--grace. Exit code: that of the first failing required node (1 if it died from a signal), else 0.\n"
       "Scalars may use ${VAR} and ${VAR:-default}; a top-level env: map is set for every node.");
-  CLI11_PARSE(app, argc, argv);
+  FAULTLINE_PARSE(app, argc, argv);
 
   launch::LoadOptions load;
   load.bin_dir = launch::self_exe_dir();

@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "cli/command.hpp"
+#include "cli/parse.hpp"
 #include "report/report.hpp"
 
 namespace faultline::cli {
@@ -32,7 +33,7 @@ int run(int argc, char** argv) {
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    return app.exit(e);
+    return usage_exit(app, e);
   }
   report::ReportData data;
   if (!title.empty()) data.title = title;

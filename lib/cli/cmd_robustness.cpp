@@ -6,6 +6,7 @@
 #include <fstream>
 
 #include "cli/command.hpp"
+#include "cli/parse.hpp"
 #include "scoring/run_manifest.hpp"
 
 namespace faultline::cli {
@@ -34,7 +35,7 @@ int run(int argc, char** argv) {
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    return app.exit(e);
+    return usage_exit(app, e);
   }
   std::vector<scoring::ConditionRun> conditions;
   std::string manifest_name;

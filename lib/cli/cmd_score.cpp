@@ -4,6 +4,7 @@
 #include <cstdio>
 
 #include "cli/command.hpp"
+#include "cli/parse.hpp"
 #include "scoring/evaluate.hpp"
 
 namespace faultline::cli {
@@ -25,7 +26,7 @@ int run(int argc, char** argv) {
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    return app.exit(e);
+    return usage_exit(app, e);
   }
   std::FILE* log = quiet ? nullptr : stdout;
   auto outcome = scoring::evaluate_detection(opts, log);

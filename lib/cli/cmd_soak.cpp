@@ -7,6 +7,7 @@
 
 #include "campaign/soak.hpp"
 #include "cli/command.hpp"
+#include "cli/parse.hpp"
 #include "cli/live_run.hpp"
 #include "common/shutdown.hpp"
 
@@ -63,7 +64,7 @@ int run(int argc, char** argv) {
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    return app.exit(e);
+    return usage_exit(app, e);
   }
   o.duration_s = minutes * 60;
   o.period_s = period_s;

@@ -5,6 +5,7 @@
 #include <cstdio>
 
 #include "cli/command.hpp"
+#include "cli/parse.hpp"
 #include "cli/topic_tools.hpp"
 #include "common/shutdown.hpp"
 #include "transport/subscriber.hpp"
@@ -47,7 +48,7 @@ int run(int argc, char** argv) {
   app.add_option("--type", type, "protobuf type of the body (default: from the registry)");
   app.add_option("-n,--count", max_messages, "exit after N messages");
   app.add_option("--duration", duration_s, "exit after S seconds")->check(CLI::NonNegativeNumber);
-  CLI11_PARSE(app, argc, argv);
+  FAULTLINE_PARSE(app, argc, argv);
 
   const topic::Target target = topic::resolve(topic_name, endpoints, type);
   transport::SubscriberConfig sc;

@@ -4,6 +4,7 @@
 #include <cstdio>
 
 #include "cli/command.hpp"
+#include "cli/parse.hpp"
 #include "cli/topic_tools.hpp"
 #include "common/shutdown.hpp"
 #include "stats/topic_meter.hpp"
@@ -36,7 +37,7 @@ int run_probe_command(int argc, char** argv, ProbeKind kind) {
         ->check(CLI::IsMember({"capture", "publish"}));
   }
   app.footer("Ends on Ctrl-C, --duration or -n and prints one `summary key=value ...` line.");
-  CLI11_PARSE(app, argc, argv);
+  FAULTLINE_PARSE(app, argc, argv);
 
   const Target target = resolve(topic_name, endpoints, "");
   transport::SubscriberConfig sc;

@@ -5,6 +5,7 @@
 #include <cstdio>
 
 #include "cli/command.hpp"
+#include "cli/parse.hpp"
 #include "cli/topic_tools.hpp"
 #include "common/shutdown.hpp"
 #include "transport/subscriber.hpp"
@@ -50,7 +51,7 @@ int run(int argc, char** argv) {
   app.add_option("--endpoint", endpoints, "bypass the registry: listen here for one message");
   app.add_option("--duration", duration_s, "seconds to wait for a message with --endpoint")
       ->check(CLI::PositiveNumber);
-  CLI11_PARSE(app, argc, argv);
+  FAULTLINE_PARSE(app, argc, argv);
   if (!endpoints.empty()) {
     std::printf("Topic: %s\nEndpoints: %zu\n", topic.c_str(), endpoints.size());
     return probe_first_message(topic, endpoints, duration_s);

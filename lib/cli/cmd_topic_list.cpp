@@ -14,6 +14,7 @@
 
 #include "camera_frame.pb.h"
 #include "cli/command.hpp"
+#include "cli/parse.hpp"
 #include "cli/topic_tools.hpp"
 #include "common/config.hpp"
 #include "common/shutdown.hpp"
@@ -151,7 +152,7 @@ int run(int argc, char** argv) {
   app.add_option("--endpoint", endpoints, "listen on this endpoint instead of reading the registry");
   app.add_option("--duration", duration_s, "seconds to listen with --endpoint")->check(CLI::PositiveNumber);
   app.footer("Registry: $FAULTLINE_RUN_DIR or /tmp/faultline-<uid>/graph (one file per publishing node).");
-  CLI11_PARSE(app, argc, argv);
+  FAULTLINE_PARSE(app, argc, argv);
   if (!endpoints.empty()) return list_endpoint(endpoints, duration_s);
 
   const auto topics = transport::list_topics();

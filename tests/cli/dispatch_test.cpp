@@ -1,0 +1,53 @@
+// Exit codes of the `faultline` tool, for every registered command: 2 for any usage error (CLI11's own codes,
+// 104-109, used to leak out), 0 for --help. In process, through cli::dispatch.
+#include "cli/command.hpp"
+
+#include <gtest/gtest.h>
+
+#include <sstream>
+#include <string>
+#include <vector>
+
+namespace faultline::cli {
+namespace {
+
+int run(const std::vector<std::string>& words) {
+  std::vector<std::string> storage{"faultline"};
+  for (const auto& w : words) {
+    std::istringstream split(w);  // a two-word command name becomes two arguments
+    for (std::string part; split >> part;) storage.push_back(part);
+  }
+  std::vector<char*> argv;
+  for (auto& s : storage) argv.push_back(s.data());
+  return dispatch(static_cast<int>(argv.size()), argv.data());
+}
+
+TEST(DispatchTest, EveryCommandExitsTwoOnAnUnknownOption) {
+  ASSERT_GT(all_commands().size(), 30u);
+  for (const Command* c : all_commands()) {
+    EXPECT_EQ(run({c->name, "--no-such-option-anywhere"}), 2) << c->name;
+  }
+}
+
+TEST(DispatchTest, EveryCommandExitsZeroOnHelp) {
+  for (const Command* c : all_commands()) EXPECT_EQ(run({c->name, "--help"}), 0) << c->name;
+}
+
+TEST(DispatchTest, ValueThatDoesNotConvertExitsTwo) {
+  EXPECT_EQ(run({"corrupt", "--angle", "abc", "in.jpg", "out.png"}), 2);  // was 104
+  EXPECT_EQ(run({"bench transport", "--seconds", "many"}), 2);
+}
+
+TEST(DispatchTest, MissingRequiredOptionExitsTwo) {
+  EXPECT_EQ(run({"score"}), 2);  // --results is required (was 106)
+  EXPECT_EQ(run({"detect"}), 2);
+}
+
+TEST(DispatchTest, UnknownCommandAndBareGroupExitTwo) {
+  EXPECT_EQ(run({"no-such-command"}), 2);
+  EXPECT_EQ(run({"bag"}), 2);
+  EXPECT_EQ(run({"bag", "no-such-subcommand"}), 2);
+}
+
+}  // namespace
+}  // namespace faultline::cli
