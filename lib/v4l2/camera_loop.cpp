@@ -35,6 +35,7 @@ CaptureConfig CameraNodeConfig::capture() const {
   c.rate_hz = rate_hz;
   c.buffers = static_cast<std::uint32_t>(buffers);
   c.output = output;
+  c.wait_for_device = wait_for_device;
   return c;
 }
 

@@ -31,6 +31,7 @@ struct CameraNodeConfig {
   int hwm = 4;                              // send queue per subscriber (messages)
   int poll_timeout_ms = 100;                // dequeue wait; bounds shutdown latency
   int max_frames = 0;                       // stop after this many frames; 0 = run until SIGINT
+  bool wait_for_device = false;             // device missing at start: wait for a hot-plug instead of failing
   int wait_subscribers = 0;                 // before capturing, wait for this many subscribers of the camera
   int wait_timeout_ms = 10000;              // ... at most this long (then start anyway)
   double stats_log_period_s = 5.0;          // info log of capture statistics every this many s
@@ -50,6 +51,7 @@ struct CameraNodeConfig {
     v("hwm", hwm, "send queue per subscriber (messages)");
     v("poll_timeout_ms", poll_timeout_ms, "dequeue wait (ms)");
     v("max_frames", max_frames, "stop after this many frames; 0 = until SIGINT");
+    v("wait_for_device", wait_for_device, "device missing at start: wait for it (hot-plug) instead of failing");
     v("wait_subscribers", wait_subscribers, "subscribers to wait for before capturing");
     v("wait_timeout_ms", wait_timeout_ms, "how long to wait for them (ms)");
     v("stats_log_period_s", stats_log_period_s, "capture statistics log period (s)");

@@ -104,7 +104,12 @@ Status Capture::start() {
     return s;
   }
   if (s.code() == StatusCode::kUnsupported || s.code() == StatusCode::kInvalidArgument) return s;
-  lose_device(s);  // busy or absent: keep trying from next()
+  // A missing node at start-up is most often a typo in the path: fail now rather than retry forever.
+  if (s.code() == StatusCode::kNotFound && !cfg_.wait_for_device) {
+    return Status(StatusCode::kNotFound,
+                  s.message() + " (no such device at start-up; wait_for_device:=true waits for it to be plugged in)");
+  }
+  lose_device(s);  // busy, or absent and waited for: keep trying from next()
   return Status::ok();
 }
 

@@ -26,6 +26,7 @@ struct CaptureConfig {
   std::string output = "auto";     // auto: MJPEG -> jpeg, others -> bgr8 (mono8 for GREY); raw: as captured
   DurationNs reconnect_min_ns = 100 * kNsPerMs;  // first backoff; doubles per failed attempt
   DurationNs reconnect_max_ns = 2 * kNsPerSec;
+  bool wait_for_device = false;    // a device node missing at start: wait for a hot-plug instead of failing
 };
 
 struct CapturedFrame {

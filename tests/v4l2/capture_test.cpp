@@ -68,8 +68,9 @@ class CaptureTest : public ::testing::Test {
   void AddBuffer(std::vector<std::uint8_t> bytes, std::uint32_t seq, bool error = false) {
     script_->buffers.push_back({std::move(bytes), seq, 5'000'000'000LL + seq * 33'000'000LL, true, error});
   }
-  std::unique_ptr<Capture> MakeCapture(const std::string& format = "auto") {
+  std::unique_ptr<Capture> MakeCapture(const std::string& format = "auto", bool wait_for_device = false) {
     CaptureConfig cfg;
+    cfg.wait_for_device = wait_for_device;
     cfg.device = "/dev/video7";
     cfg.format = format;
     cfg.width = 64;
@@ -239,6 +240,24 @@ TEST_F(CaptureTest, BusyDeviceIsRetriedNotFatal) {
   EXPECT_FALSE(cap->connected());
   EXPECT_EQ(Drain(*cap, 1).size(), 1u);
   EXPECT_EQ(cap->stats().reconnects, 1u);
+}
+
+TEST_F(CaptureTest, MissingDeviceAtStartIsFatalUnlessWaitedFor) {
+  Offer(kMjpeg, 64, 32);
+  AddBuffer(MakeJpeg(TestPattern(64, 32)), 0);
+  script_->pending_missing = 2;  // the node does not exist for the first two opens
+  auto cap = MakeCapture();
+  const Status s = cap->start();
+  EXPECT_EQ(s.code(), StatusCode::kNotFound);
+  EXPECT_NE(s.message().find("/dev/video7"), std::string::npos) << s.message();
+  EXPECT_NE(s.message().find("wait_for_device"), std::string::npos) << s.message();
+  EXPECT_EQ(script_->opens, 1);
+
+  auto waiting = MakeCapture("auto", /*wait_for_device=*/true);
+  ASSERT_TRUE(waiting->start().is_ok());
+  EXPECT_FALSE(waiting->connected());
+  EXPECT_EQ(Drain(*waiting, 1).size(), 1u);
+  EXPECT_EQ(waiting->stats().reconnects, 1u);
 }
 
 TEST_F(CaptureTest, UnofferedFormatIsFatalAndListsOffers) {
