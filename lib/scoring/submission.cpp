@@ -12,12 +12,13 @@
 
 #include <cmath>
 #include <cstdio>
-#include <memory>
-#include <unordered_set>
 #include <fstream>
+#include <memory>
 #include <sstream>
 #include <unordered_map>
+#include <unordered_set>
 
+#include "scoring/box_rules.hpp"
 #include "scoring/detection_config.hpp"
 
 namespace faultline::scoring {
@@ -44,34 +45,36 @@ constexpr const char* kFieldNames[kNumFields] = {"sample_token", "translation", 
                                                  "ego_translation", "num_pts", "detection_name",
                                                  "detection_score", "attribute_name"};
 
-template <std::size_t N>
-Status read_vec(const FieldVal& f, const char* field, const std::string& where, bool allow_nan,
-                std::array<double, N>& out) {
+// A JSON list field that must hold only numbers; its length and values are box_rules' business.
+Status read_numbers(const FieldVal& f, const char* field, const std::string& where,
+                    NumberList& out) {
   if (f.kind == FieldVal::kAbsent) return bad(where, std::string("missing field '") + field + "'");
-  if (f.kind != FieldVal::kArray || f.arr_bad >= 0 || f.arr.size() != N) {
-    if (f.kind == FieldVal::kArray && f.arr_bad >= 0) {
-      return bad(where, std::string("'") + field + "'[" + std::to_string(f.arr_bad) + "] is not a number");
-    }
-    return bad(where, std::string("'") + field + "' must be a list of " + std::to_string(N) + " numbers");
+  if (f.kind == FieldVal::kArray && f.arr_bad >= 0) {
+    return bad(where,
+               std::string("'") + field + "'[" + std::to_string(f.arr_bad) + "] is not a number");
   }
-  for (std::size_t i = 0; i < N; ++i) {
-    out[i] = f.arr[i];
-    if (!allow_nan && std::isnan(out[i])) return bad(where, std::string("'") + field + "' contains NaN");
-  }
+  if (f.kind != FieldVal::kArray)
+    return bad(where, std::string("'") + field + "' must be a list of numbers");
+  out = {f.arr.data(), f.arr.size()};
   return Status::ok();
 }
 
-// The devkit's DetectionBox.deserialize + constructor asserts, plus Faultline's score rule.
+// The devkit's DetectionBox.deserialize + constructor asserts: JSON types here, values in
+// box_rules.
 Status check_box(const std::array<FieldVal, kNumFields>& f, const std::string& where, EvalBox& box) {
   if (f[kSampleToken].kind == FieldVal::kAbsent) return bad(where, "missing field 'sample_token'");
   if (f[kSampleToken].kind != FieldVal::kString) return bad(where, "'sample_token' must be a string");
-  if (Status s = read_vec(f[kTranslation], "translation", where, false, box.translation); !s) return s;
-  if (Status s = read_vec(f[kSize], "size", where, false, box.size); !s) return s;
-  if (Status s = read_vec(f[kRotation], "rotation", where, false, box.rotation); !s) return s;
-  if (Status s = read_vec(f[kVelocity], "velocity", where, true, box.velocity); !s) return s;
-  if (f[kEgo].kind != FieldVal::kAbsent) {
-    std::array<double, 3> ego{};  // checked like the devkit, then recomputed from the ego pose
-    if (Status s = read_vec(f[kEgo], "ego_translation", where, false, ego); !s) return s;
+  BoxFields fields;
+  if (Status s = read_numbers(f[kTranslation], "translation", where, fields.translation); !s)
+    return s;
+  if (Status s = read_numbers(f[kSize], "size", where, fields.size); !s) return s;
+  if (Status s = read_numbers(f[kRotation], "rotation", where, fields.rotation); !s) return s;
+  if (Status s = read_numbers(f[kVelocity], "velocity", where, fields.velocity); !s) return s;
+  if (f[kEgo].kind !=
+      FieldVal::kAbsent) {  // checked like the devkit, then recomputed from the ego pose
+    NumberList ego;
+    if (Status s = read_numbers(f[kEgo], "ego_translation", where, ego); !s) return s;
+    if (Status s = check_numbers("ego_translation", ego, 3, false, where); !s) return s;
   }
   box.num_pts = -1;
   if (f[kNumPts].kind != FieldVal::kAbsent) {
@@ -82,30 +85,16 @@ Status check_box(const std::array<FieldVal, kNumFields>& f, const std::string& w
   }
   if (f[kName].kind == FieldVal::kAbsent) return bad(where, "missing field 'detection_name'");
   if (f[kName].kind != FieldVal::kString) return bad(where, "'detection_name' must be a string");
-  auto cls = class_index(f[kName].str);
-  if (!cls) {
-    return bad(where, "Error: Unknown detection_name " + f[kName].str +
-                          " (expected one of the 10 nuScenes detection classes, case-sensitive)");
+  fields.detection_name = f[kName].str;
+  if (f[kScore].kind != FieldVal::kAbsent) {
+    if (f[kScore].kind != FieldVal::kNumber)
+      return bad(where, "'detection_score' must be a number");
+    fields.detection_score = f[kScore].num;
   }
-  box.cls = static_cast<std::int8_t>(*cls);
-  const bool has_score = f[kScore].kind != FieldVal::kAbsent;
-  if (has_score && f[kScore].kind != FieldVal::kNumber) return bad(where, "'detection_score' must be a number");
-  box.score = has_score ? f[kScore].num : -1.0;  // devkit default -1; rejected below
-  if (std::isnan(box.score)) return bad(where, "'detection_score' is NaN");
   if (f[kAttrName].kind == FieldVal::kAbsent) return bad(where, "missing field 'attribute_name'");
   if (f[kAttrName].kind != FieldVal::kString) return bad(where, "'attribute_name' must be a string");
-  auto ai = attribute_index(f[kAttrName].str);
-  if (!ai) {
-    return bad(where, "Error: Unknown attribute_name " + f[kAttrName].str + " (expected \"\" or one of the 8 attributes)");
-  }
-  box.attr = static_cast<std::int8_t>(*ai);
-  // Faultline rule (the devkit can crash on these, spec §1): scores must be >= 0.
-  if (box.score < 0.0) {
-    return bad(where, has_score ? "negative 'detection_score' " + std::to_string(box.score) +
-                                      " (scores must be >= 0; the devkit can crash on negative scores)"
-                                : "missing 'detection_score' (the devkit would use -1, which can crash it)");
-  }
-  return Status::ok();
+  fields.attribute_name = f[kAttrName].str;
+  return check_box_fields(fields, where, box);
 }
 
 using MetaWriter = rapidjson::Writer<rapidjson::StringBuffer, rapidjson::UTF8<>, rapidjson::UTF8<>,
@@ -464,10 +453,10 @@ Result<Submission> parse_stream(Stream& stream, const std::string& name, const S
   sub.meta->Parse<kParseFlags>(meta.c_str(), meta.size());
   if (sub.meta->HasParseError()) return bad(name, "'meta' could not be copied");
   for (std::size_t i = 0; i < sub.boxes.sample_tokens.size(); ++i) {
-    if (sub.boxes.boxes[i].size() > static_cast<std::size_t>(kMaxBoxesPerSample)) {
-      return bad(name + ": results['" + sub.boxes.sample_tokens[i] + "']",
-                 "Error: Only <= 500 boxes per sample allowed! (found " +
-                     std::to_string(sub.boxes.boxes[i].size()) + ")");
+    if (Status s = check_box_count(sub.boxes.boxes[i].size(),
+                                   name + ": results['" + sub.boxes.sample_tokens[i] + "']");
+        !s) {
+      return s;
     }
   }
   return sub;

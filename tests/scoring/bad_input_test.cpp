@@ -59,6 +59,16 @@ class BadInputTest : public ::testing::Test {
     EXPECT_FALSE(std::filesystem::exists(opts.output_dir));
   }
 
+  // Scores a submission of mini_val; the outcome or its error.
+  Result<EvalOutcome> Score(const std::string& results) {
+    EvalOptions opts;
+    opts.results_path = results;
+    opts.dataroot = golden_dir() + "/dataset";
+    opts.version = "v1.0-mini";
+    opts.eval_set = "mini_val";
+    return evaluate_detection(opts, nullptr);
+  }
+
   TempDir dir_{"bad_input"};
   rapidjson::Document doc_;
   std::string first_token_;
@@ -108,6 +118,28 @@ TEST_F(BadInputTest, ExtraSampleOfPredefinedSplitIsRejected) {
 TEST_F(BadInputTest, NegativeScoreIsRejected) {
   FirstBox()["detection_score"].SetDouble(-0.2);
   ExpectRejected(Write("neg.json"), {first_token_, "negative 'detection_score'"});
+}
+
+TEST_F(BadInputTest, InfinityTranslationNamesSampleBoxAndField) {
+  FirstBox()["translation"][0].SetDouble(std::numeric_limits<double>::infinity());
+  ExpectRejected(Write("inf.json"), {first_token_, "[0]: 'translation'[0] is Infinity"});
+}
+
+TEST_F(BadInputTest, InfinityScoreIsRejected) {
+  FirstBox()["detection_score"].SetDouble(std::numeric_limits<double>::infinity());
+  ExpectRejected(Write("inf_score.json"), {first_token_, "'detection_score' is Infinity"});
+}
+
+TEST_F(BadInputTest, NegativeInfinityVelocityIsRejectedThoughNanIsAllowed) {
+  FirstBox()["velocity"][0].SetDouble(std::numeric_limits<double>::quiet_NaN());
+  FirstBox()["velocity"][1].SetDouble(-std::numeric_limits<double>::infinity());
+  ExpectRejected(Write("inf_vel.json"), {first_token_, "'velocity'[1] is -Infinity"});
+}
+
+TEST_F(BadInputTest, ScoreAboveOneIsAcceptedAsByTheDevkit) {
+  FirstBox()["detection_score"].SetDouble(1.5);  // spec §1: float(), range not checked
+  auto r = Score(Write("above_one.json"));
+  ASSERT_TRUE(r.is_ok()) << r.status().message();
 }
 
 TEST_F(BadInputTest, MissingTableNamesTheFile) {
