@@ -12,9 +12,7 @@
 
 #include <cmath>
 #include <cstdio>
-#include <fstream>
 #include <memory>
-#include <sstream>
 #include <unordered_map>
 #include <unordered_set>
 
@@ -103,8 +101,8 @@ using MetaWriter = rapidjson::Writer<rapidjson::StringBuffer, rapidjson::UTF8<>,
 // SAX handler: top object -> "results" {token: [box...]} and "meta" (re-serialised), others skipped.
 class SubmissionHandler : public rapidjson::BaseReaderHandler<rapidjson::UTF8<>, SubmissionHandler> {
  public:
-  SubmissionHandler(const std::string& name, const SubmissionScope& scope, Submission& sub)
-      : name_(name), scope_(scope), sub_(sub), meta_writer_(meta_buf_) {
+  SubmissionHandler(const std::string& name, const SubmissionScope& scope)
+      : name_(name), scope_(scope), meta_writer_(meta_buf_) {
     if (!scope.predefined) wanted_.insert(scope.samples.begin(), scope.samples.end());
   }
 
@@ -160,16 +158,55 @@ class SubmissionHandler : public rapidjson::BaseReaderHandler<rapidjson::UTF8<>,
     return scalar_other();
   }
 
+  // One results key as Python's json.load leaves it: the last list given for the key, at the place
+  // of the key's first occurrence. `odd` holds the sample_token fields that differ from the key;
+  // EvalBox::match_sample indexes it until the entry is appended to the Submission.
+  struct SampleEntry {
+    std::vector<EvalBox> boxes;
+    std::vector<std::string> odd;
+    Status status;  // the list's first error (its later boxes are not checked)
+  };
+
   const Status& status() const { return status_; }
+  const Status& results_status() const { return results_status_; }
   bool saw_results() const { return saw_results_; }
   bool saw_meta() const { return saw_meta_; }
   std::string meta_text() const { return meta_buf_.GetString(); }
-  // Custom split: per wanted sample, its boxes or its first error.
-  std::unordered_map<std::string, std::pair<std::vector<EvalBox>, Status>>& custom_samples() { return custom_; }
-  std::unordered_map<std::string, std::vector<std::string>>& custom_odd() { return custom_odd_; }
+  // The kept results keys (predefined: all; custom: the split's), in first-occurrence order.
+  std::vector<std::pair<std::string, SampleEntry>>& entries() { return entries_; }
+  SampleEntry* find(const std::string& token) {
+    auto it = entry_index_.find(token);
+    return it == entry_index_.end() ? nullptr : &entries_[it->second].second;
+  }
 
  private:
   enum TopKey { kNone, kResults, kMeta, kOtherTop };
+  static constexpr std::size_t kNoEntry = static_cast<std::size_t>(-1);
+
+  // A new value for "results" (json.load keeps the last one): forget what the earlier ones held.
+  void begin_results() {
+    saw_results_ = true;
+    results_status_ = Status::ok();
+    entries_.clear();
+    entry_index_.clear();
+    current_ = kNoEntry;
+  }
+  // A new value for "meta": the last one is copied.
+  void begin_meta() {
+    saw_meta_ = true;
+    meta_buf_.Clear();
+    meta_writer_.Reset(meta_buf_);
+  }
+  // The entry of `sample_`, emptied for a new list (a repeated key keeps its first place).
+  std::size_t reset_entry() {
+    auto [it, inserted] = entry_index_.emplace(sample_, entries_.size());
+    if (inserted) {
+      entries_.emplace_back(sample_, SampleEntry{});
+    } else {
+      entries_[it->second].second = SampleEntry{};
+    }
+    return it->second;
+  }
 
   bool fail(Status s) {
     status_ = std::move(s);
@@ -178,7 +215,7 @@ class SubmissionHandler : public rapidjson::BaseReaderHandler<rapidjson::UTF8<>,
 
   bool open(bool object) {
     if (meta_depth_ > 0 || (depth_ == 1 && top_key_ == kMeta && skip_ == 0)) {
-      if (meta_depth_ == 0) saw_meta_ = true;
+      if (meta_depth_ == 0) begin_meta();
       ++meta_depth_;
       ++depth_;
       return object ? meta_writer_.StartObject() : meta_writer_.StartArray();
@@ -193,8 +230,12 @@ class SubmissionHandler : public rapidjson::BaseReaderHandler<rapidjson::UTF8<>,
         break;
       case 1:
         if (top_key_ == kResults) {
-          saw_results_ = true;
-          if (!object) return fail(bad(name_, "'results' must be an object {sample_token: [boxes]}"));
+          begin_results();
+          if (!object) {
+            results_status_ = bad(name_, "'results' must be an object {sample_token: [boxes]}");
+            skip_ = 1;
+            return true;
+          }
           in_results_ = true;
         } else {
           skip_ = 1;
@@ -204,7 +245,7 @@ class SubmissionHandler : public rapidjson::BaseReaderHandler<rapidjson::UTF8<>,
       case 2:
         if (!in_results_) break;
         if (object) {
-          if (!sample_type_error()) return false;
+          sample_type_error();
           skip_ = 1;
           return true;
         }
@@ -212,7 +253,7 @@ class SubmissionHandler : public rapidjson::BaseReaderHandler<rapidjson::UTF8<>,
         break;
       case 3:
         if (!object) {
-          if (!box_type_error()) return false;
+          box_type_error();
           skip_ = 1;
           return true;
         }
@@ -275,7 +316,7 @@ class SubmissionHandler : public rapidjson::BaseReaderHandler<rapidjson::UTF8<>,
   bool to_meta() {
     if (meta_depth_ > 0) return true;
     if (depth_ == 1 && top_key_ == kMeta && skip_ == 0) {
-      saw_meta_ = true;
+      begin_meta();
       return true;
     }
     return false;
@@ -295,11 +336,11 @@ class SubmissionHandler : public rapidjson::BaseReaderHandler<rapidjson::UTF8<>,
   bool scalar_other() {
     if (skip_ > 0) return true;
     if (depth_ == 1 && top_key_ == kResults) {
-      saw_results_ = true;
-      return fail(bad(name_, "'results' must be an object {sample_token: [boxes]}"));
+      begin_results();
+      results_status_ = bad(name_, "'results' must be an object {sample_token: [boxes]}");
     }
-    if (depth_ == 2 && in_results_) return sample_type_error();
-    if (depth_ == 3 && in_results_) return box_type_error();
+    if (depth_ == 2 && in_results_) sample_type_error();
+    if (depth_ == 3 && in_results_) box_type_error();
     return true;
   }
 
@@ -315,49 +356,27 @@ class SubmissionHandler : public rapidjson::BaseReaderHandler<rapidjson::UTF8<>,
 
   bool keep_sample() const { return scope_.predefined || wanted_.count(sample_) > 0; }
 
-  bool sample_type_error() {
-    if (!keep_sample()) return true;
-    Status s = bad(name_ + ": results['" + sample_ + "']", "must be a list of boxes");
-    if (scope_.predefined) return fail(s);
-    custom_[sample_].second = s;
-    return true;
+  // Errors are kept per results key, not raised at once: a later value for the same key (or for
+  // "results") replaces the list, as in json.load, and the devkit checks only what it keeps.
+  void sample_type_error() {
+    if (!keep_sample()) return;
+    entries_[reset_entry()].second.status =
+        bad(name_ + ": results['" + sample_ + "']", "must be a list of boxes");
   }
-  bool box_type_error() {
-    if (!keep_sample()) {
-      ++box_index_;
-      return true;
-    }
-    Status s = bad(name_ + ": results['" + sample_ + "'][" + std::to_string(box_index_++) + "]",
-                   "a box must be an object");
-    if (scope_.predefined) return fail(s);
-    auto& slot = custom_[sample_];
-    if (slot.second.is_ok()) slot.second = s;
-    return true;
+  void box_type_error() {
+    const int index = box_index_++;
+    if (current_ == kNoEntry || !entries_[current_].second.status.is_ok()) return;
+    entries_[current_].second.status =
+        bad(name_ + ": results['" + sample_ + "'][" + std::to_string(index) + "]",
+            "a box must be an object");
   }
 
   void begin_sample() {
     box_index_ = 0;
-    boxes_.clear();
-    odd_.clear();
-    sample_error_ = Status::ok();
-    if (scope_.predefined && !seen_.insert(sample_).second) {
-      status_ = bad(name_, "results: duplicate sample token '" + sample_ + "'");
-    }
+    current_ = keep_sample() ? reset_entry() : kNoEntry;
   }
   bool end_sample() {
-    if (!status_.is_ok()) return false;
-    if (scope_.predefined) {
-      sub_.boxes.sample_tokens.push_back(sample_);
-      sub_.boxes.boxes.push_back(std::move(boxes_));
-      for (auto& o : odd_) sub_.odd_sample_fields.push_back(std::move(o));
-    } else if (wanted_.count(sample_)) {
-      auto& slot = custom_[sample_];
-      if (slot.second.is_ok()) slot.second = sample_error_;
-      slot.first = std::move(boxes_);
-      custom_odd_[sample_] = std::move(odd_);
-    }
-    boxes_ = {};
-    odd_ = {};
+    current_ = kNoEntry;
     return true;
   }
   void begin_box() {
@@ -368,30 +387,29 @@ class SubmissionHandler : public rapidjson::BaseReaderHandler<rapidjson::UTF8<>,
   bool end_box() {
     in_box_ = false;
     const int index = box_index_++;
-    if (!keep_sample() || !sample_error_.is_ok()) return true;
+    if (current_ == kNoEntry) return true;
+    SampleEntry& entry = entries_[current_].second;
+    if (!entry.status.is_ok()) return true;
     EvalBox box;
     Status s = check_box(fields_, name_ + ": results['" + sample_ + "'][" + std::to_string(index) + "]", box);
     if (!s) {
-      if (scope_.predefined) return fail(s);
-      sample_error_ = s;
+      entry.status = std::move(s);
       return true;
     }
     const std::string& field = fields_[kSampleToken].str;
     if (field == sample_) {
       box.match_sample = kMatchSampleIsKey;
     } else {
-      // Index into the per-sample odd list; rebased when the sample is appended.
-      box.match_sample = static_cast<std::int32_t>(sub_.odd_sample_fields.size() + odd_.size());
-      odd_.push_back(field);
+      box.match_sample = static_cast<std::int32_t>(entry.odd.size());  // rebased when appended
+      entry.odd.push_back(field);
     }
-    boxes_.push_back(box);
+    entry.boxes.push_back(box);
     return true;
   }
 
   const std::string& name_;
   const SubmissionScope& scope_;
-  Submission& sub_;
-  std::unordered_set<std::string> wanted_, seen_;
+  std::unordered_set<std::string> wanted_;
   rapidjson::StringBuffer meta_buf_;
   MetaWriter meta_writer_;
   int meta_depth_ = 0;
@@ -403,19 +421,42 @@ class SubmissionHandler : public rapidjson::BaseReaderHandler<rapidjson::UTF8<>,
   int field_ = -1;
   int box_index_ = 0;
   std::array<FieldVal, kNumFields> fields_;
-  std::vector<EvalBox> boxes_;
-  std::vector<std::string> odd_;
-  Status sample_error_;
-  Status status_;
-  std::unordered_map<std::string, std::pair<std::vector<EvalBox>, Status>> custom_;
-  std::unordered_map<std::string, std::vector<std::string>> custom_odd_;
+  Status status_;          // fatal for the parse (the top level is not an object)
+  Status results_status_;  // the last "results" value is not an object
+  std::vector<std::pair<std::string, SampleEntry>> entries_;
+  std::unordered_map<std::string, std::size_t> entry_index_;
+  std::size_t current_ = kNoEntry;  // entry of the list being read, kNoEntry = not kept
 };
+
+// Python dict semantics for a parsed object: of repeated keys the last value wins, at the place of
+// the first occurrence (json.load of {"a": 1, "b": 2, "a": 3} gives {"a": 3, "b": 2}). Recursive.
+void keep_last_duplicates(rapidjson::Value& v, rapidjson::Document::AllocatorType& alloc) {
+  if (v.IsArray()) {
+    for (auto& item : v.GetArray()) keep_last_duplicates(item, alloc);
+    return;
+  }
+  if (!v.IsObject()) return;
+  rapidjson::Value out(rapidjson::kObjectType);
+  std::unordered_map<std::string, rapidjson::SizeType> first;
+  for (auto& m : v.GetObject()) {
+    keep_last_duplicates(m.value, alloc);
+    auto [it, inserted] =
+        first.emplace(std::string(m.name.GetString(), m.name.GetStringLength()), out.MemberCount());
+    if (inserted) {
+      out.AddMember(m.name, m.value, alloc);  // moves
+    } else {
+      (out.MemberBegin() + it->second)->value = m.value;  // moves
+    }
+  }
+  v = out;  // moves
+}
 
 template <typename Stream>
 Result<Submission> parse_stream(Stream& stream, const std::string& name, const SubmissionScope& scope,
                                 const std::string* text) {
+  using Handler = SubmissionHandler;
   Submission sub;
-  SubmissionHandler handler(name, scope, sub);
+  Handler handler(name, scope);
   rapidjson::Reader reader;
   auto res = reader.Parse<kParseFlags>(stream, handler);
   if (!handler.status().is_ok()) return handler.status();
@@ -425,33 +466,41 @@ Result<Submission> parse_stream(Stream& stream, const std::string& name, const S
                   name + ": malformed JSON at " + where + ": " + rapidjson::GetParseError_En(res.Code()));
   }
   if (!handler.saw_results()) return bad(name, "Error: No field `results` in result file");
-  if (!scope.predefined) {
+  if (!handler.results_status().is_ok()) return handler.results_status();
+  // Appends one results key, rebasing its odd sample_token fields onto the global list.
+  auto append = [&sub](const std::string& token, Handler::SampleEntry& entry) {
+    for (EvalBox& b : entry.boxes) {
+      if (b.match_sample != kMatchSampleIsKey) {
+        const std::size_t local = static_cast<std::size_t>(b.match_sample);
+        b.match_sample = static_cast<std::int32_t>(sub.odd_sample_fields.size());
+        sub.odd_sample_fields.push_back(std::move(entry.odd[local]));
+      }
+    }
+    sub.boxes.sample_tokens.push_back(token);
+    sub.boxes.boxes.push_back(std::move(entry.boxes));
+  };
+  if (scope.predefined) {
+    for (auto& [token, entry] : handler.entries()) {
+      if (!entry.status.is_ok()) return entry.status;
+      append(token, entry);
+    }
+  } else {
     for (const auto& token : scope.samples) {
-      auto it = handler.custom_samples().find(token);
-      if (it == handler.custom_samples().end()) {
-        return bad(name, "results: sample " + token + " of the split is missing (devkit: KeyError)");
-      }
-      if (!it->second.second.is_ok()) return it->second.second;
-      auto& boxes = it->second.first;
-      auto& odd = handler.custom_odd()[token];
-      // Rebase odd-field indices onto the global list.
-      std::size_t local = 0;
-      for (EvalBox& b : boxes) {
-        if (b.match_sample != kMatchSampleIsKey) {
-          b.match_sample = static_cast<std::int32_t>(sub.odd_sample_fields.size());
-          sub.odd_sample_fields.push_back(odd[local++]);
-        }
-      }
-      sub.boxes.sample_tokens.push_back(token);
-      sub.boxes.boxes.push_back(std::move(boxes));
+      Handler::SampleEntry* entry = handler.find(token);
+      if (!entry)
+        return bad(name,
+                   "results: sample " + token + " of the split is missing (devkit: KeyError)");
+      if (!entry->status.is_ok()) return entry->status;
+      append(token, *entry);
     }
   }
-  sub.samples_in_file = scope.predefined ? sub.boxes.sample_tokens.size() : handler.custom_samples().size();
+  sub.samples_in_file = handler.entries().size();
   if (!handler.saw_meta()) return bad(name, "missing field 'meta' (devkit: KeyError 'meta')");
   sub.meta = std::make_shared<rapidjson::Document>();
   const std::string meta = handler.meta_text();
   sub.meta->Parse<kParseFlags>(meta.c_str(), meta.size());
   if (sub.meta->HasParseError()) return bad(name, "'meta' could not be copied");
+  keep_last_duplicates(*sub.meta, sub.meta->GetAllocator());
   for (std::size_t i = 0; i < sub.boxes.sample_tokens.size(); ++i) {
     if (Status s = check_box_count(sub.boxes.boxes[i].size(),
                                    name + ": results['" + sub.boxes.sample_tokens[i] + "']");

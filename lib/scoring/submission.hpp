@@ -34,7 +34,10 @@ struct Submission {
   std::size_t samples_in_file = 0;
 };
 
-// Parses JSON text (bare NaN/Infinity accepted). `name` is used in messages (usually the path).
+// Parses JSON text (bare NaN/Infinity tokens are read; box values must then be finite). Repeated
+// keys behave as in Python's json.load, which the devkit uses: the last value wins, at the place of
+// the key's first occurrence ("results", "meta", a sample token, a box field, keys inside "meta").
+// `name` is used in messages (usually the path).
 Result<Submission> parse_submission(const std::string& text, const std::string& name,
                                     const SubmissionScope& scope);
 // Reads the file and parses it.

@@ -68,6 +68,12 @@ class BadInputTest : public ::testing::Test {
     opts.eval_set = "mini_val";
     return evaluate_detection(opts, nullptr);
   }
+  // perfect.json with `extra` inserted as the first members of the top-level object.
+  static std::string PerfectWithLeadingMembers(const std::string& extra) {
+    std::string text = read_text(golden_dir() + "/predictions/perfect.json");
+    const std::size_t brace = text.find('{');
+    return text.substr(0, brace + 1) + extra + "," + text.substr(brace + 1);
+  }
 
   TempDir dir_{"bad_input"};
   rapidjson::Document doc_;
@@ -140,6 +146,67 @@ TEST_F(BadInputTest, ScoreAboveOneIsAcceptedAsByTheDevkit) {
   FirstBox()["detection_score"].SetDouble(1.5);  // spec §1: float(), range not checked
   auto r = Score(Write("above_one.json"));
   ASSERT_TRUE(r.is_ok()) << r.status().message();
+}
+
+TEST_F(BadInputTest, LastOfTwoResultsKeysWinsAsInPython) {
+  const std::string path = dir_.file("two_results.json");
+  write_text(path, PerfectWithLeadingMembers(R"("results": {"not-a-token": 5})"));
+  auto twice = Score(path);
+  ASSERT_TRUE(twice.is_ok()) << twice.status().message();
+  auto once = Score(golden_dir() + "/predictions/perfect.json");
+  ASSERT_TRUE(once.is_ok()) << once.status().message();
+  EXPECT_EQ(twice->metrics.nd_score, once->metrics.nd_score);
+  EXPECT_EQ(twice->samples, once->samples);
+}
+
+TEST_F(BadInputTest, LastResultsKeyIsTheOneValidated) {
+  std::string text = read_text(golden_dir() + "/predictions/perfect.json");
+  text.insert(text.rfind('}'), R"(, "results": {"not-a-token": 5})");
+  const std::string path = dir_.file("bad_last_results.json");
+  write_text(path, text);
+  ExpectRejected(path, {"results['not-a-token']", "must be a list of boxes"});
+}
+
+TEST_F(BadInputTest, RepeatedSampleKeyKeepsLastListAtFirstPlace) {
+  rapidjson::Value& list = doc_["results"].MemberBegin()->value;
+  rapidjson::Value saved(list, doc_.GetAllocator());
+  list.Clear();
+  auto emptied = Score(Write("emptied_sample.json"));  // the first sample's list emptied in place
+  ASSERT_TRUE(emptied.is_ok()) << emptied.status().message();
+  list = saved;
+  rapidjson::Value key(first_token_.c_str(), doc_.GetAllocator());
+  doc_["results"].AddMember(key, rapidjson::Value(rapidjson::kArrayType), doc_.GetAllocator());
+  auto repeated =
+      Score(Write("repeated_sample.json"));  // ... or emptied by a repeated key at the end
+  ASSERT_TRUE(repeated.is_ok()) << repeated.status().message();
+  EXPECT_EQ(repeated->metrics.nd_score, emptied->metrics.nd_score);
+  EXPECT_EQ(repeated->pred_counts.original, emptied->pred_counts.original);
+  EXPECT_EQ(repeated->samples, emptied->samples);
+}
+
+TEST_F(BadInputTest, RepeatedBoxFieldKeepsLastValue) {
+  FirstBox()["detection_score"].SetDouble(std::numeric_limits<double>::quiet_NaN());
+  FirstBox().AddMember("detection_score", 0.5, doc_.GetAllocator());
+  auto r = Score(Write("repeated_field.json"));
+  ASSERT_TRUE(r.is_ok()) << r.status().message();
+}
+
+TEST_F(BadInputTest, RepeatedMetaKeysKeepLastValues) {
+  doc_.RemoveMember("meta");
+  const std::string path = Write("two_meta.json");
+  std::string text = read_text(path);
+  text.insert(
+      text.find('{') + 1,
+      R"("meta": {"first": 1}, "meta": {"use_camera": false, "x": 1, "use_camera": true},)");
+  write_text(path, text);
+  auto r = Score(path);
+  ASSERT_TRUE(r.is_ok()) << r.status().message();
+  const rapidjson::Value& meta = *r->meta;
+  ASSERT_TRUE(meta.IsObject());
+  EXPECT_EQ(meta.MemberCount(), 2u);
+  EXPECT_FALSE(meta.HasMember("first"));
+  EXPECT_STREQ(meta.MemberBegin()->name.GetString(), "use_camera");
+  EXPECT_TRUE(meta["use_camera"].GetBool());
 }
 
 TEST_F(BadInputTest, MissingTableNamesTheFile) {
