@@ -82,7 +82,7 @@ Result<EvalOutcome> evaluate_detection(const EvalOptions& opts, std::FILE* log) 
     });
   }
   EvalTimings timings;
-  auto sub = read_submission(opts.results_path, scope);
+  auto sub = read_submission(opts.results_path, scope, opts.max_results_bytes);
   timings.submission_s = seconds_since(t0);
   if (!sub) {
     if (gt_future.valid()) gt_future.wait();

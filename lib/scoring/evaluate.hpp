@@ -15,6 +15,7 @@
 #include "common/status.hpp"
 #include "scoring/filter.hpp"
 #include "scoring/metrics.hpp"
+#include "scoring/submission.hpp"
 
 namespace faultline::scoring {
 
@@ -24,6 +25,7 @@ struct EvalOptions {
   std::string version = "v1.0-trainval";
   std::string eval_set = "val";  // predefined split name or a key of <dataroot>/<version>/splits.json
   std::string output_dir;        // metrics_summary.json / metrics_details.json; empty = do not write
+  std::uint64_t max_results_bytes = kDefaultMaxResultsBytes;  // larger results files are refused
 };
 
 // Wall seconds per phase; GT loading overlaps submission parsing on a second thread.

@@ -9,9 +9,12 @@
 #include <rapidjson/reader.h>
 #include <rapidjson/stringbuffer.h>
 #include <rapidjson/writer.h>
+#include <sys/stat.h>
 
+#include <cerrno>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <memory>
 #include <unordered_map>
 #include <unordered_set>
@@ -93,6 +96,90 @@ Status check_box(const std::array<FieldVal, kNumFields>& f, const std::string& w
   if (f[kAttrName].kind != FieldVal::kString) return bad(where, "'attribute_name' must be a string");
   fields.attribute_name = f[kAttrName].str;
   return check_box_fields(fields, where, box);
+}
+
+// A RapidJSON input stream over a FILE* (RapidJSON's FileReadStream with a byte budget): it reads
+// at most `limit` bytes, then reports end of input and over_limit(), so /dev/zero or a runaway file
+// cannot exhaust memory or time. A read error or a NUL byte (which RapidJSON would take for the end
+// of the text, accepting trailing garbage) also ends the input and is reported.
+class BoundedFileStream {
+ public:
+  using Ch = char;
+  BoundedFileStream(std::FILE* fp, std::uint64_t limit) : fp_(fp), limit_(limit), buf_(1 << 16) {
+    read();
+  }
+  Ch Peek() const { return *current_; }
+  Ch Take() {
+    const Ch c = *current_;
+    read();
+    return c;
+  }
+  std::size_t Tell() const { return count_ + static_cast<std::size_t>(current_ - buf_.data()); }
+  // Output functions RapidJSON requires of a stream type; never called on an input stream.
+  void Put(Ch) { RAPIDJSON_ASSERT(false); }
+  void Flush() { RAPIDJSON_ASSERT(false); }
+  Ch* PutBegin() {
+    RAPIDJSON_ASSERT(false);
+    return nullptr;
+  }
+  std::size_t PutEnd(Ch*) {
+    RAPIDJSON_ASSERT(false);
+    return 0;
+  }
+  static constexpr std::size_t kNoNul = static_cast<std::size_t>(-1);
+  bool over_limit() const { return over_limit_; }
+  int read_error() const { return read_error_; }
+  // Offset of the first NUL byte (which ends the input: not JSON text), kNoNul if none was read.
+  std::size_t nul_offset() const { return nul_offset_; }
+
+ private:
+  void read() {
+    if (current_ < last_) {
+      ++current_;
+      return;
+    }
+    if (eof_) return;
+    count_ += read_count_;
+    const std::size_t capacity = buf_.size() - 1;  // one byte for the '\0' end marker
+    std::size_t want = capacity;
+    if (limit_ - total_ < want) want = static_cast<std::size_t>(limit_ - total_) + 1;  // one past
+    read_count_ = std::fread(buf_.data(), 1, want, fp_);
+    if (read_count_ < want && std::ferror(fp_)) read_error_ = errno != 0 ? errno : EIO;
+    total_ += read_count_;
+    if (const void* nul = std::memchr(buf_.data(), '\0', read_count_)) {  // RapidJSON's end marker
+      read_count_ = static_cast<std::size_t>(static_cast<const char*>(nul) - buf_.data());
+      nul_offset_ = count_ + read_count_;
+    } else if (total_ > limit_) {
+      over_limit_ = true;
+      read_count_ = 0;
+    }
+    current_ = buf_.data();
+    last_ = buf_.data() + read_count_;
+    buf_[read_count_] = '\0';
+    if (read_count_ == 0 || read_count_ < want || over_limit_ || read_error_ != 0 ||
+        nul_offset_ != kNoNul) {
+      eof_ = true;  // last_ points at the '\0' marker
+    } else {
+      --last_;
+    }
+  }
+
+  std::FILE* fp_;
+  std::uint64_t limit_;
+  std::vector<char> buf_;
+  char* current_ = nullptr;
+  char* last_ = nullptr;
+  std::size_t read_count_ = 0, count_ = 0;
+  std::uint64_t total_ = 0;
+  bool eof_ = false, over_limit_ = false;
+  int read_error_ = 0;
+  std::size_t nul_offset_ = kNoNul;
+};
+
+Status too_large(const std::string& path, std::uint64_t max_bytes, const std::string& found) {
+  return Status(StatusCode::kInvalidArgument, path + ": results file is over the size limit of " +
+                                                  std::to_string(max_bytes) + " bytes (" + found +
+                                                  "; raise it with --max-results-bytes)");
 }
 
 using MetaWriter = rapidjson::Writer<rapidjson::StringBuffer, rapidjson::UTF8<>, rapidjson::UTF8<>,
@@ -533,20 +620,47 @@ Result<Submission> parse_submission(const std::string& text, const std::string& 
   return parse_stream(ms, name, scope, &text);
 }
 
-Result<Submission> read_submission(const std::string& path, const SubmissionScope& scope) {
+Result<Submission> read_submission(const std::string& path, const SubmissionScope& scope,
+                                   std::uint64_t max_bytes) {
+  struct stat st {};
+  if (::stat(path.c_str(), &st) != 0) {
+    return Status(errno == ENOENT ? StatusCode::kNotFound : StatusCode::kIoError,
+                  path + ": cannot open results file: " + std::strerror(errno));
+  }
+  if (S_ISDIR(st.st_mode)) {
+    return Status(StatusCode::kInvalidArgument, path + ": is a directory, not a results JSON file");
+  }
+  const bool regular = S_ISREG(st.st_mode);
+  if (regular && static_cast<std::uint64_t>(st.st_size) > max_bytes) {
+    return too_large(path, max_bytes, std::to_string(st.st_size) + " bytes");
+  }
   std::unique_ptr<std::FILE, int (*)(std::FILE*)> fp(std::fopen(path.c_str(), "rb"), &std::fclose);
-  if (!fp) return Status(StatusCode::kNotFound, path + ": cannot open results file");
-  std::vector<char> buf(1 << 16);
-  rapidjson::FileReadStream fs(fp.get(), buf.data(), buf.size());
+  if (!fp) {
+    return Status(StatusCode::kNotFound,
+                  path + ": cannot open results file: " + std::strerror(errno));
+  }
+  BoundedFileStream fs(fp.get(), max_bytes);
   auto r = parse_stream(fs, path, scope, nullptr);
-  if (!r && r.status().code() == StatusCode::kCorruptData &&
+  // A file that grows while read, or a device / pipe (/dev/zero): the limit stops the stream.
+  if (fs.over_limit()) return too_large(path, max_bytes, "more than that");
+  if (fs.read_error() != 0) {
+    return Status(StatusCode::kIoError, path + ": read failed: " + std::strerror(fs.read_error()));
+  }
+  if (fs.nul_offset() != BoundedFileStream::kNoNul) {
+    return Status(StatusCode::kCorruptData, path + ": NUL byte at offset " +
+                                                std::to_string(fs.nul_offset()) +
+                                                ": not a JSON text file");
+  }
+  if (regular && !r && r.status().code() == StatusCode::kCorruptData &&
       r.status().message().find("malformed JSON") != std::string::npos) {
-    // Re-read to give line and column of the syntax error.
+    // Re-read (at most the limit) to give line and column of the syntax error.
     std::rewind(fp.get());
     std::string text;
     char chunk[1 << 16];
     std::size_t n;
-    while ((n = std::fread(chunk, 1, sizeof chunk, fp.get())) > 0) text.append(chunk, n);
+    while (text.size() < max_bytes && (n = std::fread(chunk, 1, sizeof chunk, fp.get())) > 0) {
+      text.append(chunk, n);
+    }
     return parse_submission(text, path, scope);
   }
   return r;

@@ -10,6 +10,7 @@
 #include <limits>
 
 #include "scoring/evaluate.hpp"
+#include "scoring/submission.hpp"
 #include "test_util.hpp"
 
 namespace faultline::scoring {
@@ -60,12 +61,14 @@ class BadInputTest : public ::testing::Test {
   }
 
   // Scores a submission of mini_val; the outcome or its error.
-  Result<EvalOutcome> Score(const std::string& results) {
+  Result<EvalOutcome> Score(const std::string& results,
+                            std::uint64_t max_bytes = kDefaultMaxResultsBytes) {
     EvalOptions opts;
     opts.results_path = results;
     opts.dataroot = golden_dir() + "/dataset";
     opts.version = "v1.0-mini";
     opts.eval_set = "mini_val";
+    opts.max_results_bytes = max_bytes;
     return evaluate_detection(opts, nullptr);
   }
   // perfect.json with `extra` inserted as the first members of the top-level object.
@@ -207,6 +210,38 @@ TEST_F(BadInputTest, RepeatedMetaKeysKeepLastValues) {
   EXPECT_FALSE(meta.HasMember("first"));
   EXPECT_STREQ(meta.MemberBegin()->name.GetString(), "use_camera");
   EXPECT_TRUE(meta["use_camera"].GetBool());
+}
+
+TEST_F(BadInputTest, DirectoryIsNamedAsADirectory) {
+  ExpectRejected(dir_.str(), {dir_.str(), "is a directory"});
+}
+
+TEST_F(BadInputTest, DevZeroIsRefusedAtTheFirstByte) {
+  ExpectRejected("/dev/zero", {"/dev/zero", "NUL byte at offset 0"});
+}
+
+TEST_F(BadInputTest, FileOverTheSizeLimitIsRefusedUnread) {
+  const std::string path = golden_dir() + "/predictions/perfect.json";
+  auto r = Score(path, 1000);
+  ASSERT_FALSE(r.is_ok());
+  EXPECT_NE(r.status().message().find(path + ": results file is over the size limit of 1000 bytes"),
+            std::string::npos)
+      << r.status().message();
+}
+
+TEST_F(BadInputTest, SparseFileOverTheDefaultLimitIsRefused) {
+  const std::string path = dir_.file("huge.json");
+  write_text(path, "");
+  std::filesystem::resize_file(path, kDefaultMaxResultsBytes + 1);  // sparse: no disk used
+  ExpectRejected(path, {path, "over the size limit of 2147483648 bytes", "2147483649 bytes"});
+}
+
+TEST_F(BadInputTest, StreamWithoutKnownSizeStopsAtTheLimit) {
+  // /proc files report size 0, so only the streaming bound can stop them.
+  auto r = Score("/proc/self/status", 16);
+  ASSERT_FALSE(r.is_ok());
+  EXPECT_NE(r.status().message().find("over the size limit of 16 bytes"), std::string::npos)
+      << r.status().message();
 }
 
 TEST_F(BadInputTest, MissingTableNamesTheFile) {
