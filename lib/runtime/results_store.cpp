@@ -6,10 +6,13 @@
 #include <rapidjson/writer.h>
 #include <unistd.h>
 
+#include <array>
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
 #include <fstream>
+
+#include "scoring/box_rules.hpp"
 
 namespace faultline::runtime {
 
@@ -18,30 +21,85 @@ namespace {
 using JsonWriter = rapidjson::Writer<rapidjson::StringBuffer, rapidjson::UTF8<>, rapidjson::UTF8<>,
                                      rapidjson::CrtAllocator, rapidjson::kWriteNanAndInfFlag>;
 
-// Writes `values`, padded with `fill` (or truncated) to exactly `n` numbers, as the devkit wants.
-void write_array(JsonWriter& w, const google::protobuf::RepeatedField<double>& values, int n,
-                 const std::vector<double>& fill) {
+constexpr unsigned kJournalParseFlags = rapidjson::kParseNanAndInfFlag;
+
+// `values` padded with `fill` (or truncated) to exactly N numbers, as protocol.md §8 says.
+template <std::size_t N>
+std::array<double, N> padded(const google::protobuf::RepeatedField<double>& values,
+                             const std::array<double, N>& fill) {
+  std::array<double, N> out = fill;
+  for (std::size_t i = 0; i < N && static_cast<int>(i) < values.size(); ++i) {
+    out[i] = values.Get(static_cast<int>(i));
+  }
+  return out;
+}
+
+template <std::size_t N>
+void write_array(JsonWriter& w, const std::array<double, N>& values) {
   w.StartArray();
-  for (int i = 0; i < n; ++i) w.Double(i < values.size() ? values.Get(i) : fill[static_cast<std::size_t>(i)]);
+  for (double v : values) w.Double(v);
   w.EndArray();
 }
 
-std::string boxes_json(const msgs::DetectionArray& d) {
+// Checks `d` with the scorer's rules and renders the boxes it keeps as a JSON array into `boxes`.
+// `valid`: the split's sample tokens, null = any token.
+AddDetectionsReport check_and_render(const msgs::DetectionArray& d,
+                                     const std::unordered_set<std::string>* valid,
+                                     const std::string& split_name, std::string& boxes) {
+  AddDetectionsReport report;
+  const std::string& token = d.sample_token();
+  const std::string where = "results['" + token + "']";
+  Status array_status;
+  if (token.empty()) {
+    array_status = {StatusCode::kInvalidArgument, "empty sample_token: the array names no sample"};
+  } else if (valid && !valid->count(token)) {
+    array_status = {StatusCode::kInvalidArgument,
+                    where + ": sample token not in " + split_name +
+                        " (the scorer refuses a results file with a token outside the split)"};
+  } else {
+    array_status = scoring::check_box_count(static_cast<std::size_t>(d.detections_size()), where);
+  }
+  if (!array_status.is_ok()) {
+    report.array_rejected = true;
+    report.reasons.push_back(array_status.message());
+    return report;
+  }
   rapidjson::StringBuffer buf;
   JsonWriter w(buf);
   w.StartArray();
-  for (const auto& det : d.detections()) {
+  for (int i = 0; i < d.detections_size(); ++i) {
+    const msgs::Detection& det = d.detections(i);
+    const auto translation = padded<3>(det.translation(), {0, 0, 0});
+    const auto size = padded<3>(det.size(), {1, 1, 1});
+    const auto rotation = padded<4>(det.rotation(), {1, 0, 0, 0});
+    const auto velocity = padded<2>(det.velocity(), {0, 0});
+    scoring::BoxFields fields;
+    fields.translation = {translation.data(), translation.size()};
+    fields.size = {size.data(), size.size()};
+    fields.rotation = {rotation.data(), rotation.size()};
+    fields.velocity = {velocity.data(), velocity.size()};
+    fields.detection_name = det.detection_name();
+    fields.attribute_name = det.attribute_name();
+    fields.detection_score = det.detection_score();
+    scoring::EvalBox checked;
+    if (Status s =
+            scoring::check_box_fields(fields, where + "[" + std::to_string(i) + "]", checked);
+        !s) {
+      ++report.boxes_rejected;
+      report.reasons.push_back(s.message());
+      continue;
+    }
     w.StartObject();
     w.Key("sample_token");
-    w.String(d.sample_token().c_str());
+    w.String(token.c_str(), static_cast<rapidjson::SizeType>(token.size()));
     w.Key("translation");
-    write_array(w, det.translation(), 3, {0, 0, 0});
+    write_array(w, translation);
     w.Key("size");
-    write_array(w, det.size(), 3, {1, 1, 1});
+    write_array(w, size);
     w.Key("rotation");
-    write_array(w, det.rotation(), 4, {1, 0, 0, 0});
+    write_array(w, rotation);
     w.Key("velocity");
-    write_array(w, det.velocity(), 2, {0, 0});
+    write_array(w, velocity);
     w.Key("detection_name");
     w.String(det.detection_name().c_str());
     w.Key("detection_score");
@@ -49,9 +107,55 @@ std::string boxes_json(const msgs::DetectionArray& d) {
     w.Key("attribute_name");
     w.String(det.attribute_name().c_str());
     w.EndObject();
+    ++report.boxes_kept;
   }
   w.EndArray();
-  return buf.GetString();
+  boxes = buf.GetString();
+  return report;
+}
+
+// A journal "boxes" list back into a DetectionArray; false names the first unreadable box.
+Status boxes_from_json(const rapidjson::Value& boxes, msgs::DetectionArray& d) {
+  for (rapidjson::SizeType i = 0; i < boxes.Size(); ++i) {
+    const rapidjson::Value& b = boxes[i];
+    const std::string where = "box " + std::to_string(i);
+    if (!b.IsObject()) return {StatusCode::kCorruptData, where + " is not an object"};
+    msgs::Detection* det = d.add_detections();
+    auto numbers = [&](const char* key, google::protobuf::RepeatedField<double>* out) -> Status {
+      auto it = b.FindMember(key);
+      if (it == b.MemberEnd()) return Status::ok();
+      if (!it->value.IsArray())
+        return {StatusCode::kCorruptData, where + ": '" + key + "' is not a list"};
+      for (const auto& v : it->value.GetArray()) {
+        if (!v.IsNumber())
+          return {StatusCode::kCorruptData, where + ": '" + key + "' holds a non-number"};
+        out->Add(v.GetDouble());
+      }
+      return Status::ok();
+    };
+    auto text = [&](const char* key, std::string* out) -> Status {
+      auto it = b.FindMember(key);
+      if (it == b.MemberEnd() || !it->value.IsString()) {
+        return {StatusCode::kCorruptData, where + ": '" + key + "' is not a string"};
+      }
+      out->assign(it->value.GetString(), it->value.GetStringLength());
+      return Status::ok();
+    };
+    for (Status s :
+         {numbers("translation", det->mutable_translation()), numbers("size", det->mutable_size()),
+          numbers("rotation", det->mutable_rotation()),
+          numbers("velocity", det->mutable_velocity()),
+          text("detection_name", det->mutable_detection_name()),
+          text("attribute_name", det->mutable_attribute_name())}) {
+      if (!s.is_ok()) return s;
+    }
+    auto score = b.FindMember("detection_score");
+    if (score == b.MemberEnd() || !score->value.IsNumber()) {
+      return {StatusCode::kCorruptData, where + ": 'detection_score' is not a number"};
+    }
+    det->set_detection_score(score->value.GetDouble());
+  }
+  return Status::ok();
 }
 
 Status write_all(int fd, const std::string& text, const std::string& path) {
@@ -83,34 +187,61 @@ ResultsStore::~ResultsStore() {
   if (journal_fd_ >= 0) ::close(journal_fd_);
 }
 
-Result<std::uint64_t> ResultsStore::recover() {
+Result<RecoverReport> ResultsStore::recover() {
   std::ifstream in(journal_path_);
-  std::uint64_t lines = 0;
+  RecoverReport report;
+  std::uint64_t line_no = 0;
+  auto bad_line = [&](const std::string& why) {
+    if (report.bad_lines++ == 0) report.first_bad = "line " + std::to_string(line_no) + ": " + why;
+  };
   for (std::string line; std::getline(in, line);) {
+    ++line_no;
     rapidjson::Document doc;
-    doc.Parse<rapidjson::kParseNanAndInfFlag>(line.c_str());
-    if (doc.HasParseError() || !doc.IsObject() || !doc.HasMember("kind") || !doc.HasMember("sample_token") ||
-        !doc["sample_token"].IsString()) {
-      continue;  // a torn last line after a crash
-    }
-    const std::string token = doc["sample_token"].GetString();
-    const std::string kind = doc["kind"].IsString() ? doc["kind"].GetString() : "";
-    if (kind == "sample") {
-      samples_.insert(token);
-    } else if (kind == "detections" && doc.HasMember("boxes") && doc["boxes"].IsArray()) {
-      rapidjson::StringBuffer buf;
-      rapidjson::Writer<rapidjson::StringBuffer, rapidjson::UTF8<>, rapidjson::UTF8<>, rapidjson::CrtAllocator,
-                        rapidjson::kWriteNanAndInfFlag>
-          w(buf);
-      doc["boxes"].Accept(w);
-      boxes_[token] = buf.GetString();
-      if (doc.HasMember("detector") && doc["detector"].IsString()) detector_ = doc["detector"].GetString();
-    } else {
+    doc.Parse<kJournalParseFlags>(line.c_str(), line.size());
+    if (doc.HasParseError()) {
+      bad_line("not valid JSON (a line torn by a crash?)");
       continue;
     }
-    ++lines;
+    if (!doc.IsObject() || !doc.HasMember("kind") || !doc["kind"].IsString() ||
+        !doc.HasMember("sample_token") || !doc["sample_token"].IsString()) {
+      bad_line("not a journal record (needs string 'kind' and 'sample_token')");
+      continue;
+    }
+    const std::string token = doc["sample_token"].GetString();
+    const std::string kind = doc["kind"].GetString();
+    if (kind == "sample") {
+      samples_.insert(token);
+    } else if (kind == "detections") {
+      if (!doc.HasMember("boxes") || !doc["boxes"].IsArray()) {
+        bad_line("detections without a 'boxes' list");
+        continue;
+      }
+      msgs::DetectionArray d;
+      d.set_sample_token(token);
+      if (Status s = boxes_from_json(doc["boxes"], d); !s.is_ok()) {
+        bad_line(s.message());
+        continue;
+      }
+      std::string boxes;
+      const AddDetectionsReport checked =
+          check_and_render(d, valid_samples_ ? &*valid_samples_ : nullptr, split_name_, boxes);
+      if (checked.array_rejected) {
+        bad_line(checked.reasons.front());
+        continue;
+      }
+      report.boxes_rejected += checked.boxes_rejected;
+      boxes_[token] = std::move(boxes);
+      if (doc.HasMember("detector") && doc["detector"].IsString() &&
+          doc["detector"].GetStringLength()) {
+        detector_ = doc["detector"].GetString();
+      }
+    } else {
+      bad_line("unknown kind '" + kind + "'");
+      continue;
+    }
+    ++report.lines;
   }
-  return lines;
+  return report;
 }
 
 Status ResultsStore::append(const std::string& line) {
@@ -125,18 +256,35 @@ Status ResultsStore::append(const std::string& line) {
   return Status::ok();
 }
 
-Status ResultsStore::add_detections(const msgs::DetectionArray& detections) {
-  const std::string boxes = boxes_json(detections);
+AddDetectionsReport ResultsStore::add_detections(const msgs::DetectionArray& detections) {
+  std::string boxes;
+  AddDetectionsReport report =
+      check_and_render(detections, valid_samples_ ? &*valid_samples_ : nullptr, split_name_, boxes);
+  if (report.array_rejected) {
+    if (!detections.sample_token().empty()) refused_.insert(detections.sample_token());
+    return report;
+  }
   if (!detections.detector().empty()) detector_ = detections.detector();
-  const Status s = append(R"({"kind":"detections","sample_token":)" + json_string(detections.sample_token()) +
-                          R"(,"detector":)" + json_string(detections.detector()) + R"(,"boxes":)" + boxes + "}");
-  boxes_[detections.sample_token()] = boxes;  // kept even when the journal failed
-  return s;
+  report.journal =
+      append(R"({"kind":"detections","sample_token":)" + json_string(detections.sample_token()) +
+             R"(,"detector":)" + json_string(detections.detector()) + R"(,"boxes":)" + boxes + "}");
+  boxes_[detections.sample_token()] = std::move(boxes);  // kept even when the journal failed
+  return report;
 }
 
 Status ResultsStore::add_sample(const std::string& sample_token) {
+  if (valid_samples_ && !valid_samples_->count(sample_token)) {
+    return {StatusCode::kInvalidArgument, "sample " + sample_token + ": not in " + split_name_ +
+                                              " (the scorer refuses a results file with it)"};
+  }
   if (!samples_.insert(sample_token).second) return Status::ok();
   return append(R"({"kind":"sample","sample_token":)" + json_string(sample_token) + "}");
+}
+
+void ResultsStore::set_valid_samples(std::unordered_set<std::string> tokens,
+                                     std::string split_name) {
+  valid_samples_ = std::move(tokens);
+  split_name_ = std::move(split_name);
 }
 
 std::size_t ResultsStore::sample_count() const {

@@ -33,6 +33,11 @@ struct SinkConfig {
   bool exit_on_last = true;                                  // exit after finalizing on last_in_run
   int finalize_grace_ms = 5000;                              // after last_in_run, wait this long for detections
   std::map<std::string, std::string> meta;                   // extra keys for the results' "meta"
+  // The scorer's token rule: with a dataroot, only the samples of `eval_set` (as `faultline score
+  // --eval_set`) are accepted; other tokens are refused and counted. "" = any token is accepted.
+  std::string dataroot;                   // nuScenes root for the split; "" = off
+  std::string version = "v1.0-trainval";  // dataset version under dataroot
+  std::string eval_set = "val";           // split scored later (or splits.json key)
   double stats_window_s = 1.0;                               // statistics window (s)
   double stats_log_period_s = 5.0;                           // info log of statistics every this many s
   std::map<std::string, std::string> remap;                  // topic remaps (from -> to)
@@ -52,6 +57,9 @@ struct SinkConfig {
     v("exit_on_last", exit_on_last, "exit after the last sample");
     v("finalize_grace_ms", finalize_grace_ms, "wait for detections after last_in_run (ms)");
     v("meta", meta, "extra keys for the results meta");
+    v("dataroot", dataroot, "nuScenes root: refuse tokens outside eval_set; empty = accept any");
+    v("version", version, "dataset version under dataroot");
+    v("eval_set", eval_set, "split whose samples are the valid tokens");
     v("stats_window_s", stats_window_s, "statistics window (s)");
     v("stats_log_period_s", stats_log_period_s, "info log period of statistics (s)");
     v("remap", remap, "topic remaps from -> to");
@@ -66,6 +74,10 @@ struct SinkCounts {
   std::uint64_t acks_sent = 0;
   std::uint64_t malformed = 0;
   std::uint64_t recovered_lines = 0;
+  std::uint64_t rejected_boxes = 0;   // refused by the scorer's rules (the rest of the array kept)
+  std::uint64_t rejected_arrays = 0;  // refused whole: no sample_token, or over 500 boxes
+  std::uint64_t rejected_boundaries = 0;  // boundaries naming a sample outside the split (dataroot)
+  std::uint64_t bad_journal_lines = 0;    // journal lines that could not be read back on resume
 };
 
 class SinkLoop {

@@ -11,6 +11,7 @@
 #include <cstdio>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "common/status.hpp"
 #include "scoring/filter.hpp"
@@ -41,6 +42,13 @@ struct EvalOutcome {
   std::size_t samples = 0;
   std::shared_ptr<rapidjson::Document> meta;
 };
+
+// The sample tokens a results file for `eval_set` must hold, in sample.json order: the scenes of a
+// predefined split (version-checked as by the scorer) or of a splits.json key. Errors name the
+// file.
+Result<std::vector<std::string>> eval_set_samples(const std::string& dataroot,
+                                                  const std::string& version,
+                                                  const std::string& eval_set);
 
 // Progress lines in the devkit's wording go to `log` (may be null). Nothing is written on failure.
 Result<EvalOutcome> evaluate_detection(const EvalOptions& opts, std::FILE* log);

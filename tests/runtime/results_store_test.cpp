@@ -9,6 +9,8 @@
 #include <fstream>
 #include <sstream>
 
+#include "scoring/submission.hpp"
+
 namespace faultline::runtime {
 namespace {
 
@@ -37,21 +39,36 @@ class ResultsStoreTest : public ::testing::Test {
     }
     return d;
   }
-  rapidjson::Document Read() const {
+  std::string ReadText() const {
     std::ifstream in(Out());
     std::stringstream ss;
     ss << in.rdbuf();
+    return ss.str();
+  }
+  rapidjson::Document Read() const {
     rapidjson::Document doc;
-    doc.Parse<rapidjson::kParseNanAndInfFlag>(ss.str().c_str());
+    doc.Parse<rapidjson::kParseNanAndInfFlag | rapidjson::kParseFullPrecisionFlag>(
+        ReadText().c_str());
     EXPECT_FALSE(doc.HasParseError());
     return doc;
+  }
+  // The output read by the scorer's own reader (every box checked, as `faultline score` does).
+  Status Scorable() const {
+    auto sub = scoring::parse_submission(ReadText(), Out(), scoring::SubmissionScope{});
+    return sub.is_ok() ? Status::ok() : sub.status();
+  }
+  static void ExpectReason(const AddDetectionsReport& report, const std::string& fragment) {
+    for (const auto& r : report.reasons) {
+      if (r.find(fragment) != std::string::npos) return;
+    }
+    ADD_FAILURE() << "no refusal mentions '" << fragment << "'";
   }
   std::string dir_;
 };
 
 TEST_F(ResultsStoreTest, FinalizeWritesSubmissionFormatWithEmptySamples) {
   ResultsStore store(Out(), Journal());
-  ASSERT_TRUE(store.add_detections(Array("s1", 2)).is_ok());
+  ASSERT_TRUE(store.add_detections(Array("s1", 2)).journal.is_ok());
   ASSERT_TRUE(store.add_sample("s1").is_ok());
   ASSERT_TRUE(store.add_sample("s2").is_ok());
   ASSERT_TRUE(store.finalize(R"({"run":"unit"})").is_ok());
@@ -74,14 +91,16 @@ TEST_F(ResultsStoreTest, FinalizeWritesSubmissionFormatWithEmptySamples) {
 TEST_F(ResultsStoreTest, RestartRecoversFromJournalAndSkipsTornLine) {
   {
     ResultsStore store(Out(), Journal());
-    ASSERT_TRUE(store.add_detections(Array("s1", 1)).is_ok());
+    ASSERT_TRUE(store.add_detections(Array("s1", 1)).journal.is_ok());
     ASSERT_TRUE(store.add_sample("s2").is_ok());
   }  // "crash": never finalized
   std::ofstream(Journal(), std::ios::app) << R"({"kind":"detections","sample_token":"s3","bo)";
   ResultsStore again(Out(), Journal());
   auto r = again.recover();
   ASSERT_TRUE(r.is_ok());
-  EXPECT_EQ(*r, 2u);
+  EXPECT_EQ(r->lines, 2u);
+  EXPECT_EQ(r->bad_lines, 1u);  // the torn line is counted, not dropped silently
+  EXPECT_NE(r->first_bad.find("line 3: not valid JSON"), std::string::npos) << r->first_bad;
   EXPECT_TRUE(again.has_detections("s1"));
   EXPECT_FALSE(again.has_detections("s3"));
   EXPECT_EQ(again.detector(), "fake");
@@ -94,8 +113,8 @@ TEST_F(ResultsStoreTest, RestartRecoversFromJournalAndSkipsTornLine) {
 
 TEST_F(ResultsStoreTest, LaterArrayForSameSampleReplacesEarlier) {
   ResultsStore store(Out(), Journal());
-  ASSERT_TRUE(store.add_detections(Array("s1", 3)).is_ok());
-  ASSERT_TRUE(store.add_detections(Array("s1", 1)).is_ok());
+  ASSERT_TRUE(store.add_detections(Array("s1", 3)).journal.is_ok());
+  ASSERT_TRUE(store.add_detections(Array("s1", 1)).journal.is_ok());
   ASSERT_TRUE(store.finalize("{}").is_ok());
   EXPECT_EQ(Read()["results"]["s1"].Size(), 1u);
   ResultsStore recovered(Out(), Journal());
@@ -113,6 +132,99 @@ TEST_F(ResultsStoreTest, RemoveJournalStartsFresh) {
 TEST_F(ResultsStoreTest, UnwritableOutputIsAnIoError) {
   ResultsStore store(dir_ + "/missing/dir/results.json", Journal());
   EXPECT_EQ(store.finalize("{}").code(), StatusCode::kIoError);
+}
+
+TEST_F(ResultsStoreTest, BoxesTheScorerRejectsAreRefusedAndTheRestKept) {
+  auto d = Array("s1", 5);
+  d.mutable_detections(1)->set_detection_score(NAN);
+  d.mutable_detections(2)->set_detection_name("Car");
+  d.mutable_detections(3)->set_translation(0, INFINITY);
+  d.mutable_detections(4)->set_detection_score(-0.1);
+  ResultsStore store(Out(), Journal());
+  const AddDetectionsReport report = store.add_detections(d);
+  EXPECT_FALSE(report.array_rejected);
+  EXPECT_EQ(report.boxes_kept, 1u);
+  EXPECT_EQ(report.boxes_rejected, 4u);
+  ASSERT_EQ(report.reasons.size(), 4u);
+  ExpectReason(report, "results['s1'][1]: 'detection_score' is NaN");
+  ExpectReason(report, "results['s1'][2]: Error: Unknown detection_name Car");
+  ExpectReason(report, "results['s1'][3]: 'translation'[0] is Infinity");
+  ExpectReason(report, "results['s1'][4]: negative 'detection_score'");
+  ASSERT_TRUE(store.add_sample("s1").is_ok());
+  ASSERT_TRUE(store.finalize("{}").is_ok());
+  EXPECT_EQ(Read()["results"]["s1"].Size(), 1u);
+  const Status scorable = Scorable();
+  EXPECT_TRUE(scorable.is_ok()) << scorable.message();
+}
+
+TEST_F(ResultsStoreTest, ArrayOverFiveHundredBoxesIsRefusedWhole) {
+  ResultsStore store(Out(), Journal());
+  ASSERT_TRUE(store.add_detections(Array("s1", 2)).journal.is_ok());
+  const AddDetectionsReport report = store.add_detections(Array("s1", 501));
+  EXPECT_TRUE(report.array_rejected);
+  EXPECT_EQ(report.boxes_kept, 0u);
+  EXPECT_TRUE(store.add_detections(Array("s2", 501)).array_rejected);
+  EXPECT_FALSE(store.has_detections("s2"));
+  EXPECT_TRUE(store.answered("s2"));  // the sink does not wait for another array of s2
+  ExpectReason(report, "results['s1']: Error: Only <= 500 boxes per sample allowed! (found 501)");
+  ASSERT_TRUE(store.finalize("{}").is_ok());
+  EXPECT_EQ(Read()["results"]["s1"].Size(), 2u);  // the earlier array stands
+  EXPECT_TRUE(Scorable().is_ok());
+  ResultsStore recovered(Out(), Journal());  // the refused array was not journaled
+  auto r = recovered.recover();
+  ASSERT_TRUE(r.is_ok());
+  EXPECT_EQ(r->lines, 1u);
+  EXPECT_EQ(r->bad_lines, 0u);
+}
+
+TEST_F(ResultsStoreTest, ArrayWithoutSampleTokenIsRefused) {
+  ResultsStore store(Out(), Journal());
+  const AddDetectionsReport report = store.add_detections(Array("", 1));
+  EXPECT_TRUE(report.array_rejected);
+  ExpectReason(report, "empty sample_token");
+  EXPECT_EQ(store.detection_count(), 0u);
+}
+
+TEST_F(ResultsStoreTest, TokensOutsideTheSplitAreRefusedWhenTheSplitIsKnown) {
+  ResultsStore store(Out(), Journal());
+  store.set_valid_samples({"s1", "s2"}, "split 'unit'");
+  ASSERT_TRUE(store.add_sample("s1").is_ok());
+  EXPECT_EQ(store.add_sample("bogus").code(), StatusCode::kInvalidArgument);
+  ASSERT_TRUE(store.add_detections(Array("s1", 1)).journal.is_ok());
+  const AddDetectionsReport report = store.add_detections(Array("bogus", 1));
+  EXPECT_TRUE(report.array_rejected);
+  ExpectReason(report, "results['bogus']: sample token not in split 'unit'");
+  ASSERT_TRUE(store.finalize("{}").is_ok());
+  const auto doc = Read();
+  EXPECT_EQ(doc["results"].MemberCount(), 1u);
+  EXPECT_TRUE(doc["results"].HasMember("s1"));
+}
+
+TEST_F(ResultsStoreTest, WithoutASplitAnyTokenIsKept) {
+  ResultsStore store(Out(), Journal());
+  ASSERT_TRUE(store.add_sample("s1").is_ok());
+  ASSERT_TRUE(store.add_detections(Array("s1", 1)).journal.is_ok());
+  ASSERT_TRUE(store.add_detections(Array("s2", 1)).journal.is_ok());
+  ASSERT_TRUE(store.finalize("{}").is_ok());
+  EXPECT_EQ(Read()["results"].MemberCount(), 2u);
+}
+
+TEST_F(ResultsStoreTest, UnreadableJournalLinesAreCountedAndNamed) {
+  {
+    ResultsStore store(Out(), Journal());
+    ASSERT_TRUE(store.add_sample("s1").is_ok());
+  }
+  std::ofstream(Journal(), std::ios::app) << "garbage\n"
+                                          << R"({"kind":"detections","sample_token":"s2"})"
+                                          << "\n"
+                                          << R"({"kind":"sample","sample_token":"s3"})"
+                                          << "\n";
+  ResultsStore again(Out(), Journal());
+  auto r = again.recover();
+  ASSERT_TRUE(r.is_ok());
+  EXPECT_EQ(r->lines, 2u);
+  EXPECT_EQ(r->bad_lines, 2u);
+  EXPECT_NE(r->first_bad.find("line 2"), std::string::npos) << r->first_bad;
 }
 
 }  // namespace

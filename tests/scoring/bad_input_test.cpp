@@ -8,6 +8,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <limits>
+#include <set>
 
 #include "scoring/evaluate.hpp"
 #include "scoring/submission.hpp"
@@ -242,6 +243,16 @@ TEST_F(BadInputTest, StreamWithoutKnownSizeStopsAtTheLimit) {
   ASSERT_FALSE(r.is_ok());
   EXPECT_NE(r.status().message().find("over the size limit of 16 bytes"), std::string::npos)
       << r.status().message();
+}
+
+TEST_F(BadInputTest, EvalSetSamplesAreTheKeysTheScorerRequires) {
+  auto tokens = eval_set_samples(golden_dir() + "/dataset", "v1.0-mini", "mini_val");
+  ASSERT_TRUE(tokens.is_ok()) << tokens.status().message();
+  EXPECT_EQ(tokens->size(), 18u);  // scene-0916 (10) + scene-0103 (8), spec §11
+  std::set<std::string> keys;
+  for (const auto& m : doc_["results"].GetObject()) keys.insert(m.name.GetString());
+  EXPECT_EQ(std::set<std::string>(tokens->begin(), tokens->end()), keys);
+  EXPECT_FALSE(eval_set_samples(golden_dir() + "/dataset", "v1.0-mini", "val").is_ok());  // version
 }
 
 TEST_F(BadInputTest, MissingTableNamesTheFile) {
