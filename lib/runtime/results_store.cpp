@@ -13,15 +13,30 @@
 #include <fstream>
 
 #include "scoring/box_rules.hpp"
+#include "scoring/py_json.hpp"
 
 namespace faultline::runtime {
 
 namespace {
 
-using JsonWriter = rapidjson::Writer<rapidjson::StringBuffer, rapidjson::UTF8<>, rapidjson::UTF8<>,
+using BaseWriter = rapidjson::Writer<rapidjson::StringBuffer, rapidjson::UTF8<>, rapidjson::UTF8<>,
                                      rapidjson::CrtAllocator, rapidjson::kWriteNanAndInfFlag>;
 
-constexpr unsigned kJournalParseFlags = rapidjson::kParseNanAndInfFlag;
+// A RapidJSON writer whose doubles are the shortest text that reads back bit-identical
+// (scoring::py_float, std::to_chars), as Python's repr; RapidJSON's Grisu2 text is not always
+// the shortest. Bare NaN, as the devkit reads it.
+class JsonWriter : public BaseWriter {
+ public:
+  using BaseWriter::BaseWriter;
+  bool Double(double d) {
+    const std::string text = scoring::py_float(d);
+    return RawValue(text.c_str(), text.size(), rapidjson::kNumberType);
+  }
+};
+
+// Full precision: RapidJSON's default number parser can be off in the last digit.
+constexpr unsigned kJournalParseFlags =
+    rapidjson::kParseNanAndInfFlag | rapidjson::kParseFullPrecisionFlag;
 
 // `values` padded with `fill` (or truncated) to exactly N numbers, as protocol.md §8 says.
 template <std::size_t N>

@@ -6,6 +6,7 @@
 // read back (a torn last line after a crash) are counted and reported. Journal lines:
 //   {"kind":"sample","sample_token":"..."}                      (a SampleBoundary was seen)
 //   {"kind":"detections","sample_token":"...","detector":"...","boxes":[{...submission box...}]}
+// Doubles are written as shortest round-trip text (std::to_chars) and read back bit-identical.
 #pragma once
 
 #include <cstdint>

@@ -6,6 +6,7 @@
 
 #include <cmath>
 #include <cstdlib>
+#include <cstring>
 #include <fstream>
 #include <sstream>
 
@@ -225,6 +226,45 @@ TEST_F(ResultsStoreTest, UnreadableJournalLinesAreCountedAndNamed) {
   EXPECT_EQ(r->lines, 2u);
   EXPECT_EQ(r->bad_lines, 2u);
   EXPECT_NE(r->first_bad.find("line 2"), std::string::npos) << r->first_bad;
+}
+
+TEST_F(ResultsStoreTest, JournalRoundTripKeepsDoublesBitIdentical) {
+  // Values whose last digit changed through the journal (RapidJSON's default, lossy number parser)
+  // or whose written text was not the shortest (Grisu2): 17.735607021569707 for ...706.
+  const std::vector<double> values = {17.735607021569706,
+                                      -12.195538540161131,
+                                      0.035484969720691824,
+                                      -0.043900158474224425,
+                                      5e-324,
+                                      1.7976931348623157e308};
+  msgs::DetectionArray d = Array("s1", 1);
+  auto* box = d.mutable_detections(0);
+  box->set_translation(0, values[0]);
+  box->set_translation(1, values[1]);
+  box->set_translation(2, values[4]);
+  box->set_size(0, values[2]);
+  box->set_velocity(0, values[3]);
+  box->add_velocity(values[5]);
+  box->set_detection_score(values[2]);
+  {
+    ResultsStore store(Out(), Journal());
+    ASSERT_TRUE(store.add_detections(d).journal.is_ok());
+  }  // "crash": the results come from the journal alone
+  ResultsStore again(Out(), Journal());
+  ASSERT_TRUE(again.recover().is_ok());
+  ASSERT_TRUE(again.finalize("{}").is_ok());
+  const std::string text = ReadText();
+  EXPECT_NE(text.find("17.735607021569706"), std::string::npos) << text;
+  const auto doc = Read();
+  const auto& out = doc["results"]["s1"][0];
+  auto same_bits = [](double a, double b) { return std::memcmp(&a, &b, sizeof a) == 0; };
+  EXPECT_TRUE(same_bits(out["translation"][0].GetDouble(), values[0]));
+  EXPECT_TRUE(same_bits(out["translation"][1].GetDouble(), values[1]));
+  EXPECT_TRUE(same_bits(out["translation"][2].GetDouble(), values[4]));
+  EXPECT_TRUE(same_bits(out["size"][0].GetDouble(), values[2]));
+  EXPECT_TRUE(same_bits(out["velocity"][0].GetDouble(), values[3]));
+  EXPECT_TRUE(same_bits(out["velocity"][1].GetDouble(), values[5]));
+  EXPECT_TRUE(same_bits(out["detection_score"].GetDouble(), values[2]));
 }
 
 }  // namespace
