@@ -193,6 +193,21 @@ std::string json_string(const std::string& s) {
   return buf.GetString();
 }
 
+std::string identity_json(const std::map<std::string, std::string>& identity) {
+  std::string out = "{";
+  for (const auto& [k, v] : identity) {
+    out += (out.size() > 1 ? "," : "") + json_string(k) + ":" + json_string(v);
+  }
+  return out + "}";
+}
+
+// {dataset=..., split=...} for messages; "{}" when the run has no identity.
+std::string describe_identity(const std::map<std::string, std::string>& identity) {
+  std::string out = "{";
+  for (const auto& [k, v] : identity) out += (out.size() > 1 ? ", " : "") + k + "=" + v;
+  return out + "}";
+}
+
 }  // namespace
 
 ResultsStore::ResultsStore(std::string output_path, std::string journal_path)
@@ -206,6 +221,15 @@ Result<RecoverReport> ResultsStore::recover() {
   std::ifstream in(journal_path_);
   RecoverReport report;
   std::uint64_t line_no = 0;
+  std::optional<std::map<std::string, std::string>> journal_identity;  // nullopt: no "run" line
+  // A journal of another run: forget what was read of it (it stays on disk, untouched).
+  auto refuse = [this](Status why) {
+    boxes_.clear();
+    samples_.clear();
+    refused_.clear();
+    detector_.clear();
+    return why;
+  };
   auto bad_line = [&](const std::string& why) {
     if (report.bad_lines++ == 0) report.first_bad = "line " + std::to_string(line_no) + ": " + why;
   };
@@ -217,9 +241,29 @@ Result<RecoverReport> ResultsStore::recover() {
       bad_line("not valid JSON (a line torn by a crash?)");
       continue;
     }
-    if (!doc.IsObject() || !doc.HasMember("kind") || !doc["kind"].IsString() ||
-        !doc.HasMember("sample_token") || !doc["sample_token"].IsString()) {
+    const bool run_line = doc.IsObject() && doc.HasMember("kind") && doc["kind"] == "run";
+    if (!run_line && (!doc.IsObject() || !doc.HasMember("kind") || !doc["kind"].IsString() ||
+                      !doc.HasMember("sample_token") || !doc["sample_token"].IsString())) {
       bad_line("not a journal record (needs string 'kind' and 'sample_token')");
+      continue;
+    }
+    if (run_line) {
+      if (!doc.HasMember("run") || !doc["run"].IsObject()) {
+        bad_line("run record without a 'run' object");
+        continue;
+      }
+      std::map<std::string, std::string> identity;
+      for (const auto& m : doc["run"].GetObject()) {
+        identity[m.name.GetString()] = m.value.IsString() ? m.value.GetString() : "";
+      }
+      if (journal_identity && *journal_identity != identity) {
+        return refuse(Status(StatusCode::kInvalidArgument,
+                             journal_path_ + ": holds two runs (" +
+                                 describe_identity(*journal_identity) + " and, at line " +
+                                 std::to_string(line_no) + ", " + describe_identity(identity) +
+                                 "); remove it or set resume: false"));
+      }
+      journal_identity = std::move(identity);
       continue;
     }
     const std::string token = doc["sample_token"].GetString();
@@ -256,6 +300,22 @@ Result<RecoverReport> ResultsStore::recover() {
     }
     ++report.lines;
   }
+  if (!journal_identity && report.lines == 0) return report;  // nothing read back: nothing to mix
+  if (!journal_identity && !identity_.empty()) {
+    return refuse(Status(StatusCode::kInvalidArgument,
+                         journal_path_ +
+                             ": written by a run of unknown identity (no \"run\" line); this " +
+                             "run is " + describe_identity(identity_) +
+                             ": refusing to mix them (remove the journal or set resume: false)"));
+  }
+  if (journal_identity && *journal_identity != identity_) {
+    return refuse(Status(StatusCode::kInvalidArgument,
+                         journal_path_ + ": written by run " +
+                             describe_identity(*journal_identity) + ", but this run is " +
+                             describe_identity(identity_) +
+                             ": refusing to mix them (remove the journal or set resume: false)"));
+  }
+  identity_written_ = journal_identity.has_value();
   return report;
 }
 
@@ -264,6 +324,15 @@ Status ResultsStore::append(const std::string& line) {
     journal_fd_ = ::open(journal_path_.c_str(), O_WRONLY | O_CREAT | O_APPEND | O_CLOEXEC, 0644);
     if (journal_fd_ < 0) {
       return {StatusCode::kIoError, journal_path_ + ": cannot open journal: " + std::strerror(errno)};
+    }
+  }
+  if (!identity_written_) {  // a new journal starts with the run's identity
+    identity_written_ = true;
+    if (Status s =
+            write_all(journal_fd_, R"({"kind":"run","run":)" + identity_json(identity_) + "}\n",
+                      journal_path_);
+        !s.is_ok()) {
+      return s;
     }
   }
   if (Status s = write_all(journal_fd_, line + "\n", journal_path_); !s.is_ok()) return s;
@@ -341,6 +410,7 @@ Status ResultsStore::remove_journal() {
     ::close(journal_fd_);
     journal_fd_ = -1;
   }
+  identity_written_ = false;
   if (std::remove(journal_path_.c_str()) != 0 && errno != ENOENT) {
     return {StatusCode::kIoError, journal_path_ + ": cannot remove"};
   }

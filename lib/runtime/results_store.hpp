@@ -3,7 +3,9 @@
 // Boxes are checked with the scorer's own rules (scoring/box_rules.hpp) before they are kept, so
 // the results are never unscorable because of one bad box; rejections are counted and reported. A
 // sink that restarts calls recover() and continues where the journal ends; lines that cannot be
-// read back (a torn last line after a crash) are counted and reported. Journal lines:
+// read back (a torn last line after a crash) are counted and reported. A journal names the run that
+// wrote it, and recover() refuses a journal of another run. Journal lines:
+//   {"kind":"run","run":{"dataset":"...","split":"...",...}}    (first line: the run's identity)
 //   {"kind":"sample","sample_token":"..."}                      (a SampleBoundary was seen)
 //   {"kind":"detections","sample_token":"...","detector":"...","boxes":[{...submission box...}]}
 // Doubles are written as shortest round-trip text (std::to_chars) and read back bit-identical.
@@ -33,7 +35,7 @@ struct AddDetectionsReport {
 
 // What recover() read back from a journal.
 struct RecoverReport {
-  std::uint64_t lines = 0;           // lines applied
+  std::uint64_t lines = 0;           // sample and detections lines applied
   std::uint64_t bad_lines = 0;       // lines that could not be parsed or applied (skipped)
   std::string first_bad;             // "line N: why" of the first bad line, "" when none
   std::uint64_t boxes_rejected = 0;  // boxes of applied lines refused by the scorer's rules
@@ -49,7 +51,14 @@ class ResultsStore {
   // Restricts sample tokens to `tokens` (the evaluation split's samples, which the scorer requires
   // of a predefined split). Without this call any non-empty token is accepted.
   void set_valid_samples(std::unordered_set<std::string> tokens, std::string split_name);
-  // Loads an existing journal (a no-op when there is none).
+  // The run's identity (dataset, split, injector configuration, seeds, detector, ...; key ->
+  // value), written as the first line of a new journal. Call before recover() and the first add.
+  void set_run_identity(std::map<std::string, std::string> identity) {
+    identity_ = std::move(identity);
+  }
+  // Loads an existing journal (a no-op when there is none). A journal written by another run (its
+  // identity differs from set_run_identity's, or it has none while this run has one) is refused
+  // with kInvalidArgument naming both identities; the journal is then left as it is.
   Result<RecoverReport> recover();
   // Checks the array with the scorer's rules (scoring/box_rules.hpp): an empty sample_token, a
   // token outside the valid samples (set_valid_samples) or more than 500 boxes refuses the whole
@@ -65,7 +74,8 @@ class ResultsStore {
   // Writes {"meta": {...}, "results": {...}} to a temp file, fsyncs and renames it over the output.
   // `meta_extra` is a JSON object text merged into "meta" after the five use_* flags.
   Status finalize(const std::string& meta_extra_json) const;
-  // Removes the journal after a complete run (a restart then starts fresh).
+  // Removes the journal: after a complete run (a restart then starts fresh), or before a run that
+  // does not resume (so nothing of an earlier run can mix into it).
   Status remove_journal();
 
   bool has_detections(const std::string& sample_token) const { return boxes_.count(sample_token) > 0; }
@@ -84,11 +94,13 @@ class ResultsStore {
   Status append(const std::string& line);
   std::string output_path_, journal_path_;
   int journal_fd_ = -1;
+  bool identity_written_ = false;             // the journal's first line names this run
   std::map<std::string, std::string> boxes_;  // sample_token -> JSON array text of its boxes
   std::set<std::string> samples_;
   std::set<std::string> refused_;  // tokens of arrays refused whole
   std::string detector_;
   std::optional<std::unordered_set<std::string>> valid_samples_;
+  std::map<std::string, std::string> identity_;
   std::string split_name_;  // names valid_samples_ in messages
 };
 

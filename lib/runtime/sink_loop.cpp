@@ -56,6 +56,7 @@ struct SinkLoop::Impl {
               static_cast<DurationNs>(cfg.stats_log_period_s * 1e9)),
         detections_topic(remap_topic(cfg.remap, cfg.detections_topic)),
         sync_topic(remap_topic(cfg.remap, cfg.sync_topic)) {
+    store.set_run_identity(cfg.run);
     if (!cfg.dataroot.empty()) {
       auto tokens = scoring::eval_set_samples(cfg.dataroot, cfg.version, cfg.eval_set);
       if (!tokens) {
@@ -98,6 +99,13 @@ struct SinkLoop::Impl {
     }
     w.Key("faultline_detector");
     w.String(store.detector().c_str());
+    w.Key("faultline_run");  // the run's identity, as recorded in the journal
+    w.StartObject();
+    for (const auto& [k, v] : cfg.run) {
+      w.Key(k.c_str());
+      w.String(v.c_str());
+    }
+    w.EndObject();
     w.Key("faultline_sink");
     w.String(config::describe(cfg).c_str());
     if (processing_n >
@@ -140,9 +148,14 @@ std::string SinkLoop::detections_endpoint() const { return impl_->detections.end
 
 int SinkLoop::run(const std::atomic<bool>& stop) {
   Impl& m = *impl_;
-  if (m.cfg.resume) {
+  if (!m.cfg.resume) {
+    if (Status s = m.store.remove_journal(); !s.is_ok()) {
+      throw ConfigError("detection_sink: resume = false: " + s.message());
+    }
+  } else {
     auto r = m.store.recover();
-    if (r.is_ok()) {
+    if (!r.is_ok()) throw ConfigError("detection_sink: resume = true: " + r.status().message());
+    {
       counts_.recovered_lines = r->lines;
       counts_.bad_journal_lines = r->bad_lines;
       counts_.rejected_boxes += r->boxes_rejected;

@@ -8,6 +8,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
+#include <map>
 #include <sstream>
 
 #include "scoring/submission.hpp"
@@ -101,7 +102,7 @@ TEST_F(ResultsStoreTest, RestartRecoversFromJournalAndSkipsTornLine) {
   ASSERT_TRUE(r.is_ok());
   EXPECT_EQ(r->lines, 2u);
   EXPECT_EQ(r->bad_lines, 1u);  // the torn line is counted, not dropped silently
-  EXPECT_NE(r->first_bad.find("line 3: not valid JSON"), std::string::npos) << r->first_bad;
+  EXPECT_NE(r->first_bad.find("line 4: not valid JSON"), std::string::npos) << r->first_bad;
   EXPECT_TRUE(again.has_detections("s1"));
   EXPECT_FALSE(again.has_detections("s3"));
   EXPECT_EQ(again.detector(), "fake");
@@ -225,7 +226,7 @@ TEST_F(ResultsStoreTest, UnreadableJournalLinesAreCountedAndNamed) {
   ASSERT_TRUE(r.is_ok());
   EXPECT_EQ(r->lines, 2u);
   EXPECT_EQ(r->bad_lines, 2u);
-  EXPECT_NE(r->first_bad.find("line 2"), std::string::npos) << r->first_bad;
+  EXPECT_NE(r->first_bad.find("line 3"), std::string::npos) << r->first_bad;  // after "run"
 }
 
 TEST_F(ResultsStoreTest, JournalRoundTripKeepsDoublesBitIdentical) {
@@ -265,6 +266,56 @@ TEST_F(ResultsStoreTest, JournalRoundTripKeepsDoublesBitIdentical) {
   EXPECT_TRUE(same_bits(out["velocity"][0].GetDouble(), values[3]));
   EXPECT_TRUE(same_bits(out["velocity"][1].GetDouble(), values[5]));
   EXPECT_TRUE(same_bits(out["detection_score"].GetDouble(), values[2]));
+}
+
+TEST_F(ResultsStoreTest, JournalOfTheSameRunIsResumed) {
+  const std::map<std::string, std::string> run = {{"dataset", "mini"}, {"injector", "fog/easy"}};
+  {
+    ResultsStore store(Out(), Journal());
+    store.set_run_identity(run);
+    ASSERT_TRUE(store.add_detections(Array("s1", 1)).journal.is_ok());
+  }
+  ResultsStore again(Out(), Journal());
+  again.set_run_identity(run);
+  auto r = again.recover();
+  ASSERT_TRUE(r.is_ok()) << r.status().message();
+  EXPECT_EQ(r->lines, 1u);
+  EXPECT_TRUE(again.has_detections("s1"));
+  ASSERT_TRUE(again.add_sample("s2").is_ok());  // appends without a second "run" line
+  ResultsStore third(Out(), Journal());
+  third.set_run_identity(run);
+  auto r3 = third.recover();
+  ASSERT_TRUE(r3.is_ok()) << r3.status().message();
+  EXPECT_EQ(r3->lines, 2u);
+}
+
+TEST_F(ResultsStoreTest, JournalOfAnotherRunIsRefusedNamingBoth) {
+  {
+    ResultsStore store(Out(), Journal());
+    store.set_run_identity({{"dataset", "mini"}, {"injector", "clean"}});
+    ASSERT_TRUE(store.add_detections(Array("s1", 1)).journal.is_ok());
+  }
+  ResultsStore later(Out(), Journal());
+  later.set_run_identity({{"dataset", "mini"}, {"injector", "camera_crash/hard"}});
+  auto r = later.recover();
+  ASSERT_FALSE(r.is_ok());
+  const std::string& msg = r.status().message();
+  EXPECT_NE(msg.find(Journal() + ": written by run {dataset=mini, injector=clean}, but this run is "
+                                 "{dataset=mini, injector=camera_crash/hard}"),
+            std::string::npos)
+      << msg;
+  EXPECT_FALSE(later.has_detections("s1"));
+}
+
+TEST_F(ResultsStoreTest, JournalWithoutIdentityIsRefusedByARunWithOne) {
+  std::ofstream(Journal()) << R"({"kind":"sample","sample_token":"s1"})"
+                           << "\n";  // older sink
+  ResultsStore store(Out(), Journal());
+  store.set_run_identity({{"dataset", "mini"}});
+  auto r = store.recover();
+  ASSERT_FALSE(r.is_ok());
+  EXPECT_NE(r.status().message().find("unknown identity"), std::string::npos)
+      << r.status().message();
 }
 
 }  // namespace
