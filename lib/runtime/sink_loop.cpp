@@ -35,7 +35,7 @@ struct SinkLoop::Impl {
   ResultsStore store;
   StatsReporter stats;
   transport::LogLimiter bad_limiter;
-  transport::LogLimiter reject_limiter;
+  std::uint64_t refusals_logged = 0;  // refusal lines at warn so far (see log_refusal)
   std::string detections_topic, sync_topic;
   std::uint64_t ack_seq = 0;
 
@@ -82,6 +82,24 @@ struct SinkLoop::Impl {
       pc.snd_hwm = 1000;
       pc.send_timeout_ns = 100 * kNsPerMs;
       acks = std::make_unique<transport::Publisher>(pc);
+    }
+  }
+
+  // Each refusal (box, array or boundary) is logged once with the scorer's reason: the first
+  // kRefusalsAtWarn at warn, later ones at debug (a detector with a systematic bug would otherwise
+  // write one line per box). The counts in SinkCounts, the closing line and the meta stay exact.
+  static constexpr std::uint64_t kRefusalsAtWarn = 20;
+  void log_refusal(const std::string& what, const std::string& reason) {
+    if (refusals_logged >= kRefusalsAtWarn) {
+      log->debug("refused {}: {}", what, reason);
+      return;
+    }
+    log->warn("refused {}: {}", what, reason);
+    if (++refusals_logged == kRefusalsAtWarn) {
+      log->warn(
+          "{} refusals logged; further ones at debug level (SPDLOG_LEVEL={}=debug), counted "
+          "in the closing line and the results meta",
+          kRefusalsAtWarn, node);
     }
   }
 
@@ -210,21 +228,8 @@ int SinkLoop::run(const std::atomic<bool>& stop) {
           counts_.boxes += static_cast<std::uint64_t>(d.detections_size());
           if (added.array_rejected) ++counts_.rejected_arrays;
           counts_.rejected_boxes += added.boxes_rejected;
-          for (const auto& reason : added.reasons) m.log->debug("refused: {}", reason);
-          if (!added.reasons.empty() && m.reject_limiter.allow()) {
-            // One warning per array with refusals (at most one a second; the counts stay exact).
-            m.log->warn(
-                "sample={}: refused {} by the scorer's rules: {}{} ({} boxes, {} arrays "
-                "refused so far; {} such lines held back)",
-                d.sample_token(),
-                added.array_rejected ? std::string("the whole array")
-                                     : std::to_string(added.boxes_rejected) + " of " +
-                                           std::to_string(d.detections_size()) + " boxes",
-                added.reasons.front(),
-                added.reasons.size() > 1
-                    ? " (and " + std::to_string(added.reasons.size() - 1) + " more)"
-                    : std::string(),
-                counts_.rejected_boxes, counts_.rejected_arrays, m.reject_limiter.suppressed());
+          for (const auto& reason : added.reasons) {
+            m.log_refusal(added.array_rejected ? "DetectionArray" : "box", reason);
           }
           m.log->debug("detections sample={} boxes={}", d.sample_token(), d.detections_size());
           if (m.acks) {
@@ -251,10 +256,7 @@ int SinkLoop::run(const std::atomic<bool>& stop) {
           if (Status s = m.store.add_sample(b.sample_token()); !s.is_ok()) {
             if (s.code() == StatusCode::kInvalidArgument) {
               ++counts_.rejected_boundaries;
-              if (m.reject_limiter.allow()) {
-                m.log->warn("boundary refused: {} ({} so far)", s.message(),
-                            counts_.rejected_boundaries);
-              }
+              m.log_refusal("boundary", s.message());
             } else {
               m.log->error("journal: {}", s.message());
             }
