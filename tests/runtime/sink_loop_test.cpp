@@ -127,7 +127,8 @@ TEST_F(SinkLoopTest, RefusesWhatTheScorerRejectsCountsAndLogsItOnce) {
   const auto nan = Lines("results['s1'][1]: 'detection_score' is NaN");
   ASSERT_EQ(nan.size(), 1u);
   EXPECT_EQ(nan[0].rfind("warning refused box: ", 0), 0u) << nan[0];
-  const auto many = Lines("results['s2']: Error: Only <= 500 boxes per sample allowed! (found 501)");
+  const auto many =
+      Lines("results['s2']: Error: Only <= 500 boxes per sample allowed! (found 501)");
   ASSERT_EQ(many.size(), 1u);
   EXPECT_EQ(many[0].rfind("warning refused DetectionArray: ", 0), 0u) << many[0];
   EXPECT_EQ(Lines("1 boxes and 1 arrays refused").size(), 1u);  // the closing line

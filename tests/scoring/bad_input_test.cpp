@@ -295,5 +295,24 @@ TEST_F(BadInputTest, CliExitsNonZeroAndNamesTheFile) {
       << read_text(err);
 }
 
+TEST_F(BadInputTest, CliNamesADirectoryAndHonoursMaxResultsBytes) {
+  const std::string bin = std::string(FAULTLINE_BIN_DIR) + "/faultline";
+  ASSERT_TRUE(std::filesystem::exists(bin)) << bin << " not built";
+  const std::string err = dir_.file("stderr.txt");
+  auto score = [&](const std::string& results, const std::string& extra) {
+    const std::string cmd = bin + " score --results " + results + " --dataroot " + golden_dir() +
+                            "/dataset --version v1.0-mini --eval_set mini_val --output_dir " +
+                            dir_.file("o") + " " + extra + " > /dev/null 2> " + err;
+    return std::system(cmd.c_str());
+  };
+  EXPECT_NE(score(dir_.str(), ""), 0);
+  EXPECT_NE(read_text(err).find(dir_.str() + ": is a directory"), std::string::npos)
+      << read_text(err);
+  EXPECT_NE(score(golden_dir() + "/predictions/perfect.json", "--max-results-bytes 1000"), 0);
+  EXPECT_NE(read_text(err).find("over the size limit of 1000 bytes"), std::string::npos)
+      << read_text(err);
+  EXPECT_EQ(score(golden_dir() + "/predictions/perfect.json", "--quiet"), 0) << read_text(err);
+}
+
 }  // namespace
 }  // namespace faultline::scoring
