@@ -173,21 +173,19 @@ int SinkLoop::run(const std::atomic<bool>& stop) {
   } else {
     auto r = m.store.recover();
     if (!r.is_ok()) throw ConfigError("detection_sink: resume = true: " + r.status().message());
-    {
-      counts_.recovered_lines = r->lines;
-      counts_.bad_journal_lines = r->bad_lines;
-      counts_.rejected_boxes += r->boxes_rejected;
-      if (r->lines > 0) {
-        m.log->info("recovered {} journal lines ({} samples)", r->lines, m.store.sample_count());
-      }
-      if (r->bad_lines > 0) {
-        m.log->warn("journal {}: {} lines could not be read back and were skipped (first: {})",
-                    m.store.journal_path(), r->bad_lines, r->first_bad);
-      }
-      if (r->boxes_rejected > 0) {
-        m.log->warn("journal {}: {} recovered boxes refused by the scorer's rules",
-                    m.store.journal_path(), r->boxes_rejected);
-      }
+    counts_.recovered_lines = r->lines;
+    counts_.bad_journal_lines = r->bad_lines;
+    counts_.rejected_boxes += r->boxes_rejected;
+    if (r->lines > 0) {
+      m.log->info("recovered {} journal lines ({} samples)", r->lines, m.store.sample_count());
+    }
+    if (r->bad_lines > 0) {
+      m.log->warn("journal {}: {} lines could not be read back and were skipped (first: {})",
+                  m.store.journal_path(), r->bad_lines, r->first_bad);
+    }
+    if (r->boxes_rejected > 0) {
+      m.log->warn("journal {}: {} recovered boxes refused by the scorer's rules",
+                  m.store.journal_path(), r->boxes_rejected);
     }
   }
   std::vector<transport::RawSubscriber*> inputs{&m.detections};

@@ -13,6 +13,7 @@
 #include <future>
 #include <sstream>
 
+#include "common/config.hpp"
 #include "detection.pb.h"
 #include "scoring/submission.hpp"
 #include "transport/publisher.hpp"
@@ -147,6 +148,45 @@ TEST_F(SinkLoopTest, ManyRefusalsGoToDebugAfterTheFirstTwentyButAreAllCounted) {
   EXPECT_EQ(Lines("warning refused box: results['s1']").size(), 20u);
   EXPECT_EQ(Lines("further ones at debug level").size(), 1u);
   EXPECT_EQ(Results()["results"]["s1"].Size(), 0u);
+}
+
+TEST_F(SinkLoopTest, UnreadableJournalLinesAreReportedAndCountedInTheMeta) {
+  std::ofstream(config_.output + ".journal")
+      << R"({"kind":"run","run":{}})"
+      << "\n"
+      << R"({"kind":"sample","sample_token":"s0"})"
+      << "\n"
+      << R"({"kind":"detections","sample_token":"s9","bo)";  // torn by a crash
+  Run({Array("s1", 1)});
+  EXPECT_EQ(counts_.recovered_lines, 1u);
+  EXPECT_EQ(counts_.bad_journal_lines, 1u);
+  const auto warned = Lines("1 lines could not be read back and were skipped (first: line 3:");
+  ASSERT_EQ(warned.size(), 1u);
+  EXPECT_EQ(warned[0].rfind("warning journal ", 0), 0u) << warned[0];
+  const auto doc = Results();
+  EXPECT_EQ(doc["meta"]["faultline_sink_bad_journal_lines"].GetUint64(), 1u);
+  EXPECT_TRUE(doc["results"].HasMember("s0"));
+  EXPECT_TRUE(doc["results"].HasMember("s1"));
+}
+
+TEST_F(SinkLoopTest, JournalOfAnotherRunStopsTheSinkAtStart) {
+  std::ofstream(config_.output + ".journal") << R"({"kind":"run","run":{"corruption":"clean"}})"
+                                             << "\n"
+                                             << R"({"kind":"sample","sample_token":"s0"})"
+                                             << "\n";
+  config_.run = {{"corruption", "camera_crash/hard"}};
+  SinkLoop sink(config_, "detection_sink", log_);
+  std::atomic<bool> stop{true};
+  try {
+    (void)sink.run(stop);
+    ADD_FAILURE() << "the sink resumed a journal of another run";
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("written by run {corruption=clean}, but this run is "
+                                         "{corruption=camera_crash/hard}"),
+              std::string::npos)
+        << e.what();
+  }
+  EXPECT_FALSE(std::ifstream(config_.output).good());  // nothing written
 }
 
 }  // namespace
