@@ -45,6 +45,13 @@ std::string json_number(double v) {
   return buf;
 }
 
+// `text` as a single-quoted YAML scalar, so that a `-p key:=value` keeps it a string verbatim.
+std::string yaml_quote(const std::string& text) {
+  std::string out = "'";
+  for (char c : text) out += c == '\'' ? std::string("''") : std::string(1, c);
+  return out + "'";
+}
+
 // One run's processes: sink (required: the run ends when it has finalized), injector, detector,
 // player.
 std::vector<launch::ChildSpec> run_children(const BenchmarkOptions& o, const std::string& sock,
@@ -58,12 +65,26 @@ std::vector<launch::ChildSpec> run_children(const BenchmarkOptions& o, const std
     return node_child(o.bin_dir, name, std::move(params), required);
   };
   std::vector<launch::ChildSpec> children;
-  children.push_back(
-      node("detection_sink",
-           {"detections_endpoint:=" + det, "sync_endpoints:=[" + frames + "]",
-            "output:=" + run_dir + "/results.json", "lockstep:=true", "ack_endpoint:=" + ack,
-            "resume:=false", "finalize_grace_ms:=30000", "stats_log_period_s:=1000"},
-           true));
+  // The sink refuses tokens outside the scored split, and records the run's identity in the results
+  // meta ("faultline_run").
+  std::string detector = o.detector_cmd;
+  if (detector.empty()) {
+    detector = "detector";
+    for (const auto& p : o.detector_params) detector += " " + p;
+    for (const auto& p : variant_params) detector += " " + p;
+  }
+  children.push_back(node(
+      "detection_sink",
+      {"detections_endpoint:=" + det, "sync_endpoints:=[" + frames + "]",
+       "output:=" + run_dir + "/results.json", "lockstep:=true", "ack_endpoint:=" + ack,
+       "resume:=false", "finalize_grace_ms:=30000", "stats_log_period_s:=1000",
+       "dataroot:=" + yaml_quote(o.dataroot), "version:=" + yaml_quote(o.version),
+       "eval_set:=" + yaml_quote(o.eval_set),
+       "run.dataset:=" + yaml_quote(o.dataroot + "/" + o.version),
+       "run.split:=" + yaml_quote(o.eval_set),
+       "run.corruption:=" + yaml_quote(corruption.empty() ? "clean" : corruption + "/" + level),
+       "run.seed:=" + yaml_quote(std::to_string(seed)), "run.detector:=" + yaml_quote(detector)},
+      true));
   std::vector<std::string> inj = {"input_endpoints:=[" + player + "]",
                                   "output_endpoint:=" + frames,
                                   "input_hwm:=256",

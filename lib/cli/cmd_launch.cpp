@@ -93,6 +93,7 @@ int run(int argc, char** argv) {
   load.bin_dir = launch::self_exe_dir();
   launch::LaunchFile lf = launch::load_launch(file, load);  // ConfigError -> exit 2 in dispatch
   for (const auto& o : overrides) launch::apply_override(lf, o);
+  launch::add_run_identity(lf);  // a sink resumes only a journal of this very configuration
 
   if (dry_run) {
     for (const auto& [k, v] : lf.env) std::printf("env %s=%s\n", k.c_str(), shell_quote(v).c_str());

@@ -22,6 +22,9 @@ int run(int argc, char** argv) {
                  "split: val, mini_val, mini_train, train, test, or a key of splits.json")
       ->capture_default_str();
   app.add_option("--output_dir,--output-dir", opts.output_dir, "where the metrics files go")->required();
+  app.add_option("--max-results-bytes", opts.max_results_bytes,
+                 "refuse a results file larger than this (bytes)")
+      ->capture_default_str();
   app.add_flag("--quiet", quiet, "print only errors");
   try {
     app.parse(argc, argv);

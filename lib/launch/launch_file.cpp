@@ -5,6 +5,7 @@
 
 #include <climits>
 #include <cstdlib>
+#include <filesystem>
 #include <fstream>
 #include <set>
 #include <sstream>
@@ -261,6 +262,23 @@ void apply_override(LaunchFile& launch, const std::string& assignment) {
   for (const auto& n : launch.nodes) known += (known.empty() ? "" : ", ") + n.name;
   throw ConfigError("-p " + assignment + ": no node named '" + node_name + "' in " + launch.path +
                     " (nodes: " + known + ")");
+}
+
+void add_run_identity(LaunchFile& launch) {
+  for (NodeSpec& sink : launch.nodes) {
+    const YAML::Node& params = sink.params;
+    if (std::filesystem::path(sink.exec).filename() != "detection_sink") continue;
+    if (params.IsMap() && params["run"].IsDefined()) continue;  // the file says what the run is
+    YAML::Node run(YAML::NodeType::Map);
+    for (const NodeSpec& node : launch.nodes) {
+      if (&node == &sink) continue;
+      std::string text = node.exec;
+      for (const auto& arg : node.args) text += " " + arg;
+      run[node.name] = text + " " + yaml_to_string(node_params_document(node));
+    }
+    if (!sink.params.IsMap()) sink.params = YAML::Node(YAML::NodeType::Map);
+    sink.params["run"] = run;
+  }
 }
 
 YAML::Node node_params_document(const NodeSpec& node) {

@@ -62,6 +62,12 @@ LaunchFile load_launch(const std::string& path, const LoadOptions& options);
 // Applies "node.key:=value" (key may be nested: node.a.b:=v) to that node's params. Unknown node = ConfigError.
 void apply_override(LaunchFile& launch, const std::string& assignment);
 
+// Gives every detection_sink node (exec named detection_sink) that sets no `run` parameter the
+// identity of this launch: {node name: "exec args params"} of every other node, so that the sink
+// resumes only a journal written with the same dataset, fault configuration, seeds and detector
+// (docs/protocol.md §8). Call after apply_override.
+void add_run_identity(LaunchFile& launch);
+
 // The node's parameters file content: params plus `remap` when given.
 YAML::Node node_params_document(const NodeSpec& node);
 

@@ -3,9 +3,12 @@
 #include <rapidjson/stringbuffer.h>
 #include <rapidjson/writer.h>
 
+#include <unordered_set>
+
 #include "common/config.hpp"
 #include "runtime/results_store.hpp"
 #include "runtime/stats_reporter.hpp"
+#include "scoring/evaluate.hpp"
 #include "transport/log_limiter.hpp"
 #include "transport/typed.hpp"
 
@@ -32,6 +35,7 @@ struct SinkLoop::Impl {
   ResultsStore store;
   StatsReporter stats;
   transport::LogLimiter bad_limiter;
+  std::uint64_t refusals_logged = 0;  // refusal lines at warn so far (see log_refusal)
   std::string detections_topic, sync_topic;
   std::uint64_t ack_seq = 0;
 
@@ -52,6 +56,17 @@ struct SinkLoop::Impl {
               static_cast<DurationNs>(cfg.stats_log_period_s * 1e9)),
         detections_topic(remap_topic(cfg.remap, cfg.detections_topic)),
         sync_topic(remap_topic(cfg.remap, cfg.sync_topic)) {
+    store.set_run_identity(cfg.run);
+    if (!cfg.dataroot.empty()) {
+      auto tokens = scoring::eval_set_samples(cfg.dataroot, cfg.version, cfg.eval_set);
+      if (!tokens) {
+        throw ConfigError("detection_sink: dataroot = " + cfg.dataroot +
+                          ", eval_set = " + cfg.eval_set + ": " + tokens.status().message());
+      }
+      store.set_valid_samples(
+          {tokens->begin(), tokens->end()},
+          "split '" + cfg.eval_set + "' of " + cfg.dataroot + "/" + cfg.version);
+    }
     if (!cfg.sync_endpoints.empty()) {
       transport::SubscriberConfig sc;
       sc.endpoints = cfg.sync_endpoints;
@@ -70,8 +85,27 @@ struct SinkLoop::Impl {
     }
   }
 
+  // Each refusal (box, array or boundary) is logged once with the scorer's reason: the first
+  // kRefusalsAtWarn at warn, later ones at debug (a detector with a systematic bug would otherwise
+  // write one line per box). The counts in SinkCounts, the closing line and the meta stay exact.
+  static constexpr std::uint64_t kRefusalsAtWarn = 20;
+  void log_refusal(const std::string& what, const std::string& reason) {
+    if (refusals_logged >= kRefusalsAtWarn) {
+      log->debug("refused {}: {}", what, reason);
+      return;
+    }
+    log->warn("refused {}: {}", what, reason);
+    if (++refusals_logged == kRefusalsAtWarn) {
+      log->warn(
+          "{} refusals logged; further ones at debug level (SPDLOG_LEVEL={}=debug), counted "
+          "in the closing line and the results meta",
+          kRefusalsAtWarn, node);
+    }
+  }
+
   std::int64_t processing_ns_sum = 0;
   std::uint64_t processing_n = 0;
+  SinkCounts* counts = nullptr;  // the loop's counts (meta and log lines report them)
 
   std::string meta_json() const {
     rapidjson::StringBuffer buf;
@@ -83,6 +117,13 @@ struct SinkLoop::Impl {
     }
     w.Key("faultline_detector");
     w.String(store.detector().c_str());
+    w.Key("faultline_run");  // the run's identity, as recorded in the journal
+    w.StartObject();
+    for (const auto& [k, v] : cfg.run) {
+      w.Key(k.c_str());
+      w.String(v.c_str());
+    }
+    w.EndObject();
     w.Key("faultline_sink");
     w.String(config::describe(cfg).c_str());
     if (processing_n >
@@ -90,6 +131,15 @@ struct SinkLoop::Impl {
       w.Key("faultline_detector_ms_per_sample");
       w.Double(static_cast<double>(processing_ns_sum) / 1e6 / static_cast<double>(processing_n));
     }
+    // What the sink refused or left out, so that no loss is silent (see SinkCounts).
+    w.Key("faultline_sink_rejected_boxes");
+    w.Uint64(counts->rejected_boxes);
+    w.Key("faultline_sink_rejected_arrays");
+    w.Uint64(counts->rejected_arrays);
+    w.Key("faultline_sink_rejected_boundaries");
+    w.Uint64(counts->rejected_boundaries);
+    w.Key("faultline_sink_bad_journal_lines");
+    w.Uint64(counts->bad_journal_lines);
     w.EndObject();
     return buf.GetString();
   }
@@ -106,7 +156,9 @@ struct SinkLoop::Impl {
 };
 
 SinkLoop::SinkLoop(SinkConfig config, std::string node, std::shared_ptr<spdlog::logger> log)
-    : impl_(std::make_unique<Impl>(std::move(config), std::move(node), std::move(log))) {}
+    : impl_(std::make_unique<Impl>(std::move(config), std::move(node), std::move(log))) {
+  impl_->counts = &counts_;
+}
 
 SinkLoop::~SinkLoop() = default;
 
@@ -114,11 +166,26 @@ std::string SinkLoop::detections_endpoint() const { return impl_->detections.end
 
 int SinkLoop::run(const std::atomic<bool>& stop) {
   Impl& m = *impl_;
-  if (m.cfg.resume) {
+  if (!m.cfg.resume) {
+    if (Status s = m.store.remove_journal(); !s.is_ok()) {
+      throw ConfigError("detection_sink: resume = false: " + s.message());
+    }
+  } else {
     auto r = m.store.recover();
-    if (r.is_ok() && *r > 0) {
-      counts_.recovered_lines = *r;
-      m.log->info("recovered {} journal lines ({} samples)", *r, m.store.sample_count());
+    if (!r.is_ok()) throw ConfigError("detection_sink: resume = true: " + r.status().message());
+    counts_.recovered_lines = r->lines;
+    counts_.bad_journal_lines = r->bad_lines;
+    counts_.rejected_boxes += r->boxes_rejected;
+    if (r->lines > 0) {
+      m.log->info("recovered {} journal lines ({} samples)", r->lines, m.store.sample_count());
+    }
+    if (r->bad_lines > 0) {
+      m.log->warn("journal {}: {} lines could not be read back and were skipped (first: {})",
+                  m.store.journal_path(), r->bad_lines, r->first_bad);
+    }
+    if (r->boxes_rejected > 0) {
+      m.log->warn("journal {}: {} recovered boxes refused by the scorer's rules",
+                  m.store.journal_path(), r->boxes_rejected);
     }
   }
   std::vector<transport::RawSubscriber*> inputs{&m.detections};
@@ -153,10 +220,15 @@ int SinkLoop::run(const std::atomic<bool>& stop) {
             m.processing_ns_sum += d.processing_ns();
             ++m.processing_n;
           }
-          if (Status s = m.store.add_detections(d); !s.is_ok())
-            m.log->error("journal: {}", s.message());
+          const AddDetectionsReport added = m.store.add_detections(d);
+          if (!added.journal.is_ok()) m.log->error("journal: {}", added.journal.message());
           ++counts_.detection_arrays;
           counts_.boxes += static_cast<std::uint64_t>(d.detections_size());
+          if (added.array_rejected) ++counts_.rejected_arrays;
+          counts_.rejected_boxes += added.boxes_rejected;
+          for (const auto& reason : added.reasons) {
+            m.log_refusal(added.array_rejected ? "DetectionArray" : "box", reason);
+          }
           m.log->debug("detections sample={} boxes={}", d.sample_token(), d.detections_size());
           if (m.acks) {
             msgs::SampleAck ack;
@@ -179,8 +251,14 @@ int SinkLoop::run(const std::atomic<bool>& stop) {
           sample.publish_mono_ns = b.header().publish_mono_ns();
           m.stats.collector().record(topic, b.header().publisher(), sample);
           ++counts_.boundaries;
-          if (Status s = m.store.add_sample(b.sample_token()); !s.is_ok())
-            m.log->error("journal: {}", s.message());
+          if (Status s = m.store.add_sample(b.sample_token()); !s.is_ok()) {
+            if (s.code() == StatusCode::kInvalidArgument) {
+              ++counts_.rejected_boundaries;
+              m.log_refusal("boundary", s.message());
+            } else {
+              m.log->error("journal: {}", s.message());
+            }
+          }
           if (b.last_in_run() && !last_seen) {
             last_seen = true;
             finalize_deadline =
@@ -191,7 +269,7 @@ int SinkLoop::run(const std::atomic<bool>& stop) {
     }
     if (last_seen && !complete) {
       bool all = true;
-      for (const auto& t : m.store.boundary_samples()) all = all && m.store.has_detections(t);
+      for (const auto& t : m.store.boundary_samples()) all = all && m.store.answered(t);
       if (all || monotonic_now_ns() >= finalize_deadline) {
         m.finalize(all ? "run complete" : "run complete, grace period over");
         (void)m.store.remove_journal();
@@ -202,9 +280,13 @@ int SinkLoop::run(const std::atomic<bool>& stop) {
   }
   if (!complete) m.finalize(stop.load() ? "shutdown" : "end");
   m.stats.log_totals(monotonic_now_ns());
-  m.log->info("sink done: {} detection arrays, {} boxes, {} boundaries, {} acks, {} malformed",
-              counts_.detection_arrays, counts_.boxes, counts_.boundaries, counts_.acks_sent,
-              counts_.malformed);
+  m.log->info(
+      "sink done: {} detection arrays, {} boxes, {} boundaries, {} acks, {} malformed, {} boxes "
+      "and {} "
+      "arrays refused, {} boundaries refused, {} bad journal lines",
+      counts_.detection_arrays, counts_.boxes, counts_.boundaries, counts_.acks_sent,
+      counts_.malformed, counts_.rejected_boxes, counts_.rejected_arrays,
+      counts_.rejected_boundaries, counts_.bad_journal_lines);
   return 0;
 }
 

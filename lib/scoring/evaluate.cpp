@@ -42,6 +42,15 @@ double seconds_since(std::chrono::steady_clock::time_point start) {
 
 }  // namespace
 
+Result<std::vector<std::string>> eval_set_samples(const std::string& dataroot,
+                                                  const std::string& version,
+                                                  const std::string& eval_set) {
+  auto scenes = is_predefined_split(eval_set) ? predefined_split_scenes(eval_set, version)
+                                              : custom_split_scenes(eval_set, dataroot, version);
+  if (!scenes) return scenes.status();
+  return split_sample_tokens(dataroot, version, *scenes);
+}
+
 Result<EvalOutcome> evaluate_detection(const EvalOptions& opts, std::FILE* log) {
   const auto t0 = std::chrono::steady_clock::now();
   const bool predefined = is_predefined_split(opts.eval_set);
@@ -82,7 +91,7 @@ Result<EvalOutcome> evaluate_detection(const EvalOptions& opts, std::FILE* log) 
     });
   }
   EvalTimings timings;
-  auto sub = read_submission(opts.results_path, scope);
+  auto sub = read_submission(opts.results_path, scope, opts.max_results_bytes);
   timings.submission_s = seconds_since(t0);
   if (!sub) {
     if (gt_future.valid()) gt_future.wait();

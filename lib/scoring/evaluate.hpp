@@ -11,10 +11,12 @@
 #include <cstdio>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "common/status.hpp"
 #include "scoring/filter.hpp"
 #include "scoring/metrics.hpp"
+#include "scoring/submission.hpp"
 
 namespace faultline::scoring {
 
@@ -24,6 +26,7 @@ struct EvalOptions {
   std::string version = "v1.0-trainval";
   std::string eval_set = "val";  // predefined split name or a key of <dataroot>/<version>/splits.json
   std::string output_dir;        // metrics_summary.json / metrics_details.json; empty = do not write
+  std::uint64_t max_results_bytes = kDefaultMaxResultsBytes;  // larger results files are refused
 };
 
 // Wall seconds per phase; GT loading overlaps submission parsing on a second thread.
@@ -39,6 +42,13 @@ struct EvalOutcome {
   std::size_t samples = 0;
   std::shared_ptr<rapidjson::Document> meta;
 };
+
+// The sample tokens a results file for `eval_set` must hold, in sample.json order: the scenes of a
+// predefined split (version-checked as by the scorer) or of a splits.json key. Errors name the
+// file.
+Result<std::vector<std::string>> eval_set_samples(const std::string& dataroot,
+                                                  const std::string& version,
+                                                  const std::string& eval_set);
 
 // Progress lines in the devkit's wording go to `log` (may be null). Nothing is written on failure.
 Result<EvalOutcome> evaluate_detection(const EvalOptions& opts, std::FILE* log);

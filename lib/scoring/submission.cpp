@@ -9,15 +9,17 @@
 #include <rapidjson/reader.h>
 #include <rapidjson/stringbuffer.h>
 #include <rapidjson/writer.h>
+#include <sys/stat.h>
 
+#include <cerrno>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <memory>
-#include <unordered_set>
-#include <fstream>
-#include <sstream>
 #include <unordered_map>
+#include <unordered_set>
 
+#include "scoring/box_rules.hpp"
 #include "scoring/detection_config.hpp"
 
 namespace faultline::scoring {
@@ -44,34 +46,36 @@ constexpr const char* kFieldNames[kNumFields] = {"sample_token", "translation", 
                                                  "ego_translation", "num_pts", "detection_name",
                                                  "detection_score", "attribute_name"};
 
-template <std::size_t N>
-Status read_vec(const FieldVal& f, const char* field, const std::string& where, bool allow_nan,
-                std::array<double, N>& out) {
+// A JSON list field that must hold only numbers; its length and values are box_rules' business.
+Status read_numbers(const FieldVal& f, const char* field, const std::string& where,
+                    NumberList& out) {
   if (f.kind == FieldVal::kAbsent) return bad(where, std::string("missing field '") + field + "'");
-  if (f.kind != FieldVal::kArray || f.arr_bad >= 0 || f.arr.size() != N) {
-    if (f.kind == FieldVal::kArray && f.arr_bad >= 0) {
-      return bad(where, std::string("'") + field + "'[" + std::to_string(f.arr_bad) + "] is not a number");
-    }
-    return bad(where, std::string("'") + field + "' must be a list of " + std::to_string(N) + " numbers");
+  if (f.kind == FieldVal::kArray && f.arr_bad >= 0) {
+    return bad(where,
+               std::string("'") + field + "'[" + std::to_string(f.arr_bad) + "] is not a number");
   }
-  for (std::size_t i = 0; i < N; ++i) {
-    out[i] = f.arr[i];
-    if (!allow_nan && std::isnan(out[i])) return bad(where, std::string("'") + field + "' contains NaN");
-  }
+  if (f.kind != FieldVal::kArray)
+    return bad(where, std::string("'") + field + "' must be a list of numbers");
+  out = {f.arr.data(), f.arr.size()};
   return Status::ok();
 }
 
-// The devkit's DetectionBox.deserialize + constructor asserts, plus Faultline's score rule.
+// The devkit's DetectionBox.deserialize + constructor asserts: JSON types here, values in
+// box_rules.
 Status check_box(const std::array<FieldVal, kNumFields>& f, const std::string& where, EvalBox& box) {
   if (f[kSampleToken].kind == FieldVal::kAbsent) return bad(where, "missing field 'sample_token'");
   if (f[kSampleToken].kind != FieldVal::kString) return bad(where, "'sample_token' must be a string");
-  if (Status s = read_vec(f[kTranslation], "translation", where, false, box.translation); !s) return s;
-  if (Status s = read_vec(f[kSize], "size", where, false, box.size); !s) return s;
-  if (Status s = read_vec(f[kRotation], "rotation", where, false, box.rotation); !s) return s;
-  if (Status s = read_vec(f[kVelocity], "velocity", where, true, box.velocity); !s) return s;
-  if (f[kEgo].kind != FieldVal::kAbsent) {
-    std::array<double, 3> ego{};  // checked like the devkit, then recomputed from the ego pose
-    if (Status s = read_vec(f[kEgo], "ego_translation", where, false, ego); !s) return s;
+  BoxFields fields;
+  if (Status s = read_numbers(f[kTranslation], "translation", where, fields.translation); !s)
+    return s;
+  if (Status s = read_numbers(f[kSize], "size", where, fields.size); !s) return s;
+  if (Status s = read_numbers(f[kRotation], "rotation", where, fields.rotation); !s) return s;
+  if (Status s = read_numbers(f[kVelocity], "velocity", where, fields.velocity); !s) return s;
+  if (f[kEgo].kind !=
+      FieldVal::kAbsent) {  // checked like the devkit, then recomputed from the ego pose
+    NumberList ego;
+    if (Status s = read_numbers(f[kEgo], "ego_translation", where, ego); !s) return s;
+    if (Status s = check_numbers("ego_translation", ego, 3, false, where); !s) return s;
   }
   box.num_pts = -1;
   if (f[kNumPts].kind != FieldVal::kAbsent) {
@@ -82,30 +86,100 @@ Status check_box(const std::array<FieldVal, kNumFields>& f, const std::string& w
   }
   if (f[kName].kind == FieldVal::kAbsent) return bad(where, "missing field 'detection_name'");
   if (f[kName].kind != FieldVal::kString) return bad(where, "'detection_name' must be a string");
-  auto cls = class_index(f[kName].str);
-  if (!cls) {
-    return bad(where, "Error: Unknown detection_name " + f[kName].str +
-                          " (expected one of the 10 nuScenes detection classes, case-sensitive)");
+  fields.detection_name = f[kName].str;
+  if (f[kScore].kind != FieldVal::kAbsent) {
+    if (f[kScore].kind != FieldVal::kNumber)
+      return bad(where, "'detection_score' must be a number");
+    fields.detection_score = f[kScore].num;
   }
-  box.cls = static_cast<std::int8_t>(*cls);
-  const bool has_score = f[kScore].kind != FieldVal::kAbsent;
-  if (has_score && f[kScore].kind != FieldVal::kNumber) return bad(where, "'detection_score' must be a number");
-  box.score = has_score ? f[kScore].num : -1.0;  // devkit default -1; rejected below
-  if (std::isnan(box.score)) return bad(where, "'detection_score' is NaN");
   if (f[kAttrName].kind == FieldVal::kAbsent) return bad(where, "missing field 'attribute_name'");
   if (f[kAttrName].kind != FieldVal::kString) return bad(where, "'attribute_name' must be a string");
-  auto ai = attribute_index(f[kAttrName].str);
-  if (!ai) {
-    return bad(where, "Error: Unknown attribute_name " + f[kAttrName].str + " (expected \"\" or one of the 8 attributes)");
+  fields.attribute_name = f[kAttrName].str;
+  return check_box_fields(fields, where, box);
+}
+
+// A RapidJSON input stream over a FILE* (RapidJSON's FileReadStream with a byte budget): it reads
+// at most `limit` bytes, then reports end of input and over_limit(), so /dev/zero or a runaway file
+// cannot exhaust memory or time. A read error or a NUL byte (which RapidJSON would take for the end
+// of the text, accepting trailing garbage) also ends the input and is reported.
+class BoundedFileStream {
+ public:
+  using Ch = char;
+  BoundedFileStream(std::FILE* fp, std::uint64_t limit) : fp_(fp), limit_(limit), buf_(1 << 16) {
+    read();
   }
-  box.attr = static_cast<std::int8_t>(*ai);
-  // Faultline rule (the devkit can crash on these, spec §1): scores must be >= 0.
-  if (box.score < 0.0) {
-    return bad(where, has_score ? "negative 'detection_score' " + std::to_string(box.score) +
-                                      " (scores must be >= 0; the devkit can crash on negative scores)"
-                                : "missing 'detection_score' (the devkit would use -1, which can crash it)");
+  Ch Peek() const { return *current_; }
+  Ch Take() {
+    const Ch c = *current_;
+    read();
+    return c;
   }
-  return Status::ok();
+  std::size_t Tell() const { return count_ + static_cast<std::size_t>(current_ - buf_.data()); }
+  // Output functions RapidJSON requires of a stream type; never called on an input stream.
+  void Put(Ch) { RAPIDJSON_ASSERT(false); }
+  void Flush() { RAPIDJSON_ASSERT(false); }
+  Ch* PutBegin() {
+    RAPIDJSON_ASSERT(false);
+    return nullptr;
+  }
+  std::size_t PutEnd(Ch*) {
+    RAPIDJSON_ASSERT(false);
+    return 0;
+  }
+  static constexpr std::size_t kNoNul = static_cast<std::size_t>(-1);
+  bool over_limit() const { return over_limit_; }
+  int read_error() const { return read_error_; }
+  // Offset of the first NUL byte (which ends the input: not JSON text), kNoNul if none was read.
+  std::size_t nul_offset() const { return nul_offset_; }
+
+ private:
+  void read() {
+    if (current_ < last_) {
+      ++current_;
+      return;
+    }
+    if (eof_) return;
+    count_ += read_count_;
+    const std::size_t capacity = buf_.size() - 1;  // one byte for the '\0' end marker
+    std::size_t want = capacity;
+    if (limit_ - total_ < want) want = static_cast<std::size_t>(limit_ - total_) + 1;  // one past
+    read_count_ = std::fread(buf_.data(), 1, want, fp_);
+    if (read_count_ < want && std::ferror(fp_)) read_error_ = errno != 0 ? errno : EIO;
+    total_ += read_count_;
+    if (const void* nul = std::memchr(buf_.data(), '\0', read_count_)) {  // RapidJSON's end marker
+      read_count_ = static_cast<std::size_t>(static_cast<const char*>(nul) - buf_.data());
+      nul_offset_ = count_ + read_count_;
+    } else if (total_ > limit_) {
+      over_limit_ = true;
+      read_count_ = 0;
+    }
+    current_ = buf_.data();
+    last_ = buf_.data() + read_count_;
+    buf_[read_count_] = '\0';
+    if (read_count_ == 0 || read_count_ < want || over_limit_ || read_error_ != 0 ||
+        nul_offset_ != kNoNul) {
+      eof_ = true;  // last_ points at the '\0' marker
+    } else {
+      --last_;
+    }
+  }
+
+  std::FILE* fp_;
+  std::uint64_t limit_;
+  std::vector<char> buf_;
+  char* current_ = nullptr;
+  char* last_ = nullptr;
+  std::size_t read_count_ = 0, count_ = 0;
+  std::uint64_t total_ = 0;
+  bool eof_ = false, over_limit_ = false;
+  int read_error_ = 0;
+  std::size_t nul_offset_ = kNoNul;
+};
+
+Status too_large(const std::string& path, std::uint64_t max_bytes, const std::string& found) {
+  return Status(StatusCode::kInvalidArgument, path + ": results file is over the size limit of " +
+                                                  std::to_string(max_bytes) + " bytes (" + found +
+                                                  "; raise it with --max-results-bytes)");
 }
 
 using MetaWriter = rapidjson::Writer<rapidjson::StringBuffer, rapidjson::UTF8<>, rapidjson::UTF8<>,
@@ -114,8 +188,8 @@ using MetaWriter = rapidjson::Writer<rapidjson::StringBuffer, rapidjson::UTF8<>,
 // SAX handler: top object -> "results" {token: [box...]} and "meta" (re-serialised), others skipped.
 class SubmissionHandler : public rapidjson::BaseReaderHandler<rapidjson::UTF8<>, SubmissionHandler> {
  public:
-  SubmissionHandler(const std::string& name, const SubmissionScope& scope, Submission& sub)
-      : name_(name), scope_(scope), sub_(sub), meta_writer_(meta_buf_) {
+  SubmissionHandler(const std::string& name, const SubmissionScope& scope)
+      : name_(name), scope_(scope), meta_writer_(meta_buf_) {
     if (!scope.predefined) wanted_.insert(scope.samples.begin(), scope.samples.end());
   }
 
@@ -171,16 +245,55 @@ class SubmissionHandler : public rapidjson::BaseReaderHandler<rapidjson::UTF8<>,
     return scalar_other();
   }
 
+  // One results key as Python's json.load leaves it: the last list given for the key, at the place
+  // of the key's first occurrence. `odd` holds the sample_token fields that differ from the key;
+  // EvalBox::match_sample indexes it until the entry is appended to the Submission.
+  struct SampleEntry {
+    std::vector<EvalBox> boxes;
+    std::vector<std::string> odd;
+    Status status;  // the list's first error (its later boxes are not checked)
+  };
+
   const Status& status() const { return status_; }
+  const Status& results_status() const { return results_status_; }
   bool saw_results() const { return saw_results_; }
   bool saw_meta() const { return saw_meta_; }
   std::string meta_text() const { return meta_buf_.GetString(); }
-  // Custom split: per wanted sample, its boxes or its first error.
-  std::unordered_map<std::string, std::pair<std::vector<EvalBox>, Status>>& custom_samples() { return custom_; }
-  std::unordered_map<std::string, std::vector<std::string>>& custom_odd() { return custom_odd_; }
+  // The kept results keys (predefined: all; custom: the split's), in first-occurrence order.
+  std::vector<std::pair<std::string, SampleEntry>>& entries() { return entries_; }
+  SampleEntry* find(const std::string& token) {
+    auto it = entry_index_.find(token);
+    return it == entry_index_.end() ? nullptr : &entries_[it->second].second;
+  }
 
  private:
   enum TopKey { kNone, kResults, kMeta, kOtherTop };
+  static constexpr std::size_t kNoEntry = static_cast<std::size_t>(-1);
+
+  // A new value for "results" (json.load keeps the last one): forget what the earlier ones held.
+  void begin_results() {
+    saw_results_ = true;
+    results_status_ = Status::ok();
+    entries_.clear();
+    entry_index_.clear();
+    current_ = kNoEntry;
+  }
+  // A new value for "meta": the last one is copied.
+  void begin_meta() {
+    saw_meta_ = true;
+    meta_buf_.Clear();
+    meta_writer_.Reset(meta_buf_);
+  }
+  // The entry of `sample_`, emptied for a new list (a repeated key keeps its first place).
+  std::size_t reset_entry() {
+    auto [it, inserted] = entry_index_.emplace(sample_, entries_.size());
+    if (inserted) {
+      entries_.emplace_back(sample_, SampleEntry{});
+    } else {
+      entries_[it->second].second = SampleEntry{};
+    }
+    return it->second;
+  }
 
   bool fail(Status s) {
     status_ = std::move(s);
@@ -189,7 +302,7 @@ class SubmissionHandler : public rapidjson::BaseReaderHandler<rapidjson::UTF8<>,
 
   bool open(bool object) {
     if (meta_depth_ > 0 || (depth_ == 1 && top_key_ == kMeta && skip_ == 0)) {
-      if (meta_depth_ == 0) saw_meta_ = true;
+      if (meta_depth_ == 0) begin_meta();
       ++meta_depth_;
       ++depth_;
       return object ? meta_writer_.StartObject() : meta_writer_.StartArray();
@@ -204,8 +317,12 @@ class SubmissionHandler : public rapidjson::BaseReaderHandler<rapidjson::UTF8<>,
         break;
       case 1:
         if (top_key_ == kResults) {
-          saw_results_ = true;
-          if (!object) return fail(bad(name_, "'results' must be an object {sample_token: [boxes]}"));
+          begin_results();
+          if (!object) {
+            results_status_ = bad(name_, "'results' must be an object {sample_token: [boxes]}");
+            skip_ = 1;
+            return true;
+          }
           in_results_ = true;
         } else {
           skip_ = 1;
@@ -215,7 +332,7 @@ class SubmissionHandler : public rapidjson::BaseReaderHandler<rapidjson::UTF8<>,
       case 2:
         if (!in_results_) break;
         if (object) {
-          if (!sample_type_error()) return false;
+          sample_type_error();
           skip_ = 1;
           return true;
         }
@@ -223,7 +340,7 @@ class SubmissionHandler : public rapidjson::BaseReaderHandler<rapidjson::UTF8<>,
         break;
       case 3:
         if (!object) {
-          if (!box_type_error()) return false;
+          box_type_error();
           skip_ = 1;
           return true;
         }
@@ -286,7 +403,7 @@ class SubmissionHandler : public rapidjson::BaseReaderHandler<rapidjson::UTF8<>,
   bool to_meta() {
     if (meta_depth_ > 0) return true;
     if (depth_ == 1 && top_key_ == kMeta && skip_ == 0) {
-      saw_meta_ = true;
+      begin_meta();
       return true;
     }
     return false;
@@ -306,11 +423,11 @@ class SubmissionHandler : public rapidjson::BaseReaderHandler<rapidjson::UTF8<>,
   bool scalar_other() {
     if (skip_ > 0) return true;
     if (depth_ == 1 && top_key_ == kResults) {
-      saw_results_ = true;
-      return fail(bad(name_, "'results' must be an object {sample_token: [boxes]}"));
+      begin_results();
+      results_status_ = bad(name_, "'results' must be an object {sample_token: [boxes]}");
     }
-    if (depth_ == 2 && in_results_) return sample_type_error();
-    if (depth_ == 3 && in_results_) return box_type_error();
+    if (depth_ == 2 && in_results_) sample_type_error();
+    if (depth_ == 3 && in_results_) box_type_error();
     return true;
   }
 
@@ -326,49 +443,27 @@ class SubmissionHandler : public rapidjson::BaseReaderHandler<rapidjson::UTF8<>,
 
   bool keep_sample() const { return scope_.predefined || wanted_.count(sample_) > 0; }
 
-  bool sample_type_error() {
-    if (!keep_sample()) return true;
-    Status s = bad(name_ + ": results['" + sample_ + "']", "must be a list of boxes");
-    if (scope_.predefined) return fail(s);
-    custom_[sample_].second = s;
-    return true;
+  // Errors are kept per results key, not raised at once: a later value for the same key (or for
+  // "results") replaces the list, as in json.load, and the devkit checks only what it keeps.
+  void sample_type_error() {
+    if (!keep_sample()) return;
+    entries_[reset_entry()].second.status =
+        bad(name_ + ": results['" + sample_ + "']", "must be a list of boxes");
   }
-  bool box_type_error() {
-    if (!keep_sample()) {
-      ++box_index_;
-      return true;
-    }
-    Status s = bad(name_ + ": results['" + sample_ + "'][" + std::to_string(box_index_++) + "]",
-                   "a box must be an object");
-    if (scope_.predefined) return fail(s);
-    auto& slot = custom_[sample_];
-    if (slot.second.is_ok()) slot.second = s;
-    return true;
+  void box_type_error() {
+    const int index = box_index_++;
+    if (current_ == kNoEntry || !entries_[current_].second.status.is_ok()) return;
+    entries_[current_].second.status =
+        bad(name_ + ": results['" + sample_ + "'][" + std::to_string(index) + "]",
+            "a box must be an object");
   }
 
   void begin_sample() {
     box_index_ = 0;
-    boxes_.clear();
-    odd_.clear();
-    sample_error_ = Status::ok();
-    if (scope_.predefined && !seen_.insert(sample_).second) {
-      status_ = bad(name_, "results: duplicate sample token '" + sample_ + "'");
-    }
+    current_ = keep_sample() ? reset_entry() : kNoEntry;
   }
   bool end_sample() {
-    if (!status_.is_ok()) return false;
-    if (scope_.predefined) {
-      sub_.boxes.sample_tokens.push_back(sample_);
-      sub_.boxes.boxes.push_back(std::move(boxes_));
-      for (auto& o : odd_) sub_.odd_sample_fields.push_back(std::move(o));
-    } else if (wanted_.count(sample_)) {
-      auto& slot = custom_[sample_];
-      if (slot.second.is_ok()) slot.second = sample_error_;
-      slot.first = std::move(boxes_);
-      custom_odd_[sample_] = std::move(odd_);
-    }
-    boxes_ = {};
-    odd_ = {};
+    current_ = kNoEntry;
     return true;
   }
   void begin_box() {
@@ -379,30 +474,29 @@ class SubmissionHandler : public rapidjson::BaseReaderHandler<rapidjson::UTF8<>,
   bool end_box() {
     in_box_ = false;
     const int index = box_index_++;
-    if (!keep_sample() || !sample_error_.is_ok()) return true;
+    if (current_ == kNoEntry) return true;
+    SampleEntry& entry = entries_[current_].second;
+    if (!entry.status.is_ok()) return true;
     EvalBox box;
     Status s = check_box(fields_, name_ + ": results['" + sample_ + "'][" + std::to_string(index) + "]", box);
     if (!s) {
-      if (scope_.predefined) return fail(s);
-      sample_error_ = s;
+      entry.status = std::move(s);
       return true;
     }
     const std::string& field = fields_[kSampleToken].str;
     if (field == sample_) {
       box.match_sample = kMatchSampleIsKey;
     } else {
-      // Index into the per-sample odd list; rebased when the sample is appended.
-      box.match_sample = static_cast<std::int32_t>(sub_.odd_sample_fields.size() + odd_.size());
-      odd_.push_back(field);
+      box.match_sample = static_cast<std::int32_t>(entry.odd.size());  // rebased when appended
+      entry.odd.push_back(field);
     }
-    boxes_.push_back(box);
+    entry.boxes.push_back(box);
     return true;
   }
 
   const std::string& name_;
   const SubmissionScope& scope_;
-  Submission& sub_;
-  std::unordered_set<std::string> wanted_, seen_;
+  std::unordered_set<std::string> wanted_;
   rapidjson::StringBuffer meta_buf_;
   MetaWriter meta_writer_;
   int meta_depth_ = 0;
@@ -414,19 +508,42 @@ class SubmissionHandler : public rapidjson::BaseReaderHandler<rapidjson::UTF8<>,
   int field_ = -1;
   int box_index_ = 0;
   std::array<FieldVal, kNumFields> fields_;
-  std::vector<EvalBox> boxes_;
-  std::vector<std::string> odd_;
-  Status sample_error_;
-  Status status_;
-  std::unordered_map<std::string, std::pair<std::vector<EvalBox>, Status>> custom_;
-  std::unordered_map<std::string, std::vector<std::string>> custom_odd_;
+  Status status_;          // fatal for the parse (the top level is not an object)
+  Status results_status_;  // the last "results" value is not an object
+  std::vector<std::pair<std::string, SampleEntry>> entries_;
+  std::unordered_map<std::string, std::size_t> entry_index_;
+  std::size_t current_ = kNoEntry;  // entry of the list being read, kNoEntry = not kept
 };
+
+// Python dict semantics for a parsed object: of repeated keys the last value wins, at the place of
+// the first occurrence (json.load of {"a": 1, "b": 2, "a": 3} gives {"a": 3, "b": 2}). Recursive.
+void keep_last_duplicates(rapidjson::Value& v, rapidjson::Document::AllocatorType& alloc) {
+  if (v.IsArray()) {
+    for (auto& item : v.GetArray()) keep_last_duplicates(item, alloc);
+    return;
+  }
+  if (!v.IsObject()) return;
+  rapidjson::Value out(rapidjson::kObjectType);
+  std::unordered_map<std::string, rapidjson::SizeType> first;
+  for (auto& m : v.GetObject()) {
+    keep_last_duplicates(m.value, alloc);
+    auto [it, inserted] =
+        first.emplace(std::string(m.name.GetString(), m.name.GetStringLength()), out.MemberCount());
+    if (inserted) {
+      out.AddMember(m.name, m.value, alloc);  // moves
+    } else {
+      (out.MemberBegin() + it->second)->value = m.value;  // moves
+    }
+  }
+  v = out;  // moves
+}
 
 template <typename Stream>
 Result<Submission> parse_stream(Stream& stream, const std::string& name, const SubmissionScope& scope,
                                 const std::string* text) {
+  using Handler = SubmissionHandler;
   Submission sub;
-  SubmissionHandler handler(name, scope, sub);
+  Handler handler(name, scope);
   rapidjson::Reader reader;
   auto res = reader.Parse<kParseFlags>(stream, handler);
   if (!handler.status().is_ok()) return handler.status();
@@ -436,38 +553,46 @@ Result<Submission> parse_stream(Stream& stream, const std::string& name, const S
                   name + ": malformed JSON at " + where + ": " + rapidjson::GetParseError_En(res.Code()));
   }
   if (!handler.saw_results()) return bad(name, "Error: No field `results` in result file");
-  if (!scope.predefined) {
+  if (!handler.results_status().is_ok()) return handler.results_status();
+  // Appends one results key, rebasing its odd sample_token fields onto the global list.
+  auto append = [&sub](const std::string& token, Handler::SampleEntry& entry) {
+    for (EvalBox& b : entry.boxes) {
+      if (b.match_sample != kMatchSampleIsKey) {
+        const std::size_t local = static_cast<std::size_t>(b.match_sample);
+        b.match_sample = static_cast<std::int32_t>(sub.odd_sample_fields.size());
+        sub.odd_sample_fields.push_back(std::move(entry.odd[local]));
+      }
+    }
+    sub.boxes.sample_tokens.push_back(token);
+    sub.boxes.boxes.push_back(std::move(entry.boxes));
+  };
+  if (scope.predefined) {
+    for (auto& [token, entry] : handler.entries()) {
+      if (!entry.status.is_ok()) return entry.status;
+      append(token, entry);
+    }
+  } else {
     for (const auto& token : scope.samples) {
-      auto it = handler.custom_samples().find(token);
-      if (it == handler.custom_samples().end()) {
-        return bad(name, "results: sample " + token + " of the split is missing (devkit: KeyError)");
-      }
-      if (!it->second.second.is_ok()) return it->second.second;
-      auto& boxes = it->second.first;
-      auto& odd = handler.custom_odd()[token];
-      // Rebase odd-field indices onto the global list.
-      std::size_t local = 0;
-      for (EvalBox& b : boxes) {
-        if (b.match_sample != kMatchSampleIsKey) {
-          b.match_sample = static_cast<std::int32_t>(sub.odd_sample_fields.size());
-          sub.odd_sample_fields.push_back(odd[local++]);
-        }
-      }
-      sub.boxes.sample_tokens.push_back(token);
-      sub.boxes.boxes.push_back(std::move(boxes));
+      Handler::SampleEntry* entry = handler.find(token);
+      if (!entry)
+        return bad(name,
+                   "results: sample " + token + " of the split is missing (devkit: KeyError)");
+      if (!entry->status.is_ok()) return entry->status;
+      append(token, *entry);
     }
   }
-  sub.samples_in_file = scope.predefined ? sub.boxes.sample_tokens.size() : handler.custom_samples().size();
+  sub.samples_in_file = handler.entries().size();
   if (!handler.saw_meta()) return bad(name, "missing field 'meta' (devkit: KeyError 'meta')");
   sub.meta = std::make_shared<rapidjson::Document>();
   const std::string meta = handler.meta_text();
   sub.meta->Parse<kParseFlags>(meta.c_str(), meta.size());
   if (sub.meta->HasParseError()) return bad(name, "'meta' could not be copied");
+  keep_last_duplicates(*sub.meta, sub.meta->GetAllocator());
   for (std::size_t i = 0; i < sub.boxes.sample_tokens.size(); ++i) {
-    if (sub.boxes.boxes[i].size() > static_cast<std::size_t>(kMaxBoxesPerSample)) {
-      return bad(name + ": results['" + sub.boxes.sample_tokens[i] + "']",
-                 "Error: Only <= 500 boxes per sample allowed! (found " +
-                     std::to_string(sub.boxes.boxes[i].size()) + ")");
+    if (Status s = check_box_count(sub.boxes.boxes[i].size(),
+                                   name + ": results['" + sub.boxes.sample_tokens[i] + "']");
+        !s) {
+      return s;
     }
   }
   return sub;
@@ -495,20 +620,47 @@ Result<Submission> parse_submission(const std::string& text, const std::string& 
   return parse_stream(ms, name, scope, &text);
 }
 
-Result<Submission> read_submission(const std::string& path, const SubmissionScope& scope) {
+Result<Submission> read_submission(const std::string& path, const SubmissionScope& scope,
+                                   std::uint64_t max_bytes) {
+  struct stat st {};
+  if (::stat(path.c_str(), &st) != 0) {
+    return Status(errno == ENOENT ? StatusCode::kNotFound : StatusCode::kIoError,
+                  path + ": cannot open results file: " + std::strerror(errno));
+  }
+  if (S_ISDIR(st.st_mode)) {
+    return Status(StatusCode::kInvalidArgument, path + ": is a directory, not a results JSON file");
+  }
+  const bool regular = S_ISREG(st.st_mode);
+  if (regular && static_cast<std::uint64_t>(st.st_size) > max_bytes) {
+    return too_large(path, max_bytes, std::to_string(st.st_size) + " bytes");
+  }
   std::unique_ptr<std::FILE, int (*)(std::FILE*)> fp(std::fopen(path.c_str(), "rb"), &std::fclose);
-  if (!fp) return Status(StatusCode::kNotFound, path + ": cannot open results file");
-  std::vector<char> buf(1 << 16);
-  rapidjson::FileReadStream fs(fp.get(), buf.data(), buf.size());
+  if (!fp) {
+    return Status(StatusCode::kNotFound,
+                  path + ": cannot open results file: " + std::strerror(errno));
+  }
+  BoundedFileStream fs(fp.get(), max_bytes);
   auto r = parse_stream(fs, path, scope, nullptr);
-  if (!r && r.status().code() == StatusCode::kCorruptData &&
+  // A file that grows while read, or a device / pipe (/dev/zero): the limit stops the stream.
+  if (fs.over_limit()) return too_large(path, max_bytes, "more than that");
+  if (fs.read_error() != 0) {
+    return Status(StatusCode::kIoError, path + ": read failed: " + std::strerror(fs.read_error()));
+  }
+  if (fs.nul_offset() != BoundedFileStream::kNoNul) {
+    return Status(StatusCode::kCorruptData, path + ": NUL byte at offset " +
+                                                std::to_string(fs.nul_offset()) +
+                                                ": not a JSON text file");
+  }
+  if (regular && !r && r.status().code() == StatusCode::kCorruptData &&
       r.status().message().find("malformed JSON") != std::string::npos) {
-    // Re-read to give line and column of the syntax error.
+    // Re-read (at most the limit) to give line and column of the syntax error.
     std::rewind(fp.get());
     std::string text;
     char chunk[1 << 16];
     std::size_t n;
-    while ((n = std::fread(chunk, 1, sizeof chunk, fp.get())) > 0) text.append(chunk, n);
+    while (text.size() < max_bytes && (n = std::fread(chunk, 1, sizeof chunk, fp.get())) > 0) {
+      text.append(chunk, n);
+    }
     return parse_submission(text, path, scope);
   }
   return r;

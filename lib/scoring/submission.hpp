@@ -5,6 +5,7 @@
 
 #include <rapidjson/document.h>
 
+#include <cstdint>
 #include <memory>
 #include <string>
 #include <vector>
@@ -34,11 +35,21 @@ struct Submission {
   std::size_t samples_in_file = 0;
 };
 
-// Parses JSON text (bare NaN/Infinity accepted). `name` is used in messages (usually the path).
+// Parses JSON text (bare NaN/Infinity tokens are read; box values must then be finite). Repeated
+// keys behave as in Python's json.load, which the devkit uses: the last value wins, at the place of
+// the key's first occurrence ("results", "meta", a sample token, a box field, keys inside "meta").
+// `name` is used in messages (usually the path).
 Result<Submission> parse_submission(const std::string& text, const std::string& name,
                                     const SubmissionScope& scope);
-// Reads the file and parses it.
-Result<Submission> read_submission(const std::string& path, const SubmissionScope& scope);
+// Default size limit of a results file: 2 GiB. A val submission at the devkit's 500 boxes per
+// sample is at most ~1.2 GB; the limit stops /dev/zero, a runaway file or a wrong path early.
+inline constexpr std::uint64_t kDefaultMaxResultsBytes = std::uint64_t{2} << 30;
+
+// Reads the file and parses it. A directory, a file (or device/pipe) holding more than `max_bytes`
+// bytes, or a NUL byte (/dev/zero) is refused with an error naming the path (and the limit);
+// nothing beyond the limit is read.
+Result<Submission> read_submission(const std::string& path, const SubmissionScope& scope,
+                                   std::uint64_t max_bytes = kDefaultMaxResultsBytes);
 
 // "offset 123 (line 4, column 7)" for a byte offset in text.
 std::string describe_offset(const std::string& text, std::size_t offset);

@@ -102,6 +102,18 @@ TEST_F(RunTest, BenchmarkScoresAnExternalPythonDetector) {
   EXPECT_LT(c["camera_crash/mid"]["NDS"].GetDouble(), clean);
   EXPECT_TRUE(fs::exists(out / "report.html"));
   EXPECT_TRUE(fs::exists(out / "robustness.md"));
+  // Each run's results name the run they belong to (the sink's identity, as in its journal).
+  rapidjson::Document fog;
+  fog.Parse<rapidjson::kParseNanAndInfFlag>(
+      read_text(out / "runs" / "fog_mid" / "results.json").c_str());
+  ASSERT_TRUE(fog.IsObject() && fog["meta"].HasMember("faultline_run"));
+  const auto& run_meta = fog["meta"]["faultline_run"];
+  EXPECT_STREQ(run_meta["corruption"].GetString(), "fog/mid");
+  EXPECT_STREQ(run_meta["split"].GetString(), "mini_val");
+  EXPECT_STREQ(run_meta["seed"].GetString(), "1");
+  EXPECT_NE(std::string(run_meta["detector"].GetString()).find("simple_detector.py"),
+            std::string::npos);
+  EXPECT_EQ(fog["meta"]["faultline_sink_rejected_boxes"].GetUint64(), 0u);
 }
 
 }  // namespace

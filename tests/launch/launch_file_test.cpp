@@ -1,7 +1,10 @@
 #include "launch/launch_file.hpp"
 
 #include <gtest/gtest.h>
+#include <unistd.h>
 
+#include <filesystem>
+#include <fstream>
 #include <map>
 
 #include "common/config.hpp"
@@ -29,8 +32,25 @@ class LaunchFileTest : public ::testing::Test {
     return "";
   }
 
+  // An executable file named detection_sink (the launcher only checks that it is executable).
+  std::string FakeSink() {
+    const auto dir =
+        std::filesystem::temp_directory_path() / ("faultline_launch_" + std::to_string(::getpid()));
+    std::filesystem::create_directories(dir);
+    fake_dir_ = dir.string();
+    const std::string path = (dir / "detection_sink").string();
+    std::ofstream(path) << "#!/bin/sh\n";
+    std::filesystem::permissions(path, std::filesystem::perms::owner_all);
+    return path;
+  }
+  ~LaunchFileTest() override {
+    std::error_code ec;
+    if (!fake_dir_.empty()) std::filesystem::remove_all(fake_dir_, ec);
+  }
+
   std::map<std::string, std::string> env_;
   LoadOptions options_;
+  std::string fake_dir_;
 };
 
 TEST_F(LaunchFileTest, ParsesNodesWithDefaults) {
@@ -47,6 +67,37 @@ TEST_F(LaunchFileTest, ParsesNodesWithDefaults) {
   EXPECT_EQ(lf.nodes[0].remap.at("/cam_front/image_rect_compressed"), "/camera/front");
   EXPECT_FALSE(lf.nodes[1].required);
   EXPECT_EQ(lf.nodes[1].args, (std::vector<std::string>{"-c", "exit 0"}));
+}
+
+TEST_F(LaunchFileTest, SinkGetsTheRunIdentityOfTheOtherNodes) {
+  const std::string sink = FakeSink();
+  auto lf = Parse(
+      "nodes:\n"
+      "  - {name: player, exec: /bin/sh, params: {dataroot: data/synth, version: v1.0-mini}}\n"
+      "  - {name: injector, exec: /bin/sh, params: {corruption: fog/easy, seed: 3}}\n"
+      "  - {name: det, exec: /bin/sh, args: [-c, run.py]}\n"
+      "  - {name: detection_sink, exec: " +
+      sink + ", params: {output: r.json}}\n");
+  apply_override(lf, "injector.corruption:=camera_crash/hard");
+  add_run_identity(lf);
+  const YAML::Node run = lf.nodes[3].params["run"];
+  ASSERT_TRUE(run.IsMap());
+  EXPECT_EQ(run.size(), 3u);
+  EXPECT_EQ(run["player"].as<std::string>(), "/bin/sh {dataroot: data/synth, version: v1.0-mini}");
+  EXPECT_EQ(run["injector"].as<std::string>(), "/bin/sh {corruption: camera_crash/hard, seed: 3}");
+  EXPECT_EQ(run["det"].as<std::string>(), "/bin/sh -c run.py {}");
+  EXPECT_EQ(lf.nodes[3].params["output"].as<std::string>(), "r.json");
+}
+
+TEST_F(LaunchFileTest, SinkKeepsARunIdentityTheFileGives) {
+  const std::string sink = FakeSink();
+  auto lf = Parse(
+      "nodes:\n  - {name: player, exec: /bin/sh, params: {rate: 1}}\n  - {name: sink, exec: " +
+      sink + ", params: {run: {dataset: mini}}}\n");
+  add_run_identity(lf);
+  const YAML::Node run = lf.nodes[1].params["run"];
+  EXPECT_EQ(run.size(), 1u);
+  EXPECT_EQ(run["dataset"].as<std::string>(), "mini");
 }
 
 TEST_F(LaunchFileTest, CommandPassesNameParamsAndArgs) {
