@@ -100,6 +100,20 @@ TEST(RobustnessTest, JsonRoundTripsAndTablesCarryThePercentages) {
   EXPECT_NE(robustness_csv(*r).find("DETR3D,snow,hard,0.1616"), std::string::npos);
 }
 
+// A mid-only benchmark's robustness.json keeps its level names through the report's reader (it showed "easy").
+TEST(RobustnessTest, JsonKeepsTheLevelNamesOfAReducedMatrix) {
+  DetectorScores mid_only = detr3d_baseline();
+  for (auto& c : mid_only.corruptions) c.nds_by_level = {c.nds_by_level[1]};
+  auto r = compute_robustness(mid_only, mid_only);
+  ASSERT_TRUE(r.is_ok()) << r.status().message();
+  r->level_names = {"mid"};
+  auto back = parse_robustness_json(robustness_json(*r), "mem");
+  ASSERT_TRUE(back.is_ok()) << back.status().message();
+  EXPECT_EQ(back->level_names, std::vector<std::string>{"mid"});
+  EXPECT_EQ(level_name(*back, 0), "mid");
+  EXPECT_NE(robustness_csv(*back).find("DETR3D,snow,mid,"), std::string::npos) << robustness_csv(*back);
+}
+
 // Scored run folders of the DETR3D table + a YAML manifest reproduce the paper's figures end to
 // end.
 TEST(RunManifestTest, ManifestOfScoredRunsGivesPaperFigures) {
