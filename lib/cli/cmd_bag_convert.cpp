@@ -14,8 +14,8 @@
 #include "common/config.hpp"
 #include "common/logging.hpp"
 #include "common/shutdown.hpp"
-#include "policy/injector_policy.hpp"
 #include "runtime/bag_convert.hpp"
+#include "runtime/engine_policy.hpp"
 
 namespace faultline::cli {
 namespace {
@@ -81,7 +81,7 @@ int run(int argc, char** argv) {
       faults_text += (faults_text.empty() ? "" : " ") + c;
     }
     std::unique_ptr<runtime::FramePolicy> frame_policy;
-    if (!engine.faults.empty()) frame_policy = std::make_unique<policy::EnginePolicy>(std::move(engine));
+    if (!engine.faults.empty()) frame_policy = std::make_unique<runtime::EnginePolicy>(std::move(engine));
 
     const auto t0 = std::chrono::steady_clock::now();
     const double c0 = process_cpu_s();

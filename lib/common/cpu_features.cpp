@@ -3,6 +3,8 @@
 #include <cstdlib>
 #include <cstring>
 
+#include "common/simd.hpp"
+
 namespace faultline::common {
 
 bool scalar_forced() {
@@ -15,7 +17,7 @@ bool scalar_forced() {
 
 namespace {
 
-#if defined(__GNUC__) && defined(__x86_64__)
+#if FAULTLINE_X86_SIMD
 bool supports_avx2() { return __builtin_cpu_supports("avx2"); }
 bool supports_fma() { return __builtin_cpu_supports("fma"); }
 bool supports_f16c() { return __builtin_cpu_supports("f16c"); }

@@ -8,11 +8,7 @@
 #include <stdexcept>
 #include <vector>
 
-#include "common/cpu_features.hpp"
-
-#if defined(__GNUC__) && defined(__x86_64__)
-#include <immintrin.h>
-#endif
+#include "common/simd.hpp"
 
 namespace faultline::corruption {
 namespace {
@@ -170,13 +166,13 @@ inline void table_pixel(const BrightnessTables& t, const std::uint8_t* px, std::
   }
 }
 
-#if defined(__GNUC__) && defined(__x86_64__)
+#if FAULTLINE_X86_SIMD
 // 8 pixels per step: deinterleave, max/min/middle per pixel, two gathers from the role table, a gather from the
 // ambiguity table for ambiguous middle channels (only in steps that have one), select by role, re-interleave.
 // Returns the number of pixels processed (a multiple of 8, leaving >= 32 bytes of slack for the 32-byte loads and
 // 16-byte stores).
-__attribute__((target("avx2"))) std::size_t brightness_avx2(const std::uint8_t* src, std::uint8_t* dst,
-                                                            std::size_t npx, const BrightnessTables& t) {
+FAULTLINE_TARGET("avx2") std::size_t brightness_avx2(const std::uint8_t* src, std::uint8_t* dst,
+                                                     std::size_t npx, const BrightnessTables& t) {
   const auto* roles = reinterpret_cast<const int*>(t.roles.data());
   const auto* amb = reinterpret_cast<const int*>(t.amb.data());
   const __m256i to_lanes = _mm256_setr_epi32(0, 1, 2, 0, 3, 4, 5, 0);
@@ -264,7 +260,7 @@ cv::Mat brightness_fast(const cv::Mat& bgr, int severity) {
   const std::uint8_t* src = in.data;
   std::uint8_t* dst = out.data;
   std::size_t i = 0;
-#if defined(__GNUC__) && defined(__x86_64__)
+#if FAULTLINE_X86_SIMD
   if (common::cpu_has_avx2()) i = brightness_avx2(src, dst, n, t);
 #endif
   for (; i < n; ++i) table_pixel(t, src + 3 * i, dst + 3 * i);

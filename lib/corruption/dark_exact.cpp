@@ -9,14 +9,9 @@
 #include <cstring>
 #include <vector>
 
-#include "common/cpu_features.hpp"
+#include "common/simd.hpp"
 #include "corruption/dark.hpp"
 #include "corruption/dark_sampler.hpp"
-
-#if defined(__GNUC__) && defined(__x86_64__)
-#include <immintrin.h>
-#define FAULTLINE_DARK_AVX2 1
-#endif
 
 namespace faultline::corruption {
 
@@ -62,9 +57,9 @@ inline std::uint8_t noise_byte(double y, double sigma, double z) {
   return static_cast<std::uint8_t>(std::min(std::max(v, 0.0), 1.0) * 255.0);
 }
 
-#ifdef FAULTLINE_DARK_AVX2
+#if FAULTLINE_X86_SIMD
 
-__attribute__((target("avx2"))) inline __m256d approx_log4(__m256d x) {
+FAULTLINE_TARGET("avx2") inline __m256d approx_log4(__m256d x) {
   const __m256i bits = _mm256_castpd_si256(x);
   const __m256i biased =
       _mm256_srli_epi64(_mm256_sub_epi64(bits, _mm256_set1_epi64x(static_cast<long long>(kSqrtHalfMantissa))), 52);
@@ -84,7 +79,7 @@ __attribute__((target("avx2"))) inline __m256d approx_log4(__m256d x) {
 }
 
 // Bytes of 4 elements for factors f (one per element), values x, levels y: cvtt gives trunc for 0..255.
-__attribute__((target("avx2"))) inline __m128i noise_bytes4(__m256d f, __m256d x, __m256d y, __m256d sigma) {
+FAULTLINE_TARGET("avx2") inline __m128i noise_bytes4(__m256d f, __m256d x, __m256d y, __m256d sigma) {
   const __m256d v = _mm256_add_pd(y, _mm256_mul_pd(sigma, _mm256_mul_pd(f, x)));
   const __m256d c = _mm256_min_pd(_mm256_max_pd(v, _mm256_setzero_pd()), _mm256_set1_pd(1.0));
   return _mm256_cvttpd_epi32(_mm256_mul_pd(c, _mm256_set1_pd(255.0)));
@@ -92,11 +87,11 @@ __attribute__((target("avx2"))) inline __m128i noise_bytes4(__m256d f, __m256d x
 
 // Elements 0..8*groups of a chunk (pairs 0..4*groups). The bytes of both bracket ends go out; offsets where they
 // differ are appended to `flagged`. Returns the new flag count.
-__attribute__((target("avx2"))) std::size_t noise_groups_avx2(const double* x, const double* r2,
-                                                              std::size_t groups, const std::uint8_t* counts,
-                                                              const double* y_of_k, double sigma, double bracket,
-                                                              std::uint8_t* dst, std::uint16_t* flagged,
-                                                              std::size_t nflag) {
+FAULTLINE_TARGET("avx2") std::size_t noise_groups_avx2(const double* x, const double* r2,
+                                                       std::size_t groups, const std::uint8_t* counts,
+                                                       const double* y_of_k, double sigma, double bracket,
+                                                       std::uint8_t* dst, std::uint16_t* flagged,
+                                                       std::size_t nflag) {
   const __m256d sig = _mm256_set1_pd(sigma);
   const __m256d lo_scale = _mm256_set1_pd(1.0 - bracket), hi_scale = _mm256_set1_pd(1.0 + bracket);
   const __m256d minus_two = _mm256_set1_pd(-2.0);
@@ -137,7 +132,7 @@ __attribute__((target("avx2"))) std::size_t noise_groups_avx2(const double* x, c
   return nflag;
 }
 
-__attribute__((target("avx2"))) void store_approx_log4(const double* x, double* out) {
+FAULTLINE_TARGET("avx2") void store_approx_log4(const double* x, double* out) {
   _mm256_storeu_pd(out, approx_log4(_mm256_loadu_pd(x)));
 }
 
@@ -147,7 +142,7 @@ __attribute__((target("avx2"))) void store_approx_log4(const double* x, double* 
 
 void approx_logs(const double* x, double* out, std::size_t n) {
   std::size_t i = 0;
-#ifdef FAULTLINE_DARK_AVX2
+#if FAULTLINE_X86_SIMD
   if (common::cpu_has_avx2()) {
     for (; i + 4 <= n; i += 4) store_approx_log4(x + i, out + i);
   }
@@ -202,7 +197,7 @@ cv::Mat dark_exact_bracketed(const cv::Mat& bgr, int severity, rng::NumpyRandomS
     const std::size_t pairs = std::min(kChunkPairs, (n - i) / 2);
     rng.polar_pairs(x, r2, pairs);
     std::size_t done_pairs = 0, nflag = 0;
-#ifdef FAULTLINE_DARK_AVX2
+#if FAULTLINE_X86_SIMD
     if (common::cpu_has_avx2()) {
       const std::size_t groups = pairs / 4;
       nflag = noise_groups_avx2(x, r2, groups, counts.data() + i, y_of_k, sigma, bracket, dst + i, flagged, 0);

@@ -4,7 +4,7 @@
 
 #include <utility>
 
-#include "common/cpu_features.hpp"
+#include "common/simd.hpp"
 #include "rng/lane_rng_avx2.hpp"
 
 namespace faultline::corruption {
@@ -33,11 +33,10 @@ void sample_scalar(const std::uint32_t* tables, int lo, const std::uint8_t* src,
   }
 }
 
-#if defined(__GNUC__) && defined(__x86_64__)
-#define FAULTLINE_DARK_AVX2 1
+#if FAULTLINE_X86_SIMD
 
 // Eight samples: levels (8 x int32, already minus lo) and random bits -> 8 x int32 outcomes.
-__attribute__((target("avx2"))) inline __m256i sample8(const std::uint32_t* tables, __m256i level, __m256i bits) {
+FAULTLINE_TARGET("avx2") inline __m256i sample8(const std::uint32_t* tables, __m256i level, __m256i bits) {
   const __m256i bucket = _mm256_srli_epi32(bits, 24);
   const __m256i u = _mm256_and_si256(bits, _mm256_set1_epi32((1 << kDarkAliasThresholdBits) - 1));
   const __m256i idx = _mm256_or_si256(_mm256_slli_epi32(level, 8), bucket);
@@ -47,9 +46,9 @@ __attribute__((target("avx2"))) inline __m256i sample8(const std::uint32_t* tabl
 }
 
 // Processes whole blocks of 32 elements (two generator steps); returns how many elements it wrote.
-__attribute__((target("avx2"))) std::size_t sample_avx2(const std::uint32_t* tables, int lo,
-                                                        const std::uint8_t* src, std::uint8_t* dst, std::size_t n,
-                                                        rng::LaneRng& rng) {
+FAULTLINE_TARGET("avx2") std::size_t sample_avx2(const std::uint32_t* tables, int lo,
+                                                 const std::uint8_t* src, std::uint8_t* dst, std::size_t n,
+                                                 rng::LaneRng& rng) {
   rng::avx2::Xoshiro4 a = rng::avx2::load_half(rng, 0), b = rng::avx2::load_half(rng, 1);
   const __m256i vlo = _mm256_set1_epi32(lo);
   const __m256i order = _mm256_setr_epi32(0, 4, 1, 5, 2, 6, 3, 7);
@@ -77,15 +76,9 @@ __attribute__((target("avx2"))) std::size_t sample_avx2(const std::uint32_t* tab
 }
 #endif
 
-#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__)
-#define FAULTLINE_DARK_CLONES __attribute__((target_clones("avx2", "default")))
-#else
-#define FAULTLINE_DARK_CLONES
-#endif
-
 // Plain min/max reduction the compiler vectorises (eight times faster than cv::minMaxLoc on a frame).
-FAULTLINE_DARK_CLONES void min_max(const std::uint8_t* __restrict src, std::size_t n, std::uint8_t* lo_out,
-                                   std::uint8_t* hi_out) {
+FAULTLINE_CLONES("avx2") void min_max(const std::uint8_t* __restrict src, std::size_t n, std::uint8_t* lo_out,
+                                      std::uint8_t* hi_out) {
   std::uint8_t lo = 255, hi = 0;
   for (std::size_t i = 0; i < n; ++i) {
     lo = src[i] < lo ? src[i] : lo;
@@ -107,7 +100,7 @@ std::pair<int, int> dark_min_max(const std::uint8_t* src, std::size_t n) {
 void dark_sample(const std::uint32_t* tables, int lo, const std::uint8_t* src, std::uint8_t* dst, std::size_t n,
                  rng::LaneRng& rng, bool allow_simd) {
   std::size_t done = 0;
-#ifdef FAULTLINE_DARK_AVX2
+#if FAULTLINE_X86_SIMD
   if (allow_simd && common::cpu_has_avx2()) done = sample_avx2(tables, lo, src, dst, n, rng);
 #else
   (void)allow_simd;

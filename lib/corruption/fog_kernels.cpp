@@ -6,18 +6,8 @@
 #include <array>
 #include <cstring>
 
-#include "common/cpu_features.hpp"
+#include "common/simd.hpp"
 #include "rng/lane_rng_avx2.hpp"
-
-#if defined(__x86_64__) && defined(__GNUC__)
-#include <immintrin.h>
-#define FAULTLINE_FOG_AVX2 1
-#define FAULTLINE_TARGET_AVX2 __attribute__((target("avx2")))
-#define FAULTLINE_AVX2_INLINE __attribute__((target("avx2"), always_inline)) inline
-#define FAULTLINE_AVX2_LAMBDA __attribute__((target("avx2"), always_inline))
-#else
-#define FAULTLINE_FOG_AVX2 0
-#endif
 
 namespace faultline::corruption {
 namespace {
@@ -137,22 +127,22 @@ void blend_fixed_scalar(const std::uint8_t* src, const std::uint16_t* ga, const 
   }
 }
 
-#if FAULTLINE_FOG_AVX2
+#if FAULTLINE_X86_SIMD
 
 struct StepVec {
   __m256d w, lo, span;
 };
-FAULTLINE_AVX2_INLINE StepVec step_vec(const FogStep& s) {
+FAULTLINE_TARGET_INLINE("avx2") inline StepVec step_vec(const FogStep& s) {
   return {_mm256_set1_pd(s.w), _mm256_set1_pd(s.lo), _mm256_set1_pd(s.span)};
 }
 // sum / 4 + w * (lo + span * u): x / 4 and x * 0.25 are the same correctly rounded value.
-FAULTLINE_AVX2_INLINE __m256d point(__m256d sum, const double* u, const StepVec& v) {
+FAULTLINE_TARGET_INLINE("avx2") inline __m256d point(__m256d sum, const double* u, const StepVec& v) {
   const __m256d off = _mm256_mul_pd(v.w, _mm256_add_pd(v.lo, _mm256_mul_pd(v.span, _mm256_loadu_pd(u))));
   return _mm256_add_pd(_mm256_mul_pd(sum, _mm256_set1_pd(0.25)), off);
 }
 
-FAULTLINE_TARGET_AVX2 void centre_avx2(const double* c0, const double* c1, const double* u, double* d, int count,
-                                       const FogStep& s) {
+FAULTLINE_TARGET("avx2") void centre_avx2(const double* c0, const double* c1, const double* u, double* d, int count,
+                                          const FogStep& s) {
   const StepVec v = step_vec(s);
   int j = 0;
   for (; j + 4 <= count; j += 4) {
@@ -163,8 +153,8 @@ FAULTLINE_TARGET_AVX2 void centre_avx2(const double* c0, const double* c1, const
   centre_scalar(c0, c1, u, d, j, count, s);
 }
 
-FAULTLINE_TARGET_AVX2 void hedge_avx2(const double* d0, const double* dp, const double* c0, const double* u,
-                                      double* e, int count, const FogStep& s) {
+FAULTLINE_TARGET("avx2") void hedge_avx2(const double* d0, const double* dp, const double* c0, const double* u,
+                                         double* e, int count, const FogStep& s) {
   const StepVec v = step_vec(s);
   int j = 0;
   for (; j + 4 <= count; j += 4) {
@@ -175,8 +165,8 @@ FAULTLINE_TARGET_AVX2 void hedge_avx2(const double* d0, const double* dp, const 
   hedge_scalar(d0, dp, c0, u, e, j, count, s);
 }
 
-FAULTLINE_TARGET_AVX2 void vedge_avx2(const double* d0, const double* c0, const double* c1, const double* u,
-                                      double* e, int count, const FogStep& s) {
+FAULTLINE_TARGET("avx2") void vedge_avx2(const double* d0, const double* c0, const double* c1, const double* u,
+                                         double* e, int count, const FogStep& s) {
   const StepVec v = step_vec(s);
   int j = 0;
   for (; j + 4 <= count; j += 4) {
@@ -187,7 +177,7 @@ FAULTLINE_TARGET_AVX2 void vedge_avx2(const double* d0, const double* c0, const 
   vedge_scalar(d0, c0, c1, u, e, j, count, s);
 }
 
-FAULTLINE_TARGET_AVX2 void interleave_avx2(const double* a, const double* b, double* out, int pairs) {
+FAULTLINE_TARGET("avx2") void interleave_avx2(const double* a, const double* b, double* out, int pairs) {
   int j = 0;
   for (; j + 4 <= pairs; j += 4) {
     const __m256d va = _mm256_loadu_pd(a + j), vb = _mm256_loadu_pd(b + j);
@@ -201,7 +191,7 @@ FAULTLINE_TARGET_AVX2 void interleave_avx2(const double* a, const double* b, dou
   }
 }
 
-FAULTLINE_TARGET_AVX2 void minmax_avx2(const double* p, int count, double* mn, double* mx) {
+FAULTLINE_TARGET("avx2") void minmax_avx2(const double* p, int count, double* mn, double* mx) {
   int j = 0;
   double lo = *mn, hi = *mx;
   if (count >= 8) {
@@ -227,8 +217,8 @@ FAULTLINE_TARGET_AVX2 void minmax_avx2(const double* p, int count, double* mn, d
   *mx = hi;
 }
 
-FAULTLINE_TARGET_AVX2 void interleave_normalise_avx2(const double* a, const double* b, double* out, int pairs,
-                                                    double mn, double range) {
+FAULTLINE_TARGET("avx2") void interleave_normalise_avx2(const double* a, const double* b, double* out, int pairs,
+                                                        double mn, double range) {
   const __m256d vmn = _mm256_set1_pd(mn), vr = _mm256_set1_pd(range);
   int j = 0;
   for (; j + 4 <= pairs; j += 4) {
@@ -261,8 +251,8 @@ struct BlendVec {
 
 // Eight pixels with raw values r0 (pixels 0..3) and r1 (4..7); returns the mask of values to recompute (bit t of
 // channel vector c is value 8c + t).
-FAULTLINE_AVX2_INLINE std::uint32_t blend8(const std::uint8_t* s, std::uint8_t* d, __m256d r0, __m256d r1,
-                                           const BlendVec& v) {
+FAULTLINE_TARGET_INLINE("avx2") inline std::uint32_t blend8(const std::uint8_t* s, std::uint8_t* d, __m256d r0,
+                                                            __m256d r1, const BlendVec& v) {
   const __m128 b0 = _mm256_cvtpd_ps(_mm256_mul_pd(_mm256_sub_pd(r0, v.min), v.k));
   const __m128 b1 = _mm256_cvtpd_ps(_mm256_mul_pd(_mm256_sub_pd(r1, v.min), v.k));
   const __m256 bias = _mm256_set_m128(b1, b0);
@@ -289,7 +279,7 @@ FAULTLINE_AVX2_INLINE std::uint32_t blend8(const std::uint8_t* s, std::uint8_t* 
   return flagged;
 }
 
-FAULTLINE_AVX2_INLINE BlendVec blend_vec(const FogBlendExact& b) {
+FAULTLINE_TARGET_INLINE("avx2") inline BlendVec blend_vec(const FogBlendExact& b) {
   const double a = b.m / b.denom;
   const double k = (255.0 * b.m * b.strength) / (b.denom * b.range);
   return {_mm256_set1_pd(b.min), _mm256_set1_pd(k), _mm256_set1_ps(static_cast<float>(a))};
@@ -304,8 +294,8 @@ inline void fix_flagged(const std::uint8_t* s, std::uint8_t* d, const double* ra
   }
 }
 
-FAULTLINE_TARGET_AVX2 void blend_exact_avx2(const std::uint8_t* src, const double* f, std::uint8_t* dst, int cols,
-                                            const FogBlendExact& b) {
+FAULTLINE_TARGET("avx2") void blend_exact_avx2(const std::uint8_t* src, const double* f, std::uint8_t* dst, int cols,
+                                               const FogBlendExact& b) {
   const BlendVec v = blend_vec(b);
   int x = 0;
   for (; x + 8 <= cols; x += 8) {
@@ -316,8 +306,8 @@ FAULTLINE_TARGET_AVX2 void blend_exact_avx2(const std::uint8_t* src, const doubl
   blend_exact_scalar(src, dst, x, cols, b, [f](int i) { return f[i]; });
 }
 
-FAULTLINE_TARGET_AVX2 void blend_exact_pairs_avx2(const std::uint8_t* src, const double* even, const double* odd,
-                                                  std::uint8_t* dst, int cols, const FogBlendExact& b) {
+FAULTLINE_TARGET("avx2") void blend_exact_pairs_avx2(const std::uint8_t* src, const double* even, const double* odd,
+                                                     std::uint8_t* dst, int cols, const FogBlendExact& b) {
   const BlendVec v = blend_vec(b);
   int x = 0;
   for (; x + 8 <= cols; x += 8) {
@@ -337,15 +327,15 @@ FAULTLINE_TARGET_AVX2 void blend_exact_pairs_avx2(const std::uint8_t* src, const
 
 // trunc(src * scale + add) for eight bytes, as int32. No clamps: scale, add >= 0 keep v >= 0 and v stays far
 // below 2^31, and the caller's saturating packs turn every v >= 255 into 255, as clamping first would.
-FAULTLINE_AVX2_INLINE __m256i fast_channel(const std::uint8_t* s, __m256 add, __m256 vscale) {
+FAULTLINE_TARGET_INLINE("avx2") inline __m256i fast_channel(const std::uint8_t* s, __m256 add, __m256 vscale) {
   const __m256i b = _mm256_cvtepu8_epi32(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(s)));
   return _mm256_cvttps_epi32(_mm256_add_ps(_mm256_mul_ps(_mm256_cvtepi32_ps(b), vscale), add));
 }
 
 // Eight pixels (24 values) per step; field(x) loads the field values of pixels x .. x + 7.
 template <typename Field>
-FAULTLINE_AVX2_INLINE void blend_fast_body(const std::uint8_t* src, std::uint8_t* dst, int cols, float scale,
-                                           float add_scale, Field field, int* done) {
+FAULTLINE_TARGET_INLINE("avx2") inline void blend_fast_body(const std::uint8_t* src, std::uint8_t* dst, int cols,
+                                                            float scale, float add_scale, Field field, int* done) {
   const __m256 vscale = _mm256_set1_ps(scale), vadd = _mm256_set1_ps(add_scale);
   const __m256i p0 = _mm256_setr_epi32(0, 0, 0, 1, 1, 1, 2, 2);
   const __m256i p1 = _mm256_setr_epi32(2, 3, 3, 3, 4, 4, 4, 5);
@@ -368,23 +358,24 @@ FAULTLINE_AVX2_INLINE void blend_fast_body(const std::uint8_t* src, std::uint8_t
   *done = x;
 }
 
-FAULTLINE_TARGET_AVX2 void blend_fast_avx2(const std::uint8_t* src, const float* f, std::uint8_t* dst, int cols,
-                                           float scale, float add_scale) {
+FAULTLINE_TARGET("avx2") void blend_fast_avx2(const std::uint8_t* src, const float* f, std::uint8_t* dst, int cols,
+                                              float scale, float add_scale) {
   int x = 0;
   blend_fast_body(
-      src, dst, cols, scale, add_scale, [f](int i) FAULTLINE_AVX2_LAMBDA { return _mm256_loadu_ps(f + i); }, &x);
+      src, dst, cols, scale, add_scale,
+      [f](int i) FAULTLINE_TARGET_INLINE("avx2") { return _mm256_loadu_ps(f + i); }, &x);
   blend_fast_scalar(src, f, dst, x, cols, scale, add_scale);
 }
 
 // The field row as fa * wa + fb * wb (two products, then the sum: lerp_avx2's rounding), never stored.
-FAULTLINE_TARGET_AVX2 void blend_fast_lerp_avx2(const std::uint8_t* src, const float* fa, const float* fb,
-                                                std::uint8_t* dst, int cols, float wa, float wb, float scale,
-                                                float add_scale) {
+FAULTLINE_TARGET("avx2") void blend_fast_lerp_avx2(const std::uint8_t* src, const float* fa, const float* fb,
+                                                   std::uint8_t* dst, int cols, float wa, float wb, float scale,
+                                                   float add_scale) {
   const __m256 va = _mm256_set1_ps(wa), vb = _mm256_set1_ps(wb);
   int x = 0;
   blend_fast_body(
       src, dst, cols, scale, add_scale,
-      [=](int i) FAULTLINE_AVX2_LAMBDA {
+      [=](int i) FAULTLINE_TARGET_INLINE("avx2") {
         return _mm256_add_ps(_mm256_mul_ps(_mm256_loadu_ps(fa + i), va), _mm256_mul_ps(_mm256_loadu_ps(fb + i), vb));
       },
       &x);
@@ -392,7 +383,7 @@ FAULTLINE_TARGET_AVX2 void blend_fast_lerp_avx2(const std::uint8_t* src, const f
 }
 
 // Byte maximum, 128 bytes per step; stops at the first 4 KB block that reaches 255 (nothing is larger).
-FAULTLINE_TARGET_AVX2 std::uint8_t max_u8_avx2(const std::uint8_t* p, std::size_t count, std::uint8_t mx) {
+FAULTLINE_TARGET("avx2") std::uint8_t max_u8_avx2(const std::uint8_t* p, std::size_t count, std::uint8_t mx) {
   const __m256i all = _mm256_set1_epi8(static_cast<char>(0xFF));
   __m256i m = _mm256_set1_epi8(static_cast<char>(mx));
   std::size_t i = 0;
@@ -415,13 +406,13 @@ FAULTLINE_TARGET_AVX2 std::uint8_t max_u8_avx2(const std::uint8_t* p, std::size_
   return max_u8_scalar(p + i, count - i, mx);
 }
 
-FAULTLINE_AVX2_INLINE __m256d uniform52_avx2(__m256i bits) {
+FAULTLINE_TARGET_INLINE("avx2") inline __m256d uniform52_avx2(__m256i bits) {
   const __m256i v = _mm256_or_si256(_mm256_srli_epi64(bits, 12), _mm256_set1_epi64x(0x3FF0000000000000LL));
   return _mm256_sub_pd(_mm256_castsi256_pd(v), _mm256_set1_pd(1.0));
 }
 // Both halves of the lanes stepped together (two independent chains); a partial last step goes through the scalar
 // definition (same values).
-FAULTLINE_TARGET_AVX2 void fill_uniforms_avx2(rng::LaneRng& lanes, double* u, int count) {
+FAULTLINE_TARGET("avx2") void fill_uniforms_avx2(rng::LaneRng& lanes, double* u, int count) {
   rng::avx2::Xoshiro4 a = rng::avx2::load_half(lanes, 0), b = rng::avx2::load_half(lanes, 1);
   int i = 0;
   for (; i + rng::LaneRng::kLanes <= count; i += rng::LaneRng::kLanes) {
@@ -434,7 +425,7 @@ FAULTLINE_TARGET_AVX2 void fill_uniforms_avx2(rng::LaneRng& lanes, double* u, in
 }
 
 // Eight field values -> 24 fixed-point values (each tripled for the three channels).
-FAULTLINE_TARGET_AVX2 void fixed_field_avx2(const float* f, std::uint16_t* g, int cols, float add256) {
+FAULTLINE_TARGET("avx2") void fixed_field_avx2(const float* f, std::uint16_t* g, int cols, float add256) {
   const __m256 vmul = _mm256_set1_ps(add256), one = _mm256_set1_ps(0.5f);
   const __m128i t0 = _mm_setr_epi8(0, 1, 0, 1, 0, 1, 2, 3, 2, 3, 2, 3, 4, 5, 4, 5);
   const __m128i t1 = _mm_setr_epi8(4, 5, 6, 7, 6, 7, 6, 7, 8, 9, 8, 9, 8, 9, 10, 11);
@@ -452,7 +443,7 @@ FAULTLINE_TARGET_AVX2 void fixed_field_avx2(const float* f, std::uint16_t* g, in
 }
 
 template <int K>
-FAULTLINE_AVX2_INLINE __m256i fixed_lerp(const std::uint16_t* ga, const std::uint16_t* gb) {
+FAULTLINE_TARGET_INLINE("avx2") inline __m256i fixed_lerp(const std::uint16_t* ga, const std::uint16_t* gb) {
   const __m256i a = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(ga));
   if constexpr (K == 0) {
     return a;
@@ -466,16 +457,16 @@ FAULTLINE_AVX2_INLINE __m256i fixed_lerp(const std::uint16_t* ga, const std::uin
 }
 // 16 values: ((src << 8) * scale16 >> 16 + g) >> 8, as 16-bit lanes.
 template <int K>
-FAULTLINE_AVX2_INLINE __m256i fixed_half(const std::uint8_t* s, const std::uint16_t* ga, const std::uint16_t* gb,
-                                         __m256i vscale) {
+FAULTLINE_TARGET_INLINE("avx2") inline __m256i fixed_half(const std::uint8_t* s, const std::uint16_t* ga,
+                                                          const std::uint16_t* gb, __m256i vscale) {
   const __m256i x = _mm256_cvtepu8_epi16(_mm_loadu_si128(reinterpret_cast<const __m128i*>(s)));
   const __m256i p = _mm256_mulhi_epu16(_mm256_slli_epi16(x, 8), vscale);
   return _mm256_srli_epi16(_mm256_adds_epu16(p, fixed_lerp<K>(ga, gb)), 8);
 }
 template <int K>
-FAULTLINE_TARGET_AVX2 void blend_fixed_avx2(const std::uint8_t* src, const std::uint16_t* ga,
-                                            const std::uint16_t* gb, std::uint8_t* dst, int count,
-                                            std::uint16_t scale16) {
+FAULTLINE_TARGET("avx2") void blend_fixed_avx2(const std::uint8_t* src, const std::uint16_t* ga,
+                                               const std::uint16_t* gb, std::uint8_t* dst, int count,
+                                               std::uint16_t scale16) {
   const __m256i vscale = _mm256_set1_epi16(static_cast<short>(scale16));
   int i = 0;
   for (; i + 32 <= count; i += 32) {
@@ -488,7 +479,7 @@ FAULTLINE_TARGET_AVX2 void blend_fixed_avx2(const std::uint8_t* src, const std::
 }
 
 // Eight low values -> 32 outputs: the four phases as vectors, then a 4 x 8 transpose.
-FAULTLINE_TARGET_AVX2 void upsample4_avx2(const float* low, float* out, int count) {
+FAULTLINE_TARGET("avx2") void upsample4_avx2(const float* low, float* out, int count) {
   const __m256 w1 = _mm256_set1_ps(0.25f), w2 = _mm256_set1_ps(0.5f), w3 = _mm256_set1_ps(0.75f);
   int c = 0;
   for (; 4 * c + 32 <= count; c += 8) {
@@ -514,7 +505,7 @@ FAULTLINE_TARGET_AVX2 void upsample4_avx2(const float* low, float* out, int coun
   upsample4_scalar(low, out, 4 * c, count);
 }
 
-FAULTLINE_TARGET_AVX2 void lerp_avx2(const float* a, const float* b, float* out, int count, float wa, float wb) {
+FAULTLINE_TARGET("avx2") void lerp_avx2(const float* a, const float* b, float* out, int count, float wa, float wb) {
   const __m256 va = _mm256_set1_ps(wa), vb = _mm256_set1_ps(wb);
   int j = 0;
   for (; j + 8 <= count; j += 8) {
@@ -529,7 +520,7 @@ FAULTLINE_TARGET_AVX2 void lerp_avx2(const float* a, const float* b, float* out,
 }  // namespace
 
 void fog_centre_row(const double* c0, const double* c1, const double* u, double* d, int count, const FogStep& s) {
-#if FAULTLINE_FOG_AVX2
+#if FAULTLINE_X86_SIMD
   if (common::cpu_has_avx2()) return centre_avx2(c0, c1, u, d, count, s);
 #endif
   centre_scalar(c0, c1, u, d, 0, count, s);
@@ -537,7 +528,7 @@ void fog_centre_row(const double* c0, const double* c1, const double* u, double*
 
 void fog_hedge_row(const double* d0, const double* dp, const double* c0, const double* u, double* e, int count,
                    const FogStep& s) {
-#if FAULTLINE_FOG_AVX2
+#if FAULTLINE_X86_SIMD
   if (common::cpu_has_avx2()) return hedge_avx2(d0, dp, c0, u, e, count, s);
 #endif
   hedge_scalar(d0, dp, c0, u, e, 0, count, s);
@@ -545,14 +536,14 @@ void fog_hedge_row(const double* d0, const double* dp, const double* c0, const d
 
 void fog_vedge_row(const double* d0, const double* c0, const double* c1, const double* u, double* e, int count,
                    const FogStep& s) {
-#if FAULTLINE_FOG_AVX2
+#if FAULTLINE_X86_SIMD
   if (common::cpu_has_avx2()) return vedge_avx2(d0, c0, c1, u, e, count, s);
 #endif
   vedge_scalar(d0, c0, c1, u, e, 0, count, s);
 }
 
 void fog_interleave_row(const double* a, const double* b, double* out, int pairs) {
-#if FAULTLINE_FOG_AVX2
+#if FAULTLINE_X86_SIMD
   if (common::cpu_has_avx2()) return interleave_avx2(a, b, out, pairs);
 #endif
   for (int j = 0; j < pairs; ++j) {
@@ -562,7 +553,7 @@ void fog_interleave_row(const double* a, const double* b, double* out, int pairs
 }
 
 void fog_minmax_row(const double* p, int count, double* mn, double* mx) {
-#if FAULTLINE_FOG_AVX2
+#if FAULTLINE_X86_SIMD
   if (common::cpu_has_avx2()) return minmax_avx2(p, count, mn, mx);
 #endif
   for (int j = 0; j < count; ++j) {
@@ -572,7 +563,7 @@ void fog_minmax_row(const double* p, int count, double* mn, double* mx) {
 }
 
 void fog_interleave_normalise_row(const double* a, const double* b, double* out, int pairs, double mn, double range) {
-#if FAULTLINE_FOG_AVX2
+#if FAULTLINE_X86_SIMD
   if (common::cpu_has_avx2()) return interleave_normalise_avx2(a, b, out, pairs, mn, range);
 #endif
   for (int j = 0; j < pairs; ++j) {
@@ -583,7 +574,7 @@ void fog_interleave_normalise_row(const double* a, const double* b, double* out,
 
 void fog_blend_exact_row(const std::uint8_t* src, const double* f, std::uint8_t* dst, int cols,
                          const FogBlendExact& b) {
-#if FAULTLINE_FOG_AVX2
+#if FAULTLINE_X86_SIMD
   if (common::cpu_has_avx2()) return blend_exact_avx2(src, f, dst, cols, b);
 #endif
   blend_exact_scalar(src, dst, 0, cols, b, [f](int i) { return f[i]; });
@@ -591,7 +582,7 @@ void fog_blend_exact_row(const std::uint8_t* src, const double* f, std::uint8_t*
 
 void fog_blend_exact_pairs(const std::uint8_t* src, const double* even, const double* odd, std::uint8_t* dst,
                            int cols, const FogBlendExact& b) {
-#if FAULTLINE_FOG_AVX2
+#if FAULTLINE_X86_SIMD
   if (common::cpu_has_avx2()) return blend_exact_pairs_avx2(src, even, odd, dst, cols, b);
 #endif
   blend_exact_scalar(src, dst, 0, cols, b, [even, odd](int i) { return i % 2 ? odd[i / 2] : even[i / 2]; });
@@ -599,7 +590,7 @@ void fog_blend_exact_pairs(const std::uint8_t* src, const double* even, const do
 
 void fog_blend_fast_row(const std::uint8_t* src, const float* f, std::uint8_t* dst, int cols, float scale,
                         float add_scale) {
-#if FAULTLINE_FOG_AVX2
+#if FAULTLINE_X86_SIMD
   if (common::cpu_has_avx2()) return blend_fast_avx2(src, f, dst, cols, scale, add_scale);
 #endif
   blend_fast_scalar(src, f, dst, 0, cols, scale, add_scale);
@@ -607,21 +598,21 @@ void fog_blend_fast_row(const std::uint8_t* src, const float* f, std::uint8_t* d
 
 void fog_blend_fast_lerp_row(const std::uint8_t* src, const float* fa, const float* fb, std::uint8_t* dst, int cols,
                              float wa, float wb, float scale, float add_scale) {
-#if FAULTLINE_FOG_AVX2
+#if FAULTLINE_X86_SIMD
   if (common::cpu_has_avx2()) return blend_fast_lerp_avx2(src, fa, fb, dst, cols, wa, wb, scale, add_scale);
 #endif
   blend_fast_lerp_scalar(src, fa, fb, dst, 0, cols, wa, wb, scale, add_scale);
 }
 
 std::uint8_t fog_max_u8(const std::uint8_t* p, std::size_t count, std::uint8_t mx) {
-#if FAULTLINE_FOG_AVX2
+#if FAULTLINE_X86_SIMD
   if (common::cpu_has_avx2()) return max_u8_avx2(p, count, mx);
 #endif
   return max_u8_scalar(p, count, mx);
 }
 
 void fog_fill_uniforms(rng::LaneRng& lanes, double* u, int count) {
-#if FAULTLINE_FOG_AVX2
+#if FAULTLINE_X86_SIMD
   if (common::cpu_has_avx2()) return fill_uniforms_avx2(lanes, u, count);
 #endif
   fill_uniforms_scalar(lanes, u, 0, count);
@@ -629,7 +620,7 @@ void fog_fill_uniforms(rng::LaneRng& lanes, double* u, int count) {
 
 void fog_fixed_field_row(const float* f, std::uint16_t* g, int cols, float add_scale) {
   const float add256 = add_scale * 256.0f;
-#if FAULTLINE_FOG_AVX2
+#if FAULTLINE_X86_SIMD
   if (common::cpu_has_avx2()) return fixed_field_avx2(f, g, cols, add256);
 #endif
   fixed_field_scalar(f, g, 0, cols, add256);
@@ -638,7 +629,7 @@ void fog_fixed_field_row(const float* f, std::uint16_t* g, int cols, float add_s
 void fog_blend_fixed_row(const std::uint8_t* src, const std::uint16_t* ga, const std::uint16_t* gb, int k,
                          std::uint8_t* dst, int cols, std::uint16_t scale16) {
   const int count = 3 * cols;
-#if FAULTLINE_FOG_AVX2
+#if FAULTLINE_X86_SIMD
   if (common::cpu_has_avx2()) {
     switch (k) {
       case 0: return blend_fixed_avx2<0>(src, ga, gb, dst, count, scale16);
@@ -652,14 +643,14 @@ void fog_blend_fixed_row(const std::uint8_t* src, const std::uint16_t* ga, const
 }
 
 void fog_upsample4_row(const float* low, float* out, int count) {
-#if FAULTLINE_FOG_AVX2
+#if FAULTLINE_X86_SIMD
   if (common::cpu_has_avx2()) return upsample4_avx2(low, out, count);
 #endif
   upsample4_scalar(low, out, 0, count);
 }
 
 void fog_lerp_row(const float* a, const float* b, float* out, int count, float wa, float wb) {
-#if FAULTLINE_FOG_AVX2
+#if FAULTLINE_X86_SIMD
   if (common::cpu_has_avx2()) return lerp_avx2(a, b, out, count, wa, wb);
 #endif
   for (int j = 0; j < count; ++j) out[j] = a[j] * wa + b[j] * wb;

@@ -4,33 +4,23 @@
 #include <algorithm>
 #include <cmath>
 
-#include "common/cpu_features.hpp"
-
-#if defined(__GNUC__) && defined(__x86_64__)
-#include <immintrin.h>
-#endif
-
-#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__)
-#define FAULTLINE_CLONES __attribute__((target_clones("avx2", "default")))
-#else
-#define FAULTLINE_CLONES
-#endif
+#include "common/simd.hpp"
 
 namespace faultline::corruption::simd {
 
-FAULTLINE_CLONES void axpy(double* acc, const std::uint8_t* src, double k, std::size_t n) {
+FAULTLINE_CLONES("avx2") void axpy(double* acc, const std::uint8_t* src, double k, std::size_t n) {
   for (std::size_t j = 0; j < n; ++j) acc[j] += k * static_cast<double>(src[j]);
 }
 
-FAULTLINE_CLONES void axpy(double* acc, const double* src, double k, std::size_t n) {
+FAULTLINE_CLONES("avx2") void axpy(double* acc, const double* src, double k, std::size_t n) {
   for (std::size_t j = 0; j < n; ++j) acc[j] += k * src[j];
 }
 
-FAULTLINE_CLONES void axpy(float* acc, const std::uint8_t* src, float k, std::size_t n) {
+FAULTLINE_CLONES("avx2") void axpy(float* acc, const std::uint8_t* src, float k, std::size_t n) {
   for (std::size_t j = 0; j < n; ++j) acc[j] += k * static_cast<float>(src[j]);
 }
 
-FAULTLINE_CLONES void axpy(float* acc, const float* src, float k, std::size_t n) {
+FAULTLINE_CLONES("avx2") void axpy(float* acc, const float* src, float k, std::size_t n) {
   for (std::size_t j = 0; j < n; ++j) acc[j] += k * src[j];
 }
 
@@ -38,9 +28,9 @@ namespace {
 
 // acc[j] for whole blocks of 64 outputs; returns how many outputs it wrote. The running sums stay in registers
 // across all taps instead of streaming the accumulator row through memory once per tap.
-#if defined(__GNUC__) && defined(__x86_64__)
-__attribute__((target("avx2"))) std::size_t weighted_rows_avx2(float* acc, const std::uint8_t* const* rows,
-                                                               const float* weights, int taps, std::size_t n) {
+#if FAULTLINE_X86_SIMD
+FAULTLINE_TARGET("avx2") std::size_t weighted_rows_avx2(float* acc, const std::uint8_t* const* rows,
+                                                        const float* weights, int taps, std::size_t n) {
   constexpr std::size_t kBlock = 64;
   std::size_t j0 = 0;
   for (; j0 + kBlock <= n; j0 += kBlock) {
@@ -61,8 +51,8 @@ __attribute__((target("avx2"))) std::size_t weighted_rows_avx2(float* acc, const
 }
 
 // Same for float sources (the fast snow layer, fast mode only), with fused multiply-adds.
-__attribute__((target("avx2,fma"))) std::size_t weighted_rows_avx2(float* acc, const float* const* rows,
-                                                               const float* weights, int taps, std::size_t n) {
+FAULTLINE_TARGET("avx2,fma") std::size_t weighted_rows_avx2(float* acc, const float* const* rows,
+                                                            const float* weights, int taps, std::size_t n) {
   constexpr std::size_t kBlock = 64;
   std::size_t j0 = 0;
   for (; j0 + kBlock <= n; j0 += kBlock) {
@@ -82,8 +72,8 @@ __attribute__((target("avx2,fma"))) std::size_t weighted_rows_avx2(float* acc, c
 // integers 0..255 are exact in binary16, and half the bytes per load of float32 rows, measured ~1.5x faster), then
 // the band test and truncation on the registers (no accumulator row written or re-read).
 // eq[c] = lanes j0 + 16c .. j0 + 16c + 15 (as 16-bit masks) whose taps all hold the first tap's value.
-__attribute__((target("avx2"))) inline void flat_lanes(const std::uint16_t* const* rows, int taps, std::size_t j0,
-                                                       __m256i* eq) {
+FAULTLINE_TARGET("avx2") inline void flat_lanes(const std::uint16_t* const* rows, int taps, std::size_t j0,
+                                                __m256i* eq) {
   for (int c = 0; c < 4; ++c) {
     const __m256i first = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(rows[0] + j0 + 16 * c));
     eq[c] = _mm256_set1_epi16(-1);
@@ -95,13 +85,13 @@ __attribute__((target("avx2"))) inline void flat_lanes(const std::uint16_t* cons
 }
 
 // Eight half-precision byte values as int32.
-__attribute__((target("avx2,f16c"))) inline __m256i first_bytes(const std::uint16_t* halves) {
+FAULTLINE_TARGET("avx2,f16c") inline __m256i first_bytes(const std::uint16_t* halves) {
   return _mm256_cvttps_epi32(_mm256_cvtph_ps(_mm_loadu_si128(reinterpret_cast<const __m128i*>(halves))));
 }
 
 // Stores 64 results (clamped to 0..255) and their ambiguity mask (bit k: lane k); counts the ambiguous ones.
-__attribute__((target("avx2"))) inline void store_truncated(const __m256i* lo, const __m256i* badm, std::uint8_t* dst,
-                                                            std::uint64_t* ambiguous, std::size_t& bad_total) {
+FAULTLINE_TARGET("avx2") inline void store_truncated(const __m256i* lo, const __m256i* badm, std::uint8_t* dst,
+                                                     std::uint64_t* ambiguous, std::size_t& bad_total) {
   const __m256i max255 = _mm256_set1_epi32(255);
   std::uint64_t mask = 0;
   for (int v = 0; v < 8; v += 2) {
@@ -118,7 +108,7 @@ __attribute__((target("avx2"))) inline void store_truncated(const __m256i* lo, c
   bad_total += static_cast<std::size_t>(__builtin_popcountll(mask));
 }
 
-__attribute__((target("avx2,fma,f16c"))) std::size_t weighted_rows_truncate_f16_avx2(
+FAULTLINE_TARGET("avx2,fma,f16c") std::size_t weighted_rows_truncate_f16_avx2(
     const std::uint16_t* const* rows, const float* weights, const double* weights64, int taps, float band,
     const std::int32_t* flat, std::uint8_t* dst, std::uint64_t* ambiguous, std::size_t n, std::size_t* count) {
   constexpr std::size_t kBlock = 64;
@@ -199,7 +189,7 @@ __attribute__((target("avx2,fma,f16c"))) std::size_t weighted_rows_truncate_f16_
 // straight from memory (no conversion per tap), then truncation by the saturating packs. Only vectors with a sum
 // within `band` of an integer go over the taps again.
 template <int V>
-__attribute__((target("avx2,fma"), always_inline)) inline void fast_block(
+FAULTLINE_TARGET_INLINE("avx2,fma") inline void fast_block(
     const float* const* rows, const float* weights, int taps32, const double* weights64, int taps, float band,
     const std::int32_t* flat, std::uint8_t* dst, std::size_t j0) {
   __m256 a[V];
@@ -252,7 +242,7 @@ __attribute__((target("avx2,fma"), always_inline)) inline void fast_block(
 }
 
 // Blocks of 96 outputs (12 accumulators: more independent chains than the FMA latency needs), then 64 or 32.
-__attribute__((target("avx2,fma"))) std::size_t weighted_rows_truncate_fast_avx2(
+FAULTLINE_TARGET("avx2,fma") std::size_t weighted_rows_truncate_fast_avx2(
     const float* const* rows, const float* weights, int taps32, const double* weights64, int taps, float band,
     const std::int32_t* flat, std::uint8_t* dst, std::size_t n) {
   std::size_t j0 = 0;
@@ -268,8 +258,8 @@ __attribute__((target("avx2,fma"))) std::size_t weighted_rows_truncate_fast_avx2
   return j0;
 }
 
-__attribute__((target("avx2"))) void u8_to_float_avx2(const std::uint8_t* src, float* dst, std::size_t n,
-                                                      std::size_t* done) {
+FAULTLINE_TARGET("avx2") void u8_to_float_avx2(const std::uint8_t* src, float* dst, std::size_t n,
+                                               std::size_t* done) {
   std::size_t j = 0;
   for (; j + 8 <= n; j += 8) {
     const __m128i bytes = _mm_loadl_epi64(reinterpret_cast<const __m128i*>(src + j));
@@ -278,8 +268,8 @@ __attribute__((target("avx2"))) void u8_to_float_avx2(const std::uint8_t* src, f
   *done = j;
 }
 
-__attribute__((target("avx2,f16c"))) void u8_to_half_avx2(const std::uint8_t* src, std::uint16_t* dst,
-                                                          std::size_t n, std::size_t* done) {
+FAULTLINE_TARGET("avx2,f16c") void u8_to_half_avx2(const std::uint8_t* src, std::uint16_t* dst,
+                                                   std::size_t n, std::size_t* done) {
   std::size_t j = 0;
   for (; j + 8 <= n; j += 8) {
     const __m128i bytes = _mm_loadl_epi64(reinterpret_cast<const __m128i*>(src + j));
@@ -291,9 +281,9 @@ __attribute__((target("avx2,f16c"))) void u8_to_half_avx2(const std::uint8_t* sr
 
 // Words [w_begin, w_end) (each wholly inside n, with p - period >= 0 for every lane): 64 elements per word, two
 // 16-lane compares per 32 bits packed to bytes (lane order restored) for movemask.
-__attribute__((target("avx2"))) void period_change_bits_avx2(const std::uint16_t* src, std::size_t period,
-                                                             std::uint64_t* bits, std::size_t w_begin,
-                                                             std::size_t w_end) {
+FAULTLINE_TARGET("avx2") void period_change_bits_avx2(const std::uint16_t* src, std::size_t period,
+                                                      std::uint64_t* bits, std::size_t w_begin,
+                                                      std::size_t w_end) {
   for (std::size_t w = w_begin; w < w_end; ++w) {
     std::uint64_t word = 0;
     for (int h = 0; h < 2; ++h) {
@@ -313,8 +303,8 @@ __attribute__((target("avx2"))) void period_change_bits_avx2(const std::uint16_t
 }
 
 // Same for float32 rows: 8 lanes per compare, 8 compares per word.
-__attribute__((target("avx2"))) void period_change_bits_avx2(const float* src, std::size_t period, std::uint64_t* bits,
-                                                             std::size_t w_begin, std::size_t w_end) {
+FAULTLINE_TARGET("avx2") void period_change_bits_avx2(const float* src, std::size_t period, std::uint64_t* bits,
+                                                      std::size_t w_begin, std::size_t w_end) {
   for (std::size_t w = w_begin; w < w_end; ++w) {
     std::uint64_t word = 0;
     for (int k = 0; k < 8; ++k) {
@@ -331,7 +321,7 @@ __attribute__((target("avx2"))) void period_change_bits_avx2(const float* src, s
 
 void weighted_rows(float* acc, const std::uint8_t* const* rows, const float* weights, int taps, std::size_t n) {
   std::size_t j0 = 0;
-#if defined(__GNUC__) && defined(__x86_64__)
+#if FAULTLINE_X86_SIMD
   if (common::cpu_has_avx2()) j0 = weighted_rows_avx2(acc, rows, weights, taps, n);
 #endif
   for (std::size_t j = j0; j < n; ++j) {
@@ -343,7 +333,7 @@ void weighted_rows(float* acc, const std::uint8_t* const* rows, const float* wei
 
 void weighted_rows(float* acc, const float* const* rows, const float* weights, int taps, std::size_t n) {
   std::size_t j0 = 0;
-#if defined(__GNUC__) && defined(__x86_64__)
+#if FAULTLINE_X86_SIMD
   if (common::cpu_has_avx2_fma()) j0 = weighted_rows_avx2(acc, rows, weights, taps, n);
 #endif
   for (std::size_t j = j0; j < n; ++j) {
@@ -355,7 +345,7 @@ void weighted_rows(float* acc, const float* const* rows, const float* weights, i
 
 void u8_to_half(const std::uint8_t* src, std::uint16_t* dst, std::size_t n) {
   std::size_t j = 0;
-#if defined(__GNUC__) && defined(__x86_64__)
+#if FAULTLINE_X86_SIMD
   if (common::cpu_has_avx2_fma_f16c()) u8_to_half_avx2(src, dst, n, &j);
 #endif
   for (; j < n; ++j) dst[j] = half_of_byte(src[j]);
@@ -375,7 +365,7 @@ void period_change_bits_any(const T* src, std::size_t n, std::size_t period, std
       bits[w] = word;
     }
   };
-#if defined(__GNUC__) && defined(__x86_64__)
+#if FAULTLINE_X86_SIMD
   if (common::cpu_has_avx2() && period <= 64 && n >= 128) {
     scalar_words(0, 1);
     period_change_bits_avx2(src, period, bits, 1, n / 64);
@@ -398,7 +388,7 @@ void period_change_bits(const float* src, std::size_t n, std::size_t period, std
 
 void u8_to_float(const std::uint8_t* src, float* dst, std::size_t n) {
   std::size_t j = 0;
-#if defined(__GNUC__) && defined(__x86_64__)
+#if FAULTLINE_X86_SIMD
   if (common::cpu_has_avx2()) u8_to_float_avx2(src, dst, n, &j);
 #endif
   for (; j < n; ++j) dst[j] = static_cast<float>(src[j]);
@@ -407,7 +397,7 @@ void u8_to_float(const std::uint8_t* src, float* dst, std::size_t n) {
 void weighted_rows_truncate_fast(const float* const* rows, const float* weights, int taps32, const double* weights64,
                                  int taps, float band, const std::int32_t* flat, std::uint8_t* dst, std::size_t n) {
   std::size_t j0 = 0;
-#if defined(__GNUC__) && defined(__x86_64__)
+#if FAULTLINE_X86_SIMD
   if (common::cpu_has_avx2_fma()) {
     j0 = weighted_rows_truncate_fast_avx2(rows, weights, taps32, weights64, taps, band, flat, dst, n);
   }
@@ -433,7 +423,7 @@ std::size_t weighted_rows_truncate(const std::uint16_t* const* rows, const float
                                    int taps, float band, const std::int32_t* flat, std::uint8_t* dst,
                                    std::uint64_t* ambiguous, std::size_t n) {
   std::size_t j0 = 0, count = 0;
-#if defined(__GNUC__) && defined(__x86_64__)
+#if FAULTLINE_X86_SIMD
   if (common::cpu_has_avx2_fma_f16c()) {
     j0 = weighted_rows_truncate_f16_avx2(rows, weights, weights64, taps, band, flat, dst, ambiguous, n, &count);
   }
@@ -453,8 +443,8 @@ std::size_t weighted_rows_truncate(const std::uint16_t* const* rows, const float
   return count;
 }
 
-FAULTLINE_CLONES std::size_t truncate_outside_band(const float* acc, float band, std::uint8_t* dst,
-                                                   std::uint8_t* ambiguous, std::size_t n) {
+FAULTLINE_CLONES("avx2") std::size_t truncate_outside_band(const float* acc, float band, std::uint8_t* dst,
+                                                           std::uint8_t* ambiguous, std::size_t n) {
   std::size_t count = 0;
   for (std::size_t j = 0; j < n; ++j) {
     const float lo_f = acc[j] - band;

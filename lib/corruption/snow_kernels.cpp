@@ -5,18 +5,13 @@
 #include <cmath>
 #include <vector>
 
-#include "common/cpu_features.hpp"
-
-#if defined(__GNUC__) && defined(__x86_64__)
-#include <immintrin.h>
-#define FAULTLINE_SNOW_AVX2 1
-#endif
+#include "common/simd.hpp"
 
 namespace faultline::corruption::snow_kernels {
 namespace {
 
 bool use_avx2(bool allow_simd) {
-#ifdef FAULTLINE_SNOW_AVX2
+#if FAULTLINE_X86_SIMD
   return allow_simd && common::cpu_has_avx2();
 #else
   (void)allow_simd;
@@ -51,7 +46,7 @@ void blend_scalar(const std::uint8_t* src, const std::uint8_t* layer, const std:
   }
 }
 
-#ifdef FAULTLINE_SNOW_AVX2
+#if FAULTLINE_X86_SIMD
 
 // pshufb masks: planar <-> interleaved for 16 three-byte pixels held in three 16-byte blocks.
 struct Shuffles {
@@ -75,14 +70,14 @@ const Shuffles& shuffles() {
   return s;
 }
 
-__attribute__((target("avx2"))) inline __m128i mask(const std::int8_t* m) {
+FAULTLINE_TARGET("avx2") inline __m128i mask(const std::int8_t* m) {
   return _mm_load_si128(reinterpret_cast<const __m128i*>(m));
 }
 
-__attribute__((target("avx2"))) void column_zoom_avx2(const float* src, float* dst, int n_out,
-                                                      const std::int32_t* base, const std::int32_t* rel0,
-                                                      const std::int32_t* rel1, const float* w,
-                                                      const float* one_minus_w) {
+FAULTLINE_TARGET("avx2") void column_zoom_avx2(const float* src, float* dst, int n_out,
+                                               const std::int32_t* base, const std::int32_t* rel0,
+                                               const std::int32_t* rel1, const float* w,
+                                               const float* one_minus_w) {
   for (int blk = 0; blk * 8 < n_out; ++blk) {
     if (base[blk] < 0) continue;  // left to the scalar body
     const int o = 8 * blk;
@@ -96,14 +91,14 @@ __attribute__((target("avx2"))) void column_zoom_avx2(const float* src, float* d
 }
 
 // Two vectors of eight int32 in 0..255 -> sixteen bytes.
-__attribute__((target("avx2"))) inline __m128i narrow(__m256i lo, __m256i hi) {
+FAULTLINE_TARGET("avx2") inline __m128i narrow(__m256i lo, __m256i hi) {
   const __m256i words = _mm256_permute4x64_epi64(_mm256_packus_epi32(lo, hi), 0xD8);
   return _mm_packus_epi16(_mm256_castsi256_si128(words), _mm256_extracti128_si256(words, 1));
 }
 
 // The 16 BGR pixels at x split into B, G and R planes.
-__attribute__((target("avx2"))) inline void load_planes(const Shuffles& m, const std::uint8_t* src, int x,
-                                                       __m128i plane[3]) {
+FAULTLINE_TARGET("avx2") inline void load_planes(const Shuffles& m, const std::uint8_t* src, int x,
+                                                 __m128i plane[3]) {
   __m128i blk[3];
   for (int i = 0; i < 3; ++i) blk[i] = _mm_loadu_si128(reinterpret_cast<const __m128i*>(src + 3 * x + 16 * i));
   for (int k = 0; k < 3; ++k) {
@@ -114,8 +109,8 @@ __attribute__((target("avx2"))) inline void load_planes(const Shuffles& m, const
 }
 
 // The rotated layer's 16 bytes for pixels x..x+15: read backwards from the end of the row when rot_reversed.
-__attribute__((target("avx2"))) inline __m128i load_rotated(const std::uint8_t* rot, bool rot_reversed, int cols,
-                                                           int x) {
+FAULTLINE_TARGET("avx2") inline __m128i load_rotated(const std::uint8_t* rot, bool rot_reversed, int cols,
+                                                     int x) {
   const __m128i reverse = _mm_setr_epi8(15, 14, 13, 12, 11, 10, 9, 8, 7, 6, 5, 4, 3, 2, 1, 0);
   return rot_reversed
              ? _mm_shuffle_epi8(_mm_loadu_si128(reinterpret_cast<const __m128i*>(rot + cols - 16 - x)), reverse)
@@ -123,8 +118,8 @@ __attribute__((target("avx2"))) inline __m128i load_rotated(const std::uint8_t* 
 }
 
 // B, G and R planes of 16 bytes -> 16 interleaved BGR pixels at x.
-__attribute__((target("avx2"))) inline void merge_planes(const Shuffles& m, const __m128i res[3], std::uint8_t* dst,
-                                                        int x) {
+FAULTLINE_TARGET("avx2") inline void merge_planes(const Shuffles& m, const __m128i res[3], std::uint8_t* dst,
+                                                  int x) {
   for (int i = 0; i < 3; ++i) {
     const __m128i v = _mm_or_si128(_mm_or_si128(_mm_shuffle_epi8(res[0], mask(m.merge[i][0])),
                                                 _mm_shuffle_epi8(res[1], mask(m.merge[i][1]))),
@@ -134,22 +129,22 @@ __attribute__((target("avx2"))) inline void merge_planes(const Shuffles& m, cons
 }
 
 // Per plane two vectors of eight int32 in 0..255 -> 16 interleaved BGR pixels at x.
-__attribute__((target("avx2"))) inline void store_planes(const Shuffles& m, const __m256i out[3][2],
-                                                        std::uint8_t* dst, int x) {
+FAULTLINE_TARGET("avx2") inline void store_planes(const Shuffles& m, const __m256i out[3][2],
+                                                  std::uint8_t* dst, int x) {
   __m128i res[3];
   for (int k = 0; k < 3; ++k) res[k] = narrow(out[k][0], out[k][1]);
   merge_planes(m, res, dst, x);
 }
 
-__attribute__((target("avx2"))) inline __m256i set16(std::uint32_t v) {
+FAULTLINE_TARGET("avx2") inline __m256i set16(std::uint32_t v) {
   return _mm256_set1_epi16(static_cast<short>(static_cast<std::uint16_t>(v)));
 }
 
 // Whole blocks of 16 pixels, as blend_scalar in 16-bit lanes (every intermediate stays below 2^16); returns how many
 // pixels it wrote.
-__attribute__((target("avx2"))) int blend_avx2(const std::uint8_t* src, const std::uint8_t* layer,
-                                               const std::uint8_t* rot, bool rot_reversed, std::uint8_t* dst,
-                                               int cols, const BlendFixed& f) {
+FAULTLINE_TARGET("avx2") int blend_avx2(const std::uint8_t* src, const std::uint8_t* layer,
+                                        const std::uint8_t* rot, bool rot_reversed, std::uint8_t* dst,
+                                        int cols, const BlendFixed& f) {
   const Shuffles& m = shuffles();
   const __m256i grey0 = set16(BlendFixed::kGrey0), grey1 = set16(BlendFixed::kGrey1);
   const __m256i grey2 = set16(BlendFixed::kGrey2), offset = set16(BlendFixed::kBrightOffset);
@@ -179,10 +174,10 @@ __attribute__((target("avx2"))) int blend_avx2(const std::uint8_t* src, const st
   return x;
 }
 
-__attribute__((target("avx2"))) void column_zoom64_avx2(const double* src, double threshold, double* dst,
-                                                        int blocks, const std::int32_t* base,
-                                                        const std::int32_t* idx0, const std::int32_t* idx1,
-                                                        const double* w) {
+FAULTLINE_TARGET("avx2") void column_zoom64_avx2(const double* src, double threshold, double* dst,
+                                                 int blocks, const std::int32_t* base,
+                                                 const std::int32_t* idx0, const std::int32_t* idx1,
+                                                 const double* w) {
   const __m256d one = _mm256_set1_pd(1.0), zero = _mm256_setzero_pd(), thr = _mm256_set1_pd(threshold);
   for (int blk = 0; blk < blocks; ++blk) {
     if (base[blk] < 0) continue;  // left to the scalar body
@@ -201,8 +196,8 @@ __attribute__((target("avx2"))) void column_zoom64_avx2(const double* src, doubl
 }
 
 // Whole blocks of 32 outputs, sums kept in registers across all taps; returns how many outputs it wrote.
-__attribute__((target("avx2"))) std::size_t blur_quantise64_avx2(const double* const* rows, const double* weights,
-                                                                 int taps, std::uint8_t* dst, std::size_t n) {
+FAULTLINE_TARGET("avx2") std::size_t blur_quantise64_avx2(const double* const* rows, const double* weights,
+                                                          int taps, std::uint8_t* dst, std::size_t n) {
   constexpr int kVectors = 8;
   const __m256d k255 = _mm256_set1_pd(255.0);
   std::size_t j0 = 0;
@@ -228,16 +223,16 @@ __attribute__((target("avx2"))) std::size_t blur_quantise64_avx2(const double* c
 }
 
 // Four float32 values (the low or high half of an 8-lane vector) widened, plus the two snow terms, to bytes.
-__attribute__((target("avx2,fma"))) inline __m128i finish4(__m128 whitened, __m256d snow, __m256d snow_rot) {
+FAULTLINE_TARGET("avx2,fma") inline __m128i finish4(__m128 whitened, __m256d snow, __m256d snow_rot) {
   __m256d v = _mm256_add_pd(_mm256_add_pd(_mm256_cvtps_pd(whitened), snow), snow_rot);
   v = _mm256_min_pd(_mm256_max_pd(v, _mm256_setzero_pd()), _mm256_set1_pd(1.0));
   return _mm256_cvttpd_epi32(_mm256_mul_pd(v, _mm256_set1_pd(255.0)));
 }
 
 // Whole blocks of 16 pixels; returns how many pixels it wrote.
-__attribute__((target("avx2,fma"))) int blend_exact_avx2(const std::uint8_t* src, const std::uint8_t* layer,
-                                                         const std::uint8_t* rot, bool rot_reversed,
-                                                         std::uint8_t* dst, int cols, float b, float one_minus_b) {
+FAULTLINE_TARGET("avx2,fma") int blend_exact_avx2(const std::uint8_t* src, const std::uint8_t* layer,
+                                                  const std::uint8_t* rot, bool rot_reversed,
+                                                  std::uint8_t* dst, int cols, float b, float one_minus_b) {
   const Shuffles& m = shuffles();
   const __m256 bv = _mm256_set1_ps(b), omb = _mm256_set1_ps(one_minus_b), k255f = _mm256_set1_ps(255.0f);
   const __m256 w0 = _mm256_set1_ps(0.299f), w1 = _mm256_set1_ps(0.587f), w2 = _mm256_set1_ps(0.114f);
@@ -278,7 +273,7 @@ __attribute__((target("avx2,fma"))) int blend_exact_avx2(const std::uint8_t* src
 }
 
 // Eight float32 sums -> eight bytes, rounded half to even as quantise_value does.
-__attribute__((target("avx2"))) inline __m128i quantise8(__m256 s) {
+FAULTLINE_TARGET("avx2") inline __m128i quantise8(__m256 s) {
   const __m256 k255 = _mm256_set1_ps(255.0f), magic = _mm256_set1_ps(12582912.0f);
   const __m256 r = _mm256_sub_ps(_mm256_add_ps(_mm256_mul_ps(s, k255), magic), magic);
   const __m256i q = _mm256_cvttps_epi32(_mm256_min_ps(_mm256_max_ps(r, _mm256_setzero_ps()), k255));
@@ -288,15 +283,15 @@ __attribute__((target("avx2"))) inline __m128i quantise8(__m256 s) {
 
 // Sixteen 16-bit layer sums (65535 = 1.0) -> bytes round(s / 257) (= round(255 * s / 65535)); `bias` (+128 for the
 // rounding, plus half an LSB per tap for the truncating products) is added with saturation.
-__attribute__((target("avx2"))) inline __m256i quantise16(__m256i s, __m256i bias) {
+FAULTLINE_TARGET("avx2") inline __m256i quantise16(__m256i s, __m256i bias) {
   const __m256i t = _mm256_adds_epu16(s, bias);
   return _mm256_srli_epi16(_mm256_sub_epi16(t, _mm256_srli_epi16(t, 8)), 8);
 }
 
 // dst[j] = quantise16(sum over taps of mulhi(w[i], src[i][j]), saturating) for j < n (src readable up to n rounded
 // up to 16): blocks of 128 columns, then single vectors, sums in registers across all taps.
-__attribute__((target("avx2"))) void blur_row_u16_avx2(const std::uint16_t* const* src, const std::uint16_t* w,
-                                                       int taps, std::uint16_t bias, std::uint8_t* dst, int n) {
+FAULTLINE_TARGET("avx2") void blur_row_u16_avx2(const std::uint16_t* const* src, const std::uint16_t* w,
+                                                int taps, std::uint16_t bias, std::uint8_t* dst, int n) {
   constexpr int kVectors = 8, kBlock = 16 * kVectors;
   const __m256i biasv = _mm256_set1_epi16(static_cast<short>(bias));
   int j0 = 0;
@@ -335,8 +330,8 @@ __attribute__((target("avx2"))) void blur_row_u16_avx2(const std::uint16_t* cons
 }
 
 // lerp_threshold_u16 in whole blocks of 16; returns how many values it wrote.
-__attribute__((target("avx2"))) int lerp_threshold_u16_avx2(const float* a, const float* b, float w, float threshold,
-                                                            std::uint16_t* dst, int n) {
+FAULTLINE_TARGET("avx2") int lerp_threshold_u16_avx2(const float* a, const float* b, float w, float threshold,
+                                                     std::uint16_t* dst, int n) {
   const __m256 w0 = _mm256_set1_ps(1.0f - w), w1 = _mm256_set1_ps(w), thr = _mm256_set1_ps(threshold);
   const __m256 zero = _mm256_setzero_ps(), one = _mm256_set1_ps(1.0f), k = _mm256_set1_ps(65535.0f);
   int x = 0;
@@ -354,19 +349,13 @@ __attribute__((target("avx2"))) int lerp_threshold_u16_avx2(const float* a, cons
   return x;
 }
 
-#endif  // FAULTLINE_SNOW_AVX2
-
-#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__)
-#define FAULTLINE_SNOW_FMA_CLONES __attribute__((target_clones("fma", "default")))
-#else
-#define FAULTLINE_SNOW_FMA_CLONES
-#endif
+#endif  // FAULTLINE_X86_SIMD
 
 // The exact blend per pixel. The FMA clone turns std::fma into one instruction (same result as the library call);
 // contraction stays off, so nothing else is fused.
-FAULTLINE_SNOW_FMA_CLONES void blend_exact_scalar(const std::uint8_t* src, const std::uint8_t* l,
-                                                  const std::uint8_t* rot, bool rot_reversed, std::uint8_t* dst,
-                                                  int x0, int cols, float b, float one_minus_b) {
+FAULTLINE_CLONES("fma") void blend_exact_scalar(const std::uint8_t* src, const std::uint8_t* l,
+                                                const std::uint8_t* rot, bool rot_reversed, std::uint8_t* dst,
+                                                int x0, int cols, float b, float one_minus_b) {
   for (int x = x0; x < cols; ++x) {
     const float c0 = static_cast<float>(src[3 * x]) / 255.0f;
     const float c1 = static_cast<float>(src[3 * x + 1]) / 255.0f;
@@ -452,7 +441,7 @@ void ColumnZoom::run(const float* src, float* dst, bool allow_simd) const {
   };
   const int blocks = static_cast<int>(base_.size());
   if (use_avx2(allow_simd)) {
-#ifdef FAULTLINE_SNOW_AVX2
+#if FAULTLINE_X86_SIMD
     column_zoom_avx2(src, dst, blocks * 8, base_.data(), rel0_.data(), rel1_.data(), map_.w.data(),
                      map_.one_minus_w.data());
 #endif
@@ -465,16 +454,10 @@ void ColumnZoom::run(const float* src, float* dst, bool allow_simd) const {
   }
 }
 
-#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__)
-#define FAULTLINE_SNOW_CLONES __attribute__((target_clones("avx2", "default")))
-#else
-#define FAULTLINE_SNOW_CLONES
-#endif
-
 void lerp_threshold_u16(const float* a, const float* b, float w, float threshold, std::uint16_t* dst, int n,
                         bool allow_simd) {
   int x = 0;
-#ifdef FAULTLINE_SNOW_AVX2
+#if FAULTLINE_X86_SIMD
   if (use_avx2(allow_simd)) x = lerp_threshold_u16_avx2(a, b, w, threshold, dst, n);
 #else
   (void)allow_simd;
@@ -489,7 +472,7 @@ void lerp_threshold_u16(const float* a, const float* b, float w, float threshold
 
 // Element-wise float32 loop: vectorising it does not change any value, so the clones need no scalar twin.
 // Adding and removing 1.5 * 2^23 rounds half to even in the default rounding mode (nearbyint without a libm call).
-FAULTLINE_SNOW_CLONES void quantise_row(const float* __restrict src, std::uint8_t* __restrict dst, int n) {
+FAULTLINE_CLONES("avx2") void quantise_row(const float* __restrict src, std::uint8_t* __restrict dst, int n) {
   for (int x = 0; x < n; ++x) dst[x] = quantise_value(src[x]);
 }
 
@@ -538,7 +521,7 @@ void blur_quantise(const LayerRowMaker& make_row, int lh, int lw, const int* dx,
       blur_row_u16_scalar(src.data(), w16.data(), taps, bias, d, cols);
       continue;
     }
-#ifdef FAULTLINE_SNOW_AVX2
+#if FAULTLINE_X86_SIMD
     blur_row_u16_avx2(src.data(), w16.data(), taps, bias, d, cols);
 #endif
   }
@@ -548,7 +531,7 @@ void blend_fast_row(const std::uint8_t* src, const std::uint8_t* layer, const st
                     std::uint8_t* dst, int cols, float b, float one_minus_b, bool allow_simd) {
   const BlendFixed f(b, one_minus_b);
   int x = 0;
-#ifdef FAULTLINE_SNOW_AVX2
+#if FAULTLINE_X86_SIMD
   if (use_avx2(allow_simd)) x = blend_avx2(src, layer, rot, rot_reversed, dst, cols, f);
 #else
   (void)allow_simd;
@@ -556,8 +539,8 @@ void blend_fast_row(const std::uint8_t* src, const std::uint8_t* layer, const st
   blend_scalar(src, layer, rot, rot_reversed, dst, x, cols, f);
 }
 
-FAULTLINE_SNOW_CLONES void lerp_row64(const double* __restrict a, const double* __restrict b, double w,
-                                      double* __restrict dst, int n) {
+FAULTLINE_CLONES("avx2") void lerp_row64(const double* __restrict a, const double* __restrict b, double w,
+                                         double* __restrict dst, int n) {
   const double w0 = 1.0 - w;
   for (int x = 0; x < n; ++x) dst[x] = w0 * a[x] + w * b[x];
 }
@@ -603,7 +586,7 @@ void ColumnZoom64::run(const double* src, double threshold, double* dst, bool al
   };
   const int blocks = static_cast<int>(base_.size());
   if (use_avx2(allow_simd)) {
-#ifdef FAULTLINE_SNOW_AVX2
+#if FAULTLINE_X86_SIMD
     column_zoom64_avx2(src, threshold, dst, blocks, base_.data(), idx0_.data(), idx1_.data(), w_.data());
 #endif
     for (int blk = 0; blk < blocks; ++blk) {
@@ -618,7 +601,7 @@ void ColumnZoom64::run(const double* src, double threshold, double* dst, bool al
 void blur_quantise64(const double* const* rows, const double* weights, int taps, std::uint8_t* dst, std::size_t n,
                      bool allow_simd) {
   std::size_t j = 0;
-#ifdef FAULTLINE_SNOW_AVX2
+#if FAULTLINE_X86_SIMD
   if (use_avx2(allow_simd)) j = blur_quantise64_avx2(rows, weights, taps, dst, n);
 #else
   (void)allow_simd;
@@ -633,7 +616,7 @@ void blur_quantise64(const double* const* rows, const double* weights, int taps,
 void blend_exact_row(const std::uint8_t* src, const std::uint8_t* layer, const std::uint8_t* rot, bool rot_reversed,
                      std::uint8_t* dst, int cols, float b, float one_minus_b, bool allow_simd) {
   int x = 0;
-#ifdef FAULTLINE_SNOW_AVX2
+#if FAULTLINE_X86_SIMD
   if (allow_simd && common::cpu_has_avx2_fma()) x = blend_exact_avx2(src, layer, rot, rot_reversed, dst, cols, b, one_minus_b);
 #else
   (void)allow_simd;

@@ -15,9 +15,7 @@
 #include <set>
 #include <thread>
 
-#ifdef FAULTLINE_DATASET_HAVE_CODEC
 #include "codec/jpeg.hpp"
-#endif
 #include "dataset/geometry.hpp"
 #include "dataset/synth_render.hpp"
 #include "dataset/synth_world.hpp"
@@ -186,7 +184,6 @@ Status render_images(Shared& sh, const SynthWorld& world, const std::vector<Came
     for (std::size_t i = next++; i < jobs.size(); i = next++) {
       const ImageJob& job = jobs[i];
       const cv::Mat img = render_camera(world, job.t_s, cameras[static_cast<std::size_t>(job.camera)]);
-#ifdef FAULTLINE_DATASET_HAVE_CODEC
       auto encoded = codec::encode_jpeg(img, sh.opt.jpeg_quality);
       if (!encoded) {
         std::lock_guard<std::mutex> lock(mu);
@@ -194,9 +191,6 @@ Status render_images(Shared& sh, const SynthWorld& world, const std::vector<Came
         continue;
       }
       jpeg = std::move(encoded).value();
-#else
-      cv::imencode(".jpg", img, jpeg, {cv::IMWRITE_JPEG_QUALITY, sh.opt.jpeg_quality});
-#endif
       std::int64_t written = 0;
       Status s = write_bytes(job.path, jpeg, &written);
       std::lock_guard<std::mutex> lock(mu);

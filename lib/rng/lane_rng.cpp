@@ -1,7 +1,7 @@
 // Lock-step xoshiro256++ lanes: seeding, the scalar step, and normals (AVX2 ziggurat with a scalar twin).
 #include "rng/lane_rng.hpp"
 
-#include "common/cpu_features.hpp"
+#include "common/simd.hpp"
 #include "rng/lane_rng_avx2.hpp"
 
 namespace faultline::rng {
@@ -68,12 +68,11 @@ void fill_normals_scalar(float* dst, std::size_t n, double loc, double scale, co
   }
 }
 
-#if defined(__GNUC__) && defined(__x86_64__)
-#define FAULTLINE_LANE_AVX2 1
+#if FAULTLINE_X86_SIMD
 
 // Eight normals from eight draws; rejected lanes (rare) are redone in element order by the scalar definition.
-__attribute__((target("avx2"))) inline void normals8(__m256i hz, const ZigguratF& z, __m256 locv, __m256 scalev,
-                                                    float* dst, double loc, double scale, FastRng& slow) {
+FAULTLINE_TARGET("avx2") inline void normals8(__m256i hz, const ZigguratF& z, __m256 locv, __m256 scalev,
+                                              float* dst, double loc, double scale, FastRng& slow) {
   const __m256i iz = _mm256_and_si256(hz, _mm256_set1_epi32(127));
   const __m256i kn = _mm256_i32gather_epi32(z.kn, iz, 4);
   const __m256 wn = _mm256_i32gather_ps(z.wn, iz, 4);
@@ -93,8 +92,8 @@ __attribute__((target("avx2"))) inline void normals8(__m256i hz, const ZigguratF
 }
 
 // Whole blocks of 16 (one step of both halves); returns how many it wrote.
-__attribute__((target("avx2"))) std::size_t fill_normals_avx2(float* dst, std::size_t n, double loc, double scale,
-                                                              const ZigguratF& z, LaneRng& lanes, FastRng& slow) {
+FAULTLINE_TARGET("avx2") std::size_t fill_normals_avx2(float* dst, std::size_t n, double loc, double scale,
+                                                       const ZigguratF& z, LaneRng& lanes, FastRng& slow) {
   avx2::Xoshiro4 a = avx2::load_half(lanes, 0), b = avx2::load_half(lanes, 1);
   const __m256 locv = _mm256_set1_ps(static_cast<float>(loc)), scalev = _mm256_set1_ps(static_cast<float>(scale));
   std::size_t i = 0;
@@ -114,7 +113,7 @@ void fill_normals(float* dst, std::size_t n, double loc, double scale, LaneRng& 
                   bool allow_simd) {
   const ZigguratF z(slow);
   std::size_t done = 0;
-#ifdef FAULTLINE_LANE_AVX2
+#if FAULTLINE_X86_SIMD
   const bool has_avx2 = common::cpu_has_avx2();
   if (allow_simd && has_avx2) done = fill_normals_avx2(dst, n, loc, scale, z, lanes, slow);
 #else

@@ -6,11 +6,7 @@
 #include <cmath>
 #include <cstring>
 
-#include "common/cpu_features.hpp"
-
-#if defined(__GNUC__) && defined(__x86_64__)
-#include <immintrin.h>
-#endif
+#include "common/simd.hpp"
 
 namespace faultline::rng {
 
@@ -22,13 +18,12 @@ inline bool polar_accepts(double a, double b) {
   return r < 1.0 && r != 0.0;
 }
 
-#if defined(__GNUC__) && defined(__x86_64__)
-#define FAULTLINE_POLAR_AVX2 1
+#if FAULTLINE_X86_SIMD
 
 // Accepted attempts among four (eight doubles: x1, x2 of each attempt in turn), as a count. r2 is formed as
 // x1^2 + x2^2 with each square rounded, as the scalar test does (the horizontal add only reorders operands of a
 // commutative add).
-__attribute__((target("avx2,popcnt"))) inline int polar_accepts4(const double* d) {
+FAULTLINE_TARGET("avx2,popcnt") inline int polar_accepts4(const double* d) {
   const __m256d one = _mm256_set1_pd(1.0), two = _mm256_set1_pd(2.0), zero = _mm256_setzero_pd();
   const __m256d x0 = _mm256_sub_pd(_mm256_mul_pd(two, _mm256_loadu_pd(d)), one);
   const __m256d x1 = _mm256_sub_pd(_mm256_mul_pd(two, _mm256_loadu_pd(d + 4)), one);
@@ -39,8 +34,8 @@ __attribute__((target("avx2,popcnt"))) inline int polar_accepts4(const double* d
 
 // Skips whole chunks of four attempts from d[j..count) while they hold fewer than `pairs` acceptances; returns the
 // new j and lowers `pairs` by the acceptances skipped.
-__attribute__((target("avx2,popcnt"))) std::size_t skip_chunks_avx2(const double* d, std::size_t j,
-                                                                     std::size_t count, std::size_t& pairs) {
+FAULTLINE_TARGET("avx2,popcnt") std::size_t skip_chunks_avx2(const double* d, std::size_t j,
+                                                             std::size_t count, std::size_t& pairs) {
   for (; j + 8 <= count; j += 8) {
     const auto accepted = static_cast<std::size_t>(polar_accepts4(d + j));
     if (accepted >= pairs) break;
@@ -57,7 +52,7 @@ void NumpyRandomState::skip_polar_pairs(std::size_t pairs) {
     std::size_t count = 0;
     const double* d = mt_.block_doubles(count);
     std::size_t j = 0;
-#ifdef FAULTLINE_POLAR_AVX2
+#if FAULTLINE_X86_SIMD
     if (common::cpu_has_avx2_popcnt()) j = skip_chunks_avx2(d, j, count, pairs);
 #endif
     for (; pairs > 0 && j + 2 <= count; j += 2) pairs -= polar_accepts(2.0 * d[j] - 1.0, 2.0 * d[j + 1] - 1.0);
@@ -183,15 +178,9 @@ void Mt19937::seed(std::uint32_t seed) {
 
 namespace {
 
-#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__)
-#define FAULTLINE_RNG_CLONES __attribute__((target_clones("avx2", "default")))
-#else
-#define FAULTLINE_RNG_CLONES
-#endif
-
 // The twist as two straight loops the compiler vectorises (the first reads only words it has not yet rewritten; the
 // second reads words at distance 227, more than a vector apart).
-FAULTLINE_RNG_CLONES void twist(std::uint32_t* __restrict state) {
+FAULTLINE_CLONES("avx2") void twist(std::uint32_t* __restrict state) {
   constexpr int kN = 624, kM = 397;
   constexpr std::uint32_t kUpper = 0x80000000u, kLower = 0x7fffffffu, kMatrix = 0x9908b0dfu;
   int i = 0;
@@ -224,10 +213,10 @@ void temper_pairs_scalar(const std::uint32_t* state, double* pairs) {
   for (int k = 0; k < 312; ++k) pairs[k] = pair_double(temper_word(state[2 * k]), temper_word(state[2 * k + 1]));
 }
 
-#if defined(__GNUC__) && defined(__x86_64__)
+#if FAULTLINE_X86_SIMD
 // Four pairs per step, each pair as one 64-bit lane (a low, b high): a >> 5 and b >> 6 become doubles by OR-ing
 // them into 2^52's mantissa and subtracting 2^52 (exact below 2^52), then the scalar formula.
-__attribute__((target("avx2"))) void temper_pairs_avx2(const std::uint32_t* state, double* pairs) {
+FAULTLINE_TARGET("avx2") void temper_pairs_avx2(const std::uint32_t* state, double* pairs) {
   const __m256i m1 = _mm256_set1_epi32(static_cast<int>(0x9d2c5680u));
   const __m256i m2 = _mm256_set1_epi32(static_cast<int>(0xefc60000u));
   const __m256i low32 = _mm256_set1_epi64x(0xFFFFFFFFll);
@@ -253,7 +242,7 @@ __attribute__((target("avx2"))) void temper_pairs_avx2(const std::uint32_t* stat
 
 void Mt19937::refill() {
   twist(state_);
-#if defined(__GNUC__) && defined(__x86_64__)
+#if FAULTLINE_X86_SIMD
   if (common::cpu_has_avx2()) {
     temper_pairs_avx2(state_, pairs_);
   } else {

@@ -1,37 +1,19 @@
 #include "runtime/injector_loop.hpp"
 
-#include <opencv2/imgcodecs.hpp>
-
 #include <algorithm>
 #include <limits>
 #include <map>
 
+#include "codec/jpeg.hpp"
 #include "common/config.hpp"
 #include "runtime/stats_reporter.hpp"
 #include "transport/drop_counter.hpp"
 #include "transport/log_limiter.hpp"
 #include "transport/registry.hpp"
 
-#if __has_include("codec/jpeg.hpp")
-#include "codec/jpeg.hpp"
-#define FAULTLINE_HAVE_CODEC_JPEG 1
-#endif
-
 namespace faultline::runtime {
 
 namespace {
-
-// Decodes to bgr8 without copying the input; kCorruptData when the bytes are not a decodable JPEG.
-Result<cv::Mat> decode_bgr(const std::uint8_t* data, std::size_t size) {
-#ifdef FAULTLINE_HAVE_CODEC_JPEG
-  return codec::decode_jpeg(data, size);
-#else
-  const cv::Mat wrapped(1, static_cast<int>(size), CV_8UC1, const_cast<std::uint8_t*>(data));
-  cv::Mat image = cv::imdecode(wrapped, cv::IMREAD_COLOR);
-  if (image.empty()) return Status{StatusCode::kCorruptData, "JPEG does not decode"};
-  return image;
-#endif
-}
 
 std::string join(const std::vector<std::string>& items) {
   std::string out;
@@ -287,7 +269,7 @@ int InjectorLoop::run(const std::atomic<bool>& stop) {
     cv::Mat image;
     msgs::FaultState state;
     if (m.cfg.decode) {
-      auto decoded = decode_bgr(view->payload, view->payload_size);
+      auto decoded = codec::decode_jpeg(view->payload, view->payload_size);
       if (!decoded) {
         ++counts_.corrupt_jpeg;
         ++counts_.injected_drops;

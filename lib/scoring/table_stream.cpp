@@ -11,13 +11,9 @@
 
 #include <charconv>
 
-#include "common/cpu_features.hpp"
+#include "common/simd.hpp"
 #ifdef __SSE2__
 #include <emmintrin.h>
-#endif
-#if defined(__GNUC__) && defined(__x86_64__)
-#include <immintrin.h>
-#define FAULTLINE_BLOCK_SKIP 1
 #endif
 #include <cmath>
 #include <cstdint>
@@ -186,7 +182,7 @@ class Scanner {
   // characters) and nesting, up to the record's closing brace. Scalars in between are not parsed;
   // most of a big table's records are rejected, so this is where the scan spends its time.
   Status skip_rest_of_record() {
-#ifdef FAULTLINE_BLOCK_SKIP
+#if FAULTLINE_X86_SIMD
     if (common::cpu_has_avx2_pclmul()) {
       // 64 bytes per step; anything unusual (an escape, a control character, a mismatched bracket,
       // the last 64 bytes of the file) falls through to the character-level path below, which
@@ -200,9 +196,9 @@ class Scanner {
     return skip_rest_of_record_bytewise();
   }
 
-#ifdef FAULTLINE_BLOCK_SKIP
+#if FAULTLINE_X86_SIMD
   // Bit i set where byte i of the 64 at q equals c.
-  __attribute__((target("avx2"))) static std::uint64_t eq_mask(__m256i lo, __m256i hi, char c) {
+  FAULTLINE_TARGET("avx2") static std::uint64_t eq_mask(__m256i lo, __m256i hi, char c) {
     const __m256i v = _mm256_set1_epi8(c);
     const auto a = static_cast<std::uint32_t>(_mm256_movemask_epi8(_mm256_cmpeq_epi8(lo, v)));
     const auto b = static_cast<std::uint32_t>(_mm256_movemask_epi8(_mm256_cmpeq_epi8(hi, v)));
@@ -213,8 +209,8 @@ class Scanner {
   // the record's braces), or nullptr where the byte-level path must decide. Strings are found as
   // in simdjson: the prefix XOR of the quote bits (a carry-less multiply by all-ones) marks every
   // byte inside a string, so only brackets outside strings are visited one by one.
-  __attribute__((target("avx2,pclmul"))) static const char* skip_rest_blocks(const char* q,
-                                                                             const char* end) {
+  FAULTLINE_TARGET("avx2,pclmul") static const char* skip_rest_blocks(const char* q,
+                                                                      const char* end) {
     char stack[64];
     int depth = 0;
     stack[depth++] = '}';

@@ -6,6 +6,8 @@
 #include <cstdlib>
 #include <string>
 
+#include "common/simd.hpp"
+
 namespace faultline::common {
 namespace {
 
@@ -25,7 +27,7 @@ TEST(CpuFeatures, VectorPathsFollowTheSwitch) {
     EXPECT_FALSE(cpu_has_avx2_popcnt());
     EXPECT_FALSE(cpu_has_avx2_pclmul());
   } else {
-#if defined(__GNUC__) && defined(__x86_64__)
+#if FAULTLINE_X86_SIMD
     EXPECT_EQ(cpu_has_avx2(), static_cast<bool>(__builtin_cpu_supports("avx2")));
     EXPECT_EQ(cpu_has_avx2_fma(), cpu_has_avx2() && __builtin_cpu_supports("fma"));
 #else

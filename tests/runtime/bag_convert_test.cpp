@@ -23,9 +23,9 @@
 #include "fault.pb.h"
 #include "foxglove/CompressedImage.pb.h"
 #include "foxglove/SceneUpdate.pb.h"
-#include "policy/injector_policy.hpp"
 #include "runtime/bag_convert.hpp"
 #include "runtime/bag_layout.hpp"
+#include "runtime/engine_policy.hpp"
 #include "runtime/player_loop.hpp"
 
 namespace faultline::runtime {
@@ -142,7 +142,7 @@ class BagConvertTest : public ::testing::Test {
       policy::EngineConfig engine;
       engine.seed = 7;
       for (const auto& c : corrupt) engine.faults.push_back(*policy::parse_corruption_shorthand(c, "test"));
-      policy = std::make_unique<policy::EnginePolicy>(engine);
+      policy = std::make_unique<EnginePolicy>(engine);
     }
     ConvertConfig cfg;
     cfg.output = output;

@@ -22,8 +22,8 @@
 #include "codec/jpeg.hpp"
 #include "common/logging.hpp"
 #include "dataset/nuscenes.hpp"
-#include "policy/injector_policy.hpp"
 #include "policy/temporal_draws.hpp"
+#include "runtime/engine_policy.hpp"
 #include "runtime/injector_loop.hpp"
 #include "stats/percentile.hpp"
 #include "transport/publisher.hpp"
@@ -70,8 +70,8 @@ Row run_one(const std::string& spec, double seconds, double rate_hz, bool decode
   ic.input_hwm = ic.output_hwm = 1000;
   ic.decode = decode;
   ic.wait_subscribers = 1;
-  auto policy = policy::make_frame_policy(YAML::Node(), spec, 7, "bench");
-  if (auto* ep = dynamic_cast<policy::EnginePolicy*>(policy.get())) row.severity = ep->engine().config().faults[0].severity;
+  auto policy = runtime::make_frame_policy(YAML::Node(), spec, 7, "bench");
+  if (auto* ep = dynamic_cast<runtime::EnginePolicy*>(policy.get())) row.severity = ep->engine().config().faults[0].severity;
   runtime::InjectorLoop injector(ic, "fault_injector", std::move(policy), log);
   transport::SubscriberConfig sc;
   sc.endpoints = {injector.output_endpoint()};

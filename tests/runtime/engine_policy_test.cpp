@@ -9,15 +9,21 @@
 #include "codec/jpeg.hpp"
 #include "common/config.hpp"
 #include "common/logging.hpp"
-#include "policy/injector_policy.hpp"
 #include "policy/seeding.hpp"
+#include "runtime/engine_policy.hpp"
 #include "runtime/injector_loop.hpp"
 #include "runtime/player_loop.hpp"
 #include "transport/drop_counter.hpp"
 #include "transport/subscriber.hpp"
 
-namespace faultline::policy {
+namespace faultline::runtime {
 namespace {
+
+using policy::EngineConfig;
+using policy::frame_seed;
+using policy::kCameraNames;
+using policy::kNumCameras;
+using policy::parse_faults;
 
 constexpr StampNs kT0 = 1'600'000'000'000'000'000;
 
@@ -257,4 +263,4 @@ TEST(InjectorIntegrationTest, DroppedFramesAreEventsNotSeqGaps) {
 }
 
 }  // namespace
-}  // namespace faultline::policy
+}  // namespace faultline::runtime

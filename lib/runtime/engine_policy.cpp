@@ -1,11 +1,17 @@
-// FaultEngine -> runtime::FramePolicy: JPEG handling and the mapping to FaultDecision / ActiveFault.
-#include "policy/injector_policy.hpp"
+// policy::FaultEngine -> FramePolicy: JPEG handling and the mapping to FaultDecision / ActiveFault.
+#include "runtime/engine_policy.hpp"
 
 #include "codec/jpeg.hpp"
 #include "common/config.hpp"
 
-namespace faultline::policy {
+namespace faultline::runtime {
 namespace {
+
+using policy::Action;
+using policy::AppliedFault;
+using policy::EngineConfig;
+using policy::FrameInfo;
+using policy::FramePlan;
 
 msgs::FaultAction to_msg(Action a) {
   switch (a) {
@@ -44,9 +50,9 @@ void mark_failed(FramePlan& plan, const Status& s) {
 EnginePolicy::EnginePolicy(EngineConfig config, int jpeg_quality)
     : engine_(std::move(config)), jpeg_quality_(jpeg_quality) {}
 
-runtime::FaultDecision EnginePolicy::finish(FramePlan& plan, const Status& rendered) {
+FaultDecision EnginePolicy::finish(FramePlan& plan, const Status& rendered) {
   if (!rendered.is_ok()) mark_failed(plan, rendered);
-  runtime::FaultDecision d;
+  FaultDecision d;
   d.action = to_msg(plan.action);
   d.delay_ns = plan.action == Action::Delay ? plan.delay_ns : 0;
   for (const auto& f : plan.faults) {
@@ -72,7 +78,7 @@ EnginePolicy::Bytes EnginePolicy::black_jpeg(const transport::CameraFrameView& f
   return cached;
 }
 
-runtime::FaultDecision EnginePolicy::apply(const transport::CameraFrameView& frame, cv::Mat* image) {
+FaultDecision EnginePolicy::apply(const transport::CameraFrameView& frame, cv::Mat* image) {
   FramePlan plan = engine_.decide(info_of(frame));
   if (plan.action == Action::Drop || plan.camera < 0) return finish(plan, Status::ok());
   if (image) return finish(plan, engine_.render(plan, *image));
@@ -111,14 +117,14 @@ runtime::FaultDecision EnginePolicy::apply(const transport::CameraFrameView& fra
   return d;
 }
 
-std::unique_ptr<runtime::FramePolicy> make_frame_policy(const YAML::Node& faults, const std::string& corruption,
-                                                        std::uint64_t seed, const std::string& origin) {
+std::unique_ptr<FramePolicy> make_frame_policy(const YAML::Node& faults, const std::string& corruption,
+                                               std::uint64_t seed, const std::string& origin) {
   EngineConfig config;
-  config.faults = parse_faults(faults, origin);
-  if (auto shorthand = parse_corruption_shorthand(corruption, origin)) config.faults.push_back(*shorthand);
+  config.faults = policy::parse_faults(faults, origin);
+  if (auto shorthand = policy::parse_corruption_shorthand(corruption, origin)) config.faults.push_back(*shorthand);
   config.seed = seed;
-  if (config.faults.empty()) return std::make_unique<runtime::PassThroughPolicy>();
+  if (config.faults.empty()) return std::make_unique<PassThroughPolicy>();
   return std::make_unique<EnginePolicy>(std::move(config));
 }
 
-}  // namespace faultline::policy
+}  // namespace faultline::runtime
