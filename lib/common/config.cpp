@@ -95,7 +95,8 @@ void print_node_help(const std::string& name, const std::string& summary, const 
       "%s: %s\n\n"
       "Usage: %s [--params FILE.yaml]... [-p key:=value]... [--name NAME] [--log-level LEVEL]\n"
       "          [--log-file FILE]\n\n"
-      "A params file is a flat mapping or a launch file whose top-level key is the node name.\n"
+      "A params file is a flat mapping, or has a section named after the node (NAME: {params: {...}}).\n"
+      "A launch file (a 'nodes' list) is started with `faultline launch FILE`, not given as --params.\n"
       "SPDLOG_LEVEL (e.g. info,%s=debug) also sets levels.\n\nParameters:\n%s",
       name.c_str(), summary.c_str(), name.c_str(), name.c_str(), params.c_str());
 }
@@ -131,6 +132,12 @@ ParamSource build_source(const NodeOptions& options) {
       throw ConfigError(file + ": cannot open parameters file");
     } catch (const YAML::Exception& e) {
       throw ConfigError(file + ":" + std::to_string(e.mark.line + 1) + ": " + e.msg);
+    }
+    // A launch file lists nodes and uses ${VAR:-default} substitutions that only `faultline launch` expands.
+    if (doc.IsMap() && doc["nodes"].IsSequence() && !doc[options.name].IsDefined()) {
+      throw ConfigError(file + ": a launch file (it has a 'nodes' list), not a params file: start it with "
+                        "`faultline launch " + file + "`, or give " + options.name +
+                        " a flat params file or one with a '" + options.name + ":' section");
     }
     if (doc.IsMap() && doc[options.name].IsDefined() && doc[options.name].IsMap()) {
       YAML::Node node = doc[options.name];

@@ -88,6 +88,22 @@ TEST(ConfigTest, LaunchFileSectionIsSelectedByNodeName) {
   EXPECT_EQ(cfg.hwm, 7);
 }
 
+TEST(ConfigTest, LaunchFileGivenAsParamsFileIsRefusedWithAPointerToLaunch) {
+  const std::string path = ::testing::TempDir() + "/pipeline.yaml";
+  std::ofstream(path) << "nodes:\n  - name: player\n    exec: nusc_player\n    params: {rate: 4}\n";
+  NodeOptions options;
+  options.name = "player";
+  options.params_files = {path};
+  try {
+    build_source(options);
+    FAIL() << "expected ConfigError";
+  } catch (const ConfigError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find(path + ": a launch file"), std::string::npos) << what;
+    EXPECT_NE(what.find("faultline launch " + path), std::string::npos) << what;
+  }
+}
+
 TEST(ConfigTest, MissingParamsFileNamesTheFile) {
   NodeOptions options;
   options.params_files = {"/nonexistent/params.yaml"};
