@@ -181,6 +181,10 @@ Result<LinearScan> Reader::read_linear(const ReadOptions& options, const Message
   std::uint32_t data_crc = crc32_update(0, buf);
   const bool crc_on = options.verify_data_crc;
   Tables tables;
+  if (options.use_summary_tables && load_summary().is_ok()) {
+    tables.schemas = summary_.schemas;
+    tables.channels = summary_.channels;
+  }
   std::string content, records;
   std::uint64_t pos = kMagic.size();
   scan.valid_end = pos;

@@ -59,6 +59,9 @@ struct ReadOptions {
   bool verify_data_crc = false;        // linear mode: check DataEnd's CRC (reads every byte)
   std::uint64_t max_record_bytes = std::uint64_t{4} << 30;   // larger records/chunks are rejected
   RecordCallback on_record;                                  // linear mode only
+  // Linear mode: start from the summary's Schema and Channel records when the summary is intact, so that
+  // a damaged chunk holding the only in-data copy of them loses its own messages and no others.
+  bool use_summary_tables = true;
 };
 
 // What a linear pass saw; problems were reported through the callback as well.

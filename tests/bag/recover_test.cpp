@@ -137,5 +137,59 @@ TEST_F(RecoverTest, InspectNamesTheOffsetOfABrokenChunk) {
   EXPECT_GT(report->messages, 0u);
 }
 
+// #22 item 2: the first chunk holds the only in-data Schema and Channel records. With it damaged, the
+// summary's copies keep every message of the other chunks: recover, info and a linear read lose exactly
+// the damaged chunk's messages.
+TEST_F(RecoverTest, DamagedFirstChunkLosesOnlyItsOwnMessagesThanksToTheSummary) {
+  WriterOptions opts;
+  opts.compression = Compression::kNone;
+  opts.chunk_size_bytes = 2048;
+  std::string bag;
+  write_test_bag(bag, 60, opts);
+  auto reader = Reader::open(std::make_unique<BufferSource>(bag));
+  ASSERT_TRUE(reader->load_summary().is_ok());
+  ASSERT_GE(reader->summary().chunk_indexes.size(), 4u);
+  const ChunkIndex first = reader->summary().chunk_indexes.at(0);
+  std::uint64_t in_first = 0;
+  ASSERT_TRUE(reader
+                  ->read_indexed({}, [&](const MessageView& m) {
+                    in_first += m.chunk_offset == first.chunk_start_offset;
+                    return true;
+                  })
+                  .is_ok());
+  ASSERT_GT(in_first, 0u);
+  ASSERT_LT(in_first, 60u);
+  bag[static_cast<std::size_t>(first.chunk_start_offset + first.chunk_length - 8)] ^= 0x10;
+  spit(dir_ / "broken.mcap", bag);
+
+  auto linear = read_linear_all(bag);
+  EXPECT_EQ(linear.messages.size(), 60u - in_first);
+  for (const Problem& p : linear.problems) {
+    EXPECT_EQ(p.message.find("unknown channel"), std::string::npos) << p.to_string();
+  }
+
+  auto info = inspect_bag((dir_ / "broken.mcap").string());
+  ASSERT_TRUE(info.is_ok());
+  EXPECT_EQ(info->messages, 60u - in_first);
+
+  auto report = recover_bag((dir_ / "broken.mcap").string(), (dir_ / "fixed.mcap").string());
+  ASSERT_TRUE(report.is_ok());
+  EXPECT_EQ(report->bad_chunks, 1u);
+  EXPECT_EQ(report->messages, 60u - in_first);
+  auto fixed = read_indexed_all(slurp(dir_ / "fixed.mcap"));
+  ASSERT_EQ(fixed.messages.size(), 60u - in_first);
+  for (const testing::ReadBack& m : fixed.messages) {
+    EXPECT_EQ(m.schema, m.topic == "/c" ? "" : "test.Blob") << m.topic;
+  }
+
+  // Without the summary's tables (the behaviour before), the other chunks' messages are on unknown channels.
+  ReadOptions no_summary;
+  no_summary.use_summary_tables = false;
+  std::uint64_t without = 0;
+  auto plain = Reader::open(std::make_unique<BufferSource>(bag));
+  ASSERT_TRUE(plain->read_linear(no_summary, [&](const MessageView&) { return ++without, true; }).is_ok());
+  EXPECT_LT(without, 60u - in_first);
+}
+
 }  // namespace
 }  // namespace faultline::bag
