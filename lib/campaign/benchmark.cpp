@@ -13,6 +13,7 @@
 #include "launch/supervisor.hpp"
 #include "report/report.hpp"
 #include "scoring/evaluate.hpp"
+#include "scoring/py_json.hpp"
 #include "scoring/run_manifest.hpp"
 
 namespace faultline::campaign {
@@ -231,10 +232,11 @@ ConditionResult run_condition(const BenchmarkOptions& o, const std::string& corr
 
 std::string summary_json(const BenchmarkOptions& o, const BenchmarkResult& b) {
   std::ostringstream js;
-  js << "{\n  \"dataroot\": \"" << o.dataroot << "\",\n  \"version\": \"" << o.version
-     << "\",\n  \"eval_set\": \"" << o.eval_set << "\",\n  \"detector\": \""
-     << (o.detector_cmd.empty() ? "faultline detector" : o.detector_cmd)
-     << "\",\n  \"conditions\": {";
+  js << "{\n  \"dataroot\": " << scoring::py_escape(o.dataroot) << ",\n  \"version\": "
+     << scoring::py_escape(o.version) << ",\n  \"eval_set\": " << scoring::py_escape(o.eval_set)
+     << ",\n  \"detector\": "
+     << scoring::py_escape(o.detector_cmd.empty() ? "faultline detector" : o.detector_cmd)
+     << ",\n  \"conditions\": {";
   // Mean over seeds per condition.
   std::map<std::string, std::vector<const ConditionResult*>> by;
   std::vector<std::string> order;
@@ -260,7 +262,7 @@ std::string summary_json(const BenchmarkOptions& o, const BenchmarkResult& b) {
     js << (first ? "" : ",") << "\n    \"" << c << "\": {";
     first = false;
     if (n == 0) {
-      js << "\"error\": \"" << by[c].front()->error << "\"}";
+      js << "\"error\": " << scoring::py_escape(by[c].front()->error) << "}";
       continue;
     }
     const double mean = nds / n;
@@ -270,6 +272,9 @@ std::string summary_json(const BenchmarkOptions& o, const BenchmarkResult& b) {
        << json_number(n > 1 ? std::sqrt(std::max(0.0, nds2 / n - mean * mean)) : 0.0) << "}";
   }
   js << "\n  }";
+  if (!b.robustness_error.empty()) {
+    js << ",\n  \"robustness_error\": " << scoring::py_escape(b.robustness_error);
+  }
   if (b.robustness_ok) {
     js << ",\n  \"mCE\": " << json_number(100 * b.robustness.mce)
        << ",\n  \"mRR\": " << json_number(100 * b.robustness.mrr) << ",\n  \"baseline\": \""
@@ -290,7 +295,7 @@ std::string summary_json(const BenchmarkOptions& o, const BenchmarkResult& b) {
     first_variant = false;
   }
   js << "\n  ]";
-  js << ",\n  \"report\": \"" << b.report_path << "\"\n}\n";
+  js << ",\n  \"report\": " << scoring::py_escape(b.report_path) << "\n}\n";
   return js.str();
 }
 
@@ -487,8 +492,14 @@ Result<BenchmarkResult> run_benchmark(const BenchmarkOptions& o, const std::atom
       b.report_path = (fs::path(o.out_dir) / "report.html").string();
       write_text(b.report_path, report::render_html(data));
     } else {
-      std::fprintf(log, "robustness: %s\n", rs.status().message().c_str());
+      b.robustness_error = rs.status().message();
     }
+  } else if (!o.corruptions.empty()) {
+    b.robustness_error = !have_clean ? "the clean run did not complete"
+                                     : "no corruption completed every level";
+  }
+  if (!b.robustness_error.empty()) {
+    std::fprintf(log, "robustness not computed: %s\n", b.robustness_error.c_str());
   }
   write_text((fs::path(o.out_dir) / "summary.json").string(), summary_json(o, b));
   return b;

@@ -52,6 +52,7 @@ struct ConditionResult {
 struct BenchmarkResult {
   std::vector<ConditionResult> runs;
   bool robustness_ok = false;
+  std::string robustness_error;  // why mCE/mRR were not computed although corruptions were asked for
   scoring::RobustnessSummary robustness;
   std::string report_path;
 };

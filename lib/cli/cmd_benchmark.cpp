@@ -139,7 +139,12 @@ int run(int argc, char** argv) {
   if (!result->report_path.empty()) std::printf("report:  %s\n", result->report_path.c_str());
   if (failed)
     std::fprintf(stderr, "faultline benchmark: %d run(s) failed (see runs/*/nodes.log)\n", failed);
-  return failed || stop.load() ? 1 : 0;
+  // Asked for corruptions but got no mCE/mRR (e.g. clean NDS 0): the benchmark did not do its job.
+  if (!result->robustness_error.empty()) {
+    std::fprintf(stderr, "faultline benchmark: robustness not computed: %s (no robustness.* or report.html)\n",
+                 result->robustness_error.c_str());
+  }
+  return failed || stop.load() || !result->robustness_error.empty() ? 1 : 0;
 }
 
 }  // namespace

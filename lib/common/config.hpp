@@ -146,7 +146,7 @@ struct NodeOptions {
 
 // Parses argv (--params FILE, -p key:=value, --name, --log-level, --log-file, --help). Unknown
 // arguments are ConfigErrors. A params file is either flat or has a top-level key equal to the
-// node name (a launch file); both work.
+// node name; a launch file (a top-level `nodes:` list) is refused with a pointer to `faultline launch`.
 NodeOptions parse_node_args(int argc, char** argv, const std::string& default_name);
 ParamSource build_source(const NodeOptions& options);
 

@@ -116,5 +116,25 @@ TEST_F(RunTest, BenchmarkScoresAnExternalPythonDetector) {
   EXPECT_EQ(fog["meta"]["faultline_sink_rejected_boxes"].GetUint64(), 0u);
 }
 
+// #22 item 5: a benchmark that cannot compute mCE/mRR (here clean NDS 0: the detector subscribes to no camera)
+// says why in summary.json and on stderr and exits non-zero, instead of exiting 0 without a report.
+TEST_F(RunTest, BenchmarkWithoutRobustnessSaysWhyAndFails) {
+  const fs::path out = root_ / "blind";
+  const int rc = run("benchmark --out " + out.string() + " --dataroot " + (root_ / "data").string() +
+                         " --version v1.0-mini --corruptions fog --levels mid"
+                         " --detector-param input_prefix:=/no_such_camera/",
+                     root_ / "blind.log");
+  const std::string log = read_text(root_ / "blind.log");
+  EXPECT_EQ(rc, 1) << log;
+  EXPECT_NE(log.find("robustness not computed"), std::string::npos) << log;
+  rapidjson::Document d;
+  d.Parse(read_text(out / "summary.json").c_str());
+  ASSERT_FALSE(d.HasParseError()) << read_text(out / "summary.json");
+  EXPECT_EQ(d["conditions"]["clean"]["NDS"].GetDouble(), 0.0);
+  ASSERT_TRUE(d.HasMember("robustness_error")) << read_text(out / "summary.json");
+  EXPECT_FALSE(d.HasMember("mCE"));
+  EXPECT_FALSE(fs::exists(out / "report.html"));
+}
+
 }  // namespace
 }  // namespace faultline::campaign
