@@ -2,6 +2,7 @@
 
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
 #include <chrono>
 
 #include "common/config.hpp"
@@ -57,6 +58,14 @@ Publisher::Publisher(const PublisherConfig& config)
 
 Status Publisher::send_parts(std::string_view topic, const std::string_view* middle,
                              const Payload* payload) {
+  const std::size_t largest = std::max({topic.size(), middle->size(), payload ? payload->size_bytes : 0});
+  if (config_.max_msg_bytes >= 0 && largest > static_cast<std::uint64_t>(config_.max_msg_bytes)) {
+    ++oversize_refused_;
+    return {StatusCode::kInvalidArgument,
+            std::string(topic) + ": message part of " + std::to_string(largest) + " bytes exceeds max_msg_bytes (" +
+                std::to_string(config_.max_msg_bytes) + "); refused, not sent (" +
+                std::to_string(oversize_refused_) + " so far)"};
+  }
   try {
     zmq::message_t topic_frame(topic.data(), topic.size());
     if (!socket_.send(topic_frame, zmq::send_flags::sndmore)) {

@@ -24,6 +24,11 @@
 
 namespace faultline::transport {
 
+// Largest message part (frame) any Faultline socket sends or accepts by default: a raw 8-megapixel bgr8
+// frame (3840x2160x3 = 24.9 MB) fits with room to spare. Publishers refuse larger parts (counted, with a
+// clear error) because libzmq answers an over-limit part by cutting the subscriber's connection.
+inline constexpr std::int64_t kDefaultMaxMessageBytes = std::int64_t{64} << 20;
+
 enum class Pattern {
   PubSub,    // fan-out; drops for a slow subscriber at HWM (counted downstream from seq gaps)
   PushPull,  // lossless; the sender blocks at HWM
@@ -38,6 +43,9 @@ struct PublisherConfig {
   DurationNs send_timeout_ns = -1;  // PushPull only: -1 blocks forever, else kWouldBlock after this
   int linger_ms = 0;         // ZMQ_LINGER: 0 discards unsent messages at close; a lossless edge
                              // whose sender may exit right after its last send wants ~200
+  // A message part larger than this is refused (kInvalidArgument, counted in oversize_refused()); keep it
+  // <= the receivers' max_msg_bytes. -1 = no limit.
+  std::int64_t max_msg_bytes = kDefaultMaxMessageBytes;
 };
 
 class Publisher {
@@ -68,6 +76,8 @@ class Publisher {
   int subscriber_count(std::string_view topic);
 
   std::uint64_t would_block_count() const { return would_block_; }
+  // Messages refused because one part exceeded max_msg_bytes (never sent).
+  std::uint64_t oversize_refused() const { return oversize_refused_; }
   // Changes ZMQ_LINGER, e.g. to 0 before closing on shutdown so exit stays prompt.
   void set_linger(int linger_ms);
 
@@ -80,6 +90,7 @@ class Publisher {
   zmq::socket_t socket_;
   std::map<std::string, int> subscriptions_;  // prefix -> live subscriptions (XPUB_VERBOSE)
   std::uint64_t would_block_ = 0;
+  std::uint64_t oversize_refused_ = 0;
 };
 
 }  // namespace faultline::transport

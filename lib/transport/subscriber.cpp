@@ -2,7 +2,9 @@
 
 #include <spdlog/spdlog.h>
 
+#include <atomic>
 #include <chrono>
+#include <cstring>
 
 #include "common/config.hpp"
 #include "transport/context.hpp"
@@ -24,6 +26,10 @@ std::size_t ReceivedMessage::size_bytes() const {
   return total;
 }
 
+RawSubscriber::~RawSubscriber() {
+  if (socket_.handle() != nullptr) (void)zmq_socket_monitor(socket_.handle(), nullptr, 0);
+}
+
 RawSubscriber::RawSubscriber(const SubscriberConfig& config)
     : config_(config),
       socket_(shared_context(), config.pattern == Pattern::PubSub ? zmq::socket_type::sub
@@ -34,6 +40,15 @@ RawSubscriber::RawSubscriber(const SubscriberConfig& config)
   if (config.pattern == Pattern::PubSub) {
     for (const auto& t : config.topics) socket_.set(zmq::sockopt::subscribe, t);
   }
+  // Monitor before connecting, so that no closed connection goes unseen.
+  static std::atomic<std::uint64_t> monitor_ids{0};
+  const std::string monitor_address = "inproc://faultline-subscriber-monitor-" + std::to_string(++monitor_ids);
+  if (zmq_socket_monitor(socket_.handle(), monitor_address.c_str(), ZMQ_EVENT_DISCONNECTED) != 0) {
+    throw ConfigError("cannot monitor the subscriber socket: " + std::string(zmq_strerror(zmq_errno())));
+  }
+  monitor_ = zmq::socket_t(shared_context(), zmq::socket_type::pair);
+  monitor_.set(zmq::sockopt::linger, 0);
+  monitor_.connect(monitor_address);
   for (const auto& ep : config.endpoints) {
     try {
       if (config.bind) {
@@ -49,6 +64,52 @@ RawSubscriber::RawSubscriber(const SubscriberConfig& config)
     } catch (const zmq::error_t& e) {
       throw ConfigError("endpoint = " + ep + ": cannot " + (config.bind ? "bind" : "connect") +
                         " (" + e.what() + ")");
+    }
+  }
+}
+
+void RawSubscriber::handle_monitor_events() {
+  for (;;) {
+    zmq::message_t event, address;
+    try {
+      if (!monitor_.recv(event, zmq::recv_flags::dontwait)) return;
+      if (!event.more() || !monitor_.recv(address, zmq::recv_flags::none)) continue;
+    } catch (const zmq::error_t&) {
+      return;
+    }
+    std::uint16_t id = 0;
+    if (event.size() >= sizeof id) std::memcpy(&id, event.data(), sizeof id);
+    if (id != ZMQ_EVENT_DISCONNECTED) continue;
+    ++disconnects_;
+    const std::string where(static_cast<const char*>(address.data()), address.size());
+    if (config_.bind) {
+      spdlog::info("a peer of {} disconnected ({} so far)", where, disconnects_);
+      continue;
+    }
+    // libzmq reports the resolved address; reconnect with the string we connected with.
+    std::string configured;
+    for (const auto& ep : endpoints_) {
+      const auto colon = ep.rfind(':');
+      if (ep == where || (colon != std::string::npos && where.size() >= ep.size() - colon &&
+                          where.compare(where.size() - (ep.size() - colon), ep.size() - colon,
+                                        ep, colon, std::string::npos) == 0)) {
+        configured = ep;
+        break;
+      }
+    }
+    spdlog::info("connection to {} closed ({} so far): the publisher exited, or sent a part over "
+                 "max_msg_bytes ({} bytes); reconnecting",
+                 where, disconnects_, config_.max_msg_bytes);
+    if (configured.empty()) continue;
+    try {
+      socket_.disconnect(configured);
+    } catch (const zmq::error_t&) {
+      // Already gone from the socket's list: connecting again is what matters.
+    }
+    try {
+      socket_.connect(configured);
+    } catch (const zmq::error_t& e) {
+      spdlog::warn("cannot reconnect to {}: {}", configured, e.what());
     }
   }
 }
@@ -117,15 +178,16 @@ Result<ReceivedMessage> RawSubscriber::receive(DurationNs timeout_ns) {
       const DurationNs left = deadline - monotonic_now_ns();
       wait_ms = left <= 0 ? 0 : static_cast<long>((left + kNsPerMs - 1) / kNsPerMs);
     }
-    zmq::pollitem_t item{socket_.handle(), 0, ZMQ_POLLIN, 0};
+    zmq::pollitem_t items[2] = {{socket_.handle(), 0, ZMQ_POLLIN, 0}, {monitor_.handle(), 0, ZMQ_POLLIN, 0}};
     int ready = 0;
     try {
-      ready = zmq::poll(&item, 1, std::chrono::milliseconds(wait_ms));
+      ready = zmq::poll(items, 2, std::chrono::milliseconds(wait_ms));
     } catch (const zmq::error_t& e) {
       if (e.num() == ETERM) return Status{StatusCode::kCancelled, "context terminated"};
       if (e.num() != EINTR) return Status{StatusCode::kIoError, std::string("poll: ") + e.what()};
     }
-    if (ready > 0) {
+    if (items[1].revents & ZMQ_POLLIN) handle_monitor_events();
+    if (items[0].revents & ZMQ_POLLIN) {
       if (config_.latest_only) {
         drain_latest();
         continue;
@@ -143,21 +205,33 @@ Result<ReceivedMessage> RawSubscriber::receive(DurationNs timeout_ns) {
 }
 
 int wait_readable(const std::vector<RawSubscriber*>& subscribers, DurationNs timeout_ns) {
-  std::vector<zmq::pollitem_t> items;
-  for (std::size_t i = 0; i < subscribers.size(); ++i) {
+  const std::size_t n = subscribers.size();
+  std::vector<zmq::pollitem_t> items;  // n data sockets, then their n monitors
+  for (std::size_t i = 0; i < n; ++i) {
     if (!subscribers[i]->pending_.empty()) return static_cast<int>(i);
     items.push_back({subscribers[i]->socket_.handle(), 0, ZMQ_POLLIN, 0});
   }
-  const long wait_ms = timeout_ns < 0 ? -1 : static_cast<long>((timeout_ns + kNsPerMs - 1) / kNsPerMs);
-  try {
-    if (zmq::poll(items.data(), items.size(), std::chrono::milliseconds(wait_ms)) <= 0) return -1;
-  } catch (const zmq::error_t&) {
-    return -1;
+  for (std::size_t i = 0; i < n; ++i) items.push_back({subscribers[i]->monitor_.handle(), 0, ZMQ_POLLIN, 0});
+  const StampNs deadline = timeout_ns < 0 ? 0 : monotonic_now_ns() + timeout_ns;
+  for (;;) {
+    long wait_ms = -1;
+    if (timeout_ns >= 0) {
+      const DurationNs left = deadline - monotonic_now_ns();
+      wait_ms = left <= 0 ? 0 : static_cast<long>((left + kNsPerMs - 1) / kNsPerMs);
+    }
+    try {
+      if (zmq::poll(items.data(), items.size(), std::chrono::milliseconds(wait_ms)) <= 0) return -1;
+    } catch (const zmq::error_t&) {
+      return -1;
+    }
+    for (std::size_t i = 0; i < n; ++i) {
+      if (items[n + i].revents & ZMQ_POLLIN) subscribers[i]->handle_monitor_events();
+    }
+    for (std::size_t i = 0; i < n; ++i) {
+      if (items[i].revents & ZMQ_POLLIN) return static_cast<int>(i);
+    }
+    if (timeout_ns >= 0 && monotonic_now_ns() >= deadline) return -1;  // only connection events
   }
-  for (std::size_t i = 0; i < items.size(); ++i) {
-    if (items[i].revents & ZMQ_POLLIN) return static_cast<int>(i);
-  }
-  return -1;
 }
 
 }  // namespace faultline::transport

@@ -7,7 +7,10 @@
 // `superseded` (they arrived and were discarded by policy, so they are not seq-gap drops).
 // Two-part messages ([topic][body], e.g. /sync/sample) are never superseded.
 //
-// ZMQ_MAXMSGSIZE is set (16 MiB default): a peer sending a larger frame is disconnected by libzmq.
+// ZMQ_MAXMSGSIZE is set (kDefaultMaxMessageBytes): libzmq answers a larger part by closing the connection
+// and, for a protocol error, never reconnects. A socket monitor sees every closed connection: it is
+// counted (disconnects()), logged, and a connecting subscriber reconnects at once, so one bad message
+// costs the messages in flight (seq gaps downstream), not the rest of the run.
 // Messages with a wrong frame count are counted as malformed and skipped (receive() returns the
 // next good one). A RawSubscriber belongs to one thread.
 #pragma once
@@ -33,7 +36,7 @@ struct SubscriberConfig {
   bool bind = false;                    // true: bind endpoints[0..] (e.g. the sink's PULL)
   int rcv_hwm = 4;                      // messages; 1-8 for image topics, ~64 for lockstep
   bool latest_only = false;             // see above
-  std::int64_t max_msg_bytes = 16 << 20;  // ZMQ_MAXMSGSIZE; -1 = unlimited
+  std::int64_t max_msg_bytes = kDefaultMaxMessageBytes;  // ZMQ_MAXMSGSIZE per part; -1 = unlimited
 };
 
 // One received multipart message, owning its zmq frames: the views stay valid while it lives.
@@ -66,7 +69,8 @@ class RawSubscriber {
   // Throws ConfigError naming the endpoint when it cannot connect/bind.
   explicit RawSubscriber(const SubscriberConfig& config);
   RawSubscriber(RawSubscriber&&) noexcept = default;
-  RawSubscriber& operator=(RawSubscriber&&) noexcept = default;
+  RawSubscriber& operator=(RawSubscriber&&) = delete;  // closing order matters (see monitor_)
+  ~RawSubscriber();  // stops the monitor before its reading end closes (see monitor_)
 
   // Waits up to `timeout_ns` (0 = poll once, -1 = forever) for a well-formed message.
   // kWouldBlock on timeout, kCancelled when the context terminates; never throws.
@@ -78,18 +82,27 @@ class RawSubscriber {
   std::uint64_t malformed() const { return malformed_; }
   // Counts a message the caller found malformed (e.g. header did not parse), for one place of truth.
   void count_malformed() { ++malformed_; }
+  // Connections closed under this socket (peer exit, or a part over max_msg_bytes); each was reconnected
+  // when this socket connects.
+  std::uint64_t disconnects() const { return disconnects_; }
 
  private:
   friend int wait_readable(const std::vector<RawSubscriber*>& subscribers, DurationNs timeout_ns);
   Result<ReceivedMessage> read_one(bool wait);  // kWouldBlock when nothing is queued
   void drain_latest();
+  void handle_monitor_events();  // counts closed connections and reconnects
+
 
   SubscriberConfig config_;
   std::vector<std::string> endpoints_;
+  // Declared before socket_, so it closes after it. libzmq's I/O thread sends monitor events with a blocking send:
+  // an event for a PAIR whose reader is gone would stall every socket of the context.
+  zmq::socket_t monitor_;  // PAIR end of zmq_socket_monitor(socket_, ZMQ_EVENT_DISCONNECTED)
   zmq::socket_t socket_;
   std::deque<ReceivedMessage> pending_;  // latest-only: drained, newest per image topic
   std::uint64_t superseded_ = 0;
   std::uint64_t malformed_ = 0;
+  std::uint64_t disconnects_ = 0;
 };
 
 // Waits up to `timeout_ns` (-1 = forever) until one of `subscribers` has a message; returns its

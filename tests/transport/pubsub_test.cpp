@@ -193,5 +193,59 @@ TEST(PubSubTest, FrameLargerThanMaxMessageSizeIsRefused) {
   EXPECT_EQ(sub.receive(200 * kNsPerMs).status().code(), StatusCode::kWouldBlock);
 }
 
+// #22 item 1: libzmq answers a part over the subscriber's ZMQ_MAXMSGSIZE by closing the connection and never
+// reopening it. The subscriber sees the close, counts it and reconnects: later messages arrive again.
+TEST(PubSubTest, OversizePartFromAForeignPublisherCostsOnlyMessagesInFlight) {
+  PublisherConfig pc;
+  pc.endpoint = "tcp://127.0.0.1:*";
+  pc.max_msg_bytes = -1;  // a publisher that does not check (another tool, an older Faultline)
+  Publisher pub(pc);
+  SubscriberConfig sc;
+  sc.endpoints = {pub.endpoint()};
+  sc.max_msg_bytes = 1024;
+  RawSubscriber sub(sc);
+  ASSERT_TRUE(pub.wait_for_subscribers("/raw", 1, 5 * kNsPerSec).is_ok());
+  ASSERT_TRUE(pub.send("/raw", "h", BytesPayload(4096, 7)).is_ok());
+  bool received = false;
+  for (int i = 0; i < 1000 && !received; ++i) {  // up to ~20 s on a loaded machine; ~1 round when idle
+    ASSERT_TRUE(pub.send("/raw", "h", BytesPayload(16, 1)).is_ok());
+    auto r = sub.receive(20 * kNsPerMs);
+    received = r.is_ok() && r->payload_size() == 16;
+  }
+  EXPECT_TRUE(received);
+  EXPECT_EQ(sub.disconnects(), 1u);
+}
+
+// A Faultline publisher never sends such a part: it refuses it with a clear error and counts it.
+TEST(PubSubTest, PublisherRefusesAPartOverItsLimitAndCountsIt) {
+  PublisherConfig pc;
+  pc.endpoint = unique_ipc("refuse");
+  pc.max_msg_bytes = 1024;
+  Publisher pub(pc);
+  SubscriberConfig sc;
+  sc.endpoints = {pub.endpoint()};
+  RawSubscriber sub(sc);
+  ASSERT_TRUE(pub.wait_for_subscribers("/raw", 1, 5 * kNsPerSec).is_ok());
+  const Status refused = pub.send("/raw", "h", BytesPayload(1025, 7));
+  EXPECT_EQ(refused.code(), StatusCode::kInvalidArgument);
+  EXPECT_NE(refused.message().find("max_msg_bytes"), std::string::npos) << refused.message();
+  EXPECT_EQ(pub.oversize_refused(), 1u);
+  ASSERT_TRUE(pub.send("/raw", "h", BytesPayload(1024, 8)).is_ok());
+  auto r = sub.receive(5 * kNsPerSec);
+  ASSERT_TRUE(r.is_ok());
+  EXPECT_EQ(r->payload_size(), 1024u);
+  EXPECT_EQ(sub.disconnects(), 0u);
+}
+
+TEST(PubSubTest, DefaultLimitAcceptsARawUhdFrame) {
+  PubSubPair p(unique_ipc("uhd"));
+  ASSERT_TRUE(p.pub.wait_for_subscribers("/raw", 1, 5 * kNsPerSec).is_ok());
+  constexpr std::size_t kUhdBytes = 3840 * 2160 * 3;  // 24.9 MB: over the old 16 MiB limit
+  ASSERT_TRUE(p.pub.send("/raw", "h", BytesPayload(kUhdBytes, 3)).is_ok());
+  auto r = p.sub.receive(10 * kNsPerSec);
+  ASSERT_TRUE(r.is_ok());
+  EXPECT_EQ(r->payload_size(), kUhdBytes);
+}
+
 }  // namespace
 }  // namespace faultline::transport
