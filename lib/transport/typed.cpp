@@ -6,7 +6,7 @@ int bytes_per_pixel(const std::string& encoding) {
   if (encoding == "bgr8" || encoding == "rgb8") return 3;
   if (encoding == "bgra8" || encoding == "rgba8") return 4;
   if (encoding == "mono8") return 1;
-  if (encoding == "mono16") return 2;
+  if (encoding == "mono16" || encoding == "yuv422" || encoding == "yuv422_yuy2") return 2;
   return 0;
 }
 
