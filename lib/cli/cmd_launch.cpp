@@ -85,7 +85,8 @@ int run(int argc, char** argv) {
   app.footer(
       "Each node runs as `<exec> --name <name> --params <tmp>/<name>.yaml [args...]`. SIGINT/SIGTERM are\n"
       "forwarded to all nodes; when a required node exits the others get SIGTERM, then SIGKILL after\n"
-      "--grace. Exit code: that of the first failing required node (1 if it died from a signal), else 0.\n"
+      "--grace. Exit code: that of the first failing required node (1 if it died from a signal), else 1 if\n"
+      "any other node failed on its own (non-zero exit, or a signal the launcher did not send), else 0.\n"
       "Scalars may use ${VAR} and ${VAR:-default}; a top-level env: map is set for every node.");
   FAULTLINE_PARSE(app, argc, argv);
 

@@ -302,6 +302,16 @@ class Loop {
     if (first) {
       const auto& o = first->outcome;
       result_.exit_code = !o.started ? 127 : (o.term_signal != 0 || o.exit_code == 0) ? 1 : o.exit_code;
+    } else {
+      // A non-required node does not stop the launch, but one that failed on its own (a sink killed, a detector
+      // that crashed) means the run's outputs may be missing: never report that as success.
+      for (const auto& c : children_) {
+        if (!c.spec.required && c.outcome.failed()) {
+          note("exit code 1: non-required node " + c.spec.name + " failed (" + describe_end(c.outcome) + ")");
+          result_.exit_code = 1;
+          break;
+        }
+      }
     }
     return result_;
   }

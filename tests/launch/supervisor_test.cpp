@@ -103,7 +103,21 @@ TEST_F(SupervisorTest, NonRequiredNodeExitDoesNotStopTheLaunch) {
   EXPECT_TRUE(Of(r, "helper").failed());
   EXPECT_EQ(Of(r, "helper").exit_code, 5);
   EXPECT_EQ(Of(r, "server").term_signal, SIGTERM);
-  EXPECT_EQ(r.exit_code, 0);  // non-required nodes never set the exit code
+  EXPECT_EQ(r.exit_code, 1);  // it did not stop the launch, but its failure is not reported as success
+}
+
+// #22 item 7: a non-required sink killed from outside (so no results) made `launch` exit 0.
+TEST_F(SupervisorTest, NonRequiredNodeKilledFromOutsideFailsTheLaunch) {
+  Add("sink", "kill -KILL $$", /*required=*/false);  // a SIGKILL the supervisor did not send
+  Add("player", "echo ready; exec sleep 30");
+  options_.on_exit = [this](const ChildOutcome& o) {
+    if (o.name == "sink") stop_.store(true);
+  };
+  const auto r = Run();
+  EXPECT_EQ(Of(r, "sink").term_signal, SIGKILL);
+  EXPECT_TRUE(Of(r, "sink").failed());
+  EXPECT_FALSE(Of(r, "player").failed());  // stopped by us
+  EXPECT_EQ(r.exit_code, 1);
 }
 
 TEST_F(SupervisorTest, OnlyNonRequiredNodesEndWhenAllExited) {
