@@ -164,11 +164,24 @@ ConditionResult run_condition(const BenchmarkOptions& o, const std::string& corr
     so.env["FAULTLINE_DETECTIONS"] = "ipc://" + std::string(sock) + "/det";
   }
   so.sink = [&node_log](const std::string& node, std::string_view line, launch::OutputStream) {
-    node_log << "[" << node << "] " << line << "\n";
+    node_log << "[" << node << "] " << line << std::endl;  // flushed: the log is readable while the run goes
   };
   std::atomic<bool> run_stop{false};
   const auto t0 = std::chrono::steady_clock::now();
-  so.on_exit = [](const launch::ChildOutcome&) {};
+  // A node that fails on its own (a detector that exits 1 after five samples) ends the run at once with the
+  // real cause, instead of leaving the others waiting until --run-timeout.
+  std::string node_failure;
+  so.on_exit = [&](const launch::ChildOutcome& c) {
+    if (!c.failed() || !node_failure.empty()) return;
+    const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    char when[32];
+    std::snprintf(when, sizeof when, "%.1f", s);
+    node_failure = c.name + (!c.started       ? " did not start: " + c.start_error
+                             : c.term_signal ? " was killed by signal " + std::to_string(c.term_signal)
+                                             : " exited with code " + std::to_string(c.exit_code)) +
+                   " after " + when + " s";
+    run_stop.store(true);
+  };
   launch::Supervisor sup(run_children(o, sock, run_dir.string(), corruption, level, seed,
                                       variant ? variant->params : std::vector<std::string>{}),
                          so);
@@ -196,8 +209,11 @@ ConditionResult run_condition(const BenchmarkOptions& o, const std::string& corr
                 (run_dir / "nodes.log").string();
     }
   }
-  if (run_stop.load())
+  if (!node_failure.empty()) {
+    r.error = node_failure + "; see " + (run_dir / "nodes.log").string();
+  } else if (run_stop.load()) {
     r.error = stop.load() ? "stopped" : "timed out after " + std::to_string(o.run_timeout_s) + " s";
+  }
   if (!r.error.empty()) return r;
 
   scoring::EvalOptions eo;

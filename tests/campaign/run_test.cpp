@@ -136,5 +136,22 @@ TEST_F(RunTest, BenchmarkWithoutRobustnessSaysWhyAndFails) {
   EXPECT_FALSE(fs::exists(out / "report.html"));
 }
 
+// #22 item 5: a detector that dies is noticed at once: the run ends as failed with the real cause in summary.json
+// (it used to wait for --run-timeout and report "timed out").
+TEST_F(RunTest, ADetectorThatDiesFailsItsRunWithTheRealCause) {
+  const fs::path out = root_ / "dead";
+  const int rc = run("benchmark --out " + out.string() + " --dataroot " + (root_ / "data").string() +
+                         " --version v1.0-mini --corruptions fog --levels mid --run-timeout 300"
+                         " --detector-cmd 'exit 3'",
+                     root_ / "dead.log");
+  EXPECT_EQ(rc, 1) << read_text(root_ / "dead.log");
+  rapidjson::Document d;
+  d.Parse(read_text(out / "summary.json").c_str());
+  ASSERT_FALSE(d.HasParseError()) << read_text(out / "summary.json");
+  const std::string error = d["conditions"]["clean"]["error"].GetString();
+  EXPECT_NE(error.find("exited with code 3"), std::string::npos) << error;
+  EXPECT_EQ(error.find("timed out"), std::string::npos) << error;
+}
+
 }  // namespace
 }  // namespace faultline::campaign
