@@ -9,6 +9,7 @@
 #include "detection.pb.h"
 #include "detector/detector.hpp"
 #include "detector/results_json.hpp"
+#include "transport/drop_counter.hpp"
 #include "transport/log_limiter.hpp"
 #include "transport/publisher.hpp"
 #include "transport/subscriber.hpp"
@@ -63,6 +64,7 @@ struct DetectorLoop::Impl {
   transport::Publisher push;
   Detector detector;
   transport::LogLimiter bad_limiter;
+  transport::DropCounter boundary_seqs;  // boundaries lost in transport show as gaps in the publisher's seq
   // Single-frame mode: per camera, the latest frame of the current sample (key frames preferred), still encoded.
   struct Pending {
     msgs::CameraFrame header;
@@ -123,6 +125,16 @@ int DetectorLoop::run(const std::atomic<bool>& stop) {
         continue;
       }
       ++counts_.boundaries;
+      const std::uint64_t lost_before = m.boundary_seqs.counts(b.header().publisher(), topic).transport_drops;
+      (void)m.boundary_seqs.observe(b.header().publisher(), topic, b.header().seq());
+      const std::uint64_t lost = m.boundary_seqs.counts(b.header().publisher(), topic).transport_drops - lost_before;
+      if (lost > 0) {
+        // Those samples get no DetectionArray from us (scored as empty): say so, never skip them silently.
+        counts_.boundaries_lost += lost;
+        m.log->warn("{} sample boundar{} lost in transport before sample {}: no detections for {} ({} lost so far)",
+                    lost, lost == 1 ? "y" : "ies", b.sample_token(), lost == 1 ? "that sample" : "those samples",
+                    counts_.boundaries_lost);
+      }
       const auto t0 = Clock::now();
       if (!m.cfg.temporal) {
         for (auto& [camera, p] : m.pending) {
@@ -149,6 +161,7 @@ int DetectorLoop::run(const std::atomic<bool>& stop) {
       d.mutable_header()->set_seq(++seq);
       d.mutable_header()->set_publisher(m.node);
       d.mutable_header()->set_capture_stamp_ns(b.timestamp_us() * 1000);
+      d.mutable_header()->set_capture_clock(b.header().capture_clock());
       d.mutable_header()->set_publish_stamp_ns(realtime_now_ns());
       d.mutable_header()->set_publish_mono_ns(monotonic_now_ns());
       if (transport::send_message(m.push, m.cfg.detections_topic, d).is_ok()) {

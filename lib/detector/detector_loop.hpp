@@ -44,6 +44,7 @@ struct DetectorLoopConfig {
 
 struct DetectorLoopCounts {
   std::uint64_t frames = 0, malformed = 0, undecodable = 0, boundaries = 0, arrays_sent = 0, send_failures = 0;
+  std::uint64_t boundaries_lost = 0;  // seq gaps on the sync topic: samples that got no DetectionArray
 };
 
 class DetectorLoop {

@@ -166,6 +166,7 @@ struct BagConverter::Impl {
 
     msgs::FaultEvent e;
     e.mutable_header()->set_capture_stamp_ns(in.header().capture_stamp_ns());
+    e.mutable_header()->set_capture_clock(in.header().capture_clock());
     e.mutable_header()->set_frame_id(in.header().frame_id());
     e.mutable_header()->set_seq(next_seq(cfg.faults_topic));
     e.mutable_header()->set_publisher(cfg.injector_publisher);
@@ -284,6 +285,7 @@ Result<ConvertCounts> BagConverter::run(const std::atomic<bool>& stop, const Con
       b.set_stream_end_follows(b.last_in_run());  // `bag play` sends the StreamEnd after the bag's last frame
       auto* hdr = b.mutable_header();
       hdr->set_capture_stamp_ns(t_ns);
+      hdr->set_capture_clock(msgs::CAPTURE_CLOCK_DATASET);
       hdr->set_frame_id("base_link");
       hdr->set_seq(m.next_seq(m.cfg.sync_topic));
       hdr->set_publisher(m.cfg.publisher);

@@ -62,6 +62,7 @@ msgs::CameraFrame camera_frame_header(const dataset::CameraFrameRecord& f) {
   std::string frame_id = f.channel;
   for (char& c : frame_id) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
   h.mutable_header()->set_capture_stamp_ns(f.timestamp_us * 1000);
+  h.mutable_header()->set_capture_clock(msgs::CAPTURE_CLOCK_DATASET);
   h.mutable_header()->set_frame_id(frame_id);
   return h;
 }

@@ -5,6 +5,7 @@
 #include <map>
 
 #include "codec/jpeg.hpp"
+#include "codec/raw.hpp"
 #include "common/config.hpp"
 #include "runtime/stats_reporter.hpp"
 #include "transport/drop_counter.hpp"
@@ -54,6 +55,7 @@ struct InjectorLoop::Impl {
   StatsReporter stats;
   transport::TopicRegistry registry;
   transport::DropCounter drops;
+  std::map<std::string, std::uint64_t> frames_from;  // camera frames received per upstream publisher
   std::map<std::string, std::uint64_t> seq;
   std::map<std::string, std::string> out_topics;  // input topic -> output topic
   transport::LogLimiter bad_limiter;
@@ -119,6 +121,7 @@ struct InjectorLoop::Impl {
   void publish_event(const msgs::CameraFrame& in, const msgs::FaultState& state) {
     msgs::FaultEvent e;
     e.mutable_header()->set_capture_stamp_ns(in.header().capture_stamp_ns());
+    e.mutable_header()->set_capture_clock(in.header().capture_clock());
     e.mutable_header()->set_frame_id(in.header().frame_id());
     stamp(e.mutable_header(), faults_topic);
     e.set_camera(in.camera());
@@ -134,6 +137,7 @@ struct InjectorLoop::Impl {
       Delayed d = std::move(delayed.begin()->second);
       delayed.erase(delayed.begin());
       const Status s = publish_frame(d.topic, d.header, d.payload, d.receive_mono_ns);
+      if (s.code() == StatusCode::kInvalidArgument && bad_limiter.allow()) log->warn("{}", s.message());
       if (s.code() == StatusCode::kCancelled || s.code() == StatusCode::kIoError) return s;
     }
     return Status::ok();
@@ -231,6 +235,20 @@ int InjectorLoop::run(const std::atomic<bool>& stop) {
         rc = s.code() == StatusCode::kCancelled ? 0 : 1;
         break;
       }
+      // Frames lost after the last one on their topic leave no seq gap; the source's count shows them.
+      const std::string& source = e.header().publisher();
+      std::uint64_t gaps = 0;
+      for (const auto& [key, c] : m.drops.all()) gaps += key.first == source ? c.transport_drops : 0;
+      // Malformed frames name no publisher; with one source they are its frames, already counted as malformed.
+      const std::uint64_t accounted = m.frames_from[source] + gaps + (m.frames_from.size() <= 1 ? counts_.malformed : 0);
+      if (e.frames_sent() > accounted) {
+        const std::uint64_t lost = e.frames_sent() - accounted;
+        counts_.transport_drops += lost;
+        m.stats.collector().add_transport_drops(in_topic, lost);
+        m.log->warn("stream end: {} of the {} frames {} sent never arrived and left no seq gap (lost at the end "
+                    "of their topics); counted as transport drops",
+                    lost, e.frames_sent(), source);
+      }
       m.stamp(e.mutable_header(), m.end_out);
       if (!transport::send_message(m.pub, m.end_out, e).is_ok()) m.log->warn("stream end forward failed");
       ++counts_.stream_ends;
@@ -245,7 +263,7 @@ int InjectorLoop::run(const std::atomic<bool>& stop) {
       ++counts_.malformed;
       m.sub->count_malformed();
       m.stats.collector().add_malformed(in_topic, 1);
-      if (m.bad_limiter.allow()) {
+      if (counts_.malformed <= 20 || m.bad_limiter.allow()) {
         m.log->warn("malformed message on {} dropped: {} ({} so far)", in_topic, view.status().message(),
                     counts_.malformed);
       }
@@ -253,6 +271,7 @@ int InjectorLoop::run(const std::atomic<bool>& stop) {
     }
     ++counts_.frames_in;
     const msgs::CameraFrame& in = view->header;
+    ++m.frames_from[in.header().publisher()];
     const std::uint64_t before = m.drops.counts(in.header().publisher(), in_topic).transport_drops;
     (void)m.drops.observe(in.header().publisher(), in_topic, in.header().seq());
     const std::uint64_t gap = m.drops.counts(in.header().publisher(), in_topic).transport_drops - before;
@@ -260,7 +279,7 @@ int InjectorLoop::run(const std::atomic<bool>& stop) {
     stats::Sample sample;
     sample.receive_mono_ns = msg.receive_mono_ns();
     sample.receive_realtime_ns = msg.receive_realtime_ns();
-    sample.capture_stamp_ns = in.header().capture_stamp_ns();
+    sample.capture_stamp_ns = transport::wall_clock_capture_ns(in.header());
     sample.publish_mono_ns = in.header().publish_mono_ns();
     sample.size_bytes = msg.size_bytes();
     m.stats.collector().record(in_topic, in.header().publisher(), sample);
@@ -269,14 +288,20 @@ int InjectorLoop::run(const std::atomic<bool>& stop) {
     cv::Mat image;
     msgs::FaultState state;
     if (m.cfg.decode) {
-      auto decoded = codec::decode_jpeg(view->payload, view->payload_size);
+      // JPEG from the player and most cameras; raw layouts from a V4L2 camera in raw mode or a ROS 2 Image.
+      const bool jpeg = in.encoding().empty() || in.encoding() == "jpeg";
+      auto decoded = jpeg ? codec::decode_jpeg(view->payload, view->payload_size)
+                          : codec::raw_to_bgr(in.encoding(), in.width(), in.height(), in.step(), view->payload,
+                                              view->payload_size);
       if (!decoded) {
+        // Bad input, not an injected fault: counted as malformed on its topic, and named in the log (every one
+        // of the first 20, then at most one line a second with the count).
         ++counts_.corrupt_jpeg;
-        ++counts_.injected_drops;
-        m.stats.collector().add_injected_drops(in_topic, 1);
-        if (m.bad_limiter.allow()) {
-          m.log->warn("{} seq={}: {}; frame dropped ({} corrupt so far)", in_topic, in.header().seq(),
-                      decoded.status().message(), counts_.corrupt_jpeg);
+        m.stats.collector().add_malformed(in_topic, 1);
+        if (counts_.corrupt_jpeg <= 20 || m.bad_limiter.allow()) {
+          m.log->warn("{} seq={} ({}): {}; frame dropped ({} undecodable so far)", in_topic, in.header().seq(),
+                      in.encoding().empty() ? "jpeg" : in.encoding(), decoded.status().message(),
+                      counts_.corrupt_jpeg);
         }
         state.set_action(msgs::FAULT_ACTION_DROP);
         state.add_faults()->set_name("undecodable_input");
@@ -331,6 +356,11 @@ int InjectorLoop::run(const std::atomic<bool>& stop) {
     }
     const Status s = m.publish_frame(out_topic, out, payload, sample.receive_mono_ns);
     if (s.code() == StatusCode::kCancelled) break;
+    if (s.code() == StatusCode::kInvalidArgument) {  // over max_msg_bytes: refused and counted, run goes on
+      counts_.oversize_refused = m.pub.oversize_refused();
+      if (m.bad_limiter.allow()) m.log->warn("{}", s.message());
+      continue;
+    }
     if (!s.is_ok()) {
       m.log->error("send on {} failed: {}", out_topic, s.message());
       rc = 1;
@@ -344,10 +374,12 @@ int InjectorLoop::run(const std::atomic<bool>& stop) {
   m.stats.tick(monotonic_now_ns() + static_cast<DurationNs>(m.cfg.stats_window_s * 1e9), &m.pub);
   m.stats.log_totals(monotonic_now_ns());
   if (!finished) m.pub.set_linger(0);  // shutdown: exit promptly
+  counts_.oversize_refused = m.pub.oversize_refused();
   m.log->info("injector done: in {} out {} boundaries {} injected_drops {} corrupt_jpeg {} malformed {} "
-              "transport_drops {} superseded {}",
+              "transport_drops {} superseded {} oversize_refused {} input_disconnects {}",
               counts_.frames_in, counts_.frames_out, counts_.boundaries, counts_.injected_drops,
-              counts_.corrupt_jpeg, counts_.malformed, counts_.transport_drops, counts_.superseded);
+              counts_.corrupt_jpeg, counts_.malformed, counts_.transport_drops, counts_.superseded,
+              counts_.oversize_refused, m.sub ? m.sub->disconnects() : 0);
   return rc;
 }
 

@@ -18,6 +18,7 @@
 #include "runtime/frame_policy.hpp"
 #include "runtime/remap.hpp"
 #include "stats/topic_stats.hpp"
+#include "transport/publisher.hpp"
 
 namespace faultline::runtime {
 
@@ -37,7 +38,7 @@ struct InjectorConfig {
   int wait_timeout_ms = 10000;                       // ... at most this long before subscribing upstream
   bool exit_on_last = true;                          // stop at the end of the run (see run())
   int linger_ms = 1000;                              // end of run: time to deliver queued messages
-  std::int64_t max_msg_bytes = 16 << 20;             // ZMQ_MAXMSGSIZE on the input; -1 = unlimited
+  std::int64_t max_msg_bytes = transport::kDefaultMaxMessageBytes;  // ZMQ_MAXMSGSIZE on the input; -1 = none
   double stats_window_s = 1.0;                       // statistics window (s)
   double stats_log_period_s = 5.0;                   // info log of statistics every this many s
   std::map<std::string, std::string> remap;          // topic remaps (from -> to), applied to outputs
@@ -83,6 +84,7 @@ struct InjectorCounts {
   std::uint64_t malformed = 0;
   std::uint64_t transport_drops = 0;
   std::uint64_t superseded = 0;
+  std::uint64_t oversize_refused = 0;  // output frames over max_msg_bytes: refused by the publisher, not sent
 };
 
 // The output topic for an input camera topic: prefix + topic, with image_rect_compressed ->

@@ -203,19 +203,24 @@ int PlayerLoop::run(const std::atomic<bool>& stop) {
         h.set_source_seq(h.header().seq());
         const Status s = transport::send_camera_frame(m.pub, topic, h, transport::Payload::of(*image));
         if (s.code() == StatusCode::kCancelled) return 0;
-        if (!s.is_ok()) {
+        if (s.code() == StatusCode::kInvalidArgument) {
+          // Over max_msg_bytes: refused and counted; the run goes on, and the unused seq is a gap downstream.
+          ++counts_.send_failures;
+          if (m.missing_limiter.allow()) m.log->warn("{} ({} send failures so far)", s.message(), counts_.send_failures);
+        } else if (!s.is_ok()) {
           ++counts_.send_failures;
           m.log->error("send on {} failed: {}", topic, s.message());
           return 1;
+        } else {
+          ++counts_.frames_sent;
+          if (f.is_key_frame) ++keys_sent[f.sample_token];
+          stats::Sample sample;
+          sample.receive_mono_ns = h.header().publish_mono_ns();
+          sample.receive_realtime_ns = h.header().publish_stamp_ns();
+          sample.size_bytes = (*image)->size();
+          m.stats.collector().record(topic, m.node, sample);
+          m.log->trace("sent {} seq={} sample_data={}", topic, h.header().seq(), f.sample_data_token);
         }
-        ++counts_.frames_sent;
-        if (f.is_key_frame) ++keys_sent[f.sample_token];
-        stats::Sample sample;
-        sample.receive_mono_ns = h.header().publish_mono_ns();
-        sample.receive_realtime_ns = h.header().publish_stamp_ns();
-        sample.size_bytes = (*image)->size();
-        m.stats.collector().record(topic, m.node, sample);
-        m.log->trace("sent {} seq={} sample_data={}", topic, h.header().seq(), f.sample_data_token);
       }
       if (boundary_after[i]) {
         msgs::SampleBoundary b;
@@ -227,6 +232,7 @@ int PlayerLoop::run(const std::atomic<bool>& stop) {
         b.set_last_in_run(!m.cfg.loop && i == last_boundary);
         b.set_stream_end_follows(b.last_in_run());
         b.mutable_header()->set_capture_stamp_ns(sample_time[f.sample_token] * 1000);
+        b.mutable_header()->set_capture_clock(msgs::CAPTURE_CLOCK_DATASET);
         b.mutable_header()->set_frame_id("base_link");
         m.stamp(b.mutable_header(), m.sync_topic);
         const Status s = transport::send_message(m.pub, m.sync_topic, b);

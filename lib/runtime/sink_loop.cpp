@@ -107,6 +107,11 @@ struct SinkLoop::Impl {
   std::uint64_t processing_n = 0;
   SinkCounts* counts = nullptr;  // the loop's counts (meta and log lines report them)
 
+  // Malformed messages: those that did not parse here, and those the sockets refused for a wrong frame count.
+  std::uint64_t malformed_total() const {
+    return counts->malformed + detections.malformed() + (sync ? sync->malformed() : 0);
+  }
+
   std::string meta_json() const {
     rapidjson::StringBuffer buf;
     rapidjson::Writer<rapidjson::StringBuffer> w(buf);
@@ -140,6 +145,10 @@ struct SinkLoop::Impl {
     w.Uint64(counts->rejected_boundaries);
     w.Key("faultline_sink_bad_journal_lines");
     w.Uint64(counts->bad_journal_lines);
+    w.Key("faultline_sink_malformed_messages");
+    w.Uint64(malformed_total());
+    w.Key("faultline_sink_disconnects");  // connections closed under the sink's sockets (peer exit, oversize)
+    w.Uint64(detections.disconnects() + (sync ? sync->disconnects() : 0));
     w.EndObject();
     return buf.GetString();
   }
@@ -213,7 +222,8 @@ int SinkLoop::run(const std::atomic<bool>& stop) {
               m.log->warn("malformed DetectionArray dropped ({} so far)", counts_.malformed);
             continue;
           }
-          sample.capture_stamp_ns = d.first_frame_capture_ns();
+          sample.capture_stamp_ns =
+              d.header().capture_clock() == msgs::CAPTURE_CLOCK_REALTIME ? d.first_frame_capture_ns() : 0;
           sample.publish_mono_ns = d.header().publish_mono_ns();
           m.stats.collector().record(topic, d.header().publisher(), sample);
           if (d.processing_ns() > 0) {
@@ -247,7 +257,7 @@ int SinkLoop::run(const std::atomic<bool>& stop) {
             m.stats.collector().add_malformed(topic, 1);
             continue;
           }
-          sample.capture_stamp_ns = b.header().capture_stamp_ns();
+          sample.capture_stamp_ns = transport::wall_clock_capture_ns(b.header());
           sample.publish_mono_ns = b.header().publish_mono_ns();
           m.stats.collector().record(topic, b.header().publisher(), sample);
           ++counts_.boundaries;
@@ -280,6 +290,7 @@ int SinkLoop::run(const std::atomic<bool>& stop) {
   }
   if (!complete) m.finalize(stop.load() ? "shutdown" : "end");
   m.stats.log_totals(monotonic_now_ns());
+  counts_.malformed = m.malformed_total();
   m.log->info(
       "sink done: {} detection arrays, {} boxes, {} boundaries, {} acks, {} malformed, {} boxes "
       "and {} "

@@ -29,6 +29,12 @@ Result<CameraFrameView> parse_camera_frame(const ReceivedMessage& message);
 // Parses a two-part [topic][body] message into `out`; kCorruptData on a wrong frame count or bad bytes.
 Status parse_message(const ReceivedMessage& message, google::protobuf::MessageLite* out);
 
+// The capture stamp to age a message against: capture_stamp_ns for a wall-clock capture, else 0 (no age; a replay's
+// dataset time would read as an age of years).
+inline StampNs wall_clock_capture_ns(const msgs::Header& h) {
+  return h.capture_clock() == msgs::CAPTURE_CLOCK_REALTIME ? h.capture_stamp_ns() : 0;
+}
+
 // Sets header.payload_bytes, serialises the header and sends [topic][header][payload].
 Status send_camera_frame(Publisher& publisher, std::string_view topic, msgs::CameraFrame& header,
                          const Payload& payload);

@@ -11,8 +11,8 @@ int main(int argc, char** argv) {
         log->info("starting: {}", faultline::config::describe(cfg));
         const int rc = loop.run(stop);
         const auto& c = loop.counts();
-        log->info("done: {} frames, {} samples sent, {} malformed, {} undecodable", c.frames, c.arrays_sent,
-                  c.malformed, c.undecodable);
+        log->info("done: {} frames, {} samples sent, {} malformed, {} undecodable, {} boundaries lost", c.frames,
+                  c.arrays_sent, c.malformed, c.undecodable, c.boundaries_lost);
         return rc;
       });
 }

@@ -72,6 +72,31 @@ class ClientTest(unittest.TestCase):
         self.assertEqual(self.client.transport_drops, 2)
         self.assertEqual(self.client.malformed, 1)
 
+    def test_a_lost_boundary_is_counted_and_its_sample_rebuilt_from_its_frames(self):
+        # #22 item 6: the boundary of s2 (seq 2) is lost; its frames still arrived. s3's frames were all lost too.
+        img = np.zeros((2, 2, 3), dtype=np.uint8)
+
+        def boundary(token, seq, last=False):
+            b = self.msgs.SampleBoundary(sample_token=token, scene_name="scene-0103", last_in_run=last,
+                                         timestamp_us=seq * 500_000)
+            b.header.seq = seq
+            b.header.publisher = "fault_injector"
+            self.pub.send_multipart([b"/sync/sample", b.SerializeToString()])
+
+        self.send_frame("CAM_FRONT", 1, "s1", img)
+        boundary("s1", 1)
+        self.send_frame("CAM_FRONT", 2, "s2", img)
+        self.send_frame("CAM_BACK", 1, "s2", img)
+        self.send_frame("CAM_FRONT", 3, "s4", img)
+        boundary("s4", 4, last=True)  # boundaries 2 (s2) and 3 (s3) lost
+        samples = list(self.client.samples(timeout_s=5))
+        self.assertEqual([s.token for s in samples], ["s1", "s2", "s4"])
+        self.assertEqual([s.boundary_lost for s in samples], [False, True, False])
+        self.assertEqual(sorted(samples[1].frames), ["CAM_BACK", "CAM_FRONT"])
+        self.assertEqual(sorted(samples[2].frames), ["CAM_FRONT"])
+        self.assertEqual(self.client.boundaries_lost, 2)
+        self.assertEqual(self.client.transport_drops, 0)
+
     def test_stream_end_ends_the_run_at_once_and_is_not_malformed(self):
         # The end wait is long, so only the StreamEnd can end the iteration before the timeout.
         self.client.end_wait_s = 30

@@ -16,6 +16,7 @@
 #include "common/config.hpp"
 #include "detection.pb.h"
 #include "scoring/submission.hpp"
+#include "transport/context.hpp"
 #include "transport/publisher.hpp"
 #include "transport/subscriber.hpp"
 #include "transport/typed.hpp"
@@ -187,6 +188,40 @@ TEST_F(SinkLoopTest, JournalOfAnotherRunStopsTheSinkAtStart) {
         << e.what();
   }
   EXPECT_FALSE(std::ifstream(config_.output).good());  // nothing written
+}
+
+// #22 item 7: a message with a wrong frame count (5 parts) is refused by the socket and counted in the results'
+// meta, and the sink carries on with the next one.
+TEST_F(SinkLoopTest, AFivePartMessageIsCountedAsMalformedInTheMeta) {
+  transport::SubscriberConfig ac;
+  ac.endpoints = {config_.ack_endpoint};
+  ac.pattern = transport::Pattern::PushPull;
+  ac.bind = true;
+  transport::RawSubscriber acks(ac);
+  SinkLoop sink(config_, "detection_sink", log_);
+  zmq::socket_t push(transport::shared_context(), zmq::socket_type::push);
+  push.set(zmq::sockopt::linger, 200);
+  push.connect(sink.detections_endpoint());
+  std::atomic<bool> stop{false};
+  auto rc = std::async(std::launch::async, [&] { return sink.run(stop); });
+  for (int i = 0; i < 5; ++i) {
+    zmq::message_t part("x", 1);
+    push.send(part, i < 4 ? zmq::send_flags::sndmore : zmq::send_flags::none);
+  }
+  const std::string body = Array("s1", 1).SerializeAsString();  // one socket keeps order: after the bad one
+  zmq::message_t topic("/detections", 11), payload(body.data(), body.size());
+  push.send(topic, zmq::send_flags::sndmore);
+  push.send(payload, zmq::send_flags::none);
+  const auto ack = acks.receive(10 * kNsPerSec);
+  stop = true;
+  ASSERT_EQ(rc.wait_for(std::chrono::seconds(30)), std::future_status::ready);
+  EXPECT_EQ(rc.get(), 0);
+  ASSERT_TRUE(ack.is_ok()) << ack.status().message();
+  EXPECT_EQ(sink.counts().detection_arrays, 1u);
+  EXPECT_EQ(sink.counts().malformed, 1u);
+  const auto doc = Results();
+  EXPECT_EQ(doc["meta"]["faultline_sink_malformed_messages"].GetUint64(), 1u);
+  EXPECT_EQ(doc["results"]["s1"].Size(), 1u);
 }
 
 }  // namespace

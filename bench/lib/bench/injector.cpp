@@ -114,6 +114,7 @@ Row run_one(const std::string& spec, double seconds, double rate_hz, bool decode
         h.mutable_header()->set_seq(static_cast<std::uint64_t>(k + 1));
         h.mutable_header()->set_publisher("bench_source");
         h.mutable_header()->set_capture_stamp_ns(realtime_now_ns());
+        h.mutable_header()->set_capture_clock(msgs::CAPTURE_CLOCK_REALTIME);
         h.mutable_header()->set_publish_mono_ns(monotonic_now_ns());
         h.mutable_header()->set_publish_stamp_ns(realtime_now_ns());
         (void)transport::send_camera_frame(source, topic, h, transport::Payload::of(f.jpeg));

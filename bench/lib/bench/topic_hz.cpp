@@ -44,6 +44,7 @@ void publish(const TopicHzOptions& o, transport::Publisher& pub, std::uint64_t c
     clock.sleep_until_ns(t0 + static_cast<StampNs>(static_cast<double>(i) * 1e9 / o.rate_hz));
     header.mutable_header()->set_seq(i + 1);
     header.mutable_header()->set_capture_stamp_ns(realtime_now_ns());
+    header.mutable_header()->set_capture_clock(msgs::CAPTURE_CLOCK_REALTIME);
     header.mutable_header()->set_publish_stamp_ns(realtime_now_ns());
     const StampNs now = monotonic_now_ns();
     header.mutable_header()->set_publish_mono_ns(now);

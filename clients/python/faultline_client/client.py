@@ -12,7 +12,7 @@ import importlib
 import os
 import sys
 import time
-from typing import Dict, Iterator, List, Optional
+from typing import Dict, Iterator, List, Optional, Tuple
 
 import numpy as np
 import zmq
@@ -68,6 +68,10 @@ class Sample:
     timestamp_us: int
     frames: Dict[str, Frame]          # latest frame per camera for this sample (missing when dropped)
     last_in_run: bool
+    # True when this sample's boundary was lost in transport: the sample is rebuilt from its key frames when the
+    # next boundary arrives, timestamp_us is then the earliest frame's capture time and scene_name that of the
+    # next boundary. A sample whose boundary and frames were all lost is only counted (boundaries_lost).
+    boundary_lost: bool = False
 
 
 def _quat_to_matrix(q) -> np.ndarray:
@@ -137,18 +141,22 @@ class FaultlineClient:
         self.malformed = 0
         self.frames_received = 0
         self.transport_drops = 0
+        self.boundaries_lost = 0  # SampleBoundary messages lost in transport (seq gaps on the sync topic)
         self._last_seq: Dict[bytes, int] = {}
 
     def close(self):
         self.sub.close(0)
         self.push.close()
 
-    def _count_gap(self, topic: bytes, header) -> None:
+    def _gap(self, topic: bytes, header) -> int:
+        """Messages lost before this one on (topic, publisher), from the publisher's seq."""
         key = topic + b"|" + header.publisher.encode()
         last = self._last_seq.get(key)
-        if last is not None and header.seq > last + 1:
-            self.transport_drops += header.seq - last - 1
         self._last_seq[key] = header.seq
+        return header.seq - last - 1 if last is not None and header.seq > last + 1 else 0
+
+    def _count_gap(self, topic: bytes, header) -> None:
+        self.transport_drops += self._gap(topic, header)
 
     def samples(self, timeout_s: Optional[float] = None, decode: bool = True) -> Iterator[Sample]:
         """Yields one Sample per SampleBoundary; stops after last_in_run or timeout_s without traffic.
@@ -156,7 +164,7 @@ class FaultlineClient:
         When the last boundary announces a stream end (stream_end_follows), the frames still coming (sweeps after the
         last sample) are read and counted up to /sync/end, for at most end_wait_s, so frames_received and
         transport_drops account for every frame the injector sent."""
-        pending: Dict[str, Frame] = {}
+        pending: Dict[Tuple[str, str], Frame] = {}  # (sample token, camera) -> latest key frame
         poller = zmq.Poller()
         poller.register(self.sub, zmq.POLLIN)
         draining_until = None  # monotonic deadline once the last sample was yielded
@@ -173,8 +181,19 @@ class FaultlineClient:
             try:
                 if topic == self.sync_topic and len(parts) == 2:
                     b = self.msgs.SampleBoundary.FromString(parts[1].bytes)
-                    frames = {c: f for c, f in pending.items() if f.sample_token == b.sample_token}
-                    pending = {c: f for c, f in pending.items() if f.sample_token != b.sample_token}
+                    self.boundaries_lost += self._gap(topic, b.header)
+                    # Frames of other samples are still pending only when their boundary was lost (one socket keeps
+                    # order: a sample's frames come before its boundary): deliver those samples first.
+                    orphans: Dict[str, Dict[str, Frame]] = {}
+                    for (token, c), f in pending.items():
+                        if token != b.sample_token:
+                            orphans.setdefault(token, {})[c] = f
+                    for token, frames in sorted(orphans.items(),
+                                                key=lambda kv: min(f.capture_stamp_ns for f in kv[1].values())):
+                        first_us = min(f.capture_stamp_ns for f in frames.values()) // 1000
+                        yield Sample(token, b.scene_name, first_us, frames, False, boundary_lost=True)
+                    frames = {c: f for (token, c), f in pending.items() if token == b.sample_token}
+                    pending = {}
                     yield Sample(b.sample_token, b.scene_name, b.timestamp_us, frames, b.last_in_run)
                     if b.last_in_run:
                         if not b.stream_end_follows:
@@ -193,7 +212,7 @@ class FaultlineClient:
                     if not h.is_key_frame or draining_until is not None:
                         continue  # sweeps: a temporal model would consume them here
                     image = decode_payload(h, payload) if decode else None
-                    pending[h.camera] = Frame(
+                    pending[(h.sample_token, h.camera)] = Frame(
                         h.camera, image, h.encoding, np.array(h.intrinsics, float).reshape(3, 3),
                         _transform(h.sensor_to_ego), _transform(h.ego_pose), h.header.capture_stamp_ns,
                         h.source_seq, h.sample_token, h.is_key_frame, h.fault)
