@@ -713,22 +713,43 @@ class Scanner {
 
 }  // namespace
 
+namespace {
+
+// The scan itself; `name` (the path) prefixes errors. `release`: the bytes are a mapping whose
+// scanned pages may be dropped.
+Status scan_table(const char* data, std::size_t size, bool release, const std::string& name,
+                  const std::vector<std::string>& wanted,
+                  const std::function<Status(const TableRecord&, std::size_t)>& on_record,
+                  const RecordFilter& filter) {
+  Scanner scanner(data, data + size, wanted, on_record, filter);
+  scanner.release_scanned_pages(release);
+  Status s = scanner.run();
+  if (s.is_ok()) return s;
+  if (scanner.parse_failed()) {
+    return Status(StatusCode::kCorruptData, name + ": malformed JSON at offset " +
+                                                std::to_string(scanner.error_offset()) + ": " +
+                                                s.message());
+  }
+  return Status(s.code(), name + ": " + s.message());
+}
+
+}  // namespace
+
 Status stream_table(const std::string& path, const std::vector<std::string>& wanted,
                     const std::function<Status(const TableRecord&, std::size_t)>& on_record,
                     const RecordFilter& filter) {
   MappedFile file(path);
   if (!file.opened()) return Status(StatusCode::kNotFound, path + ": table not found");
   const char* data = file.data() ? file.data() : "";
-  Scanner scanner(data, data + file.size(), wanted, on_record, filter);
-  scanner.release_scanned_pages(file.data() != nullptr);
-  Status s = scanner.run();
-  if (s.is_ok()) return s;
-  if (scanner.parse_failed()) {
-    return Status(StatusCode::kCorruptData, path + ": malformed JSON at offset " +
-                                                std::to_string(scanner.error_offset()) + ": " +
-                                                s.message());
-  }
-  return Status(s.code(), path + ": " + s.message());
+  return scan_table(data, file.size(), file.data() != nullptr, path, wanted, on_record, filter);
+}
+
+Status stream_table_bytes(std::string_view bytes, const std::string& name,
+                          const std::vector<std::string>& wanted,
+                          const std::function<Status(const TableRecord&, std::size_t)>& on_record,
+                          const RecordFilter& filter) {
+  return scan_table(bytes.empty() ? "" : bytes.data(), bytes.size(), false, name, wanted, on_record,
+                    filter);
 }
 
 }  // namespace faultline::scoring

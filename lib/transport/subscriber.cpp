@@ -24,6 +24,12 @@ std::size_t ReceivedMessage::size_bytes() const {
   return total;
 }
 
+ReceivedMessage ReceivedMessage::from_frames(const std::vector<std::string_view>& frames) {
+  ReceivedMessage msg;
+  for (const auto f : frames) msg.parts_.emplace_back(f.data(), f.size());
+  return msg;
+}
+
 RawSubscriber::RawSubscriber(const SubscriberConfig& config)
     : config_(config),
       socket_(shared_context(), config.pattern == Pattern::PubSub ? zmq::socket_type::sub
