@@ -27,6 +27,9 @@ namespace {
 
 constexpr unsigned kParseFlags = rapidjson::kParseNanAndInfFlag | rapidjson::kParseFullPrecisionFlag;
 
+// Containers open at once; results files nest 4 deep ({results: {token: [{translation: [..]}]}}).
+constexpr int kMaxNesting = 128;
+
 Status bad(const std::string& where, const std::string& what) {
   return Status(StatusCode::kInvalidArgument, where + ": " + what);
 }
@@ -301,6 +304,11 @@ class SubmissionHandler : public rapidjson::BaseReaderHandler<rapidjson::UTF8<>,
   }
 
   bool open(bool object) {
+    // RapidJSON's reader recurses per level: hostile nesting must end before the stack does.
+    if (++nesting_ > kMaxNesting) {
+      return fail(bad(name_, "JSON nested deeper than " + std::to_string(kMaxNesting) +
+                                 " levels (Python's json.load gives up near 1000)"));
+    }
     if (meta_depth_ > 0 || (depth_ == 1 && top_key_ == kMeta && skip_ == 0)) {
       if (meta_depth_ == 0) begin_meta();
       ++meta_depth_;
@@ -368,6 +376,7 @@ class SubmissionHandler : public rapidjson::BaseReaderHandler<rapidjson::UTF8<>,
   }
 
   bool close(bool object) {
+    --nesting_;
     if (meta_depth_ > 0) {
       --meta_depth_;
       --depth_;
@@ -502,6 +511,7 @@ class SubmissionHandler : public rapidjson::BaseReaderHandler<rapidjson::UTF8<>,
   int meta_depth_ = 0;
   int depth_ = 0;
   int skip_ = 0;
+  int nesting_ = 0;  // open containers, whatever is done with them
   TopKey top_key_ = kNone;
   bool in_results_ = false, in_box_ = false, saw_results_ = false, saw_meta_ = false;
   std::string sample_;

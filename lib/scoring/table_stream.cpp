@@ -332,8 +332,8 @@ class Scanner {
     return nullptr;
   }
 
-  // A wanted field: scalars land in str/num/boolean/is_null, lists (nested ones flattened) in
-  // nums/strs.
+  // A wanted field: scalars land in str/num/boolean/is_null, lists (nested ones flattened, at most
+  // 64 levels deep like skipped values) in nums/strs.
   Status field_value(TableField& f) {
     const char c = peek();
     if (c == '"') return decode_string(f.str);
@@ -349,7 +349,8 @@ class Scanner {
     return number(&f.num);
   }
 
-  Status list_value(TableField& f) {
+  Status list_value(TableField& f, int depth = 0) {
+    if (depth > 64) return fail("nesting deeper than 64 levels");
     ++p_;  // '['
     skip_ws();
     if (peek() == ']') {
@@ -363,7 +364,7 @@ class Scanner {
         f.strs.emplace_back();
         if (Status s = decode_string(f.strs.back()); !s) return s;
       } else if (c == '[') {
-        if (Status s = list_value(f); !s) return s;
+        if (Status s = list_value(f, depth + 1); !s) return s;
       } else if (c == '{') {
         if (Status s = skip_value(); !s) return s;
       } else if (c == 't' || c == 'f' || c == 'n') {
