@@ -74,7 +74,9 @@ FaultSpec parse_one(const YAML::Node& node, const std::string& where) {
     throw ConfigError(where + " = " + config::yaml_to_string(node) + ": expected a mapping with at least `type`");
   }
   for (const auto& kv : node) {
-    const auto key = kv.first.as<std::string>();
+    // A list or mapping as key (YAML's `? [a, b] : v`): as<std::string> would throw yaml-cpp's own error.
+    if (!kv.first.IsScalar()) fail(where, "(key)", config::yaml_to_string(kv.first), "a key must be a string");
+    const auto key = kv.first.Scalar();
     if (!kKeys.count(key)) {
       fail(where, key, config::yaml_to_string(kv.second),
            "unknown key (expected type, level, severity, cameras, rng, coherent, mode, delay_ms, start_s, "
