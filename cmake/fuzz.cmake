@@ -12,6 +12,7 @@
 
 option(FAULTLINE_FUZZ "Build the libFuzzer targets (clang only; every target instrumented, see scripts/fuzz.sh)" OFF)
 set(FAULTLINE_FUZZ_LIST ${CMAKE_BINARY_DIR}/fuzz_targets.txt)
+add_custom_target(faultline_fuzz_replays)  # every fuzz_replay_<name> (scripts/sanitize.sh builds them)
 if(FAULTLINE_FUZZ)
   if(NOT CMAKE_CXX_COMPILER_ID STREQUAL "Clang")
     message(FATAL_ERROR "FAULTLINE_FUZZ needs clang (libFuzzer): configure with -DCMAKE_CXX_COMPILER=clang++")
@@ -40,6 +41,7 @@ function(faultline_add_fuzz_target name)
   target_link_libraries(fuzz_replay_${name} PRIVATE ${ARG_LIBS})
   target_include_directories(fuzz_replay_${name} PRIVATE ${PROJECT_SOURCE_DIR}/tests)
   faultline_warnings(fuzz_replay_${name})
+  add_dependencies(faultline_fuzz_replays fuzz_replay_${name})
   add_test(NAME fuzz_regressions.${name} COMMAND fuzz_replay_${name} ${regressions} ${ARG_CORPUS})
   set_tests_properties(fuzz_regressions.${name} PROPERTIES LABELS fuzz)
 
