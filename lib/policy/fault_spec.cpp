@@ -212,7 +212,12 @@ std::optional<FaultSpec> parse_corruption_shorthand(const std::string& text, con
   node["type"] = text.substr(0, slash);
   if (slash != std::string::npos) {
     const std::string level = text.substr(slash + 1);
-    if (!level.empty() && std::all_of(level.begin(), level.end(), ::isdigit)) node["severity"] = std::stoi(level);
+    // Digits go to `severity` as text: parse_one's integer check refuses what does not fit an int
+    // (std::stoi threw std::out_of_range past the ConfigError handler).
+    const bool digits = !level.empty() && std::all_of(level.begin(), level.end(), [](unsigned char c) {
+      return std::isdigit(c) != 0;
+    });
+    if (digits) node["severity"] = level;
     else node["level"] = level;
   }
   try {
