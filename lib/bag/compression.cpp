@@ -4,6 +4,7 @@
 #include <memory>
 
 #include <lz4frame.h>
+#define ZSTD_STATIC_LINKING_ONLY  // ZSTD_decompressBound (exported by Debian 12's libzstd 1.5)
 #include <zstd.h>
 
 #include <string>
@@ -100,6 +101,18 @@ Status decompress(std::string_view compression, std::string_view in, std::uint64
   }
   if (compression != "zstd" && compression != "lz4") {
     return Status(StatusCode::kUnsupported, "compression '" + std::string(compression) + "'");
+  }
+  // The declared size is only a claim: allocate no more than the compressed bytes can hold, so a
+  // damaged size field costs an error, not gigabytes. LZ4 expands at most 255:1 (a match's length
+  // grows by 255 per byte); zstd's bound reads the frame headers (exact when they carry the size).
+  const std::uint64_t bound = compression == "lz4" ? std::uint64_t{in.size()} * 256
+                                                   : ZSTD_decompressBound(in.data(), in.size());
+  if (bound == ZSTD_CONTENTSIZE_ERROR) return Status(StatusCode::kCorruptData, "zstd: malformed frame");
+  if (expected_size > bound) {
+    return Status(StatusCode::kCorruptData,
+                  std::string(compression) + ": declares " + std::to_string(expected_size) +
+                      " bytes, the " + std::to_string(in.size()) + " compressed bytes hold at most " +
+                      std::to_string(bound));
   }
   out.resize(static_cast<std::size_t>(expected_size));
   if (compression == "lz4") return decompress_lz4(in, out);

@@ -4,6 +4,9 @@
 #include <cstring>
 
 #include "common/simd.hpp"
+#if FAULTLINE_X86_SIMD
+#include <cpuid.h>
+#endif
 
 namespace faultline::common {
 
@@ -20,9 +23,14 @@ namespace {
 #if FAULTLINE_X86_SIMD
 bool supports_avx2() { return __builtin_cpu_supports("avx2"); }
 bool supports_fma() { return __builtin_cpu_supports("fma"); }
-bool supports_f16c() { return __builtin_cpu_supports("f16c"); }
 bool supports_popcnt() { return __builtin_cpu_supports("popcnt"); }
-bool supports_pclmul() { return __builtin_cpu_supports("pclmul"); }
+// CPUID leaf 1, ECX: clang's __builtin_cpu_supports knows neither "f16c" nor "pclmul".
+bool cpuid1_ecx_has(unsigned bit) {
+  unsigned eax = 0, ebx = 0, ecx = 0, edx = 0;
+  return __get_cpuid(1, &eax, &ebx, &ecx, &edx) != 0 && (ecx & bit) != 0;
+}
+bool supports_f16c() { return cpuid1_ecx_has(bit_F16C); }
+bool supports_pclmul() { return cpuid1_ecx_has(bit_PCLMUL); }
 #else
 bool supports_avx2() { return false; }
 bool supports_fma() { return false; }

@@ -223,6 +223,17 @@ FAULTLINE_TARGET("avx2") std::size_t blur_quantise64_avx2(const double* const* r
 }
 
 // Four float32 values (the low or high half of an 8-lane vector) widened, plus the two snow terms, to bytes.
+// _mm_srli_si128 by 0, 4, 8 or 12 bytes. The intrinsic needs a compile-time constant; gcc folds the loop
+// counters below into one, clang 14 refuses to (with constant arguments the switch folds away).
+FAULTLINE_TARGET("avx2") inline __m128i bytes_right(__m128i v, int bytes) {
+  switch (bytes) {
+    case 0: return v;
+    case 4: return _mm_srli_si128(v, 4);
+    case 8: return _mm_srli_si128(v, 8);
+    default: return _mm_srli_si128(v, 12);
+  }
+}
+
 FAULTLINE_TARGET("avx2,fma") inline __m128i finish4(__m128 whitened, __m256d snow, __m256d snow_rot) {
   __m256d v = _mm256_add_pd(_mm256_add_pd(_mm256_cvtps_pd(whitened), snow), snow_rot);
   v = _mm256_min_pd(_mm256_max_pd(v, _mm256_setzero_pd()), _mm256_set1_pd(1.0));
@@ -248,15 +259,15 @@ FAULTLINE_TARGET("avx2,fma") int blend_exact_avx2(const std::uint8_t* src, const
     for (int h = 0; h < 2; ++h) {
       __m256 c[3];
       for (int k = 0; k < 3; ++k) {
-        c[k] = _mm256_div_ps(_mm256_cvtepi32_ps(_mm256_cvtepu8_epi32(_mm_srli_si128(plane[k], 8 * h))), k255f);
+        c[k] = _mm256_div_ps(_mm256_cvtepi32_ps(_mm256_cvtepu8_epi32(bytes_right(plane[k], 8 * h))), k255f);
       }
       const __m256 grey = _mm256_fmadd_ps(c[2], w2, _mm256_fmadd_ps(c[1], w1, _mm256_mul_ps(c[0], w0)));
       const __m256 bright = _mm256_add_ps(_mm256_mul_ps(grey, k15), k05);
       __m256d snow[2], snow_rot[2];
       for (int q = 0; q < 2; ++q) {
         const int shift = 8 * h + 4 * q;
-        const __m128i l4 = _mm_cvtepu8_epi32(_mm_srli_si128(l, shift));
-        const __m128i r4 = _mm_cvtepu8_epi32(_mm_srli_si128(r, shift));
+        const __m128i l4 = _mm_cvtepu8_epi32(bytes_right(l, shift));
+        const __m128i r4 = _mm_cvtepu8_epi32(bytes_right(r, shift));
         snow[q] = _mm256_div_pd(_mm256_cvtepi32_pd(l4), k255);
         snow_rot[q] = _mm256_div_pd(_mm256_cvtepi32_pd(r4), k255);
       }

@@ -58,6 +58,7 @@ JsonRecord::Field& JsonRecord::next_field() {
 }
 
 // Depth 0 = outside, 1 = inside the top-level array, 2 = inside a record, >= 3 = inside an array field.
+constexpr int kMaxDepth = 66;  // 64 levels of arrays inside a field
 class RecordHandler : public rapidjson::BaseReaderHandler<rapidjson::UTF8<>, RecordHandler> {
  public:
   explicit RecordHandler(const RecordFn& fn) : fn_(fn) {}
@@ -68,6 +69,8 @@ class RecordHandler : public rapidjson::BaseReaderHandler<rapidjson::UTF8<>, Rec
       return true;
     }
     if (depth_ == 1) return fail("top-level array holds a nested array, expected objects");
+    // RapidJSON's reader recurses per level: hostile nesting must end before the stack does.
+    if (depth_ >= kMaxDepth) return fail("arrays nested deeper than 64 levels");
     if (depth_ == 2) {
       begin_field().kind = JsonRecord::Kind::kArray;
     }
@@ -213,7 +216,7 @@ Status parse_document(const std::string& path, rapidjson::Document* doc) {
   if (!file) return Status(StatusCode::kNotFound, path + ": table not found");
   std::vector<char> buffer(1 << 16);
   rapidjson::FileReadStream stream(file.get(), buffer.data(), buffer.size());
-  doc->ParseStream<kParseFlags>(stream);
+  doc->ParseStream<kParseFlags | rapidjson::kParseIterativeFlag>(stream);  // no recursion on nesting
   if (doc->HasParseError()) return parse_error(path, doc->GetParseError(), doc->GetErrorOffset(), "");
   if (!doc->IsArray()) return Status(StatusCode::kCorruptData, path + ": expected a JSON array of records");
   return Status::ok();

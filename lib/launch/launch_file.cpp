@@ -26,6 +26,16 @@ using config::yaml_to_string;
   throw ConfigError(file + ": " + key + ": missing");
 }
 
+// A mapping key as text. A key that is itself a list or mapping (YAML's `? [a, b]: v`) is a ConfigError
+// (yaml-cpp's as<std::string> would throw its own bad-conversion error, naming neither file nor key).
+// `where` names the file and the mapping ("launch/x.yaml: nodes[0].params").
+std::string key_text(const YAML::Node& key, const std::string& where) {
+  if (!key.IsScalar()) {
+    throw ConfigError(where + ".(key) = " + yaml_to_string(key) + ": a key must be a string");
+  }
+  return key.Scalar();
+}
+
 bool is_executable(const std::string& path) { return ::access(path.c_str(), X_OK) == 0; }
 
 // Resolves a bare name in bin_dir, then $PATH; a name with '/' is used as is.
@@ -56,14 +66,15 @@ void substitute_tree(YAML::Node node, const EnvLookup& lookup, const std::string
       substitute_tree(node[i], lookup, where + "[" + std::to_string(i) + "]");
     }
   } else if (node.IsMap()) {
-    for (auto kv : node) substitute_tree(kv.second, lookup, where + "." + kv.first.as<std::string>());
+    for (auto kv : node) substitute_tree(kv.second, lookup, where + "." + key_text(kv.first, where));
   }
 }
 
 void check_keys(const YAML::Node& map, const std::set<std::string>& known, const std::string& file,
                 const std::string& prefix) {
   for (const auto& kv : map) {
-    const auto key = kv.first.as<std::string>();
+    const std::string map_name = prefix.empty() ? "(top level)" : prefix.substr(0, prefix.size() - 1);
+    const auto key = key_text(kv.first, file + ": " + map_name);
     if (!known.count(key)) {
       std::string list;
       for (const auto& k : known) list += (list.empty() ? "" : ", ") + k;
@@ -83,7 +94,7 @@ std::map<std::string, std::string> string_map(const YAML::Node& n, const std::st
   if (!n.IsDefined() || n.IsNull()) return out;
   if (!n.IsMap()) fail(file, key, n, "expected a mapping of strings");
   for (const auto& kv : n) {
-    const auto k = kv.first.as<std::string>();
+    const auto k = key_text(kv.first, file + ": " + key);
     out[k] = scalar(kv.second, file, key + "." + k);
   }
   return out;
@@ -208,7 +219,7 @@ LaunchFile parse_launch(const std::string& text, const std::string& path, const 
   if (env.IsDefined() && !env.IsNull()) {
     if (!env.IsMap()) fail(path, "env", env, "expected a mapping of strings");
     for (auto kv : env) {
-      const auto key = kv.first.as<std::string>();
+      const auto key = key_text(kv.first, path + ": env");
       const std::string value = scalar(kv.second, path, "env." + key);
       launch.env[key] = substitute_env(value, options.env, path + ": env." + key);
     }

@@ -74,7 +74,9 @@ FaultSpec parse_one(const YAML::Node& node, const std::string& where) {
     throw ConfigError(where + " = " + config::yaml_to_string(node) + ": expected a mapping with at least `type`");
   }
   for (const auto& kv : node) {
-    const auto key = kv.first.as<std::string>();
+    // A list or mapping as key (YAML's `? [a, b] : v`): as<std::string> would throw yaml-cpp's own error.
+    if (!kv.first.IsScalar()) fail(where, "(key)", config::yaml_to_string(kv.first), "a key must be a string");
+    const auto key = kv.first.Scalar();
     if (!kKeys.count(key)) {
       fail(where, key, config::yaml_to_string(kv.second),
            "unknown key (expected type, level, severity, cameras, rng, coherent, mode, delay_ms, start_s, "
@@ -210,7 +212,12 @@ std::optional<FaultSpec> parse_corruption_shorthand(const std::string& text, con
   node["type"] = text.substr(0, slash);
   if (slash != std::string::npos) {
     const std::string level = text.substr(slash + 1);
-    if (!level.empty() && std::all_of(level.begin(), level.end(), ::isdigit)) node["severity"] = std::stoi(level);
+    // Digits go to `severity` as text: parse_one's integer check refuses what does not fit an int
+    // (std::stoi threw std::out_of_range past the ConfigError handler).
+    const bool digits = !level.empty() && std::all_of(level.begin(), level.end(), [](unsigned char c) {
+      return std::isdigit(c) != 0;
+    });
+    if (digits) node["severity"] = level;
     else node["level"] = level;
   }
   try {

@@ -12,10 +12,13 @@
 #include <sys/stat.h>
 
 #include <cerrno>
+#include <charconv>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <limits>
 #include <memory>
+#include <string_view>
 #include <unordered_map>
 #include <unordered_set>
 
@@ -26,6 +29,11 @@ namespace faultline::scoring {
 namespace {
 
 constexpr unsigned kParseFlags = rapidjson::kParseNanAndInfFlag | rapidjson::kParseFullPrecisionFlag;
+// The results reader takes numbers as text and converts them itself (SubmissionHandler::RawNumber).
+constexpr unsigned kResultsParseFlags = rapidjson::kParseNanAndInfFlag | rapidjson::kParseNumbersAsStringsFlag;
+
+// Containers open at once; results files nest 4 deep ({results: {token: [{translation: [..]}]}}).
+constexpr int kMaxNesting = 128;
 
 Status bad(const std::string& where, const std::string& what) {
   return Status(StatusCode::kInvalidArgument, where + ": " + what);
@@ -225,6 +233,38 @@ class SubmissionHandler : public rapidjson::BaseReaderHandler<rapidjson::UTF8<>,
     }
     return scalar_other();
   }
+  // Numbers arrive as text (kResultsParseFlags) and are dispatched as RapidJSON would: its own
+  // full-precision conversion turns some zeros with large exponents into garbage ("0.00e100" read as
+  // 4e295, clz(0) in DiyFp::Normalize; found by fuzz_results). from_chars rounds correctly, like
+  // Python's float(); out of range goes to +-inf or 0, as Python does.
+  bool RawNumber(const char* s, rapidjson::SizeType len, bool) {
+    const char* end = s + len;
+    const std::string_view text(s, len);
+    if (text == "NaN") return Double(std::numeric_limits<double>::quiet_NaN());
+    if (text == "Infinity") return Double(std::numeric_limits<double>::infinity());
+    if (text == "-Infinity") return Double(-std::numeric_limits<double>::infinity());
+    if (text.find_first_of(".eE") == std::string_view::npos) {
+      if (s[0] == '-') {
+        std::int64_t v = 0;
+        if (auto r = std::from_chars(s, end, v); r.ec == std::errc() && r.ptr == end) {
+          return v >= std::numeric_limits<int>::min() ? Int(static_cast<int>(v)) : Int64(v);
+        }
+      } else {
+        std::uint64_t v = 0;
+        if (auto r = std::from_chars(s, end, v); r.ec == std::errc() && r.ptr == end) {
+          return v <= std::numeric_limits<unsigned>::max() ? Uint(static_cast<unsigned>(v)) : Uint64(v);
+        }
+      }
+    }
+    double d = 0;
+    const auto r = std::from_chars(s, end, d);
+    if (r.ec == std::errc::result_out_of_range) {
+      d = std::strtod(std::string(text).c_str(), nullptr);
+    } else if (r.ec != std::errc() || r.ptr != end) {
+      return fail(bad(name_, "number " + std::string(text) + " does not convert"));
+    }
+    return Double(d);
+  }
   bool Double(double v) { return number(v, false, [&](MetaWriter& w) { return w.Double(v); }); }
   bool Int(int v) { return number(v, true, [&](MetaWriter& w) { return w.Int(v); }); }
   bool Uint(unsigned v) { return number(v, true, [&](MetaWriter& w) { return w.Uint(v); }); }
@@ -301,6 +341,11 @@ class SubmissionHandler : public rapidjson::BaseReaderHandler<rapidjson::UTF8<>,
   }
 
   bool open(bool object) {
+    // RapidJSON's reader recurses per level: hostile nesting must end before the stack does.
+    if (++nesting_ > kMaxNesting) {
+      return fail(bad(name_, "JSON nested deeper than " + std::to_string(kMaxNesting) +
+                                 " levels (Python's json.load gives up near 1000)"));
+    }
     if (meta_depth_ > 0 || (depth_ == 1 && top_key_ == kMeta && skip_ == 0)) {
       if (meta_depth_ == 0) begin_meta();
       ++meta_depth_;
@@ -368,6 +413,7 @@ class SubmissionHandler : public rapidjson::BaseReaderHandler<rapidjson::UTF8<>,
   }
 
   bool close(bool object) {
+    --nesting_;
     if (meta_depth_ > 0) {
       --meta_depth_;
       --depth_;
@@ -502,6 +548,7 @@ class SubmissionHandler : public rapidjson::BaseReaderHandler<rapidjson::UTF8<>,
   int meta_depth_ = 0;
   int depth_ = 0;
   int skip_ = 0;
+  int nesting_ = 0;  // open containers, whatever is done with them
   TopKey top_key_ = kNone;
   bool in_results_ = false, in_box_ = false, saw_results_ = false, saw_meta_ = false;
   std::string sample_;
@@ -545,7 +592,7 @@ Result<Submission> parse_stream(Stream& stream, const std::string& name, const S
   Submission sub;
   Handler handler(name, scope);
   rapidjson::Reader reader;
-  auto res = reader.Parse<kParseFlags>(stream, handler);
+  auto res = reader.Parse<kResultsParseFlags>(stream, handler);
   if (!handler.status().is_ok()) return handler.status();
   if (res.IsError()) {
     const std::string where = text ? describe_offset(*text, res.Offset()) : "offset " + std::to_string(res.Offset());

@@ -332,8 +332,8 @@ class Scanner {
     return nullptr;
   }
 
-  // A wanted field: scalars land in str/num/boolean/is_null, lists (nested ones flattened) in
-  // nums/strs.
+  // A wanted field: scalars land in str/num/boolean/is_null, lists (nested ones flattened, at most
+  // 64 levels deep like skipped values) in nums/strs.
   Status field_value(TableField& f) {
     const char c = peek();
     if (c == '"') return decode_string(f.str);
@@ -349,7 +349,8 @@ class Scanner {
     return number(&f.num);
   }
 
-  Status list_value(TableField& f) {
+  Status list_value(TableField& f, int depth = 0) {
+    if (depth > 64) return fail("nesting deeper than 64 levels");
     ++p_;  // '['
     skip_ws();
     if (peek() == ']') {
@@ -363,7 +364,7 @@ class Scanner {
         f.strs.emplace_back();
         if (Status s = decode_string(f.strs.back()); !s) return s;
       } else if (c == '[') {
-        if (Status s = list_value(f); !s) return s;
+        if (Status s = list_value(f, depth + 1); !s) return s;
       } else if (c == '{') {
         if (Status s = skip_value(); !s) return s;
       } else if (c == 't' || c == 'f' || c == 'n') {
@@ -713,22 +714,43 @@ class Scanner {
 
 }  // namespace
 
+namespace {
+
+// The scan itself; `name` (the path) prefixes errors. `release`: the bytes are a mapping whose
+// scanned pages may be dropped.
+Status scan_table(const char* data, std::size_t size, bool release, const std::string& name,
+                  const std::vector<std::string>& wanted,
+                  const std::function<Status(const TableRecord&, std::size_t)>& on_record,
+                  const RecordFilter& filter) {
+  Scanner scanner(data, data + size, wanted, on_record, filter);
+  scanner.release_scanned_pages(release);
+  Status s = scanner.run();
+  if (s.is_ok()) return s;
+  if (scanner.parse_failed()) {
+    return Status(StatusCode::kCorruptData, name + ": malformed JSON at offset " +
+                                                std::to_string(scanner.error_offset()) + ": " +
+                                                s.message());
+  }
+  return Status(s.code(), name + ": " + s.message());
+}
+
+}  // namespace
+
 Status stream_table(const std::string& path, const std::vector<std::string>& wanted,
                     const std::function<Status(const TableRecord&, std::size_t)>& on_record,
                     const RecordFilter& filter) {
   MappedFile file(path);
   if (!file.opened()) return Status(StatusCode::kNotFound, path + ": table not found");
   const char* data = file.data() ? file.data() : "";
-  Scanner scanner(data, data + file.size(), wanted, on_record, filter);
-  scanner.release_scanned_pages(file.data() != nullptr);
-  Status s = scanner.run();
-  if (s.is_ok()) return s;
-  if (scanner.parse_failed()) {
-    return Status(StatusCode::kCorruptData, path + ": malformed JSON at offset " +
-                                                std::to_string(scanner.error_offset()) + ": " +
-                                                s.message());
-  }
-  return Status(s.code(), path + ": " + s.message());
+  return scan_table(data, file.size(), file.data() != nullptr, path, wanted, on_record, filter);
+}
+
+Status stream_table_bytes(std::string_view bytes, const std::string& name,
+                          const std::vector<std::string>& wanted,
+                          const std::function<Status(const TableRecord&, std::size_t)>& on_record,
+                          const RecordFilter& filter) {
+  return scan_table(bytes.empty() ? "" : bytes.data(), bytes.size(), false, name, wanted, on_record,
+                    filter);
 }
 
 }  // namespace faultline::scoring

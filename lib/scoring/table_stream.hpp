@@ -44,4 +44,11 @@ Status stream_table(const std::string& path, const std::vector<std::string>& wan
                     const std::function<Status(const TableRecord&, std::size_t)>& on_record,
                     const RecordFilter& filter = {});
 
+// The same scan over bytes already in memory (tests and fuzz targets); `name` stands for the path
+// in errors.
+Status stream_table_bytes(std::string_view bytes, const std::string& name,
+                          const std::vector<std::string>& wanted,
+                          const std::function<Status(const TableRecord&, std::size_t)>& on_record,
+                          const RecordFilter& filter = {});
+
 }  // namespace faultline::scoring

@@ -26,6 +26,12 @@ std::size_t ReceivedMessage::size_bytes() const {
   return total;
 }
 
+ReceivedMessage ReceivedMessage::from_frames(const std::vector<std::string_view>& frames) {
+  ReceivedMessage msg;
+  for (const auto f : frames) msg.parts_.emplace_back(f.data(), f.size());
+  return msg;
+}
+
 RawSubscriber::~RawSubscriber() {
   if (socket_.handle() != nullptr) (void)zmq_socket_monitor(socket_.handle(), nullptr, 0);
 }

@@ -54,6 +54,9 @@ class ReceivedMessage {
   StampNs receive_mono_ns() const { return receive_mono_ns_; }
   StampNs receive_realtime_ns() const { return receive_realtime_ns_; }
 
+  // A message made of copies of these frames, as if it had been received (tests and fuzz targets).
+  static ReceivedMessage from_frames(const std::vector<std::string_view>& frames);
+
  private:
   friend class RawSubscriber;
   std::string_view view(std::size_t i) const {

@@ -1,5 +1,6 @@
 // libFuzzer target: arbitrary bytes through the linear and indexed readers and the metadata path.
-// Built only with clang and -fsanitize=fuzzer (tests/bag/CMakeLists.txt).
+// Built by cmake/fuzz.cmake (tests/bag/CMakeLists.txt): fuzz_bag_reader with libFuzzer,
+// fuzz_replay_bag_reader without.
 #include <cstddef>
 #include <cstdint>
 #include <memory>
@@ -13,7 +14,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   ReadOptions options;
   options.verify_data_crc = true;
   options.max_record_bytes = 16 << 20;  // stay far below libFuzzer's malloc limit
-  std::size_t sink = 0;
+  volatile std::size_t sink = 0;        // keeps the reads from being optimised away
   const auto count = [&](const MessageView& m) {
     sink += m.data.size() + (m.schema ? m.schema->data.size() : 0);
     return true;
@@ -27,5 +28,5 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     (void)reader->read_indexed(options, count, [&](const Problem& p) { sink += p.message.size(); });
     (void)reader->read_metadata();
   }
-  return sink == 0xFFFFFFFF ? 1 : 0;
+  return 0;
 }
