@@ -24,8 +24,7 @@ Result<BagInfo> inspect_bag(const std::string& path) {
     switch (static_cast<Opcode>(r.opcode)) {
       case Opcode::kHeader: {
         ByteReader br(r.content);
-        std::string profile;
-        if (br.str(profile)) (void)br.str(info.library);
+        if (br.str(info.profile)) (void)br.str(info.library);
         break;
       }
       case Opcode::kChunk: {

@@ -26,6 +26,7 @@ struct TopicInfo {
 
 struct BagInfo {
   std::uint64_t file_bytes = 0;
+  std::string profile;                       // Header.profile: "" or "ros2"
   std::string library;
   std::vector<TopicInfo> topics;             // by channel id
   std::vector<std::string> schemas;          // names, by schema id
