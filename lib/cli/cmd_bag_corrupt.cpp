@@ -20,17 +20,15 @@ using ull = unsigned long long;
 
 int run(int argc, char** argv) {
   CLI::App app{
-      "Apply the injector's faults to the image topics of a recorded ROS 2 bag (a rosbag2 "
-      "directory or a single "
-      ".mcap) and write the same kind of bag: every other topic is copied byte for byte with its "
-      "schema and channel "
-      "metadata, message order and times are kept, and a diagnostic_msgs/DiagnosticArray faults "
-      "topic says what was "
-      "done to each frame (with the seed `faultline corrupt --seed` reproduces it from). Faulted "
-      "topics: "
-      "sensor_msgs/CompressedImage (JPEG, PNG) and sensor_msgs/Image (bgr8, rgb8, mono8, yuv422). "
-      "Nothing appears "
-      "under --out until the bag is complete."};
+      "Apply the injector's faults to the image topics of a recorded bag and write the same kind "
+      "of "
+      "bag. Input: a ROS 2 bag (a rosbag2 directory or a single .mcap) or a Faultline recording. "
+      "Every other topic is copied byte for byte with its schema and channel metadata, message "
+      "order and times are kept, and a faults topic says what was done to each frame "
+      "(diagnostic_msgs/DiagnosticArray in ROS 2 bags, with the seed `faultline corrupt --seed` "
+      "reproduces a frame from; the injector's FaultEvent in Faultline recordings). Faulted "
+      "topics: sensor_msgs/CompressedImage (JPEG, PNG), sensor_msgs/Image (bgr8, rgb8, mono8, "
+      "yuv422), Faultline camera topics. Nothing appears under --out until the bag is complete."};
   runtime::BagCorruptConfig cfg;
   std::vector<std::string> fault_args;
   std::string schedule, rng_name = "fast";
@@ -119,5 +117,5 @@ int run(int argc, char** argv) {
 
 }  // namespace
 FAULTLINE_COMMAND(bag_corrupt, "bag corrupt",
-                  "apply faults to the image topics of a recorded ROS 2 bag", &run);
+                  "apply faults to the image topics of a recorded ROS 2 or Faultline bag", &run);
 }  // namespace faultline::cli

@@ -25,12 +25,15 @@
 #include "bag/reader.hpp"
 #include "bag/rosbag2.hpp"
 #include "bag/writer.hpp"
+#include "camera_frame.pb.h"
 #include "codec/jpeg.hpp"
 #include "common/config.hpp"
+#include "fault.pb.h"
 #include "policy/fault_engine.hpp"
 #include "policy/temporal_draws.hpp"
 #include "ros2/messages.hpp"
 #include "ros2/schema.hpp"
+#include "runtime/bag_layout.hpp"
 
 namespace faultline::runtime {
 namespace {
@@ -59,14 +62,24 @@ struct InputChannel {
   std::optional<bag::Schema> schema;  // none for a schemaless channel
 };
 
+// The transport topic of a Faultline camera-frame replay channel ("" for any other channel).
+std::string replay_topic(const InputChannel& c) {
+  const auto it = c.channel.metadata.find(kMetaTopic);
+  if (c.channel.message_encoding != kMultipartEncoding || it == c.channel.metadata.end()) return "";
+  return it->second;
+}
+
 struct InputFile {
   std::string path;
   std::string profile;
   std::map<std::uint16_t, InputChannel> channels;
+  std::vector<bag::Metadata> metadata;  // Metadata records (indexed files only)
 };
 
 struct InputBag {
   bool rosbag2 = false;
+  bool faultline =
+      false;  // Faultline's own profile: camera frames on faultline-multipart replay channels
   std::string path;
   YAML::Node metadata;         // rosbag2: metadata.yaml as read, kept for the output's
   std::uint64_t messages = 0;  // total as the input says (0 = unknown)
@@ -99,6 +112,10 @@ Result<InputFile> scan_file(const std::string& path) {
       const auto it = summary.schemas.find(c.schema_id);
       add(c, it == summary.schemas.end() ? nullptr : &it->second);
     }
+    auto metadata = (*reader)->read_metadata();
+    if (!metadata)
+      return Status(metadata.status().code(), path + ": " + metadata.status().message());
+    file.metadata = std::move(metadata).value();
     return file;
   }
   // Not indexed (a recording cut short): the channels that have messages, from one linear pass.
@@ -148,13 +165,23 @@ Result<InputBag> open_input(const std::string& path) {
     return Status(StatusCode::kNotFound,
                   path + ": no such bag (expected a rosbag2 directory or an .mcap file)");
   }
+  // A ROS 2 bag (profile ros2), or a Faultline recording (replay channels with faultline.topic
+  // metadata).
+  const auto is_faultline = [](const InputFile& f) {
+    for (const auto& [id, c] : f.channels) {
+      if (c.channel.metadata.count(kMetaTopic) != 0) return true;
+    }
+    return false;
+  };
+  in.faultline = in.files.front().profile.empty() && is_faultline(in.files.front());
   for (const auto& f : in.files) {
-    if (f.profile != "ros2") {
+    const bool faultline = f.profile.empty() && is_faultline(f);
+    if ((f.profile != "ros2" && !faultline) || faultline != in.faultline) {
       return Status(
           StatusCode::kUnsupported,
           f.path + ": MCAP profile '" + f.profile +
-              "': bag corrupt reads ROS 2 bags (profile ros2); for Faultline recordings use "
-              "`bag convert --corrupt` or the injector");
+              "': bag corrupt reads ROS 2 bags (profile ros2) and Faultline recordings (replay "
+              "channels with faultline.topic metadata)");
     }
   }
   if (!in.rosbag2) {
@@ -297,16 +324,78 @@ Status bgr_to_compressed(const cv::Mat& bgr, int quality, Codecs& codecs,
 // ---------------------------------------------------------------------------------------------------------------
 // One message in flight.
 
-struct ImageMessage {  // one of the two, by kind
-  bool compressed = true;
+struct ImageMessage {      // one of the three, by kind
+  bool faultline = false;  // a Faultline camera frame: CameraFrame header + payload
+  bool compressed = true;  // else a ROS 2 CompressedImage (true) or Image (false)
   ros2::CompressedImage c;
   ros2::Image raw;
+  msgs::CameraFrame frame;
+  std::string payload;
   ros2::Header& header() { return compressed ? c.header : raw.header; }
-  std::string serialize() const { return compressed ? ros2::serialize(c) : ros2::serialize(raw); }
+  std::string serialize() {
+    if (faultline) {
+      frame.set_payload_bytes(static_cast<std::uint32_t>(payload.size()));
+      return encode_multipart(frame.SerializeAsString(), payload);
+    }
+    return compressed ? ros2::serialize(c) : ros2::serialize(raw);
+  }
+  // A raw Faultline frame seen as a sensor_msgs/Image (the same fields), to share the conversions.
+  ros2::Image raw_view() const {
+    ros2::Image img;
+    img.width = frame.width();
+    img.height = frame.height();
+    img.encoding = frame.encoding();
+    img.step = frame.step();
+    img.data = payload;
+    return img;
+  }
+  bool jpeg_frame() const { return frame.encoding().empty() || frame.encoding() == "jpeg"; }
 };
+
+// FaultState as the injector fills it (runtime/engine_policy.cpp), from a plan after render().
+msgs::FaultState fault_state(const policy::FramePlan& plan, const Status& error) {
+  msgs::FaultState state;
+  switch (plan.action) {
+    case policy::Action::Pass:
+      state.set_action(msgs::FAULT_ACTION_PASS);
+      break;
+    case policy::Action::Corrupt:
+      state.set_action(msgs::FAULT_ACTION_CORRUPT);
+      break;
+    case policy::Action::Drop:
+      state.set_action(msgs::FAULT_ACTION_DROP);
+      break;
+    case policy::Action::Black:
+      state.set_action(msgs::FAULT_ACTION_BLACK);
+      break;
+    case policy::Action::Freeze:
+      state.set_action(msgs::FAULT_ACTION_FREEZE);
+      break;
+    case policy::Action::Delay:
+      state.set_action(msgs::FAULT_ACTION_DELAY);
+      break;
+  }
+  for (const auto& f : plan.faults) {
+    msgs::ActiveFault* a = state.add_faults();
+    a->set_name(f.name);
+    a->set_severity(static_cast<std::uint32_t>(f.severity));
+    a->set_seed(f.seed);
+    a->set_rng(f.rng);
+    for (const auto& [k, v] : f.params) (*a->mutable_params())[k] = v;
+  }
+  if (!error
+           .is_ok()) {  // not applied: the frame went through unchanged, as the injector reports it
+    state.set_action(msgs::FAULT_ACTION_PASS);
+    msgs::ActiveFault* a = state.add_faults();
+    a->set_name("render_error");
+    (*a->mutable_params())["status_code"] = static_cast<double>(error.code());
+  }
+  return state;
+}
 
 struct FaultedTopic {
   std::string topic;
+  bool faultline = false;  // Faultline replay channel (CameraFrame + payload)
   bool compressed = true;
   int camera = 0;  // engine slot
 };
@@ -322,6 +411,7 @@ struct Job {
   policy::FramePlan plan;
   ros2::Header header;
   bool header_ok = false;
+  std::optional<msgs::CameraFrame> frame;  // Faultline frames: the parsed header
   std::optional<std::string>
       replacement;                    // new message bytes (corrupt, black, delay with corruption)
   std::optional<ImageMessage> good;   // this frame's output image, for a later freeze
@@ -336,9 +426,18 @@ struct Worker {
       nullptr;  // renders corruptions (the shared one when faults are coherent)
 };
 
-Status decode_message(std::string_view data, bool compressed, ImageMessage& m) {
+Status decode_message(std::string_view data, const FaultedTopic& topic, ImageMessage& m) {
+  const bool compressed = topic.compressed;
   m.compressed = compressed;
-  if (compressed) {
+  m.faultline = topic.faultline;
+  if (topic.faultline) {
+    auto parts = decode_multipart(data);
+    if (!parts) return parts.status();
+    if (!m.frame.ParseFromArray(parts->header.data(), static_cast<int>(parts->header.size()))) {
+      return Status(StatusCode::kCorruptData, "CameraFrame header does not parse");
+    }
+    m.payload.assign(parts->payload.data(), parts->payload.size());
+  } else if (compressed) {
     auto r = ros2::deserialize<ros2::CompressedImage>(data);
     if (!r) return r.status();
     m.c = std::move(r).value();
@@ -351,10 +450,27 @@ Status decode_message(std::string_view data, bool compressed, ImageMessage& m) {
 }
 
 Status to_bgr(const ImageMessage& m, Codecs& codecs, cv::Mat& bgr) {
+  if (m.faultline) {
+    if (!m.jpeg_frame()) return image_to_bgr(m.raw_view(), bgr);
+    return codecs.decoder.decode(reinterpret_cast<const std::uint8_t*>(m.payload.data()),
+                                 m.payload.size(), bgr);
+  }
   return m.compressed ? compressed_to_bgr(m.c, codecs, bgr) : image_to_bgr(m.raw, bgr);
 }
 
 Status from_bgr(const cv::Mat& bgr, int quality, Codecs& codecs, ImageMessage& m) {
+  if (m.faultline) {
+    if (m.jpeg_frame()) {
+      auto jpeg = codecs.encoder.encode(bgr, quality);
+      if (!jpeg) return jpeg.status();
+      m.payload.assign(reinterpret_cast<const char*>(jpeg->data), jpeg->size);
+    } else {
+      ros2::Image img = m.raw_view();
+      bgr_to_image(bgr, img);
+      m.payload = std::move(img.data);
+    }
+    return Status::ok();
+  }
   if (m.compressed) return bgr_to_compressed(bgr, quality, codecs, m.c);
   bgr_to_image(bgr, m.raw);
   return Status::ok();
@@ -363,16 +479,24 @@ Status from_bgr(const cv::Mat& bgr, int quality, Codecs& codecs, ImageMessage& m
 // Decode, render and encode one frame of a faulted topic (any worker thread; touches only the job
 // and `w`).
 void process(Job& job, const FaultedTopic& topic, bool keep_good, int quality, Worker& w) {
-  const char* type = topic.compressed ? kCompressedType : kImageType;
-  ros2::CdrReader hr(job.data, type);
-  ros2::decode(hr, job.header);
-  job.header_ok = hr.ok();
+  if (topic.faultline) {
+    job.header_ok = job.frame.has_value();
+    if (job.frame) {
+      job.header = {ros2::time_from_ns(job.frame->header().capture_stamp_ns()),
+                    job.frame->header().frame_id()};
+    }
+  } else {
+    const char* type = topic.compressed ? kCompressedType : kImageType;
+    ros2::CdrReader hr(job.data, type);
+    ros2::decode(hr, job.header);
+    job.header_ok = hr.ok();
+  }
   const policy::Action action = job.plan.action;
   if (action == policy::Action::Drop) return;
   const bool new_pixels = job.plan.needs_pixels();
   if (!new_pixels && !keep_good) return;
   ImageMessage m;
-  if (Status s = decode_message(job.data, topic.compressed, m); !s) {
+  if (Status s = decode_message(job.data, topic, m); !s) {
     if (new_pixels) job.error = s;
     return;
   }
@@ -402,6 +526,7 @@ void process(Job& job, const FaultedTopic& topic, bool keep_good, int quality, W
     job.black = std::move(m);  // used only when the topic has no good frame yet
     return;
   }
+  if (m.faultline) *m.frame.mutable_fault() = fault_state(job.plan, Status::ok());
   job.replacement = m.serialize();
   if (action != policy::Action::Black) job.good = std::move(m);
 }
@@ -431,33 +556,38 @@ std::string format_param(double v) {
   return buf;
 }
 
+// What was done to one frame, in the layout `bag convert --format ros2` writes its
+// /faultline/faults reports with (runtime/ros2_convert.cpp): name faultline<topic>, hardware_id the
+// frame_id, message the action and faults, values action, source_seq, topic, delay_ns and per fault
+// <name>.severity, .seed, .rng and its parameters.
 ros2::DiagnosticArray fault_event(const Job& job, const FaultedTopic& topic,
                                   const std::string& action, const std::string& why) {
   ros2::DiagnosticArray a;
   a.header = job.header_ok ? job.header : ros2::Header{ros2::time_from_ns(job.log_ns), ""};
   ros2::DiagnosticStatus s;
   const policy::Action act = job.plan.action;
-  s.level = !job.error.is_ok() || act == policy::Action::Drop || act == policy::Action::Black ||
-                    act == policy::Action::Freeze
-                ? ros2::DiagnosticStatus::kError
+  const bool error = !job.error.is_ok() || act == policy::Action::Drop ||
+                     act == policy::Action::Black || act == policy::Action::Freeze;
+  s.level = error                         ? ros2::DiagnosticStatus::kError
             : act == policy::Action::Pass ? ros2::DiagnosticStatus::kOk
                                           : ros2::DiagnosticStatus::kWarn;
-  s.name = topic.topic;
-  s.message = why.empty() ? action : action + ": " + why;
+  s.name = "faultline" + topic.topic;
   s.hardware_id = a.header.frame_id;
-  s.values.push_back({"source_seq", std::to_string(job.source_seq)});
+  s.message = action;
+  for (const auto& f : job.plan.faults)
+    s.message += " " + f.name + "/" + std::to_string(f.severity);
+  if (!why.empty()) s.message += ": " + why;
   s.values.push_back({"action", action});
-  s.values.push_back({"camera", policy::kCameraNames[topic.camera]});
-  if (job.plan.delay_ns > 0) s.values.push_back({"delay_ns", std::to_string(job.plan.delay_ns)});
-  s.values.push_back({"faults", std::to_string(job.plan.faults.size())});
-  for (std::size_t k = 0; k < job.plan.faults.size(); ++k) {
-    const auto& f = job.plan.faults[k];
-    const std::string p = "fault." + std::to_string(k) + ".";
-    s.values.push_back({p + "type", f.name});
-    s.values.push_back({p + "severity", std::to_string(f.severity)});
-    s.values.push_back({p + "seed", std::to_string(f.seed)});
-    s.values.push_back({p + "rng", f.rng});
-    for (const auto& [key, value] : f.params) s.values.push_back({p + key, format_param(value)});
+  s.values.push_back({"source_seq", std::to_string(job.source_seq)});
+  s.values.push_back({"topic", topic.topic});
+  if (act == policy::Action::Delay)
+    s.values.push_back({"delay_ns", std::to_string(job.plan.delay_ns)});
+  for (const auto& f : job.plan.faults) {
+    s.values.push_back({f.name + ".severity", std::to_string(f.severity)});
+    s.values.push_back({f.name + ".seed", std::to_string(f.seed)});
+    s.values.push_back({f.name + ".rng", f.rng});
+    for (const auto& [key, value] : f.params)
+      s.values.push_back({f.name + "." + key, format_param(value)});
   }
   a.status.push_back(std::move(s));
   return a;
@@ -523,9 +653,12 @@ class Corrupter {
 Status Corrupter::plan_topics() {
   // Topic -> (schema name, message encoding) over every file.
   std::map<std::string, std::set<std::pair<std::string, std::string>>> types;
+  std::set<std::string>
+      camera_topics;  // Faultline bags: transport topics of camera-frame replay channels
   for (const auto& f : in_.files) {
     for (const auto& [id, c] : f.channels) {
       types[c.channel.topic].insert({c.schema ? c.schema->name : "", c.channel.message_encoding});
+      if (in_.faultline && !replay_topic(c).empty()) camera_topics.insert(replay_topic(c));
     }
   }
   if (types.count(config_.faults_topic) != 0) {
@@ -539,30 +672,33 @@ Status Corrupter::plan_topics() {
   }
   std::array<bool, policy::kNumCameras> taken{};
   for (const auto& name : order) {
-    const auto it = types.find(name);
-    if (it == types.end()) {
-      std::string list;
-      for (const auto& [t, unused] : types) list += (list.empty() ? "" : ", ") + t;
-      return Status(StatusCode::kInvalidArgument,
-                    "topic " + name + " is not in " + in_.path + " (its topics: " + list + ")");
-    }
-    if (it->second.size() != 1) {
-      return Status(StatusCode::kInvalidArgument,
-                    "topic " + name + " has channels of several types in " + in_.path);
-    }
-    const auto& [schema, encoding] = *it->second.begin();
-    const std::string type = normalised_type(schema);
-    if ((type != kCompressedType && type != kImageType) || encoding != "cdr") {
-      return Status(StatusCode::kInvalidArgument,
-                    "topic " + name + " has type '" + schema + "' (message encoding '" + encoding +
-                        "'): bag corrupt faults sensor_msgs/msg/CompressedImage and "
-                        "sensor_msgs/msg/Image topics "
-                        "(cdr) only");
-    }
     FaultedTopic t;
     t.topic = name;
-    t.compressed = type == kCompressedType;
     t.camera = -1;
+    const auto it = types.find(name);
+    if (camera_topics.count(name) != 0) {
+      t.faultline =
+          true;  // a Faultline camera topic: its replay channel (the view channel stays as it is)
+    } else if (it == types.end()) {
+      std::string list;
+      for (const auto& [known, unused] : types) list += (list.empty() ? "" : ", ") + known;
+      return Status(StatusCode::kInvalidArgument,
+                    "topic " + name + " is not in " + in_.path + " (its topics: " + list + ")");
+    } else if (it->second.size() != 1) {
+      return Status(StatusCode::kInvalidArgument,
+                    "topic " + name + " has channels of several types in " + in_.path);
+    } else {
+      const auto& [schema, encoding] = *it->second.begin();
+      const std::string type = normalised_type(schema);
+      if ((type != kCompressedType && type != kImageType) || encoding != "cdr") {
+        return Status(
+            StatusCode::kInvalidArgument,
+            "topic " + name + " has type '" + schema + "' (message encoding '" + encoding +
+                "'): bag corrupt faults sensor_msgs/msg/CompressedImage and sensor_msgs/msg/Image "
+                "topics (cdr) and Faultline camera topics only");
+      }
+      t.compressed = type == kCompressedType;
+    }
     std::string upper = name;
     std::transform(upper.begin(), upper.end(), upper.begin(),
                    [](unsigned char ch) { return std::toupper(ch); });
@@ -659,6 +795,14 @@ Status Corrupter::open_output() {
 }
 
 Status Corrupter::add_channels() {
+  // Metadata records, each distinct one once (a split bag's files may repeat them).
+  std::set<std::pair<std::string, bag::KeyValueMap>> metadata;
+  for (const auto& f : in_.files) {
+    for (const auto& m : f.metadata) {
+      if (!metadata.insert({m.name, m.metadata}).second) continue;
+      if (Status s = writer_->write_metadata(m.name, m.metadata); !s) return s;
+    }
+  }
   // Channels by (topic, encoding, schema, metadata): a split bag's files repeat them.
   std::map<std::string, std::uint16_t> by_key;
   for (std::size_t f = 0; f < in_.files.size(); ++f) {
@@ -679,11 +823,20 @@ Status Corrupter::add_channels() {
         if (!out) return out.status();
         it = by_key.emplace(key, *out).first;
         channel_topic_[*out] = c.channel.topic;
-        const auto t = topic_index_.find(c.channel.topic);
+        const auto t = topic_index_.find(in_.faultline ? replay_topic(c) : c.channel.topic);
         if (t != topic_index_.end()) faulted_channel_[*out] = t->second;
       }
       out_channel_[{f, id}] = it->second;
     }
+  }
+  if (in_.faultline) {  // the injector's own events, as a replay channel `bag play` republishes
+    auto channel = writer_->channel_for<msgs::FaultEvent>(
+        config_.faults_topic, {{kMetaTopic, config_.faults_topic},
+                               {kMetaFrames, "2"},
+                               {kMetaType, msgs::FaultEvent::descriptor()->full_name()}});
+    if (!channel) return channel.status();
+    faults_channel_ = *channel;
+    return Status::ok();
   }
   auto definition = ros2::ros2msg_definition(kDiagnosticType);
   if (!definition) return definition.status();
@@ -725,7 +878,17 @@ Status Corrupter::write_frame(Job& job) {
     auto& good = last_good_[static_cast<std::size_t>(job.topic)];
     ImageMessage m = good ? *good : *job.black;
     if (!good) why = "no earlier frame: black";
-    m.header() = job.header;
+    if (m.faultline) {  // the current frame's header with the last good image's layout and payload
+      msgs::CameraFrame header = *job.frame;
+      header.set_encoding(m.frame.encoding());
+      header.set_width(m.frame.width());
+      header.set_height(m.frame.height());
+      header.set_step(m.frame.step());
+      *header.mutable_fault() = fault_state(job.plan, Status::ok());
+      m.frame = std::move(header);
+    } else {
+      m.header() = job.header;
+    }
     frozen = m.serialize();
     out = frozen;
     ++counts_.frozen;
@@ -749,7 +912,26 @@ Status Corrupter::write_frame(Job& job) {
     if (Status s = write(job.out_channel, job.sequence, log_ns, publish_ns, out); !s) return s;
     ++topic_counts_[topic.topic];
   }
-  const std::string event = ros2::serialize(fault_event(job, topic, action, why));
+  std::string event;
+  if (topic.faultline) {  // the injector's FaultEvent (bag_convert.cpp writes the same)
+    msgs::FaultEvent e;
+    auto* h = e.mutable_header();
+    h->set_capture_stamp_ns(job.frame ? job.frame->header().capture_stamp_ns() : job.log_ns);
+    h->set_frame_id(job.header.frame_id);
+    h->set_seq(counts_.fault_events + 1);
+    h->set_publisher("bag_corrupt");
+    h->set_publish_stamp_ns(job.log_ns);
+    if (job.frame) {
+      e.set_camera(job.frame->camera());
+      e.set_sample_data_token(job.frame->sample_data_token());
+      e.set_sample_token(job.frame->sample_token());
+    }
+    e.set_source_seq(job.source_seq);
+    *e.mutable_state() = fault_state(job.plan, job.error);
+    event = e.SerializeAsString();
+  } else {
+    event = ros2::serialize(fault_event(job, topic, action, why));
+  }
   if (Status s = write(faults_channel_, static_cast<std::uint32_t>(counts_.fault_events + 1),
                        job.log_ns, job.log_ns, event);
       !s) {
@@ -822,6 +1004,19 @@ Status Corrupter::on_message(std::size_t file, const bag::MessageView& m) {
     info.camera = policy::kCameraNames[topics_[t].camera];
     info.source_seq = job.source_seq;
     info.capture_stamp_ns = m.log_time_ns;
+    if (topics_[t].faultline) {  // the frame's own seq, stamp and key-frame flag, as the injector
+                                 // sees them
+      auto parts = decode_multipart(m.data);
+      msgs::CameraFrame frame;
+      if (parts &&
+          frame.ParseFromArray(parts->header.data(), static_cast<int>(parts->header.size()))) {
+        info.source_seq = frame.source_seq() != 0 ? frame.source_seq() : frame.header().seq();
+        info.capture_stamp_ns = frame.header().capture_stamp_ns();
+        info.is_key_frame = frame.is_key_frame();
+        job.source_seq = info.source_seq;
+        job.frame = std::move(frame);
+      }
+    }
     job.plan = engine_->decide(info);
     ++batch_frames_;
   }

@@ -1,29 +1,35 @@
 // `faultline bag corrupt`: the injector's fault engine applied offline to the image topics of a
-// user's ROS 2 bag (a rosbag2 directory or a single .mcap with profile "ros2"), written as the same
-// kind of bag.
+// recorded bag, written as the same kind of bag. Inputs: a ROS 2 bag (a rosbag2 directory or a
+// single .mcap with profile "ros2") or a Faultline recording (camera frames on faultline-multipart
+// replay channels, bag_layout.hpp).
 //
 // - Every message of a topic that is not faulted is copied byte for byte (data, sequence, log and
 // publish time),
-//   and every channel keeps its topic, message encoding, metadata and schema (name, encoding,
-//   text). Messages keep their file order; a rosbag2 directory's files are read in metadata.yaml's
-//   order into one output file.
-// - Faulted topics (sensor_msgs/msg/CompressedImage or sensor_msgs/msg/Image in bgr8, rgb8, mono8
-// or yuv422)
-//   go through policy::FaultEngine. Each faulted topic is one engine camera (a topic naming a
+//   every channel keeps its topic, message encoding, metadata and schema (name, encoding, text),
+//   and the Metadata records are copied. Messages keep their file order; a rosbag2 directory's
+//   files are read in metadata.yaml's order into one output file.
+// - Faulted topics: sensor_msgs/msg/CompressedImage (JPEG, PNG) or sensor_msgs/msg/Image in bgr8,
+// rgb8, mono8 or
+//   yuv422; in a Faultline recording, a camera topic (its replay channel; the Foxglove view channel
+//   is copied as it is). Each faulted topic is one policy::FaultEngine camera (a topic naming a
 //   nuScenes camera, e.g. /CAM_FRONT/image_rect_compressed, takes that camera's slot so numpy-mode
 //   camera_crash/frame_lost draws match RoboBEV's; the others take the free slots in order), so at
-//   most kNumCameras topics per run. A frame's source_seq is its 1-based index on its topic and its
-//   time is its log time, so the same bag, faults and seed give the same output bytes whatever
-//   --threads is. A pass frame keeps its bytes; a corrupted or black frame is re-encoded (JPEG at
-//   jpeg_quality, PNG as PNG, raw images in their own encoding and row step); a frozen frame
-//   carries the topic's last good image under its own header; a dropped frame is absent; a delayed
-//   frame has its log and publish time moved by the delay (it keeps its place in the file).
-// - A faults topic (diagnostic_msgs/msg/DiagnosticArray) gets one message per frame of a faulted
-// topic, at that
-//   frame's log time: level OK (pass), WARN (corrupt, delay) or ERROR (drop, black, freeze,
-//   undecodable); name = the topic; message = the action; values = source_seq, action and, per
-//   applied fault k, fault.k.type, .severity, .seed (the effective seed, what `faultline corrupt
-//   --seed` takes), .rng and its draws.
+//   most kNumCameras topics per run. A ROS 2 frame's source_seq is its 1-based index on its topic
+//   and its time its log time; a Faultline frame uses its header's source_seq, capture stamp and
+//   key-frame flag, so it gets the seeds the live injector would draw. The same bag, faults and
+//   seed give the same output bytes whatever --threads is. A pass frame keeps its bytes; a
+//   corrupted or black frame is re-encoded (JPEG at jpeg_quality, PNG as PNG, raw images in their
+//   own encoding and row step; a Faultline frame also gets its FaultState); a frozen frame carries
+//   the topic's last good image under its own header; a dropped frame is absent; a delayed frame
+//   has its log and publish time moved by the delay (it keeps its place in the file).
+// - A faults topic gets one message per frame of a faulted topic, at that frame's log time. ROS 2
+// bags:
+//   diagnostic_msgs/msg/DiagnosticArray as `bag convert --format ros2` writes it: level OK (pass),
+//   WARN (corrupt, delay) or ERROR (drop, black, freeze, undecodable); name faultline<topic>;
+//   hardware_id the frame_id; message the action and faults ("corrupt fog/3"); values action,
+//   source_seq, topic, delay_ns and per applied fault <name>.severity, <name>.seed (the effective
+//   seed, what `faultline corrupt --seed` takes), <name>.rng and its draws. Faultline recordings:
+//   the injector's FaultEvent on a replay channel.
 // - A frame that cannot be decoded (bad CDR, unknown encoding, bad JPEG) while its pixels must
 // change is copied
 //   unchanged, counted and reported on the faults topic; it never stops the run.
@@ -66,9 +72,10 @@ struct BagCorruptCounts {
   std::uint64_t messages_out = 0;  // messages written, fault events included
   std::uint64_t passthrough = 0;   // messages of topics that are not faulted (copied)
   std::uint64_t frames = 0;        // messages of faulted topics
-  std::uint64_t unchanged = 0;     // ... written with their original bytes (pass)
+  std::uint64_t unchanged = 0;     // ... written with their original bytes (pass, undecodable)
   std::uint64_t corrupted = 0;     // ... re-encoded with corrupted pixels
-  std::uint64_t black = 0, frozen = 0, delayed = 0;
+  std::uint64_t black = 0, frozen = 0;
+  std::uint64_t delayed = 0;       // ... of the unchanged and corrupted ones, moved in time
   std::uint64_t dropped = 0;       // injected drops (absent from the output)
   std::uint64_t undecodable = 0;   // needed new pixels but could not be decoded: copied unchanged
   std::uint64_t fault_events = 0;  // messages on the faults topic

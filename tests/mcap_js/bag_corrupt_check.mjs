@@ -287,12 +287,18 @@ async function main() {
   for (const ev of events) {
     const st = ev.status[0];
     const v = Object.fromEntries(st.values.map((kv) => [kv.key, kv.value]));
-    const topic = st.name;
+    const topic = v.topic;
     const i = seen.get(topic) ?? 0;
     seen.set(topic, i + 1);
-    if (v.action !== "corrupt" || v["fault.0.rng"] !== "numpy") fail(`${topic} frame ${i}: event ${JSON.stringify(v)}`);
     const tp = TOPICS.find((t) => t.topic === topic);
-    if (v["fault.0.type"] !== tp.fault.split(":")[0]) fail(`${topic}: event type ${v["fault.0.type"]}`);
+    if (!tp || !tp.fault) fail(`fault event names topic ${topic}`);
+    const f = tp.fault.split(":")[0];  // the fault's values are "<name>.severity", "<name>.seed", ...
+    if (v.action !== "corrupt" || v[`${f}.rng`] !== "numpy" || v[`${f}.seed`] === undefined) {
+      fail(`${topic} frame ${i}: event ${JSON.stringify(v)}`);
+    }
+    if (st.name !== `faultline${topic}` || st.level !== 1 || v.source_seq !== String(i + 1)) {
+      fail(`${topic} frame ${i}: event name ${st.name}, level ${st.level}, source_seq ${v.source_seq}`);
+    }
     const src = a.reader(topic).readMessage(a.byTopic(topic)[i].data);
     const outMsg = b.byTopic(topic)[i];
     const dst = b.reader(topic).readMessage(outMsg.data);
@@ -301,8 +307,8 @@ async function main() {
     if (outMsg.logTime !== a.byTopic(topic)[i].logTime) fail(`${topic} frame ${i}: log time changed`);
     const dir = join(work, "expected");
     mkdirSync(dir, { recursive: true });
-    const corrupt = (input, output) => run(["corrupt", "--type", v["fault.0.type"], "--severity", v["fault.0.severity"],
-      "--rng", "numpy", "--seed", v["fault.0.seed"], "--in", input, "--out", output]);
+    const corrupt = (input, output) => run(["corrupt", "--type", f, "--severity", v[`${f}.severity`],
+      "--rng", "numpy", "--seed", v[`${f}.seed`], "--in", input, "--out", output]);
     if (tp.type === "sensor_msgs/msg/CompressedImage") {
       const input = join(dir, `in_${compared}.jpg`), expected = join(dir, `out_${compared}.jpg`);
       writeFileSync(input, src.data);

@@ -14,16 +14,23 @@
 #include <opencv2/imgproc.hpp>
 #include <sstream>
 
+#include "bag/proto_schema.hpp"
 #include "bag/reader.hpp"
 #include "bag/rosbag2.hpp"
 #include "bag/writer.hpp"
+#include "camera_frame.pb.h"
 #include "codec/jpeg.hpp"
 #include "common/config.hpp"
 #include "corruption/corrupt.hpp"
+#include "fault.pb.h"
 #include "faultline_tool.hpp"
+#include "foxglove/CompressedImage.pb.h"
+#include "policy/seeding.hpp"
+#include "rng/fast_rng.hpp"
 #include "rng/numpy_legacy.hpp"
 #include "ros2/messages.hpp"
 #include "ros2/schema.hpp"
+#include "runtime/bag_layout.hpp"
 
 namespace faultline::runtime {
 namespace {
@@ -135,7 +142,13 @@ std::map<std::string, std::string> event_values(const std::string& cdr) {
   std::map<std::string, std::string> v;
   if (!a || a->status.size() != 1) return v;
   for (const auto& kv : a->status[0].values) v[kv.key] = kv.value;
+  for (const auto& kv : a->status[0].values) {  // the one fault's name, from its "<name>.seed" key
+    if (kv.key.size() > 5 && kv.key.compare(kv.key.size() - 5, 5, ".seed") == 0) {
+      v["fault"] = kv.key.substr(0, kv.key.size() - 5);
+    }
+  }
   v["name"] = a->status[0].name;
+  v["hardware_id"] = a->status[0].hardware_id;
   v["message"] = a->status[0].message;
   v["level"] = std::to_string(a->status[0].level);
   return v;
@@ -228,6 +241,8 @@ class BagCorruptTest : public ::testing::Test {
       add(t, "sensor_msgs/msg/Image", *ros2::ros2msg_definition("sensor_msgs/msg/Image"));
     }
     add("/chatter", "std_msgs/msg/String", kStringDefinition);
+    EXPECT_TRUE((*w)->write_metadata(
+        "rosbag2", {{"serialized_metadata", "version: 9"}, {"ros_distro", "jazzy"}}));
     write_messages(
         [&](const std::string& topic, StampNs log, StampNs publish, const std::string& data) {
           EXPECT_TRUE((*w)->write(ch[topic], 100 + seq[topic]++, log, publish, data));
@@ -334,10 +349,12 @@ void expect_corrupted_as_events_say(const Bag& in, const Bag& out) {
   std::map<std::string, int> seen;
   for (const Message* e : events) {
     auto v = event_values(e->data);
-    const std::string topic = v["name"];
+    const std::string topic = v["topic"];
+    const std::string f = v["fault"];
     ASSERT_EQ(v["action"], "corrupt");
-    ASSERT_EQ(v["faults"], "1");
-    EXPECT_EQ(v["fault.0.rng"], "numpy");
+    EXPECT_EQ(v["name"], "faultline" + topic);
+    EXPECT_EQ(v["message"], "corrupt " + f + "/" + v[f + ".severity"]);
+    EXPECT_EQ(v[f + ".rng"], "numpy");
     const int i = seen[topic]++;
     EXPECT_EQ(v["source_seq"], std::to_string(i + 1));
     const Message* src = in.on(topic).at(static_cast<std::size_t>(i));
@@ -345,10 +362,9 @@ void expect_corrupted_as_events_say(const Bag& in, const Bag& out) {
     EXPECT_EQ(e->log_ns, src->log_ns);
     const bool compressed = topic == kFaultedTopics[0];
     const cv::Mat input = decoded(src->data, compressed);
-    rng::NumpyRandomState r(static_cast<std::uint32_t>(std::stoull(v["fault.0.seed"])));
-    auto expected =
-        corruption::corrupt(input, *corruption::corruption_from_string(v["fault.0.type"]),
-                            std::stoi(v["fault.0.severity"]), r);
+    rng::NumpyRandomState r(static_cast<std::uint32_t>(std::stoull(v[f + ".seed"])));
+    auto expected = corruption::corrupt(input, *corruption::corruption_from_string(f),
+                                        std::stoi(v[f + ".severity"]), r);
     ASSERT_TRUE(expected);
     if (compressed) {
       auto c = ros2::deserialize<ros2::CompressedImage>(dst->data);
@@ -408,7 +424,7 @@ TEST_F(BagCorruptTest, RosbagDirectoryPassThroughIsByteIdenticalAndFramesMatchCo
   }
 }
 
-TEST_F(BagCorruptTest, McapFileKeepsSequencesPublishTimesAndExtraChannelMetadata) {
+TEST_F(BagCorruptTest, McapFileKeepsSequencesPublishTimesExtraChannelMetadataAndMetadataRecords) {
   const std::string in = write_mcap();
   auto cfg = config(in, "out.mcap");
   add_faults(cfg);
@@ -416,6 +432,12 @@ TEST_F(BagCorruptTest, McapFileKeepsSequencesPublishTimesAndExtraChannelMetadata
   ASSERT_TRUE(counts) << counts.status().to_string();
   const Bag a = read_bag(in), b = read_bag(cfg.output);
   EXPECT_EQ(b.channels.at("/tf").metadata.at("topic_type_hash"), "RIHS01_/tf");
+  auto reader = bag::Reader::open(cfg.output);
+  auto metadata = (*reader)->read_metadata();
+  ASSERT_TRUE(metadata);
+  ASSERT_EQ(metadata->size(), 1u);
+  EXPECT_EQ((*metadata)[0].name, "rosbag2");
+  EXPECT_EQ((*metadata)[0].metadata.at("ros_distro"), "jazzy");
   expect_pass_through(a, b);
   expect_corrupted_as_events_say(a, b);
   // The faulted frames keep their sequence and times too.
@@ -554,7 +576,8 @@ TEST_F(BagCorruptTest, TemporalFaultsDropFreezeAndBlackFrames) {
     auto v = event_values(e->data);
     if (v["action"] == "drop") {
       ++drops;
-      EXPECT_EQ(v["name"], "/cam/bgr");
+      EXPECT_EQ(v["topic"], "/cam/bgr");
+      EXPECT_EQ(v["hardware_id"], "cam");
       EXPECT_EQ(v["level"], "2");
     }
   }
@@ -631,6 +654,120 @@ TEST_F(BagCorruptTest, UndecodableFramesAreCopiedCountedAndReported) {
   auto v = event_values(b.on("/faultline/faults").at(0)->data);
   EXPECT_EQ(v["action"], "undecodable");
   EXPECT_NE(v["message"].find("corrupt not applied"), std::string::npos) << v["message"];
+}
+
+TEST_F(BagCorruptTest, FaultlineRecordingGetsTheInjectorsSeedsStateAndEvents) {
+  // A recording as `bag record` / `bag convert` write it: a camera-frame replay channel, the
+  // Foxglove view of the same topic, a two-part proto channel and the run's Metadata record.
+  const std::string path = (dir_ / "run.mcap").string();
+  const std::string topic = "/cam_front/image_rect_compressed";
+  std::vector<std::string> jpegs;
+  {
+    auto w = bag::Writer::open(path, {});
+    ASSERT_TRUE(w);
+    ASSERT_TRUE((*w)->write_metadata("faultline.run", {{"tool", "test"}}));
+    const auto d = msgs::CameraFrame::descriptor();
+    const auto schema =
+        (*w)->add_schema(d->full_name(), "protobuf", bag::build_file_descriptor_set(d));
+    const auto raw = *(*w)->add_channel(
+        std::string(kRawTopicPrefix) + topic, schema,
+        {{kMetaTopic, topic}, {kMetaFrames, "3"}, {kMetaType, d->full_name()}}, kMultipartEncoding);
+    const auto view = *(*w)->channel_for<foxglove::CompressedImage>(topic);
+    const auto sync = *(*w)->channel_for<msgs::SampleBoundary>(
+        "/sync/sample", {{kMetaTopic, "/sync/sample"}, {kMetaFrames, "2"}});
+    for (int i = 0; i < 6; ++i) {
+      const StampNs t = kT0 + i * kPeriod;
+      jpegs.push_back(jpeg_of(picture(48, 32, i)));
+      msgs::CameraFrame h;
+      h.mutable_header()->set_seq(static_cast<std::uint64_t>(i + 1));
+      h.mutable_header()->set_capture_stamp_ns(t);
+      h.mutable_header()->set_frame_id("CAM_FRONT");
+      h.mutable_header()->set_publisher("nusc_player");
+      h.set_camera("CAM_FRONT");
+      h.set_encoding("jpeg");
+      h.set_width(48);
+      h.set_height(32);
+      h.set_source_seq(static_cast<std::uint64_t>(100 + i));
+      h.set_is_key_frame(i % 2 == 0);
+      h.set_payload_bytes(static_cast<std::uint32_t>(jpegs.back().size()));
+      ASSERT_TRUE(
+          (*w)->write(raw, i + 1, t, t, encode_multipart(h.SerializeAsString(), jpegs.back())));
+      foxglove::CompressedImage v;
+      v.set_frame_id("CAM_FRONT");
+      v.set_format("jpeg");
+      v.set_data(jpegs.back());
+      ASSERT_TRUE((*w)->write_proto(view, i + 1, t, t, v));
+      msgs::SampleBoundary b;
+      b.set_sample_token("s" + std::to_string(i));
+      ASSERT_TRUE((*w)->write_proto(sync, i + 1, t + 1, t + 1, b));
+    }
+    ASSERT_TRUE((*w)->close());
+  }
+  auto cfg = config(path, "out.mcap");
+  const std::string schedule = (dir_ / "faults.yaml").string();
+  std::ofstream(schedule) << topic << ":\n  - {type: fog, level: mid, frames: key}\n";
+  cfg.faults = load_fault_schedule(schedule, corruption::RngMode::Fast);
+  auto counts = corrupt_bag(cfg, stop_);
+  ASSERT_TRUE(counts) << counts.status().to_string();
+  EXPECT_EQ(counts->frames, 6u);
+  EXPECT_EQ(counts->corrupted, 3u);  // key frames only
+  EXPECT_EQ(counts->unchanged, 3u);
+
+  const Bag a = read_bag(path), b = read_bag(cfg.output);
+  for (const char* same :
+       {"/sync/sample", "/cam_front/image_rect_compressed"}) {  // the view stays clean
+    std::vector<Message> x, y;
+    for (const auto* m : a.on(same)) x.push_back(*m);
+    for (const auto* m : b.on(same)) y.push_back(*m);
+    EXPECT_TRUE(x == y) << same;
+    EXPECT_EQ(b.channels.at(same).metadata, a.channels.at(same).metadata);
+  }
+  auto reader = bag::Reader::open(cfg.output);
+  auto metadata = (*reader)->read_metadata();
+  ASSERT_TRUE(metadata);
+  ASSERT_EQ(metadata->size(), 1u);
+  EXPECT_EQ((*metadata)[0].name, "faultline.run");
+
+  const auto src = a.on(std::string(kRawTopicPrefix) + topic),
+             dst = b.on(std::string(kRawTopicPrefix) + topic);
+  ASSERT_EQ(dst.size(), 6u);
+  for (std::size_t i = 0; i < 6; ++i) {
+    if (i % 2 == 1) {
+      EXPECT_EQ(dst[i]->data, src[i]->data) << i;
+      continue;
+    }
+    auto parts = decode_multipart(dst[i]->data);
+    ASSERT_TRUE(parts);
+    msgs::CameraFrame h;
+    ASSERT_TRUE(h.ParseFromArray(parts->header.data(), static_cast<int>(parts->header.size())));
+    EXPECT_EQ(h.source_seq(), 100 + i);
+    EXPECT_EQ(h.payload_bytes(), parts->payload.size());
+    ASSERT_EQ(h.fault().faults_size(), 1);
+    EXPECT_EQ(h.fault().action(), msgs::FAULT_ACTION_CORRUPT);
+    const auto seed =
+        policy::frame_seed(7, 0, 100 + i);  // what the live injector draws for this frame
+    EXPECT_EQ(h.fault().faults(0).seed(), seed);
+    auto input =
+        codec::decode_jpeg(reinterpret_cast<const std::uint8_t*>(jpegs[i].data()), jpegs[i].size());
+    rng::FastRng r(seed);
+    auto expected = corruption::corrupt(
+        *input, corruption::Corruption::Fog,
+        corruption::severity_for(corruption::Corruption::Fog, corruption::Level::Mid), r);
+    auto jpeg = codec::encode_jpeg(*expected, 95);
+    EXPECT_EQ(parts->payload, std::string(jpeg->begin(), jpeg->end())) << i;
+  }
+  const auto events = b.on("/faultline/faults");
+  ASSERT_EQ(events.size(), 6u);
+  EXPECT_EQ(b.schemas.at("/faultline/faults").name, "faultline.msgs.FaultEvent");
+  EXPECT_EQ(b.channels.at("/faultline/faults").metadata.at(kMetaTopic), "/faultline/faults");
+  for (std::size_t i = 0; i < events.size(); ++i) {
+    msgs::FaultEvent e;
+    ASSERT_TRUE(e.ParseFromString(events[i]->data));
+    EXPECT_EQ(e.camera(), "CAM_FRONT");
+    EXPECT_EQ(e.source_seq(), 100 + i);
+    EXPECT_EQ(e.state().action(),
+              i % 2 == 0 ? msgs::FAULT_ACTION_CORRUPT : msgs::FAULT_ACTION_PASS);
+  }
 }
 
 TEST(BagCorruptArgsTest, TopicFaultSyntax) {
