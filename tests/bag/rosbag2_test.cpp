@@ -36,13 +36,19 @@ class Rosbag2Test : public ::testing::Test {
     auto img = (*w)->add_topic("/CAM_FRONT/image_rect_compressed", "sensor_msgs/msg/CompressedImage", Qos::reliable());
     auto tf = (*w)->add_topic("/tf_static", "tf2_msgs/msg/TFMessage", Qos::tf_static());
     ASSERT_TRUE(img.is_ok() && tf.is_ok());
-    ros2::TFMessage msg;
-    msg.transforms.push_back({{{1, 0}, "base_link"}, "CAM_FRONT", {}});
+    ros2::TFMessage msg;  // fields assigned one by one: GCC 12 warns falsely on nested brace-init strings
+    msg.transforms.resize(1);
+    msg.transforms[0].header.stamp.sec = 1;
+    msg.transforms[0].header.frame_id = "base_link";
+    msg.transforms[0].child_frame_id = "CAM_FRONT";
     ASSERT_TRUE((*w)->write(*tf, 1'000'000'000, ros2::serialize(msg)).is_ok());
     for (int i = 0; i < 3; ++i) {
       const StampNs t = 1'000'000'000 + i * 100'000'000;
       const std::string jpeg("\xFF\xD8\xFF\xD9", 4);
-      const std::string prefix = ros2::compressed_image_prefix({ros2::time_from_ns(t), "CAM_FRONT"}, "jpeg", 4);
+      ros2::Header header;
+      header.stamp = ros2::time_from_ns(t);
+      header.frame_id = "CAM_FRONT";
+      const std::string prefix = ros2::compressed_image_prefix(header, "jpeg", 4);
       ASSERT_TRUE((*w)->write_parts(*img, t, {prefix, jpeg}).is_ok());
     }
     EXPECT_TRUE(fs::exists(root_ / ("." + dir.filename().string() + ".partial-" + std::to_string(::getpid()))));

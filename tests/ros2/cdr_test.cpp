@@ -23,6 +23,32 @@ double f64_at(const std::string& s, std::size_t offset) {
   return v;
 }
 
+// Built field by field: GCC 12 reports -Wmaybe-uninitialized (falsely) for nested brace-initialised strings.
+Header header(std::int32_t sec, std::uint32_t nanosec, const char* frame_id) {
+  Header h;
+  h.stamp.sec = sec;
+  h.stamp.nanosec = nanosec;
+  h.frame_id = frame_id;
+  return h;
+}
+
+CompressedImage jpeg_image(Header h, std::string data) {
+  CompressedImage img;
+  img.header = std::move(h);
+  img.format = "jpeg";
+  img.data = std::move(data);
+  return img;
+}
+
+TransformStamped transform(Header h, const char* child, Vector3 t, Quaternion q) {
+  TransformStamped out;
+  out.header = std::move(h);
+  out.child_frame_id = child;
+  out.transform.translation = t;
+  out.transform.rotation = q;
+  return out;
+}
+
 std::uint32_t u32_at(const std::string& s, std::size_t offset) {
   std::uint32_t v = 0;
   std::memcpy(&v, s.data() + offset, 4);
@@ -30,8 +56,7 @@ std::uint32_t u32_at(const std::string& s, std::size_t offset) {
 }
 
 TEST(CdrWriterTest, HeaderStringLayout) {
-  Header h{{1, 2}, "ab"};
-  EXPECT_EQ(serialize(h), bytes({0x00, 0x01, 0x00, 0x00,  // CDR_LE encapsulation
+  EXPECT_EQ(serialize(header(1, 2, "ab")), bytes({0x00, 0x01, 0x00, 0x00,  // CDR_LE encapsulation
                                  0x01, 0x00, 0x00, 0x00,  // sec
                                  0x02, 0x00, 0x00, 0x00,  // nanosec
                                  0x03, 0x00, 0x00, 0x00,  // length with NUL
@@ -90,19 +115,25 @@ TEST(CdrWriterTest, CameraInfoLayout) {
 }
 
 TEST(CdrWriterTest, CompressedImagePrefixPlusDataIsTheMessage) {
-  CompressedImage img{{{5, 6}, "CAM_FRONT"}, "jpeg", std::string("\xFF\xD8\xFF\xD9", 4)};
+  const CompressedImage img = jpeg_image(header(5, 6, "CAM_FRONT"), std::string("\xFF\xD8\xFF\xD9", 4));
   EXPECT_EQ(compressed_image_prefix(img.header, img.format, img.data.size()) + img.data, serialize(img));
 }
 
 TEST(CdrRoundTripTest, EveryMessage) {
-  CompressedImage img{{{5, 6}, "CAM_FRONT"}, "jpeg", std::string("\xFF\xD8\x00\xFF\xD9", 5)};
+  const CompressedImage img = jpeg_image(header(5, 6, "CAM_FRONT"), std::string("\xFF\xD8\x00\xFF\xD9", 5));
   auto img2 = deserialize<CompressedImage>(serialize(img));
   ASSERT_TRUE(img2.is_ok()) << img2.status().to_string();
   EXPECT_EQ(img2->header.frame_id, "CAM_FRONT");
   EXPECT_EQ(img2->header.stamp.nanosec, 6u);
   EXPECT_EQ(img2->data, img.data);
 
-  Image raw{{{1, 2}, "cam"}, 2, 3, "bgr8", 0, 9, std::string(18, '\x7f')};
+  Image raw;
+  raw.header = header(1, 2, "cam");
+  raw.height = 2;
+  raw.width = 3;
+  raw.encoding = "bgr8";
+  raw.step = 9;
+  raw.data = std::string(18, '\x7f');
   auto raw2 = deserialize<Image>(serialize(raw));
   ASSERT_TRUE(raw2.is_ok());
   EXPECT_EQ(raw2->step, 9u);
@@ -120,8 +151,8 @@ TEST(CdrRoundTripTest, EveryMessage) {
   EXPECT_EQ(info2->roi.width, 4u);
 
   TFMessage tf;
-  tf.transforms.push_back({{{1, 0}, "map"}, "base_link", {{1, 2, 3}, {0.1, 0.2, 0.3, 0.9}}});
-  tf.transforms.push_back({{{1, 0}, "base_link"}, "CAM_FRONT", {{4, 5, 6}, {0, 0, 0, 1}}});
+  tf.transforms.push_back(transform(header(1, 0, "map"), "base_link", {1, 2, 3}, {0.1, 0.2, 0.3, 0.9}));
+  tf.transforms.push_back(transform(header(1, 0, "base_link"), "CAM_FRONT", {4, 5, 6}, {0, 0, 0, 1}));
   auto tf2 = deserialize<TFMessage>(serialize(tf));
   ASSERT_TRUE(tf2.is_ok());
   ASSERT_EQ(tf2->transforms.size(), 2u);
@@ -183,7 +214,7 @@ TEST(CdrReaderTest, EveryTruncationIsAnErrorNotACrash) {
 }
 
 TEST(CdrReaderTest, LyingDataCountNamesTheField) {
-  std::string s = serialize(CompressedImage{{{0, 0}, "cam"}, "jpeg", "xyz"});
+  std::string s = serialize(jpeg_image(header(0, 0, "cam"), "xyz"));
   // body: stamp 0..7, "cam" 8..15, "jpeg" 16..24, pad 25..27, data count at 28.
   ASSERT_EQ(u32_at(s, 4 + 28), 3u);
   const std::uint32_t huge = 0xFFFFFFFFu;
