@@ -154,6 +154,43 @@ TEST_F(Rosbag2Test, McapHasRos2ProfileCdrChannelsAndRos2msgSchemas) {
   EXPECT_EQ(images, 3u);
 }
 
+TEST_F(Rosbag2Test, InspectAgreesWithAnIntactBagAndNamesEachDisagreement) {
+  const fs::path dir = root_ / "run";
+  WriteSmallBag(dir);
+  auto info = inspect_rosbag2(dir.string());
+  ASSERT_TRUE(info.is_ok()) << info.status().to_string();
+  EXPECT_TRUE(info->intact());
+  EXPECT_TRUE(info->disagreements.empty());
+  ASSERT_EQ(info->files.size(), 1u);
+  EXPECT_EQ(info->files[0].profile, "ros2");
+  EXPECT_EQ(info->metadata.topics.size(), 2u);
+
+  // A metadata.yaml that lies about a count and a type, and lists a topic the file does not have.
+  auto m = read_rosbag2_metadata(dir.string());
+  ASSERT_TRUE(m.is_ok());
+  m->topics[0].message_count = 5;
+  m->topics[1].type = "tf2_msgs/msg/Other";
+  m->topics.push_back({"/ghost", "std_msgs/msg/Header", "cdr", "", 2});
+  {
+    std::ofstream out(dir / "metadata.yaml", std::ios::trunc);
+    out << rosbag2_metadata_yaml(*m);
+  }
+  auto lied = inspect_rosbag2(dir.string());
+  ASSERT_TRUE(lied.is_ok());
+  EXPECT_FALSE(lied->intact());
+  ASSERT_EQ(lied->disagreements.size(), 3u);
+  EXPECT_EQ(lied->disagreements[0], "/CAM_FRONT/image_rect_compressed message_count: metadata.yaml 5, files 3");
+  EXPECT_NE(lied->disagreements[1].find("tf2_msgs/msg/Other"), std::string::npos);
+  EXPECT_EQ(lied->disagreements[2], "/ghost: in metadata.yaml, in no file");
+
+  // A missing file is a disagreement, not an error.
+  fs::remove(dir / "run_0.mcap");
+  auto missing = inspect_rosbag2(dir.string());
+  ASSERT_TRUE(missing.is_ok());
+  ASSERT_EQ(missing->disagreements.size(), 1u);
+  EXPECT_NE(missing->disagreements[0].find("run_0.mcap"), std::string::npos);
+}
+
 TEST_F(Rosbag2Test, RefusesAnExistingDirectory) {
   fs::create_directories(root_ / "taken");
   auto w = Rosbag2Writer::open((root_ / "taken").string());
