@@ -114,6 +114,24 @@ TEST(CdrWriterTest, CameraInfoLayout) {
   EXPECT_EQ(f64_at(s, 4 + 232 + 48), 4.0);  // p[6] = k[5]
 }
 
+TEST(CdrWriterTest, DefaultMarkerLayout) {
+  MarkerArray a;
+  a.markers.resize(1);
+  const std::string s = serialize(a);
+  // body: 0 count, then the marker from 4: stamp 4..11, frame_id 12..16, ns 20..24, id/type/action 28..39,
+  // pose 40..95 (w at 88), scale 96..119, color 120..135, lifetime 136..143, frame_locked 144, points 148,
+  // colors 152, texture_resource 156..160, texture: stamp 164, frame_id 172..176, format 180..184, data 188,
+  // uv_coordinates 192, text 196..200, mesh_resource 204..208, mesh_file 212..216 + 220, embedded 224.
+  ASSERT_EQ(s.size(), 4u + 225u);
+  EXPECT_EQ(u32_at(s, 4 + 0), 1u);
+  EXPECT_EQ(u32_at(s, 4 + 32), static_cast<std::uint32_t>(Marker::kCube));
+  EXPECT_EQ(f64_at(s, 4 + 88), 1.0);
+  EXPECT_EQ(u32_at(s, 4 + 156), 1u);  // texture_resource: "" is length 1 (the NUL)
+  EXPECT_EQ(u32_at(s, 4 + 188), 0u);  // texture.data count
+  EXPECT_EQ(u32_at(s, 4 + 212), 1u);  // mesh_file.filename
+  EXPECT_EQ(u32_at(s, 4 + 220), 0u);  // mesh_file.data count
+}
+
 TEST(CdrWriterTest, CompressedImagePrefixPlusDataIsTheMessage) {
   const CompressedImage img = jpeg_image(header(5, 6, "CAM_FRONT"), std::string("\xFF\xD8\xFF\xD9", 4));
   EXPECT_EQ(compressed_image_prefix(img.header, img.format, img.data.size()) + img.data, serialize(img));
@@ -182,6 +200,14 @@ TEST(CdrRoundTripTest, EveryMessage) {
   m.points = {{1, 1, 1}};
   m.colors = {{1, 0, 0, 1}};
   m.text = "car";
+  m.texture_resource = "embedded://t";
+  m.texture.format = "png";
+  m.texture.data = "PNG";
+  m.uv_coordinates.resize(2);
+  m.uv_coordinates[1].u = 0.25;
+  m.mesh_file.filename = "box.stl";
+  m.mesh_file.data = "solid";
+  m.mesh_use_embedded_materials = true;
   markers.markers = {Marker{}, m};
   markers.markers[0].action = Marker::kDeleteAll;
   auto markers2 = deserialize<MarkerArray>(serialize(markers));
@@ -193,6 +219,13 @@ TEST(CdrRoundTripTest, EveryMessage) {
   EXPECT_EQ(markers2->markers[1].scale.x, 4.5);
   EXPECT_EQ(markers2->markers[1].color.g, 0.8f);
   EXPECT_EQ(markers2->markers[1].text, "car");
+  EXPECT_EQ(markers2->markers[1].texture_resource, "embedded://t");
+  EXPECT_EQ(markers2->markers[1].texture.data, "PNG");
+  ASSERT_EQ(markers2->markers[1].uv_coordinates.size(), 2u);
+  EXPECT_EQ(markers2->markers[1].uv_coordinates[1].u, 0.25);
+  EXPECT_EQ(markers2->markers[1].mesh_file.filename, "box.stl");
+  EXPECT_EQ(markers2->markers[1].mesh_file.data, "solid");
+  EXPECT_TRUE(markers2->markers[1].mesh_use_embedded_materials);
   EXPECT_TRUE(markers2->markers[1].frame_locked);
 }
 
