@@ -378,5 +378,59 @@ TEST_F(Ros2ConvertTest, FaultsMatchTheFoxgloveConvertAndRerunsAreByteIdentical) 
   EXPECT_TRUE(node_validates(out("crash_only_ros2"), dataroot(), {{"/faultline/faults", only->frames}}));
 }
 
+// From memory: a calibration that changes between scenes is published again on /tf_static (every camera, the new
+// pose), and an unreadable image is counted and skipped while the other topics go on.
+TEST(Ros2ConvertMemoryTest, CalibrationChangeRepublishesTfStaticAndMissingImagesAreCounted) {
+  auto frame = [](const char* channel, std::int64_t us, double x, const char* file, const char* sample) {
+    dataset::CameraFrameRecord f;
+    f.channel = channel;
+    f.filename = file;
+    f.sample_data_token = std::string(file) + "_sd";
+    f.sample_token = sample;
+    f.is_key_frame = true;
+    f.timestamp_us = us;
+    f.width = 4;
+    f.height = 2;
+    f.intrinsics = {2, 0, 1, 0, 2, 1, 0, 0, 1};
+    f.sensor_to_ego.translation = {x, 0, 1.5};
+    f.ego_pose.translation = {10, 20, 0};
+    return f;
+  };
+  std::vector<dataset::CameraFrameRecord> frames = {
+      frame("CAM_FRONT", 1'000'000, 1.0, "a.jpg", "s1"), frame("CAM_BACK", 1'000'010, -1.0, "b.jpg", "s1"),
+      frame("CAM_FRONT", 1'500'000, 1.2, "c.jpg", "s2"), frame("CAM_BACK", 1'500'010, -1.0, "missing.jpg", "s2")};
+  const auto jpeg = std::make_shared<const std::vector<std::uint8_t>>(std::vector<std::uint8_t>{0xFF, 0xD8, 0xFF, 0xD9});
+  std::map<std::string, ImageBytes> images = {{"a.jpg", jpeg}, {"b.jpg", jpeg}, {"c.jpg", jpeg}};
+  const fs::path dir = fs::temp_directory_path() / ("faultline_ros2_memory_" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  Ros2ConvertConfig cfg;
+  cfg.output = dir.string();
+  Ros2BagConverter converter(cfg, std::make_unique<MemoryFrameSource>(frames, images), {}, nullptr, quiet_logger());
+  std::atomic<bool> stop{false};
+  auto counts = converter.run(stop);
+  ASSERT_TRUE(counts.is_ok()) << counts.status().to_string();
+  EXPECT_EQ(counts->frames, 3u);
+  EXPECT_EQ(counts->missing_images, 1u);
+  EXPECT_EQ(counts->tf_static, 2u);
+  EXPECT_EQ(counts->gt_updates, 0u);
+  // /tf_static x2, /tf x3, images x3, camera infos x3.
+  EXPECT_EQ(counts->messages, 11u);
+
+  const Ros2Content c = read_ros2(converter.mcap_path());
+  ASSERT_EQ(c.tf_static.size(), 2u);
+  ASSERT_EQ(c.tf_static[1].transforms.size(), 2u);
+  std::map<std::string, double> x;
+  for (const auto& t : c.tf_static[1].transforms) x[t.child_frame_id] = t.transform.translation.x;
+  EXPECT_EQ(x.at("CAM_FRONT"), 1.2);
+  EXPECT_EQ(x.at("CAM_BACK"), -1.0);
+  EXPECT_EQ(ros2::to_ns(c.tf_static[1].transforms[0].header.stamp), 1'500'000'000);
+  EXPECT_EQ(c.images.at("/CAM_FRONT/image_rect_compressed").size(), 2u);
+  EXPECT_EQ(c.images.at("/CAM_BACK/image_rect_compressed").size(), 1u);
+  EXPECT_EQ(c.count_of_topic.count("/markers/annotations"), 0u);
+  ASSERT_EQ(c.infos.at("/CAM_FRONT/camera_info").size(), 2u);
+  EXPECT_EQ(c.infos.at("/CAM_FRONT/camera_info")[0].width, 4u);
+  fs::remove_all(dir);
+}
+
 }  // namespace
 }  // namespace faultline::runtime
