@@ -399,7 +399,8 @@ TEST(Ros2ConvertMemoryTest, CalibrationChangeRepublishesTfStaticAndMissingImages
   std::vector<dataset::CameraFrameRecord> frames = {
       frame("CAM_FRONT", 1'000'000, 1.0, "a.jpg", "s1"), frame("CAM_BACK", 1'000'010, -1.0, "b.jpg", "s1"),
       frame("CAM_FRONT", 1'500'000, 1.2, "c.jpg", "s2"), frame("CAM_BACK", 1'500'010, -1.0, "missing.jpg", "s2")};
-  const auto jpeg = std::make_shared<const std::vector<std::uint8_t>>(std::vector<std::uint8_t>{0xFF, 0xD8, 0xFF, 0xD9});
+  const auto jpeg =
+      std::make_shared<const std::vector<std::uint8_t>>(std::vector<std::uint8_t>{0xFF, 0xD8, 0xFF, 0xD9});
   std::map<std::string, ImageBytes> images = {{"a.jpg", jpeg}, {"b.jpg", jpeg}, {"c.jpg", jpeg}};
   const fs::path dir = fs::temp_directory_path() / ("faultline_ros2_memory_" + std::to_string(::getpid()));
   fs::remove_all(dir);
