@@ -100,6 +100,12 @@ class Rosbag2Writer {
   // The same message given as consecutive parts (e.g. ros2::compressed_image_prefix + the JPEG).
   Status write_parts(std::uint16_t channel_id, StampNs log_time_ns, std::initializer_list<std::string_view> parts);
 
+  // An MCAP Metadata record (e.g. "faultline.run": seeds, faults, dataset); rosbag2 ignores names other than
+  // "rosbag2".
+  Status write_metadata(const std::string& name, const KeyValueMap& metadata) {
+    return writer_->write_metadata(name, metadata);
+  }
+
   // Finishes the MCAP file, writes metadata.yaml and moves the bag to its final name. Idempotent.
   Status close();
 

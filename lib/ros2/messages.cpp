@@ -10,7 +10,8 @@ namespace {
 constexpr std::size_t kMinTransformStamped = 8 + 4 + 4 + 7 * 8;
 constexpr std::size_t kMinKeyValue = 4 + 4;
 constexpr std::size_t kMinDiagnosticStatus = 1 + 4 + 4 + 4 + 4;
-constexpr std::size_t kMinMarker = 12 + 4 + 12 + 56 + 24 + 16 + 8 + 1 + 4 + 4 + 4 + 4 + 1;
+constexpr std::size_t kMinMarker = 12 + 4 + 12 + 56 + 24 + 16 + 8 + 1 + 4 + 4 + 4 + (12 + 4 + 4 + 4) + 4 + 4 + 4 +
+                                   (4 + 4) + 1;
 
 template <typename T>
 void encode_sequence(CdrWriter& w, const std::vector<T>& v) {
@@ -124,6 +125,14 @@ void encode(CdrWriter& w, const ColorRGBA& m) {
   w.f32(m.b);
   w.f32(m.a);
 }
+void encode(CdrWriter& w, const UVCoordinate& m) {
+  w.f64(m.u);
+  w.f64(m.v);
+}
+void encode(CdrWriter& w, const MeshFile& m) {
+  w.string(m.filename);
+  w.octets(m.data);
+}
 void encode(CdrWriter& w, const Marker& m) {
   encode(w, m.header);
   w.string(m.ns);
@@ -137,8 +146,12 @@ void encode(CdrWriter& w, const Marker& m) {
   w.boolean(m.frame_locked);
   encode_sequence(w, m.points);
   encode_sequence(w, m.colors);
+  w.string(m.texture_resource);
+  encode(w, m.texture);
+  encode_sequence(w, m.uv_coordinates);
   w.string(m.text);
   w.string(m.mesh_resource);
+  encode(w, m.mesh_file);
   w.boolean(m.mesh_use_embedded_materials);
 }
 void encode(CdrWriter& w, const MarkerArray& m) { encode_sequence(w, m.markers); }
@@ -237,6 +250,14 @@ void decode(CdrReader& r, ColorRGBA& m) {
   m.b = r.f32("b");
   m.a = r.f32("a");
 }
+void decode(CdrReader& r, UVCoordinate& m) {
+  m.u = r.f64("u");
+  m.v = r.f64("v");
+}
+void decode(CdrReader& r, MeshFile& m) {
+  m.filename = r.string("mesh_file.filename");
+  m.data = r.octets("mesh_file.data");
+}
 void decode(CdrReader& r, Marker& m) {
   decode(r, m.header);
   m.ns = r.string("ns");
@@ -250,8 +271,12 @@ void decode(CdrReader& r, Marker& m) {
   m.frame_locked = r.boolean("frame_locked");
   decode_sequence(r, "points", 24, m.points);
   decode_sequence(r, "colors", 16, m.colors);
+  m.texture_resource = r.string("texture_resource");
+  decode(r, m.texture);
+  decode_sequence(r, "uv_coordinates", 16, m.uv_coordinates);
   m.text = r.string("text");
   m.mesh_resource = r.string("mesh_resource");
+  decode(r, m.mesh_file);
   m.mesh_use_embedded_materials = r.boolean("mesh_use_embedded_materials");
 }
 void decode(CdrReader& r, MarkerArray& m) { decode_sequence(r, "markers", kMinMarker, m.markers); }

@@ -107,8 +107,15 @@ struct DiagnosticArray {  // diagnostic_msgs/DiagnosticArray
 struct ColorRGBA {  // std_msgs/ColorRGBA
   float r = 0, g = 0, b = 0, a = 0;
 };
-// visualization_msgs/Marker in the Humble layout (Iron and later append texture, uv_coordinates and mesh_file
-// fields; a bag's embedded schema says which layout its bytes have).
+struct UVCoordinate {  // visualization_msgs/UVCoordinate
+  double u = 0, v = 0;
+};
+struct MeshFile {  // visualization_msgs/MeshFile
+  std::string filename;
+  std::string data;
+};
+// visualization_msgs/Marker as Humble and Jazzy define it (the texture, uv_coordinates and mesh_file fields came
+// with Humble; Jazzy only adds the ARROW_STRIP constant, so the wire layout is the same).
 struct Marker {
   static constexpr std::int32_t kCube = 1, kAdd = 0, kDeleteAll = 3;
   Header header;
@@ -121,7 +128,11 @@ struct Marker {
   bool frame_locked = false;
   std::vector<Point> points;
   std::vector<ColorRGBA> colors;
+  std::string texture_resource;
+  CompressedImage texture;
+  std::vector<UVCoordinate> uv_coordinates;
   std::string text, mesh_resource;
+  MeshFile mesh_file;
   bool mesh_use_embedded_materials = false;
 };
 struct MarkerArray {  // visualization_msgs/MarkerArray
@@ -165,6 +176,8 @@ void encode(CdrWriter& w, const KeyValue& m);
 void encode(CdrWriter& w, const DiagnosticStatus& m);
 void encode(CdrWriter& w, const DiagnosticArray& m);
 void encode(CdrWriter& w, const ColorRGBA& m);
+void encode(CdrWriter& w, const UVCoordinate& m);
+void encode(CdrWriter& w, const MeshFile& m);
 void encode(CdrWriter& w, const Marker& m);
 void encode(CdrWriter& w, const MarkerArray& m);
 
@@ -186,6 +199,8 @@ void decode(CdrReader& r, KeyValue& m);
 void decode(CdrReader& r, DiagnosticStatus& m);
 void decode(CdrReader& r, DiagnosticArray& m);
 void decode(CdrReader& r, ColorRGBA& m);
+void decode(CdrReader& r, UVCoordinate& m);
+void decode(CdrReader& r, MeshFile& m);
 void decode(CdrReader& r, Marker& m);
 void decode(CdrReader& r, MarkerArray& m);
 

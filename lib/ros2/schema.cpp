@@ -10,7 +10,8 @@ namespace faultline::ros2 {
 
 namespace {
 
-// "pkg/Type" -> .msg text (field and constant lines, ros2/common_interfaces Humble, comments left out).
+// "pkg/Type" -> .msg text (field and constant lines, ros2/common_interfaces Humble, comments left out). The wire
+// layout of every type here is the same in Jazzy (whose Marker only adds the ARROW_STRIP constant).
 const std::map<std::string, std::string, std::less<>>& msg_texts() {
   static const std::map<std::string, std::string, std::less<>> kTexts = {
       {"builtin_interfaces/Time", "int32 sec\nuint32 nanosec\n"},
@@ -44,8 +45,11 @@ const std::map<std::string, std::string, std::less<>>& msg_texts() {
        "int32 TRIANGLE_LIST=11\n\nint32 ADD=0\nint32 MODIFY=0\nint32 DELETE=2\nint32 DELETEALL=3\n\n"
        "std_msgs/Header header\nstring ns\nint32 id\nint32 type\nint32 action\ngeometry_msgs/Pose pose\n"
        "geometry_msgs/Vector3 scale\nstd_msgs/ColorRGBA color\nbuiltin_interfaces/Duration lifetime\n"
-       "bool frame_locked\n\ngeometry_msgs/Point[] points\nstd_msgs/ColorRGBA[] colors\n\nstring text\n\n"
-       "string mesh_resource\nbool mesh_use_embedded_materials\n"},
+       "bool frame_locked\n\ngeometry_msgs/Point[] points\nstd_msgs/ColorRGBA[] colors\n\n"
+       "string texture_resource\nsensor_msgs/CompressedImage texture\nUVCoordinate[] uv_coordinates\n\n"
+       "string text\n\nstring mesh_resource\nMeshFile mesh_file\nbool mesh_use_embedded_materials\n"},
+      {"visualization_msgs/UVCoordinate", "float64 u\nfloat64 v\n"},
+      {"visualization_msgs/MeshFile", "string filename\nuint8[] data\n"},
       {"visualization_msgs/MarkerArray", "Marker[] markers\n"},
   };
   return kTexts;

@@ -2,7 +2,8 @@
 // docs/message_definition_encoding.md): the type's .msg text, then every type it depends on, each once, introduced
 // by a line of 80 '=' and a line `MSG: pkg/Type`. Dependencies are visited depth first in sorted order, as
 // rosbag2's LocalMessageDefinitionSource does, so a reader that resolves nested types by name finds them all.
-// The .msg texts are the field and constant lines of ros2/common_interfaces (Humble), without comments.
+// The .msg texts are the field and constant lines of ros2/common_interfaces (Humble; the wire layouts are Jazzy's
+// too), without comments.
 #pragma once
 
 #include <string>

@@ -36,13 +36,19 @@ class Rosbag2Test : public ::testing::Test {
     auto img = (*w)->add_topic("/CAM_FRONT/image_rect_compressed", "sensor_msgs/msg/CompressedImage", Qos::reliable());
     auto tf = (*w)->add_topic("/tf_static", "tf2_msgs/msg/TFMessage", Qos::tf_static());
     ASSERT_TRUE(img.is_ok() && tf.is_ok());
-    ros2::TFMessage msg;
-    msg.transforms.push_back({{{1, 0}, "base_link"}, "CAM_FRONT", {}});
+    ros2::TFMessage msg;  // fields assigned one by one: GCC 12 warns falsely on nested brace-init strings
+    msg.transforms.resize(1);
+    msg.transforms[0].header.stamp.sec = 1;
+    msg.transforms[0].header.frame_id = "base_link";
+    msg.transforms[0].child_frame_id = "CAM_FRONT";
     ASSERT_TRUE((*w)->write(*tf, 1'000'000'000, ros2::serialize(msg)).is_ok());
     for (int i = 0; i < 3; ++i) {
       const StampNs t = 1'000'000'000 + i * 100'000'000;
       const std::string jpeg("\xFF\xD8\xFF\xD9", 4);
-      const std::string prefix = ros2::compressed_image_prefix({ros2::time_from_ns(t), "CAM_FRONT"}, "jpeg", 4);
+      ros2::Header header;
+      header.stamp = ros2::time_from_ns(t);
+      header.frame_id = "CAM_FRONT";
+      const std::string prefix = ros2::compressed_image_prefix(header, "jpeg", 4);
       ASSERT_TRUE((*w)->write_parts(*img, t, {prefix, jpeg}).is_ok());
     }
     EXPECT_TRUE(fs::exists(root_ / ("." + dir.filename().string() + ".partial-" + std::to_string(::getpid()))));
@@ -146,6 +152,43 @@ TEST_F(Rosbag2Test, McapHasRos2ProfileCdrChannelsAndRos2msgSchemas) {
   });
   ASSERT_TRUE(scan.is_ok());
   EXPECT_EQ(images, 3u);
+}
+
+TEST_F(Rosbag2Test, InspectAgreesWithAnIntactBagAndNamesEachDisagreement) {
+  const fs::path dir = root_ / "run";
+  WriteSmallBag(dir);
+  auto info = inspect_rosbag2(dir.string());
+  ASSERT_TRUE(info.is_ok()) << info.status().to_string();
+  EXPECT_TRUE(info->intact());
+  EXPECT_TRUE(info->disagreements.empty());
+  ASSERT_EQ(info->files.size(), 1u);
+  EXPECT_EQ(info->files[0].profile, "ros2");
+  EXPECT_EQ(info->metadata.topics.size(), 2u);
+
+  // A metadata.yaml that lies about a count and a type, and lists a topic the file does not have.
+  auto m = read_rosbag2_metadata(dir.string());
+  ASSERT_TRUE(m.is_ok());
+  m->topics[0].message_count = 5;
+  m->topics[1].type = "tf2_msgs/msg/Other";
+  m->topics.push_back({"/ghost", "std_msgs/msg/Header", "cdr", "", 2});
+  {
+    std::ofstream out(dir / "metadata.yaml", std::ios::trunc);
+    out << rosbag2_metadata_yaml(*m);
+  }
+  auto lied = inspect_rosbag2(dir.string());
+  ASSERT_TRUE(lied.is_ok());
+  EXPECT_FALSE(lied->intact());
+  ASSERT_EQ(lied->disagreements.size(), 3u);
+  EXPECT_EQ(lied->disagreements[0], "/CAM_FRONT/image_rect_compressed message_count: metadata.yaml 5, files 3");
+  EXPECT_NE(lied->disagreements[1].find("tf2_msgs/msg/Other"), std::string::npos);
+  EXPECT_EQ(lied->disagreements[2], "/ghost: in metadata.yaml, in no file");
+
+  // A missing file is a disagreement, not an error.
+  fs::remove(dir / "run_0.mcap");
+  auto missing = inspect_rosbag2(dir.string());
+  ASSERT_TRUE(missing.is_ok());
+  ASSERT_EQ(missing->disagreements.size(), 1u);
+  EXPECT_NE(missing->disagreements[0].find("run_0.mcap"), std::string::npos);
 }
 
 TEST_F(Rosbag2Test, RefusesAnExistingDirectory) {

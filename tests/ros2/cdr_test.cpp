@@ -23,6 +23,32 @@ double f64_at(const std::string& s, std::size_t offset) {
   return v;
 }
 
+// Built field by field: GCC 12 reports -Wmaybe-uninitialized (falsely) for nested brace-initialised strings.
+Header header(std::int32_t sec, std::uint32_t nanosec, const char* frame_id) {
+  Header h;
+  h.stamp.sec = sec;
+  h.stamp.nanosec = nanosec;
+  h.frame_id = frame_id;
+  return h;
+}
+
+CompressedImage jpeg_image(Header h, std::string data) {
+  CompressedImage img;
+  img.header = std::move(h);
+  img.format = "jpeg";
+  img.data = std::move(data);
+  return img;
+}
+
+TransformStamped transform(Header h, const char* child, Vector3 t, Quaternion q) {
+  TransformStamped out;
+  out.header = std::move(h);
+  out.child_frame_id = child;
+  out.transform.translation = t;
+  out.transform.rotation = q;
+  return out;
+}
+
 std::uint32_t u32_at(const std::string& s, std::size_t offset) {
   std::uint32_t v = 0;
   std::memcpy(&v, s.data() + offset, 4);
@@ -30,8 +56,7 @@ std::uint32_t u32_at(const std::string& s, std::size_t offset) {
 }
 
 TEST(CdrWriterTest, HeaderStringLayout) {
-  Header h{{1, 2}, "ab"};
-  EXPECT_EQ(serialize(h), bytes({0x00, 0x01, 0x00, 0x00,  // CDR_LE encapsulation
+  EXPECT_EQ(serialize(header(1, 2, "ab")), bytes({0x00, 0x01, 0x00, 0x00,  // CDR_LE encapsulation
                                  0x01, 0x00, 0x00, 0x00,  // sec
                                  0x02, 0x00, 0x00, 0x00,  // nanosec
                                  0x03, 0x00, 0x00, 0x00,  // length with NUL
@@ -89,20 +114,44 @@ TEST(CdrWriterTest, CameraInfoLayout) {
   EXPECT_EQ(f64_at(s, 4 + 232 + 48), 4.0);  // p[6] = k[5]
 }
 
+TEST(CdrWriterTest, DefaultMarkerLayout) {
+  MarkerArray a;
+  a.markers.resize(1);
+  const std::string s = serialize(a);
+  // body: 0 count, then the marker from 4: stamp 4..11, frame_id 12..16, ns 20..24, id/type/action 28..39,
+  // pose 40..95 (w at 88), scale 96..119, color 120..135, lifetime 136..143, frame_locked 144, points 148,
+  // colors 152, texture_resource 156..160, texture: stamp 164, frame_id 172..176, format 180..184, data 188,
+  // uv_coordinates 192, text 196..200, mesh_resource 204..208, mesh_file 212..216 + 220, embedded 224.
+  ASSERT_EQ(s.size(), 4u + 225u);
+  EXPECT_EQ(u32_at(s, 4 + 0), 1u);
+  EXPECT_EQ(u32_at(s, 4 + 32), static_cast<std::uint32_t>(Marker::kCube));
+  EXPECT_EQ(f64_at(s, 4 + 88), 1.0);
+  EXPECT_EQ(u32_at(s, 4 + 156), 1u);  // texture_resource: "" is length 1 (the NUL)
+  EXPECT_EQ(u32_at(s, 4 + 188), 0u);  // texture.data count
+  EXPECT_EQ(u32_at(s, 4 + 212), 1u);  // mesh_file.filename
+  EXPECT_EQ(u32_at(s, 4 + 220), 0u);  // mesh_file.data count
+}
+
 TEST(CdrWriterTest, CompressedImagePrefixPlusDataIsTheMessage) {
-  CompressedImage img{{{5, 6}, "CAM_FRONT"}, "jpeg", std::string("\xFF\xD8\xFF\xD9", 4)};
+  const CompressedImage img = jpeg_image(header(5, 6, "CAM_FRONT"), std::string("\xFF\xD8\xFF\xD9", 4));
   EXPECT_EQ(compressed_image_prefix(img.header, img.format, img.data.size()) + img.data, serialize(img));
 }
 
 TEST(CdrRoundTripTest, EveryMessage) {
-  CompressedImage img{{{5, 6}, "CAM_FRONT"}, "jpeg", std::string("\xFF\xD8\x00\xFF\xD9", 5)};
+  const CompressedImage img = jpeg_image(header(5, 6, "CAM_FRONT"), std::string("\xFF\xD8\x00\xFF\xD9", 5));
   auto img2 = deserialize<CompressedImage>(serialize(img));
   ASSERT_TRUE(img2.is_ok()) << img2.status().to_string();
   EXPECT_EQ(img2->header.frame_id, "CAM_FRONT");
   EXPECT_EQ(img2->header.stamp.nanosec, 6u);
   EXPECT_EQ(img2->data, img.data);
 
-  Image raw{{{1, 2}, "cam"}, 2, 3, "bgr8", 0, 9, std::string(18, '\x7f')};
+  Image raw;
+  raw.header = header(1, 2, "cam");
+  raw.height = 2;
+  raw.width = 3;
+  raw.encoding = "bgr8";
+  raw.step = 9;
+  raw.data = std::string(18, '\x7f');
   auto raw2 = deserialize<Image>(serialize(raw));
   ASSERT_TRUE(raw2.is_ok());
   EXPECT_EQ(raw2->step, 9u);
@@ -120,8 +169,8 @@ TEST(CdrRoundTripTest, EveryMessage) {
   EXPECT_EQ(info2->roi.width, 4u);
 
   TFMessage tf;
-  tf.transforms.push_back({{{1, 0}, "map"}, "base_link", {{1, 2, 3}, {0.1, 0.2, 0.3, 0.9}}});
-  tf.transforms.push_back({{{1, 0}, "base_link"}, "CAM_FRONT", {{4, 5, 6}, {0, 0, 0, 1}}});
+  tf.transforms.push_back(transform(header(1, 0, "map"), "base_link", {1, 2, 3}, {0.1, 0.2, 0.3, 0.9}));
+  tf.transforms.push_back(transform(header(1, 0, "base_link"), "CAM_FRONT", {4, 5, 6}, {0, 0, 0, 1}));
   auto tf2 = deserialize<TFMessage>(serialize(tf));
   ASSERT_TRUE(tf2.is_ok());
   ASSERT_EQ(tf2->transforms.size(), 2u);
@@ -151,6 +200,14 @@ TEST(CdrRoundTripTest, EveryMessage) {
   m.points = {{1, 1, 1}};
   m.colors = {{1, 0, 0, 1}};
   m.text = "car";
+  m.texture_resource = "embedded://t";
+  m.texture.format = "png";
+  m.texture.data = "PNG";
+  m.uv_coordinates.resize(2);
+  m.uv_coordinates[1].u = 0.25;
+  m.mesh_file.filename = "box.stl";
+  m.mesh_file.data = "solid";
+  m.mesh_use_embedded_materials = true;
   markers.markers = {Marker{}, m};
   markers.markers[0].action = Marker::kDeleteAll;
   auto markers2 = deserialize<MarkerArray>(serialize(markers));
@@ -162,6 +219,13 @@ TEST(CdrRoundTripTest, EveryMessage) {
   EXPECT_EQ(markers2->markers[1].scale.x, 4.5);
   EXPECT_EQ(markers2->markers[1].color.g, 0.8f);
   EXPECT_EQ(markers2->markers[1].text, "car");
+  EXPECT_EQ(markers2->markers[1].texture_resource, "embedded://t");
+  EXPECT_EQ(markers2->markers[1].texture.data, "PNG");
+  ASSERT_EQ(markers2->markers[1].uv_coordinates.size(), 2u);
+  EXPECT_EQ(markers2->markers[1].uv_coordinates[1].u, 0.25);
+  EXPECT_EQ(markers2->markers[1].mesh_file.filename, "box.stl");
+  EXPECT_EQ(markers2->markers[1].mesh_file.data, "solid");
+  EXPECT_TRUE(markers2->markers[1].mesh_use_embedded_materials);
   EXPECT_TRUE(markers2->markers[1].frame_locked);
 }
 
@@ -183,7 +247,7 @@ TEST(CdrReaderTest, EveryTruncationIsAnErrorNotACrash) {
 }
 
 TEST(CdrReaderTest, LyingDataCountNamesTheField) {
-  std::string s = serialize(CompressedImage{{{0, 0}, "cam"}, "jpeg", "xyz"});
+  std::string s = serialize(jpeg_image(header(0, 0, "cam"), "xyz"));
   // body: stamp 0..7, "cam" 8..15, "jpeg" 16..24, pad 25..27, data count at 28.
   ASSERT_EQ(u32_at(s, 4 + 28), 3u);
   const std::uint32_t huge = 0xFFFFFFFFu;
