@@ -468,6 +468,88 @@ TEST_F(BagCorruptTest, OneAndTwoThreadsWriteTheSameBytes) {
   EXPECT_TRUE(bytes[0] == bytes[1]);
 }
 
+TEST_F(BagCorruptTest, SplitRosbagIsReadFileByFileAndKeepsUnknownMetadataFields) {
+  // A second file with the same topics (channel ids in another order) and metadata.yaml fields of
+  // newer rosbag2 versions: one output file, channels not repeated, the unknown fields kept.
+  const std::string in = write_rosbag2();
+  const fs::path second = fs::path(in) / "in_bag_1.mcap";
+  {
+    bag::WriterOptions options;
+    options.profile = "ros2";
+    auto w = bag::Writer::open(second.string(), options);
+    const auto qos = bag::offered_qos_profiles_yaml(bag::Qos::reliable());
+    const auto chatter = *(*w)->add_channel(
+        "/chatter", (*w)->add_schema("std_msgs/msg/String", "ros2msg", kStringDefinition),
+        {{"offered_qos_profiles", qos}}, "cdr");
+    const auto bgr = *(*w)->add_channel(
+        "/cam/bgr",
+        (*w)->add_schema("sensor_msgs/msg/Image", "ros2msg",
+                         *ros2::ros2msg_definition("sensor_msgs/msg/Image")),
+        {{"offered_qos_profiles", bag::offered_qos_profiles_yaml(bag::Qos::sensor_data())}}, "cdr");
+    const StampNs t = kT0 + kFrames * kPeriod;
+    ASSERT_TRUE((*w)->write(chatter, 1, t, t, string_msg("late")));
+    ASSERT_TRUE((*w)->write(bgr, 1, t + 1, t + 1,
+                            ros2::serialize(raw_image(picture(48, 32, 99), "bgr8", t))));
+    ASSERT_TRUE((*w)->close());
+  }
+  {
+    std::string yaml = test_tool::read_text(fs::path(in) / "metadata.yaml");
+    const auto at = yaml.find("  relative_file_paths:\n    - in_bag_0.mcap\n");
+    ASSERT_NE(at, std::string::npos) << yaml;
+    yaml.replace(at, std::string("  relative_file_paths:\n    - in_bag_0.mcap\n").size(),
+                 "  relative_file_paths:\n    - in_bag_0.mcap\n    - in_bag_1.mcap\n"
+                 "  ros_distro: jazzy\n  custom_data:\n    owner: test\n");
+    std::ofstream(fs::path(in) / "metadata.yaml", std::ios::trunc) << yaml;
+  }
+  auto cfg = config(in, "out_bag");
+  cfg.faults.push_back(parse_topic_fault("/cam/bgr=snow:2", corruption::RngMode::Fast));
+  auto counts = corrupt_bag(cfg, stop_);
+  ASSERT_TRUE(counts) << counts.status().to_string();
+  EXPECT_EQ(counts->messages_in, 6u * kFrames + 2);
+  EXPECT_EQ(counts->frames, static_cast<std::uint64_t>(kFrames + 1));
+  const Bag b = read_bag((fs::path(cfg.output) / "out_bag_0.mcap").string());
+  EXPECT_EQ(b.channels.size(), 7u);  // six topics once each, and the faults topic
+  EXPECT_EQ(b.on("/chatter").size(), static_cast<std::size_t>(kFrames + 1));
+  EXPECT_EQ(b.on("/chatter").back()->data, string_msg("late"));
+  EXPECT_EQ(b.on("/cam/bgr").size(), static_cast<std::size_t>(kFrames + 1));
+  const std::string yaml = test_tool::read_text(fs::path(cfg.output) / "metadata.yaml");
+  EXPECT_NE(yaml.find("ros_distro: jazzy"), std::string::npos) << yaml;
+  EXPECT_NE(yaml.find("owner: test"), std::string::npos) << yaml;
+  EXPECT_EQ(yaml.find("in_bag_1.mcap"), std::string::npos) << yaml;
+  auto meta = bag::read_rosbag2_metadata(cfg.output);
+  ASSERT_TRUE(meta) << meta.status().to_string();
+  EXPECT_EQ(meta->message_count, 7u * kFrames + 2 + 1);
+}
+
+TEST_F(BagCorruptTest, MoreTopicsThanEngineCamerasIsAnError) {
+  const std::string path = (dir_ / "many.mcap").string();
+  {
+    bag::WriterOptions options;
+    options.profile = "ros2";
+    auto w = bag::Writer::open(path, options);
+    const auto schema = (*w)->add_schema("sensor_msgs/msg/Image", "ros2msg",
+                                         *ros2::ros2msg_definition("sensor_msgs/msg/Image"));
+    const std::string frame = ros2::serialize(raw_image(picture(8, 4, 0), "bgr8", kT0));
+    for (int i = 0; i < 7;
+         ++i) {  // channels with a message each (the writer stores only used channels)
+      const auto ch = (*w)->add_channel("/cam" + std::to_string(i), schema, {}, "cdr");
+      ASSERT_TRUE(ch);
+      ASSERT_TRUE((*w)->write(*ch, 1, kT0, kT0, frame));
+    }
+    ASSERT_TRUE((*w)->close());
+  }
+  auto cfg = config(path, "out.mcap");
+  for (int i = 0; i < 7; ++i) {
+    cfg.faults.push_back(
+        parse_topic_fault("/cam" + std::to_string(i) + "=fog:1", corruption::RngMode::Fast));
+  }
+  auto r = corrupt_bag(cfg, stop_);
+  ASSERT_FALSE(r);
+  EXPECT_EQ(r.status().code(), StatusCode::kInvalidArgument);
+  EXPECT_NE(r.status().message().find("at most 6"), std::string::npos) << r.status().message();
+  EXPECT_EQ(leftovers("many.mcap"), std::vector<std::string>{});
+}
+
 TEST_F(BagCorruptTest, AbsentTopicIsAnErrorBeforeAnyOutput) {
   const std::string in = write_rosbag2();
   auto cfg = config(in, "out_bag");
