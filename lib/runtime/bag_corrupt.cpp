@@ -1,7 +1,7 @@
-// `faultline bag corrupt`: read a ROS 2 bag, fault its image topics with the injector's engine,
-// write the same kind of bag. Decisions run in file order on the calling thread; decode + corrupt +
-// encode run on a worker pool over batches of frames; results are written in file order, so the
-// output does not depend on thread scheduling.
+// `faultline bag corrupt`: read a ROS 2 bag or a Faultline recording, fault its image topics with
+// the injector's engine, write the same kind of bag. Decisions run in file order on the calling
+// thread; decode + corrupt + encode run on a worker pool over batches of frames; results are
+// written in file order, so the output does not depend on thread scheduling.
 #include "runtime/bag_corrupt.hpp"
 
 #include <unistd.h>
@@ -43,7 +43,8 @@ namespace fs = std::filesystem;
 constexpr const char* kCompressedType = "sensor_msgs/msg/CompressedImage";
 constexpr const char* kImageType = "sensor_msgs/msg/Image";
 constexpr const char* kDiagnosticType = "diagnostic_msgs/msg/DiagnosticArray";
-constexpr std::uint64_t kMaxBatchBytes = std::uint64_t{256} << 20;
+constexpr std::uint64_t kMaxBatchBytes = std::uint64_t{256}
+                                         << 20;  // buffered message bytes before a flush
 
 // "sensor_msgs/CompressedImage" and "sensor_msgs/msg/CompressedImage" name the same type.
 std::string normalised_type(const std::string& name) {
@@ -78,8 +79,7 @@ struct InputFile {
 
 struct InputBag {
   bool rosbag2 = false;
-  bool faultline =
-      false;  // Faultline's own profile: camera frames on faultline-multipart replay channels
+  bool faultline = false;  // Faultline profile: frames on faultline-multipart replay channels
   std::string path;
   YAML::Node metadata;         // rosbag2: metadata.yaml as read, kept for the output's
   std::uint64_t messages = 0;  // total as the input says (0 = unknown)
@@ -383,8 +383,8 @@ msgs::FaultState fault_state(const policy::FramePlan& plan, const Status& error)
     a->set_rng(f.rng);
     for (const auto& [k, v] : f.params) (*a->mutable_params())[k] = v;
   }
-  if (!error
-           .is_ok()) {  // not applied: the frame went through unchanged, as the injector reports it
+  // Not applied: the frame went through unchanged, as the injector reports it.
+  if (!error.is_ok()) {
     state.set_action(msgs::FAULT_ACTION_PASS);
     msgs::ActiveFault* a = state.add_faults();
     a->set_name("render_error");
@@ -412,8 +412,8 @@ struct Job {
   ros2::Header header;
   bool header_ok = false;
   std::optional<msgs::CameraFrame> frame;  // Faultline frames: the parsed header
-  std::optional<std::string>
-      replacement;                    // new message bytes (corrupt, black, delay with corruption)
+  // New message bytes (corrupt, black, delay with corruption); none = the original bytes.
+  std::optional<std::string> replacement;
   std::optional<ImageMessage> good;   // this frame's output image, for a later freeze
   std::optional<ImageMessage> black;  // freeze without history
   Status error;                       // pixels needed but the frame could not be decoded
@@ -422,8 +422,8 @@ struct Job {
 struct Worker {
   Codecs codecs;
   std::unique_ptr<policy::FaultEngine> owned;
-  policy::FaultEngine* engine =
-      nullptr;  // renders corruptions (the shared one when faults are coherent)
+  // Renders corruptions: its own engine, or the deciding one when faults are coherent.
+  policy::FaultEngine* engine = nullptr;
 };
 
 Status decode_message(std::string_view data, const FaultedTopic& topic, ImageMessage& m) {
@@ -677,8 +677,7 @@ Status Corrupter::plan_topics() {
     t.camera = -1;
     const auto it = types.find(name);
     if (camera_topics.count(name) != 0) {
-      t.faultline =
-          true;  // a Faultline camera topic: its replay channel (the view channel stays as it is)
+      t.faultline = true;  // a Faultline camera topic: its replay channel (the view stays as it is)
     } else if (it == types.end()) {
       std::string list;
       for (const auto& [known, unused] : types) list += (list.empty() ? "" : ", ") + known;
@@ -1004,8 +1003,8 @@ Status Corrupter::on_message(std::size_t file, const bag::MessageView& m) {
     info.camera = policy::kCameraNames[topics_[t].camera];
     info.source_seq = job.source_seq;
     info.capture_stamp_ns = m.log_time_ns;
-    if (topics_[t].faultline) {  // the frame's own seq, stamp and key-frame flag, as the injector
-                                 // sees them
+    // A Faultline frame: its own seq, stamp and key-frame flag, as the injector sees them.
+    if (topics_[t].faultline) {
       auto parts = decode_multipart(m.data);
       msgs::CameraFrame frame;
       if (parts &&
