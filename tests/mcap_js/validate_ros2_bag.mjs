@@ -50,7 +50,9 @@ async function loadDataset(dataroot, version) {
   for (const c of await table("calibrated_sensor")) {
     const channel = sensors.get(c.sensor_token);
     if (!channel?.startsWith("CAM_")) continue;
-    calibrations.set(c.token, { channel, k: c.camera_intrinsic.flat(), translation: c.translation, rotation: c.rotation });
+    calibrations.set(c.token, {
+      channel, k: c.camera_intrinsic.flat(), translation: c.translation, rotation: c.rotation,
+    });
   }
   const files = new Map();  // `${channel}@${timestamp_us}` -> filename
   for (const sd of await table("sample_data")) {

@@ -361,7 +361,8 @@ TEST_F(Ros2ConvertTest, FaultsMatchTheFoxgloveConvertAndRerunsAreByteIdentical) 
   ASSERT_TRUE(again.is_ok());
   EXPECT_EQ(file_bytes(fs::path(dir) / "crash_ros2_0.mcap"),
             file_bytes(fs::path(out("rerun/crash_ros2")) / "crash_ros2_0.mcap"));
-  EXPECT_EQ(file_bytes(fs::path(dir) / "metadata.yaml"), file_bytes(fs::path(out("rerun/crash_ros2")) / "metadata.yaml"));
+  EXPECT_EQ(file_bytes(fs::path(dir) / "metadata.yaml"),
+            file_bytes(fs::path(out("rerun/crash_ros2")) / "metadata.yaml"));
 
   std::map<std::string, std::uint64_t> expect = {{"/faultline/faults", counts->frames}};
   EXPECT_TRUE(node_validates(dir, dataroot(), expect));
