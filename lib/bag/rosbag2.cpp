@@ -48,9 +48,11 @@ std::string offered_qos_profiles_yaml(const Qos& qos) {
   return e.c_str();
 }
 
-std::string rosbag2_metadata_yaml(const Rosbag2Metadata& m) {
-  YAML::Emitter e;
-  e << YAML::BeginMap << YAML::Key << "rosbag2_bagfile_information" << YAML::Value << YAML::BeginMap;
+namespace {
+
+// The BagMetadata map (rosbag2's YAML::convert<BagMetadata>::encode), without the top-level key.
+void emit_metadata(YAML::Emitter& e, const Rosbag2Metadata& m) {
+  e << YAML::BeginMap;
   e << YAML::Key << "version" << YAML::Value << m.version;
   e << YAML::Key << "storage_identifier" << YAML::Value << m.storage_identifier;
   e << YAML::Key << "duration" << YAML::Value << YAML::BeginMap << YAML::Key << "nanoseconds" << YAML::Value
@@ -86,8 +88,23 @@ std::string rosbag2_metadata_yaml(const Rosbag2Metadata& m) {
     e << YAML::EndMap;
   }
   e << YAML::EndSeq;
-  e << YAML::EndMap << YAML::EndMap;
+  e << YAML::EndMap;
+}
+
+}  // namespace
+
+std::string rosbag2_metadata_yaml(const Rosbag2Metadata& m) {
+  YAML::Emitter e;
+  e << YAML::BeginMap << YAML::Key << "rosbag2_bagfile_information" << YAML::Value;
+  emit_metadata(e, m);
+  e << YAML::EndMap;
   return std::string(e.c_str()) + "\n";
+}
+
+std::string rosbag2_serialized_metadata(const Rosbag2Metadata& m) {
+  YAML::Emitter e;
+  emit_metadata(e, m);
+  return e.c_str();
 }
 
 Result<Rosbag2Metadata> read_rosbag2_metadata(const std::string& bag_dir) {
@@ -235,10 +252,14 @@ Status Rosbag2Writer::write_parts(std::uint16_t channel_id, StampNs log_time_ns,
 
 Status Rosbag2Writer::close() {
   if (closed_) return Status::ok();
-  if (Status s = writer_->close(); !s) return s;
   metadata_.starting_time_ns = has_messages_ ? first_ns_ : 0;
   metadata_.duration_ns = has_messages_ ? last_ns_ - first_ns_ : 0;
   metadata_.files = {{file_name_, metadata_.starting_time_ns, metadata_.duration_ns, metadata_.message_count}};
+  if (Status s = writer_->write_metadata("rosbag2", {{"serialized_metadata", rosbag2_serialized_metadata(metadata_)}});
+      !s) {
+    return s;
+  }
+  if (Status s = writer_->close(); !s) return s;
   const fs::path yaml_path = fs::path(partial_dir_) / kRosbag2MetadataFile;
   {
     std::ofstream out(yaml_path, std::ios::binary | std::ios::trunc);

@@ -5,8 +5,10 @@
 //
 // metadata.yaml is written at version 5, the version ROS 2 Humble writes: Humble reads it, and Jazzy reads
 // every version up to its own (fields added later are optional for old versions, and QoS policies stay the
-// integers that versions <= 8 use; rosbag2_storage/yaml.hpp, qos.cpp). No "rosbag2" Metadata record is put in
-// the MCAP file, so a reader that opens the bare .mcap also takes the QoS integers as version <= 8.
+// integers that versions <= 8 use; rosbag2_storage/yaml.hpp, qos.cpp). The MCAP file also carries the same
+// metadata as a Metadata record "rosbag2" {serialized_metadata: ...}, as newer rosbag2 writes it: a reader that
+// opens the bare .mcap (Jazzy) takes its version from there, so it reads the QoS integers as version 5 (without
+// the record it would assume its own version and read them as policy names).
 //
 // Crash safety: everything is written into a hidden sibling directory (.<name>.partial-<pid>) that close()
 // renames to the final name after metadata.yaml is complete, so a bag under the final name is always whole.
@@ -74,6 +76,8 @@ struct Rosbag2Metadata {
 
 // metadata.yaml text (top-level key rosbag2_bagfile_information).
 std::string rosbag2_metadata_yaml(const Rosbag2Metadata& metadata);
+// The same map without the top-level key: the "serialized_metadata" of the MCAP Metadata record "rosbag2".
+std::string rosbag2_serialized_metadata(const Rosbag2Metadata& metadata);
 // Reads <bag_dir>/metadata.yaml. kNotFound without it; kCorruptData naming the file and key when a required
 // field is missing or malformed; kUnsupported for a storage other than mcap.
 Result<Rosbag2Metadata> read_rosbag2_metadata(const std::string& bag_dir);

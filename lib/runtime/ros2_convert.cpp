@@ -12,6 +12,11 @@ namespace faultline::runtime {
 
 void Ros2ConvertConfig::validate() const {
   if (output.empty()) throw ConfigError("bag convert: output = \"\": expected a bag directory");
+  if (output.size() > 5 && output.compare(output.size() - 5, 5, ".mcap") == 0) {
+    throw ConfigError("bag convert: output = \"" + output +
+                      "\": --format ros2 writes a rosbag2 directory (metadata.yaml + <name>_0.mcap); give a "
+                      "directory name");
+  }
   if (!bag::compression_from_string(compression)) {
     throw ConfigError("bag convert: compression = \"" + compression + "\": expected none, zstd or lz4");
   }

@@ -152,6 +152,17 @@ TEST_F(Rosbag2Test, McapHasRos2ProfileCdrChannelsAndRos2msgSchemas) {
   });
   ASSERT_TRUE(scan.is_ok());
   EXPECT_EQ(images, 3u);
+
+  // The "rosbag2" Metadata record: the metadata map (no top-level key) at version 5, as Jazzy reads it.
+  auto records = (*reader)->read_metadata();
+  ASSERT_TRUE(records.is_ok());
+  ASSERT_EQ(records->size(), 1u);
+  EXPECT_EQ((*records)[0].name, "rosbag2");
+  const YAML::Node m = YAML::Load((*records)[0].metadata.at("serialized_metadata"));
+  EXPECT_EQ(m["version"].as<int>(), 5);
+  EXPECT_EQ(m["message_count"].as<std::uint64_t>(), 4u);
+  EXPECT_EQ(m["topics_with_message_count"].size(), 2u);
+  EXPECT_EQ(m["files"][0]["path"].as<std::string>(), "run_0.mcap");
 }
 
 TEST_F(Rosbag2Test, InspectAgreesWithAnIntactBagAndNamesEachDisagreement) {

@@ -50,7 +50,9 @@ async function loadDataset(dataroot, version) {
   for (const c of await table("calibrated_sensor")) {
     const channel = sensors.get(c.sensor_token);
     if (!channel?.startsWith("CAM_")) continue;
-    calibrations.set(c.token, { channel, k: c.camera_intrinsic.flat(), translation: c.translation, rotation: c.rotation });
+    calibrations.set(c.token, {
+      channel, k: c.camera_intrinsic.flat(), translation: c.translation, rotation: c.rotation,
+    });
   }
   const files = new Map();  // `${channel}@${timestamp_us}` -> filename
   for (const sd of await table("sample_data")) {
@@ -234,6 +236,15 @@ async function validate(args) {
       const qos = parseYaml(t.topic_metadata.offered_qos_profiles)[0];
       const wantDurability = channel.topic === "/tf_static" ? 1 : 2;  // transient local : volatile
       if (qos.durability !== wantDurability) fail(`${channel.topic}: durability ${qos.durability}`);
+    }
+    // The "rosbag2" Metadata record (what Jazzy reads from a bare .mcap): the same metadata at the same version.
+    const records = [];
+    for await (const record of reader.readMetadata({ name: "rosbag2" })) records.push(record);
+    if (records.length !== 1) fail(`${records.length} "rosbag2" metadata records, expected 1`);
+    const embedded = parseYaml(records[0].metadata.get("serialized_metadata") ?? "", { intAsBigInt: true });
+    if (embedded?.version !== meta.version || embedded?.message_count !== meta.message_count ||
+        embedded?.topics_with_message_count?.length !== meta.topics_with_message_count.length) {
+      fail("the rosbag2 metadata record disagrees with metadata.yaml");
     }
     for (const [topic, n] of args.expect) {
       if ((counts.get(topic) ?? 0) !== n) fail(`${topic}: ${counts.get(topic) ?? 0} messages, expected ${n}`);

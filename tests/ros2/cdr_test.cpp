@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cstring>
+#include <random>
 #include <string>
 
 #include "ros2/cdr.hpp"
@@ -243,6 +244,46 @@ TEST(CdrReaderTest, EveryTruncationIsAnErrorNotACrash) {
   const std::string info = serialize(camera_info_from_k({{0, 0}, "cam"}, 2, 2, {1, 0, 0, 0, 1, 0, 0, 0, 1}));
   for (std::size_t n = 0; n < info.size(); ++n) {
     EXPECT_FALSE(deserialize<CameraInfo>(info.substr(0, n)).is_ok()) << n;
+  }
+}
+
+template <typename M>
+void DecodeRandomBytes(std::mt19937& rng) {
+  std::uniform_int_distribution<int> byte(0, 255), size(0, 96);
+  for (int i = 0; i < 500; ++i) {
+    std::string s(kCdrLeHeader);
+    const int n = size(rng);
+    for (int k = 0; k < n; ++k) s.push_back(static_cast<char>(byte(rng)));
+    auto r = deserialize<M>(s);  // ok or an error; never a crash or a huge allocation
+    if (!r.is_ok()) {
+      EXPECT_FALSE(r.status().message().empty());
+    }
+  }
+}
+
+TEST(CdrReaderTest, RandomBodiesDecodeOrFailCleanly) {
+  std::mt19937 rng(18);  // fixed seed: the same bytes every run
+  DecodeRandomBytes<CompressedImage>(rng);
+  DecodeRandomBytes<Image>(rng);
+  DecodeRandomBytes<CameraInfo>(rng);
+  DecodeRandomBytes<TFMessage>(rng);
+  DecodeRandomBytes<DiagnosticArray>(rng);
+  DecodeRandomBytes<MarkerArray>(rng);
+}
+
+TEST(CdrReaderTest, EveryFlippedByteOfAMarkerArrayDecodesOrFailsCleanly) {
+  MarkerArray a;
+  a.markers.resize(2);
+  a.markers[1].ns = "vehicle.car";
+  a.markers[1].points.resize(2);
+  const std::string good = serialize(a);
+  for (std::size_t i = 0; i < good.size(); ++i) {
+    std::string bad = good;
+    bad[i] = static_cast<char>(bad[i] ^ 0xA5);
+    auto r = deserialize<MarkerArray>(bad);
+    if (r.is_ok()) {
+      EXPECT_LE(r->markers.size(), 2u) << i;
+    }
   }
 }
 

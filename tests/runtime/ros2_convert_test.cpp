@@ -356,11 +356,13 @@ TEST_F(Ros2ConvertTest, FaultsMatchTheFoxgloveConvertAndRerunsAreByteIdentical) 
   EXPECT_EQ(faulted, counts->faulted_frames);
   EXPECT_EQ(c.images.size(), 12u);
 
-  // Same input, same seed: the same bytes.
-  auto again = convert(out("crash_ros2_b"), {"camera_crash/hard"});
+  // Same input, same seed: the same bytes (under the same bag name: the file name is part of the metadata).
+  auto again = convert(out("rerun/crash_ros2"), {"camera_crash/hard"});
   ASSERT_TRUE(again.is_ok());
   EXPECT_EQ(file_bytes(fs::path(dir) / "crash_ros2_0.mcap"),
-            file_bytes(fs::path(out("crash_ros2_b")) / "crash_ros2_b_0.mcap"));
+            file_bytes(fs::path(out("rerun/crash_ros2")) / "crash_ros2_0.mcap"));
+  EXPECT_EQ(file_bytes(fs::path(dir) / "metadata.yaml"),
+            file_bytes(fs::path(out("rerun/crash_ros2")) / "metadata.yaml"));
 
   std::map<std::string, std::uint64_t> expect = {{"/faultline/faults", counts->frames}};
   EXPECT_TRUE(node_validates(dir, dataroot(), expect));
