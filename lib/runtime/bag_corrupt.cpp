@@ -617,6 +617,7 @@ class Corrupter {
   Status open_output();
   Status add_channels();
   Status finish_output();
+  void update_bag_info(YAML::Node info, const std::string& file);
   Status on_message(std::size_t file, const bag::MessageView& m);
   Status flush();
   Status write(std::uint16_t channel, std::uint32_t seq, StampNs log_ns, StampNs publish_ns,
@@ -642,6 +643,7 @@ class Corrupter {
   std::map<std::uint16_t, std::string> channel_topic_;  // output channel -> topic
   std::map<std::string, std::uint64_t> topic_counts_;   // messages written per topic
   std::uint16_t faults_channel_ = 0;
+  std::vector<bag::Metadata> rosbag2_records_;  // "rosbag2" Metadata records, rewritten at the end
   bool any_written_ = false;
   StampNs first_ns_ = 0, last_ns_ = 0;
 
@@ -799,6 +801,10 @@ Status Corrupter::add_channels() {
   for (const auto& f : in_.files) {
     for (const auto& m : f.metadata) {
       if (!metadata.insert({m.name, m.metadata}).second) continue;
+      if (m.name == "rosbag2") {
+        rosbag2_records_.push_back(m);
+        continue;
+      }
       if (Status s = writer_->write_metadata(m.name, m.metadata); !s) return s;
     }
   }
@@ -1025,46 +1031,71 @@ Status Corrupter::on_message(std::size_t file, const bag::MessageView& m) {
   return Status::ok();
 }
 
+void Corrupter::update_bag_info(YAML::Node info, const std::string& file) {
+  const StampNs start = any_written_ ? first_ns_ : 0,
+                duration = any_written_ ? last_ns_ - first_ns_ : 0;
+  info["message_count"] = counts_.messages_out;
+  info["starting_time"]["nanoseconds_since_epoch"] = start;
+  info["duration"]["nanoseconds"] = duration;
+  YAML::Node topics = info["topics_with_message_count"];
+  if (!topics.IsSequence()) topics = YAML::Node(YAML::NodeType::Sequence);
+  for (YAML::Node t : topics) {
+    const std::string name = t["topic_metadata"]["name"].as<std::string>("");
+    t["message_count"] = topic_counts_.count(name) ? topic_counts_[name] : 0;
+  }
+  YAML::Node faults;
+  faults["topic_metadata"]["name"] = config_.faults_topic;
+  faults["topic_metadata"]["type"] = kDiagnosticType;
+  faults["topic_metadata"]["serialization_format"] = "cdr";
+  faults["topic_metadata"]["offered_qos_profiles"] =
+      bag::offered_qos_profiles_yaml(bag::Qos::reliable());
+  faults["message_count"] = counts_.fault_events;
+  topics.push_back(faults);
+  info["topics_with_message_count"] = topics;
+  info["compression_format"] = "";
+  info["compression_mode"] = "";
+  YAML::Node paths(YAML::NodeType::Sequence);
+  paths.push_back(file);
+  info["relative_file_paths"] = paths;
+  if (info["files"] || info["version"].as<int>(0) >= 5) {
+    YAML::Node files(YAML::NodeType::Sequence), f;
+    f["path"] = file;
+    f["starting_time"]["nanoseconds_since_epoch"] = start;
+    f["duration"]["nanoseconds"] = duration;
+    f["message_count"] = counts_.messages_out;
+    files.push_back(f);
+    info["files"] = files;
+  }
+}
+
 Status Corrupter::finish_output() {
+  const std::string file = (in_.rosbag2 ? mcap_path_ : final_path_).filename().string();
+  // rosbag2's own Metadata record (what `ros2 bag` reads from a bare .mcap): its serialized
+  // BagMetadata gets the output's counts, times, faults topic and file, as metadata.yaml does.
+  // Written last, once counted.
+  for (bag::Metadata m : rosbag2_records_) {
+    const auto it = m.metadata.find("serialized_metadata");
+    if (it != m.metadata.end()) {
+      try {
+        YAML::Node info = YAML::Load(it->second);
+        if (info.IsMap()) {
+          update_bag_info(info, file);
+          YAML::Emitter e;
+          e << info;
+          it->second = e.c_str();
+        }
+      } catch (const YAML::Exception&) {
+        // Not YAML: copied as it is, like any other Metadata record.
+      }
+    }
+    if (Status s = writer_->write_metadata(m.name, m.metadata); !s) return s;
+  }
   if (Status s = writer_->close(); !s) return s;
   writer_.reset();
   std::error_code ec;
   if (in_.rosbag2) {
     YAML::Node root = YAML::Clone(in_.metadata);
-    YAML::Node info = root["rosbag2_bagfile_information"];
-    const StampNs start = any_written_ ? first_ns_ : 0,
-                  duration = any_written_ ? last_ns_ - first_ns_ : 0;
-    info["message_count"] = counts_.messages_out;
-    info["starting_time"]["nanoseconds_since_epoch"] = start;
-    info["duration"]["nanoseconds"] = duration;
-    YAML::Node topics = info["topics_with_message_count"];
-    for (YAML::Node t : topics) {
-      const std::string name = t["topic_metadata"]["name"].as<std::string>("");
-      t["message_count"] = topic_counts_.count(name) ? topic_counts_[name] : 0;
-    }
-    YAML::Node faults;
-    faults["topic_metadata"]["name"] = config_.faults_topic;
-    faults["topic_metadata"]["type"] = kDiagnosticType;
-    faults["topic_metadata"]["serialization_format"] = "cdr";
-    faults["topic_metadata"]["offered_qos_profiles"] =
-        bag::offered_qos_profiles_yaml(bag::Qos::reliable());
-    faults["message_count"] = counts_.fault_events;
-    topics.push_back(faults);
-    const std::string file = mcap_path_.filename().string();
-    info["compression_format"] = "";
-    info["compression_mode"] = "";
-    YAML::Node paths(YAML::NodeType::Sequence);
-    paths.push_back(file);
-    info["relative_file_paths"] = paths;
-    if (info["files"] || info["version"].as<int>(0) >= 5) {
-      YAML::Node files(YAML::NodeType::Sequence), f;
-      f["path"] = file;
-      f["starting_time"]["nanoseconds_since_epoch"] = start;
-      f["duration"]["nanoseconds"] = duration;
-      f["message_count"] = counts_.messages_out;
-      files.push_back(f);
-      info["files"] = files;
-    }
+    update_bag_info(root["rosbag2_bagfile_information"], file);
     YAML::Emitter e;
     e << root;
     const fs::path yaml_path = partial_path_ / bag::kRosbag2MetadataFile;

@@ -416,6 +416,14 @@ TEST_F(BagCorruptTest, RosbagDirectoryPassThroughIsByteIdenticalAndFramesMatchCo
     const std::uint64_t expected = t.name == "/faultline/faults" ? 3 * kFrames : kFrames;
     EXPECT_EQ(t.message_count, expected) << t.name;
   }
+  auto records =
+      (*bag::Reader::open((fs::path(cfg.output) / "out_bag_0.mcap").string()))->read_metadata();
+  ASSERT_TRUE(records);
+  ASSERT_EQ(records->size(), 1u);  // the writer's "rosbag2" record, rewritten for the output
+  const std::string serialized = (*records)[0].metadata.at("serialized_metadata");
+  EXPECT_NE(serialized.find("message_count: 90"), std::string::npos) << serialized;
+  EXPECT_NE(serialized.find("name: /faultline/faults"), std::string::npos) << serialized;
+  EXPECT_NE(serialized.find("- out_bag_0.mcap"), std::string::npos) << serialized;
   const auto in_meta = bag::read_rosbag2_metadata(in);
   EXPECT_EQ(meta->starting_time_ns, in_meta->starting_time_ns);
   EXPECT_EQ(meta->duration_ns, in_meta->duration_ns);
@@ -438,6 +446,12 @@ TEST_F(BagCorruptTest, McapFileKeepsSequencesPublishTimesExtraChannelMetadataAnd
   ASSERT_EQ(metadata->size(), 1u);
   EXPECT_EQ((*metadata)[0].name, "rosbag2");
   EXPECT_EQ((*metadata)[0].metadata.at("ros_distro"), "jazzy");
+  // rosbag2's serialized BagMetadata describes the output: its counts, the faults topic, its file.
+  const std::string serialized = (*metadata)[0].metadata.at("serialized_metadata");
+  EXPECT_NE(serialized.find("version: 9"), std::string::npos) << serialized;
+  EXPECT_NE(serialized.find("message_count: 90"), std::string::npos) << serialized;
+  EXPECT_NE(serialized.find("name: /faultline/faults"), std::string::npos) << serialized;
+  EXPECT_NE(serialized.find("- out.mcap"), std::string::npos) << serialized;
   expect_pass_through(a, b);
   expect_corrupted_as_events_say(a, b);
   // The faulted frames keep their sequence and times too.
@@ -456,7 +470,8 @@ TEST_F(BagCorruptTest, OneAndTwoThreadsWriteTheSameBytes) {
   const std::string in = write_mcap();
   std::string bytes[2];
   for (int threads : {1, 2}) {
-    auto cfg = config(in, "out" + std::to_string(threads) + ".mcap");
+    // Same file name in two directories: rosbag2's Metadata record names the output file.
+    auto cfg = config(in, "t" + std::to_string(threads) + "/out.mcap");
     cfg.threads = threads;
     cfg.batch_frames_per_thread = 1;
     add_faults(cfg);
