@@ -421,6 +421,7 @@ struct Job {
 
 struct Worker {
   Codecs codecs;
+  cv::Mat bgr;  // the decoded frame, its buffer reused from frame to frame
   std::unique_ptr<policy::FaultEngine> owned;
   // Renders corruptions: its own engine, or the deciding one when faults are coherent.
   policy::FaultEngine* engine = nullptr;
@@ -504,7 +505,9 @@ void process(Job& job, const FaultedTopic& topic, bool keep_good, int quality, W
     job.good = std::move(m);
     return;
   }
-  cv::Mat bgr;
+  cv::Mat& bgr = w.bgr;
+  if (bgr.u != nullptr && bgr.u->refcount > 1)
+    bgr.release();  // shared (e.g. kept by a corruptor): not ours
   if (Status s = to_bgr(m, w.codecs, bgr); !s) {
     job.error = s;
     return;
@@ -531,19 +534,18 @@ void process(Job& job, const FaultedTopic& topic, bool keep_good, int quality, W
   if (action != policy::Action::Black) job.good = std::move(m);
 }
 
+// Runs fn over 0..n-1 on one thread per worker (also for a single worker: the calling thread's
+// malloc arena returns freed frame buffers to the system, and faulting them back in cost up to 4x
+// the CPU per frame).
 void run_parallel(std::size_t n, std::vector<Worker>& workers,
                   const std::function<void(std::size_t, Worker&)>& fn) {
-  if (workers.size() == 1 || n <= 1) {
-    for (std::size_t i = 0; i < n; ++i) fn(i, workers[0]);
-    return;
-  }
+  if (n == 0) return;
   std::atomic<std::size_t> next{0};
   auto loop = [&](Worker& w) {
     for (std::size_t i = next++; i < n; i = next++) fn(i, w);
   };
   std::vector<std::thread> pool;
-  for (std::size_t t = 1; t < workers.size(); ++t) pool.emplace_back(loop, std::ref(workers[t]));
-  loop(workers[0]);
+  for (auto& w : workers) pool.emplace_back(loop, std::ref(w));
   for (auto& t : pool) t.join();
 }
 
