@@ -534,9 +534,9 @@ void process(Job& job, const FaultedTopic& topic, bool keep_good, int quality, W
   if (action != policy::Action::Black) job.good = std::move(m);
 }
 
-// Runs fn over 0..n-1 on one thread per worker (also for a single worker: the calling thread's
-// malloc arena returns freed frame buffers to the system, and faulting them back in cost up to 4x
-// the CPU per frame).
+// Runs fn over 0..n-1 on one thread per worker, also for a single worker: on the calling thread about
+// half the runs cost 4x the CPU per frame (bench/results/bag_corrupt.txt; likely its malloc arena
+// returning freed frame buffers to the system, not profiled).
 void run_parallel(std::size_t n, std::vector<Worker>& workers,
                   const std::function<void(std::size_t, Worker&)>& fn) {
   if (n == 0) return;
