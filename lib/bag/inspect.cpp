@@ -24,8 +24,7 @@ Result<BagInfo> inspect_bag(const std::string& path) {
     switch (static_cast<Opcode>(r.opcode)) {
       case Opcode::kHeader: {
         ByteReader br(r.content);
-        std::string profile;
-        if (br.str(profile)) (void)br.str(info.library);
+        if (br.str(info.profile)) (void)br.str(info.library);
         break;
       }
       case Opcode::kChunk: {
@@ -106,6 +105,78 @@ Result<BagInfo> inspect_bag(const std::string& path) {
   std::sort(info.problems.begin(), info.problems.end(),
             [](const Problem& a, const Problem& b) { return a.offset < b.offset; });
   return info;
+}
+
+bool Rosbag2Info::intact() const {
+  if (!disagreements.empty()) return false;
+  for (const auto& f : files) {
+    if (!f.intact()) return false;
+  }
+  return true;
+}
+
+Result<Rosbag2Info> inspect_rosbag2(const std::string& bag_dir) {
+  auto metadata = read_rosbag2_metadata(bag_dir);
+  if (!metadata) return metadata.status();
+  Rosbag2Info out;
+  out.metadata = std::move(metadata).value();
+  const Rosbag2Metadata& m = out.metadata;
+  std::map<std::string, std::uint64_t> counts;  // topic -> messages in the files
+  std::map<std::string, std::string> types;     // topic -> schema name
+  std::uint64_t messages = 0;
+  StampNs start = 0, end = 0;
+  bool any = false;
+  for (const auto& rel : m.relative_file_paths) {
+    const std::string path = bag_dir + "/" + rel;
+    auto info = inspect_bag(path);
+    if (!info) {
+      out.disagreements.push_back(rel + ": " + info.status().to_string());
+      continue;
+    }
+    for (const auto& t : info->topics) {
+      counts[t.topic] += t.messages;
+      types[t.topic] = t.schema_name;
+    }
+    if (info->messages > 0) {
+      start = any ? std::min(start, info->start_ns) : info->start_ns;
+      end = any ? std::max(end, info->end_ns) : info->end_ns;
+      any = true;
+    }
+    messages += info->messages;
+    out.paths.push_back(path);
+    out.files.push_back(std::move(info).value());
+  }
+  auto differ = [&](const std::string& what, auto yaml, auto file) {
+    if (yaml != file) {
+      out.disagreements.push_back(what + ": metadata.yaml " + std::to_string(yaml) + ", files " + std::to_string(file));
+    }
+  };
+  if (out.files.size() == m.relative_file_paths.size()) {
+    differ("message_count", m.message_count, messages);
+    if (any) {
+      differ("starting_time", m.starting_time_ns, start);
+      differ("duration", m.duration_ns, end - start);
+    }
+    for (const auto& t : m.topics) {
+      const auto it = counts.find(t.name);
+      if (it == counts.end()) {
+        if (t.message_count > 0) out.disagreements.push_back(t.name + ": in metadata.yaml, in no file");
+        continue;
+      }
+      differ(t.name + " message_count", t.message_count, it->second);
+      if (types[t.name] != t.type) {
+        out.disagreements.push_back(t.name + ": type " + t.type + " in metadata.yaml, " + types[t.name] +
+                                    " in the file");
+      }
+    }
+    for (const auto& [topic, n] : counts) {
+      const bool listed = std::any_of(m.topics.begin(), m.topics.end(), [&](const auto& t) { return t.name == topic; });
+      if (!listed && n > 0) {
+        out.disagreements.push_back(topic + ": " + std::to_string(n) + " messages, not in metadata.yaml");
+      }
+    }
+  }
+  return out;
 }
 
 }  // namespace faultline::bag

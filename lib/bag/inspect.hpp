@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "bag/reader.hpp"
+#include "bag/rosbag2.hpp"
 #include "common/status.hpp"
 
 namespace faultline::bag {
@@ -26,6 +27,7 @@ struct TopicInfo {
 
 struct BagInfo {
   std::uint64_t file_bytes = 0;
+  std::string profile;                       // Header.profile: "" or "ros2"
   std::string library;
   std::vector<TopicInfo> topics;             // by channel id
   std::vector<std::string> schemas;          // names, by schema id
@@ -46,5 +48,17 @@ struct BagInfo {
 
 // kNotFound / kCorruptData (bad magic) when the file cannot be read at all.
 Result<BagInfo> inspect_bag(const std::string& path);
+
+// A rosbag2 directory: its metadata.yaml, every MCAP file it lists (inspected as above), and every way the two
+// disagree (file missing, topic missing on either side, type, message counts, start, duration).
+struct Rosbag2Info {
+  Rosbag2Metadata metadata;
+  std::vector<std::string> paths;  // the files, as opened
+  std::vector<BagInfo> files;      // by relative_file_paths; an unreadable file is a disagreement
+  std::vector<std::string> disagreements;
+  bool intact() const;             // no disagreement and every file intact
+};
+// Errors: metadata.yaml missing or malformed (read_rosbag2_metadata).
+Result<Rosbag2Info> inspect_rosbag2(const std::string& bag_dir);
 
 }  // namespace faultline::bag

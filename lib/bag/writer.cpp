@@ -82,7 +82,7 @@ Status Writer::start_file() {
   ByteWriter w(out_);
   w.raw(kMagic);
   const auto rec = w.begin_record(Opcode::kHeader);
-  w.str("");  // protobuf has no registered profile
+  w.str(options_.profile);
   w.str(options_.library);
   w.finish_record(rec);
   return emit(out_);

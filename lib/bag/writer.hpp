@@ -44,6 +44,7 @@ struct WriterOptions {
   StampNs split_ns = 0;                          // start a new file after this log-time span; 0 = never
   bool sync_chunks = false;                      // fdatasync after each chunk (power-loss safety; slow)
   std::string library = "faultline/0.1.0";       // Header.library
+  std::string profile;                           // Header.profile: "" (protobuf has none) or "ros2"
 };
 
 // Totals over all files written so far (for stop lines and benchmarks).

@@ -1,5 +1,9 @@
-// `faultline corrupt`: applies one image corruption to a file (OpenCV I/O, BGR array as loaded).
+// `faultline corrupt`: applies one image corruption to a file (OpenCV I/O, BGR array as loaded). A .jpg/.jpeg output
+// is encoded with the codec every other Faultline JPEG goes through (TurboJPEG, 4:2:0, quality 95 by default), so a
+// frame corrupted here has the bytes the injector, `export` and `bag corrupt` write for the same seed.
 #include <CLI/CLI.hpp>
+#include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -52,6 +56,7 @@ int run(int argc, char** argv) {
   std::uint32_t seed = 0;
   std::optional<double> angle;
   bool allow_partial = false;
+  int jpeg_quality = 95;
   app.add_option("--type", type_name, "brightness, dark, fog, snow, motion_blur or color_quant")->required();
   auto* sev_opt = app.add_option("--severity", severity, "1..5 as the reference numbers them (0 = off)");
   auto* level_opt = app.add_option("--level", level_name, "easy, mid or hard (nuScenes-C's mapping)");
@@ -61,6 +66,9 @@ int run(int argc, char** argv) {
   app.add_option("--angle", angle, "motion_blur: inject the blur angle in degrees instead of drawing it");
   app.add_option("--in", in_path, "input image")->required();
   app.add_option("--out", out_path, "output image (use .png for lossless)")->required();
+  app.add_option("--jpeg-quality", jpeg_quality, "quality of a .jpg/.jpeg output (TurboJPEG, 4:2:0)")
+      ->check(CLI::Range(1, 100))
+      ->capture_default_str();
   app.add_flag("--allow-partial", allow_partial,
                "corrupt a truncated or damaged JPEG as a decoder renders it, with a warning "
                "(default: refuse it)");
@@ -122,6 +130,20 @@ int run(int argc, char** argv) {
   if (!out) {
     std::fprintf(stderr, "faultline corrupt: %s\n", out.status().to_string().c_str());
     return 1;
+  }
+  std::string ext = out_path.substr(std::min(out_path.size(), out_path.rfind('.') + 1));
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+  if (out_path.find('.') != std::string::npos && (ext == "jpg" || ext == "jpeg")) {
+    auto jpeg = codec::encode_jpeg(*out, jpeg_quality);
+    std::ofstream file(out_path, std::ios::binary | std::ios::trunc);
+    if (jpeg) file.write(reinterpret_cast<const char*>(jpeg->data()), static_cast<std::streamsize>(jpeg->size()));
+    file.close();
+    if (!jpeg || !file) {
+      std::fprintf(stderr, "faultline corrupt: cannot write output image '%s'%s%s\n", out_path.c_str(),
+                   jpeg ? "" : ": ", jpeg ? "" : jpeg.status().message().c_str());
+      return 1;
+    }
+    return 0;
   }
   bool written = false;
   try {

@@ -68,11 +68,8 @@ Result<std::map<std::string, std::vector<bag::GtBox>>> load_gt_boxes(const std::
   return out;
 }
 
-namespace {
-
-// The player's CameraFrame header (camera_frame_header) with dataset-time publish stamps.
-msgs::CameraFrame frame_header(const dataset::CameraFrameRecord& f, std::uint64_t seq, const std::string& publisher,
-                               std::size_t payload_bytes) {
+msgs::CameraFrame convert_frame_header(const dataset::CameraFrameRecord& f, std::uint64_t seq,
+                                       const std::string& publisher, std::size_t payload_bytes) {
   msgs::CameraFrame h = camera_frame_header(f);
   auto* hdr = h.mutable_header();
   hdr->set_seq(seq);
@@ -82,8 +79,6 @@ msgs::CameraFrame frame_header(const dataset::CameraFrameRecord& f, std::uint64_
   h.set_payload_bytes(static_cast<std::uint32_t>(payload_bytes));
   return h;
 }
-
-}  // namespace
 
 struct BagConverter::Impl {
   ConvertConfig cfg;
@@ -264,7 +259,7 @@ Result<ConvertCounts> BagConverter::run(const std::atomic<bool>& stop, const Con
     } else {
       const std::string topic = camera_topic(f.channel);
       const StampNs log_ns = f.timestamp_us * 1000;
-      const msgs::CameraFrame h = frame_header(f, m.next_seq(topic), m.cfg.publisher, (*image)->size());
+      const msgs::CameraFrame h = convert_frame_header(f, m.next_seq(topic), m.cfg.publisher, (*image)->size());
       const std::string_view jpeg(reinterpret_cast<const char*>((*image)->data()), (*image)->size());
       m.counts.image_bytes += jpeg.size();
       if (m.cfg.clean_frames || !m.policy) m.write_frame(topic, h, jpeg, log_ns, /*with_tf=*/true);

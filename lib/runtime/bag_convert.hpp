@@ -63,6 +63,11 @@ Result<std::map<std::string, std::vector<bag::GtBox>>> load_gt_boxes(const std::
                                                                      const std::string& version,
                                                                      const std::set<std::string>& sample_tokens);
 
+// The player's CameraFrame header (camera_frame_header) with dataset-time publish stamps: what a converted
+// frame carries and what the fault policy sees.
+msgs::CameraFrame convert_frame_header(const dataset::CameraFrameRecord& f, std::uint64_t seq,
+                                       const std::string& publisher, std::size_t payload_bytes);
+
 // done / total camera frames; called every few frames and once at the end.
 using ConvertProgressFn = std::function<void(std::uint64_t done, std::uint64_t total)>;
 
