@@ -200,7 +200,7 @@ struct InBridge::Impl {
   void bad_image(const Camera& cam, const std::string& why) {
     ++counts.bad_images;
     if (bad_limiter.allow()) {
-      log->warn("{}: {}; frame dropped ({} bad so far)", cam.ros_topic, why, counts.bad_images);
+      log->warn("{}: {}; frame dropped ({} bad so far)", cam.ros_topic, why, counts.bad_images.load());
     }
   }
 
@@ -365,16 +365,17 @@ int InBridge::run(const std::atomic<bool>& stop) {
     m.check_qos();
     if (period > 0 && monotonic_now_ns() >= next_log) {
       m.log->info("frames_in={} frames_out={} bad_images={} camera_infos={} type_mismatch={} incompatible_qos={}",
-                  c.frames_in, c.frames_out, c.bad_images, c.camera_infos, c.type_mismatch, c.incompatible_qos);
+                  c.frames_in.load(), c.frames_out.load(), c.bad_images.load(), c.camera_infos.load(), c.type_mismatch.load(), c.incompatible_qos.load());
       next_log = monotonic_now_ns() + period;
     }
     if (m.cfg.max_frames > 0 && c.frames_out >= static_cast<std::uint64_t>(m.cfg.max_frames)) break;
   }
+  m.check_qos();
   if (!stop.load()) m.pub.set_linger(1000);  // a finite run delivers what is queued
   m.log->info("stopped: frames_in={} frames_out={} bad_images={} camera_infos={} tf_static={} type_mismatch={} "
               "incompatible_qos={}",
-              c.frames_in, c.frames_out, c.bad_images, c.camera_infos, c.tf_static, c.type_mismatch,
-              c.incompatible_qos);
+              c.frames_in.load(), c.frames_out.load(), c.bad_images.load(), c.camera_infos.load(), c.tf_static.load(), c.type_mismatch.load(),
+              c.incompatible_qos.load());
   return rc;
 }
 

@@ -68,14 +68,15 @@ struct InBridgeConfig {
   void validate() const;  // throws ConfigError naming the key and value
 };
 
+// Counters, written by the bridge's thread; safe to read from any thread while it runs.
 struct InBridgeCounts {
-  std::uint64_t frames_in = 0;         // image samples taken from DDS
-  std::uint64_t frames_out = 0;        // CameraFrames sent
-  std::uint64_t bad_images = 0;        // undecodable / unsupported encoding / wrong size: dropped
-  std::uint64_t camera_infos = 0;
-  std::uint64_t tf_static = 0;         // transforms received
-  std::uint64_t type_mismatch = 0;     // writers of a non-image type on a configured topic
-  std::uint64_t incompatible_qos = 0;  // writers whose QoS never matched (sum over readers)
+  std::atomic<std::uint64_t> frames_in = 0;         // image samples taken from DDS
+  std::atomic<std::uint64_t> frames_out = 0;        // CameraFrames sent
+  std::atomic<std::uint64_t> bad_images = 0;        // undecodable / unsupported encoding / wrong size: dropped
+  std::atomic<std::uint64_t> camera_infos = 0;
+  std::atomic<std::uint64_t> tf_static = 0;         // transforms received
+  std::atomic<std::uint64_t> type_mismatch = 0;     // writers of a non-image type on a configured topic
+  std::atomic<std::uint64_t> incompatible_qos = 0;  // writers whose QoS never matched (sum over readers)
 };
 
 // The Faultline topic of a ROS image topic: prefix + topic, then remapped.

@@ -190,13 +190,13 @@ struct OutBridge::Impl {
     }
     if (Status s = w.write(sample); !s) {
       ++counts.write_failures;
-      if (write_limiter.allow()) log->warn("{} ({} failures so far)", s.message(), counts.write_failures);
+      if (write_limiter.allow()) log->warn("{} ({} failures so far)", s.message(), counts.write_failures.load());
     }
   }
 
   void malformed(const std::string& topic, const std::string& why) {
     ++counts.malformed;
-    if (bad_limiter.allow()) log->warn("{}: {}; dropped ({} so far)", topic, why, counts.malformed);
+    if (bad_limiter.allow()) log->warn("{}: {}; dropped ({} so far)", topic, why, counts.malformed.load());
   }
 
   void on_frame(const std::string& topic, const transport::CameraFrameView& view) {
@@ -394,8 +394,8 @@ int OutBridge::run(const std::atomic<bool>& stop) {
       m.check_qos();
       m.log->info("frames_in={} frames_out={} events={} malformed={} transport_drops={} write_failures={} "
                   "incompatible_qos={}",
-                  c.frames_in, c.frames_out, c.events, c.malformed, c.transport_drops, c.write_failures,
-                  c.incompatible_qos);
+                  c.frames_in.load(), c.frames_out.load(), c.events.load(), c.malformed.load(), c.transport_drops.load(), c.write_failures.load(),
+                  c.incompatible_qos.load());
       next_log = monotonic_now_ns() + period;
     }
     if (!r) {
@@ -437,8 +437,8 @@ int OutBridge::run(const std::atomic<bool>& stop) {
   if (finished) m.flush();
   m.log->info("stopped: frames_in={} frames_out={} events={} malformed={} transport_drops={} write_failures={} "
               "incompatible_qos={}",
-              c.frames_in, c.frames_out, c.events, c.malformed, c.transport_drops, c.write_failures,
-              c.incompatible_qos);
+              c.frames_in.load(), c.frames_out.load(), c.events.load(), c.malformed.load(), c.transport_drops.load(), c.write_failures.load(),
+              c.incompatible_qos.load());
   return rc;
 }
 

@@ -80,14 +80,15 @@ struct OutBridgeConfig {
   void validate() const;  // throws ConfigError naming the key and value
 };
 
+// Counters, written by the bridge's thread; safe to read from any thread while it runs.
 struct OutBridgeCounts {
-  std::uint64_t frames_in = 0;        // CameraFrames received
-  std::uint64_t frames_out = 0;       // images written to DDS
-  std::uint64_t events = 0;           // DiagnosticArrays written
-  std::uint64_t malformed = 0;        // unparsable messages or undecodable JPEG (raw output): dropped
-  std::uint64_t transport_drops = 0;  // seq gaps on the ZeroMQ input
-  std::uint64_t write_failures = 0;   // DDS writes that failed (frame lost)
-  std::uint64_t incompatible_qos = 0; // readers whose QoS never matched (sum over writers)
+  std::atomic<std::uint64_t> frames_in = 0;        // CameraFrames received
+  std::atomic<std::uint64_t> frames_out = 0;       // images written to DDS
+  std::atomic<std::uint64_t> events = 0;           // DiagnosticArrays written
+  std::atomic<std::uint64_t> malformed = 0;        // unparsable messages or undecodable JPEG (raw output): dropped
+  std::atomic<std::uint64_t> transport_drops = 0;  // seq gaps on the ZeroMQ input
+  std::atomic<std::uint64_t> write_failures = 0;   // DDS writes that failed (frame lost)
+  std::atomic<std::uint64_t> incompatible_qos = 0; // readers whose QoS never matched (sum over writers)
 };
 
 // The ROS topic of a Faultline camera topic (rule above); "" when it does not start with strip_prefix + "/".
