@@ -10,6 +10,8 @@
 #include "camera_frame.pb.h"
 #include "codec/jpeg.hpp"
 #include "common/config.hpp"
+#include "policy/fault_spec.hpp"
+#include "policy/temporal_draws.hpp"
 #include "ros2dds/convert.hpp"
 #include "ros2dds/dds.hpp"
 #include "ros2dds/tf_tree.hpp"
@@ -37,8 +39,8 @@ void InBridgeConfig::validate() const {
   }
   for (const auto& [topic, name] : channels) {
     if (!seen.count(topic)) throw ConfigError("channels." + topic + ": not one of topics");
-    if (name.empty()) throw ConfigError("channels." + topic + " = '': empty camera name");
   }
+  (void)assign_cameras(*this);
   for (const auto& [topic, info] : camera_info) {
     if (!seen.count(topic)) throw ConfigError("camera_info." + topic + ": not one of topics");
     if (!info.empty()) {
@@ -53,6 +55,42 @@ void InBridgeConfig::validate() const {
     throw ConfigError("output_prefix = '" + output_prefix + "': expected /name (no trailing '/')");
   }
   if (max_frames < 0) throw ConfigError("max_frames = " + std::to_string(max_frames) + ": must be >= 0");
+}
+
+std::vector<std::string> assign_cameras(const InBridgeConfig& config) {
+  std::vector<std::string> names(config.topics.size());
+  std::set<std::string> used;
+  auto take = [&](std::size_t i, const std::string& name, const char* how) {
+    if (policy::camera_index(name) < 0) {
+      throw ConfigError("channels." + config.topics[i] + " = " + name +
+                        ": unknown camera (the fault engine knows CAM_FRONT, CAM_FRONT_RIGHT, CAM_FRONT_LEFT, "
+                        "CAM_BACK, CAM_BACK_LEFT, CAM_BACK_RIGHT)");
+    }
+    if (!used.insert(name).second) {
+      throw ConfigError(std::string("topics: ") + config.topics[i] + " would be camera " + name + " (" + how +
+                        "), which another topic already is; name the cameras with channels");
+    }
+    names[i] = name;
+  };
+  for (std::size_t i = 0; i < config.topics.size(); ++i) {  // explicit names first
+    auto it = config.channels.find(config.topics[i]);
+    if (it != config.channels.end()) take(i, it->second, "channels");
+  }
+  for (std::size_t i = 0; i < config.topics.size(); ++i) {  // then topics named like a camera
+    const std::string derived = channel_from_topic(config.topics[i]);
+    if (names[i].empty() && policy::camera_index(derived) >= 0 && !used.count(derived)) take(i, derived, "its namespace");
+  }
+  for (std::size_t i = 0; i < config.topics.size(); ++i) {  // then the rest in camera order
+    if (!names[i].empty()) continue;
+    for (int c = 0; c < policy::kNumCameras && names[i].empty(); ++c) {
+      if (!used.count(policy::kCameraNames[c])) take(i, policy::kCameraNames[c], "in order");
+    }
+    if (names[i].empty()) {
+      throw ConfigError("topics: " + config.topics[i] + ": more than six topics; the fault engine has six cameras "
+                        "(run a second ros2_in and injector for more)");
+    }
+  }
+  return names;
 }
 
 std::string faultline_topic(const InBridgeConfig& config, const std::string& ros_topic) {
@@ -125,11 +163,12 @@ struct InBridge::Impl {
         discovery(participant),
         waitset(participant) {
     const TopicQos default_qos = parse_qos(cfg.qos).value();
-    for (const auto& topic : cfg.topics) {
+    const std::vector<std::string> names = assign_cameras(cfg);
+    for (std::size_t i = 0; i < cfg.topics.size(); ++i) {
+      const std::string& topic = cfg.topics[i];
       Camera cam;
       cam.ros_topic = topic;
-      auto ch = cfg.channels.find(topic);
-      cam.channel = ch != cfg.channels.end() ? ch->second : channel_from_topic(topic);
+      cam.channel = names[i];
       cam.out_topic = faultline_topic(cfg, topic);
       auto info = cfg.camera_info.find(topic);
       cam.info_topic = info != cfg.camera_info.end() ? info->second : camera_info_topic(topic);

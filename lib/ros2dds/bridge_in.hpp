@@ -8,8 +8,11 @@
 // CameraInfo next to each image topic gives K and the size; /tf_static, when some node publishes it, gives the
 // camera's extrinsics (the chain from base_frame to the image's frame_id).
 //
-// Each frame goes out on output_prefix + the ROS topic (/ros2/front/image_raw/compressed), camera = the topic's
-// namespace upper-cased (FRONT) unless `channels` names it, header.frame_id and capture stamp from the ROS header.
+// Each frame goes out on output_prefix + the ROS topic (/ros2/front/image_raw/compressed), with header.frame_id and
+// capture stamp from the ROS header. Its camera is one of the six nuScenes names, the only cameras the fault engine
+// (and fault specs) know: `channels` names it, else the topic's namespace upper-cased when it is one
+// (/cam_front/image_raw -> CAM_FRONT), else the next unused one in CAM_FRONT, CAM_FRONT_RIGHT, CAM_FRONT_LEFT,
+// CAM_BACK, CAM_BACK_LEFT, CAM_BACK_RIGHT order. So one ros2_in carries at most six topics.
 #pragma once
 
 #include <spdlog/logger.h>
@@ -30,7 +33,7 @@ struct InBridgeConfig {
   std::vector<std::string> topics;          // ROS image topics to subscribe (at least one)
   std::string qos = "default";              // image and CameraInfo QoS: default | sensor_data | reliable,10 ...
   std::map<std::string, std::string> topic_qos;    // per-topic QoS overrides (ROS topic -> spec)
-  std::map<std::string, std::string> channels;     // camera name per image topic (default: from the topic)
+  std::map<std::string, std::string> channels;     // nuScenes camera name per image topic (default: see above)
   std::map<std::string, std::string> camera_info;  // CameraInfo topic per image topic ("" = none; default sibling)
   bool tf_static = true;                    // read /tf_static for extrinsics
   std::string base_frame = "base_link";     // extrinsics are camera -> base_frame
@@ -51,7 +54,7 @@ struct InBridgeConfig {
     v("topics", topics, "ROS 2 image topics (CompressedImage or Image, found by discovery)");
     v("qos", qos, "QoS of the subscriptions: default | sensor_data | reliable|best_effort,<depth>");
     v("topic_qos", topic_qos, "per-topic QoS (ROS topic -> spec)");
-    v("channels", channels, "camera name per image topic (default: topic namespace, upper case)");
+    v("channels", channels, "nuScenes camera name per image topic, e.g. CAM_FRONT (default: in topic order)");
     v("camera_info", camera_info, "CameraInfo topic per image topic (\"\" = none; default <ns>/camera_info)");
     v("tf_static", tf_static, "read /tf_static for the cameras' extrinsics");
     v("base_frame", base_frame, "frame the extrinsics are expressed in");
@@ -76,8 +79,12 @@ struct InBridgeCounts {
   std::atomic<std::uint64_t> camera_infos = 0;
   std::atomic<std::uint64_t> tf_static = 0;         // transforms received
   std::atomic<std::uint64_t> type_mismatch = 0;     // writers of a non-image type on a configured topic
-  std::atomic<std::uint64_t> incompatible_qos = 0;  // writers whose QoS never matched (sum over readers)
+  std::atomic<std::uint64_t> incompatible_qos = 0;  // QoS mismatches DDS reported (per match attempt; sum)
 };
+
+// The camera name of each of config.topics, in order (rule above). Throws ConfigError naming the topic for an
+// unknown or repeated name, or a seventh topic.
+std::vector<std::string> assign_cameras(const InBridgeConfig& config);
 
 // The Faultline topic of a ROS image topic: prefix + topic, then remapped.
 std::string faultline_topic(const InBridgeConfig& config, const std::string& ros_topic);

@@ -142,6 +142,9 @@ struct OutBridge::Impl {
       diagnostics = std::make_unique<Writer>(participant, &diagnostic_msgs_msg_dds__DiagnosticArray__desc,
                                              cfg.diagnostics_topic, qos_for(cfg.diagnostics_topic));
     }
+    for (const auto& topic : cfg.advertise) {
+      if (!camera(topic)) throw ConfigError("advertise: " + topic + " does not start with strip_prefix " + cfg.strip_prefix + "/");
+    }
     if (cfg.publish_tf) {
       tf_static = std::make_unique<Writer>(participant, &tf2_msgs_msg_dds__TFMessage__desc, "/tf_static",
                                            TopicQos{true, 1, true});

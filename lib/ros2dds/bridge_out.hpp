@@ -11,6 +11,9 @@
 // /faulty/cam_front/image_rect_compressed -> /cam_front/image_rect_compressed (replay), or with strip_prefix
 // /faulty/ros2 and topic_suffix /faulty: /faulty/ros2/front/image -> /front/image/faulty (proxy). The CameraInfo
 // topic is the image_transport sibling of the unsuffixed name, plus the suffix: /front/camera_info/faulty.
+// A topic's writers are created at its first frame, or at start for the topics listed in `advertise`, so that ROS 2
+// subscribers discover them (and match, ~0.1-1 s) before frames flow: a volatile reader gets no sample written
+// before it matched.
 #pragma once
 
 #include <spdlog/logger.h>
@@ -29,6 +32,7 @@ struct OutBridgeConfig {
   std::string dds_config;                    // Cyclone XML; "" = CYCLONEDDS_URI
   std::vector<std::string> input_endpoints{"tcp://127.0.0.1:5601"};  // the injector's output
   std::vector<std::string> input_topics{"/faulty/"};  // camera frame topic prefixes
+  std::vector<std::string> advertise;        // Faultline camera topics whose ROS 2 writers exist from the start
   int input_hwm = 48;                        // receive queue (messages)
   std::string strip_prefix = "/faulty";      // removed from the Faultline topic
   std::string topic_suffix;                  // appended to the ROS topic ("/faulty" for a proxy)
@@ -57,6 +61,7 @@ struct OutBridgeConfig {
     v("input_endpoints", input_endpoints, "ZeroMQ publishers of faulted frames (the injector)");
     v("input_topics", input_topics, "camera frame topic prefixes");
     v("input_hwm", input_hwm, "receive queue (messages)");
+    v("advertise", advertise, "Faultline camera topics to offer on ROS 2 from the start (else at their first frame)");
     v("strip_prefix", strip_prefix, "removed from the Faultline topic to make the ROS topic");
     v("topic_suffix", topic_suffix, "appended to the ROS topic (/faulty for a proxy)");
     v("remap", remap, "ROS topic remaps from -> to");
@@ -88,7 +93,7 @@ struct OutBridgeCounts {
   std::atomic<std::uint64_t> malformed = 0;        // unparsable messages or undecodable JPEG (raw output): dropped
   std::atomic<std::uint64_t> transport_drops = 0;  // seq gaps on the ZeroMQ input
   std::atomic<std::uint64_t> write_failures = 0;   // DDS writes that failed (frame lost)
-  std::atomic<std::uint64_t> incompatible_qos = 0; // readers whose QoS never matched (sum over writers)
+  std::atomic<std::uint64_t> incompatible_qos = 0; // QoS mismatches DDS reported (per match attempt; sum)
 };
 
 // The ROS topic of a Faultline camera topic (rule above); "" when it does not start with strip_prefix + "/".

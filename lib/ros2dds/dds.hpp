@@ -60,7 +60,7 @@ class Participant {
 // Counts of one endpoint, read from Cyclone's statuses (cheap; call from the owning thread).
 struct EndpointStatus {
   std::uint32_t matched = 0;           // peers currently matched
-  std::uint32_t incompatible_qos = 0;  // peers seen on the topic whose QoS never matched (total)
+  std::uint32_t incompatible_qos = 0;  // match attempts refused for QoS (total; a peer may count more than once)
 };
 
 class Writer {

@@ -285,6 +285,36 @@ TEST(TopicRulesTest, ProxyAppendsTheSuffixAndRemaps) {
   EXPECT_EQ(faultline_topic(in, "/front/image_raw/compressed"), "/ros2/front/image_raw/compressed");
 }
 
+TEST(CameraNamesTest, ExplicitThenNamespaceThenInOrder) {
+  InBridgeConfig c;
+  c.topics = {"/front/image_raw/compressed", "/cam_back/image_rect_compressed", "/left/image_raw",
+              "/right/image_raw"};
+  c.channels["/right/image_raw"] = "CAM_FRONT";
+  EXPECT_EQ(assign_cameras(c),
+            (std::vector<std::string>{"CAM_FRONT_RIGHT", "CAM_BACK", "CAM_FRONT_LEFT", "CAM_FRONT"}));
+}
+
+TEST(CameraNamesTest, UnknownRepeatedOrSeventhIsAnError) {
+  auto message_of = [](const InBridgeConfig& cfg) -> std::string {
+    try {
+      (void)assign_cameras(cfg);
+    } catch (const ConfigError& e) {
+      return e.what();
+    }
+    return "";
+  };
+  InBridgeConfig c;
+  c.topics = {"/a/image", "/b/image"};
+  c.channels["/a/image"] = "FRONT";
+  EXPECT_NE(message_of(c).find("channels./a/image = FRONT: unknown camera"), std::string::npos) << message_of(c);
+  c.channels["/a/image"] = "CAM_BACK";
+  c.channels["/b/image"] = "CAM_BACK";
+  EXPECT_NE(message_of(c).find("CAM_BACK"), std::string::npos);
+  c.channels.clear();
+  c.topics = {"/a/i", "/b/i", "/c/i", "/d/i", "/e/i", "/f/i", "/g/i"};
+  EXPECT_NE(message_of(c).find("/g/i: more than six topics"), std::string::npos) << message_of(c);
+}
+
 TEST(BridgeConfigTest, InvalidParametersThrowNamingTheKey) {
   auto message_of = [](const auto& cfg) -> std::string {
     try {

@@ -91,6 +91,17 @@ bool FastPeer::wait_matched(dds::DataWriter* writer, int count, std::chrono::mil
   }
 }
 
+bool FastPeer::wait_matched(dds::DataReader* reader, int count, std::chrono::milliseconds timeout) {
+  const auto deadline = std::chrono::steady_clock::now() + timeout;
+  for (;;) {
+    dds::SubscriptionMatchedStatus st;
+    (void)reader->get_subscription_matched_status(st);
+    if (st.current_count >= count) return true;
+    if (std::chrono::steady_clock::now() > deadline) return false;
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));  // discovery: bounded wait, not an assertion
+  }
+}
+
 int FastPeer::offered_incompatible_qos(dds::DataWriter* writer) {
   dds::OfferedIncompatibleQosStatus st;
   (void)writer->get_offered_incompatible_qos_status(st);

@@ -75,6 +75,7 @@ class FastPeer {
   }
   // Polls until the writer matched `count` readers; false after `timeout`.
   static bool wait_matched(eprosima::fastdds::dds::DataWriter* writer, int count, std::chrono::milliseconds timeout);
+  static bool wait_matched(eprosima::fastdds::dds::DataReader* reader, int count, std::chrono::milliseconds timeout);
   static int offered_incompatible_qos(eprosima::fastdds::dds::DataWriter* writer);
 
  private:

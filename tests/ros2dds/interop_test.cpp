@@ -201,7 +201,7 @@ TEST_F(InteropTest, FastDdsCamerasReachFaultlineAsCameraFrames) {
     EXPECT_EQ(fa.header().capture_stamp_ns(), stamp);
     EXPECT_EQ(fa.header().frame_id(), "cam_a_optical");
     EXPECT_EQ(fa.header().publisher(), "ros2_in");
-    EXPECT_EQ(fa.camera(), "TEST_CAM_A");
+    EXPECT_EQ(fa.camera(), "CAM_FRONT");  // the first topic, in the fault engine's camera order
     EXPECT_EQ(fa.encoding(), "jpeg");
     EXPECT_EQ(fa.width(), 32u);
     EXPECT_EQ(fa.height(), 24u);
@@ -210,7 +210,7 @@ TEST_F(InteropTest, FastDdsCamerasReachFaultlineAsCameraFrames) {
     EXPECT_EQ(fb.header().seq(), static_cast<std::uint64_t>(i + 1));
     EXPECT_EQ(fb.header().capture_stamp_ns(), stamp);
     EXPECT_EQ(fb.header().frame_id(), "cam_b");
-    EXPECT_EQ(fb.camera(), "TEST_CAM_B");
+    EXPECT_EQ(fb.camera(), "CAM_FRONT_RIGHT");
     EXPECT_EQ(fb.width(), 16u);
     EXPECT_EQ(fb.height(), 8u);
     EXPECT_EQ(pb, expected_b[static_cast<std::size_t>(i)]) << "frame " << i << ": rgb8 -> BGR -> JPEG q95";
@@ -233,7 +233,8 @@ TEST_F(InteropTest, FastDdsCamerasReachFaultlineAsCameraFrames) {
   EXPECT_EQ(c.camera_infos.load(), static_cast<std::uint64_t>(kFrames));
   EXPECT_EQ(c.tf_static.load(), 1u);
   EXPECT_EQ(c.type_mismatch.load(), 1u) << "/test/not_image carries diagnostic_msgs/msg/DiagnosticArray";
-  EXPECT_EQ(c.incompatible_qos.load(), 1u) << "best-effort writer vs reliable reader on cam_c";
+  // DDS reports a mismatch per match attempt (a rediscovered writer counts again): at least one.
+  EXPECT_GE(c.incompatible_qos.load(), 1u) << "best-effort writer vs reliable reader on cam_c";
   EXPECT_GE(FastPeer::offered_incompatible_qos(best_effort), 1);
 }
 
@@ -249,19 +250,22 @@ TEST_F(InteropTest, FaultlineFramesReachFastDdsAsRosTopics) {
   Collector<smsg::CameraInfo_> front_info, back_info;
   Collector<diagnostic_msgs::msg::dds_::DiagnosticArray_> diagnostics;
   Collector<tf2_msgs::msg::dds_::TFMessage_> tf_static, tf;
-  peer.reader<smsg::CompressedImage_PubSubType>("rt/cam_front/image_rect_compressed", keep_all, &front);
-  peer.reader<smsg::CompressedImage_PubSubType>("rt/cam_back/image_rect_compressed", keep_all, &back);
-  peer.reader<smsg::CameraInfo_PubSubType>("rt/cam_front/camera_info", keep_all, &front_info);
-  peer.reader<smsg::CameraInfo_PubSubType>("rt/cam_back/camera_info", keep_all, &back_info);
-  peer.reader<diagnostic_msgs::msg::dds_::DiagnosticArray_PubSubType>("rt/faultline/faults", keep_all, &diagnostics);
-  peer.reader<tf2_msgs::msg::dds_::TFMessage_PubSubType>("rt/tf_static", {true, true, true, 1}, &tf_static);
-  peer.reader<tf2_msgs::msg::dds_::TFMessage_PubSubType>("rt/tf", keep_all, &tf);
+  std::vector<fdds::DataReader*> readers{
+      peer.reader<smsg::CompressedImage_PubSubType>("rt/cam_front/image_rect_compressed", keep_all, &front),
+      peer.reader<smsg::CompressedImage_PubSubType>("rt/cam_back/image_rect_compressed", keep_all, &back),
+      peer.reader<smsg::CameraInfo_PubSubType>("rt/cam_front/camera_info", keep_all, &front_info),
+      peer.reader<smsg::CameraInfo_PubSubType>("rt/cam_back/camera_info", keep_all, &back_info),
+      peer.reader<diagnostic_msgs::msg::dds_::DiagnosticArray_PubSubType>("rt/faultline/faults", keep_all,
+                                                                          &diagnostics),
+      peer.reader<tf2_msgs::msg::dds_::TFMessage_PubSubType>("rt/tf_static", {true, true, true, 1}, &tf_static),
+      peer.reader<tf2_msgs::msg::dds_::TFMessage_PubSubType>("rt/tf", keep_all, &tf)};
 
   OutBridgeConfig cfg;
   cfg.domain_id = domain_;
   cfg.input_endpoints = {injector.endpoint()};
   cfg.publish_tf = true;
-  cfg.wait_readers = 1;
+  cfg.advertise = {"/faulty/cam_front/image_rect_compressed", "/faulty/cam_back/image_rect_compressed"};
+  cfg.wait_readers = 1;  // discovery is not symmetric: the writers must have matched the readers too
   cfg.wait_timeout_ms = 20000;
   cfg.stats_log_period_s = 0;
   cfg.validate();
@@ -271,6 +275,9 @@ TEST_F(InteropTest, FaultlineFramesReachFastDdsAsRosTopics) {
   std::thread runner([&] { rc = bridge.run(stop); });
   ASSERT_TRUE(injector.wait_for_subscribers("/faulty/cam_front/image_rect_compressed", 1, 10 * kNsPerSec).is_ok());
   ASSERT_TRUE(injector.wait_for_subscribers("/sync/end", 1, 10 * kNsPerSec).is_ok());
+  // Every topic is advertised from the start: once each reader matched its writer (and, wait_readers, each writer
+  // its reader), no sample can be missed.
+  for (auto* r : readers) ASSERT_TRUE(FastPeer::wait_matched(r, 1, 20s)) << r->get_topicdescription()->get_name();
 
   const char* cams[] = {"CAM_FRONT", "CAM_BACK"};
   std::vector<std::vector<std::uint8_t>> jpegs;
@@ -317,8 +324,8 @@ TEST_F(InteropTest, FaultlineFramesReachFastDdsAsRosTopics) {
   runner.join();  // the bridge stops at the StreamEnd, after its readers acknowledged everything
   EXPECT_EQ(rc, 0);
 
-  ASSERT_TRUE(front.wait_for(kFrames, 20s));
-  ASSERT_TRUE(back.wait_for(kFrames, 20s));
+  ASSERT_TRUE(front.wait_for(kFrames, 20s)) << front.samples().size() << " front frames arrived";
+  ASSERT_TRUE(back.wait_for(kFrames, 20s)) << back.samples().size() << " back frames arrived";
   ASSERT_TRUE(front_info.wait_for(kFrames, 20s));
   ASSERT_TRUE(back_info.wait_for(kFrames, 20s));
   ASSERT_TRUE(diagnostics.wait_for(2 * kFrames, 20s));
