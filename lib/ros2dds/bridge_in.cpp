@@ -390,6 +390,10 @@ int InBridge::run(const std::atomic<bool>& stop) {
   }
   m.log->info("{} on DDS domain {}: {} topic(s) -> {}", m.node, m.participant.domain_id(), m.cameras.size(),
               m.pub.endpoint());
+  for (const auto& cam : m.cameras) {
+    m.log->info("{} is camera {} on {} (CameraInfo: {})", cam.ros_topic, cam.channel, cam.out_topic,
+                cam.info_topic.empty() ? "none" : cam.info_topic);
+  }
   const auto period = static_cast<DurationNs>(m.cfg.stats_log_period_s * 1e9);
   StampNs next_log = monotonic_now_ns() + period;
   int rc = 0;
