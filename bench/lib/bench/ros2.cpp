@@ -128,13 +128,13 @@ std::string params_yaml(const Ros2Options& o, const std::string& dir, int domain
   std::ostringstream y;
   y << "ros2_in:\n  domain_id: " << domain << "\n  topics: [";
   for (int c = 0; c < o.cameras; ++c) y << (c ? ", " : "") << topic_of(c);
-  y << "]\n  endpoint: ipc://" << dir << "/in.sock\n  hwm: 48\n  wait_subscribers: 1\n  stats_log_period_s: 0\n"
+  y << "]\n  endpoint: ipc://" << dir << "/in.sock\n  hwm: 96\n  wait_subscribers: 1\n  stats_log_period_s: 0\n"
     << "fault_injector:\n  input_endpoints: [ipc://" << dir << "/in.sock]\n  input_topics: [/ros2/]\n"
-    << "  output_endpoint: ipc://" << dir << "/out.sock\n  input_hwm: 48\n  output_hwm: 48\n  decode: false\n"
+    << "  output_endpoint: ipc://" << dir << "/out.sock\n  input_hwm: 96\n  output_hwm: 240\n  decode: false\n"
     << "  exit_on_last: false\n  wait_subscribers: 1\n  stats_log_period_s: 1000\n  seed: 7\n";
   if (!corruption.empty()) y << "  corruption: " << corruption << "\n";
   y << "ros2_out:\n  domain_id: " << domain << "\n  input_endpoints: [ipc://" << dir << "/out.sock]\n"
-    << "  input_topics: [/faulty/ros2/, /sync/sample]\n  strip_prefix: /faulty/ros2\n  topic_suffix: /faulty\n"
+    << "  input_hwm: 240\n  input_topics: [/faulty/ros2/, /sync/sample]\n  strip_prefix: /faulty/ros2\n  topic_suffix: /faulty\n"
     << "  exit_on_end: false\n  wait_readers: 1\n  camera_info: false\n  stats_log_period_s: 0\n  advertise: [";
   for (int c = 0; c < o.cameras; ++c) y << (c ? ", " : "") << "/faulty/ros2" << topic_of(c);
   y << "]\n";
@@ -142,7 +142,7 @@ std::string params_yaml(const Ros2Options& o, const std::string& dir, int domain
 }
 
 Row run_one(const Ros2Options& o, const std::string& config, const std::string& corruption, int domain,
-            const std::vector<std::vector<std::uint8_t>>& jpegs, int run_index) {
+            const std::vector<std::vector<std::uint8_t>>& jpegs, int run_index, int repeat) {
   Row row;
   row.config = config;
   const std::string dir = o.work_dir + "/faultline-bench-ros2-" + std::to_string(::getpid()) + "-" +
@@ -201,7 +201,10 @@ Row run_one(const Ros2Options& o, const std::string& config, const std::string& 
     for (;;) {
       (void)waitset.wait(50 * kNsPerMs);
       const StampNs now = monotonic_now_ns();
-      (void)faults.take([&](const void*) { ++events; });
+      (void)faults.take([&](const void*) {
+        ++events;
+        last_rx = now;
+      });
       for (int c = 0; c < o.cameras; ++c) {
         (void)readers[static_cast<std::size_t>(c)]->take([&](const void* s) {
           const auto* m = static_cast<const sensor_msgs_msg_dds__CompressedImage_*>(s);
@@ -213,7 +216,9 @@ Row run_one(const Ros2Options& o, const std::string& config, const std::string& 
           last_rx = now;
         });
       }
-      if (sending_done && (received.load() >= sent.load() || now - last_rx > idle_limit)) break;
+      if (sending_done && ((received.load() >= sent.load() && events.load() >= sent.load()) || now - last_rx > idle_limit)) {
+        break;
+      }
     }
   });
 
@@ -265,7 +270,7 @@ Row run_one(const Ros2Options& o, const std::string& config, const std::string& 
     std::filesystem::remove_all(dir, ignored);
   } else {
     std::fprintf(stderr, "faultline bench ros2: %s run %d lost frames; node logs kept in %s\n", config.c_str(),
-                 run_index + 1, dir.c_str());
+                 repeat + 1, dir.c_str());
   }
   return row;
 }
@@ -314,7 +319,7 @@ int run_ros2(const Ros2Options& o) {
   try {
     for (int r = 0; r < o.repeats; ++r) {
       for (const auto& [name, corruption] : configs) {
-        Row row = run_one(o, name, corruption, domain, jpegs, index++);
+        Row row = run_one(o, name, corruption, domain, jpegs, index++, r);
         if (!o.json) {
           std::printf("%-16s run %d  sent %5llu  received %5llu  diagnostics %5llu  drops %4llu  added latency p50 %7.2f ms  p99 %7.2f ms  "
                       "max %7.2f ms  nodes cpu %5.1f %%\n",
