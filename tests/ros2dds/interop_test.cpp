@@ -3,6 +3,7 @@
 // through CYCLONEDDS_URI, as a ROS 2 user would. Every frame must arrive, decode, and carry the right stamp and
 // frame_id; waits are bounded, assertions are counts, bytes and values.
 #include <gtest/gtest.h>
+#include <spdlog/sinks/base_sink.h>
 #include <spdlog/sinks/stdout_sinks.h>
 #include <spdlog/spdlog.h>
 #include <unistd.h>
@@ -40,8 +41,32 @@ const std::array<double, 9> kK{1266.4, 0.0, 816.3, 0.0, 1266.4, 491.5, 0.0, 0.0,
 
 int TestDomain() { return 100 + static_cast<int>(::getpid() % 100); }
 
-std::shared_ptr<spdlog::logger> Logger(const std::string& name) {
-  auto log = std::make_shared<spdlog::logger>(name, std::make_shared<spdlog::sinks::stderr_sink_mt>());
+// Counts the lines of each level that contain a phrase: the warn-once and error-once contract of the bridges.
+class CountingSink : public spdlog::sinks::base_sink<std::mutex> {
+ public:
+  int count(spdlog::level::level_enum level, const std::string& phrase) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    int n = 0;
+    for (const auto& [l, text] : lines_) n += (l == level && text.find(phrase) != std::string::npos) ? 1 : 0;
+    return n;
+  }
+
+ protected:
+  void sink_it_(const spdlog::details::log_msg& msg) override {
+    std::lock_guard<std::mutex> lock(mutex_);
+    lines_.emplace_back(msg.level, std::string(msg.payload.data(), msg.payload.size()));
+  }
+  void flush_() override {}
+
+ private:
+  std::mutex mutex_;
+  std::vector<std::pair<spdlog::level::level_enum, std::string>> lines_;
+};
+
+std::shared_ptr<spdlog::logger> Logger(const std::string& name, std::shared_ptr<CountingSink> counter = nullptr) {
+  std::vector<spdlog::sink_ptr> sinks{std::make_shared<spdlog::sinks::stderr_sink_mt>()};
+  if (counter) sinks.push_back(counter);
+  auto log = std::make_shared<spdlog::logger>(name, sinks.begin(), sinks.end());
   log->set_level(spdlog::level::info);
   return log;
 }
@@ -76,7 +101,8 @@ TEST_F(InteropTest, FastDdsCamerasReachFaultlineAsCameraFrames) {
   cfg.wait_subscribers = 1;
   cfg.stats_log_period_s = 0;
   cfg.validate();
-  InBridge bridge(cfg, "ros2_in", Logger("ros2_in"));
+  auto lines = std::make_shared<CountingSink>();
+  InBridge bridge(cfg, "ros2_in", Logger("ros2_in", lines));
   transport::SubscriberConfig sc;
   sc.endpoints = {bridge.endpoint()};
   sc.topics = {"/ros2/"};
@@ -236,6 +262,10 @@ TEST_F(InteropTest, FastDdsCamerasReachFaultlineAsCameraFrames) {
   // DDS reports a mismatch per match attempt (a rediscovered writer counts again): at least one.
   EXPECT_GE(c.incompatible_qos.load(), 1u) << "best-effort writer vs reliable reader on cam_c";
   EXPECT_GE(FastPeer::offered_incompatible_qos(best_effort), 1);
+  EXPECT_EQ(lines->count(spdlog::level::err, "topic /test/not_image has a writer of type "
+                                              "diagnostic_msgs/msg/DiagnosticArray: not an image type"), 1);
+  EXPECT_EQ(lines->count(spdlog::level::warn, "QoS of /test/cam_c/image_raw/compressed never matched a writer"), 1);
+  EXPECT_EQ(lines->count(spdlog::level::warn, "never matched"), 1) << "warned once, then only counted";
 }
 
 TEST_F(InteropTest, FaultlineFramesReachFastDdsAsRosTopics) {
@@ -396,6 +426,72 @@ TEST_F(InteropTest, FaultlineFramesReachFastDdsAsRosTopics) {
   EXPECT_EQ(c.transport_drops.load(), 0u);
   EXPECT_EQ(c.write_failures.load(), 0u);
   EXPECT_EQ(c.incompatible_qos.load(), 0u);
+}
+
+TEST_F(InteropTest, RawOutputDecodesTheFaultedJpegToBgr8Images) {
+  transport::PublisherConfig pc;
+  pc.endpoint = "tcp://127.0.0.1:*";
+  pc.snd_hwm = 1000;
+  transport::Publisher injector(pc);
+  FastPeer peer(domain_);
+  Collector<smsg::Image_> images;
+  auto* reader = peer.reader<smsg::Image_PubSubType>("rt/front/image_raw/faulty", {true, false, true, 10}, &images);
+
+  OutBridgeConfig cfg;
+  cfg.domain_id = domain_;
+  cfg.input_endpoints = {injector.endpoint()};
+  cfg.input_topics = {"/faulty/ros2/"};
+  cfg.strip_prefix = "/faulty/ros2";
+  cfg.topic_suffix = "/faulty";
+  cfg.output = "raw";
+  cfg.camera_info = false;
+  cfg.faults_topic = "";
+  cfg.advertise = {"/faulty/ros2/front/image_raw"};
+  cfg.wait_readers = 1;
+  cfg.stats_log_period_s = 0;
+  cfg.validate();
+  OutBridge bridge(cfg, "ros2_out", Logger("ros2_out"));
+  std::atomic<bool> stop{false};
+  int rc = -1;
+  std::thread runner([&] { rc = bridge.run(stop); });
+  ASSERT_TRUE(injector.wait_for_subscribers("/faulty/ros2/front/image_raw", 1, 10 * kNsPerSec).is_ok());
+  ASSERT_TRUE(injector.wait_for_subscribers("/sync/end", 1, 10 * kNsPerSec).is_ok());
+  ASSERT_TRUE(FastPeer::wait_matched(reader, 1, 20s));
+  std::vector<cv::Mat> expected;
+  for (int i = 0; i < kFrames; ++i) {
+    msgs::CameraFrame f;
+    f.mutable_header()->set_seq(static_cast<std::uint64_t>(i + 1));
+    f.mutable_header()->set_capture_stamp_ns(kStamp0 + i * kPeriodNs);
+    f.mutable_header()->set_frame_id("front_optical");
+    f.mutable_header()->set_publisher("fault_injector");
+    f.set_camera("CAM_FRONT");
+    f.set_encoding("jpeg");
+    f.set_width(32);
+    f.set_height(24);
+    auto bytes = std::make_shared<const std::vector<std::uint8_t>>(Jpeg(i));
+    expected.push_back(codec::decode_jpeg(bytes->data(), bytes->size()).value());
+    ASSERT_TRUE(transport::send_camera_frame(injector, "/faulty/ros2/front/image_raw", f,
+                                             transport::Payload::of(bytes)).is_ok());
+  }
+  ASSERT_TRUE(transport::send_message(injector, "/sync/end", msgs::StreamEnd()).is_ok());
+  runner.join();
+  EXPECT_EQ(rc, 0);
+  ASSERT_TRUE(images.wait_for(kFrames, 20s)) << images.samples().size() << " images arrived";
+  const auto got = images.samples();
+  ASSERT_EQ(got.size(), static_cast<std::size_t>(kFrames));
+  for (int i = 0; i < kFrames; ++i) {
+    const auto& m = got[static_cast<std::size_t>(i)];
+    EXPECT_EQ(m.encoding(), "bgr8");
+    EXPECT_EQ(m.width(), 32u);
+    EXPECT_EQ(m.height(), 24u);
+    EXPECT_EQ(m.step(), 96u);
+    EXPECT_EQ(m.is_bigendian(), 0);
+    EXPECT_EQ(m.header().frame_id(), "front_optical");
+    EXPECT_EQ(m.header().stamp().nanosec(), static_cast<std::uint32_t>((kStamp0 + i * kPeriodNs) % 1'000'000'000));
+    const cv::Mat& e = expected[static_cast<std::size_t>(i)];
+    ASSERT_EQ(m.data().size(), e.total() * e.elemSize());
+    EXPECT_TRUE(std::equal(m.data().begin(), m.data().end(), e.data)) << "frame " << i << ": the decoded JPEG";
+  }
 }
 
 }  // namespace
