@@ -1,8 +1,8 @@
-// launch/ros2_replay.yaml end to end: `faultline launch` starts nusc_player, fault_injector and ros2_out (real
-// processes) on a small generated nuScenes dataset; this test subscribes every ROS 2 topic ros2_out publishes
-// (Cyclone DDS, loopback, domain 100 + pid % 100) and checks that every camera frame the player sent arrives with
-// its nuScenes stamp and frame_id, its CameraInfo, one DiagnosticArray, the ego pose on /tf and the six cameras on
-// /tf_static.
+// The ROS 2 launch files end to end, through `faultline launch` and real node processes, seen from a DDS peer in
+// this test (Cyclone DDS, loopback, domain 100 + pid % 100). launch/ros2_replay.yaml on a small generated nuScenes
+// dataset: every camera frame the player sent arrives with its nuScenes stamp and frame_id, its CameraInfo, one
+// DiagnosticArray, the ego pose on /tf and the six cameras on /tf_static. launch/ros2_proxy.yaml: two ROS 2 camera
+// topics come back faulted as <topic>/faulty with their stamps and frame_ids.
 #include <gtest/gtest.h>
 #include <fcntl.h>
 #include <signal.h>
@@ -16,6 +16,7 @@
 #include <sstream>
 #include <thread>
 
+#include "codec/jpeg.hpp"
 #include "dataset/synth.hpp"
 #include "diagnostic_msgs.h"
 #include "ros2dds/convert.hpp"
@@ -29,8 +30,27 @@ extern char** environ;
 namespace faultline::ros2dds {
 namespace {
 
+// A 32x24 JPEG.
+std::vector<std::uint8_t> JpegForTest() {
+  return codec::encode_jpeg(cv::Mat(24, 32, CV_8UC3, cv::Scalar(40, 120, 200)), 90).value();
+}
+
 const char* kCameras[] = {"cam_front", "cam_front_right", "cam_front_left", "cam_back", "cam_back_left",
                           "cam_back_right"};
+
+pid_t SpawnLogged(std::vector<std::string> args, const std::string& log) {
+  std::vector<char*> argv;
+  for (auto& a : args) argv.push_back(a.data());
+  argv.push_back(nullptr);
+  posix_spawn_file_actions_t fa;
+  posix_spawn_file_actions_init(&fa);
+  posix_spawn_file_actions_addopen(&fa, 1, log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  posix_spawn_file_actions_adddup2(&fa, 1, 2);
+  pid_t pid = -1;
+  if (posix_spawn(&pid, argv[0], &fa, nullptr, argv.data(), environ) != 0) pid = -1;
+  posix_spawn_file_actions_destroy(&fa);
+  return pid;
+}
 
 std::string ReadText(const std::string& path) {
   std::ifstream in(path);
@@ -39,7 +59,7 @@ std::string ReadText(const std::string& path) {
   return ss.str();
 }
 
-class ReplayTest : public ::testing::Test {
+class Ros2LaunchTest : public ::testing::Test {
  protected:
   void SetUp() override {
     char tmpl[] = "/tmp/faultline-ros2-replay-XXXXXX";
@@ -66,7 +86,7 @@ class ReplayTest : public ::testing::Test {
   std::string dir_;
 };
 
-TEST_F(ReplayTest, EveryFrameReachesRos2WithCalibrationPoseAndFaults) {
+TEST_F(Ros2LaunchTest, EveryFrameReachesRos2WithCalibrationPoseAndFaults) {
   // What the player will send: the dataset's camera frames whose image file exists.
   auto source = runtime::NuScenesFrameSource::open(dir_ + "/nuscenes", "v1.0-mini", {});
   ASSERT_TRUE(source) << source.status().message();
@@ -188,6 +208,114 @@ TEST_F(ReplayTest, EveryFrameReachesRos2WithCalibrationPoseAndFaults) {
   std::vector<std::string> cams(std::begin(kCameras), std::end(kCameras));
   std::sort(cams.begin(), cams.end());
   EXPECT_EQ(static_children, cams) << "/tf_static carries all six cameras";
+}
+
+TEST_F(Ros2LaunchTest, ProxyRepublishesEachTopicFaulted) {
+  constexpr int kFrames = 12;
+  const int domain = 100 + static_cast<int>(::getpid() % 100);
+  Participant p(domain, "");
+  const TopicQos all{true, 10000, false};
+  Writer front(p, &sensor_msgs_msg_dds__CompressedImage__desc, "/front/image_raw/compressed", TopicQos{});
+  Writer rear(p, &sensor_msgs_msg_dds__Image__desc, "/rear/image_raw", TopicQos{});
+  Reader front_out(p, &sensor_msgs_msg_dds__CompressedImage__desc, "/front/image_raw/compressed/faulty", all);
+  Reader rear_out(p, &sensor_msgs_msg_dds__CompressedImage__desc, "/rear/image_raw/faulty", all);
+  Reader front_info(p, &sensor_msgs_msg_dds__CameraInfo__desc, "/front/camera_info/faulty", all);
+  Reader rear_info(p, &sensor_msgs_msg_dds__CameraInfo__desc, "/rear/camera_info/faulty", all);
+  Reader faults(p, &diagnostic_msgs_msg_dds__DiagnosticArray__desc, "/faultline/faults", all);
+
+  const std::string ipc = "ipc://" + dir_ + "/";
+  const std::string d = std::to_string(domain);
+  const pid_t pid = SpawnLogged(
+      {std::string(FAULTLINE_BIN_DIR) + "/faultline", "launch", std::string(FAULTLINE_SOURCE_DIR) + "/launch/ros2_proxy.yaml",
+       "-p", "ros2_in.topics:=[/front/image_raw/compressed, /rear/image_raw]", "-p", "ros2_in.domain_id:=" + d,
+       "-p", "ros2_in.endpoint:=" + ipc + "in", "-p", "fault_injector.input_endpoints:=[" + ipc + "in]",
+       "-p", "fault_injector.output_endpoint:=" + ipc + "out", "-p", "fault_injector.corruption:=brightness/mid",
+       "-p", "ros2_out.input_endpoints:=[" + ipc + "out]", "-p", "ros2_out.domain_id:=" + d,
+       "-p", "ros2_out.advertise:=[/faulty/ros2/front/image_raw/compressed, /faulty/ros2/rear/image_raw]",
+       "-p", "ros2_out.wait_readers:=1"},
+      dir_ + "/launch.log");
+  ASSERT_GT(pid, 0);
+  auto stop_launch = [&] {
+    kill(pid, SIGINT);
+    int status = 0;
+    waitpid(pid, &status, 0);
+    return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+  };
+  // Connected end to end: ros2_in subscribed (after the injector and ros2_out joined), ros2_out's writers matched.
+  if (!front.wait_for_readers(1, 30 * kNsPerSec).is_ok() || !rear.wait_for_readers(1, 30 * kNsPerSec).is_ok()) {
+    stop_launch();
+    FAIL() << "ros2_in did not subscribe\n" << ReadText(dir_ + "/launch.log");
+  }
+  for (Reader* r : {&front_out, &rear_out, &front_info, &rear_info, &faults}) {
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(30);
+    while (r->status().matched < 1 && std::chrono::steady_clock::now() < deadline) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(10));  // discovery; not an assertion
+    }
+    ASSERT_EQ(r->status().matched, 1u) << r->ros_topic() << "\n" << ReadText(dir_ + "/launch.log");
+  }
+  const StampNs t0 = 1533151603512404000;
+  const std::vector<std::uint8_t> jpeg = JpegForTest();
+  for (int i = 0; i < kFrames; ++i) {
+    const RosTime t = time_from_ns(t0 + i * 83'333'333);
+    sensor_msgs_msg_dds__CompressedImage_ a{};
+    a.header.stamp = {t.sec, t.nanosec};
+    std::string fid_a = "front_optical";
+    a.header.frame_id = fid_a.data();
+    std::string fmt = "jpeg";
+    a.format = fmt.data();
+    a.data._buffer = const_cast<std::uint8_t*>(jpeg.data());
+    a.data._length = a.data._maximum = static_cast<std::uint32_t>(jpeg.size());
+    ASSERT_TRUE(front.write(&a).is_ok());
+    std::vector<std::uint8_t> px(16 * 8 * 3, static_cast<std::uint8_t>(10 * i));
+    sensor_msgs_msg_dds__Image_ b{};
+    b.header.stamp = {t.sec, t.nanosec};
+    std::string fid_b = "rear_optical";
+    b.header.frame_id = fid_b.data();
+    std::string enc = "rgb8";
+    b.encoding = enc.data();
+    b.width = 16;
+    b.height = 8;
+    b.step = 48;
+    b.data._buffer = px.data();
+    b.data._length = b.data._maximum = static_cast<std::uint32_t>(px.size());
+    ASSERT_TRUE(rear.write(&b).is_ok());
+    ASSERT_TRUE(front.wait_for_acks(10 * kNsPerSec).is_ok());
+    ASSERT_TRUE(rear.wait_for_acks(10 * kNsPerSec).is_ok());
+  }
+  std::vector<StampNs> got_front, got_rear;
+  std::vector<std::string> ids_front, ids_rear;
+  std::size_t infos = 0, events = 0, corrupt = 0;
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(30);
+  while ((got_front.size() < kFrames || got_rear.size() < kFrames || events < 2 * kFrames ||
+          infos < 2 * kFrames) && std::chrono::steady_clock::now() < deadline) {
+    (void)front_out.take([&](const void* s) {
+      const auto* m = static_cast<const sensor_msgs_msg_dds__CompressedImage_*>(s);
+      got_front.push_back(ns_from_time({m->header.stamp.sec, m->header.stamp.nanosec}));
+      ids_front.push_back(m->header.frame_id);
+    });
+    (void)rear_out.take([&](const void* s) {
+      const auto* m = static_cast<const sensor_msgs_msg_dds__CompressedImage_*>(s);
+      got_rear.push_back(ns_from_time({m->header.stamp.sec, m->header.stamp.nanosec}));
+      ids_rear.push_back(m->header.frame_id);
+    });
+    for (Reader* r : {&front_info, &rear_info}) (void)r->take([&](const void*) { ++infos; });
+    (void)faults.take([&](const void* s) {
+      const auto* m = static_cast<const diagnostic_msgs_msg_dds__DiagnosticArray_*>(s);
+      ++events;
+      if (m->status._length == 1 && std::string(m->status._buffer[0].message).rfind("corrupt: brightness/", 0) == 0) ++corrupt;
+    });
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));  // polling the readers; not an assertion
+  }
+  EXPECT_EQ(stop_launch(), 0) << ReadText(dir_ + "/launch.log");
+  std::vector<StampNs> want;
+  for (int i = 0; i < kFrames; ++i) want.push_back(t0 + i * 83'333'333);
+  EXPECT_EQ(got_front, want) << ReadText(dir_ + "/launch.log");
+  EXPECT_EQ(got_rear, want);
+  EXPECT_EQ(ids_front, std::vector<std::string>(kFrames, "front_optical"));
+  EXPECT_EQ(ids_rear, std::vector<std::string>(kFrames, "rear_optical"));
+  EXPECT_EQ(infos, 2u * kFrames);
+  EXPECT_EQ(events, 2u * kFrames);
+  EXPECT_EQ(corrupt, 2u * kFrames) << "brightness/mid on both cameras (CAM_FRONT and CAM_FRONT_RIGHT by topic order)";
 }
 
 }  // namespace
