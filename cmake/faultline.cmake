@@ -22,12 +22,14 @@ function(faultline_add_library concern)
   faultline_warnings(faultline_${concern})
 endfunction()
 
-# faultline_add_test(<name> SOURCES ... LIBS ... [LABELS ...] [SCALAR_TOO]): one GoogleTest executable, discovered by
+# faultline_add_test(<name> SOURCES ... LIBS ... [LABELS ...] [RESOURCE_LOCK <lock>] [SCALAR_TOO]): one GoogleTest
+# executable, discovered by
 # CTest, built after the fixtures are unpacked (tests/test_data.hpp says where they are). SCALAR_TOO registers every
 # test a second time as scalar.<test> with FAULTLINE_SCALAR=1, so the portable fallbacks of the hand-dispatched SIMD
-# kernels are held to the same assertions (goldens included) on a CPU that has the vector units.
+# kernels are held to the same assertions (goldens included) on a CPU that has the vector units. RESOURCE_LOCK keeps
+# tests that share something outside the process (e.g. a DDS domain) from running at the same time under ctest -j.
 function(faultline_add_test name)
-  cmake_parse_arguments(ARG "SCALAR_TOO" "" "SOURCES;LIBS;LABELS" ${ARGN})
+  cmake_parse_arguments(ARG "SCALAR_TOO" "RESOURCE_LOCK" "SOURCES;LIBS;LABELS" ${ARGN})
   add_executable(${name} ${ARG_SOURCES})
   target_link_libraries(${name} PRIVATE ${ARG_LIBS} GTest::gtest GTest::gmock GTest::gtest_main)
   target_compile_definitions(${name} PRIVATE
@@ -38,7 +40,11 @@ function(faultline_add_test name)
   target_include_directories(${name} PRIVATE ${PROJECT_SOURCE_DIR}/tests)
   add_dependencies(${name} faultline_test_data)
   faultline_warnings(${name})
-  gtest_discover_tests(${name} DISCOVERY_TIMEOUT 60 PROPERTIES LABELS "${ARG_LABELS}")
+  if(ARG_RESOURCE_LOCK)
+    gtest_discover_tests(${name} DISCOVERY_TIMEOUT 60 PROPERTIES LABELS "${ARG_LABELS}" RESOURCE_LOCK ${ARG_RESOURCE_LOCK})
+  else()
+    gtest_discover_tests(${name} DISCOVERY_TIMEOUT 60 PROPERTIES LABELS "${ARG_LABELS}")
+  endif()
   if(ARG_SCALAR_TOO)
     gtest_discover_tests(${name} DISCOVERY_TIMEOUT 60 TEST_PREFIX "scalar."
       PROPERTIES LABELS "${ARG_LABELS};scalar" ENVIRONMENT "FAULTLINE_SCALAR=1")

@@ -15,6 +15,8 @@ packages=(
   libcli11-dev                           # command line
   libzstd-dev liblz4-dev zlib1g-dev      # MCAP chunk compression and CRC
   libv4l-dev                             # V4L2 capture
+  cyclonedds-dev cyclonedds-tools        # live ROS 2 topics over DDS (lib/ros2dds; idlc compiles msgs/ros2)
+  libfastrtps-dev libfastcdr-dev fastddsgen  # tests: the Fast DDS peer of the cross-vendor ROS 2 test
   libgtest-dev libgmock-dev libbenchmark-dev
   libssl-dev                             # tests: SHA-256 of golden outputs
   python3-zmq python3-protobuf python3-numpy python3-opencv

@@ -9,6 +9,7 @@
 #include "bench/export.hpp"
 #include "bench/injector.hpp"
 #include "bench/record.hpp"
+#include "bench/ros2.hpp"
 #include "bench/score.hpp"
 #include "bench/topic_hz.hpp"
 #include "bench/transport.hpp"
@@ -146,6 +147,33 @@ int run_injector(int argc, char** argv) {
   return bench::run_injector(o);
 }
 
+int run_ros2(int argc, char** argv) {
+  CLI::App app{
+      "ROS 2 proxy benchmark: N cameras x 12 Hz of 1600x900 JPEG CompressedImages over Cyclone DDS (loopback) "
+      "through ros2_in -> fault_injector -> ros2_out (child processes), passthrough and with one corruption, "
+      "alternating: frames in/out, unintended drops, added latency p50/p99, the nodes' CPU. Medians and ranges "
+      "over --repeats runs.",
+      argv[0]};
+  bench::Ros2Options o;
+  app.add_option("--seconds", o.seconds, "real-time duration of each run (s)")->capture_default_str();
+  app.add_option("--rate-hz", o.rate_hz, "frames per second per camera")->capture_default_str();
+  app.add_option("--cameras", o.cameras, "1..6")->check(CLI::Range(1, 6))->capture_default_str();
+  app.add_option("--width", o.width, "frame width")->check(CLI::Range(16, 8192))->capture_default_str();
+  app.add_option("--height", o.height, "frame height")->check(CLI::Range(16, 8192))->capture_default_str();
+  app.add_option("--corruption", o.corruption, "the corrupted configuration, e.g. fog/mid")->capture_default_str();
+  app.add_option("--repeats", o.repeats, "runs per configuration")->check(CLI::Range(1, 50))->capture_default_str();
+  app.add_option("--domain", o.domain_id, "DDS domain (-1: 100 + pid % 100)")->check(CLI::Range(-1, 232));
+  app.add_option("--bin-dir", o.bin_dir, "directory of ros2_in, fault_injector, ros2_out (default: next to faultline)");
+  app.add_option("--work-dir", o.work_dir, "scratch directory (params, sockets, node logs)")->capture_default_str();
+  app.add_flag("--json", o.json, "print a JSON object");
+  FAULTLINE_PARSE(app, argc, argv);
+  if (o.seconds <= 0 || o.rate_hz <= 0) {
+    std::fprintf(stderr, "faultline bench ros2: --seconds and --rate-hz must be > 0\n");
+    return 2;
+  }
+  return bench::run_ros2(o);
+}
+
 int run_record(int argc, char** argv) {
   CLI::App app{"Recorder CPU, player speed and bag size for N cameras of JPEG frames over ipc.",
                argv[0]};
@@ -237,6 +265,8 @@ FAULTLINE_COMMAND(bench_injector, "bench injector",
                   &run_injector);
 FAULTLINE_COMMAND(bench_record, "bench record", "recorder CPU, player speed and bag size",
                   &run_record);
+FAULTLINE_COMMAND(bench_ros2, "bench ros2",
+                  "ROS 2 proxy over DDS: drops and added latency, passthrough vs a corruption", &run_ros2);
 FAULTLINE_COMMAND(bench_score, "bench score", "benchmark the scorer on a val-sized synthetic set",
                   &run_score);
 FAULTLINE_COMMAND(bench_topic_hz, "bench topic-hz",

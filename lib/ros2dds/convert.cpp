@@ -1,0 +1,185 @@
+#include "ros2dds/convert.hpp"
+
+#include <opencv2/imgproc.hpp>
+
+#include <algorithm>
+#include <cctype>
+
+namespace faultline::ros2dds {
+namespace {
+
+bool ends_with(std::string_view s, std::string_view suffix) {
+  return s.size() >= suffix.size() && s.substr(s.size() - suffix.size()) == suffix;
+}
+
+std::string parent_of(const std::string& topic) {
+  const auto slash = topic.rfind('/');
+  return slash == std::string::npos || slash == 0 ? std::string() : topic.substr(0, slash);
+}
+
+// The topic without image_transport's transport suffix and the image's own name.
+std::string image_namespace(const std::string& topic) {
+  std::string base = topic;
+  if (ends_with(base, "/compressed")) base = parent_of(base);
+  return parent_of(base);
+}
+
+}  // namespace
+
+RosTime time_from_ns(StampNs stamp_ns) {
+  StampNs sec = stamp_ns / kNsPerSec;
+  StampNs rem = stamp_ns % kNsPerSec;
+  if (rem < 0) {
+    rem += kNsPerSec;
+    --sec;
+  }
+  return {static_cast<std::int32_t>(sec), static_cast<std::uint32_t>(rem)};
+}
+
+RosTime time_from_us(std::int64_t stamp_us) { return time_from_ns(stamp_us * 1000); }
+
+StampNs ns_from_time(const RosTime& time) {
+  return static_cast<StampNs>(time.sec) * kNsPerSec + static_cast<StampNs>(time.nanosec);
+}
+
+Result<std::string> dds_topic_name(const std::string& ros_topic) {
+  auto bad = [&](const char* why) {
+    return Result<std::string>(StatusCode::kInvalidArgument, "ROS topic '" + ros_topic + "': " + why);
+  };
+  if (ros_topic.size() < 2 || ros_topic.front() != '/') return bad("expected an absolute name such as /camera/image_raw");
+  if (ros_topic.back() == '/') return bad("ends with '/'");
+  if (ros_topic.find("//") != std::string::npos) return bad("contains '//'");
+  for (char c : ros_topic) {
+    if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '/')) {
+      return bad("only letters, digits, '_' and '/' are allowed");
+    }
+  }
+  return "rt" + ros_topic;
+}
+
+std::string ros_type_name(const std::string& dds_type_name) {
+  // pkg::msg::dds_::Type_ -> pkg/msg/Type
+  const std::string marker = "::dds_::";
+  const auto at = dds_type_name.find(marker);
+  if (at == std::string::npos || !ends_with(dds_type_name, "_")) return dds_type_name;
+  std::string head = dds_type_name.substr(0, at);
+  std::string type = dds_type_name.substr(at + marker.size());
+  type.pop_back();
+  std::string out;
+  for (std::size_t i = 0; i < head.size(); ++i) {
+    if (head.compare(i, 2, "::") == 0) {
+      out += '/';
+      ++i;
+    } else {
+      out += head[i];
+    }
+  }
+  return out + "/" + type;
+}
+
+std::optional<ImageType> image_type_of(const std::string& dds_type_name) {
+  if (dds_type_name == kCompressedImageType) return ImageType::kCompressed;
+  if (dds_type_name == kImageType) return ImageType::kRaw;
+  return std::nullopt;
+}
+
+namespace {
+
+struct EncodingInfo {
+  const char* name;
+  int bytes_per_pixel;
+  int cv_code;  // -1: already BGR
+  int cv_type;
+};
+
+constexpr EncodingInfo kEncodings[] = {
+    {"bgr8", 3, -1, CV_8UC3},
+    {"rgb8", 3, cv::COLOR_RGB2BGR, CV_8UC3},
+    {"mono8", 1, cv::COLOR_GRAY2BGR, CV_8UC1},
+    {"yuv422", 2, cv::COLOR_YUV2BGR_UYVY, CV_8UC2},
+    {"yuv422_yuy2", 2, cv::COLOR_YUV2BGR_YUYV, CV_8UC2},
+    {"bgra8", 4, cv::COLOR_BGRA2BGR, CV_8UC4},
+    {"rgba8", 4, cv::COLOR_RGBA2BGR, CV_8UC4},
+};
+
+const EncodingInfo* find_encoding(std::string_view encoding) {
+  for (const auto& e : kEncodings) {
+    if (encoding == e.name) return &e;
+  }
+  return nullptr;
+}
+
+}  // namespace
+
+bool is_supported_encoding(std::string_view encoding) { return find_encoding(encoding) != nullptr; }
+
+Result<cv::Mat> raw_to_bgr(const RawImageView& image) {
+  const EncodingInfo* enc = find_encoding(image.encoding);
+  if (!enc) {
+    return Result<cv::Mat>(StatusCode::kUnsupported,
+                           "encoding '" + std::string(image.encoding) +
+                               "': expected bgr8, rgb8, mono8, yuv422, yuv422_yuy2, bgra8 or rgba8");
+  }
+  if (image.width == 0 || image.height == 0) {
+    return Result<cv::Mat>(StatusCode::kCorruptData, "image size " + std::to_string(image.width) + "x" +
+                                                         std::to_string(image.height) + ": must be > 0");
+  }
+  if (enc->bytes_per_pixel == 2 && image.width % 2 != 0) {
+    return Result<cv::Mat>(StatusCode::kCorruptData,
+                           "width " + std::to_string(image.width) + ": 4:2:2 needs an even width");
+  }
+  const std::uint64_t row = static_cast<std::uint64_t>(image.width) * static_cast<std::uint64_t>(enc->bytes_per_pixel);
+  if (image.step < row) {
+    return Result<cv::Mat>(StatusCode::kCorruptData, "step " + std::to_string(image.step) + " < width x " +
+                                                         std::to_string(enc->bytes_per_pixel) + " = " +
+                                                         std::to_string(row));
+  }
+  const std::uint64_t need = static_cast<std::uint64_t>(image.step) * image.height;
+  if (image.size_bytes < need || image.data == nullptr) {
+    return Result<cv::Mat>(StatusCode::kCorruptData, "data " + std::to_string(image.size_bytes) +
+                                                         " bytes < step x height = " + std::to_string(need));
+  }
+  const cv::Mat in(static_cast<int>(image.height), static_cast<int>(image.width), enc->cv_type,
+                   const_cast<std::uint8_t*>(image.data), image.step);
+  cv::Mat out;
+  if (enc->cv_code < 0) {
+    out = in.clone();
+  } else {
+    cv::cvtColor(in, out, enc->cv_code);
+  }
+  return out;
+}
+
+CameraInfoValues camera_info_from_intrinsics(const std::vector<double>& k, std::uint32_t width,
+                                             std::uint32_t height) {
+  CameraInfoValues c;
+  c.width = width;
+  c.height = height;
+  c.d.assign(5, 0.0);
+  c.r = {1, 0, 0, 0, 1, 0, 0, 0, 1};
+  if (k.size() == 9) {
+    std::copy(k.begin(), k.end(), c.k.begin());
+    for (int row = 0; row < 3; ++row) {
+      for (int col = 0; col < 3; ++col) c.p[static_cast<std::size_t>(row * 4 + col)] = k[static_cast<std::size_t>(row * 3 + col)];
+    }
+  }
+  return c;
+}
+
+std::string camera_info_topic(const std::string& image_topic) { return image_namespace(image_topic) + "/camera_info"; }
+
+std::string channel_from_topic(const std::string& image_topic) {
+  std::string ns = image_namespace(image_topic);
+  if (ns.empty()) ns = image_topic;
+  std::string out;
+  for (char c : ns) {
+    if (c == '/') {
+      if (!out.empty()) out += '_';
+    } else {
+      out += static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
+    }
+  }
+  return out;
+}
+
+}  // namespace faultline::ros2dds
