@@ -118,13 +118,16 @@ FaultDecision EnginePolicy::apply(const transport::CameraFrameView& frame, cv::M
 }
 
 std::unique_ptr<FramePolicy> make_frame_policy(const YAML::Node& faults, const std::string& corruption,
-                                               std::uint64_t seed, const std::string& origin) {
+                                               std::uint64_t seed, const std::string& origin, int jpeg_quality) {
+  if (jpeg_quality < 1 || jpeg_quality > 100) {
+    throw ConfigError(origin + ": jpeg_quality = " + std::to_string(jpeg_quality) + ": expected 1..100");
+  }
   EngineConfig config;
   config.faults = policy::parse_faults(faults, origin);
   if (auto shorthand = policy::parse_corruption_shorthand(corruption, origin)) config.faults.push_back(*shorthand);
   config.seed = seed;
   if (config.faults.empty()) return std::make_unique<PassThroughPolicy>();
-  return std::make_unique<EnginePolicy>(std::move(config));
+  return std::make_unique<EnginePolicy>(std::move(config), jpeg_quality);
 }
 
 }  // namespace faultline::runtime

@@ -37,9 +37,9 @@ class EnginePolicy final : public FramePolicy {
 };
 
 // The injector's policy from its parameters: the `faults` list plus the `corruption: fog/mid` shorthand (appended
-// as one more fault on all cameras) and the run seed. No faults at all gives the pass-through policy.
-// Throws ConfigError naming the key and value.
+// as one more fault on all cameras), the run seed, and the JPEG quality of re-encoded faulted frames. No faults at
+// all gives the pass-through policy. Throws ConfigError naming the key and value.
 std::unique_ptr<FramePolicy> make_frame_policy(const YAML::Node& faults, const std::string& corruption,
-                                               std::uint64_t seed, const std::string& origin);
+                                               std::uint64_t seed, const std::string& origin, int jpeg_quality = 95);
 
 }  // namespace faultline::runtime

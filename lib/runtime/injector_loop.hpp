@@ -45,6 +45,7 @@ struct InjectorConfig {
   YAML::Node faults;                                 // fault schedule (policy/fault_spec.hpp); null = none
   std::string corruption;                            // shorthand "fog/mid": one more fault on all cameras
   std::uint64_t seed = 0;                            // run seed of every fault draw
+  int jpeg_quality = 95;                             // re-encoded faulted JPEG frames (nuScenes-C: 95)
 
   template <class V>
   void visit(V& v) {
@@ -70,6 +71,7 @@ struct InjectorConfig {
     v("faults", faults, "fault schedule: list of {type, level|severity, cameras, rng, coherent, mode, ...}");
     v("corruption", corruption, "shorthand for one fault on all cameras, e.g. fog/mid");
     v("seed", seed, "run seed of the fault draws");
+    v("jpeg_quality", jpeg_quality, "JPEG quality of faulted frames re-encoded in JPEG mode, 1..100 (nuScenes-C: 95)");
   }
   void validate() const;  // throws ConfigError
 };

@@ -88,35 +88,11 @@ void RawSubscriber::handle_monitor_events() {
     if (id != ZMQ_EVENT_DISCONNECTED) continue;
     ++disconnects_;
     const std::string where(static_cast<const char*>(address.data()), address.size());
-    if (config_.bind) {
-      spdlog::info("a peer of {} disconnected ({} so far)", where, disconnects_);
-      continue;
-    }
-    // libzmq reports the resolved address; reconnect with the string we connected with.
-    std::string configured;
-    for (const auto& ep : endpoints_) {
-      const auto colon = ep.rfind(':');
-      if (ep == where || (colon != std::string::npos && where.size() >= ep.size() - colon &&
-                          where.compare(where.size() - (ep.size() - colon), ep.size() - colon,
-                                        ep, colon, std::string::npos) == 0)) {
-        configured = ep;
-        break;
-      }
-    }
-    spdlog::info("connection to {} closed ({} so far): the publisher exited, or sent a part over "
-                 "max_msg_bytes ({} bytes); reconnecting",
+    // Counted and logged only. libzmq reconnects by itself after a peer's exit; after an oversize part it does
+    // not, and reconnecting for it (zmq_disconnect + zmq_connect) can kill a pipe that still holds a message
+    // (libzmq 4.3.4 then aborts in fq.cpp), so that case needs a reconnect that waits to see libzmq give up.
+    spdlog::info("connection {} closed ({} so far): the peer exited, or sent a part over max_msg_bytes ({} bytes)",
                  where, disconnects_, config_.max_msg_bytes);
-    if (configured.empty()) continue;
-    try {
-      socket_.disconnect(configured);
-    } catch (const zmq::error_t&) {
-      // Already gone from the socket's list: connecting again is what matters.
-    }
-    try {
-      socket_.connect(configured);
-    } catch (const zmq::error_t& e) {
-      spdlog::warn("cannot reconnect to {}: {}", configured, e.what());
-    }
   }
 }
 

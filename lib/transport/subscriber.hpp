@@ -8,9 +8,8 @@
 // Two-part messages ([topic][body], e.g. /sync/sample) are never superseded.
 //
 // ZMQ_MAXMSGSIZE is set (kDefaultMaxMessageBytes): libzmq answers a larger part by closing the connection
-// and, for a protocol error, never reconnects. A socket monitor sees every closed connection: it is
-// counted (disconnects()), logged, and a connecting subscriber reconnects at once, so one bad message
-// costs the messages in flight (seq gaps downstream), not the rest of the run.
+// and, for that protocol error, never reconnects. Faultline's publishers refuse such parts; a socket monitor
+// sees every closed connection, which is counted (disconnects()) and logged, so a cut is never silent.
 // Messages with a wrong frame count are counted as malformed and skipped (receive() returns the
 // next good one). A RawSubscriber belongs to one thread.
 #pragma once
@@ -85,15 +84,14 @@ class RawSubscriber {
   std::uint64_t malformed() const { return malformed_; }
   // Counts a message the caller found malformed (e.g. header did not parse), for one place of truth.
   void count_malformed() { ++malformed_; }
-  // Connections closed under this socket (peer exit, or a part over max_msg_bytes); each was reconnected
-  // when this socket connects.
+  // Connections closed under this socket (a peer's exit, or a part over max_msg_bytes).
   std::uint64_t disconnects() const { return disconnects_; }
 
  private:
   friend int wait_readable(const std::vector<RawSubscriber*>& subscribers, DurationNs timeout_ns);
   Result<ReceivedMessage> read_one(bool wait);  // kWouldBlock when nothing is queued
   void drain_latest();
-  void handle_monitor_events();  // counts closed connections and reconnects
+  void handle_monitor_events();  // counts and logs closed connections
 
 
   SubscriberConfig config_;

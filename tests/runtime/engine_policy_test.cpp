@@ -78,6 +78,23 @@ TEST(EnginePolicyTest, CorruptionInJpegModeIsReencodedAndDescribed) {
   EXPECT_EQ(*again.apply(f.view, nullptr).replacement_jpeg, *d.replacement_jpeg);
 }
 
+// The injector's jpeg_quality reaches the re-encoder (issue #18: the quality of faulted frames is a parameter).
+TEST(EnginePolicyTest, JpegQualityOfFaultedFramesIsAParameter) {
+  const YAML::Node faults = YAML::Load("[{type: motion_blur, severity: 3}]");
+  auto q95 = make_frame_policy(faults, "", 9, "test");
+  auto q40 = make_frame_policy(faults, "", 9, "test", 40);
+  const TestFrame f = Frame("CAM_FRONT", 3, 0, 100);
+  const auto a = q95->apply(f.view, nullptr);
+  const auto b = q40->apply(f.view, nullptr);
+  ASSERT_TRUE(a.replacement_jpeg && b.replacement_jpeg);
+  EXPECT_LT(b.replacement_jpeg->size(), a.replacement_jpeg->size());
+  // Same pixels before encoding: q95 is what the default gives.
+  auto q95_explicit = make_frame_policy(faults, "", 9, "test", 95);
+  EXPECT_EQ(*q95_explicit->apply(f.view, nullptr).replacement_jpeg, *a.replacement_jpeg);
+  EXPECT_THROW(make_frame_policy(faults, "", 9, "test", 0), ConfigError);
+  EXPECT_THROW(make_frame_policy(faults, "", 9, "test", 101), ConfigError);
+}
+
 TEST(EnginePolicyTest, BlackInJpegModeDecodesToZeros) {
   auto policy = Policy("[{type: camera_crash, cameras: all, severity: 5, rng: numpy}]", 0);
   // Seed 0, five draws: at least one camera is dead; find it.
