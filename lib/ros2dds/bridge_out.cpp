@@ -1,5 +1,6 @@
 #include "ros2dds/bridge_out.hpp"
 
+#include <algorithm>
 #include <cstdlib>
 #include <cstring>
 #include <set>
@@ -11,6 +12,8 @@
 #include "common/config.hpp"
 #include "diagnostic_msgs.h"
 #include "fault.pb.h"
+#include "policy/temporal_draws.hpp"
+#include "ros2/naming.hpp"
 #include "ros2dds/convert.hpp"
 #include "ros2dds/dds.hpp"
 #include "ros2dds/diagnostics.hpp"
@@ -48,16 +51,22 @@ void OutBridgeConfig::validate() const {
   for (const auto& [from, to] : remap) {
     if (auto n = dds_topic_name(to); !n) throw ConfigError("remap." + from + ": " + n.status().message());
   }
+  if (names != "as_is" && names != "nuscenes") throw ConfigError("names = '" + names + "': expected as_is or nuscenes");
   if (max_frames < 0) throw ConfigError("max_frames = " + std::to_string(max_frames) + ": must be >= 0");
   if (wait_readers < 0) throw ConfigError("wait_readers = " + std::to_string(wait_readers) + ": must be >= 0");
 }
 
 namespace {
 
+// The Faultline topic without strip_prefix, its camera segment renamed under names = nuscenes; "" if not prefixed.
 std::string unsuffixed(const OutBridgeConfig& config, const std::string& faultline_topic) {
   const std::string prefix = config.strip_prefix + "/";
   if (faultline_topic.compare(0, prefix.size(), prefix) != 0) return "";
-  return faultline_topic.substr(config.strip_prefix.size());
+  std::string base = faultline_topic.substr(config.strip_prefix.size());
+  if (config.names != "nuscenes") return base;
+  const std::size_t end = std::min(base.find('/', 1), base.size());
+  const std::string channel = ros2::channel_of_lower(std::string_view(base).substr(1, end - 1), policy::kCameraNames);
+  return channel.empty() ? base : "/" + channel + base.substr(end);
 }
 
 std::string remapped(const OutBridgeConfig& config, const std::string& topic) {
@@ -84,6 +93,12 @@ std::string ros_topic_for(const OutBridgeConfig& config, const std::string& faul
 std::string ros_camera_info_topic_for(const OutBridgeConfig& config, const std::string& faultline_topic) {
   const std::string base = unsuffixed(config, faultline_topic);
   return base.empty() ? base : remapped(config, camera_info_topic(base) + config.topic_suffix);
+}
+
+std::string ros_frame_id_for(const OutBridgeConfig& config, const std::string& faultline_frame_id) {
+  if (config.names != "nuscenes") return faultline_frame_id;
+  std::string channel = ros2::channel_of_lower(faultline_frame_id, policy::kCameraNames);
+  return channel.empty() ? faultline_frame_id : channel;
 }
 
 namespace {
@@ -208,7 +223,7 @@ struct OutBridge::Impl {
     OutCamera* cam = camera(topic);
     if (!cam) return;
     const StampNs stamp = f.header().capture_stamp_ns();
-    const std::string& frame_id = f.header().frame_id();
+    const std::string frame_id = ros_frame_id_for(cfg, f.header().frame_id());
     const bool jpeg = f.encoding() == "jpeg";
     if (cfg.output == "compressed") {
       sensor_msgs_msg_dds__CompressedImage_ m{};
@@ -281,7 +296,7 @@ struct OutBridge::Impl {
 
   void publish_transforms(const msgs::CameraFrame& f) {
     const StampNs stamp = f.header().capture_stamp_ns();
-    const std::string& frame_id = f.header().frame_id();
+    const std::string frame_id = ros_frame_id_for(cfg, f.header().frame_id());
     if (f.has_sensor_to_ego() && !frame_id.empty()) {
       const auto& s = f.sensor_to_ego();
       Extrinsics e{{s.translation().x(), s.translation().y(), s.translation().z(), s.rotation().w(),
@@ -328,7 +343,8 @@ struct OutBridge::Impl {
   }
 
   void on_event(const msgs::FaultEvent& e) {
-    const DiagnosticValues d = diagnostic_from_event(e);
+    DiagnosticValues d = diagnostic_from_event(e);
+    d.frame_id = ros_frame_id_for(cfg, d.frame_id);
     std::vector<diagnostic_msgs_msg_dds__KeyValue_> kv(d.values.size());
     for (std::size_t i = 0; i < d.values.size(); ++i) {
       kv[i].key = mutable_str(d.values[i].first);

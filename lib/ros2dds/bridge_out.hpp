@@ -8,7 +8,8 @@
 // (base_frame -> frame_id, transient local) and each frame's ego pose to /tf (map_frame -> base_frame).
 //
 // Topic names: the Faultline topic without strip_prefix, plus topic_suffix, then remapped:
-// /faulty/cam_front/image_rect_compressed -> /cam_front/image_rect_compressed (replay), or with strip_prefix
+// /faulty/cam_front/image_rect_compressed -> /cam_front/image_rect_compressed (replay; with names = nuscenes
+// /CAM_FRONT/image_rect_compressed, the name `bag convert --format ros2` writes), or with strip_prefix
 // /faulty/ros2 and topic_suffix /faulty: /faulty/ros2/front/image -> /front/image/faulty (proxy). The CameraInfo
 // topic is the image_transport sibling of the unsuffixed name, plus the suffix: /front/camera_info/faulty.
 // A topic's writers are created at its first frame, or at start for the topics listed in `advertise`, so that ROS 2
@@ -37,6 +38,7 @@ struct OutBridgeConfig {
   std::string strip_prefix = "/faulty";      // removed from the Faultline topic
   std::string topic_suffix;                  // appended to the ROS topic ("/faulty" for a proxy)
   std::map<std::string, std::string> remap;  // ROS topic remaps (from -> to), after the rule above
+  std::string names = "as_is";               // as_is | nuscenes: /CAM_FRONT/... topics and CAM_FRONT frame ids
   std::string output = "compressed";         // compressed | raw
   int jpeg_quality = 95;                     // raw frames -> CompressedImage (1..100; nuScenes-C used 95)
   std::string qos = "default";               // image, CameraInfo and diagnostics QoS
@@ -65,6 +67,9 @@ struct OutBridgeConfig {
     v("strip_prefix", strip_prefix, "removed from the Faultline topic to make the ROS topic");
     v("topic_suffix", topic_suffix, "appended to the ROS topic (/faulty for a proxy)");
     v("remap", remap, "ROS topic remaps from -> to");
+    v("names", names,
+      "as_is, or nuscenes: a nuScenes camera's topics and frame_id take its channel name (/CAM_FRONT/..., CAM_FRONT) "
+      "as in bag convert --format ros2 and nuscenes2mcap");
     v("output", output, "compressed (CompressedImage) or raw (Image bgr8)");
     v("jpeg_quality", jpeg_quality, "JPEG quality when encoding raw frames (1..100)");
     v("qos", qos, "QoS of the writers: default | sensor_data | reliable|best_effort,<depth>");
@@ -97,10 +102,14 @@ struct OutBridgeCounts {
 };
 
 // The ROS topic of a Faultline camera topic (rule above); "" when it does not start with strip_prefix + "/".
+// With names = nuscenes, a first topic segment that is a nuScenes camera in lower case becomes its channel name.
 std::string ros_topic_for(const OutBridgeConfig& config, const std::string& faultline_topic);
 // The CameraInfo topic of a Faultline camera topic: the image_transport sibling of the unsuffixed ROS topic, plus
 // topic_suffix, then remapped; "" like ros_topic_for.
 std::string ros_camera_info_topic_for(const OutBridgeConfig& config, const std::string& faultline_topic);
+// The frame_id written for a Faultline frame_id: with names = nuscenes, "cam_front" -> "CAM_FRONT" (the /tf_static
+// child frame too); other ids, and every id with names = as_is, unchanged.
+std::string ros_frame_id_for(const OutBridgeConfig& config, const std::string& faultline_frame_id);
 
 class OutBridge {
  public:

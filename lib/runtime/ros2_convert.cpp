@@ -7,6 +7,7 @@
 #include "common/config.hpp"
 #include "fault.pb.h"
 #include "ros2/messages.hpp"
+#include "ros2/naming.hpp"
 
 namespace faultline::runtime {
 
@@ -27,9 +28,6 @@ void Ros2ConvertConfig::validate() const {
     throw ConfigError("bag convert: output_prefix = \"" + output_prefix + "\": expected a /namespace");
   }
 }
-
-std::string ros2_image_topic(const std::string& channel) { return "/" + channel + "/image_rect_compressed"; }
-std::string ros2_camera_info_topic(const std::string& channel) { return "/" + channel + "/camera_info"; }
 
 namespace {
 
@@ -180,7 +178,7 @@ struct Ros2BagConverter::Impl {
   // Image + CameraInfo of one frame under `ns` ("" or the faulted prefix), logged at log_ns.
   void write_camera(const std::string& ns, const dataset::CameraFrameRecord& f, std::string_view jpeg,
                     StampNs log_ns) {
-    CameraChannels& ch = channels_for(ns + ros2_image_topic(f.channel), ns + ros2_camera_info_topic(f.channel));
+    CameraChannels& ch = channels_for(ns + ros2::nuscenes_image_topic(f.channel), ns + ros2::nuscenes_camera_info_topic(f.channel));
     const ros2::Header header{ros2::time_from_us(f.timestamp_us), f.channel};
     prefix = ros2::compressed_image_prefix(header, "jpeg", jpeg.size());
     check(writer->write_parts(ch.image, log_ns, {prefix, jpeg}));
@@ -270,10 +268,10 @@ Result<Ros2ConvertCounts> Ros2BagConverter::run(const std::atomic<bool>& stop, c
         m.topic(m.cfg.faults_topic, ros2::MessageTraits<ros2::DiagnosticArray>::kTypeName, bag::Qos::reliable());
   }
   for (const auto& f : frames) {
-    if (!m.policy || m.cfg.clean_frames) m.channels_for(ros2_image_topic(f.channel), ros2_camera_info_topic(f.channel));
+    if (!m.policy || m.cfg.clean_frames) m.channels_for(ros2::nuscenes_image_topic(f.channel), ros2::nuscenes_camera_info_topic(f.channel));
     if (m.policy) {
       const std::string ns = m.cfg.clean_frames ? m.cfg.output_prefix : "";
-      m.channels_for(ns + ros2_image_topic(f.channel), ns + ros2_camera_info_topic(f.channel));
+      m.channels_for(ns + ros2::nuscenes_image_topic(f.channel), ns + ros2::nuscenes_camera_info_topic(f.channel));
     }
     m.calibration.emplace(f.channel, f.sensor_to_ego);  // each camera's first calibration
   }

@@ -60,10 +60,6 @@ struct Ros2ConvertCounts {
   std::uint64_t image_bytes = 0;     // source JPEG bytes read
 };
 
-// "/CAM_FRONT/image_rect_compressed" and "/CAM_FRONT/camera_info".
-std::string ros2_image_topic(const std::string& channel);
-std::string ros2_camera_info_topic(const std::string& channel);
-
 class Ros2BagConverter {
  public:
   // policy: null = clean bag only. gt: boxes per sample token (may be empty: no annotations topic).

@@ -5,6 +5,7 @@
 #include <cstdlib>
 
 #include "common/config.hpp"
+#include "ros2/naming.hpp"
 #include "ros2dds/bridge_in.hpp"
 #include "ros2dds/bridge_out.hpp"
 #include "ros2dds/convert.hpp"
@@ -271,6 +272,26 @@ TEST(TopicRulesTest, ReplayStripsTheFaultedNamespace) {
   EXPECT_EQ(ros_topic_for(c, "/faulty/cam_front/image_rect_compressed"), "/cam_front/image_rect_compressed");
   EXPECT_EQ(ros_camera_info_topic_for(c, "/faulty/cam_front/image_rect_compressed"), "/cam_front/camera_info");
   EXPECT_EQ(ros_topic_for(c, "/other/cam_front/image"), "");
+}
+
+TEST(TopicRulesTest, NuscenesNamesMatchTheRosbag2Conversion) {
+  OutBridgeConfig c;
+  c.names = "nuscenes";
+  EXPECT_EQ(ros_topic_for(c, "/faulty/cam_front/image_rect_compressed"), ros2::nuscenes_image_topic("CAM_FRONT"));
+  EXPECT_EQ(ros_camera_info_topic_for(c, "/faulty/cam_back_left/image_rect_compressed"),
+            ros2::nuscenes_camera_info_topic("CAM_BACK_LEFT"));
+  EXPECT_EQ(ros_frame_id_for(c, "cam_front_right"), "CAM_FRONT_RIGHT");
+  // Only nuScenes cameras are renamed; a user's own names stay as they are.
+  EXPECT_EQ(ros_topic_for(c, "/faulty/front/image_raw"), "/front/image_raw");
+  EXPECT_EQ(ros_topic_for(c, "/faulty/cam_frontal/image"), "/cam_frontal/image");
+  EXPECT_EQ(ros_frame_id_for(c, "cam_a_optical"), "cam_a_optical");
+  EXPECT_EQ(ros_frame_id_for(c, "base_link"), "base_link");
+  c.remap["/CAM_BACK/image_rect_compressed"] = "/rear/compressed";
+  EXPECT_EQ(ros_topic_for(c, "/faulty/cam_back/image_rect_compressed"), "/rear/compressed") << "remap comes after";
+  c.names = "as_is";
+  EXPECT_EQ(ros_frame_id_for(c, "cam_front_right"), "cam_front_right");
+  c.names = "upper";
+  EXPECT_THROW(c.validate(), ConfigError);
 }
 
 TEST(TopicRulesTest, ProxyAppendsTheSuffixAndRemaps) {

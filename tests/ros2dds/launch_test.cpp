@@ -19,6 +19,7 @@
 #include "codec/jpeg.hpp"
 #include "dataset/synth.hpp"
 #include "diagnostic_msgs.h"
+#include "ros2/naming.hpp"
 #include "ros2dds/convert.hpp"
 #include "ros2dds/dds.hpp"
 #include "runtime/frame_source.hpp"
@@ -35,8 +36,14 @@ std::vector<std::uint8_t> JpegForTest() {
   return codec::encode_jpeg(cv::Mat(24, 32, CV_8UC3, cv::Scalar(40, 120, 200)), 90).value();
 }
 
-const char* kCameras[] = {"cam_front", "cam_front_right", "cam_front_left", "cam_back", "cam_back_left",
-                          "cam_back_right"};
+// The replay's ROS 2 names are nuScenes' (names: nuscenes): /CAM_FRONT/image_rect_compressed, frame_id CAM_FRONT.
+const char* kCameras[] = {"CAM_FRONT", "CAM_FRONT_RIGHT", "CAM_FRONT_LEFT", "CAM_BACK", "CAM_BACK_LEFT",
+                          "CAM_BACK_RIGHT"};
+
+std::string Lower(std::string s) {
+  for (char& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return s;
+}
 
 pid_t SpawnLogged(std::vector<std::string> args, const std::string& log) {
   std::vector<char*> argv;
@@ -90,12 +97,10 @@ TEST_F(Ros2LaunchTest, EveryFrameReachesRos2WithCalibrationPoseAndFaults) {
   // What the player will send: the dataset's camera frames whose image file exists.
   auto source = runtime::NuScenesFrameSource::open(dir_ + "/nuscenes", "v1.0-mini", {});
   ASSERT_TRUE(source) << source.status().message();
-  std::map<std::string, std::vector<std::int64_t>> expected_us;  // lower-case channel -> timestamps
+  std::map<std::string, std::vector<std::int64_t>> expected_us;  // channel -> timestamps
   for (const auto& f : (*source)->frames()) {
     if (!std::filesystem::exists(dir_ + "/nuscenes/" + f.filename)) continue;
-    std::string ch = f.channel;
-    for (char& c : ch) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-    expected_us[ch].push_back(f.timestamp_us);
+    expected_us[f.channel].push_back(f.timestamp_us);
   }
   ASSERT_EQ(expected_us.size(), 6u);
 
@@ -106,10 +111,10 @@ TEST_F(Ros2LaunchTest, EveryFrameReachesRos2WithCalibrationPoseAndFaults) {
   std::string advertise = "[";
   for (const char* cam : kCameras) {
     images.push_back(std::make_unique<Reader>(p, &sensor_msgs_msg_dds__CompressedImage__desc,
-                                              std::string("/") + cam + "/image_rect_compressed", all));
+                                              ros2::nuscenes_image_topic(cam), all));
     infos.push_back(std::make_unique<Reader>(p, &sensor_msgs_msg_dds__CameraInfo__desc,
-                                             std::string("/") + cam + "/camera_info", all));
-    advertise += std::string(advertise.size() > 1 ? "," : "") + "/faulty/" + cam + "/image_rect_compressed";
+                                             ros2::nuscenes_camera_info_topic(cam), all));
+    advertise += std::string(advertise.size() > 1 ? "," : "") + "/faulty/" + Lower(cam) + "/image_rect_compressed";
   }
   advertise += "]";
   Reader faults(p, &diagnostic_msgs_msg_dds__DiagnosticArray__desc, "/faultline/faults", all);
@@ -196,7 +201,7 @@ TEST_F(Ros2LaunchTest, EveryFrameReachesRos2WithCalibrationPoseAndFaults) {
     std::vector<StampNs> want_ns;
     for (auto us : want) want_ns.push_back(ns_from_time(time_from_us(us)));
     EXPECT_EQ(got[cam], want_ns) << cam << ": every frame, in order, with its nuScenes stamp";
-    for (const auto& id : frame_ids[cam]) ASSERT_EQ(id, cam);
+    for (const auto& id : frame_ids[cam]) ASSERT_EQ(id, cam) << "the same frame_id as bag convert --format ros2";
     EXPECT_EQ(infos_got[cam], want.size()) << cam;
     total += want.size();
   }

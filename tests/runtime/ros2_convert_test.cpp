@@ -22,6 +22,7 @@
 #include "dataset/synth.hpp"
 #include "fault.pb.h"
 #include "ros2/messages.hpp"
+#include "ros2/naming.hpp"
 #include "runtime/bag_convert.hpp"
 #include "runtime/bag_layout.hpp"
 #include "runtime/engine_policy.hpp"
@@ -218,8 +219,8 @@ TEST_F(Ros2ConvertTest, CleanBagHoldsEveryFrameWithCalibrationTfAndBoxes) {
   const Ros2Content c = read_ros2(mcap);
   EXPECT_EQ(c.messages, counts->messages);
   for (const auto& [channel, list] : by_channel) {
-    const auto& imgs = c.images.at(ros2_image_topic(channel));
-    const auto& infos = c.infos.at(ros2_camera_info_topic(channel));
+    const auto& imgs = c.images.at(ros2::nuscenes_image_topic(channel));
+    const auto& infos = c.infos.at(ros2::nuscenes_camera_info_topic(channel));
     ASSERT_EQ(imgs.size(), list.size()) << channel;
     ASSERT_EQ(infos.size(), list.size()) << channel;
     for (std::size_t i = 0; i < list.size(); ++i) {
@@ -288,7 +289,7 @@ TEST_F(Ros2ConvertTest, CleanBagHoldsEveryFrameWithCalibrationTfAndBoxes) {
   std::map<std::string, std::uint64_t> expect = {{"/tf", frames->size()},
                                                  {"/tf_static", counts->tf_static},
                                                  {"/markers/annotations", samples->size()}};
-  for (const auto& [channel, list] : by_channel) expect[ros2_image_topic(channel)] = list.size();
+  for (const auto& [channel, list] : by_channel) expect[ros2::nuscenes_image_topic(channel)] = list.size();
   EXPECT_TRUE(node_validates(dir, dataroot(), expect));
 
   // An existing directory is never overwritten.
