@@ -160,6 +160,8 @@ int run_ros2(int argc, char** argv) {
   app.add_option("--cameras", o.cameras, "1..6")->check(CLI::Range(1, 6))->capture_default_str();
   app.add_option("--width", o.width, "frame width")->check(CLI::Range(16, 8192))->capture_default_str();
   app.add_option("--height", o.height, "frame height")->check(CLI::Range(16, 8192))->capture_default_str();
+  app.add_option("--noise", o.noise, "frame sensor noise: 2 ~380 KB JPEGs, 6 the heavy worst case (~550 KB)")
+      ->check(CLI::Range(0, 64))->capture_default_str();
   app.add_option("--corruption", o.corruption, "the corrupted configuration, e.g. fog/mid")->capture_default_str();
   app.add_option("--repeats", o.repeats, "runs per configuration")->check(CLI::Range(1, 50))->capture_default_str();
   app.add_option("--domain", o.domain_id, "DDS domain (-1: 100 + pid % 100)")->check(CLI::Range(-1, 232));

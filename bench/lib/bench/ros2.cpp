@@ -45,7 +45,30 @@ struct Row {
   std::uint64_t events = 0;  // DiagnosticArrays received (one per frame the injector saw)
   double p50_ms = 0, p99_ms = 0, max_ms = 0;
   double cpu_pct = 0;  // the three nodes, % of one core
+  std::uint64_t udp_overflows = 0;  // UDP datagrams this host dropped for a full receive buffer during the run
 };
+
+// The host's UDP RcvbufErrors (/proc/net/snmp): datagrams dropped because a socket's receive buffer was full. DDS
+// recovers each by NACK and retransmission, which is where a reliable topic's latency tail comes from.
+std::uint64_t udp_rcvbuf_errors() {
+  std::ifstream in("/proc/net/snmp");
+  std::string header, values, line;
+  while (std::getline(in, line)) {
+    if (line.rfind("Udp: ", 0) != 0) continue;
+    if (header.empty()) {
+      header = line;
+    } else {
+      values = line;
+      break;
+    }
+  }
+  std::istringstream h(header), v(values);
+  std::string name, value;
+  while (h >> name && v >> value) {
+    if (name == "RcvbufErrors") return std::stoull(value);
+  }
+  return 0;
+}
 
 struct Child {
   pid_t pid = -1;
@@ -108,12 +131,13 @@ std::string self_dir() {
 
 // Loopback only with unicast discovery (lo has no multicast), as the interop test configures Cyclone, plus what
 // ~550 KB samples at 72/s need (docs/ros2.md): 64 KB datagrams instead of 1344-byte fragments, and socket buffers
-// up to the kernel's default rmem_max (4 MB).
+// of 4 MB at least and up to 32 MB where net.core.rmem_max allows (a burst of six frames overflows 4 MB, and each
+// datagram lost there is a NACK and a retransmission: tens to hundreds of ms).
 constexpr const char* kLoopbackConfig =
     "<CycloneDDS><Domain Id=\"any\"><General><Interfaces><NetworkInterface address=\"127.0.0.1\"/></Interfaces>"
     "<AllowMulticast>false</AllowMulticast><MaxMessageSize>65500B</MaxMessageSize>"
     "<FragmentSize>65000B</FragmentSize></General>"
-    "<Internal><SocketReceiveBufferSize min=\"4MB\"/></Internal>"
+    "<Internal><SocketReceiveBufferSize min=\"4MB\" max=\"32MB\"/></Internal>"
     "<Discovery><ParticipantIndex>auto</ParticipantIndex><MaxAutoParticipantIndex>19</MaxAutoParticipantIndex>"
     "<Peers><Peer address=\"127.0.0.1\"/></Peers></Discovery></Domain></CycloneDDS>";
 
@@ -224,6 +248,7 @@ Row run_one(const Ros2Options& o, const std::string& config, const std::string& 
 
   std::vector<double> cpu0;
   for (auto& n : nodes) cpu0.push_back(child_cpu_s(n.pid));
+  const std::uint64_t overflows0 = udp_rcvbuf_errors();
   const auto period = std::chrono::nanoseconds(static_cast<std::int64_t>(1e9 / o.rate_hz));
   const auto start = std::chrono::steady_clock::now();
   const int ticks = static_cast<int>(o.seconds * o.rate_hz);
@@ -255,6 +280,7 @@ Row run_one(const Ros2Options& o, const std::string& config, const std::string& 
   row.cpu_pct = 100.0 * cpu / elapsed;
   sending_done = true;
   sink.join();
+  row.udp_overflows = udp_rcvbuf_errors() - overflows0;
   for (auto& n : nodes) stop_child(n);
   row.sent = sent.load();
   row.received = received.load();
@@ -300,6 +326,7 @@ int run_ros2(const Ros2Options& o) {
     spec.width = o.width;
     spec.height = o.height;
     spec.seed = 7 + static_cast<std::uint64_t>(c);
+    spec.noise = o.noise;
     auto bytes = codec::encode_jpeg(synthetic_frame(spec), 95);
     if (!bytes) {
       std::fprintf(stderr, "faultline bench ros2: %s\n", bytes.status().message().c_str());
@@ -322,11 +349,11 @@ int run_ros2(const Ros2Options& o) {
         Row row = run_one(o, name, corruption, domain, jpegs, index++, r);
         if (!o.json) {
           std::printf("%-16s run %d  sent %5llu  received %5llu  diagnostics %5llu  drops %4llu  added latency p50 %7.2f ms  p99 %7.2f ms  "
-                      "max %7.2f ms  nodes cpu %5.1f %%\n",
+                      "max %7.2f ms  nodes cpu %5.1f %%  udp overflows %llu\n",
                       row.config.c_str(), r + 1, static_cast<unsigned long long>(row.sent),
                       static_cast<unsigned long long>(row.received), static_cast<unsigned long long>(row.events),
                       static_cast<unsigned long long>(row.unintended_drops), row.p50_ms, row.p99_ms, row.max_ms,
-                      row.cpu_pct);
+                      row.cpu_pct, static_cast<unsigned long long>(row.udp_overflows));
           std::fflush(stdout);
         }
         rows.push_back(row);

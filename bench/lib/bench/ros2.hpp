@@ -2,7 +2,8 @@
 // launch/ros2_proxy.yaml composes them) under N cameras x rate_hz of 1600x900 JPEG CompressedImages published over
 // Cyclone DDS on loopback, passthrough and with one corruption, alternating run by run (side by side). Per run:
 // frames in/out, unintended drops, added latency p50/p99 (DDS write of the original -> DDS receipt of the faulted
-// copy, both in this process), and the nodes' CPU.
+// copy, both in this process: an upper bound, as it includes the two DDS hops a direct subscriber would also pay),
+// and the nodes' CPU.
 #pragma once
 
 #include <string>
@@ -15,6 +16,8 @@ struct Ros2Options {
   int cameras = 6;                         // 1..6
   int width = 1600;                        // frame size (pixels)
   int height = 900;
+  int noise = 2;                           // the frames' sensor noise (bench/frames.hpp): 2 gives ~380 KB at q95,
+                                           // 6 the heavy worst case (~550 KB)
   std::string corruption = "brightness/mid";  // the corrupted configuration (injector `corruption` shorthand)
   int repeats = 3;                         // runs per configuration (medians and ranges reported)
   int domain_id = -1;                      // -1: 100 + pid % 100 (a domain no real ROS 2 graph uses)
