@@ -25,6 +25,10 @@ int run(int argc, char** argv) {
   app.add_option("--width", opt.image_width, "image width in px (intrinsics scale with it)");
   app.add_option("--height", opt.image_height, "image height in px");
   app.add_option("--quality", opt.jpeg_quality, "JPEG quality")->check(CLI::Range(1, 100));
+  app.add_option("--sensor-noise", opt.sensor_noise,
+                 "per-pixel sensor noise in 8-bit levels (0 = flat render; the default gives JPEGs of nuScenes' size)")
+      ->check(CLI::Range(0, 64))
+      ->capture_default_str();
   app.add_option("--threads", opt.threads, "render/encode threads")->check(CLI::Range(1, 64));
   bool no_annotations = false;
   app.add_flag("--no-annotations", no_annotations, "write empty sample_annotation/instance tables (like v1.0-test)");

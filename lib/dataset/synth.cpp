@@ -146,6 +146,7 @@ struct Frame {
 
 struct ImageJob {
   std::string path;
+  std::string filename;  // relative to the dataroot (the noise seed: files do not depend on where they are written)
   int camera = 0;
   double t_s = 0;
 };
@@ -172,6 +173,14 @@ Status write_bytes(const fs::path& path, const std::vector<unsigned char>& bytes
   return Status::ok();
 }
 
+// The noise seed of one image: the dataset seed and the image's file name, so that files do not depend on the
+// order the workers take them in (FNV-1a of the name).
+std::uint64_t noise_seed(std::uint64_t seed, const std::string& path) {
+  std::uint64_t h = 1469598103934665603ULL ^ seed;
+  for (unsigned char c : path) h = (h ^ c) * 1099511628211ULL;
+  return h;
+}
+
 // Renders and encodes the images of one scene on `threads` workers; the files do not depend on the worker count.
 Status render_images(Shared& sh, const SynthWorld& world, const std::vector<CameraModel>& cameras,
                      const std::vector<ImageJob>& jobs) {
@@ -183,7 +192,8 @@ Status render_images(Shared& sh, const SynthWorld& world, const std::vector<Came
     std::vector<std::uint8_t> jpeg;
     for (std::size_t i = next++; i < jobs.size(); i = next++) {
       const ImageJob& job = jobs[i];
-      const cv::Mat img = render_camera(world, job.t_s, cameras[static_cast<std::size_t>(job.camera)]);
+      cv::Mat img = render_camera(world, job.t_s, cameras[static_cast<std::size_t>(job.camera)]);
+      add_sensor_noise(img, sh.opt.sensor_noise, noise_seed(sh.opt.seed, job.filename));
       auto encoded = codec::encode_jpeg(img, sh.opt.jpeg_quality);
       if (!encoded) {
         std::lock_guard<std::mutex> lock(mu);
@@ -372,7 +382,7 @@ Status write_scene(Shared& sh, int index, const std::string& log_token, const st
       ++sh.summary.sample_data;
       if (camera) {
         ++sh.summary.camera_frames;
-        if (!opt.metadata_only) jobs.push_back({(sh.root / filename).string(), static_cast<int>(cameras.size() - 1), t_s});
+        if (!opt.metadata_only) jobs.push_back({(sh.root / filename).string(), filename, static_cast<int>(cameras.size() - 1), t_s});
       }
     }
   }
@@ -533,6 +543,10 @@ Result<SynthSummary> write_synthetic_dataset(const SynthOptions& opt, const Synt
   }
   if (opt.image_width < 16 || opt.image_height < 16 || opt.jpeg_quality < 1 || opt.jpeg_quality > 100) {
     return Status(StatusCode::kInvalidArgument, "synth: bad image size or JPEG quality");
+  }
+  if (opt.sensor_noise < 0 || opt.sensor_noise > 64) {
+    return Status(StatusCode::kInvalidArgument,
+                  "synth: sensor_noise = " + std::to_string(opt.sensor_noise) + ": expected 0..64 (8-bit levels)");
   }
   if (opt.version.empty() || opt.version.find('/') != std::string::npos) {
     return Status(StatusCode::kInvalidArgument, "synth: bad version '" + opt.version + "'");

@@ -2,6 +2,9 @@
 // the near plane and to a guard band, projected, and filled with cv::fillConvexPoly.
 #include "dataset/synth_render.hpp"
 
+#include <random>
+#include <vector>
+
 #include <opencv2/imgproc.hpp>
 
 #include <algorithm>
@@ -150,6 +153,26 @@ bool project_world_point(const Rigid& ego_to_world, const CameraModel& camera, c
   *u = camera.fx * p[0] / p[2] + camera.cx;
   *v = camera.fy * p[1] / p[2] + camera.cy;
   return true;
+}
+
+void add_sensor_noise(cv::Mat& bgr, int amplitude, std::uint64_t seed) {
+  if (amplitude <= 0 || bgr.empty()) return;
+  // A table of draws read at a random offset per row: per-pixel generator calls would cost more than the render.
+  // It is one row longer than the offsets reach, so a row reads it without wrapping (a loop the compiler vectorises).
+  constexpr std::size_t kOffsets = 1 << 16;
+  const std::size_t row_len = static_cast<std::size_t>(bgr.cols) * static_cast<std::size_t>(bgr.channels());
+  std::vector<std::int16_t> table(kOffsets + row_len);
+  std::mt19937_64 rng(seed);
+  std::uniform_int_distribution<int> draw(-amplitude, amplitude);
+  for (auto& v : table) v = static_cast<std::int16_t>(draw(rng));
+  for (int y = 0; y < bgr.rows; ++y) {
+    std::uint8_t* p = bgr.ptr<std::uint8_t>(y);
+    const std::int16_t* n = table.data() + (static_cast<std::size_t>(rng()) & (kOffsets - 1));
+    for (std::size_t x = 0; x < row_len; ++x) {
+      const int v = p[x] + n[x];
+      p[x] = static_cast<std::uint8_t>(v < 0 ? 0 : (v > 255 ? 255 : v));
+    }
+  }
 }
 
 cv::Mat render_camera(const SynthWorld& world, double t_s, const CameraModel& camera) {
