@@ -20,6 +20,7 @@ packages=(
   libgtest-dev libgmock-dev libbenchmark-dev
   libssl-dev                             # tests: SHA-256 of golden outputs
   python3-zmq python3-protobuf python3-numpy python3-opencv
+  slurmctld slurmd slurm-client munge    # tests: the Slurm job-array test starts a one-node cluster (docs/cluster.md)
 )
 if [[ "${1:-}" == "--with-browser" ]]; then packages+=(chromium); fi
 # Node.js runs the independent MCAP validator (tests/mcap_js); a node already on PATH (any install) is kept.

@@ -6,45 +6,17 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
-#include <map>
-#include <sstream>
+#include <string>
 #include <thread>
 
+#include "campaign/benchmark_plan.hpp"
+#include "campaign/text_file.hpp"
 #include "launch/supervisor.hpp"
-#include "report/report.hpp"
 #include "scoring/evaluate.hpp"
-#include "scoring/py_json.hpp"
-#include "scoring/run_manifest.hpp"
 
 namespace faultline::campaign {
 namespace fs = std::filesystem;
 namespace {
-
-std::string read_text(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
-
-bool write_text(const std::string& path, const std::string& text) {
-  const std::string tmp = path + ".tmp";
-  {
-    std::ofstream out(tmp, std::ios::binary);
-    out << text;
-    if (!out) return false;
-  }
-  std::error_code ec;
-  fs::rename(tmp, path, ec);
-  return !ec;
-}
-
-std::string json_number(double v) {
-  if (!std::isfinite(v)) return "null";
-  char buf[32];
-  std::snprintf(buf, sizeof(buf), "%.6f", v);
-  return buf;
-}
 
 // `text` as a single-quoted YAML scalar, so that a `-p key:=value` keeps it a string verbatim.
 std::string yaml_quote(const std::string& text) {
@@ -130,23 +102,18 @@ std::vector<launch::ChildSpec> run_children(const BenchmarkOptions& o, const std
   return children;
 }
 
-// A detector configuration beyond the configured one: a name and its -p overrides.
-struct Variant {
-  std::string name, tag;
-  std::vector<std::string> params;
-};
+}  // namespace
 
-ConditionResult run_condition(const BenchmarkOptions& o, const std::string& corruption,
-                              const std::string& level, int seed, const std::atomic<bool>& stop,
-                              std::FILE* log, const Variant* variant = nullptr) {
+ConditionResult run_one(const BenchmarkOptions& o, const RunSpec& run,
+                        const std::atomic<bool>& stop) {
+  const std::string& corruption = run.corruption;
+  const std::string& level = run.level;
+  const int seed = run.seed;
   ConditionResult r;
   r.condition = corruption.empty() ? "clean" : corruption + "/" + level;
   r.seed = seed;
-  if (variant) r.variant = variant->name;
-  std::string run_name = corruption.empty() ? "clean" : corruption + "_" + level;
-  if (variant) run_name = "variant_" + variant->tag + "_" + run_name;
-  if (o.seeds > 1 && !corruption.empty()) run_name += "_s" + std::to_string(seed);
-  const fs::path run_dir = fs::path(o.out_dir) / "runs" / run_name;
+  r.variant = run.variant;
+  const fs::path run_dir = fs::path(o.out_dir) / "runs" / run.name;
   fs::remove_all(run_dir);
   fs::create_directories(run_dir);
   // ipc paths must stay under ~100 characters: sockets live in a short private temp dir.
@@ -182,9 +149,8 @@ ConditionResult run_condition(const BenchmarkOptions& o, const std::string& corr
                    " after " + when + " s";
     run_stop.store(true);
   };
-  launch::Supervisor sup(run_children(o, sock, run_dir.string(), corruption, level, seed,
-                                      variant ? variant->params : std::vector<std::string>{}),
-                         so);
+  launch::Supervisor sup(
+      run_children(o, sock, run_dir.string(), corruption, level, seed, run.variant_params), so);
   // Stop the run on the user's request or when it exceeds its time budget.
   std::atomic<bool> done{false};
   std::thread watchdog([&] {
@@ -242,80 +208,8 @@ ConditionResult run_condition(const BenchmarkOptions& o, const std::string& corr
   r.nds = outcome->metrics.nd_score;
   r.map = outcome->metrics.mean_ap;
   for (std::size_t i = 0; i < 5; ++i) r.tp_errors[i] = outcome->metrics.tp_errors[i];
-  (void)log;
   return r;
 }
-
-std::string summary_json(const BenchmarkOptions& o, const BenchmarkResult& b) {
-  std::ostringstream js;
-  js << "{\n  \"dataroot\": " << scoring::py_escape(o.dataroot) << ",\n  \"version\": "
-     << scoring::py_escape(o.version) << ",\n  \"eval_set\": " << scoring::py_escape(o.eval_set)
-     << ",\n  \"detector\": "
-     << scoring::py_escape(o.detector_cmd.empty() ? "faultline detector" : o.detector_cmd)
-     << ",\n  \"conditions\": {";
-  // Mean over seeds per condition.
-  std::map<std::string, std::vector<const ConditionResult*>> by;
-  std::vector<std::string> order;
-  for (const auto& r : b.runs) {
-    if (!r.variant.empty()) continue;
-    if (!by.count(r.condition)) order.push_back(r.condition);
-    by[r.condition].push_back(&r);
-  }
-  bool first = true;
-  static const char* kTp[5] = {"mATE", "mASE", "mAOE", "mAVE", "mAAE"};
-  for (const auto& c : order) {
-    double nds = 0, map = 0, nds2 = 0;
-    std::array<double, 5> tp{};
-    int n = 0;
-    for (const auto* r : by[c]) {
-      if (!r->ok) continue;
-      ++n;
-      nds += r->nds;
-      nds2 += r->nds * r->nds;
-      map += r->map;
-      for (int i = 0; i < 5; ++i) tp[i] += r->tp_errors[i];
-    }
-    js << (first ? "" : ",") << "\n    \"" << c << "\": {";
-    first = false;
-    if (n == 0) {
-      js << "\"error\": " << scoring::py_escape(by[c].front()->error) << "}";
-      continue;
-    }
-    const double mean = nds / n;
-    js << "\"NDS\": " << json_number(mean) << ", \"mAP\": " << json_number(map / n);
-    for (int i = 0; i < 5; ++i) js << ", \"" << kTp[i] << "\": " << json_number(tp[i] / n);
-    js << ", \"runs\": " << n << ", \"NDS_std\": "
-       << json_number(n > 1 ? std::sqrt(std::max(0.0, nds2 / n - mean * mean)) : 0.0) << "}";
-  }
-  js << "\n  }";
-  if (!b.robustness_error.empty()) {
-    js << ",\n  \"robustness_error\": " << scoring::py_escape(b.robustness_error);
-  }
-  if (b.robustness_ok) {
-    js << ",\n  \"mCE\": " << json_number(100 * b.robustness.mce)
-       << ",\n  \"mRR\": " << json_number(100 * b.robustness.mrr) << ",\n  \"baseline\": \""
-       << b.robustness.baseline << "\"";
-  }
-  js << ",\n  \"detector_configurations\": [";
-  bool first_variant = true;
-  for (const auto& r : b.runs) {
-    if (r.variant.empty() && !(r.condition == "clean" || r.condition.rfind("frame_lost/", 0) == 0 ||
-                               r.condition.rfind("camera_crash/", 0) == 0)) {
-      continue;
-    }
-    js << (first_variant ? "" : ",") << "\n    {\"configuration\": \""
-       << (r.variant.empty() ? std::string("configured") : r.variant) << "\", \"condition\": \""
-       << r.condition << "\", \"NDS\": " << (r.ok ? json_number(r.nds) : "null")
-       << ", \"detector_ms_per_sample\": "
-       << (r.detector_ms_per_sample > 0 ? json_number(r.detector_ms_per_sample) : "null") << "}";
-    first_variant = false;
-  }
-  js << "\n  ]";
-  js << ",\n  \"report\": " << scoring::py_escape(b.report_path) << "\n}\n";
-  return js.str();
-}
-
-}  // namespace
 
 launch::ChildSpec node_child(const std::string& bin_dir, const std::string& name,
                              std::vector<std::string> params, bool required) {
@@ -337,8 +231,62 @@ std::string injector_corruption_name(const std::string& robobev_name) {
   return c;
 }
 
-Result<BenchmarkResult> run_benchmark(const BenchmarkOptions& o, const std::atomic<bool>& stop,
-                                      std::FILE* log) {
+std::vector<RunSpec> plan_runs(const BenchmarkOptions& o) {
+  auto spec = [&o](const std::string& corruption, const std::string& level, int seed,
+                   const std::string& variant, const std::string& tag,
+                   std::vector<std::string> params) {
+    RunSpec r{corruption.empty() ? "clean" : corruption + "_" + level,
+              corruption,
+              level,
+              seed,
+              variant,
+              std::move(params)};
+    if (!tag.empty()) r.name = "variant_" + tag + "_" + r.name;
+    if (o.seeds > 1 && !corruption.empty()) r.name += "_s" + std::to_string(seed);
+    return r;
+  };
+  std::vector<RunSpec> runs{spec("", "", 1, "", "", {})};
+  for (const auto& c : o.corruptions)
+    for (const auto& l : o.levels)
+      for (int s = 1; s <= o.seeds; ++s) runs.push_back(spec(c, l, s, "", "", {}));
+  if (!o.variants || !o.detector_cmd.empty()) return runs;
+  // Detector configurations (Faultline's detector only): input scales on clean, and single-frame
+  // against the configured (temporal) detector on the temporal faults, whose configured runs are
+  // added when the matrix lacks them.
+  const std::string lvl = o.levels.empty() ? "mid" : o.levels.front();
+  for (const char* c : {"frame_lost", "camera_crash"}) {
+    bool have = false;
+    for (const auto& r : runs) have |= r.variant.empty() && r.corruption == c && r.level == lvl;
+    if (!have) runs.push_back(spec(c, lvl, 1, "", "", {}));
+  }
+  runs.push_back(spec("", "", 1, "temporal, scale 0.5", "scale050", {"scale:=0.5"}));
+  runs.push_back(spec("", "", 1, "temporal, scale 0.25", "scale025", {"scale:=0.25"}));
+  for (const char* c : {"", "frame_lost", "camera_crash"}) {
+    runs.push_back(
+        spec(c, *c ? lvl : "", 1, "single-frame, scale 1", "single", {"temporal:=false"}));
+  }
+  return runs;
+}
+
+void print_run_line(std::FILE* log, std::size_t index, std::size_t count, const ConditionResult& r,
+                    double eta_s) {
+  const std::string what = r.condition + (r.variant.empty() ? "" : " [" + r.variant + "]");
+  if (r.ok) {
+    std::fprintf(log, "[%zu/%zu] %-22s seed %d  NDS %.4f  mAP %.4f", index + 1, count, what.c_str(),
+                 r.seed, r.nds, r.map);
+    if (r.detector_ms_per_sample > 0)
+      std::fprintf(log, "  %.1f samples/s", 1000.0 / r.detector_ms_per_sample);
+    std::fprintf(log, "  (%.1f s", r.wall_s);
+    if (eta_s >= 0) std::fprintf(log, "; ETA %.0f s", eta_s);
+    std::fprintf(log, ")\n");
+  } else {
+    std::fprintf(log, "[%zu/%zu] %-22s seed %d  FAILED: %s\n", index + 1, count, what.c_str(),
+                 r.seed, r.error.c_str());
+  }
+  std::fflush(log);
+}
+
+Status check_node_executables(const BenchmarkOptions& o) {
   for (const char* node : {"nusc_player", "fault_injector", "detection_sink", "detector"}) {
     if (!o.detector_cmd.empty() && std::string(node) == "detector") continue;
     if (access((fs::path(o.bin_dir) / node).c_str(), X_OK) != 0) {
@@ -346,179 +294,32 @@ Result<BenchmarkResult> run_benchmark(const BenchmarkOptions& o, const std::atom
                     (fs::path(o.bin_dir) / node).string() + ": node executable not found");
     }
   }
+  return Status::ok();
+}
+
+Result<BenchmarkResult> run_benchmark(const BenchmarkOptions& o, const std::atomic<bool>& stop,
+                                      std::FILE* log) {
+  if (Status s = check_node_executables(o); !s) return s;
   std::error_code ec;
   fs::create_directories(fs::path(o.out_dir) / "runs", ec);
   if (ec) return Status(StatusCode::kIoError, o.out_dir + ": " + ec.message());
-
-  struct Plan {
-    std::string corruption, level;
-    int seed;
-  };
-  std::vector<Plan> plan{{"", "", 1}};
-  for (const auto& c : o.corruptions)
-    for (const auto& l : o.levels)
-      for (int s = 1; s <= o.seeds; ++s) plan.push_back({c, l, s});
-
+  const BenchmarkPlan plan = make_plan(o);
   BenchmarkResult b;
   const auto t0 = std::chrono::steady_clock::now();
-  for (std::size_t i = 0; i < plan.size() && !stop.load(); ++i) {
-    const auto& p = plan[i];
-    ConditionResult r = run_condition(o, p.corruption, p.level, p.seed, stop, log);
+  for (std::size_t i = 0; i < plan.runs.size() && !stop.load(); ++i) {
+    ConditionResult r = run_one(o, plan.runs[i], stop);
+    if (Status s = write_run_record(plan, static_cast<int>(i), r); !s) return s;
     const double elapsed =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     const double eta =
-        elapsed / static_cast<double>(i + 1) * static_cast<double>(plan.size() - i - 1);
-    if (r.ok) {
-      std::fprintf(log, "[%zu/%zu] %-22s seed %d  NDS %.4f  mAP %.4f  (%.1f s; ETA %.0f s)\n",
-                   i + 1, plan.size(), r.condition.c_str(), r.seed, r.nds, r.map, r.wall_s, eta);
-    } else {
-      std::fprintf(log, "[%zu/%zu] %-22s seed %d  FAILED: %s\n", i + 1, plan.size(),
-                   r.condition.c_str(), r.seed, r.error.c_str());
-    }
-    std::fflush(log);
+        elapsed / static_cast<double>(i + 1) * static_cast<double>(plan.runs.size() - i - 1);
+    print_run_line(log, i, plan.runs.size(), r, eta);
     b.runs.push_back(std::move(r));
-    write_text((fs::path(o.out_dir) / "summary.json").string(),
-               summary_json(o, b));  // partial results survive
-  }
-
-  // Detector configurations (Faultline's detector only): input scales on clean, and single-frame
-  // against the configured (temporal) detector on the temporal faults.
-  if (o.variants && o.detector_cmd.empty() && !stop.load()) {
-    const std::string lvl = o.levels.empty() ? "mid" : o.levels.front();
-    std::vector<std::pair<Variant, std::vector<std::string>>> extra = {
-        {{"temporal, scale 0.5", "scale050", {"scale:=0.5"}}, {""}},
-        {{"temporal, scale 0.25", "scale025", {"scale:=0.25"}}, {""}},
-        {{"single-frame, scale 1", "single", {"temporal:=false"}},
-         {"", "frame_lost", "camera_crash"}},
-    };
-    // The configured detector's own frame_lost / camera_crash runs, if the matrix did not include
-    // them.
-    std::vector<std::string> missing;
-    for (const char* c : {"frame_lost", "camera_crash"}) {
-      bool have = false;
-      for (const auto& r : b.runs)
-        have |= r.variant.empty() && r.condition == std::string(c) + "/" + lvl;
-      if (!have) missing.push_back(c);
-    }
-    std::vector<std::pair<const Variant*, std::string>> todo;
-    Variant configured{"", "", {}};
-    for (const auto& c : missing) todo.push_back({nullptr, c});
-    for (const auto& [v, conds] : extra)
-      for (const auto& c : conds) todo.push_back({&v, c});
-    for (std::size_t i = 0; i < todo.size() && !stop.load(); ++i) {
-      const auto& [v, c] = todo[i];
-      ConditionResult r = run_condition(o, c, c.empty() ? "" : lvl, 1, stop, log, v);
-      std::fprintf(
-          log, "[config %zu/%zu] %-24s %-18s %s\n", i + 1, todo.size(),
-          v ? v->name.c_str() : "configured", r.condition.c_str(),
-          r.ok ? ("NDS " + json_number(r.nds) +
-                  (r.detector_ms_per_sample > 0
-                       ? ", " + json_number(1000.0 / r.detector_ms_per_sample) + " samples/s"
-                       : std::string()))
-                     .c_str()
-               : ("FAILED: " + r.error).c_str());
-      std::fflush(log);
-      b.runs.push_back(std::move(r));
+    if (i + 1 < plan.runs.size()) {  // partial results survive
+      (void)write_text_atomic((fs::path(o.out_dir) / "summary.json").string(), summary_json(o, b));
     }
   }
-
-  // Robustness: severity-averaged NDS per corruption (seeds averaged), against the baseline's same
-  // levels.
-  scoring::DetectorScores model;
-  model.name = o.detector_cmd.empty() ? "faultline detector" : o.detector_cmd;
-  bool have_clean = false;
-  for (const auto& r : b.runs) {
-    if (r.condition == "clean" && r.ok && r.variant.empty()) {
-      model.clean_nds = r.nds;
-      have_clean = true;
-    }
-  }
-  std::vector<int> level_idx;
-  for (const auto& l : o.levels) level_idx.push_back(scoring::severity_index(l));
-  for (const auto& c : o.corruptions) {
-    scoring::CorruptionScores cs;
-    cs.name = scoring::canonical_corruption(c);
-    bool complete = true;
-    for (const auto& l : o.levels) {
-      double sum = 0;
-      int n = 0;
-      for (const auto& r : b.runs) {
-        if (r.ok && r.variant.empty() && r.condition == c + "/" + l) {
-          sum += r.nds;
-          ++n;
-        }
-      }
-      if (n == 0) complete = false;
-      cs.nds_by_level.push_back(n ? sum / n : 0.0);
-    }
-    if (complete) model.corruptions.push_back(cs);
-  }
-  scoring::DetectorScores baseline = scoring::detr3d_baseline();
-  if (!o.baseline_manifest.empty()) {
-    std::string bname = "baseline";
-    auto runs = scoring::read_run_manifest(o.baseline_manifest, &bname, nullptr);
-    if (!runs) return runs.status();
-    auto bs = scoring::collect_detector_scores(bname, *runs);
-    if (!bs) return bs.status();
-    baseline = *bs;
-  }
-  // Keep only the baseline levels this benchmark ran, so a reduced matrix compares like with like.
-  if (baseline.corruptions.size() && baseline.corruptions.front().nds_by_level.size() == 3) {
-    for (auto& c : baseline.corruptions) {
-      std::vector<double> kept;
-      for (int li : level_idx)
-        if (li >= 0 && li < 3) kept.push_back(c.nds_by_level[static_cast<std::size_t>(li)]);
-      c.nds_by_level = kept;
-    }
-  }
-  if (have_clean && !model.corruptions.empty()) {
-    auto rs = scoring::compute_robustness(model, baseline);
-    if (rs) {
-      rs->level_names = o.levels;
-      b.robustness = *rs;
-      b.robustness_ok = true;
-      write_text((fs::path(o.out_dir) / "robustness.md").string(),
-                 scoring::robustness_markdown(*rs));
-      write_text((fs::path(o.out_dir) / "robustness.csv").string(), scoring::robustness_csv(*rs));
-      write_text((fs::path(o.out_dir) / "robustness.json").string(), scoring::robustness_json(*rs));
-      report::ReportData data;
-      data.title = "Faultline benchmark: " + model.name;
-      data.detectors.push_back(*rs);
-      if (!o.corrupt_bench.empty() && fs::exists(o.corrupt_bench)) {
-        if (auto pts = report::parse_corrupt_bench(read_text(o.corrupt_bench), o.corrupt_bench))
-          data.corrupt_bench = *pts;
-      }
-      for (const auto& r : b.runs) {
-        const bool temporal_fault = r.condition == "clean" ||
-                                    r.condition.rfind("frame_lost/", 0) == 0 ||
-                                    r.condition.rfind("camera_crash/", 0) == 0;
-        if (!r.ok || (r.variant.empty() && !temporal_fault) || r.seed != 1) continue;
-        report::DetectorVariantRun v;
-        std::string configured = "temporal, scale 1 (default)";
-        if (!o.detector_params.empty()) {
-          configured = "configured:";
-          for (const auto& p : o.detector_params) configured += " " + p;
-        }
-        v.variant = r.variant.empty() ? configured : r.variant;
-        v.condition = r.condition;
-        v.nds = r.nds;
-        v.fps = r.detector_ms_per_sample > 0 ? 1000.0 / r.detector_ms_per_sample : -1.0;
-        data.variants.push_back(v);
-      }
-      b.report_path = (fs::path(o.out_dir) / "report.html").string();
-      write_text(b.report_path, report::render_html(data));
-    } else {
-      b.robustness_error = rs.status().message();
-    }
-  } else if (!o.corruptions.empty()) {
-    b.robustness_error = !have_clean ? "the clean run did not complete"
-                                     : "no corruption completed every level";
-  }
-  if (!b.robustness_error.empty()) {
-    std::fprintf(log, "robustness not computed: %s\n", b.robustness_error.c_str());
-  }
-  write_text((fs::path(o.out_dir) / "summary.json").string(), summary_json(o, b));
-  return b;
+  return finish_benchmark(o, std::move(b.runs), log);
 }
 
 }  // namespace faultline::campaign

@@ -57,10 +57,48 @@ struct BenchmarkResult {
   std::string report_path;
 };
 
+// One run of the matrix: a condition and seed with the detector configuration it runs with. The
+// list of them (plan_runs) is what `faultline benchmark` runs one after the other and what
+// `faultline benchmark plan` hands to a cluster scheduler as independent units.
+struct RunSpec {
+  std::string name;        // its folder under <out>/runs/: "clean", "fog_mid", "fog_mid_s2", ...
+  std::string corruption;  // RoboBEV name; "" = clean
+  std::string level;       // "" for clean
+  int seed = 1;
+  std::string variant;                      // "" = the configured detector
+  std::vector<std::string> variant_params;  // -p overrides of that detector configuration
+};
+
+// The runs of the matrix in order: clean, corruption x level x seed, then (variants, our detector
+// only) the detector-configuration runs. A pure function of the options.
+std::vector<RunSpec> plan_runs(const BenchmarkOptions& opts);
+
+// One progress line for run `index` of `count`; eta_s < 0 leaves the ETA out.
+void print_run_line(std::FILE* log, std::size_t index, std::size_t count, const ConditionResult& r,
+                    double eta_s = -1);
+
+// A missing node executable under opts.bin_dir is kNotFound naming it.
+Status check_node_executables(const BenchmarkOptions& opts);
+
+// Runs one run into <out>/runs/<name>/ (emptied first) and scores it. A failing run is a result
+// with ok = false and the cause; `stop` ends it early ("stopped").
+ConditionResult run_one(const BenchmarkOptions& opts, const RunSpec& run,
+                        const std::atomic<bool>& stop);
+
+// Everything after the runs, from their results in plan order: mCE/mRR, robustness.{md,csv,json},
+// report.html and summary.json in opts.out_dir. A local run and a collected cluster campaign both
+// end here, so the same results give the same files. Fails only on a bad --baseline manifest.
+Result<BenchmarkResult> finish_benchmark(const BenchmarkOptions& opts,
+                                         std::vector<ConditionResult> runs, std::FILE* log);
+
 // Runs the whole matrix; progress lines go to `log`. Fails only on setup problems (a missing node
-// executable, an unwritable output dir); a failing run is recorded and the matrix continues.
+// executable, an unwritable output dir); a failing run is recorded and the matrix continues. Each
+// run also leaves its run.json record (benchmark_plan.hpp), as a cluster unit does.
 Result<BenchmarkResult> run_benchmark(const BenchmarkOptions& opts, const std::atomic<bool>& stop,
                                       std::FILE* log);
+
+// The partial summary.json written after each run of a local benchmark (no robustness yet).
+std::string summary_json(const BenchmarkOptions& opts, const BenchmarkResult& result);
 
 // One node process: `<bin_dir>/<name> --name <name> -p k:=v ...`.
 launch::ChildSpec node_child(const std::string& bin_dir, const std::string& name,

@@ -69,16 +69,6 @@ void prefetch(const std::string& path) {
   ::close(fd);
 }
 
-const char* subsampling_name(codec::Subsampling s) {
-  switch (s) {
-    case codec::Subsampling::k444: return "444";
-    case codec::Subsampling::k422: return "422";
-    case codec::Subsampling::k420: return "420";
-    case codec::Subsampling::kGray: return "gray";
-  }
-  return "?";
-}
-
 int camera_index(const std::string& channel) {
   for (int i = 0; i < policy::kNumCameras; ++i) {
     if (channel == policy::kCameraNames[i]) return i;
@@ -320,6 +310,27 @@ Status flush_manifests(const std::vector<std::unique_ptr<Output>>& outputs) {
 }
 
 }  // namespace
+
+const char* subsampling_name(codec::Subsampling s) {
+  switch (s) {
+    case codec::Subsampling::k444:
+      return "444";
+    case codec::Subsampling::k422:
+      return "422";
+    case codec::Subsampling::k420:
+      return "420";
+    case codec::Subsampling::kGray:
+      return "gray";
+  }
+  return "?";
+}
+
+std::optional<codec::Subsampling> subsampling_from_name(std::string_view name) {
+  if (name == "420") return codec::Subsampling::k420;
+  if (name == "422") return codec::Subsampling::k422;
+  if (name == "444") return codec::Subsampling::k444;
+  return std::nullopt;
+}
 
 std::string manifest_name(int shard_index, int shard_count) {
   if (shard_count <= 1) return "manifest.json";

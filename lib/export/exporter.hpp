@@ -9,7 +9,9 @@
 #include <cstdint>
 #include <functional>
 #include <map>
+#include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "codec/jpeg.hpp"
@@ -56,6 +58,10 @@ struct ExportSummary {
 
 // done/total outputs (written + skipped + failed) and elapsed seconds; called from the calling thread.
 using ExportProgressFn = std::function<void(std::int64_t done, std::int64_t total, double elapsed_s)>;
+
+// JPEG chroma subsampling as the manifests and --subsampling spell it: "420", "422", "444".
+const char* subsampling_name(codec::Subsampling s);
+std::optional<codec::Subsampling> subsampling_from_name(std::string_view name);
 
 // Manifest file name for a shard: manifest.json, or manifest.shard-K-of-N.json when N > 1.
 std::string manifest_name(int shard_index, int shard_count);

@@ -1,5 +1,8 @@
 #include "export/merge.hpp"
 
+#include <unistd.h>
+
+#include <atomic>
 #include <filesystem>
 #include <map>
 
@@ -18,6 +21,23 @@ bool same_root(const std::string& a, const std::string& b) {
   return fs::weakly_canonical(a, ec1) == fs::weakly_canonical(b, ec2);
 }
 
+// Hard-links src to dst through a temporary name and rename(2), so dst is never missing or partial.
+bool link_atomic(const std::string& src, const std::string& dst) {
+  static std::atomic<unsigned> counter{0};
+  const fs::path d(dst);
+  const fs::path tmp =
+      d.parent_path() / ("." + d.filename().string() + ".link-" + std::to_string(::getpid()) + "-" +
+                         std::to_string(counter++));
+  std::error_code ec;
+  fs::create_hard_link(src, tmp, ec);
+  if (ec) return false;
+  fs::rename(tmp, d, ec);
+  if (!ec) return true;
+  std::error_code ignored;
+  fs::remove(tmp, ignored);
+  return false;
+}
+
 struct Group {
   Manifest merged;
   bool started = false;
@@ -28,7 +48,7 @@ struct Group {
 }  // namespace
 
 Result<MergeSummary> merge_exports(const std::vector<std::string>& inputs, const std::string& out,
-                                   const std::string& tool_version) {
+                                   const std::string& tool_version, bool hard_link) {
   if (inputs.empty()) return Status(StatusCode::kInvalidArgument, "merge: no input folders");
   std::map<std::string, Group> groups;  // "<Condition>/<level>"
   for (const auto& root : inputs) {
@@ -94,7 +114,8 @@ Result<MergeSummary> merge_exports(const std::vector<std::string>& inputs, const
       if (s) {
         std::error_code ec;
         fs::create_directories(fs::path(dst).parent_path(), ec);
-        s = write_file_atomic(dst, bytes->data(), bytes->size());
+        if (!hard_link || !link_atomic(src, dst))
+          s = write_file_atomic(dst, bytes->data(), bytes->size());
       }
       if (s) {
         ++summary.copied;

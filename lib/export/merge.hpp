@@ -16,9 +16,12 @@ struct MergeSummary {
   std::vector<std::string> problems;
 };
 
-// Reads every <root>/<Condition>/<level>/manifest*.json. Shards must agree on the configuration (version, rng,
-// seed, quality, subsampling, sweeps) and on the checksum of any file two of them list; otherwise an error.
+// Reads every <root>/<Condition>/<level>/manifest*.json. Shards must agree on the configuration
+// (version, rng, seed, quality, subsampling, sweeps) and on the checksum of any file two of them
+// list; otherwise an error. hard_link: a file outside <out> is hard-linked into it (after its
+// checksum is verified) instead of copied, falling back to a copy across file systems, so a
+// collected campaign does not take twice the space.
 Result<MergeSummary> merge_exports(const std::vector<std::string>& inputs, const std::string& out,
-                                   const std::string& tool_version);
+                                   const std::string& tool_version, bool hard_link = false);
 
 }  // namespace faultline::exporter

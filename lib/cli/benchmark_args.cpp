@@ -1,0 +1,133 @@
+#include "cli/benchmark_args.hpp"
+
+#include <cstdio>
+#include <filesystem>
+
+#include "cli/live_run.hpp"
+#include "scoring/robustness.hpp"
+
+namespace faultline::cli {
+namespace {
+
+std::vector<std::string> split_commas(const std::string& s) {
+  std::vector<std::string> out;
+  std::string cur;
+  for (char c : s + ",") {
+    if (c == ',') {
+      if (!cur.empty()) out.push_back(cur);
+      cur.clear();
+    } else if (c != ' ') {
+      cur += c;
+    }
+  }
+  return out;
+}
+
+}  // namespace
+
+void add_benchmark_options(CLI::App& app, BenchmarkArgs& args) {
+  campaign::BenchmarkOptions& o = args.options;
+  app.add_option("--out", o.out_dir,
+                 "output folder (runs/, summary.json, robustness.*, report.html)")
+      ->required();
+  app.add_option("--dataroot", o.dataroot,
+                 "nuScenes tree (default: the embedded synthetic dataset)");
+  app.add_option("--version", o.version, "table folder")->capture_default_str();
+  app.add_option("--eval-set", o.eval_set, "split to score: mini_val, val or a splits.json key")
+      ->capture_default_str();
+  app.add_option("--scenes", o.scenes, "scenes to replay (default: all)")->delimiter(',');
+  app.add_option(
+         "--corruptions", args.corruptions,
+         "comma list of "
+         "camera_crash,frame_lost,color_quant,motion_blur,brightness,low_light,fog,snow or all")
+      ->capture_default_str();
+  app.add_option("--levels", args.levels,
+                 "comma list of easy,mid,hard (default: mid; --full: all)");
+  app.add_flag("--full", args.full, "the full matrix: 8 corruptions x 3 levels");
+  app.add_option("--seeds", o.seeds,
+                 "repeat each faulted run with seeds 1..N (mean and std of NDS)")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 100));
+  app.add_option("--detector-cmd", o.detector_cmd,
+                 "external detector command (sh -c) with FAULTLINE_FRAMES / FAULTLINE_DETECTIONS "
+                 "set (docs/protocol.md)");
+  app.add_option("--detector-param", o.detector_params,
+                 "key:=value for Faultline's detector (repeatable)");
+  app.add_option("--baseline", o.baseline_manifest,
+                 "manifest of a scored baseline detector (default: paper DETR3D)");
+  app.add_option("--synth-dir", args.synth_dir,
+                 "where the embedded synthetic dataset lives / is generated")
+      ->capture_default_str();
+  o.corrupt_bench = "bench/results/corrupt.json";
+  app.add_option("--corrupt-bench", o.corrupt_bench, "corruption engine figures for the report")
+      ->capture_default_str();
+  app.add_flag("--no-variants", args.no_variants,
+               "skip the detector-configuration runs (input scales 0.5/0.25, single-frame on "
+               "clean, frame_lost, "
+               "camera_crash) that feed the report's fps and temporal views");
+  app.add_option("--run-timeout", o.run_timeout_s, "seconds before one run is stopped as failed")
+      ->capture_default_str();
+}
+
+int resolve_benchmark_options(BenchmarkArgs& args, const char* command) {
+  campaign::BenchmarkOptions& o = args.options;
+  o.variants = !args.no_variants;
+  if (args.corruptions == "all") {
+    for (const char* c : scoring::kRoboBevCorruptions) o.corruptions.push_back(c);
+  } else {
+    for (const auto& c : split_commas(args.corruptions)) {
+      const std::string canon = scoring::canonical_corruption(c);
+      bool known = false;
+      for (const char* k : scoring::kRoboBevCorruptions) known |= canon == k;
+      if (!known) {
+        std::fprintf(stderr, "faultline %s: --corruptions: unknown corruption '%s'\n", command,
+                     c.c_str());
+        return 2;
+      }
+      o.corruptions.push_back(canon);
+    }
+  }
+  o.levels = args.levels.empty() ? (args.full ? std::vector<std::string>{"easy", "mid", "hard"}
+                                              : std::vector<std::string>{"mid"})
+                                 : split_commas(args.levels);
+  for (const auto& l : o.levels) {
+    if (scoring::severity_index(l) < 0) {
+      std::fprintf(stderr, "faultline %s: --levels: unknown level '%s' (easy, mid, hard)\n",
+                   command, l.c_str());
+      return 2;
+    }
+  }
+  if (o.dataroot.empty()) {
+    o.dataroot = args.synth_dir;
+    o.version = "v1.0-mini";
+    if (Status s = ensure_synth_dataset(args.synth_dir); !s) {
+      std::fprintf(stderr, "faultline %s: %s\n", command, s.message().c_str());
+      return 1;
+    }
+  }
+  return 0;
+}
+
+int print_benchmark_result(const campaign::BenchmarkResult& result, const std::string& out_dir,
+                           const char* command, bool stopped) {
+  int failed = 0;
+  for (const auto& r : result.runs) failed += r.ok ? 0 : 1;
+  if (result.robustness_ok) {
+    std::printf("%s\n", scoring::robustness_markdown(result.robustness).c_str());
+  }
+  std::printf("summary: %s\n", (std::filesystem::path(out_dir) / "summary.json").c_str());
+  if (!result.report_path.empty()) std::printf("report:  %s\n", result.report_path.c_str());
+  if (failed) {
+    std::fprintf(stderr, "faultline %s: %d run(s) failed (see runs/*/nodes.log)\n", command,
+                 failed);
+  }
+  // Asked for corruptions but got no mCE/mRR (e.g. clean NDS 0): the benchmark did not do its job.
+  if (!result.robustness_error.empty()) {
+    std::fprintf(stderr,
+                 "faultline %s: robustness not computed: %s (no robustness.* or report.html)\n",
+                 command, result.robustness_error.c_str());
+  }
+  return failed || stopped || !result.robustness_error.empty() ? 1 : 0;
+}
+
+}  // namespace faultline::cli
