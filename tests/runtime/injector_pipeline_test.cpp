@@ -11,10 +11,12 @@
 #include <opencv2/imgproc.hpp>
 
 #include "codec/jpeg.hpp"
+#include "common/config.hpp"
 #include "common/logging.hpp"
 #include "policy/temporal_draws.hpp"
 #include "runtime/delay_queue.hpp"
 #include "runtime/engine_policy.hpp"
+#include "runtime/injector_loop.hpp"
 #include "runtime/injector_pipeline.hpp"
 
 namespace faultline::runtime {
@@ -284,6 +286,23 @@ TEST(InjectorPipelineStopTest, FinishWithoutDrainCountsWhatWasNotSent) {
   late.owner = bytes;
   EXPECT_FALSE(pipeline.submit_frame(std::move(late), stop));
   EXPECT_EQ(pipeline.counts().discarded_at_stop, c.discarded_at_stop + 1);
+}
+
+TEST(InjectorConfigTest, WorkerCountsAreCheckedAndDefaultToTheCoresLessOne) {
+  EXPECT_GE(default_worker_count(), 1);
+  InjectorConfig c;
+  c.workers = -1;
+  try {
+    c.validate();
+    FAIL() << "workers = -1 accepted";
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("workers = -1"), std::string::npos) << e.what();
+  }
+  c.workers = 0;
+  c.queue_frames = -2;
+  EXPECT_THROW(c.validate(), ConfigError);
+  c.queue_frames = 0;
+  EXPECT_NO_THROW(c.validate());
 }
 
 TEST(DelayQueueTest, ReleasesInDueOrderAndKeepsPushOrderForTies) {
