@@ -42,6 +42,7 @@ struct Row {
   int severity = 0;
   int workers = 1;
   double fps = 0, cpu_ms_per_frame = 0, process_cpu_ms_per_frame = 0;
+  double receive_ms_per_frame = 0, workers_ms_per_frame = 0, send_ms_per_frame = 0;  // the injector's threads
   std::uint64_t window_full_waits = 0;
   std::uint64_t sent = 0, received = 0, injected_drops = 0, unintended_drops = 0;
   double seconds = 0, cpu_pct = 0;
@@ -177,6 +178,10 @@ Row run_one(const std::string& spec, double seconds, double rate_hz, bool decode
   row.workers = c.workers;
   row.cpu_ms_per_frame = 1e3 * cpu_s / static_cast<double>(std::max<std::uint64_t>(1, c.frames_in));
   row.window_full_waits = c.window_full_waits;
+  const double frames_in = static_cast<double>(std::max<std::uint64_t>(1, c.frames_in));
+  row.receive_ms_per_frame = static_cast<double>(c.dispatch_cpu_ns) / 1e6 / frames_in;
+  row.workers_ms_per_frame = static_cast<double>(c.worker_cpu_ns) / 1e6 / frames_in;
+  row.send_ms_per_frame = static_cast<double>(c.output_cpu_ns) / 1e6 / frames_in;
   // Everything this process spent: the injector, its libzmq I/O threads, and the bench's own source and sink.
   row.process_cpu_ms_per_frame = 1e3 * process_cpu / static_cast<double>(std::max<std::uint64_t>(1, c.frames_in));
   row.injected_drops = c.injected_drops;
@@ -200,11 +205,12 @@ std::string load_average() {
 
 // One run's line; with `first` (the same corruption's run with the first --workers count), the fps ratio too.
 void print_row(const Row& r, const Row* first) {
-  std::printf("%-12s sev %d  workers %d  %7.1f fps  cpu %6.1f %% of one core, %6.2f ms/frame (process %6.2f)  "
-              "e2e p50 %7.2f ms p99 %7.2f ms  injector p50 %7.2f ms p99 %7.2f ms  sent %llu recv %llu unintended "
+  std::printf("%-12s sev %d  workers %d  %7.1f fps  cpu %6.1f %% of one core, %6.2f ms/frame (receive %.2f workers "
+              "%.2f send %.2f; process %6.2f)  e2e p50 %7.2f ms p99 %7.2f ms  injector p50 %7.2f ms p99 %7.2f ms  sent %llu recv %llu unintended "
               "drops %llu (window full %llu times)",
               r.corruption.c_str(), r.severity, r.workers, r.fps, r.cpu_pct, r.cpu_ms_per_frame,
-              r.process_cpu_ms_per_frame, r.e2e_p50_ms,
+              r.receive_ms_per_frame, r.workers_ms_per_frame, r.send_ms_per_frame, r.process_cpu_ms_per_frame,
+              r.e2e_p50_ms,
               r.e2e_p99_ms, r.inj_p50_ms, r.inj_p99_ms, static_cast<unsigned long long>(r.sent),
               static_cast<unsigned long long>(r.received), static_cast<unsigned long long>(r.unintended_drops),
               static_cast<unsigned long long>(r.window_full_waits));
@@ -219,11 +225,13 @@ void print_json(const std::vector<Row>& rows, const std::string& output) {
     const Row& r = rows[i];
     std::printf("  {\"corruption\": \"%s\", \"severity\": %d, \"output\": \"%s\", \"workers\": %d, "
                 "\"seconds\": %.1f, \"fps\": %.2f, \"cpu_pct_one_core\": %.1f, \"cpu_ms_per_frame\": %.3f, \"process_cpu_ms_per_frame\": %.3f, "
+                "\"receive_ms_per_frame\": %.3f, \"workers_ms_per_frame\": %.3f, \"send_ms_per_frame\": %.3f, "
                 "\"e2e_p50_ms\": %.2f, \"e2e_p99_ms\": %.2f, \"injector_p50_ms\": %.2f, \"injector_p99_ms\": %.2f, "
                 "\"sent\": %llu, \"received\": %llu, \"injected_drops\": %llu, \"unintended_drops\": %llu, "
                 "\"window_full_waits\": %llu}%s\n",
                 r.corruption.c_str(), r.severity, output.c_str(), r.workers, r.seconds, r.fps, r.cpu_pct,
-                r.cpu_ms_per_frame, r.process_cpu_ms_per_frame, r.e2e_p50_ms, r.e2e_p99_ms, r.inj_p50_ms, r.inj_p99_ms,
+                r.cpu_ms_per_frame, r.process_cpu_ms_per_frame, r.receive_ms_per_frame, r.workers_ms_per_frame,
+                r.send_ms_per_frame, r.e2e_p50_ms, r.e2e_p99_ms, r.inj_p50_ms, r.inj_p99_ms,
                 static_cast<unsigned long long>(r.sent), static_cast<unsigned long long>(r.received),
                 static_cast<unsigned long long>(r.injected_drops), static_cast<unsigned long long>(r.unintended_drops),
                 static_cast<unsigned long long>(r.window_full_waits), i + 1 < rows.size() ? "," : "");
