@@ -126,23 +126,34 @@ int run_export(int argc, char** argv) {
 
 int run_injector(int argc, char** argv) {
   CLI::App app{
-      "Real-time injector benchmark: 6 cameras x 12 Hz of 1600x900 JPEGs, decode + one corruption.",
+      "Injector benchmark: 6 cameras x 12 Hz of 1600x900 JPEGs, decode + one corruption, per worker count.",
       argv[0]};
   bench::InjectorOptions o;
   app.add_option("--seconds", o.seconds, "real-time duration of each run (s)");
   app.add_option("--images", o.images,
                  "JPEG files to stream instead of the built-in road scene (camera k sends file k "
                  "mod count), e.g. one frame per camera from a dataset's samples/CAM_*/");
-  app.add_option("--rate-hz", o.rate_hz, "frames per second per camera");
+  app.add_option("--rate-hz", o.rate_hz,
+                 "frames per second per camera; 0 = as fast as the injector takes them (closed loop, "
+                 "4 frames per worker outstanding): throughput");
+  app.add_option("--workers", o.workers,
+                 "injector worker threads; several counts (--workers 1 2) run side by side per corruption "
+                 "and report the fps ratio (0 = the injector's default, cores - 1)");
   app.add_option("--level", o.level, "easy|mid|hard");
   app.add_option("--types", o.types, "corruptions to run (\"none\" = decode only)");
   app.add_option("--output", o.output, "bgr8 (republish decoded) or jpeg (re-encode q95)")
       ->check(CLI::IsMember({"bgr8", "jpeg"}));
   app.add_flag("--json", o.json, "print a JSON array");
   FAULTLINE_PARSE(app, argc, argv);
-  if (o.seconds <= 0 || o.rate_hz <= 0) {
-    std::fprintf(stderr, "faultline bench injector: --seconds and --rate-hz must be > 0\n");
+  if (o.seconds <= 0 || o.rate_hz < 0) {
+    std::fprintf(stderr, "faultline bench injector: --seconds must be > 0 and --rate-hz >= 0\n");
     return 2;
+  }
+  for (const int w : o.workers) {
+    if (w < 0) {
+      std::fprintf(stderr, "faultline bench injector: --workers %d: expected >= 0\n", w);
+      return 2;
+    }
   }
   return bench::run_injector(o);
 }

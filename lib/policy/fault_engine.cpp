@@ -183,6 +183,14 @@ FramePlan FaultEngine::decide(const FrameInfo& frame) {
   return plan;
 }
 
+bool FaultEngine::stateful(const FramePlan& plan) const {
+  if (plan.camera < 0 || plan.action == Action::Drop) return false;  // render() does nothing
+  if (freezes_) return true;
+  if (plan.action == Action::Black) return false;  // the corruptions are skipped
+  return std::any_of(plan.corruptions.begin(), plan.corruptions.end(),
+                     [&](const FramePlan::Step& s) { return config_.faults[s.fault_index].coherent; });
+}
+
 Status FaultEngine::render(FramePlan& plan, cv::Mat& image) {
   if (plan.camera < 0 || plan.action == Action::Drop) return Status::ok();
   const auto cam = static_cast<std::size_t>(plan.camera);
@@ -193,18 +201,17 @@ Status FaultEngine::render(FramePlan& plan, cv::Mat& image) {
       AppliedFault& f = plan.faults[step.applied_index];
       Result<cv::Mat> out = Status{StatusCode::kInternal, "not run"};
       if (spec.coherent) {
-        const auto key = std::make_pair(step.fault_index, plan.camera);
-        auto& c = coherent_[key];
-        if (!c || coherent_severity_[key] != step.severity) {
+        Coherent& c = coherent_[cam][step.fault_index];
+        if (!c.corruptor || c.severity != step.severity) {
           corruption::CoherentConfig cc;
           cc.type = spec.corruption;
           cc.severity = step.severity;
           cc.seed = step.seed;
-          c = std::make_unique<corruption::CoherentCorruptor>(cc);
-          coherent_severity_[key] = step.severity;
+          c.corruptor = std::make_unique<corruption::CoherentCorruptor>(cc);
+          c.severity = step.severity;
         }
-        out = c->apply(image);
-        if (spec.corruption == corruption::Corruption::MotionBlur) f.params["angle_deg"] = c->angle_deg();
+        out = c.corruptor->apply(image);
+        if (spec.corruption == corruption::Corruption::MotionBlur) f.params["angle_deg"] = c.corruptor->angle_deg();
       } else {
         // The motion-blur angle is the corruption's first draw either way; drawing it here lets us report it.
         corruption::CorruptOptions options;

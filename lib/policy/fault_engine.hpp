@@ -1,6 +1,8 @@
 // The fault engine: given the schedule and a run seed, decides per camera frame which faults fire (decide) and
 // applies them to the decoded pixels (render). Pure (no I/O, no clocks): time comes from the frames' capture
-// stamps, relative to the first frame seen. Not thread-safe; call from the injector thread in arrival order.
+// stamps, relative to the first frame seen. decide() is not thread-safe: call it from one thread in arrival order.
+// render() keeps its state per camera (coherent corruptors, the last good frame), so frames of different cameras may
+// render concurrently; see render() for the order frames of one camera need.
 //
 // - Image corruptions: a fresh RNG per (run seed, camera, source_seq) (seeding.hpp), or one CoherentCorruptor per
 //   camera (restarted when a ramp changes the severity).
@@ -80,7 +82,11 @@ class FaultEngine {
 
   // Applies the plan to `image` (CV_8UC3) in place: corruptions, then black or freeze. Keeps the camera's last
   // good frame (PASS/CORRUPT/DELAY output) when some fault freezes. Must see every frame that is not dropped.
+  // Thread-safety: calls for different cameras may run concurrently. Calls for one camera whose plans are
+  // stateful(plan) must run one at a time in decide() order; other plans only read the configuration.
   Status render(FramePlan& plan, cv::Mat& image);
+  // The plan's render reads or writes the camera's state (a coherent corruption, or freeze history).
+  bool stateful(const FramePlan& plan) const;
 
   bool freezes() const { return freezes_; }  // some fault may freeze: the caller keeps history
   const EngineConfig& config() const { return config_; }
@@ -95,8 +101,12 @@ class FaultEngine {
   std::vector<std::vector<std::array<double, kNumCameras>>> lost_draws_;  // per fault (numpy): uniforms per instant
   std::vector<std::unique_ptr<rng::NumpyRandomState>> lost_streams_;     // per fault (numpy): the run's stream
   std::vector<std::array<std::uint64_t, kNumCameras>> lost_counters_;   // per fault: eligible frames per camera
-  std::map<std::pair<std::size_t, int>, std::unique_ptr<corruption::CoherentCorruptor>> coherent_;
-  std::map<std::pair<std::size_t, int>, int> coherent_severity_;
+  // Per camera, so that render() calls of different cameras touch disjoint objects.
+  struct Coherent {
+    std::unique_ptr<corruption::CoherentCorruptor> corruptor;
+    int severity = 0;
+  };
+  std::array<std::map<std::size_t, Coherent>, kNumCameras> coherent_;  // fault index -> its corruptor
   std::array<cv::Mat, kNumCameras> last_good_;
 };
 

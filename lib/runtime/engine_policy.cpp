@@ -69,6 +69,7 @@ FaultDecision EnginePolicy::finish(FramePlan& plan, const Status& rendered) {
 EnginePolicy::Bytes EnginePolicy::black_jpeg(const transport::CameraFrameView& frame) {
   auto size = codec::jpeg_size(frame.payload, frame.payload_size);
   if (!size) return nullptr;
+  std::lock_guard<std::mutex> lock(black_mutex_);
   auto& cached = black_cache_[{size->width, size->height}];
   if (!cached) {
     auto encoded = codec::encode_jpeg(cv::Mat::zeros(*size, CV_8UC3), jpeg_quality_);
@@ -78,12 +79,23 @@ EnginePolicy::Bytes EnginePolicy::black_jpeg(const transport::CameraFrameView& f
   return cached;
 }
 
-FaultDecision EnginePolicy::apply(const transport::CameraFrameView& frame, cv::Mat* image) {
-  FramePlan plan = engine_.decide(info_of(frame));
+PlannedFrame EnginePolicy::plan(const transport::CameraFrameView& frame) {
+  PlannedFrame p;
+  p.plan = engine_.decide(info_of(frame));
+  p.drop = p.plan.action == Action::Drop;
+  p.lane = engine_.stateful(p.plan) ? p.plan.camera : -1;
+  return p;
+}
+
+FaultDecision EnginePolicy::render(PlannedFrame& planned, const transport::CameraFrameView& frame, cv::Mat* image) {
+  FramePlan& plan = planned.plan;
   if (plan.action == Action::Drop || plan.camera < 0) return finish(plan, Status::ok());
   if (image) return finish(plan, engine_.render(plan, *image));
+  return render_jpeg(plan, frame);
+}
 
-  // JPEG passthrough: touch pixels only when they change.
+// JPEG passthrough: touch pixels only when they change.
+FaultDecision EnginePolicy::render_jpeg(FramePlan& plan, const transport::CameraFrameView& frame) {
   const auto cam = static_cast<std::size_t>(plan.camera);
   if (plan.action == Action::Black) {
     auto d = finish(plan, Status::ok());

@@ -2,7 +2,9 @@
 // knows nothing of transport, codec or messages). With a decoded image (decode: true) the engine renders into it
 // and the loop republishes bgr8; in JPEG passthrough it decodes only frames whose pixels change, corrupts and
 // re-encodes them as JPEG q95 (the quality nuScenes-C used), serves black frames from a per-size cache and
-// frozen frames from the camera's last good JPEG.
+// frozen frames from the camera's last good JPEG. plan() runs the engine's decide(); render() its render(), with the
+// lane of a stateful plan set to the camera (coherent faults, freeze history); the black-frame cache is shared
+// behind a mutex.
 #pragma once
 
 #include <yaml-cpp/yaml.h>
@@ -10,6 +12,7 @@
 #include <array>
 #include <map>
 #include <memory>
+#include <mutex>
 #include <string>
 #include <utility>
 #include <vector>
@@ -22,18 +25,21 @@ namespace faultline::runtime {
 class EnginePolicy final : public FramePolicy {
  public:
   explicit EnginePolicy(policy::EngineConfig config, int jpeg_quality = 95);
-  FaultDecision apply(const transport::CameraFrameView& frame, cv::Mat* image) override;
+  PlannedFrame plan(const transport::CameraFrameView& frame) override;
+  FaultDecision render(PlannedFrame& planned, const transport::CameraFrameView& frame, cv::Mat* image) override;
   const policy::FaultEngine& engine() const { return engine_; }
 
  private:
   using Bytes = std::shared_ptr<const std::vector<std::uint8_t>>;
   FaultDecision finish(policy::FramePlan& plan, const Status& rendered);
+  FaultDecision render_jpeg(policy::FramePlan& plan, const transport::CameraFrameView& frame);
   Bytes black_jpeg(const transport::CameraFrameView& frame);
 
   policy::FaultEngine engine_;
   int jpeg_quality_;
+  std::mutex black_mutex_;                            // guards black_cache_ (any lane may fill it)
   std::map<std::pair<int, int>, Bytes> black_cache_;  // (width, height) -> encoded black frame
-  std::array<Bytes, policy::kNumCameras> last_good_jpeg_;
+  std::array<Bytes, policy::kNumCameras> last_good_jpeg_;  // per camera: touched only by that camera's lane
 };
 
 // The injector's policy from its parameters: the `faults` list plus the `corruption: fog/mid` shorthand (appended

@@ -2,7 +2,10 @@
 
 namespace faultline::runtime {
 
-FaultDecision PassThroughPolicy::apply(const transport::CameraFrameView& /*frame*/, cv::Mat* /*image*/) {
+PlannedFrame PassThroughPolicy::plan(const transport::CameraFrameView& /*frame*/) { return {}; }
+
+FaultDecision PassThroughPolicy::render(PlannedFrame& /*planned*/, const transport::CameraFrameView& /*frame*/,
+                                        cv::Mat* /*image*/) {
   return {};
 }
 

@@ -3,10 +3,11 @@
 #include <algorithm>
 #include <limits>
 #include <map>
+#include <mutex>
+#include <ctime>
 
-#include "codec/jpeg.hpp"
-#include "codec/raw.hpp"
 #include "common/config.hpp"
+#include "runtime/injector_pipeline.hpp"
 #include "runtime/stats_reporter.hpp"
 #include "transport/drop_counter.hpp"
 #include "transport/log_limiter.hpp"
@@ -24,6 +25,15 @@ std::string join(const std::vector<std::string>& items) {
 
 const std::string kCompressedSuffix = "image_rect_compressed";
 
+std::int64_t thread_cpu_ns() {
+  timespec ts{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return static_cast<std::int64_t>(ts.tv_sec) * kNsPerSec + ts.tv_nsec;
+}
+
+// What run() does after a handler.
+enum class Next { Continue, Finished, Stop };
+
 }  // namespace
 
 void InjectorConfig::validate() const {
@@ -34,6 +44,8 @@ void InjectorConfig::validate() const {
   if (input_hwm < 1) fail("input_hwm", std::to_string(input_hwm), "expected >= 1");
   if (output_hwm < 1) fail("output_hwm", std::to_string(output_hwm), "expected >= 1");
   if (stats_window_s <= 0) fail("stats_window_s", std::to_string(stats_window_s), "expected > 0");
+  if (workers < 0) fail("workers", std::to_string(workers), "expected >= 0 (0 = the cores available minus one)");
+  if (queue_frames < 0) fail("queue_frames", std::to_string(queue_frames), "expected >= 0 (0 = 4 x workers)");
 }
 
 std::string faulted_topic(const InjectorConfig& config, const std::string& input_topic) {
@@ -45,36 +57,66 @@ std::string faulted_topic(const InjectorConfig& config, const std::string& input
   return remap_topic(config.remap, topic);
 }
 
+// The loop's I/O holder: the sockets, the statistics and the registry, shared by the handlers below and by the
+// pipeline's output thread through Sink (statistics under stats_mutex; the publisher only on that thread while
+// the pipeline runs).
 struct InjectorLoop::Impl {
   InjectorConfig cfg;
   std::string node;
   std::unique_ptr<FramePolicy> policy;
   std::shared_ptr<spdlog::logger> log;
+  Clock& clock;
   transport::Publisher pub;
   std::unique_ptr<transport::RawSubscriber> sub;
   StatsReporter stats;
+  std::mutex stats_mutex;
   transport::TopicRegistry registry;
   transport::DropCounter drops;
   std::map<std::string, std::uint64_t> frames_from;  // camera frames received per upstream publisher
-  std::map<std::string, std::uint64_t> seq;
-  std::map<std::string, std::string> out_topics;  // input topic -> output topic
+  std::map<std::string, std::string> out_topics;     // input topic -> output topic
   transport::LogLimiter bad_limiter;
   std::string sync_out;
   std::string end_out;
   std::string faults_topic;
-  struct Delayed {
-    std::string topic;
-    msgs::CameraFrame header;
-    transport::Payload payload;
-    StampNs receive_mono_ns = 0;
-  };
-  std::multimap<StampNs, Delayed> delayed;  // due (monotonic) -> frame
+  std::uint64_t superseded_seen = 0;
+  InjectorCounts& counts;
 
-  Impl(InjectorConfig c, std::string n, std::unique_ptr<FramePolicy> p, std::shared_ptr<spdlog::logger> l)
+  struct Sink final : PipelineSink {
+    explicit Sink(Impl& impl) : m(impl) {}
+    Status send_frame(const std::string& topic, msgs::CameraFrame& h, const transport::Payload& p) override {
+      return transport::send_camera_frame(m.pub, topic, h, p);
+    }
+    Status send_message(const std::string& topic, const google::protobuf::MessageLite& message) override {
+      return transport::send_message(m.pub, topic, message);
+    }
+    void frame_sent(const std::string& /*input_topic*/, const std::string& topic, const stats::Sample& s) override {
+      std::lock_guard<std::mutex> lock(m.stats_mutex);
+      m.stats.collector().record(topic, m.node, s);
+    }
+    void injected_drop(const std::string& input_topic) override {
+      std::lock_guard<std::mutex> lock(m.stats_mutex);
+      m.stats.collector().add_injected_drops(input_topic, 1);
+    }
+    void undecodable(const std::string& input_topic) override {
+      std::lock_guard<std::mutex> lock(m.stats_mutex);
+      m.stats.collector().add_malformed(input_topic, 1);
+    }
+    void idle(StampNs now_mono_ns) override {
+      std::lock_guard<std::mutex> lock(m.stats_mutex);
+      m.stats.tick(now_mono_ns, &m.pub);
+    }
+    Impl& m;
+  };
+  Sink sink{*this};
+  std::unique_ptr<InjectorPipeline> pipeline;
+
+  Impl(InjectorConfig c, std::string n, std::unique_ptr<FramePolicy> p, std::shared_ptr<spdlog::logger> l,
+       Clock& clk, InjectorCounts& out_counts)
       : cfg(std::move(c)),
         node(std::move(n)),
         policy(std::move(p)),
         log(std::move(l)),
+        clock(clk),
         pub([&] {
           transport::PublisherConfig pc;
           pc.endpoint = cfg.output_endpoint;
@@ -87,13 +129,13 @@ struct InjectorLoop::Impl {
         registry(node),
         sync_out(remap_topic(cfg.remap, cfg.sync_topic)),
         end_out(remap_topic(cfg.remap, cfg.end_topic)),
-        faults_topic(remap_topic(cfg.remap, cfg.faults_topic)) {}
+        faults_topic(remap_topic(cfg.remap, cfg.faults_topic)),
+        counts(out_counts) {}
 
-  void stamp(msgs::Header* h, const std::string& topic) {
-    h->set_seq(++seq[topic]);
-    h->set_publisher(node);
-    h->set_publish_stamp_ns(realtime_now_ns());
-    h->set_publish_mono_ns(monotonic_now_ns());
+  template <class F>
+  void with_stats(F&& f) {
+    std::lock_guard<std::mutex> lock(stats_mutex);
+    f(stats.collector());
   }
 
   const std::string& output_topic(const std::string& in) {
@@ -104,49 +146,192 @@ struct InjectorLoop::Impl {
     return out_topics.emplace(in, out).first->second;
   }
 
-  Status publish_frame(const std::string& topic, msgs::CameraFrame& h, const transport::Payload& payload,
-                       StampNs receive_mono) {
-    stamp(h.mutable_header(), topic);
-    h.mutable_fault()->set_injector_latency_ns(h.header().publish_mono_ns() - receive_mono);
-    const Status s = transport::send_camera_frame(pub, topic, h, payload);
-    stats::Sample sample;  // injector's own latency: receive -> publish
-    sample.receive_mono_ns = h.header().publish_mono_ns();
-    sample.receive_realtime_ns = h.header().publish_stamp_ns();
-    sample.publish_mono_ns = receive_mono;
-    sample.size_bytes = payload.size_bytes;
-    stats.collector().record(topic, node, sample);
-    return s;
-  }
-
-  void publish_event(const msgs::CameraFrame& in, const msgs::FaultState& state) {
-    msgs::FaultEvent e;
-    e.mutable_header()->set_capture_stamp_ns(in.header().capture_stamp_ns());
-    e.mutable_header()->set_capture_clock(in.header().capture_clock());
-    e.mutable_header()->set_frame_id(in.header().frame_id());
-    stamp(e.mutable_header(), faults_topic);
-    e.set_camera(in.camera());
-    e.set_source_seq(in.source_seq() != 0 ? in.source_seq() : in.header().seq());
-    e.set_sample_data_token(in.sample_data_token());
-    e.set_sample_token(in.sample_token());
-    *e.mutable_state() = state;
-    (void)transport::send_message(pub, faults_topic, e);
-  }
-
-  Status flush_delayed(StampNs now) {
-    while (!delayed.empty() && delayed.begin()->first <= now) {
-      Delayed d = std::move(delayed.begin()->second);
-      delayed.erase(delayed.begin());
-      const Status s = publish_frame(d.topic, d.header, d.payload, d.receive_mono_ns);
-      if (s.code() == StatusCode::kInvalidArgument && bad_limiter.allow()) log->warn("{}", s.message());
-      if (s.code() == StatusCode::kCancelled || s.code() == StatusCode::kIoError) return s;
-    }
-    return Status::ok();
-  }
+  Status start(const std::atomic<bool>& stop);
+  Next on_boundary(const transport::ReceivedMessage& msg, const std::atomic<bool>& stop);
+  Next on_stream_end(const transport::ReceivedMessage& msg, const std::atomic<bool>& stop);
+  Next on_frame(std::shared_ptr<transport::ReceivedMessage> msg, const std::atomic<bool>& stop);
+  bool parse_control(const transport::ReceivedMessage& msg, google::protobuf::MessageLite* out);
+  void count_superseded(const std::string& in_topic);
+  void finish(bool finished);
 };
+
+// Advertises, waits for downstream subscribers, then subscribes upstream. kCancelled when stopped while waiting.
+Status InjectorLoop::Impl::start(const std::atomic<bool>& stop) {
+  (void)registry.advertise(sync_out, "faultline.msgs.SampleBoundary", pub.endpoint());
+  (void)registry.advertise(end_out, "faultline.msgs.StreamEnd", pub.endpoint());
+  (void)registry.advertise(faults_topic, "faultline.msgs.FaultEvent", pub.endpoint());
+  (void)registry.advertise(stats.stats_topic(), "faultline.msgs.TopicStats", pub.endpoint());
+  if (cfg.wait_subscribers > 0) {
+    const Status s = pub.wait_for_subscribers(sync_out, cfg.wait_subscribers,
+                                              static_cast<DurationNs>(cfg.wait_timeout_ms) * kNsPerMs, &stop);
+    if (s.code() == StatusCode::kCancelled) return s;
+    if (!s.is_ok()) log->warn("{}; subscribing upstream anyway", s.message());
+  }
+  // Subscribing only now chains readiness: the upstream publisher sees us once our consumers are here.
+  transport::SubscriberConfig sc;
+  sc.endpoints = cfg.input_endpoints;
+  sc.topics = cfg.input_topics;
+  const bool end_covered = std::any_of(sc.topics.begin(), sc.topics.end(), [&](const std::string& prefix) {
+    return cfg.end_topic.compare(0, prefix.size(), prefix) == 0;
+  });
+  if (!end_covered) sc.topics.push_back(cfg.end_topic);
+  sc.rcv_hwm = cfg.input_hwm;
+  sc.latest_only = cfg.latest_only;
+  sc.max_msg_bytes = cfg.max_msg_bytes;
+  sub = std::make_unique<transport::RawSubscriber>(sc);
+  PipelineConfig pc;
+  pc.node = node;
+  pc.faults_topic = faults_topic;
+  pc.decode = cfg.decode;
+  pc.workers = cfg.workers > 0 ? cfg.workers : default_worker_count();
+  pc.queue_frames = cfg.queue_frames > 0 ? cfg.queue_frames : 4 * pc.workers;
+  counts.workers = pc.workers;
+  log->info("subscribed to {} on {}; {} worker(s), {} frames in flight at most", join(cfg.input_topics),
+            join(cfg.input_endpoints), pc.workers, pc.queue_frames);
+  pipeline = std::make_unique<InjectorPipeline>(pc, *policy, sink, clock, log);
+  return Status::ok();
+}
+
+void InjectorLoop::Impl::count_superseded(const std::string& in_topic) {
+  if (sub->superseded() == superseded_seen) return;
+  const std::uint64_t n = sub->superseded() - superseded_seen;
+  with_stats([&](stats::TopicStatsCollector& c) { c.add_superseded(in_topic, n); });
+  counts.superseded += n;
+  superseded_seen = sub->superseded();
+}
+
+// Control messages (boundary, stream end): a malformed one is counted and skipped.
+bool InjectorLoop::Impl::parse_control(const transport::ReceivedMessage& msg, google::protobuf::MessageLite* out) {
+  if (transport::parse_message(msg, out).is_ok()) return true;
+  ++counts.malformed;
+  with_stats([&](stats::TopicStatsCollector& c) { c.add_malformed(std::string(msg.topic()), 1); });
+  return false;
+}
+
+Next InjectorLoop::Impl::on_boundary(const transport::ReceivedMessage& msg, const std::atomic<bool>& stop) {
+  msgs::SampleBoundary b;
+  if (!parse_control(msg, &b)) return Next::Continue;
+  const bool last = b.last_in_run() && cfg.exit_on_last;
+  const bool end_follows = b.stream_end_follows();
+  const std::string token = b.sample_token();
+  if (!pipeline->submit_control(sync_out, std::move(b), false, stop)) return Next::Stop;
+  ++counts.boundaries;
+  if (!last) return Next::Continue;
+  if (end_follows) {
+    log->info("last sample {} forwarded; waiting for the stream end", token);
+    return Next::Continue;
+  }
+  log->info("last sample {} forwarded; run complete", token);
+  return Next::Finished;
+}
+
+Next InjectorLoop::Impl::on_stream_end(const transport::ReceivedMessage& msg, const std::atomic<bool>& stop) {
+  msgs::StreamEnd e;
+  if (!parse_control(msg, &e)) return Next::Continue;
+  // Frames lost after the last one on their topic leave no seq gap; the source's count shows them.
+  const std::string& source = e.header().publisher();
+  std::uint64_t gaps = 0;
+  for (const auto& [key, c] : drops.all()) gaps += key.first == source ? c.transport_drops : 0;
+  // Malformed frames name no publisher; with one source they are its frames, already counted as malformed.
+  const std::uint64_t accounted = frames_from[source] + gaps + (frames_from.size() <= 1 ? counts.malformed : 0);
+  if (e.frames_sent() > accounted) {
+    const std::uint64_t lost = e.frames_sent() - accounted;
+    counts.transport_drops += lost;
+    with_stats([&](stats::TopicStatsCollector& c) { c.add_transport_drops(std::string(msg.topic()), lost); });
+    log->warn("stream end: {} of the {} frames {} sent never arrived and left no seq gap (lost at the end "
+              "of their topics); counted as transport drops",
+              lost, e.frames_sent(), source);
+  }
+  const std::uint64_t sent = e.frames_sent();
+  // Frames held back by a delay fault go out first: the end marker stays last.
+  if (!pipeline->submit_control(end_out, std::move(e), true, stop)) return Next::Stop;
+  ++counts.stream_ends;
+  if (!cfg.exit_on_last) return Next::Continue;
+  log->info("stream end forwarded ({} frames sent upstream); run complete", sent);
+  return Next::Finished;
+}
+
+// A camera frame: validated and counted here (seq gaps, statistics), then planned and queued by the pipeline.
+Next InjectorLoop::Impl::on_frame(std::shared_ptr<transport::ReceivedMessage> msg, const std::atomic<bool>& stop) {
+  const std::string in_topic(msg->topic());
+  auto view = transport::parse_camera_frame(*msg);
+  if (!view) {
+    ++counts.malformed;
+    sub->count_malformed();
+    with_stats([&](stats::TopicStatsCollector& c) { c.add_malformed(in_topic, 1); });
+    if (counts.malformed <= 20 || bad_limiter.allow()) {
+      log->warn("malformed message on {} dropped: {} ({} so far)", in_topic, view.status().message(), counts.malformed);
+    }
+    return Next::Continue;
+  }
+  ++counts.frames_in;
+  const msgs::CameraFrame& in = view->header;
+  const std::string& publisher = in.header().publisher();
+  ++frames_from[publisher];
+  const std::uint64_t before = drops.counts(publisher, in_topic).transport_drops;
+  (void)drops.observe(publisher, in_topic, in.header().seq());
+  const std::uint64_t gap = drops.counts(publisher, in_topic).transport_drops - before;
+  counts.transport_drops += gap;
+  stats::Sample sample;
+  sample.receive_mono_ns = msg->receive_mono_ns();
+  sample.receive_realtime_ns = msg->receive_realtime_ns();
+  sample.capture_stamp_ns = transport::wall_clock_capture_ns(in.header());
+  sample.publish_mono_ns = in.header().publish_mono_ns();
+  sample.size_bytes = msg->size_bytes();
+  with_stats([&](stats::TopicStatsCollector& c) {
+    c.record(in_topic, publisher, sample);
+    if (gap) c.add_transport_drops(in_topic, gap);
+  });
+  InputFrame frame;
+  frame.topic = in_topic;
+  frame.out_topic = output_topic(in_topic);
+  frame.view = std::move(view).value();
+  frame.receive_mono_ns = msg->receive_mono_ns();
+  frame.owner = std::move(msg);
+  return pipeline->submit_frame(std::move(frame), stop) ? Next::Continue : Next::Stop;
+}
+
+// Drains (finished run) or stops the pipeline, then the closing statistics and counts.
+void InjectorLoop::Impl::finish(bool finished) {
+  if (pipeline) {
+    pipeline->finish(finished);
+    const PipelineCounts p = pipeline->counts();
+    counts.frames_out = p.frames_out;
+    counts.injected_drops = p.injected_drops;
+    counts.corrupt_jpeg = p.corrupt_jpeg;
+    counts.window_full_waits = p.window_full_waits;
+    counts.discarded_at_stop = p.discarded_at_stop;
+    counts.worker_cpu_ns = p.worker_cpu_ns;
+    counts.output_cpu_ns = p.output_cpu_ns;
+  }
+  // The pipeline's threads have ended: the publisher is this thread's again.
+  stats.tick(clock.now_ns() + static_cast<DurationNs>(cfg.stats_window_s * 1e9), &pub);
+  stats.log_totals(clock.now_ns());
+  if (!finished) pub.set_linger(0);  // shutdown: exit promptly
+  counts.oversize_refused = pub.oversize_refused();
+  const std::uint64_t handled = std::max<std::uint64_t>(1, counts.frames_in);
+  log->info("injector done: in {} out {} boundaries {} injected_drops {} corrupt_jpeg {} malformed {} "
+            "transport_drops {} superseded {} oversize_refused {} input_disconnects {} window_full_waits {} "
+            "discarded_at_stop {}; {} worker(s), CPU per frame in: receive {:.2f} ms workers {:.2f} ms send {:.2f} ms",
+            counts.frames_in, counts.frames_out, counts.boundaries, counts.injected_drops, counts.corrupt_jpeg,
+            counts.malformed, counts.transport_drops, counts.superseded, counts.oversize_refused,
+            sub ? sub->disconnects() : 0, counts.window_full_waits, counts.discarded_at_stop, counts.workers,
+            static_cast<double>(counts.dispatch_cpu_ns) / 1e6 / static_cast<double>(handled),
+            static_cast<double>(counts.worker_cpu_ns) / 1e6 / static_cast<double>(handled),
+            static_cast<double>(counts.output_cpu_ns) / 1e6 / static_cast<double>(handled));
+}
 
 InjectorLoop::InjectorLoop(InjectorConfig config, std::string node, std::unique_ptr<FramePolicy> policy,
                            std::shared_ptr<spdlog::logger> log)
-    : impl_(std::make_unique<Impl>(std::move(config), std::move(node), std::move(policy), std::move(log))) {}
+    : InjectorLoop(std::move(config), std::move(node), std::move(policy), std::move(log), []() -> Clock& {
+        static SystemClock clock;
+        return clock;
+      }()) {}
+
+InjectorLoop::InjectorLoop(InjectorConfig config, std::string node, std::unique_ptr<FramePolicy> policy,
+                           std::shared_ptr<spdlog::logger> log, Clock& clock)
+    : impl_(std::make_unique<Impl>(std::move(config), std::move(node), std::move(policy), std::move(log), clock,
+                                   counts_)) {}
 
 InjectorLoop::~InjectorLoop() = default;
 
@@ -154,42 +339,16 @@ std::string InjectorLoop::output_endpoint() const { return impl_->pub.endpoint()
 
 int InjectorLoop::run(const std::atomic<bool>& stop) {
   Impl& m = *impl_;
-  (void)m.registry.advertise(m.sync_out, "faultline.msgs.SampleBoundary", m.pub.endpoint());
-  (void)m.registry.advertise(m.end_out, "faultline.msgs.StreamEnd", m.pub.endpoint());
-  (void)m.registry.advertise(m.faults_topic, "faultline.msgs.FaultEvent", m.pub.endpoint());
-  (void)m.registry.advertise(m.stats.stats_topic(), "faultline.msgs.TopicStats", m.pub.endpoint());
-  if (m.cfg.wait_subscribers > 0) {
-    const Status s = m.pub.wait_for_subscribers(m.sync_out, m.cfg.wait_subscribers,
-                                                static_cast<DurationNs>(m.cfg.wait_timeout_ms) * kNsPerMs, &stop);
-    if (s.code() == StatusCode::kCancelled) return 0;
-    if (!s.is_ok()) m.log->warn("{}; subscribing upstream anyway", s.message());
-  }
-  // Subscribing only now chains readiness: the upstream publisher sees us once our consumers are here.
-  transport::SubscriberConfig sc;
-  sc.endpoints = m.cfg.input_endpoints;
-  sc.topics = m.cfg.input_topics;
-  const bool end_covered = std::any_of(sc.topics.begin(), sc.topics.end(), [&](const std::string& prefix) {
-    return m.cfg.end_topic.compare(0, prefix.size(), prefix) == 0;
-  });
-  if (!end_covered) sc.topics.push_back(m.cfg.end_topic);
-  sc.rcv_hwm = m.cfg.input_hwm;
-  sc.latest_only = m.cfg.latest_only;
-  sc.max_msg_bytes = m.cfg.max_msg_bytes;
-  m.sub = std::make_unique<transport::RawSubscriber>(sc);
-  m.log->info("subscribed to {} on {}", join(m.cfg.input_topics), join(m.cfg.input_endpoints));
-
+  const std::int64_t cpu0 = thread_cpu_ns();
+  if (m.start(stop).code() == StatusCode::kCancelled) return 0;
   bool finished = false;
   int rc = 0;
-  std::uint64_t superseded_seen = 0;
   while (!stop.load() && !finished) {
-    DurationNs timeout = 50 * kNsPerMs;
-    if (!m.delayed.empty()) timeout = std::clamp<DurationNs>(m.delayed.begin()->first - monotonic_now_ns(), 0, timeout);
-    auto r = m.sub->receive(timeout);
-    if (Status s = m.flush_delayed(monotonic_now_ns()); !s.is_ok()) {
-      rc = s.code() == StatusCode::kCancelled ? 0 : 1;
+    if (const Status f = m.pipeline->failure(); !f.is_ok()) {
+      rc = f.code() == StatusCode::kCancelled ? 0 : 1;
       break;
     }
-    m.stats.tick(monotonic_now_ns(), &m.pub);
+    auto r = m.sub->receive(50 * kNsPerMs);
     if (!r.is_ok()) {
       if (r.status().code() == StatusCode::kWouldBlock) continue;
       if (r.status().code() == StatusCode::kCancelled) break;
@@ -197,194 +356,28 @@ int InjectorLoop::run(const std::atomic<bool>& stop) {
       rc = 1;
       break;
     }
-    const transport::ReceivedMessage& msg = *r;
-    const std::string in_topic(msg.topic());
-    if (m.sub->superseded() != superseded_seen) {
-      m.stats.collector().add_superseded(in_topic, m.sub->superseded() - superseded_seen);
-      counts_.superseded += m.sub->superseded() - superseded_seen;
-      superseded_seen = m.sub->superseded();
-    }
-    // Control messages (boundary, stream end): a malformed one is counted and skipped.
-    auto parse_control = [&](google::protobuf::MessageLite* out) {
-      if (transport::parse_message(msg, out).is_ok()) return true;
-      ++counts_.malformed;
-      m.stats.collector().add_malformed(in_topic, 1);
-      return false;
-    };
+    auto msg = std::make_shared<transport::ReceivedMessage>(std::move(r).value());
+    const std::string in_topic(msg->topic());
+    m.count_superseded(in_topic);
+    Next next = Next::Continue;
     if (in_topic == m.cfg.sync_topic) {
-      msgs::SampleBoundary b;
-      if (!parse_control(&b)) continue;
-      m.stamp(b.mutable_header(), m.sync_out);
-      if (!transport::send_message(m.pub, m.sync_out, b).is_ok()) m.log->warn("boundary forward failed");
-      ++counts_.boundaries;
-      if (b.last_in_run() && m.cfg.exit_on_last) {
-        if (b.stream_end_follows()) {
-          m.log->info("last sample {} forwarded; waiting for the stream end", b.sample_token());
-        } else {
-          m.log->info("last sample {} forwarded; run complete", b.sample_token());
-          finished = true;
-        }
-      }
-      continue;
-    }
-    if (in_topic == m.cfg.end_topic) {
-      msgs::StreamEnd e;
-      if (!parse_control(&e)) continue;
-      // Frames held back by a delay fault go out first: the end marker stays last.
-      if (Status s = m.flush_delayed(std::numeric_limits<StampNs>::max()); !s.is_ok()) {
-        rc = s.code() == StatusCode::kCancelled ? 0 : 1;
-        break;
-      }
-      // Frames lost after the last one on their topic leave no seq gap; the source's count shows them.
-      const std::string& source = e.header().publisher();
-      std::uint64_t gaps = 0;
-      for (const auto& [key, c] : m.drops.all()) gaps += key.first == source ? c.transport_drops : 0;
-      // Malformed frames name no publisher; with one source they are its frames, already counted as malformed.
-      const std::uint64_t accounted = m.frames_from[source] + gaps + (m.frames_from.size() <= 1 ? counts_.malformed : 0);
-      if (e.frames_sent() > accounted) {
-        const std::uint64_t lost = e.frames_sent() - accounted;
-        counts_.transport_drops += lost;
-        m.stats.collector().add_transport_drops(in_topic, lost);
-        m.log->warn("stream end: {} of the {} frames {} sent never arrived and left no seq gap (lost at the end "
-                    "of their topics); counted as transport drops",
-                    lost, e.frames_sent(), source);
-      }
-      m.stamp(e.mutable_header(), m.end_out);
-      if (!transport::send_message(m.pub, m.end_out, e).is_ok()) m.log->warn("stream end forward failed");
-      ++counts_.stream_ends;
-      if (m.cfg.exit_on_last) {
-        m.log->info("stream end forwarded ({} frames sent upstream); run complete", e.frames_sent());
-        finished = true;
-      }
-      continue;
-    }
-    auto view = transport::parse_camera_frame(msg);
-    if (!view) {
-      ++counts_.malformed;
-      m.sub->count_malformed();
-      m.stats.collector().add_malformed(in_topic, 1);
-      if (counts_.malformed <= 20 || m.bad_limiter.allow()) {
-        m.log->warn("malformed message on {} dropped: {} ({} so far)", in_topic, view.status().message(),
-                    counts_.malformed);
-      }
-      continue;
-    }
-    ++counts_.frames_in;
-    const msgs::CameraFrame& in = view->header;
-    ++m.frames_from[in.header().publisher()];
-    const std::uint64_t before = m.drops.counts(in.header().publisher(), in_topic).transport_drops;
-    (void)m.drops.observe(in.header().publisher(), in_topic, in.header().seq());
-    const std::uint64_t gap = m.drops.counts(in.header().publisher(), in_topic).transport_drops - before;
-    counts_.transport_drops += gap;
-    stats::Sample sample;
-    sample.receive_mono_ns = msg.receive_mono_ns();
-    sample.receive_realtime_ns = msg.receive_realtime_ns();
-    sample.capture_stamp_ns = transport::wall_clock_capture_ns(in.header());
-    sample.publish_mono_ns = in.header().publish_mono_ns();
-    sample.size_bytes = msg.size_bytes();
-    m.stats.collector().record(in_topic, in.header().publisher(), sample);
-    if (gap) m.stats.collector().add_transport_drops(in_topic, gap);
-
-    cv::Mat image;
-    msgs::FaultState state;
-    if (m.cfg.decode) {
-      // JPEG from the player and most cameras; raw layouts from a V4L2 camera in raw mode or a ROS 2 Image.
-      const bool jpeg = in.encoding().empty() || in.encoding() == "jpeg";
-      auto decoded = jpeg ? codec::decode_jpeg(view->payload, view->payload_size)
-                          : codec::raw_to_bgr(in.encoding(), in.width(), in.height(), in.step(), view->payload,
-                                              view->payload_size);
-      if (!decoded) {
-        // Bad input, not an injected fault: counted as malformed on its topic, and named in the log (every one
-        // of the first 20, then at most one line a second with the count).
-        ++counts_.corrupt_jpeg;
-        m.stats.collector().add_malformed(in_topic, 1);
-        if (counts_.corrupt_jpeg <= 20 || m.bad_limiter.allow()) {
-          m.log->warn("{} seq={} ({}): {}; frame dropped ({} undecodable so far)", in_topic, in.header().seq(),
-                      in.encoding().empty() ? "jpeg" : in.encoding(), decoded.status().message(),
-                      counts_.corrupt_jpeg);
-        }
-        state.set_action(msgs::FAULT_ACTION_DROP);
-        state.add_faults()->set_name("undecodable_input");
-        state.set_injector_latency_ns(monotonic_now_ns() - msg.receive_mono_ns());
-        m.publish_event(in, state);
-        continue;
-      }
-      image = std::move(decoded).value();
-    }
-    FaultDecision d = m.policy->apply(*view, m.cfg.decode ? &image : nullptr);
-    state.set_action(d.action);
-    for (auto& f : d.faults) *state.add_faults() = std::move(f);
-    if (d.action == msgs::FAULT_ACTION_DROP) {
-      ++counts_.injected_drops;
-      m.stats.collector().add_injected_drops(in_topic, 1);
-      state.set_injector_latency_ns(monotonic_now_ns() - msg.receive_mono_ns());
-      m.publish_event(in, state);
-      continue;
-    }
-    msgs::CameraFrame out = in;
-    *out.mutable_fault() = state;
-    if (out.source_seq() == 0) out.set_source_seq(in.header().seq());
-    transport::Payload payload;
-    if (m.cfg.decode) {
-      if (!image.isContinuous()) image = image.clone();
-      auto owner = std::make_shared<cv::Mat>(image);
-      out.set_encoding("bgr8");
-      out.set_width(static_cast<std::uint32_t>(image.cols));
-      out.set_height(static_cast<std::uint32_t>(image.rows));
-      out.set_step(static_cast<std::uint32_t>(image.step[0]));
-      payload.data = owner->data;
-      payload.size_bytes = owner->total() * owner->elemSize();
-      payload.owner = owner;
-    } else if (d.replacement_jpeg) {
-      payload = transport::Payload::of(d.replacement_jpeg);
+      next = m.on_boundary(*msg, stop);
+    } else if (in_topic == m.cfg.end_topic) {
+      next = m.on_stream_end(*msg, stop);
     } else {
-      // Forward the received frame itself: the zmq message stays alive until libzmq sent it.
-      auto owner = std::make_shared<transport::ReceivedMessage>(std::move(r).value());
-      payload.data = owner->payload_data();
-      payload.size_bytes = owner->payload_size();
-      payload.owner = owner;
+      next = m.on_frame(std::move(msg), stop);
     }
-    const std::string& out_topic = m.output_topic(in_topic);
-    if (d.action == msgs::FAULT_ACTION_DELAY && d.delay_ns > 0) {
-      // The event is published now; the frame when due (its latency then includes the delay).
-      out.mutable_fault()->set_injector_latency_ns(monotonic_now_ns() - sample.receive_mono_ns);
-      m.publish_event(in, out.fault());
-      m.delayed.emplace(sample.receive_mono_ns + d.delay_ns,
-                        Impl::Delayed{out_topic, std::move(out), std::move(payload), sample.receive_mono_ns});
-      ++counts_.frames_out;
-      continue;
-    }
-    const Status s = m.publish_frame(out_topic, out, payload, sample.receive_mono_ns);
-    if (s.code() == StatusCode::kCancelled) break;
-    if (s.code() == StatusCode::kInvalidArgument) {  // over max_msg_bytes: refused and counted, run goes on
-      counts_.oversize_refused = m.pub.oversize_refused();
-      if (m.bad_limiter.allow()) m.log->warn("{}", s.message());
-      continue;
-    }
-    if (!s.is_ok()) {
-      m.log->error("send on {} failed: {}", out_topic, s.message());
-      rc = 1;
-      break;
-    }
-    ++counts_.frames_out;
-    m.publish_event(in, out.fault());
-    m.log->trace("forwarded {} seq={} source_seq={}", out_topic, out.header().seq(), out.source_seq());
+    if (next == Next::Finished) finished = true;
+    if (next == Next::Stop) break;
   }
-  if (finished) (void)m.flush_delayed(std::numeric_limits<StampNs>::max());
-  m.stats.tick(monotonic_now_ns() + static_cast<DurationNs>(m.cfg.stats_window_s * 1e9), &m.pub);
-  m.stats.log_totals(monotonic_now_ns());
-  if (!finished) m.pub.set_linger(0);  // shutdown: exit promptly
-  counts_.oversize_refused = m.pub.oversize_refused();
-  m.log->info("injector done: in {} out {} boundaries {} injected_drops {} corrupt_jpeg {} malformed {} "
-              "transport_drops {} superseded {} oversize_refused {} input_disconnects {}",
-              counts_.frames_in, counts_.frames_out, counts_.boundaries, counts_.injected_drops,
-              counts_.corrupt_jpeg, counts_.malformed, counts_.transport_drops, counts_.superseded,
-              counts_.oversize_refused, m.sub ? m.sub->disconnects() : 0);
+  counts_.dispatch_cpu_ns = thread_cpu_ns() - cpu0;
+  m.finish(finished);
+  if (const Status f = m.pipeline->failure(); !f.is_ok() && f.code() != StatusCode::kCancelled) rc = 1;
   return rc;
 }
 
 std::vector<stats::TopicWindow> InjectorLoop::stats_totals() const {
-  return impl_->stats.collector().totals(monotonic_now_ns());
+  return impl_->stats.collector().totals(impl_->clock.now_ns());
 }
 
 }  // namespace faultline::runtime

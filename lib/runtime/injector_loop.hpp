@@ -4,6 +4,9 @@
 // are forwarded in order on the same socket; every source frame also yields a FaultEvent on /faultline/faults, including
 // frames dropped on purpose or because their JPEG did not decode. Output is numbered with the
 // injector's own seq per topic; source_seq is kept. Cost: decoding a 1600x900 JPEG is ~10 ms of CPU.
+// Decode, faults and re-encode run on `workers` threads (InjectorPipeline): the output keeps the input's order and is
+// byte-identical for any worker count; `queue_frames` bounds what is in flight, and when it is full the receive
+// waits, so the input queue (input_hwm) fills and upstream losses show up as transport_drops (seq gaps).
 #pragma once
 
 #include <spdlog/logger.h>
@@ -15,6 +18,7 @@
 #include <string>
 #include <vector>
 
+#include "common/clock.hpp"
 #include "runtime/frame_policy.hpp"
 #include "runtime/remap.hpp"
 #include "stats/topic_stats.hpp"
@@ -46,6 +50,8 @@ struct InjectorConfig {
   std::string corruption;                            // shorthand "fog/mid": one more fault on all cameras
   std::uint64_t seed = 0;                            // run seed of every fault draw
   int jpeg_quality = 95;                             // re-encoded faulted JPEG frames (nuScenes-C: 95)
+  int workers = 0;                                   // decode/fault/encode threads; 0 = cores available - 1, >= 1
+  int queue_frames = 0;                              // frames in flight receive -> send; 0 = 4 x workers
 
   template <class V>
   void visit(V& v) {
@@ -72,6 +78,12 @@ struct InjectorConfig {
     v("corruption", corruption, "shorthand for one fault on all cameras, e.g. fog/mid");
     v("seed", seed, "run seed of the fault draws");
     v("jpeg_quality", jpeg_quality, "JPEG quality of faulted frames re-encoded in JPEG mode, 1..100 (nuScenes-C: 95)");
+    v("workers", workers,
+      "threads that decode, corrupt and re-encode frames; 0 = the cores available minus one (at least 1). The "
+      "output is byte-identical for any count");
+    v("queue_frames", queue_frames,
+      "frames in flight between receive and send (0 = 4 x workers); when full, receiving waits and the input "
+      "queue (input_hwm) absorbs");
   }
   void validate() const;  // throws ConfigError
 };
@@ -87,6 +99,12 @@ struct InjectorCounts {
   std::uint64_t transport_drops = 0;
   std::uint64_t superseded = 0;
   std::uint64_t oversize_refused = 0;  // output frames over max_msg_bytes: refused by the publisher, not sent
+  std::uint64_t window_full_waits = 0;   // receives that waited for room in queue_frames (backpressure, no loss)
+  std::uint64_t discarded_at_stop = 0;   // in flight or delayed when the run was stopped: not sent
+  int workers = 0;                       // worker threads used
+  std::int64_t dispatch_cpu_ns = 0;      // CPU time of the receiving thread (the one calling run())
+  std::int64_t worker_cpu_ns = 0;        // ... of the worker threads
+  std::int64_t output_cpu_ns = 0;        // ... of the sending thread
 };
 
 // The output topic for an input camera topic: prefix + topic, with image_rect_compressed ->
@@ -95,9 +113,13 @@ std::string faulted_topic(const InjectorConfig& config, const std::string& input
 
 class InjectorLoop {
  public:
-  // Binds the output now; the input is subscribed in run() once downstream subscribers joined.
+  // Binds the output now; the input is subscribed in run() once downstream subscribers joined. `clock` (the
+  // monotonic time of stamps, latencies, delays and statistics) must outlive the loop; the first form uses the
+  // system clock.
   InjectorLoop(InjectorConfig config, std::string node, std::unique_ptr<FramePolicy> policy,
                std::shared_ptr<spdlog::logger> log);
+  InjectorLoop(InjectorConfig config, std::string node, std::unique_ptr<FramePolicy> policy,
+               std::shared_ptr<spdlog::logger> log, Clock& clock);
   ~InjectorLoop();
   std::string output_endpoint() const;
   // Runs until `stop` (0), the end of the run with exit_on_last (0), or a fatal socket error (1). The end of

@@ -203,6 +203,7 @@ TEST(InjectorIntegrationTest, DroppedFramesAreEventsNotSeqGaps) {
   ic.output_endpoint = "ipc://" + dir + "/injector.sock";
   ic.input_hwm = ic.output_hwm = 1000;
   ic.wait_subscribers = 1;
+  ic.workers = 3;  // the counts and the seq-gap-free output hold with a worker pool too
   runtime::InjectorLoop injector(
       ic, "fault_injector",
       make_frame_policy(YAML::Load(R"([{type: camera_crash, cameras: [CAM_FRONT], mode: drop},

@@ -41,6 +41,7 @@ TEST(InjectorRawInputTest, RawLayoutsAreCorruptedAndBrokenOnesCountedAsMalformed
   ic.decode = true;
   ic.wait_subscribers = 1;
   ic.exit_on_last = true;
+  ic.workers = 2;  // broken frames are counted on the output thread, in order, with a worker pool too
   InjectorLoop injector(ic, "fault_injector", make_frame_policy(YAML::Node(), "brightness/mid", 3, "fault_injector"),
                         log);
   transport::SubscriberConfig sc;

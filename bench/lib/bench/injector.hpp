@@ -1,6 +1,6 @@
 // `faultline bench injector`: 6 cameras x rate_hz of JPEG frames through the real InjectorLoop
-// (ipc), decode + one corruption per run, paced in real time: the injector thread's CPU, p50/p99
-// added latency and unintended drops.
+// (ipc), decode + one corruption per run, paced in real time (or closed-loop, as fast as it goes): frames/s, the
+// injector threads' CPU, p50/p99 added latency and unintended drops, per worker count side by side.
 #pragma once
 
 #include <string>
@@ -10,7 +10,8 @@ namespace faultline::bench {
 
 struct InjectorOptions {
   double seconds = 10;          // real-time duration of each run (> 0)
-  double rate_hz = 12;          // frames per second per camera (> 0)
+  double rate_hz = 12;          // frames per second per camera; 0 = closed loop (4 frames per worker outstanding)
+  std::vector<int> workers = {1};  // injector worker threads, one run each (0 = the injector's default)
   std::string level = "mid";    // easy | mid | hard
   std::string output = "bgr8";  // bgr8 (republish decoded) or jpeg (re-encode q95)
   bool json = false;            // print a JSON array (the frames line then goes to stderr)
