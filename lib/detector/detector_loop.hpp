@@ -50,6 +50,9 @@ struct DetectorLoopCounts {
   // the frames that did arrive (incomplete_samples counts those samples).
   std::uint64_t key_frames_missing = 0;
   std::uint64_t incomplete_samples = 0;
+  // Samples after a break in the stream (joined mid-run, publisher restarted, boundaries lost): detected
+  // without the ego-motion history of the samples before (the road curvature estimate starts over).
+  std::uint64_t stream_breaks = 0;
 };
 
 class DetectorLoop {

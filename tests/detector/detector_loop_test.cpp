@@ -57,6 +57,7 @@ TEST(DetectorLoopTest, BoundariesLostInTransportAreCountedFromTheSeqGap) {
   EXPECT_EQ(tokens, (std::vector<std::string>{"sample-1", "sample-2", "sample-5"}));
   EXPECT_EQ(loop.counts().boundaries, 3u);
   EXPECT_EQ(loop.counts().boundaries_lost, 2u);
+  EXPECT_EQ(loop.counts().stream_breaks, 1u);  // sample-5 follows the gap: named, motion history reset
 }
 
 // A detector that joins mid-sample (a respawn) or loses key frames counts them from the boundary's frames_sent.
