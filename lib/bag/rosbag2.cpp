@@ -107,16 +107,15 @@ std::string rosbag2_serialized_metadata(const Rosbag2Metadata& m) {
   return e.c_str();
 }
 
-Result<Rosbag2Metadata> read_rosbag2_metadata(const std::string& bag_dir) {
-  const std::string path = (fs::path(bag_dir) / kRosbag2MetadataFile).string();
-  if (!fs::exists(path)) return Status(StatusCode::kNotFound, path + ": no such file");
+Result<Rosbag2Metadata> parse_rosbag2_metadata(const std::string& text, const std::string& path) {
   std::string key = "rosbag2_bagfile_information";
   try {
-    const YAML::Node root = YAML::LoadFile(path)["rosbag2_bagfile_information"];
+    const YAML::Node doc = YAML::Load(text);
+    const YAML::Node root = doc.IsMap() ? doc["rosbag2_bagfile_information"] : YAML::Node();
     if (!root || !root.IsMap()) return Status(StatusCode::kCorruptData, path + ": missing rosbag2_bagfile_information");
     auto need = [&](const YAML::Node& parent, const char* name) {
       key = name;
-      const YAML::Node n = parent[name];
+      const YAML::Node n = parent.IsMap() ? parent[name] : YAML::Node();
       if (!n) throw YAML::Exception(YAML::Mark::null_mark(), std::string("missing key ") + name);
       return n;
     };
@@ -155,6 +154,24 @@ Result<Rosbag2Metadata> read_rosbag2_metadata(const std::string& bag_dir) {
   } catch (const YAML::Exception& e) {
     return Status(StatusCode::kCorruptData, path + ": " + key + ": " + e.what());
   }
+}
+
+Result<Rosbag2Metadata> read_rosbag2_metadata(const std::string& bag_dir) {
+  const std::string path = (fs::path(bag_dir) / kRosbag2MetadataFile).string();
+  std::error_code ec;
+  if (!fs::exists(path, ec)) return Status(StatusCode::kNotFound, path + ": no such file");
+  const auto size = fs::file_size(path, ec);
+  if (ec) return Status(StatusCode::kIoError, path + ": " + ec.message());
+  if (size > kMaxRosbag2MetadataBytes) {
+    return Status(StatusCode::kCorruptData, path + ": " + std::to_string(size) + " bytes: over the limit of " +
+                                                std::to_string(kMaxRosbag2MetadataBytes) + " for metadata.yaml");
+  }
+  std::ifstream in(path, std::ios::binary);
+  std::string text(static_cast<std::size_t>(size), '\0');
+  if (!in.read(text.data(), static_cast<std::streamsize>(size))) {
+    return Status(StatusCode::kIoError, path + ": cannot read");
+  }
+  return parse_rosbag2_metadata(text, path);
 }
 
 Result<std::unique_ptr<Rosbag2Writer>> Rosbag2Writer::open(const std::string& dir, WriterOptions mcap) {
