@@ -30,6 +30,39 @@ void emit_duration(YAML::Emitter& e, const char* key) {
   e << YAML::EndMap;
 }
 
+// Offset of the first byte that is not well-formed UTF-8 (overlong forms, surrogates and code points past
+// U+10FFFF included), or npos.
+std::size_t first_bad_utf8(const std::string& s) {
+  std::size_t i = 0;
+  while (i < s.size()) {
+    const auto c = static_cast<unsigned char>(s[i]);
+    std::size_t n = 0;
+    std::uint32_t cp = 0;
+    if (c < 0x80) {
+      ++i;
+      continue;
+    } else if (c >= 0xC2 && c <= 0xDF) {
+      n = 1, cp = c & 0x1Fu;
+    } else if (c >= 0xE0 && c <= 0xEF) {
+      n = 2, cp = c & 0x0Fu;
+    } else if (c >= 0xF0 && c <= 0xF4) {
+      n = 3, cp = c & 0x07u;
+    } else {
+      return i;
+    }
+    if (i + n >= s.size()) return i;  // truncated sequence
+    for (std::size_t k = 1; k <= n; ++k) {
+      const auto cc = static_cast<unsigned char>(s[i + k]);
+      if ((cc & 0xC0) != 0x80) return i;
+      cp = (cp << 6) | (cc & 0x3Fu);
+    }
+    const bool overlong = (n == 2 && cp < 0x800) || (n == 3 && cp < 0x10000);
+    if (overlong || (cp >= 0xD800 && cp <= 0xDFFF) || cp > 0x10FFFF) return i;
+    i += n + 1;
+  }
+  return std::string::npos;
+}
+
 }  // namespace
 
 std::string offered_qos_profiles_yaml(const Qos& qos) {
@@ -108,6 +141,11 @@ std::string rosbag2_serialized_metadata(const Rosbag2Metadata& m) {
 }
 
 Result<Rosbag2Metadata> parse_rosbag2_metadata(const std::string& text, const std::string& path) {
+  // YAML is Unicode text: bytes that are not UTF-8 would not be written back as they were read (found by
+  // fuzz_rosbag2_metadata: `bag convert` would have changed a topic's QoS text).
+  if (const std::size_t bad = first_bad_utf8(text); bad != std::string::npos) {
+    return Status(StatusCode::kCorruptData, path + ": byte " + std::to_string(bad) + " is not UTF-8 text");
+  }
   std::string key = "rosbag2_bagfile_information";
   try {
     const YAML::Node doc = YAML::Load(text);
