@@ -262,7 +262,8 @@ TEST_F(Rosbag2Test, MetadataOverTheSizeLimitIsRefusedNamingTheFile) {
 }
 
 TEST_F(Rosbag2Test, MetadataTextThatIsNotAMappingNamesTheFile) {
-  for (const char* text : {"", "[1, 2]", "rosbag2_bagfile_information: 3", "rosbag2_bagfile_information: {version: [1]}"}) {
+  for (const char* text :
+       {"", "[1, 2]", "rosbag2_bagfile_information: 3", "rosbag2_bagfile_information: {version: [1]}"}) {
     const auto m = parse_rosbag2_metadata(text, "b/metadata.yaml");
     ASSERT_FALSE(m.is_ok()) << text;
     EXPECT_EQ(m.status().message().rfind("b/metadata.yaml: ", 0), 0u) << m.status().message();

@@ -33,7 +33,8 @@ TEST(ReaderHistoryTest, SamplesReplacedBeforeTheTakeAreCounted) {
   }
   ASSERT_TRUE(writer.wait_for_acks(20 * kNsPerSec).is_ok());  // all five are in the reader's history now
   std::vector<int> taken;
-  auto r = reader.take([&](const void* s) { taken.push_back(static_cast<const std_msgs_msg_dds__Header_*>(s)->stamp.sec); });
+  auto r = reader.take(
+      [&](const void* s) { taken.push_back(static_cast<const std_msgs_msg_dds__Header_*>(s)->stamp.sec); });
   ASSERT_TRUE(r.is_ok());
   EXPECT_EQ(taken, std::vector<int>{5});  // keep-last 1: the newest
   const EndpointStatus st = reader.status();
