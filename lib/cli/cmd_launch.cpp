@@ -103,12 +103,13 @@ int run(int argc, char** argv) {
     for (const auto& [k, v] : lf.env) std::printf("env %s=%s\n", k.c_str(), shell_quote(v).c_str());
     for (const auto& node : lf.nodes) {
       const auto cmd = launch::node_command(node, "<tmp>/" + node.name + ".yaml");
-      const std::string respawn =
-          node.respawn ? " (respawn after " + std::to_string(node.respawn_delay_s) + " s, at most " +
-                             std::to_string(node.respawn_max_retries) + " times)"
-                       : "";
+      char respawn[96] = "";
+      if (node.respawn) {
+        std::snprintf(respawn, sizeof(respawn), " (respawn after %g s, at most %d times)", node.respawn_delay_s,
+                      node.respawn_max_retries);
+      }
       std::printf("%s%s%s: %s\n", node.name.c_str(), node.required ? "" : " (not required)",
-                  respawn.c_str(), join_quoted(cmd).c_str());
+                  respawn, join_quoted(cmd).c_str());
       std::printf("  params: %s\n", config::yaml_to_string(launch::node_params_document(node)).c_str());
     }
     return 0;
