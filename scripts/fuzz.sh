@@ -2,6 +2,7 @@
 # Builds the libFuzzer targets with clang in build-fuzz/ (-DFAULTLINE_FUZZ=ON: every library instrumented for
 # coverage, ASan and UBSan; cmake/fuzz.cmake) and runs each for a bounded time.
 # Usage: scripts/fuzz.sh [--seconds N] [target ...]     (default: 60 s, every target in build-fuzz/fuzz_targets.txt)
+# Named targets are the only ones built and run; FUZZ_BUILD_JOBS sets the build's -j (default: nproc).
 #
 # Each target starts from its seed corpus and its regressions folder (read only) plus build-fuzz/corpus/<target>/
 # (what earlier runs found; libFuzzer writes new inputs there only). Executions per target are printed and kept in
@@ -17,7 +18,7 @@ while (($#)); do
   case "$1" in
     --seconds) seconds="$2"; shift 2 ;;
     --seconds=*) seconds="${1#*=}"; shift ;;
-    -h|--help) sed -n '2,10p' "$0"; exit 0 ;;
+    -h|--help) sed -n '2,11p' "$0"; exit 0 ;;
     *) wanted+=("$1"); shift ;;
   esac
 done
@@ -31,7 +32,13 @@ fi
 cmake -S . -B build-fuzz -DCMAKE_CXX_COMPILER=clang++ -DFAULTLINE_FUZZ=ON \
   -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g" -DFAULTLINE_BUILD_BENCH=OFF \
   "${launcher[@]}" >/dev/null
-cmake --build build-fuzz --target faultline_fuzz_targets -j"$(nproc)"
+# Named targets: only those are built (the list of targets comes from the configure step).
+build_targets=(faultline_fuzz_targets)
+if ((${#wanted[@]})); then
+  build_targets=()
+  for t in "${wanted[@]}"; do build_targets+=("fuzz_$t"); done
+fi
+cmake --build build-fuzz --target "${build_targets[@]}" -j"${FUZZ_BUILD_JOBS:-$(nproc)}"
 
 summary=build-fuzz/fuzz_summary.txt
 printf '%-16s %12s %10s %8s  %s\n' target executions exec/s corpus result | tee "$summary"

@@ -170,7 +170,8 @@ Result<Rosbag2Info> inspect_rosbag2(const std::string& bag_dir) {
       }
     }
     for (const auto& [topic, n] : counts) {
-      const bool listed = std::any_of(m.topics.begin(), m.topics.end(), [&](const auto& t) { return t.name == topic; });
+      const std::string& name = topic;  // C++17 lambdas cannot capture a structured binding (clang refuses)
+      const bool listed = std::any_of(m.topics.begin(), m.topics.end(), [&](const auto& t) { return t.name == name; });
       if (!listed && n > 0) {
         out.disagreements.push_back(topic + ": " + std::to_string(n) + " messages, not in metadata.yaml");
       }

@@ -30,6 +30,39 @@ void emit_duration(YAML::Emitter& e, const char* key) {
   e << YAML::EndMap;
 }
 
+// Offset of the first byte that is not well-formed UTF-8 (overlong forms, surrogates and code points past
+// U+10FFFF included), or npos.
+std::size_t first_bad_utf8(const std::string& s) {
+  std::size_t i = 0;
+  while (i < s.size()) {
+    const auto c = static_cast<unsigned char>(s[i]);
+    std::size_t n = 0;
+    std::uint32_t cp = 0;
+    if (c < 0x80) {
+      ++i;
+      continue;
+    } else if (c >= 0xC2 && c <= 0xDF) {
+      n = 1, cp = c & 0x1Fu;
+    } else if (c >= 0xE0 && c <= 0xEF) {
+      n = 2, cp = c & 0x0Fu;
+    } else if (c >= 0xF0 && c <= 0xF4) {
+      n = 3, cp = c & 0x07u;
+    } else {
+      return i;
+    }
+    if (i + n >= s.size()) return i;  // truncated sequence
+    for (std::size_t k = 1; k <= n; ++k) {
+      const auto cc = static_cast<unsigned char>(s[i + k]);
+      if ((cc & 0xC0) != 0x80) return i;
+      cp = (cp << 6) | (cc & 0x3Fu);
+    }
+    const bool overlong = (n == 2 && cp < 0x800) || (n == 3 && cp < 0x10000);
+    if (overlong || (cp >= 0xD800 && cp <= 0xDFFF) || cp > 0x10FFFF) return i;
+    i += n + 1;
+  }
+  return std::string::npos;
+}
+
 }  // namespace
 
 std::string offered_qos_profiles_yaml(const Qos& qos) {
@@ -107,16 +140,20 @@ std::string rosbag2_serialized_metadata(const Rosbag2Metadata& m) {
   return e.c_str();
 }
 
-Result<Rosbag2Metadata> read_rosbag2_metadata(const std::string& bag_dir) {
-  const std::string path = (fs::path(bag_dir) / kRosbag2MetadataFile).string();
-  if (!fs::exists(path)) return Status(StatusCode::kNotFound, path + ": no such file");
+Result<Rosbag2Metadata> parse_rosbag2_metadata(const std::string& text, const std::string& path) {
+  // YAML is Unicode text: bytes that are not UTF-8 would not be written back as they were read (found by
+  // fuzz_rosbag2_metadata: `bag convert` would have changed a topic's QoS text).
+  if (const std::size_t bad = first_bad_utf8(text); bad != std::string::npos) {
+    return Status(StatusCode::kCorruptData, path + ": byte " + std::to_string(bad) + " is not UTF-8 text");
+  }
   std::string key = "rosbag2_bagfile_information";
   try {
-    const YAML::Node root = YAML::LoadFile(path)["rosbag2_bagfile_information"];
+    const YAML::Node doc = YAML::Load(text);
+    const YAML::Node root = doc.IsMap() ? doc["rosbag2_bagfile_information"] : YAML::Node();
     if (!root || !root.IsMap()) return Status(StatusCode::kCorruptData, path + ": missing rosbag2_bagfile_information");
     auto need = [&](const YAML::Node& parent, const char* name) {
       key = name;
-      const YAML::Node n = parent[name];
+      const YAML::Node n = parent.IsMap() ? parent[name] : YAML::Node();
       if (!n) throw YAML::Exception(YAML::Mark::null_mark(), std::string("missing key ") + name);
       return n;
     };
@@ -155,6 +192,24 @@ Result<Rosbag2Metadata> read_rosbag2_metadata(const std::string& bag_dir) {
   } catch (const YAML::Exception& e) {
     return Status(StatusCode::kCorruptData, path + ": " + key + ": " + e.what());
   }
+}
+
+Result<Rosbag2Metadata> read_rosbag2_metadata(const std::string& bag_dir) {
+  const std::string path = (fs::path(bag_dir) / kRosbag2MetadataFile).string();
+  std::error_code ec;
+  if (!fs::exists(path, ec)) return Status(StatusCode::kNotFound, path + ": no such file");
+  const auto size = fs::file_size(path, ec);
+  if (ec) return Status(StatusCode::kIoError, path + ": " + ec.message());
+  if (size > kMaxRosbag2MetadataBytes) {
+    return Status(StatusCode::kCorruptData, path + ": " + std::to_string(size) + " bytes: over the limit of " +
+                                                std::to_string(kMaxRosbag2MetadataBytes) + " for metadata.yaml");
+  }
+  std::ifstream in(path, std::ios::binary);
+  std::string text(static_cast<std::size_t>(size), '\0');
+  if (!in.read(text.data(), static_cast<std::streamsize>(size))) {
+    return Status(StatusCode::kIoError, path + ": cannot read");
+  }
+  return parse_rosbag2_metadata(text, path);
 }
 
 Result<std::unique_ptr<Rosbag2Writer>> Rosbag2Writer::open(const std::string& dir, WriterOptions mcap) {

@@ -87,6 +87,9 @@ int run(int argc, char** argv) {
       "forwarded to all nodes; when a required node exits the others get SIGTERM, then SIGKILL after\n"
       "--grace. Exit code: that of the first failing required node (1 if it died from a signal), else 1 if\n"
       "any other node failed on its own (non-zero exit, or a signal the launcher did not send), else 0.\n"
+      "A node with `respawn: true` that fails on its own is started again after `respawn_delay` seconds,\n"
+      "at most `respawn_max_retries` times (default 3); only its last start counts for the exit code, and\n"
+      "the closing line counts the respawns.\n"
       "Scalars may use ${VAR} and ${VAR:-default}; a top-level env: map is set for every node.");
   FAULTLINE_PARSE(app, argc, argv);
 
@@ -100,8 +103,13 @@ int run(int argc, char** argv) {
     for (const auto& [k, v] : lf.env) std::printf("env %s=%s\n", k.c_str(), shell_quote(v).c_str());
     for (const auto& node : lf.nodes) {
       const auto cmd = launch::node_command(node, "<tmp>/" + node.name + ".yaml");
-      std::printf("%s%s: %s\n", node.name.c_str(), node.required ? "" : " (not required)",
-                  join_quoted(cmd).c_str());
+      char respawn[96] = "";
+      if (node.respawn) {
+        std::snprintf(respawn, sizeof(respawn), " (respawn after %g s, at most %d times)", node.respawn_delay_s,
+                      node.respawn_max_retries);
+      }
+      std::printf("%s%s%s: %s\n", node.name.c_str(), node.required ? "" : " (not required)",
+                  respawn, join_quoted(cmd).c_str());
       std::printf("  params: %s\n", config::yaml_to_string(launch::node_params_document(node)).c_str());
     }
     return 0;
@@ -110,8 +118,14 @@ int run(int argc, char** argv) {
   ParamsDir dir;
   std::vector<launch::ChildSpec> children;
   for (const auto& node : lf.nodes) {
-    children.push_back({node.name, launch::node_command(node, dir.write(node.name, params_yaml(node))),
-                        node.required});
+    launch::ChildSpec child;
+    child.name = node.name;
+    child.argv = launch::node_command(node, dir.write(node.name, params_yaml(node)));
+    child.required = node.required;
+    child.respawn = node.respawn;
+    child.respawn_delay_ns = static_cast<DurationNs>(node.respawn_delay_s * 1e9);
+    child.max_respawns = node.respawn_max_retries;
+    children.push_back(std::move(child));
   }
   launch::SupervisorOptions opts;
   opts.grace_ns = static_cast<DurationNs>(grace_s * 1e9);
@@ -121,8 +135,13 @@ int run(int argc, char** argv) {
   const auto& stop = shutdown_requested();
   launch::Supervisor supervisor(std::move(children), opts);
   const launch::LaunchResult result = supervisor.run(stop);
-  std::fprintf(stderr, "[launch] done (%s%s%s): exit code %d\n", launch::to_string(result.cause),
-               result.cause_node.empty() ? "" : ": ", result.cause_node.c_str(), result.exit_code);
+  // The summary counts every respawn (a node killed and started again lost what it held; the nodes
+  // downstream count that loss where it shows).
+  const std::string respawned = launch::respawn_summary(result);
+  std::fprintf(stderr, "[launch] done (%s%s%s): exit code %d, respawns %d%s%s%s\n",
+               launch::to_string(result.cause), result.cause_node.empty() ? "" : ": ",
+               result.cause_node.c_str(), result.exit_code, result.respawns(),
+               respawned.empty() ? "" : " (", respawned.c_str(), respawned.empty() ? "" : ")");
   return result.exit_code;
 }
 

@@ -19,7 +19,13 @@ void ParamSource::merge(const YAML::Node& mapping, const std::string& origin) {
   if (!mapping || mapping.IsNull()) return;
   if (!mapping.IsMap()) throw ConfigError(origin + ": expected a mapping of parameters");
   for (const auto& kv : mapping) {
-    const auto key = kv.first.as<std::string>();
+    // A key that is a list or mapping (YAML's `? [a, b] : v`) would make as<std::string> throw
+    // yaml-cpp's bad-conversion error, which names neither the file nor the key.
+    if (!kv.first.IsScalar()) {
+      throw ConfigError(origin + ": (key) = " + yaml_to_string(kv.first) +
+                        ": a parameter name must be a string");
+    }
+    const std::string key = kv.first.Scalar();
     root_[key] = kv.second;
     origins_[key] = origin;
   }
@@ -68,7 +74,7 @@ std::string ParamSource::origin_of(const std::string& key) const {
 
 void Loader::finish() const {
   for (const auto& kv : source_.root()) {
-    const auto key = kv.first.as<std::string>();
+    const std::string key = kv.first.Scalar();  // merge and apply_override store string keys only
     if (!used_.count(key)) {
       std::string known;
       for (const auto& k : used_) known += (known.empty() ? "" : ", ") + k;

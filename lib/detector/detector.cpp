@@ -86,9 +86,18 @@ std::vector<Box3d> Detector::detect_camera(const CameraInput& frame) const {
   return out;
 }
 
+void Detector::reset_motion() {
+  have_ego_ = false;
+  road_.curvature = 0;
+}
+
 void Detector::observe_ego(const dataset::Rigid& ego, std::int64_t t_us) {
   const auto& r = ego.rotation;
   const double yaw = std::atan2(r[3], r[0]);
+  // A stream that starts over (a looped or restarted player) goes back in time: the motion history starts over
+  // too, so a replayed sample is detected as it was the first time. (Key frames of one sample arrive in camera
+  // order, a few tens of milliseconds apart, hence the margin.)
+  if (have_ego_ && t_us + kStartOverUs < last_ego_us_) reset_motion();
   if (have_ego_ && t_us > last_ego_us_) {
     const auto& lr = last_ego_.rotation;
     const double dist = std::hypot(ego.translation[0] - last_ego_.translation[0],

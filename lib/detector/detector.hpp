@@ -61,7 +61,11 @@ class Detector {
 
   const DetectorConfig& config() const { return config_; }
 
+  // Forgets the ego-motion history (the road curvature estimate), as at start-up: for a break in the stream.
+  void reset_motion();
+
  private:
+  static constexpr std::int64_t kStartOverUs = 1'000'000;  // a frame this much older than the last: start over
   void observe_ego(const dataset::Rigid& ego_to_world, std::int64_t t_us);
 
   DetectorConfig config_;

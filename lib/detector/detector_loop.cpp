@@ -73,6 +73,42 @@ struct DetectorLoop::Impl {
   std::map<std::string, Pending> pending;
   std::int64_t sample_processing_ns = 0;
   std::int64_t first_capture_ns = 0;
+  std::map<std::string, std::uint32_t> key_frames_seen;  // per sample token, until its boundary
+  transport::LogLimiter incomplete_limiter;
+
+  // A break in the sample stream: this detector joined mid-run (a respawn: the first boundary it sees is not
+  // its publisher's first), the publisher restarted, or boundaries were lost. The samples before it are not
+  // all known, so the ego-motion history starts over and the sample is named: its boxes may differ from an
+  // unbroken run's.
+  void check_break(transport::SeqOutcome outcome, const msgs::SampleBoundary& b, DetectorLoopCounts& counts) {
+    const bool joined_late = outcome == transport::SeqOutcome::First && b.header().seq() > 1;
+    if (!joined_late && outcome != transport::SeqOutcome::Restart && outcome != transport::SeqOutcome::Gap) return;
+    detector.reset_motion();
+    ++counts.stream_breaks;
+    if (counts.stream_breaks <= 20 || incomplete_limiter.allow()) {
+      log->warn("sample {} follows a break in the stream ({}): detected without the motion history before it "
+                "({} breaks so far)",
+                b.sample_token(),
+                joined_late ? "joined mid-run" : outcome == transport::SeqOutcome::Restart ? "publisher restarted"
+                                                                                          : "boundaries lost",
+                counts.stream_breaks);
+    }
+  }
+
+  // Compares the key frames that arrived for the boundary's sample with those its source sent.
+  void check_complete(const msgs::SampleBoundary& b, DetectorLoopCounts& counts) {
+    const auto it = key_frames_seen.find(b.sample_token());
+    const std::uint32_t seen = it == key_frames_seen.end() ? 0 : it->second;
+    if (it != key_frames_seen.end()) key_frames_seen.erase(it);
+    if (b.frames_sent() <= seen) return;
+    counts.key_frames_missing += b.frames_sent() - seen;
+    ++counts.incomplete_samples;
+    if (counts.incomplete_samples <= 20 || incomplete_limiter.allow()) {  // the first ones each named
+      log->warn("sample {} incomplete: {} of its {} key frames arrived; detected from those ({} samples "
+                "incomplete so far)",
+                b.sample_token(), seen, b.frames_sent(), counts.incomplete_samples);
+    }
+  }
 
   Impl(DetectorLoopConfig c, std::string n, std::shared_ptr<spdlog::logger> l)
       : cfg(std::move(c)), node(std::move(n)), log(std::move(l)),
@@ -126,7 +162,7 @@ int DetectorLoop::run(const std::atomic<bool>& stop) {
       }
       ++counts_.boundaries;
       const std::uint64_t lost_before = m.boundary_seqs.counts(b.header().publisher(), topic).transport_drops;
-      (void)m.boundary_seqs.observe(b.header().publisher(), topic, b.header().seq());
+      m.check_break(m.boundary_seqs.observe(b.header().publisher(), topic, b.header().seq()), b, counts_);
       const std::uint64_t lost = m.boundary_seqs.counts(b.header().publisher(), topic).transport_drops - lost_before;
       if (lost > 0) {
         // Those samples get no DetectionArray from us (scored as empty): say so, never skip them silently.
@@ -135,6 +171,7 @@ int DetectorLoop::run(const std::atomic<bool>& stop) {
                     lost, lost == 1 ? "y" : "ies", b.sample_token(), lost == 1 ? "that sample" : "those samples",
                     counts_.boundaries_lost);
       }
+      m.check_complete(b, counts_);
       const auto t0 = Clock::now();
       if (!m.cfg.temporal) {
         for (auto& [camera, p] : m.pending) {
@@ -182,6 +219,7 @@ int DetectorLoop::run(const std::atomic<bool>& stop) {
     }
     ++counts_.frames;
     const msgs::CameraFrame& h = view->header;
+    if (h.is_key_frame()) ++m.key_frames_seen[h.sample_token()];
     if (m.cfg.temporal) {
       const auto t0 = Clock::now();
       auto in = to_input(h, view->payload, view->payload_size);

@@ -45,6 +45,14 @@ struct DetectorLoopConfig {
 struct DetectorLoopCounts {
   std::uint64_t frames = 0, malformed = 0, undecodable = 0, boundaries = 0, arrays_sent = 0, send_failures = 0;
   std::uint64_t boundaries_lost = 0;  // seq gaps on the sync topic: samples that got no DetectionArray
+  // Key frames a boundary announces (its frames_sent) that never arrived here: lost in transport, dropped
+  // by an injected fault, or sent before a respawned detector connected. Their samples are detected from
+  // the frames that did arrive (incomplete_samples counts those samples).
+  std::uint64_t key_frames_missing = 0;
+  std::uint64_t incomplete_samples = 0;
+  // Samples after a break in the stream (joined mid-run, publisher restarted, boundaries lost): detected
+  // without the ego-motion history of the samples before (the road curvature estimate starts over).
+  std::uint64_t stream_breaks = 0;
 };
 
 class DetectorLoop {

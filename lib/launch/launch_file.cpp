@@ -100,6 +100,41 @@ std::map<std::string, std::string> string_map(const YAML::Node& n, const std::st
   return out;
 }
 
+// respawn / respawn_delay / respawn_max_retries, as ROS 2 launch spells them (a retry cap is required
+// here: a node that dies at start-up would otherwise be restarted for ever).
+void parse_respawn(const YAML::Node& n, const std::string& file, const std::string& at, NodeSpec& spec) {
+  if (n["respawn"].IsDefined()) {
+    try {
+      if (!n["respawn"].IsScalar()) throw YAML::Exception(YAML::Mark::null_mark(), "");
+      spec.respawn = n["respawn"].as<bool>();
+    } catch (const YAML::Exception&) {
+      fail(file, at + ".respawn", n["respawn"], "expected true or false");
+    }
+  }
+  if (n["respawn_delay"].IsDefined()) {
+    double delay = -1;
+    try {
+      if (n["respawn_delay"].IsScalar()) delay = n["respawn_delay"].as<double>();
+    } catch (const YAML::Exception&) {
+    }
+    if (!(delay >= 0 && delay <= 3600)) {
+      fail(file, at + ".respawn_delay", n["respawn_delay"], "expected seconds in 0..3600");
+    }
+    spec.respawn_delay_s = delay;
+  }
+  if (n["respawn_max_retries"].IsDefined()) {
+    int retries = -1;
+    try {
+      if (n["respawn_max_retries"].IsScalar()) retries = n["respawn_max_retries"].as<int>();
+    } catch (const YAML::Exception&) {
+    }
+    if (retries < 0 || retries > 1000) {
+      fail(file, at + ".respawn_max_retries", n["respawn_max_retries"], "expected an integer in 0..1000");
+    }
+    spec.respawn_max_retries = retries;
+  }
+}
+
 NodeSpec parse_node(const YAML::Node& n, const std::string& file, const std::string& where,
                     const LoadOptions& options) {
   if (!n.IsMap()) fail(file, where, n, "expected a mapping with name and exec");
@@ -110,7 +145,10 @@ NodeSpec parse_node(const YAML::Node& n, const std::string& file, const std::str
     fail(file, where + ".name", n["name"], "expected a non-empty name without '/' or spaces");
   }
   const std::string at = where + " (" + spec.name + ")";
-  check_keys(n, {"name", "exec", "required", "params", "remap", "args"}, file, at + ".");
+  check_keys(n,
+             {"name", "exec", "required", "params", "remap", "args", "respawn", "respawn_delay",
+              "respawn_max_retries"},
+             file, at + ".");
   if (!n["exec"].IsDefined()) fail_missing(file, at + ".exec");
   spec.exec = scalar(n["exec"], file, at + ".exec");
   const auto resolved = resolve_exec(spec.exec, options);
@@ -130,6 +168,7 @@ NodeSpec parse_node(const YAML::Node& n, const std::string& file, const std::str
       fail(file, at + ".required", n["required"], "expected true or false");
     }
   }
+  parse_respawn(n, file, at, spec);
   spec.params = YAML::Node(YAML::NodeType::Map);
   if (n["params"].IsDefined() && !n["params"].IsNull()) {
     if (!n["params"].IsMap()) fail(file, at + ".params", n["params"], "expected a mapping");

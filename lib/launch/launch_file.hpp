@@ -8,6 +8,9 @@
 //       params: {dataroot: data/synth, rate: 1.0} # written to a temp YAML passed as --params
 //       remap: {/a: /b}                           # optional; passed to the node as its `remap` parameter
 //       args: []                                  # optional extra command-line arguments
+//       respawn: false                            # start it again when it fails (killed, non-zero exit)
+//       respawn_delay: 0.0                        # seconds between its end and the new start
+//       respawn_max_retries: 3                    # respawns allowed over the launch (0..1000)
 //
 // Every scalar may use ${VAR} or ${VAR:-default}; VAR is looked up in `env:` first, then in the
 // launcher's environment. Unknown keys, a missing exec, a duplicate name or an unset variable without a
@@ -32,6 +35,9 @@ struct NodeSpec {
   YAML::Node params;      // mapping (possibly empty)
   std::map<std::string, std::string> remap;  // from topic -> to topic
   std::vector<std::string> args;             // extra arguments after the standard ones
+  bool respawn = false;                      // restart when it fails on its own (lib/launch/supervisor.hpp)
+  double respawn_delay_s = 0.0;              // seconds before the restart (ROS 2's respawn_delay)
+  int respawn_max_retries = 3;               // restarts allowed over the launch
 };
 
 struct LaunchFile {

@@ -32,6 +32,7 @@ struct Child {
   ChildOutcome outcome;
   Pipe out, err;
   int reap_order = -1;
+  StampNs respawn_at_ns = -1;  // >= 0: ended, to be started again at this monotonic time
 };
 
 void close_fd(int& fd) {
@@ -153,13 +154,13 @@ class Loop {
   }
 
   LaunchResult run(const std::atomic<bool>& stop) {
-    std::vector<std::string> env = build_env(options_.env);
+    env_ = build_env(options_.env);
     for (auto& c : children_) {
       if (stopping_) {  // a required node already failed to start: start nothing more
         c.outcome.start_error = "not started: the launch was stopping";
         continue;
       }
-      start_child(c, env);
+      start_child(c, env_);
       if (c.outcome.started) {
         note("started " + c.spec.name + " (pid " + std::to_string(c.outcome.pid) + ")");
       } else {
@@ -171,6 +172,7 @@ class Loop {
       if (!stopping_ && stop.load()) begin_stop(StopCause::StopRequested, "");
       poll_output();
       reap();
+      start_due_respawns();
       if (stopping_ && !killed_ && monotonic_now_ns() >= kill_deadline_ns_) kill_remaining();
     }
     if (!stopping_) result_.cause = StopCause::AllExited;
@@ -182,9 +184,38 @@ class Loop {
 
   bool all_reaped() const {
     for (const auto& c : children_) {
-      if (c.outcome.started && !c.outcome.exited) return false;
+      if ((c.outcome.started && !c.outcome.exited) || c.respawn_at_ns >= 0) return false;
     }
     return true;
+  }
+
+  // A child that failed on its own, with respawns left, while the launch runs on.
+  bool should_respawn(const Child& c) const {
+    return !stopping_ && c.spec.respawn && c.outcome.failed() && c.outcome.respawns < c.spec.max_respawns;
+  }
+
+  void start_due_respawns() {
+    for (auto& c : children_) {
+      if (c.respawn_at_ns < 0 || monotonic_now_ns() < c.respawn_at_ns) continue;
+      c.respawn_at_ns = -1;
+      close_fd(c.out.read_fd);  // a grandchild may still hold the old pipes; the new start gets new ones
+      close_fd(c.err.read_fd);
+      c.out.partial.clear();
+      c.err.partial.clear();
+      ChildOutcome fresh;
+      fresh.name = c.outcome.name;
+      fresh.required = c.outcome.required;
+      fresh.respawns = c.outcome.respawns + 1;
+      c.outcome = fresh;
+      start_child(c, env_);
+      if (c.outcome.started) {
+        note("respawned " + c.spec.name + " (pid " + std::to_string(c.outcome.pid) + "; respawn " +
+             std::to_string(c.outcome.respawns) + " of at most " + std::to_string(c.spec.max_respawns) + ")");
+      } else {
+        finish_child(c);
+        if (c.spec.required && !stopping_) begin_stop(StopCause::StartFailed, c.spec.name);
+      }
+    }
   }
 
   void begin_stop(StopCause cause, const std::string& node) {
@@ -196,6 +227,10 @@ class Loop {
     std::string why = cause == StopCause::StopRequested ? "stop requested" : "required node " + node + " ended";
     note("stopping (" + why + "): sending " + ::strsignal(sig) + " to running nodes");
     for (auto& c : children_) {
+      if (c.respawn_at_ns >= 0) {
+        c.respawn_at_ns = -1;
+        note("respawn of " + c.spec.name + " cancelled: the launch is stopping");
+      }
       if (!c.outcome.started || c.outcome.exited) continue;
       c.outcome.signalled_by_us = true;
       ::kill(-c.outcome.pid, sig);
@@ -275,8 +310,16 @@ class Loop {
       // grandchild holding the pipe open must not keep us here, so read only what is there now.
       drain(c, c.out, false);
       drain(c, c.err, true);
+      c.outcome.will_respawn = should_respawn(c);
       finish_child(c);
-      if (c.spec.required && !stopping_) begin_stop(StopCause::RequiredExited, c.spec.name);
+      if (c.outcome.will_respawn) {
+        c.respawn_at_ns = monotonic_now_ns() + c.spec.respawn_delay_ns;
+        note("respawning " + c.spec.name + " in " + std::to_string(c.spec.respawn_delay_ns / kNsPerMs) +
+             " ms (respawn " + std::to_string(c.outcome.respawns + 1) + " of at most " +
+             std::to_string(c.spec.max_respawns) + ")");
+      } else if (c.spec.required && !stopping_) {
+        begin_stop(StopCause::RequiredExited, c.spec.name);
+      }
     }
   }
 
@@ -318,6 +361,7 @@ class Loop {
 
   SupervisorOptions options_;
   LineSink sink_;
+  std::vector<std::string> env_;  // every child's environment (respawns too)
   std::vector<Child> children_;
   LaunchResult result_;
   bool stopping_ = false;
@@ -332,6 +376,20 @@ bool ChildOutcome::failed() const {
   if (!started) return true;
   if (term_signal != 0) return !signalled_by_us;
   return exited && exit_code != 0;
+}
+
+int LaunchResult::respawns() const {
+  int n = 0;
+  for (const auto& c : children) n += c.respawns;
+  return n;
+}
+
+std::string respawn_summary(const LaunchResult& result) {
+  std::string out;
+  for (const auto& c : result.children) {
+    if (c.respawns > 0) out += (out.empty() ? "" : ", ") + c.name + " " + std::to_string(c.respawns);
+  }
+  return out;
 }
 
 const char* to_string(StopCause cause) {

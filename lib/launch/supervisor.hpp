@@ -3,8 +3,14 @@
 // the stop signal first, SIGKILL after a grace period. Each child runs in its own process group (so
 // its own children are signalled too) and gets SIGTERM if the launcher dies (PR_SET_PDEATHSIG).
 //
+// Respawn (ROS 2 launch's `respawn`/`respawn_delay`): a child with `respawn` that fails on its own (a
+// non-zero exit, or a signal the supervisor did not send) while the launch is not stopping is started
+// again after `respawn_delay_ns`, at most `max_respawns` times; each respawn is a Supervisor note and is
+// counted in its outcome. Unlike ROS 2, a child that exits with code 0 has finished its work and is not
+// respawned, and a required child that is respawned does not end the launch.
+//
 // Exit code of run(): the exit code of the first required child that failed (non-zero exit, or 1 when
-// it died from a signal the supervisor did not send), 0 otherwise. Children stopped by the
+// it died from a signal the supervisor did not send) and was not respawned, 0 otherwise. Children stopped by the
 // supervisor's own signals do not count as failures; non-required children never set the exit code.
 // Not thread-safe: one run() at a time, from one thread.
 #pragma once
@@ -24,6 +30,9 @@ struct ChildSpec {
   std::string name;
   std::vector<std::string> argv;  // argv[0] is the executable path (execv, no PATH search)
   bool required = true;
+  bool respawn = false;            // start it again when it fails on its own
+  DurationNs respawn_delay_ns = 0;  // between its end and the new start
+  int max_respawns = 0;            // respawns allowed over the launch
 };
 
 enum class OutputStream { Stdout, Stderr, Supervisor };
@@ -43,6 +52,8 @@ struct ChildOutcome {
   bool signalled_by_us = false;   // the supervisor had sent it a signal before it ended
   bool killed_after_grace = false;  // needed SIGKILL
   StampNs end_ns = 0;             // monotonic time it was reaped
+  int respawns = 0;               // times it was started again (this outcome is of the last start)
+  bool will_respawn = false;      // in on_exit: this end is followed by a respawn
   bool failed() const;            // non-zero exit, failed start, or a signal we did not send
 };
 
@@ -54,7 +65,11 @@ struct LaunchResult {
   StopCause cause = StopCause::None;
   std::string cause_node;  // the required node whose exit ended the launch
   std::vector<ChildOutcome> children;  // in spec order
+  int respawns() const;                // summed over the children
 };
+
+// "nusc_player 1, detector 2" for the children that were respawned; "" when none was.
+std::string respawn_summary(const LaunchResult& result);
 
 struct SupervisorOptions {
   DurationNs grace_ns = 2 * kNsPerSec;     // between the stop signal and SIGKILL

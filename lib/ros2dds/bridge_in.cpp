@@ -115,6 +115,7 @@ struct Camera {
   bool advertised = false;
   std::set<std::string> reported_types;
   std::uint32_t incompatible_seen = 0;
+  std::uint64_t replaced_seen = 0;  // image samples replaced in the reader's history, as last reported
 };
 
 Rigid rigid_of(const geometry_msgs_msg_dds__Transform_& t) {
@@ -234,6 +235,25 @@ struct InBridge::Impl {
       total += cam.incompatible_seen;
     }
     counts.incompatible_qos = total;
+  }
+
+  // Image samples DDS lost before they were taken: counted per topic, the first loss of each topic logged.
+  void check_losses() {
+    std::uint64_t replaced = 0, lost = 0;
+    for (auto& cam : cameras) {
+      if (!cam.image) continue;
+      const EndpointStatus st = cam.image->status();
+      if (st.replaced_in_history > cam.replaced_seen && cam.replaced_seen == 0) {
+        log->warn("{}: this node fell behind by more than the history depth ({}): samples replaced before they "
+                  "were taken are counted (history_replaced in the closing line)",
+                  cam.ros_topic, cam.qos.depth);
+      }
+      cam.replaced_seen = st.replaced_in_history;
+      replaced += st.replaced_in_history;
+      lost += st.lost;
+    }
+    counts.history_replaced = replaced;
+    counts.dds_lost = lost;
   }
 
   void bad_image(const Camera& cam, const std::string& why) {
@@ -406,19 +426,23 @@ int InBridge::run(const std::atomic<bool>& stop) {
       break;
     }
     m.check_qos();
+    m.check_losses();
     if (period > 0 && monotonic_now_ns() >= next_log) {
-      m.log->info("frames_in={} frames_out={} bad_images={} camera_infos={} type_mismatch={} incompatible_qos={}",
-                  c.frames_in.load(), c.frames_out.load(), c.bad_images.load(), c.camera_infos.load(), c.type_mismatch.load(), c.incompatible_qos.load());
+      m.log->info("frames_in={} frames_out={} bad_images={} camera_infos={} type_mismatch={} incompatible_qos={} "
+                  "history_replaced={} dds_lost={}",
+                  c.frames_in.load(), c.frames_out.load(), c.bad_images.load(), c.camera_infos.load(),
+                  c.type_mismatch.load(), c.incompatible_qos.load(), c.history_replaced.load(), c.dds_lost.load());
       next_log = monotonic_now_ns() + period;
     }
     if (m.cfg.max_frames > 0 && c.frames_out >= static_cast<std::uint64_t>(m.cfg.max_frames)) break;
   }
   m.check_qos();
+  m.check_losses();
   if (!stop.load()) m.pub.set_linger(1000);  // a finite run delivers what is queued
   m.log->info("stopped: frames_in={} frames_out={} bad_images={} camera_infos={} tf_static={} type_mismatch={} "
-              "incompatible_qos={}",
-              c.frames_in.load(), c.frames_out.load(), c.bad_images.load(), c.camera_infos.load(), c.tf_static.load(), c.type_mismatch.load(),
-              c.incompatible_qos.load());
+              "incompatible_qos={} history_replaced={} dds_lost={}",
+              c.frames_in.load(), c.frames_out.load(), c.bad_images.load(), c.camera_infos.load(), c.tf_static.load(),
+              c.type_mismatch.load(), c.incompatible_qos.load(), c.history_replaced.load(), c.dds_lost.load());
   return rc;
 }
 

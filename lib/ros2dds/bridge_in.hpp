@@ -80,6 +80,10 @@ struct InBridgeCounts {
   std::atomic<std::uint64_t> tf_static = 0;         // transforms received
   std::atomic<std::uint64_t> type_mismatch = 0;     // writers of a non-image type on a configured topic
   std::atomic<std::uint64_t> incompatible_qos = 0;  // QoS mismatches DDS reported (per match attempt; sum)
+  // Image samples lost before this node took them: replaced in a reader's keep-last history (it fell behind
+  // by more than the topic's depth), or never received (DDS SAMPLE_LOST: gaps in a best-effort stream).
+  std::atomic<std::uint64_t> history_replaced = 0;
+  std::atomic<std::uint64_t> dds_lost = 0;
 };
 
 // The camera name of each of config.topics, in order (rule above). Throws ConfigError naming the topic for an

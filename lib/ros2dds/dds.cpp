@@ -188,7 +188,13 @@ Reader::Reader(const Participant& participant, const dds_topic_descriptor_t* typ
     : ros_topic_(ros_topic) {
   topic_ = create_topic(participant, type, ros_topic);
   dds_qos_t* q = make_qos(qos);
-  reader_ = dds_create_reader(participant.handle(), topic_, q, nullptr);
+  // Cyclone calls the data-available listener once per sample it stores in the history: counting those
+  // calls against the samples taken shows the ones keep-last replaced before they were taken, which no
+  // DDS status reports (SAMPLE_LOST is for samples never received).
+  dds_listener_t* listener = dds_create_listener(this);
+  dds_lset_data_available(listener, &Reader::on_data_available);
+  reader_ = dds_create_reader(participant.handle(), topic_, q, listener);
+  dds_delete_listener(listener);
   dds_delete_qos(q);
   if (reader_ < 0) {
     const std::string why = dds_error(reader_);
@@ -207,8 +213,15 @@ Result<int> Reader::take(const std::function<void(const void* sample)>& fn, int 
   void* samples[kBatch] = {};
   dds_sample_info_t infos[kBatch];
   const int n_max = std::min(max_samples, kBatch);
+  // Read before the take: a sample stored during the take may be taken without being in `arrived`, so
+  // arrived - taken never overcounts.
+  const std::uint64_t arrived = arrived_.load();
   const dds_return_t n = dds_take(reader_, samples, infos, static_cast<size_t>(n_max), static_cast<uint32_t>(n_max));
   if (n < 0) return Result<int>(StatusCode::kIoError, "DDS take on " + ros_topic_ + ": " + dds_error(n));
+  taken_ += static_cast<std::uint64_t>(n);
+  // A take that got fewer than asked drained the history: what arrived before it and was not taken
+  // was replaced.
+  if (n < n_max && arrived > taken_ && arrived - taken_ > replaced_) replaced_ = arrived - taken_;
   int delivered = 0;
   for (int i = 0; i < n; ++i) {
     if (!infos[i].valid_data) continue;
@@ -225,7 +238,16 @@ EndpointStatus Reader::status() const {
   if (dds_get_subscription_matched_status(reader_, &m) == DDS_RETCODE_OK) s.matched = m.current_count;
   dds_requested_incompatible_qos_status_t q{};
   if (dds_get_requested_incompatible_qos_status(reader_, &q) == DDS_RETCODE_OK) s.incompatible_qos = q.total_count;
+  s.replaced_in_history = replaced_;
+  dds_sample_lost_status_t lost{};
+  if (dds_get_sample_lost_status(reader_, &lost) == DDS_RETCODE_OK) s.lost = lost.total_count;
+  dds_sample_rejected_status_t rejected{};
+  if (dds_get_sample_rejected_status(reader_, &rejected) == DDS_RETCODE_OK) s.rejected = rejected.total_count;
   return s;
+}
+
+void Reader::on_data_available(dds_entity_t /*reader*/, void* self) {
+  static_cast<Reader*>(self)->arrived_.fetch_add(1);
 }
 
 WriterDiscovery::WriterDiscovery(const Participant& participant) {

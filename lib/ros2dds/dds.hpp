@@ -61,6 +61,12 @@ class Participant {
 struct EndpointStatus {
   std::uint32_t matched = 0;           // peers currently matched
   std::uint32_t incompatible_qos = 0;  // match attempts refused for QoS (total; a peer may count more than once)
+  // Reader: samples that reached the history but were never taken, replaced under keep-last by newer ones
+  // (arrivals counted by a data-available listener minus samples taken). A lower bound while samples
+  // keep arriving; exact once the writers are quiet and the reader has been drained.
+  std::uint64_t replaced_in_history = 0;
+  std::uint64_t lost = 0;      // Cyclone's SAMPLE_LOST total (never received: gaps in a best-effort stream)
+  std::uint64_t rejected = 0;  // Cyclone's SAMPLE_REJECTED total (resource limits)
 };
 
 class Writer {
@@ -104,9 +110,13 @@ class Reader {
   const std::string& ros_topic() const { return ros_topic_; }
 
  private:
+  static void on_data_available(dds_entity_t reader, void* self);
   std::string ros_topic_;
   dds_entity_t topic_ = 0;
   dds_entity_t reader_ = 0;
+  std::atomic<std::uint64_t> arrived_{0};  // samples stored in the history (listener, Cyclone's thread)
+  std::uint64_t taken_ = 0;                // samples taken, valid or not (owning thread)
+  std::uint64_t replaced_ = 0;             // the largest arrived - taken seen after a draining take
 };
 
 // A writer some other participant offers: what discovery tells about a ROS topic before subscribing to it.

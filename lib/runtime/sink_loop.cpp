@@ -145,6 +145,10 @@ struct SinkLoop::Impl {
     w.Uint64(counts->rejected_boundaries);
     w.Key("faultline_sink_bad_journal_lines");
     w.Uint64(counts->bad_journal_lines);
+    w.Key("faultline_sink_duplicate_arrays");  // replaced: a restarted player or detector sent it again
+    w.Uint64(counts->duplicate_arrays);
+    w.Key("faultline_sink_unanswered_samples");  // announced samples that got no detections (empty lists)
+    w.Uint64(unanswered().size());
     w.Key("faultline_sink_malformed_messages");
     w.Uint64(malformed_total());
     w.Key("faultline_sink_disconnects");  // connections closed under the sink's sockets (peer exit, oversize)
@@ -153,7 +157,75 @@ struct SinkLoop::Impl {
     return buf.GetString();
   }
 
+  // One DetectionArray: parsed, checked with the scorer's rules, journaled, acked in lockstep.
+  void on_detections(const transport::ReceivedMessage& r, stats::Sample sample) {
+    const std::string topic(r.topic());
+    msgs::DetectionArray d;
+    if (!transport::parse_message(r, &d).is_ok()) {
+      ++counts->malformed;
+      stats.collector().add_malformed(topic, 1);
+      if (bad_limiter.allow())
+        log->warn("malformed DetectionArray dropped ({} so far)", counts->malformed);
+      return;
+    }
+    sample.capture_stamp_ns =
+        d.header().capture_clock() == msgs::CAPTURE_CLOCK_REALTIME ? d.first_frame_capture_ns() : 0;
+    sample.publish_mono_ns = d.header().publish_mono_ns();
+    stats.collector().record(topic, d.header().publisher(), sample);
+    if (d.processing_ns() > 0) {
+      processing_ns_sum += d.processing_ns();
+      ++processing_n;
+    }
+    if (store.has_detections(d.sample_token())) {
+      // A restarted player or detector sent this sample again: the last array is kept, each is counted.
+      ++counts->duplicate_arrays;
+      if (counts->duplicate_arrays == 1) {
+        log->info("second DetectionArray for sample {}: it replaces the first (further ones at debug level, "
+                  "counted in the closing line and the results meta)", d.sample_token());
+      } else {
+        log->debug("second DetectionArray for sample {}: replacing the first", d.sample_token());
+      }
+    }
+    const AddDetectionsReport added = store.add_detections(d);
+    if (!added.journal.is_ok()) log->error("journal: {}", added.journal.message());
+    ++counts->detection_arrays;
+    counts->boxes += static_cast<std::uint64_t>(d.detections_size());
+    if (added.array_rejected) ++counts->rejected_arrays;
+    counts->rejected_boxes += added.boxes_rejected;
+    for (const auto& reason : added.reasons) {
+      log_refusal(added.array_rejected ? "DetectionArray" : "box", reason);
+    }
+    log->debug("detections sample={} boxes={}", d.sample_token(), d.detections_size());
+    if (acks) {
+      msgs::SampleAck ack;
+      ack.set_sample_token(d.sample_token());
+      auto* h = ack.mutable_header();
+      h->set_seq(++ack_seq);
+      h->set_publisher(node);
+      h->set_publish_stamp_ns(realtime_now_ns());
+      h->set_publish_mono_ns(monotonic_now_ns());
+      if (transport::send_message(*acks, "/sync/ack", ack).is_ok()) ++counts->acks_sent;
+    }
+  }
+
+  // Samples whose boundary arrived but whose detections never did: scored as empty, so say which.
+  std::vector<std::string> unanswered() const {
+    std::vector<std::string> out;
+    for (const auto& t : store.boundary_samples()) {
+      if (!store.answered(t)) out.push_back(t);
+    }
+    return out;
+  }
+
   void finalize(const char* why) {
+    const auto missing = unanswered();
+    counts->unanswered_samples = missing.size();
+    if (!missing.empty()) {
+      std::string names;
+      for (std::size_t i = 0; i < missing.size() && i < 20; ++i) names += (i ? " " : "") + missing[i];
+      log->warn("{} announced samples got no detections and are written as empty: {}{}", missing.size(), names,
+                missing.size() > 20 ? " ..." : "");
+    }
     const Status s = store.finalize(meta_json());
     if (s.is_ok()) {
       log->info("results written to {} ({} samples, {} with detections; {})", cfg.output,
@@ -214,42 +286,7 @@ int SinkLoop::run(const std::atomic<bool>& stop) {
         sample.receive_realtime_ns = r->receive_realtime_ns();
         sample.size_bytes = r->size_bytes();
         if (topic == m.detections_topic) {
-          msgs::DetectionArray d;
-          if (!transport::parse_message(*r, &d).is_ok()) {
-            ++counts_.malformed;
-            m.stats.collector().add_malformed(topic, 1);
-            if (m.bad_limiter.allow())
-              m.log->warn("malformed DetectionArray dropped ({} so far)", counts_.malformed);
-            continue;
-          }
-          sample.capture_stamp_ns =
-              d.header().capture_clock() == msgs::CAPTURE_CLOCK_REALTIME ? d.first_frame_capture_ns() : 0;
-          sample.publish_mono_ns = d.header().publish_mono_ns();
-          m.stats.collector().record(topic, d.header().publisher(), sample);
-          if (d.processing_ns() > 0) {
-            m.processing_ns_sum += d.processing_ns();
-            ++m.processing_n;
-          }
-          const AddDetectionsReport added = m.store.add_detections(d);
-          if (!added.journal.is_ok()) m.log->error("journal: {}", added.journal.message());
-          ++counts_.detection_arrays;
-          counts_.boxes += static_cast<std::uint64_t>(d.detections_size());
-          if (added.array_rejected) ++counts_.rejected_arrays;
-          counts_.rejected_boxes += added.boxes_rejected;
-          for (const auto& reason : added.reasons) {
-            m.log_refusal(added.array_rejected ? "DetectionArray" : "box", reason);
-          }
-          m.log->debug("detections sample={} boxes={}", d.sample_token(), d.detections_size());
-          if (m.acks) {
-            msgs::SampleAck ack;
-            ack.set_sample_token(d.sample_token());
-            auto* h = ack.mutable_header();
-            h->set_seq(++m.ack_seq);
-            h->set_publisher(m.node);
-            h->set_publish_stamp_ns(realtime_now_ns());
-            h->set_publish_mono_ns(monotonic_now_ns());
-            if (transport::send_message(*m.acks, "/sync/ack", ack).is_ok()) ++counts_.acks_sent;
-          }
+          m.on_detections(*r, sample);
         } else if (topic == m.sync_topic) {
           msgs::SampleBoundary b;
           if (!transport::parse_message(*r, &b).is_ok()) {
@@ -294,10 +331,12 @@ int SinkLoop::run(const std::atomic<bool>& stop) {
   m.log->info(
       "sink done: {} detection arrays, {} boxes, {} boundaries, {} acks, {} malformed, {} boxes "
       "and {} "
-      "arrays refused, {} boundaries refused, {} bad journal lines",
+      "arrays refused, {} boundaries refused, {} bad journal lines, {} duplicate arrays, {} "
+      "unanswered samples",
       counts_.detection_arrays, counts_.boxes, counts_.boundaries, counts_.acks_sent,
       counts_.malformed, counts_.rejected_boxes, counts_.rejected_arrays,
-      counts_.rejected_boundaries, counts_.bad_journal_lines);
+      counts_.rejected_boundaries, counts_.bad_journal_lines, counts_.duplicate_arrays,
+      counts_.unanswered_samples);
   return 0;
 }
 

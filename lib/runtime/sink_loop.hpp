@@ -85,6 +85,8 @@ struct SinkCounts {
   std::uint64_t rejected_arrays = 0;  // refused whole: no sample_token, or over 500 boxes
   std::uint64_t rejected_boundaries = 0;  // boundaries naming a sample outside the split (dataroot)
   std::uint64_t bad_journal_lines = 0;    // journal lines that could not be read back on resume
+  std::uint64_t duplicate_arrays = 0;     // a second array for a sample (a restarted source): the last kept
+  std::uint64_t unanswered_samples = 0;   // at finalize: announced samples without detections (empty lists)
 };
 
 class SinkLoop {

@@ -11,8 +11,10 @@ int main(int argc, char** argv) {
         log->info("starting: {}", faultline::config::describe(cfg));
         const int rc = loop.run(stop);
         const auto& c = loop.counts();
-        log->info("done: {} frames, {} samples sent, {} malformed, {} undecodable, {} boundaries lost", c.frames,
-                  c.arrays_sent, c.malformed, c.undecodable, c.boundaries_lost);
+        log->info("done: {} frames, {} samples sent, {} malformed, {} undecodable, {} boundaries lost, {} "
+                  "incomplete samples ({} key frames missing), {} stream breaks",
+                  c.frames, c.arrays_sent, c.malformed, c.undecodable, c.boundaries_lost, c.incomplete_samples,
+                  c.key_frames_missing, c.stream_breaks);
         return rc;
       });
 }

@@ -246,5 +246,42 @@ TEST_F(Rosbag2Test, MetadataReaderNamesMissingKeys) {
   EXPECT_EQ(read_rosbag2_metadata((root_ / "nothing").string()).status().code(), StatusCode::kNotFound);
 }
 
+TEST_F(Rosbag2Test, MetadataOverTheSizeLimitIsRefusedNamingTheFile) {
+  const fs::path dir = root_ / "big";
+  fs::create_directories(dir);
+  {
+    std::ofstream out(dir / "metadata.yaml");
+    out << "rosbag2_bagfile_information:\n  version: 5\n#";
+    out << std::string(kMaxRosbag2MetadataBytes, 'x') << "\n";
+  }
+  const auto m = read_rosbag2_metadata(dir.string());
+  ASSERT_FALSE(m.is_ok());
+  EXPECT_EQ(m.status().code(), StatusCode::kCorruptData);
+  EXPECT_NE(m.status().message().find((dir / "metadata.yaml").string() + ": "), std::string::npos);
+  EXPECT_NE(m.status().message().find("over the limit"), std::string::npos) << m.status().message();
+}
+
+TEST_F(Rosbag2Test, MetadataTextThatIsNotAMappingNamesTheFile) {
+  for (const char* text :
+       {"", "[1, 2]", "rosbag2_bagfile_information: 3", "rosbag2_bagfile_information: {version: [1]}"}) {
+    const auto m = parse_rosbag2_metadata(text, "b/metadata.yaml");
+    ASSERT_FALSE(m.is_ok()) << text;
+    EXPECT_EQ(m.status().message().rfind("b/metadata.yaml: ", 0), 0u) << m.status().message();
+  }
+}
+
+// Found by fuzz_rosbag2_metadata: bytes that are not UTF-8 did not survive a write and read back.
+TEST_F(Rosbag2Test, MetadataThatIsNotUtf8IsRefusedNamingTheByte) {
+  const std::string text = "rosbag2_bagfile_information:\n  version: 5\n  storage_identifier: \"mc\xEE\xFF\"\n";
+  const auto m = parse_rosbag2_metadata(text, "b/metadata.yaml");
+  ASSERT_FALSE(m.is_ok());
+  EXPECT_EQ(m.status().message(), "b/metadata.yaml: byte 67 is not UTF-8 text");
+  for (const char* bad : {"\xC0\x80", "\xED\xA0\x80", "\xF4\x90\x80\x80", "\xE2\x82"}) {
+    EXPECT_FALSE(parse_rosbag2_metadata(std::string("a: ") + bad, "b").is_ok()) << bad;
+  }
+  EXPECT_EQ(parse_rosbag2_metadata("a: \xE2\x82\xAC \xF0\x9F\x98\x80", "b").status().message(),
+            "b: missing rosbag2_bagfile_information");  // valid UTF-8 gets as far as the keys
+}
+
 }  // namespace
 }  // namespace faultline::bag

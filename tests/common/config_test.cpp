@@ -115,6 +115,37 @@ TEST(ConfigTest, MissingParamsFileNamesTheFile) {
   }
 }
 
+// The launch-file reader's fix of session 10 (a key that is a list or mapping: `? [a, b] : v`), here
+// for params files: yaml-cpp's bad-conversion error named neither the file nor the mapping.
+TEST(ConfigTest, AListAsAParameterKeyNamesTheSourceAndTheKey) {
+  ParamSource s;
+  try {
+    s.merge(YAML::Load("{rate: 2, ? [a, b] : 1}"), "params.yaml: player");
+    FAIL() << "expected ConfigError";
+  } catch (const ConfigError& e) {
+    const std::string what = e.what();
+    EXPECT_EQ(what.rfind("params.yaml: player: (key) = [a, b]: a parameter name must be a string", 0),
+              0u)
+        << what;
+  }
+}
+
+TEST(ConfigTest, AMappingAsAKeyInAParamsFileNamesTheFile) {
+  const std::string path = ::testing::TempDir() + "/map_key.yaml";
+  std::ofstream(path) << "? {x: 1}\n: 3\n";
+  NodeOptions options;
+  options.name = "player";
+  options.params_files = {path};
+  try {
+    build_source(options);
+    FAIL() << "expected ConfigError";
+  } catch (const ConfigError& e) {
+    const std::string what = e.what();
+    EXPECT_EQ(what.rfind(path + ": (key) = {x: 1}: a parameter name must be a string", 0), 0u)
+        << what;
+  }
+}
+
 TEST(ConfigTest, DescribeListsResolvedValues) {
   DemoConfig cfg;
   cfg.rate = 3;

@@ -57,6 +57,63 @@ TEST(DetectorLoopTest, BoundariesLostInTransportAreCountedFromTheSeqGap) {
   EXPECT_EQ(tokens, (std::vector<std::string>{"sample-1", "sample-2", "sample-5"}));
   EXPECT_EQ(loop.counts().boundaries, 3u);
   EXPECT_EQ(loop.counts().boundaries_lost, 2u);
+  EXPECT_EQ(loop.counts().stream_breaks, 1u);  // sample-5 follows the gap: named, motion history reset
+}
+
+// A detector that joins mid-sample (a respawn) or loses key frames counts them from the boundary's frames_sent.
+TEST(DetectorLoopTest, KeyFramesMissingFromASampleAreCountedFromItsBoundary) {
+  const std::string dir = ::testing::TempDir() + "detector_keys_" + std::to_string(::getpid());
+  transport::PublisherConfig pc;
+  pc.endpoint = "ipc://" + dir + "_injector.sock";
+  pc.snd_hwm = 100;
+  transport::Publisher injector(pc);
+  transport::SubscriberConfig kc;
+  kc.endpoints = {"ipc://" + dir + "_sink.sock"};
+  kc.pattern = transport::Pattern::PushPull;
+  kc.bind = true;
+  kc.rcv_hwm = 100;
+  transport::RawSubscriber sink(kc);
+  DetectorLoopConfig cfg;
+  cfg.input_endpoints = {injector.endpoint()};
+  cfg.sink_endpoint = sink.endpoints().front();
+  cfg.temporal = false;
+  DetectorLoop loop(cfg, "detector", logging::make_node_logger("detector_keys_test", "error"));
+  std::atomic<bool> stop{false};
+  auto rc = std::async(std::launch::async, [&] { return loop.run(stop); });
+  ASSERT_TRUE(injector.wait_for_subscribers("/sync/sample", 1, 20 * kNsPerSec).is_ok());
+  std::uint64_t seq = 0;
+  auto frame = [&](const std::string& camera, const std::string& token) {
+    msgs::CameraFrame h;
+    h.set_camera(camera);
+    h.set_sample_token(token);
+    h.set_is_key_frame(true);
+    h.set_encoding("jpeg");
+    h.mutable_header()->set_seq(++seq);
+    h.mutable_header()->set_publisher("fault_injector");
+    auto bytes = std::make_shared<const std::vector<std::uint8_t>>(std::vector<std::uint8_t>{0xFF, 0xD8, 0xFF, 0xD9});
+    ASSERT_TRUE(transport::send_camera_frame(injector, "/faulty/" + camera, h, transport::Payload::of(bytes)).is_ok());
+  };
+  auto boundary = [&](const std::string& token, std::uint32_t frames_sent, bool last) {
+    msgs::SampleBoundary b;
+    b.mutable_header()->set_seq(++seq);
+    b.mutable_header()->set_publisher("fault_injector");
+    b.set_sample_token(token);
+    b.set_frames_sent(frames_sent);
+    b.set_last_in_run(last);
+    ASSERT_TRUE(transport::send_message(injector, "/sync/sample", b).is_ok());
+  };
+  frame("CAM_FRONT", "s1");
+  frame("CAM_BACK", "s1");
+  boundary("s1", 2, false);  // complete
+  frame("CAM_FRONT", "s2");
+  boundary("s2", 3, true);  // two of its three key frames never came
+  int arrays = 0;
+  const StampNs deadline = monotonic_now_ns() + 30 * kNsPerSec;  // watchdog, not synchronisation
+  while (arrays < 2 && monotonic_now_ns() < deadline) arrays += sink.receive(50 * kNsPerMs).is_ok() ? 1 : 0;
+  EXPECT_EQ(rc.get(), 0);
+  EXPECT_EQ(arrays, 2);
+  EXPECT_EQ(loop.counts().incomplete_samples, 1u);
+  EXPECT_EQ(loop.counts().key_frames_missing, 2u);
 }
 
 }  // namespace

@@ -181,6 +181,29 @@ TEST_F(LaunchFileTest, BadRequiredValueNamesIt) {
   EXPECT_NE(err.find("(a).required = maybe"), std::string::npos) << err;
 }
 
+TEST_F(LaunchFileTest, RespawnKeysAsRos2LaunchSpellsThem) {
+  const auto lf = Parse(
+      "nodes:\n"
+      "  - {name: a, exec: sh, respawn: true, respawn_delay: 0.5, respawn_max_retries: 7}\n"
+      "  - {name: b, exec: sh}\n");
+  EXPECT_TRUE(lf.nodes[0].respawn);
+  EXPECT_DOUBLE_EQ(lf.nodes[0].respawn_delay_s, 0.5);
+  EXPECT_EQ(lf.nodes[0].respawn_max_retries, 7);
+  EXPECT_FALSE(lf.nodes[1].respawn);
+  EXPECT_EQ(lf.nodes[1].respawn_max_retries, 3);
+}
+
+TEST_F(LaunchFileTest, BadRespawnValuesNameNodeKeyAndValue) {
+  EXPECT_EQ(ErrorOf("nodes:\n  - {name: a, exec: sh, respawn: often}\n"),
+            "launch/t.yaml: nodes[0] (a).respawn = often: expected true or false");
+  EXPECT_EQ(ErrorOf("nodes:\n  - {name: a, exec: sh, respawn_delay: -1}\n"),
+            "launch/t.yaml: nodes[0] (a).respawn_delay = -1: expected seconds in 0..3600");
+  EXPECT_EQ(ErrorOf("nodes:\n  - {name: a, exec: sh, respawn_delay: .nan}\n"),
+            "launch/t.yaml: nodes[0] (a).respawn_delay = .nan: expected seconds in 0..3600");
+  EXPECT_EQ(ErrorOf("nodes:\n  - {name: a, exec: sh, respawn_max_retries: [1]}\n"),
+            "launch/t.yaml: nodes[0] (a).respawn_max_retries = [1]: expected an integer in 0..1000");
+}
+
 TEST_F(LaunchFileTest, EmptyNodesListIsAnError) {
   EXPECT_NE(ErrorOf("nodes: []\n").find("nodes"), std::string::npos);
   EXPECT_NE(ErrorOf("env: {}\n").find("nodes: missing"), std::string::npos);

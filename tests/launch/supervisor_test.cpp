@@ -4,7 +4,10 @@
 
 #include <gtest/gtest.h>
 
+#include <unistd.h>
+
 #include <csignal>
+#include <cstdlib>
 #include <tuple>
 
 namespace faultline::launch {
@@ -191,6 +194,91 @@ TEST_F(SupervisorTest, PassesExtraEnvironment) {
   Add("env", "echo \"$FAULTLINE_LAUNCH_TEST_VAR\"");
   Run();
   EXPECT_EQ(LinesOf("env"), (std::vector<std::string>{"hello"}));
+}
+
+// Respawn: the children keep their state in a scratch directory, so each start knows which it is.
+class SupervisorRespawnTest : public SupervisorTest {
+ protected:
+  void SetUp() override {
+    char tmpl[] = "/tmp/faultline-respawn-XXXXXX";
+    dir_ = ::mkdtemp(tmpl);
+  }
+  void TearDown() override { std::system(("rm -rf " + dir_).c_str()); }
+  void AddRespawning(const std::string& name, const std::string& script, bool required, int max_respawns,
+                     DurationNs delay_ns = 0) {
+    Add(name, script, required);
+    children_.back().respawn = true;
+    children_.back().max_respawns = max_respawns;
+    children_.back().respawn_delay_ns = delay_ns;
+  }
+  bool Noted(const std::string& text) const {
+    for (const auto& l : LinesOf("launch", OutputStream::Supervisor)) {
+      if (l.find(text) != std::string::npos) return true;
+    }
+    return false;
+  }
+  std::string dir_;
+};
+
+TEST_F(SupervisorRespawnTest, AKilledRequiredNodeIsStartedAgainInsteadOfEndingTheLaunch) {
+  // First start: SIGKILLs itself; second start: finishes its work and exits 0, which ends the launch.
+  AddRespawning("flaky", "if [ -e " + dir_ + "/once ]; then echo second; exit 0; fi; touch " + dir_ +
+                             "/once; kill -KILL $$",
+                /*required=*/true, /*max_respawns=*/3, 50 * kNsPerMs);
+  Add("server", "echo ready; exec sleep 30", false);
+  std::vector<ChildOutcome> ends;
+  options_.on_exit = [&](const ChildOutcome& o) { ends.push_back(o); };
+  const auto r = Run();
+  EXPECT_EQ(r.exit_code, 0);
+  EXPECT_EQ(r.cause, StopCause::RequiredExited);
+  EXPECT_EQ(Of(r, "flaky").respawns, 1);
+  EXPECT_EQ(Of(r, "flaky").exit_code, 0);
+  EXPECT_EQ(r.respawns(), 1);
+  EXPECT_EQ(respawn_summary(r), "flaky 1");
+  EXPECT_EQ(LinesOf("flaky"), std::vector<std::string>{"second"});
+  ASSERT_GE(ends.size(), 2u);
+  EXPECT_EQ(ends[0].name, "flaky");
+  EXPECT_EQ(ends[0].term_signal, SIGKILL);
+  EXPECT_TRUE(ends[0].will_respawn);
+  EXPECT_FALSE(ends[1].will_respawn);
+  EXPECT_TRUE(Noted("respawning flaky in 50 ms (respawn 1 of at most 3)"));
+  EXPECT_TRUE(Noted("respawned flaky (pid "));
+}
+
+TEST_F(SupervisorRespawnTest, RespawnsStopAtTheCapAndTheLastFailureCounts) {
+  AddRespawning("crasher", "echo start >> " + dir_ + "/starts; exit 4", /*required=*/true, 2);
+  Add("server", "echo ready; exec sleep 30", false);
+  const auto r = Run();
+  EXPECT_EQ(r.exit_code, 4);
+  EXPECT_EQ(r.cause_node, "crasher");
+  EXPECT_EQ(Of(r, "crasher").respawns, 2);
+  EXPECT_TRUE(Of(r, "crasher").failed());
+  EXPECT_EQ(respawn_summary(r), "crasher 2");
+  EXPECT_FALSE(Noted("respawn 3 of"));
+}
+
+TEST_F(SupervisorRespawnTest, ANodeThatExitsCleanlyIsNotRespawned) {
+  AddRespawning("done", "echo once; exit 0", /*required=*/true, 3);
+  const auto r = Run();
+  EXPECT_EQ(r.exit_code, 0);
+  EXPECT_EQ(Of(r, "done").respawns, 0);
+  EXPECT_EQ(LinesOf("done"), std::vector<std::string>{"once"});
+  EXPECT_EQ(respawn_summary(r), "");
+}
+
+TEST_F(SupervisorRespawnTest, StoppingTheLaunchCancelsAPendingRespawn) {
+  // flaky dies at once and would come back after 60 s; main ends the launch as soon as flaky is reaped.
+  const std::string pid_file = dir_ + "/flaky.pid";
+  AddRespawning("flaky", "echo $$ > " + pid_file + ".tmp; mv " + pid_file + ".tmp " + pid_file +
+                             "; kill -KILL $$",
+                /*required=*/false, 3, 60 * kNsPerSec);
+  Add("main", "while [ ! -e " + pid_file + " ]; do sleep 0.01; done; while kill -0 $(cat " + pid_file +
+                  ") 2>/dev/null; do sleep 0.01; done; exit 0");
+  const auto r = Run();
+  EXPECT_EQ(r.cause_node, "main");
+  EXPECT_EQ(Of(r, "flaky").respawns, 0);
+  EXPECT_TRUE(Noted("respawn of flaky cancelled: the launch is stopping"));
+  EXPECT_EQ(r.exit_code, 1) << "flaky's death without a respawn is a failure";
 }
 
 TEST_F(SupervisorTest, ChildrenRunInTheirOwnProcessGroup) {

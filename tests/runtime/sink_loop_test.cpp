@@ -192,6 +192,55 @@ TEST_F(SinkLoopTest, JournalOfAnotherRunStopsTheSinkAtStart) {
 
 // #22 item 7: a message with a wrong frame count (5 parts) is refused by the socket and counted in the results'
 // meta, and the sink carries on with the next one.
+// A respawned player or detector sends a sample again: the last array is kept and each repeat counted.
+TEST_F(SinkLoopTest, ASecondArrayForASampleReplacesTheFirstAndIsCounted) {
+  Run({Array("s1", 1), Array("s1", 2), Array("s2", 1)});
+  EXPECT_EQ(counts_.duplicate_arrays, 1u);
+  const auto doc = Results();
+  EXPECT_EQ(doc["results"]["s1"].Size(), 2u);
+  EXPECT_EQ(doc["meta"]["faultline_sink_duplicate_arrays"].GetUint64(), 1u);
+  EXPECT_EQ(Lines("second DetectionArray for sample s1: it replaces the first").size(), 1u);
+}
+
+// Samples announced by a boundary whose detections never came are written as empty and named.
+TEST_F(SinkLoopTest, AnnouncedSamplesWithoutDetectionsAreCountedAndNamed) {
+  transport::PublisherConfig sc;
+  sc.endpoint = "ipc://" + dir_ + "/sync.sock";
+  transport::Publisher sync(sc);
+  config_.sync_endpoints = {sync.endpoint()};
+  config_.finalize_grace_ms = 0;  // the sample's array was acked before its boundary was sent
+  transport::SubscriberConfig ac;
+  ac.endpoints = {config_.ack_endpoint};
+  ac.pattern = transport::Pattern::PushPull;
+  ac.bind = true;
+  transport::RawSubscriber acks(ac);
+  SinkLoop sink(config_, "detection_sink", log_);
+  transport::PublisherConfig pc;
+  pc.endpoint = sink.detections_endpoint();
+  pc.pattern = transport::Pattern::PushPull;
+  pc.bind = false;
+  pc.linger_ms = 200;
+  transport::Publisher push(pc);
+  std::atomic<bool> stop{false};
+  auto rc = std::async(std::launch::async, [&] { return sink.run(stop); });
+  ASSERT_TRUE(sync.wait_for_subscribers("/sync/sample", 1, 20 * kNsPerSec).is_ok());
+  ASSERT_TRUE(transport::send_message(push, "/detections", Array("s1", 1)).is_ok());
+  ASSERT_TRUE(acks.receive(10 * kNsPerSec).is_ok());
+  for (const char* token : {"s1", "s2"}) {
+    msgs::SampleBoundary b;
+    b.set_sample_token(token);
+    b.set_last_in_run(std::string(token) == "s2");
+    ASSERT_TRUE(transport::send_message(sync, "/sync/sample", b).is_ok());
+  }
+  if (rc.wait_for(std::chrono::seconds(30)) != std::future_status::ready) stop = true;  // watchdog
+  EXPECT_EQ(rc.get(), 0);
+  EXPECT_EQ(sink.counts().unanswered_samples, 1u);
+  EXPECT_EQ(Lines("1 announced samples got no detections and are written as empty: s2").size(), 1u);
+  const auto doc = Results();
+  EXPECT_EQ(doc["results"]["s2"].Size(), 0u);
+  EXPECT_EQ(doc["meta"]["faultline_sink_unanswered_samples"].GetUint64(), 1u);
+}
+
 TEST_F(SinkLoopTest, AFivePartMessageIsCountedAsMalformedInTheMeta) {
   transport::SubscriberConfig ac;
   ac.endpoints = {config_.ack_endpoint};
