@@ -104,8 +104,8 @@ Result<cv::Mat> corrupt(const cv::Mat& bgr, Corruption type, int severity, rng::
     case Corruption::SpeckleNoise:
     case Corruption::IsoNoise: return pointwise_noise_fast(bgr, type, severity, rng);
     case Corruption::GaussianBlur: return gaussian_blur_fast(bgr, severity);
+    case Corruption::Saturate: return saturate_fast(bgr, severity);
     case Corruption::Contrast:
-    case Corruption::Saturate:
     case Corruption::Pixelate:
     case Corruption::JpegCompression: return deterministic(bgr, type, severity);
   }

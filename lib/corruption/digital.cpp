@@ -82,10 +82,37 @@ cv::Mat contrast(const cv::Mat& bgr, int severity) {
   return out;
 }
 
+namespace {
+constexpr double kSatA[] = {0.3, 0.1, 2, 5, 20};
+constexpr double kSatB[] = {0, 0, 0, 0.1, 0.2};
+}  // namespace
+
+cv::Mat saturate_fast(const cv::Mat& bgr, int severity) {
+  const float a = static_cast<float>(kSatA[sev_index(severity)]), b = static_cast<float>(kSatB[sev_index(severity)]);
+  const cv::Mat in = continuous(bgr);
+  cv::Mat out(in.size(), CV_8UC3);
+  const std::size_t n = in.total();
+  const std::uint8_t* src = in.data;
+  std::uint8_t* dst = out.data;
+  for (std::size_t i = 0; i < n; ++i) {
+    const float c0 = src[3 * i], c1 = src[3 * i + 1], c2 = src[3 * i + 2];
+    const float v = std::max(std::max(c0, c1), c2), lo = std::min(std::min(c0, c1), c2);
+    const float s = v > 0.0f ? (v - lo) / v : 0.0f;
+    const float s2 = std::min(std::max(s * a + b, 0.0f), 1.0f);
+    // Every channel moves towards or away from V by the same factor: c' = v - (v - c) * s2 / s. A grey pixel has
+    // hue 0 (channel 0) in skimage, so an offset b tints it: (v, v (1 - s2), v (1 - s2)).
+    const float k = v > lo ? s2 * v / (v - lo) : 0.0f;
+    const float grey_tail = v > lo ? 0.0f : v * s2;
+    const float o0 = v - (v - c0) * k, o1 = v - (v - c1) * k - grey_tail, o2 = v - (v - c2) * k - grey_tail;
+    dst[3 * i] = static_cast<std::uint8_t>(std::min(std::max(o0, 0.0f), 255.0f));
+    dst[3 * i + 1] = static_cast<std::uint8_t>(std::min(std::max(o1, 0.0f), 255.0f));
+    dst[3 * i + 2] = static_cast<std::uint8_t>(std::min(std::max(o2, 0.0f), 255.0f));
+  }
+  return out;
+}
+
 cv::Mat saturate(const cv::Mat& bgr, int severity) {
-  static constexpr double kA[] = {0.3, 0.1, 2, 5, 20};
-  static constexpr double kB[] = {0, 0, 0, 0.1, 0.2};
-  const double a = kA[sev_index(severity)], b = kB[sev_index(severity)];
+  const double a = kSatA[sev_index(severity)], b = kSatB[sev_index(severity)];
   const cv::Mat in = continuous(bgr);
   cv::Mat out(in.size(), CV_8UC3);
   const std::size_t n = in.total();

@@ -1,5 +1,6 @@
 // The deterministic "digital" corruptions of imagecorruptions 1.1.2: contrast, saturate, gaussian_blur, pixelate and
-// jpeg_compression. No randomness: numpy and fast mode give the same bytes except where noted.
+// jpeg_compression. No randomness: numpy and fast mode give the same bytes except where noted (saturate and
+// gaussian_blur have faster float32 paths in fast mode).
 // Inputs are CV_8UC3 in the order the reference received them (BGR as RoboBEV feeds it; the reference treats
 // channel 0 as red, which matters for saturate's hue sectors and JPEG's colour conversion, so it is kept as is).
 #pragma once
@@ -19,6 +20,9 @@ cv::Mat contrast(const cv::Mat& bgr, int severity);
 // saturate: skimage rgb2hsv, S = clip(S * a + b, 0, 1), hsv2rgb; (a, b) = (0.3, 0) (0.1, 0) (2, 0) (5, 0.1)
 // (20, 0.2). Mirrors the float path per pixel in double: bit-exact.
 cv::Mat saturate(const cv::Mat& bgr, int severity);
+// fast mode: the same map in closed form, c' = V - (V - c) * S' / S per channel, in float32 (vectorisable). It
+// rounds differently, so a truncated value may differ by one (tests/corruption/fast_ext_test.cpp bounds the share).
+cv::Mat saturate_fast(const cv::Mat& bgr, int severity);
 
 // Gaussian sigma of gaussian_blur by severity: 1 2 3 4 6 (pixels).
 double gaussian_blur_sigma(int severity);
@@ -33,7 +37,7 @@ std::vector<double> normalized_kernel(const std::vector<double>& phi);
 }  // namespace detail
 
 // fast mode: the same kernel in float32 (OpenCV separable filter, replicated border), truncated. Within one level
-// of the exact output (tests/corruption/digital_test.cpp holds the share that differs).
+// of the exact output on under 1 % of the values (tests/corruption/fast_ext_test.cpp).
 cv::Mat gaussian_blur_fast(const cv::Mat& bgr, int severity);
 
 // pixelate: PIL resize to (int(W * c), int(H * c)) with BOX (Pillow 9.4's fixed-point two-pass resampler), then

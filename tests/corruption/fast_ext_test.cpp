@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <string>
 #include <tuple>
 #include <vector>
@@ -104,7 +105,7 @@ INSTANTIATE_TEST_SUITE_P(Noises, FastNoiseTest,
 
 TEST(FastDeterministicTest, SharedImplementationsEqualNumpyModeOn1600x900) {
   const cv::Mat& in = frame_1600x900();
-  for (Corruption c : {Corruption::Contrast, Corruption::Saturate, Corruption::Pixelate, Corruption::JpegCompression}) {
+  for (Corruption c : {Corruption::Contrast, Corruption::Pixelate, Corruption::JpegCompression}) {
     for (int sev : {1, 3, 5}) {
       EXPECT_EQ(cv::norm(fast_out(in, c, sev, 1), numpy_out(in, c, sev, 1), cv::NORM_INF), 0.0)
           << to_string(c) << " sev " << sev;
@@ -112,15 +113,22 @@ TEST(FastDeterministicTest, SharedImplementationsEqualNumpyModeOn1600x900) {
   }
 }
 
-// float32 against the float64 reference: the truncation moves a value by one where the two straddle an integer.
-TEST(FastDeterministicTest, GaussianBlurWithinOneLevelOn1600x900) {
+// Fixed-point or closed-form paths against the float64 reference path: the truncation moves a value by one where
+// the two straddle an integer. Bounds: max diff 1, on under 1 % (gaussian_blur) or 10 % (saturate, whose severity
+// 3, S x 2, makes every result an integer the reference's float path often lands just under) of the values.
+TEST(FastDeterministicTest, SaturateAndGaussianBlurWithinOneLevelOn1600x900) {
   const cv::Mat& in = frame_1600x900();
-  for (int sev = 1; sev <= 5; ++sev) {
-    const cv::Mat a = numpy_out(in, Corruption::GaussianBlur, sev, 1), b = fast_out(in, Corruption::GaussianBlur, sev, 1);
-    cv::Mat ne;
-    cv::compare(a.reshape(1), b.reshape(1), ne, cv::CMP_NE);
-    EXPECT_LE(cv::norm(a, b, cv::NORM_INF), 1.0) << "sev " << sev;
-    EXPECT_LT(cv::countNonZero(ne) / static_cast<double>(ne.total()), 0.01) << "sev " << sev;
+  for (Corruption c : {Corruption::Saturate, Corruption::GaussianBlur}) {
+    const double kMaxShare = c == Corruption::Saturate ? 0.10 : 0.01;
+    for (int sev = 1; sev <= 5; ++sev) {
+      const cv::Mat a = numpy_out(in, c, sev, 1), b = fast_out(in, c, sev, 1);
+      cv::Mat ne;
+      cv::compare(a.reshape(1), b.reshape(1), ne, cv::CMP_NE);
+      const double share = cv::countNonZero(ne) / static_cast<double>(ne.total());
+      EXPECT_LE(cv::norm(a, b, cv::NORM_INF), 1.0) << to_string(c) << " sev " << sev;
+      EXPECT_LT(share, kMaxShare) << to_string(c) << " sev " << sev;
+      std::printf("%s sev %d: %.4f %% of values differ by 1\n", to_string(c), sev, 100 * share);
+    }
   }
 }
 
