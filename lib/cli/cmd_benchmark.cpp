@@ -8,6 +8,7 @@
 #include "cli/parse.hpp"
 #include "cli/live_run.hpp"
 #include "common/shutdown.hpp"
+#include "corruption/types.hpp"
 #include "scoring/robustness.hpp"
 
 namespace faultline::cli {
@@ -38,8 +39,9 @@ int run(int argc, char** argv) {
   app.add_option("--scenes", o.scenes, "scenes to replay (default: all)")->delimiter(',');
   app.add_option(
          "--corruptions", corruptions,
-         "comma list of "
-         "camera_crash,frame_lost,color_quant,motion_blur,brightness,low_light,fog,snow or all")
+         "comma list of camera_crash, frame_lost, low_light or any image corruption (" +
+             corruption::corruption_names(",") +
+             "), or all (nuScenes-C's eight); mCE covers those the baseline has")
       ->capture_default_str();
   app.add_option("--levels", levels, "comma list of easy,mid,hard (default: mid; --full: all)");
   app.add_flag("--full", full, "the full matrix: 8 corruptions x 3 levels");
@@ -93,6 +95,7 @@ int run(int argc, char** argv) {
       const std::string canon = scoring::canonical_corruption(c);
       bool known = false;
       for (const char* k : scoring::kRoboBevCorruptions) known |= canon == k;
+      known |= corruption::corruption_from_string(canon).has_value();
       if (!known) {
         std::fprintf(stderr, "faultline benchmark: --corruptions: unknown corruption '%s'\n",
                      c.c_str());

@@ -4,16 +4,21 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <utility>
 #include <set>
 #include <string>
 #include <vector>
 
 #include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
 
 #include "corruption/corrupt.hpp"
 #include "corruption/golden_cases.hpp"
 #include "corruption/noise.hpp"
 #include "rng/golden_json.hpp"
+#include "test_data.hpp"
 
 namespace faultline::testing {
 namespace {
@@ -102,6 +107,28 @@ TEST_P(GoldenExtTest, NumpyModeMatchesReference) {
 
 INSTANTIATE_TEST_SUITE_P(Manifest, GoldenExtTest, ::testing::ValuesIn(ext_case_ids()),
                          [](const ::testing::TestParamInfo<ExtCase>& p) { return pascal_case(p.param.name); });
+
+// `faultline corrupt` reaches the same code by name: numpy mode through files gives the reference's arrays, and
+// --level maps to the documented severities (iso_noise mid = 3, jpeg_compression hard = 5).
+TEST(GoldenExtCliTest, CorruptCommandReproducesReferenceByName) {
+  for (const auto& [name, level] : {std::pair<std::string, std::string>{"iso_noise_chart_333x197_sev3", "mid"},
+                                   {"jpeg_compression_chart_333x197_sev5", "hard"},
+                                   {"saturate_chart_333x197_sev3", "mid"}}) {
+    ExtCase c;
+    for (const auto& k : ext_case_ids()) {
+      if (k.name == name) c = k;
+    }
+    const rapidjson::Value& o = record_of(c);
+    const std::string out = ::testing::TempDir() + "/faultline_ext_" + name + ".png";
+    const std::string cmd = std::string(FAULTLINE_BIN_DIR) + "/faultline corrupt --type " +
+                            corruption::to_string(c.type) + " --level " + level + " --rng numpy --seed " +
+                            std::to_string(o["seed"].GetUint()) + " --in " +
+                            test_data::fixture(golden_dir() + "/inputs/" + c.input + ".png") + " --out " + out;
+    ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
+    EXPECT_EQ(pixel_sha256(cv::imread(out, cv::IMREAD_COLOR)), o["sha256"].GetString()) << name;
+    std::remove(out.c_str());
+  }
+}
 
 TEST(GoldenExtManifestTest, EnumeratedCasesAreExactlyTheManifestOutputs) {
   std::set<std::string> enumerated, listed;
