@@ -4,6 +4,7 @@
 #include <filesystem>
 
 #include "cli/live_run.hpp"
+#include "corruption/types.hpp"
 #include "scoring/robustness.hpp"
 
 namespace faultline::cli {
@@ -38,8 +39,9 @@ void add_benchmark_options(CLI::App& app, BenchmarkArgs& args) {
   app.add_option("--scenes", o.scenes, "scenes to replay (default: all)")->delimiter(',');
   app.add_option(
          "--corruptions", args.corruptions,
-         "comma list of "
-         "camera_crash,frame_lost,color_quant,motion_blur,brightness,low_light,fog,snow or all")
+         "comma list of camera_crash, frame_lost, low_light or any image corruption (" +
+             corruption::corruption_names(",") +
+             "), or all (nuScenes-C's eight); mCE covers those the baseline has")
       ->capture_default_str();
   app.add_option("--levels", args.levels,
                  "comma list of easy,mid,hard (default: mid; --full: all)");
@@ -79,6 +81,7 @@ int resolve_benchmark_options(BenchmarkArgs& args, const char* command) {
       const std::string canon = scoring::canonical_corruption(c);
       bool known = false;
       for (const char* k : scoring::kRoboBevCorruptions) known |= canon == k;
+      known |= corruption::corruption_from_string(canon).has_value();
       if (!known) {
         std::fprintf(stderr, "faultline %s: --corruptions: unknown corruption '%s'\n", command,
                      c.c_str());

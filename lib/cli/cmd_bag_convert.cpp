@@ -15,6 +15,7 @@
 #include "common/config.hpp"
 #include "common/logging.hpp"
 #include "common/shutdown.hpp"
+#include "corruption/types.hpp"
 #include "runtime/bag_convert.hpp"
 #include "runtime/engine_policy.hpp"
 #include "runtime/ros2_convert.hpp"
@@ -64,8 +65,9 @@ int run(int argc, char** argv) {
   app.add_option("-o,--output", cfg.output, "bag path (.mcap), or with --format ros2 the bag directory to create")
       ->required();
   app.add_option("--corrupt", corrupt,
-                 "TYPE:LEVEL fault on all cameras, e.g. fog:mid, snow:3, camera_crash:hard (repeatable; the "
-                 "injector's `corruption` shorthand)");
+                 "TYPE:LEVEL fault on all cameras, e.g. fog:mid, snow:3, iso_noise:hard, camera_crash:hard "
+                 "(repeatable; the injector's `corruption` shorthand; TYPE: " +
+                     corruption::corruption_names() + ", camera_crash, frame_lost)");
   app.add_option("--seed", cfg.run_metadata["seed"], "run seed of the fault draws")->default_str("0");
   app.add_flag("!--no-clean", cfg.clean_frames,
                "with --corrupt: store only the faulted stream (--format ros2: on the plain camera topics)");

@@ -11,6 +11,7 @@
 #include "cli/parse.hpp"
 #include "common/config.hpp"
 #include "common/shutdown.hpp"
+#include "corruption/types.hpp"
 #include "runtime/bag_corrupt.hpp"
 
 namespace faultline::cli {
@@ -41,10 +42,10 @@ int run(int argc, char** argv) {
   app.add_option("--fault", fault_args,
                  "TOPIC=TYPE:LEVEL on every frame of TOPIC, e.g. /cam/image_raw=fog:mid, "
                  "/cam/image_raw=snow:3, "
-                 "/cam/compressed=frame_lost:hard (repeatable; TYPE: brightness, dark, fog, snow, "
-                 "motion_blur, "
-                 "color_quant, camera_crash, frame_lost, black, freeze, drop, delay; LEVEL "
-                 "easy|mid|hard or 1..5)");
+                 "/cam/compressed=frame_lost:hard (repeatable; TYPE: " +
+                     corruption::corruption_names() +
+                     ", camera_crash, frame_lost, black, freeze, drop, delay; LEVEL "
+                     "easy|mid|hard or 1..5)");
   app.add_option("--faults", schedule,
                  "YAML schedule: topic -> list of faults with the injector's keys (type, "
                  "level|severity, rng, mode, "

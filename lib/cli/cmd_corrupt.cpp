@@ -49,7 +49,8 @@ Result<cv::Mat> read_input(const std::string& path, bool allow_partial) {
 }
 
 int run(int argc, char** argv) {
-  CLI::App app("Apply a nuScenes-C camera corruption to an image (read and written with OpenCV, BGR order).",
+  CLI::App app("Apply an image corruption (nuScenes-C, imagecorruptions, RoboBEV) to an image (read and written with "
+               "OpenCV, BGR order).",
                argv[0]);
   std::string type_name, level_name, rng_name = "fast", in_path, out_path;
   int severity = -1;
@@ -57,7 +58,7 @@ int run(int argc, char** argv) {
   std::optional<double> angle;
   bool allow_partial = false;
   int jpeg_quality = 95;
-  app.add_option("--type", type_name, "brightness, dark, fog, snow, motion_blur or color_quant")->required();
+  app.add_option("--type", type_name, "one of: " + corruption::corruption_names())->required();
   auto* sev_opt = app.add_option("--severity", severity, "1..5 as the reference numbers them (0 = off)");
   auto* level_opt = app.add_option("--level", level_name, "easy, mid or hard (nuScenes-C's mapping)");
   sev_opt->excludes(level_opt);
@@ -79,10 +80,8 @@ int run(int argc, char** argv) {
   }
   const auto type = corruption::corruption_from_string(type_name);
   if (!type) {
-    std::fprintf(stderr,
-                 "faultline corrupt: unknown --type '%s' (expected brightness, dark, fog, snow, motion_blur or "
-                 "color_quant)\n",
-                 type_name.c_str());
+    std::fprintf(stderr, "faultline corrupt: unknown --type '%s' (expected one of: %s)\n", type_name.c_str(),
+                 corruption::corruption_names().c_str());
     return 2;
   }
   if (!level_name.empty()) {

@@ -5,7 +5,8 @@
 // - Snow: one snow layer per camera, falling along its streak direction by `snow_fall_px` per frame (wrapping).
 // - Motion Blur: the angle follows a mean-reverting random walk (step sd `angle_step_deg`) kept in [-45°, 45°].
 // - Dark: the tone curve is fixed by the severity; the sensor noise is redrawn each frame (it is temporally white).
-// - Bright, Color Quant: deterministic, identical every frame.
+// - Bright, Color Quant, Contrast, Saturate, Pixelate, JPEG, Gaussian blur: deterministic, identical every frame.
+// - The pointwise noises (gaussian, shot, impulse, speckle, ISO): redrawn each frame, as sensor noise is white in time.
 // Fast-mode generators throughout. Same config + same frames -> same outputs. Not thread-safe; one per camera.
 #pragma once
 

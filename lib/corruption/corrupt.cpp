@@ -7,8 +7,10 @@
 #include "corruption/brightness.hpp"
 #include "corruption/color_quant.hpp"
 #include "corruption/dark.hpp"
+#include "corruption/digital.hpp"
 #include "corruption/fog.hpp"
 #include "corruption/motion_blur.hpp"
+#include "corruption/noise.hpp"
 #include "corruption/snow.hpp"
 
 namespace faultline::corruption {
@@ -35,6 +37,17 @@ Status validate_options(const CorruptOptions& options) {
   return Status::ok();
 }
 
+// The corruptions without randomness whose one implementation serves both modes.
+Result<cv::Mat> deterministic(const cv::Mat& bgr, Corruption type, int severity) {
+  switch (type) {
+    case Corruption::Contrast: return contrast(bgr, severity);
+    case Corruption::Saturate: return saturate(bgr, severity);
+    case Corruption::Pixelate: return pixelate(bgr, severity);
+    case Corruption::JpegCompression: return jpeg_compression(bgr, severity);
+    default: return Status(StatusCode::kInternal, std::string("not a shared deterministic corruption: ") + to_string(type));
+  }
+}
+
 }  // namespace
 
 Result<cv::Mat> corrupt(const cv::Mat& bgr, Corruption type, int severity, rng::NumpyRandomState& rng,
@@ -54,6 +67,16 @@ Result<cv::Mat> corrupt(const cv::Mat& bgr, Corruption type, int severity, rng::
     case Corruption::Fog: return fog_exact(bgr, severity, rng);
     case Corruption::Snow: return snow_exact(bgr, severity, rng);
     case Corruption::Dark: return dark_exact(bgr, severity, rng);
+    case Corruption::GaussianNoise:
+    case Corruption::ShotNoise:
+    case Corruption::ImpulseNoise:
+    case Corruption::SpeckleNoise:
+    case Corruption::IsoNoise: return pointwise_noise_numpy(bgr, type, severity, rng);
+    case Corruption::GaussianBlur: return gaussian_blur_exact(bgr, severity);
+    case Corruption::Contrast:
+    case Corruption::Saturate:
+    case Corruption::Pixelate:
+    case Corruption::JpegCompression: return deterministic(bgr, type, severity);
   }
   return Status(StatusCode::kInvalidArgument, "unknown corruption");
 }
@@ -75,6 +98,16 @@ Result<cv::Mat> corrupt(const cv::Mat& bgr, Corruption type, int severity, rng::
     }
     case Corruption::Snow: return snow_fast(bgr, severity, rng);
     case Corruption::Dark: return dark_fast(bgr, severity, rng);
+    case Corruption::GaussianNoise:
+    case Corruption::ShotNoise:
+    case Corruption::ImpulseNoise:
+    case Corruption::SpeckleNoise:
+    case Corruption::IsoNoise: return pointwise_noise_fast(bgr, type, severity, rng);
+    case Corruption::GaussianBlur: return gaussian_blur_fast(bgr, severity);
+    case Corruption::Saturate: return saturate_fast(bgr, severity);
+    case Corruption::Contrast:
+    case Corruption::Pixelate:
+    case Corruption::JpegCompression: return deterministic(bgr, type, severity);
   }
   return Status(StatusCode::kInvalidArgument, "unknown corruption");
 }

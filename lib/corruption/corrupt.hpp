@@ -1,4 +1,4 @@
-// One entry point per RNG mode for the six image corruptions. Pure: no I/O, no clocks, no globals.
+// One entry point per RNG mode for the image corruptions. Pure: no I/O, no clocks, no globals.
 // Input: CV_8UC3 in OpenCV's BGR order (what cv::imread returns), any size >= 1x1. Output: same size and type.
 // Severity 0 is "off" and returns a copy without drawing; 1..5 follow the reference (spec corruptions.md).
 #pragma once
@@ -23,8 +23,9 @@ struct CorruptOptions {
 Result<cv::Mat> corrupt(const cv::Mat& bgr, Corruption type, int severity, rng::NumpyRandomState& rng,
                         const CorruptOptions& options = {});
 
-// fast mode: statistically equivalent; Bright, Color Quant and angle-injected Motion Blur (up to float32
-// accumulation) equal numpy mode.
+// (impulse_noise, which the reference cannot seed, runs the reference's algorithm on this stream instead.)
+// fast mode: statistically equivalent; Bright, Color Quant, Contrast, Saturate, Pixelate, JPEG and angle-injected
+// Motion Blur (up to float32 accumulation) equal numpy mode; Gaussian blur is float32 (within one level).
 Result<cv::Mat> corrupt(const cv::Mat& bgr, Corruption type, int severity, rng::FastRng& rng,
                         const CorruptOptions& options = {});
 

@@ -66,40 +66,6 @@ void noise_row(double y, double sigma, double* prob) {
   }
 }
 
-// Walker alias table over 256 outcomes with 23-bit thresholds, packed as threshold << 8 | alias so one load serves
-// a sample (one 32-bit random value per sample; each outcome's probability is quantised below 2^-31, far under the
-// spec's statistical tolerances). Writes 256 entries.
-void build_alias(const double* prob, std::uint32_t* entry) {
-  std::array<double, 256> scaled{};
-  double total = 0.0;
-  for (int j = 0; j < 256; ++j) total += prob[j];
-  std::array<int, 256> small{}, large{};
-  int ns = 0, nl = 0;
-  for (int j = 0; j < 256; ++j) {
-    scaled[static_cast<std::size_t>(j)] = prob[j] / total * 256.0;
-    if (scaled[static_cast<std::size_t>(j)] < 1.0) {
-      small[static_cast<std::size_t>(ns++)] = j;
-    } else {
-      large[static_cast<std::size_t>(nl++)] = j;
-    }
-  }
-  constexpr std::uint32_t kKeep = 1u << kDarkAliasThresholdBits;  // u < threshold keeps the bucket
-  constexpr double kOne = kKeep;
-  for (int j = 0; j < 256; ++j) entry[j] = (kKeep << 8) | static_cast<std::uint32_t>(j);
-  while (ns > 0 && nl > 0) {
-    const int s = small[static_cast<std::size_t>(--ns)];
-    const int l = large[static_cast<std::size_t>(nl - 1)];
-    const auto threshold = static_cast<std::uint32_t>(std::llround(scaled[static_cast<std::size_t>(s)] * kOne));
-    entry[s] = (threshold << 8) | static_cast<std::uint32_t>(l);
-    scaled[static_cast<std::size_t>(l)] -= 1.0 - scaled[static_cast<std::size_t>(s)];
-    if (scaled[static_cast<std::size_t>(l)] < 1.0) {
-      --nl;
-      small[static_cast<std::size_t>(ns++)] = l;
-    }
-  }
-  // Leftovers (rounding) keep their own bucket always, as initialised.
-}
-
 // Output distribution per input level. It depends only on (severity, image min, image max), which are the same for
 // most frames of a stream, so the last few table sets are kept for reuse.
 struct DarkTables {
@@ -135,7 +101,7 @@ std::shared_ptr<const DarkTables> build_tables(int severity, int lo, int hi) {
       const double* row = rows.data() + static_cast<std::size_t>(k) * 256;
       for (int j = 0; j < 256; ++j) mix[static_cast<std::size_t>(j)] += pk * row[j];
     }
-    build_alias(mix.data(), t->entries.data() + static_cast<std::size_t>(v - lo) * 256);
+    build_alias_entries(mix.data(), t->entries.data() + static_cast<std::size_t>(v - lo) * 256);
   }
   return t;
 }

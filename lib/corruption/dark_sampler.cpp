@@ -2,6 +2,8 @@
 // run time, scalar body otherwise and for the tail.
 #include "corruption/dark_sampler.hpp"
 
+#include <array>
+#include <cmath>
 #include <utility>
 
 #include "common/simd.hpp"
@@ -106,6 +108,37 @@ void dark_sample(const std::uint32_t* tables, int lo, const std::uint8_t* src, s
   (void)allow_simd;
 #endif
   sample_scalar(tables, lo, src + done, dst + done, n - done, rng);
+}
+
+void build_alias_entries(const double* prob, std::uint32_t* entry) {
+  std::array<double, 256> scaled{};
+  double total = 0.0;
+  for (int j = 0; j < 256; ++j) total += prob[j];
+  std::array<int, 256> small{}, large{};
+  int ns = 0, nl = 0;
+  for (int j = 0; j < 256; ++j) {
+    scaled[static_cast<std::size_t>(j)] = prob[j] / total * 256.0;
+    if (scaled[static_cast<std::size_t>(j)] < 1.0) {
+      small[static_cast<std::size_t>(ns++)] = j;
+    } else {
+      large[static_cast<std::size_t>(nl++)] = j;
+    }
+  }
+  constexpr std::uint32_t kKeep = 1u << kDarkAliasThresholdBits;  // u < threshold keeps the bucket
+  constexpr double kOne = kKeep;
+  for (int j = 0; j < 256; ++j) entry[j] = (kKeep << 8) | static_cast<std::uint32_t>(j);
+  while (ns > 0 && nl > 0) {
+    const int s = small[static_cast<std::size_t>(--ns)];
+    const int l = large[static_cast<std::size_t>(nl - 1)];
+    const auto threshold = static_cast<std::uint32_t>(std::llround(scaled[static_cast<std::size_t>(s)] * kOne));
+    entry[s] = (threshold << 8) | static_cast<std::uint32_t>(l);
+    scaled[static_cast<std::size_t>(l)] -= 1.0 - scaled[static_cast<std::size_t>(s)];
+    if (scaled[static_cast<std::size_t>(l)] < 1.0) {
+      --nl;
+      small[static_cast<std::size_t>(ns++)] = l;
+    }
+  }
+  // Leftovers (rounding) keep their own bucket always, as initialised.
 }
 
 }  // namespace faultline::corruption

@@ -14,6 +14,11 @@ namespace faultline::corruption {
 // r >> 24 and keeps it when (r & 0x7FFFFF) < threshold; otherwise the outcome is the alias.
 constexpr int kDarkAliasThresholdBits = 23;
 
+// Walker alias table over 256 outcomes with 23-bit thresholds, packed as threshold << 8 | alias so one load serves
+// a sample (one 32-bit random value per sample; each outcome's probability is quantised below 2^-31, far under the
+// statistical tolerances). prob[0..256) need not sum to 1 (it is normalised). Writes entry[0..256).
+void build_alias_entries(const double* prob, std::uint32_t* entry);
+
 // {min, max} of n bytes ({0, 0} when n = 0).
 std::pair<int, int> dark_min_max(const std::uint8_t* src, std::size_t n);
 

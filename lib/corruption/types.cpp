@@ -11,6 +11,16 @@ const char* to_string(Corruption c) {
     case Corruption::Snow: return "snow";
     case Corruption::MotionBlur: return "motion_blur";
     case Corruption::ColorQuant: return "color_quant";
+    case Corruption::GaussianNoise: return "gaussian_noise";
+    case Corruption::ShotNoise: return "shot_noise";
+    case Corruption::ImpulseNoise: return "impulse_noise";
+    case Corruption::SpeckleNoise: return "speckle_noise";
+    case Corruption::IsoNoise: return "iso_noise";
+    case Corruption::Contrast: return "contrast";
+    case Corruption::Saturate: return "saturate";
+    case Corruption::Pixelate: return "pixelate";
+    case Corruption::JpegCompression: return "jpeg_compression";
+    case Corruption::GaussianBlur: return "gaussian_blur";
   }
   return "unknown";
 }
@@ -22,6 +32,15 @@ std::optional<Corruption> corruption_from_string(std::string_view name) {
   if (name == "low_light") return Corruption::Dark;
   if (name == "bright") return Corruption::Brightness;
   return std::nullopt;
+}
+
+std::string corruption_names(std::string_view separator) {
+  std::string out;
+  for (Corruption c : kAllCorruptions) {
+    if (!out.empty()) out += separator;
+    out += to_string(c);
+  }
+  return out;
 }
 
 const char* to_string(Level level) {
@@ -53,10 +72,20 @@ int severity_for(Corruption c, Level level) {
   switch (c) {
     case Corruption::ColorQuant:
     case Corruption::Snow: return 1 + index;
-    case Corruption::Dark: return 2 + index;
+    case Corruption::Dark:
+    case Corruption::IsoNoise: return 2 + index;
     case Corruption::Brightness:
     case Corruption::Fog:
     case Corruption::MotionBlur: return index == 0 ? 2 : (index == 1 ? 4 : 5);
+    case Corruption::GaussianNoise:
+    case Corruption::ShotNoise:
+    case Corruption::ImpulseNoise:
+    case Corruption::SpeckleNoise:
+    case Corruption::Contrast:
+    case Corruption::Saturate:
+    case Corruption::Pixelate:
+    case Corruption::JpegCompression:
+    case Corruption::GaussianBlur: return 1 + 2 * index;
   }
   return 1;
 }
@@ -68,6 +97,17 @@ Status validate_severity(int severity) {
   return Status::ok();
 }
 
-bool is_random(Corruption c) { return c != Corruption::Brightness && c != Corruption::ColorQuant; }
+bool is_random(Corruption c) {
+  switch (c) {
+    case Corruption::Brightness:
+    case Corruption::ColorQuant:
+    case Corruption::Contrast:
+    case Corruption::Saturate:
+    case Corruption::Pixelate:
+    case Corruption::JpegCompression:
+    case Corruption::GaussianBlur: return false;
+    default: return true;
+  }
+}
 
 }  // namespace faultline::corruption

@@ -9,11 +9,32 @@
 
 namespace faultline::corruption {
 
-// The six image corruptions. to_string/from_string use the imagecorruptions names ("motion_blur").
-enum class Corruption { Brightness, Dark, Fog, Snow, MotionBlur, ColorQuant };
+// The image corruptions: nuScenes-C's six, then imagecorruptions 1.1.2's pointwise ones and RoboBEV's ISONoise
+// (docs/faults.md). to_string/from_string use the imagecorruptions names ("motion_blur", "iso_noise").
+enum class Corruption {
+  Brightness,
+  Dark,
+  Fog,
+  Snow,
+  MotionBlur,
+  ColorQuant,
+  GaussianNoise,
+  ShotNoise,
+  ImpulseNoise,
+  SpeckleNoise,
+  IsoNoise,
+  Contrast,
+  Saturate,
+  Pixelate,
+  JpegCompression,
+  GaussianBlur,
+};
 
-inline constexpr Corruption kAllCorruptions[] = {Corruption::Brightness, Corruption::Dark, Corruption::Fog,
-                                                 Corruption::Snow, Corruption::MotionBlur, Corruption::ColorQuant};
+inline constexpr Corruption kAllCorruptions[] = {
+    Corruption::Brightness,    Corruption::Dark,         Corruption::Fog,          Corruption::Snow,
+    Corruption::MotionBlur,    Corruption::ColorQuant,   Corruption::GaussianNoise, Corruption::ShotNoise,
+    Corruption::ImpulseNoise,  Corruption::SpeckleNoise, Corruption::IsoNoise,     Corruption::Contrast,
+    Corruption::Saturate,      Corruption::Pixelate,     Corruption::JpegCompression, Corruption::GaussianBlur};
 
 // The paper's three levels; each corruption maps them to its own severities.
 enum class Level { Easy, Mid, Hard };
@@ -25,6 +46,8 @@ enum class RngMode { Numpy, Fast };
 const char* to_string(Corruption c);
 // Accepts the imagecorruptions names plus the manifest's RoboBEV aliases ("low_light" -> Dark).
 std::optional<Corruption> corruption_from_string(std::string_view name);
+// Every name to_string gives, in kAllCorruptions order, joined by `separator` (help texts and error messages).
+std::string corruption_names(std::string_view separator = ", ");
 
 const char* to_string(Level level);
 std::optional<Level> level_from_string(std::string_view name);
@@ -33,12 +56,15 @@ const char* to_string(RngMode mode);
 std::optional<RngMode> rng_mode_from_string(std::string_view name);
 
 // Severity used by nuScenes-C for a level: Bright/Fog/MotionBlur 2/4/5, ColorQuant/Snow 1/2/3, Dark 2/3/4.
+// The corruptions nuScenes-C does not have use 1/3/5, except ISONoise: it indexes its list like Dark (and stops
+// at 4 in the reference), so it takes Dark's 2/3/4 (docs/faults.md).
 int severity_for(Corruption c, Level level);
 
 // Severity 0 means "off" (identity); 1..5 are the reference's numbers. Anything else is kInvalidArgument.
 Status validate_severity(int severity);
 
-// Whether the corruption draws random numbers (Bright and Color Quant do not).
+// Whether the corruption draws random numbers (Bright, Color Quant, Contrast, Saturate, Pixelate, JPEG and Gaussian
+// blur do not).
 bool is_random(Corruption c);
 
 }  // namespace faultline::corruption

@@ -29,6 +29,12 @@ std::vector<std::string> split_commas(const std::string& list) {
   return parts;
 }
 
+std::string every_class_name() {
+  std::string out;
+  for (Condition c : kEveryCondition) out += (out.empty() ? "" : ", ") + std::string(class_name(c));
+  return out;
+}
+
 }  // namespace
 
 const char* class_name(Condition c) {
@@ -41,13 +47,23 @@ const char* class_name(Condition c) {
     case Condition::LowLight: return "LowLight";
     case Condition::Fog: return "Fog";
     case Condition::Snow: return "Snow";
+    case Condition::GaussianNoise: return "GaussianNoise";
+    case Condition::ShotNoise: return "ShotNoise";
+    case Condition::ImpulseNoise: return "ImpulseNoise";
+    case Condition::SpeckleNoise: return "SpeckleNoise";
+    case Condition::IsoNoise: return "ISONoise";
+    case Condition::Contrast: return "Contrast";
+    case Condition::Saturate: return "Saturate";
+    case Condition::Pixelate: return "Pixelate";
+    case Condition::JpegCompression: return "JpegCompression";
+    case Condition::GaussianBlur: return "GaussianBlur";
   }
   return "?";
 }
 
 std::optional<Condition> condition_from_string(std::string_view name) {
   const std::string key = lower_without_underscores(name);
-  for (Condition c : kAllConditions) {
+  for (Condition c : kEveryCondition) {
     if (key == lower_without_underscores(class_name(c))) return c;
   }
   if (key == "dark") return Condition::LowLight;
@@ -64,8 +80,20 @@ std::optional<corruption::Corruption> image_corruption(Condition c) {
     case Condition::LowLight: return Corruption::Dark;
     case Condition::Fog: return Corruption::Fog;
     case Condition::Snow: return Corruption::Snow;
-    default: return std::nullopt;
+    case Condition::GaussianNoise: return Corruption::GaussianNoise;
+    case Condition::ShotNoise: return Corruption::ShotNoise;
+    case Condition::ImpulseNoise: return Corruption::ImpulseNoise;
+    case Condition::SpeckleNoise: return Corruption::SpeckleNoise;
+    case Condition::IsoNoise: return Corruption::IsoNoise;
+    case Condition::Contrast: return Corruption::Contrast;
+    case Condition::Saturate: return Corruption::Saturate;
+    case Condition::Pixelate: return Corruption::Pixelate;
+    case Condition::JpegCompression: return Corruption::JpegCompression;
+    case Condition::GaussianBlur: return Corruption::GaussianBlur;
+    case Condition::CameraCrash:
+    case Condition::FrameLost: return std::nullopt;
   }
+  return std::nullopt;
 }
 
 int severity_of(Condition c, corruption::Level level) {
@@ -82,21 +110,19 @@ Result<std::vector<Condition>> parse_conditions(const std::string& list) {
   if (lower_without_underscores(list) == "all") {
     return std::vector<Condition>(std::begin(kAllConditions), std::end(kAllConditions));
   }
-  std::vector<bool> wanted(std::size(kAllConditions), false);
+  std::vector<bool> wanted(std::size(kEveryCondition), false);
   const auto parts = split_commas(list);
   if (parts.empty()) return Status(StatusCode::kInvalidArgument, "empty corruption list");
   for (const auto& p : parts) {
     const auto c = condition_from_string(p);
     if (!c) {
       return Status(StatusCode::kInvalidArgument,
-                    "unknown corruption '" + p +
-                        "' (expected all or CameraCrash, FrameLost, MotionBlur, ColorQuant, Brightness, LowLight, "
-                        "Fog, Snow)");
+                    "unknown corruption '" + p + "' (expected all or " + every_class_name() + ")");
     }
     wanted[static_cast<std::size_t>(*c)] = true;
   }
   std::vector<Condition> out;
-  for (Condition c : kAllConditions) {
+  for (Condition c : kEveryCondition) {
     if (wanted[static_cast<std::size_t>(c)]) out.push_back(c);
   }
   return out;

@@ -9,7 +9,8 @@
 
 namespace faultline::exporter {
 
-// Mean of the reference's easy/mid/hard ms per 1600x900 image, corruption only, one thread (spec §12).
+// Mean of the reference's easy/mid/hard ms per 1600x900 image, corruption only, one thread (spec §12); 0 where
+// no reference timing exists (the conditions beyond nuScenes-C's eight).
 double reference_ms_per_image(Condition c);
 
 // RoboBEV's __call__ overhead per image (torch de-normalisation and copies), part of the reference generator's
@@ -17,7 +18,7 @@ double reference_ms_per_image(Condition c);
 inline constexpr double kReferenceCallOverheadMs = 75.0;
 
 // The reference's end-to-end ms per image as far as the spec quantifies it: corruption + __call__ overhead. The
-// spec gives no figure for its imread/imwrite (JPEG decode/encode), so this is a lower bound.
+// spec gives no figure for its imread/imwrite (JPEG decode/encode), so this is a lower bound; 0 where unknown.
 double reference_end_to_end_ms(Condition c);
 
 // Hours for the full val export (kFullValImages) at cpu_ms per image on `cores` fully used cores.

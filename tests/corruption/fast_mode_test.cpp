@@ -114,6 +114,7 @@ TEST_P(FastGoldenTest, MatchesGoldenExactlyOrWithinSeedToSeedRange) {
       }
       return;
     }
+    default: FAIL() << "not one of the nuScenes-C goldens (the others: fast_ext_test.cpp)";
   }
 }
 

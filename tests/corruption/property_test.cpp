@@ -2,6 +2,8 @@
 // severity 0 is the identity and draws nothing, bounds per corruption; plus degenerate frames.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <string>
 #include <tuple>
 #include <vector>
@@ -11,6 +13,7 @@
 #include "corruption/dark.hpp"
 #include "corruption/fog.hpp"
 #include "corruption/corrupt.hpp"
+#include "corruption/noise.hpp"
 #include "corruption/test_images.hpp"
 
 namespace faultline::corruption {
@@ -29,6 +32,67 @@ cv::Mat run(const cv::Mat& in, Corruption c, int sev, RngMode mode, std::uint32_
   auto r = corrupt(in, c, sev, rng);
   EXPECT_TRUE(r.is_ok()) << r.status().to_string();
   return r.is_ok() ? *r : cv::Mat();
+}
+
+double psnr_db(const cv::Mat& a, const cv::Mat& b) {
+  const double mse = cv::norm(a, b, cv::NORM_L2SQR) / static_cast<double>(a.total() * a.channels());
+  return mse == 0.0 ? 99.0 : 10.0 * std::log10(255.0 * 255.0 / mse);
+}
+
+// Sum of absolute differences between horizontal neighbours: blurs and pixelation lower it, noise raises it.
+double roughness(const cv::Mat& m) {
+  cv::Mat a, b;
+  cv::absdiff(m(cv::Rect(1, 0, m.cols - 1, m.rows)), m(cv::Rect(0, 0, m.cols - 1, m.rows)), a);
+  return cv::sum(a.reshape(1))[0];
+}
+
+// Bounds of the imagecorruptions / ISONoise corruptions (docs/faults.md) at severity 1..5.
+void ExpectPointwiseBounds(const cv::Mat& in, const cv::Mat& out, Corruption c, int sev) {
+  const double mean_in = cv::mean(in.reshape(1))[0], mean_out = cv::mean(out.reshape(1))[0];
+  cv::Scalar m_in, sd_in, m_out, sd_out;
+  cv::meanStdDev(in.reshape(1), m_in, sd_in);
+  cv::meanStdDev(out.reshape(1), m_out, sd_out);
+  switch (c) {
+    case Corruption::GaussianNoise:
+    case Corruption::ShotNoise:
+    case Corruption::SpeckleNoise:
+    case Corruption::IsoNoise:
+      // Zero-mean noise (up to clipping and truncation) that roughens the image.
+      EXPECT_NEAR(mean_out, mean_in, 0.25 * mean_in);
+      EXPECT_GT(roughness(out), roughness(in));
+      break;
+    case Corruption::ImpulseNoise: {
+      // Each value is kept, or replaced by 0 or 255, in about `amount` of the values.
+      cv::Mat changed, extreme, lo, hi;
+      cv::compare(out.reshape(1), in.reshape(1), changed, cv::CMP_NE);
+      cv::compare(out.reshape(1), 0, lo, cv::CMP_EQ);
+      cv::compare(out.reshape(1), 255, hi, cv::CMP_EQ);
+      cv::bitwise_and(changed, ~(lo | hi), extreme);
+      EXPECT_EQ(cv::countNonZero(extreme), 0);
+      const double share = cv::countNonZero(changed) / static_cast<double>(out.total() * 3);
+      EXPECT_LT(share, impulse_noise_amount(sev) + 0.03);
+      EXPECT_GT(share, 0.3 * impulse_noise_amount(sev));
+      break;
+    }
+    case Corruption::Contrast: EXPECT_LT(sd_out[0], 0.45 * sd_in[0]); break;
+    case Corruption::Saturate: {
+      // V (the pixel's max channel) is kept; only saturation moves.
+      for (int y = 0; y < in.rows; y += 7) {
+        for (int x = 0; x < in.cols; x += 5) {
+          const auto p = in.at<cv::Vec3b>(y, x), q = out.at<cv::Vec3b>(y, x);
+          EXPECT_NEAR(std::max({q[0], q[1], q[2]}), std::max({p[0], p[1], p[2]}), 1);
+        }
+      }
+      break;
+    }
+    case Corruption::Pixelate:
+    case Corruption::GaussianBlur:
+      EXPECT_LT(roughness(out), roughness(in));
+      EXPECT_NEAR(mean_out, mean_in, 3.0);
+      break;
+    case Corruption::JpegCompression: EXPECT_GT(psnr_db(out, in), 15.0); break;
+    default: FAIL() << "no bounds for " << to_string(c);
+  }
 }
 
 class CorruptionPropertyTest : public ::testing::TestWithParam<Param> {
@@ -98,6 +162,7 @@ TEST_P(CorruptionPropertyTest, StaysWithinTheCorruptionsBounds) {
     case Corruption::Snow: EXPECT_GT(mean_out, mean_in); break;
     case Corruption::Fog:
     case Corruption::MotionBlur: EXPECT_NEAR(mean_out, mean_in, 0.5 * mean_in); break;
+    default: ExpectPointwiseBounds(in, out, type(), severity()); break;
   }
 }
 
@@ -125,7 +190,8 @@ class DegenerateFrameTest : public ::testing::TestWithParam<std::tuple<Corruptio
 TEST_P(DegenerateFrameTest, EverySeverityWorksOnTinyAndConstantFrames) {
   const auto [type, mode] = GetParam();
   const cv::Mat frames[] = {
-      faultline::testing::scene(1, 1), faultline::testing::scene(2, 3), faultline::testing::scene(7, 5),
+      faultline::testing::scene(1, 1), faultline::testing::scene(2, 2), faultline::testing::scene(2, 3),
+      faultline::testing::scene(7, 5),
       faultline::testing::scene(40, 3), cv::Mat(20, 30, CV_8UC3, cv::Scalar::all(0)),
       cv::Mat(20, 30, CV_8UC3, cv::Scalar::all(255)), cv::Mat(9, 11, CV_8UC3, cv::Scalar(80, 120, 160))};
   for (const cv::Mat& f : frames) {
@@ -140,6 +206,61 @@ TEST_P(DegenerateFrameTest, EverySeverityWorksOnTinyAndConstantFrames) {
 INSTANTIATE_TEST_SUITE_P(AllTypes, DegenerateFrameTest,
                          ::testing::Combine(::testing::ValuesIn(kAllCorruptions),
                                             ::testing::Values(RngMode::Numpy, RngMode::Fast)));
+
+// The imagecorruptions / ISONoise corruptions on flat frames, in both modes: what each defines there.
+TEST(DegenerateBehaviourTest, PointwiseCorruptionsOnFlatFrames) {
+  const cv::Mat black(24, 36, CV_8UC3, cv::Scalar::all(0)), white(24, 36, CV_8UC3, cv::Scalar::all(255));
+  const cv::Mat flat(24, 36, CV_8UC3, cv::Scalar(80, 120, 160));
+  for (const RngMode mode : {RngMode::Numpy, RngMode::Fast}) {
+    for (int sev = 1; sev <= 5; ++sev) {
+      const std::string at = std::string(to_string(mode)) + " sev " + std::to_string(sev);
+      auto mean_of = [&](const cv::Mat& in, Corruption c) { return cv::mean(run(in, c, sev, mode, 9).reshape(1))[0]; };
+      auto max_diff = [&](const cv::Mat& in, Corruption c) { return cv::norm(run(in, c, sev, mode, 9), in, cv::NORM_INF); };
+      // Multiplicative or photon noise on black has nothing to act on; additive noise clipped at 0 brightens it.
+      EXPECT_EQ(max_diff(black, Corruption::SpeckleNoise), 0.0) << at;
+      EXPECT_EQ(max_diff(black, Corruption::ShotNoise), 0.0) << at;
+      EXPECT_GT(mean_of(black, Corruption::GaussianNoise), 1.0) << at;
+      EXPECT_GT(mean_of(black, Corruption::IsoNoise), 1.0) << at;
+      // White: photon noise stays near white (k / c clipped at 1), additive noise darkens it.
+      EXPECT_GT(mean_of(white, Corruption::ShotNoise), 150.0) << at;
+      EXPECT_LT(mean_of(white, Corruption::GaussianNoise), 254.0) << at;
+      // The deterministic ones keep flat frames flat (the blur up to the reference's truncation of float noise).
+      for (const cv::Mat* in : {&black, &white, &flat}) {
+        EXPECT_EQ(max_diff(*in, Corruption::Pixelate), 0.0) << at;
+        EXPECT_LE(max_diff(*in, Corruption::Contrast), 1.0) << at;
+        EXPECT_LE(max_diff(*in, Corruption::GaussianBlur), 1.0) << at;
+        // JPEG keeps a flat frame flat, its colour moved by the quantised chroma at most.
+        const cv::Mat jpeg = run(*in, Corruption::JpegCompression, sev, mode, 9);
+        cv::Scalar jm, jsd;
+        cv::meanStdDev(jpeg, jm, jsd);
+        EXPECT_EQ(jsd, cv::Scalar::all(0)) << at;
+        EXPECT_LE(cv::norm(jpeg, *in, cv::NORM_INF), 10.0) << at;
+      }
+      EXPECT_EQ(max_diff(black, Corruption::Saturate), 0.0) << at;
+      // Grey has S = 0 and hue 0 (channel 0): an offset b > 0 (severities 4, 5) tints it towards channel 0, as the
+      // reference does: (255, 255 (1 - b), 255 (1 - b)) truncated.
+      const cv::Vec3b w = run(white, Corruption::Saturate, sev, mode, 9).at<cv::Vec3b>(3, 4);
+      const int tint = sev == 4 ? 229 : (sev == 5 ? 204 : 255);
+      EXPECT_EQ(w, cv::Vec3b(255, static_cast<uchar>(tint), static_cast<uchar>(tint))) << at;
+    }
+  }
+}
+
+TEST(DegenerateBehaviourTest, ImpulseNoiseOnGreyOnlyAddsSaltAndPepper) {
+  const cv::Mat grey(50, 60, CV_8UC3, cv::Scalar::all(128));
+  for (const RngMode mode : {RngMode::Numpy, RngMode::Fast}) {
+    const cv::Mat out = run(grey, Corruption::ImpulseNoise, 5, mode, 3);
+    cv::Mat kept, salt, pepper;
+    cv::compare(out.reshape(1), 128, kept, cv::CMP_EQ);
+    cv::compare(out.reshape(1), 255, salt, cv::CMP_EQ);
+    cv::compare(out.reshape(1), 0, pepper, cv::CMP_EQ);
+    const int n = static_cast<int>(out.total() * 3);
+    EXPECT_EQ(cv::countNonZero(kept) + cv::countNonZero(salt) + cv::countNonZero(pepper), n);
+    // amount 0.27, half salt: 9000 values, so each share within a few percent.
+    EXPECT_NEAR(cv::countNonZero(salt) / static_cast<double>(n), 0.135, 0.02);
+    EXPECT_NEAR(cv::countNonZero(pepper) / static_cast<double>(n), 0.135, 0.02);
+  }
+}
 
 TEST(DegenerateBehaviourTest, DarkOnConstantFrameIsPureReadNoise) {
   for (const int v : {0, 128, 255}) {

@@ -197,5 +197,22 @@ TEST(ExportConditionsTest, ParsesNamesAndKeepsReferenceOrder) {
   EXPECT_EQ(severity_of(Condition::Snow, corruption::Level::Hard), 3);
 }
 
+// The imagecorruptions / ISONoise corruptions by their names, after nuScenes-C's eight, with their own levels;
+// "all" stays nuScenes-C's eight.
+TEST(ExportConditionsTest, AcceptsThePointwiseCorruptionsByName) {
+  auto some = parse_conditions("jpeg_compression,iso_noise,fog,GaussianNoise,gaussian_blur");
+  ASSERT_TRUE(some) << some.status().to_string();
+  EXPECT_EQ(*some, (std::vector<Condition>{Condition::Fog, Condition::GaussianNoise, Condition::IsoNoise,
+                                           Condition::JpegCompression, Condition::GaussianBlur}));
+  EXPECT_STREQ(class_name(Condition::IsoNoise), "ISONoise");
+  EXPECT_EQ(image_corruption(Condition::Pixelate), corruption::Corruption::Pixelate);
+  EXPECT_EQ(severity_of(Condition::Contrast, corruption::Level::Mid), 3);
+  EXPECT_EQ(severity_of(Condition::IsoNoise, corruption::Level::Hard), 4);
+  for (Condition c : kEveryCondition) EXPECT_EQ(condition_from_string(class_name(c)), c) << class_name(c);
+  const auto bad = parse_conditions("rain");
+  ASSERT_FALSE(bad);
+  EXPECT_NE(bad.status().message().find("SpeckleNoise"), std::string::npos) << bad.status().message();
+}
+
 }  // namespace
 }  // namespace faultline::exporter

@@ -114,6 +114,18 @@ TEST(FaultSpecTest, CorruptionShorthandIsOneFaultOnAllCameras) {
   }
 }
 
+TEST(FaultSpecTest, AcceptsEveryImageCorruptionName) {
+  for (corruption::Corruption c : corruption::kAllCorruptions) {
+    const std::string name = corruption::to_string(c);
+    const auto f = parse_corruption_shorthand(name + "/hard", "fault_injector");
+    ASSERT_TRUE(f) << name;
+    EXPECT_EQ(f->corruption, c) << name;
+    EXPECT_EQ(f->severity, corruption::severity_for(c, corruption::Level::Hard)) << name;
+  }
+  EXPECT_EQ(Parse("[{type: iso_noise, level: mid}]")[0].severity, 3);
+  EXPECT_EQ(Parse("[{type: pixelate, severity: 2}]")[0].corruption, corruption::Corruption::Pixelate);
+}
+
 TEST(FaultSpecTest, WindowOpensAtStartAndClosesAfterDuration) {
   const auto f = Parse("[{type: black, start_s: 12, duration_s: 3}]")[0];
   EXPECT_EQ(severity_at(f, Sec(0)), 0);

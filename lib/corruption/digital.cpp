@@ -1,0 +1,123 @@
+// contrast and saturate: per-channel tables and a per-pixel mirror of skimage's HSV float path.
+#include "corruption/digital.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+
+namespace faultline::corruption {
+namespace {
+
+std::size_t sev_index(int severity) { return static_cast<std::size_t>(std::clamp(severity, 1, 5) - 1); }
+
+inline std::uint8_t to_u8(double v) { return static_cast<std::uint8_t>(std::min(std::max(v, 0.0), 1.0) * 255.0); }
+
+cv::Mat continuous(const cv::Mat& m) { return m.isContinuous() ? m : m.clone(); }
+
+// One pixel through rgb2hsv, S = clip(S * a + b, 0, 1), hsv2rgb (skimage 0.19, channels in stored order).
+void saturate_pixel(const std::uint8_t* in, std::uint8_t* out, double a, double b) {
+  const double a0 = in[0] / 255.0, a1 = in[1] / 255.0, a2 = in[2] / 255.0;
+  const double v = std::max(std::max(a0, a1), a2);
+  const double delta = v - std::min(std::min(a0, a1), a2);
+  double s = delta / v;
+  if (delta == 0.0) s = 0.0;
+  double h = 0.0;
+  if (a0 == v) h = (a1 - a2) / delta;
+  if (a1 == v) h = 2.0 + (a2 - a0) / delta;
+  if (a2 == v) h = 4.0 + (a0 - a1) / delta;
+  // numpy's floor-mod of h / 6 by 1: |h / 6| < 1, so only negatives move (by +1, which may round to 1.0).
+  double hue = h / 6.0;
+  if (hue < 0.0) hue += 1.0;
+  if (delta == 0.0 || std::isnan(hue)) hue = 0.0;
+  if (std::isnan(s)) s = 0.0;
+  const double s2 = std::min(std::max(s * a + b, 0.0), 1.0);
+  const double hi = std::floor(hue * 6.0);
+  const double f = hue * 6.0 - hi;
+  const double p = v * (1.0 - s2);
+  const double q = v * (1.0 - f * s2);
+  const double t = v * (1.0 - (1.0 - f) * s2);
+  double r0 = 0.0, r1 = 0.0, r2 = 0.0;
+  switch (static_cast<std::uint8_t>(hi) % 6) {
+    case 0: r0 = v, r1 = t, r2 = p; break;
+    case 1: r0 = q, r1 = v, r2 = p; break;
+    case 2: r0 = p, r1 = v, r2 = t; break;
+    case 3: r0 = p, r1 = q, r2 = v; break;
+    case 4: r0 = t, r1 = p, r2 = v; break;
+    default: r0 = v, r1 = p, r2 = q; break;
+  }
+  out[0] = to_u8(r0);
+  out[1] = to_u8(r1);
+  out[2] = to_u8(r2);
+}
+
+}  // namespace
+
+cv::Mat contrast(const cv::Mat& bgr, int severity) {
+  static constexpr double kC[] = {0.4, .3, .2, .1, .05};
+  const double c = kC[sev_index(severity)];
+  const cv::Mat in = continuous(bgr);
+  double x_of[256];
+  for (int v = 0; v < 256; ++v) x_of[v] = v / 255.0;
+  // numpy reduces axes (0, 1) with the channel axis innermost: one running float64 sum per channel, in pixel order.
+  double sum[3] = {0.0, 0.0, 0.0};
+  const std::size_t pixels = in.total();
+  const std::uint8_t* src = in.data;
+  for (std::size_t i = 0; i < pixels; ++i) {
+    sum[0] += x_of[src[3 * i]];
+    sum[1] += x_of[src[3 * i + 1]];
+    sum[2] += x_of[src[3 * i + 2]];
+  }
+  std::uint8_t lut[3][256];
+  for (int ch = 0; ch < 3; ++ch) {
+    const double mean = sum[ch] / static_cast<double>(pixels);
+    for (int v = 0; v < 256; ++v) lut[ch][v] = to_u8((x_of[v] - mean) * c + mean);
+  }
+  cv::Mat out(in.size(), CV_8UC3);
+  std::uint8_t* dst = out.data;
+  for (std::size_t i = 0; i < pixels; ++i) {
+    dst[3 * i] = lut[0][src[3 * i]];
+    dst[3 * i + 1] = lut[1][src[3 * i + 1]];
+    dst[3 * i + 2] = lut[2][src[3 * i + 2]];
+  }
+  return out;
+}
+
+namespace {
+constexpr double kSatA[] = {0.3, 0.1, 2, 5, 20};
+constexpr double kSatB[] = {0, 0, 0, 0.1, 0.2};
+}  // namespace
+
+cv::Mat saturate_fast(const cv::Mat& bgr, int severity) {
+  const float a = static_cast<float>(kSatA[sev_index(severity)]), b = static_cast<float>(kSatB[sev_index(severity)]);
+  const cv::Mat in = continuous(bgr);
+  cv::Mat out(in.size(), CV_8UC3);
+  const std::size_t n = in.total();
+  const std::uint8_t* src = in.data;
+  std::uint8_t* dst = out.data;
+  for (std::size_t i = 0; i < n; ++i) {
+    const float c0 = src[3 * i], c1 = src[3 * i + 1], c2 = src[3 * i + 2];
+    const float v = std::max(std::max(c0, c1), c2), lo = std::min(std::min(c0, c1), c2);
+    const float s = v > 0.0f ? (v - lo) / v : 0.0f;
+    const float s2 = std::min(std::max(s * a + b, 0.0f), 1.0f);
+    // Every channel moves towards or away from V by the same factor: c' = v - (v - c) * s2 / s. A grey pixel has
+    // hue 0 (channel 0) in skimage, so an offset b tints it: (v, v (1 - s2), v (1 - s2)).
+    const float k = v > lo ? s2 * v / (v - lo) : 0.0f;
+    const float grey_tail = v > lo ? 0.0f : v * s2;
+    const float o0 = v - (v - c0) * k, o1 = v - (v - c1) * k - grey_tail, o2 = v - (v - c2) * k - grey_tail;
+    dst[3 * i] = static_cast<std::uint8_t>(std::min(std::max(o0, 0.0f), 255.0f));
+    dst[3 * i + 1] = static_cast<std::uint8_t>(std::min(std::max(o1, 0.0f), 255.0f));
+    dst[3 * i + 2] = static_cast<std::uint8_t>(std::min(std::max(o2, 0.0f), 255.0f));
+  }
+  return out;
+}
+
+cv::Mat saturate(const cv::Mat& bgr, int severity) {
+  const double a = kSatA[sev_index(severity)], b = kSatB[sev_index(severity)];
+  const cv::Mat in = continuous(bgr);
+  cv::Mat out(in.size(), CV_8UC3);
+  const std::size_t n = in.total();
+  for (std::size_t i = 0; i < n; ++i) saturate_pixel(in.data + 3 * i, out.data + 3 * i, a, b);
+  return out;
+}
+
+}  // namespace faultline::corruption

@@ -1,0 +1,180 @@
+// pixelate and jpeg_compression: the PIL (Pillow 9.4) operations imagecorruptions calls, reproduced step by step.
+#include <turbojpeg.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "corruption/digital.hpp"
+
+namespace faultline::corruption {
+namespace {
+
+constexpr int kPrecisionBits = 32 - 8 - 2;  // Pillow's 8-bit resampler fixed point
+
+// Pillow's clip8: the sum shifted down, clamped to 0..255 (its lookup table covers -640..639).
+inline std::uint8_t clip8(int ss) {
+  const int v = ss >> kPrecisionBits;
+  return static_cast<std::uint8_t>(std::min(std::max(v, 0), 255));
+}
+
+// precompute_coeffs for the BOX filter (support 0.5) from in_size to out_size over [0, in_size), then
+// normalize_coeffs_8bpc: per output index its first input index, tap count and fixed-point weights.
+struct Coeffs {
+  int ksize = 0;
+  std::vector<int> first, count;
+  std::vector<int> k;  // out_size * ksize
+};
+
+Coeffs box_coeffs(int in_size, int out_size) {
+  Coeffs c;
+  const float in0 = 0.0f, in1 = static_cast<float>(in_size);
+  const double scale = static_cast<double>(in1 - in0) / out_size;
+  const double filterscale = std::max(scale, 1.0);
+  const double support = 0.5 * filterscale;
+  c.ksize = static_cast<int>(std::ceil(support)) * 2 + 1;
+  c.first.resize(static_cast<std::size_t>(out_size));
+  c.count.resize(static_cast<std::size_t>(out_size));
+  c.k.assign(static_cast<std::size_t>(out_size) * static_cast<std::size_t>(c.ksize), 0);
+  std::vector<double> w(static_cast<std::size_t>(c.ksize));
+  for (int xx = 0; xx < out_size; ++xx) {
+    const double center = in0 + (xx + 0.5) * scale;
+    const double ss = 1.0 / filterscale;
+    int xmin = static_cast<int>(center - support + 0.5);
+    if (xmin < 0) xmin = 0;
+    int xmax = static_cast<int>(center + support + 0.5);
+    if (xmax > in_size) xmax = in_size;
+    xmax -= xmin;
+    double ww = 0.0;
+    for (int x = 0; x < xmax; ++x) {
+      const double arg = (x + xmin - center + 0.5) * ss;
+      const double v = (arg > -0.5 && arg <= 0.5) ? 1.0 : 0.0;
+      w[static_cast<std::size_t>(x)] = v;
+      ww += v;
+    }
+    for (int x = 0; x < xmax; ++x) {
+      double v = w[static_cast<std::size_t>(x)];
+      if (ww != 0.0) v /= ww;
+      c.k[static_cast<std::size_t>(xx * c.ksize + x)] =
+          v < 0 ? static_cast<int>(-0.5 + v * (1 << kPrecisionBits)) : static_cast<int>(0.5 + v * (1 << kPrecisionBits));
+    }
+    c.first[static_cast<std::size_t>(xx)] = xmin;
+    c.count[static_cast<std::size_t>(xx)] = xmax;
+  }
+  return c;
+}
+
+// ImagingResample with BOX: horizontal pass over the source rows the vertical pass needs, then the vertical pass;
+// both round to 8 bits.
+cv::Mat pil_box_resize(const cv::Mat& in, int out_w, int out_h) {
+  const Coeffs h = box_coeffs(in.cols, out_w), v = box_coeffs(in.rows, out_h);
+  const int y_first = v.first.front();
+  const int y_last = v.first.back() + v.count.back();
+  cv::Mat tmp(y_last - y_first, out_w, CV_8UC3);
+  for (int yy = 0; yy < tmp.rows; ++yy) {
+    const std::uint8_t* src = in.ptr<std::uint8_t>(yy + y_first);
+    std::uint8_t* dst = tmp.ptr<std::uint8_t>(yy);
+    for (int xx = 0; xx < out_w; ++xx) {
+      const int* k = &h.k[static_cast<std::size_t>(xx * h.ksize)];
+      const int xmin = h.first[static_cast<std::size_t>(xx)];
+      int ss[3] = {1 << (kPrecisionBits - 1), 1 << (kPrecisionBits - 1), 1 << (kPrecisionBits - 1)};
+      for (int x = 0; x < h.count[static_cast<std::size_t>(xx)]; ++x) {
+        for (int ch = 0; ch < 3; ++ch) ss[ch] += src[(x + xmin) * 3 + ch] * k[x];
+      }
+      for (int ch = 0; ch < 3; ++ch) dst[xx * 3 + ch] = clip8(ss[ch]);
+    }
+  }
+  cv::Mat out(out_h, out_w, CV_8UC3);
+  for (int yy = 0; yy < out_h; ++yy) {
+    const int* k = &v.k[static_cast<std::size_t>(yy * v.ksize)];
+    const int ymin = v.first[static_cast<std::size_t>(yy)] - y_first;
+    std::uint8_t* dst = out.ptr<std::uint8_t>(yy);
+    for (int e = 0; e < out_w * 3; ++e) {
+      int ss = 1 << (kPrecisionBits - 1);
+      for (int y = 0; y < v.count[static_cast<std::size_t>(yy)]; ++y) ss += tmp.ptr<std::uint8_t>(ymin + y)[e] * k[y];
+      dst[e] = clip8(ss);
+    }
+  }
+  return out;
+}
+
+// ImagingScaleAffine (NEAREST resize): source column of output x is int(x0 + a), a accumulated in double from
+// a / 2 in steps of a = in / out; positions outside the source stay 0 (Pillow's fill).
+std::vector<int> nearest_map(int in_size, int out_size) {
+  const double a = static_cast<double>(static_cast<float>(in_size) - 0.0f) / out_size;
+  std::vector<int> map(static_cast<std::size_t>(out_size), -1);
+  double pos = 0.0 + a * 0.5;
+  for (int x = 0; x < out_size; ++x) {
+    const int xin = pos < 0.0 ? -1 : static_cast<int>(pos);
+    if (xin >= 0 && xin < in_size) map[static_cast<std::size_t>(x)] = xin;
+    pos += a;
+  }
+  return map;
+}
+
+cv::Mat pil_nearest_resize(const cv::Mat& in, int out_w, int out_h) {
+  const std::vector<int> xs = nearest_map(in.cols, out_w), ys = nearest_map(in.rows, out_h);
+  cv::Mat out(out_h, out_w, CV_8UC3, cv::Scalar::all(0));
+  for (int y = 0; y < out_h; ++y) {
+    if (ys[static_cast<std::size_t>(y)] < 0) continue;
+    const auto* src = in.ptr<cv::Vec3b>(ys[static_cast<std::size_t>(y)]);
+    auto* dst = out.ptr<cv::Vec3b>(y);
+    for (int x = 0; x < out_w; ++x) {
+      if (xs[static_cast<std::size_t>(x)] >= 0) dst[x] = src[xs[static_cast<std::size_t>(x)]];
+    }
+  }
+  return out;
+}
+
+struct TjDeleter {
+  void operator()(void* h) const {
+    if (h) tjDestroy(h);
+  }
+};
+using TjHandle = std::unique_ptr<void, TjDeleter>;
+
+}  // namespace
+
+cv::Mat pixelate(const cv::Mat& bgr, int severity) {
+  static constexpr double kC[] = {0.6, 0.5, 0.4, 0.3, 0.25};
+  const double c = kC[static_cast<std::size_t>(std::clamp(severity, 1, 5) - 1)];
+  const int w = std::max(1, static_cast<int>(bgr.cols * c)), h = std::max(1, static_cast<int>(bgr.rows * c));
+  if (w == bgr.cols && h == bgr.rows) return bgr.clone();  // PIL's resize to the same size is a copy
+  return pil_nearest_resize(pil_box_resize(bgr, w, h), bgr.cols, bgr.rows);
+}
+
+int jpeg_compression_quality(int severity) {
+  static constexpr int kQ[] = {25, 18, 15, 10, 7};
+  return kQ[static_cast<std::size_t>(std::clamp(severity, 1, 5) - 1)];
+}
+
+Result<cv::Mat> jpeg_compression(const cv::Mat& bgr, int severity) {
+  // One compressor and decompressor per thread: no handle setup per frame.
+  thread_local TjHandle enc(tjInitCompress()), dec(tjInitDecompress());
+  if (!enc || !dec) return Status(StatusCode::kInternal, "jpeg_compression: TurboJPEG initialisation failed");
+  const cv::Mat in = bgr.isContinuous() ? bgr : bgr.clone();
+  // PIL sees the stored channel order as RGB: TJPF_RGB on the same bytes gives the same colour conversion.
+  // Pillow's libjpeg defaults use the accurate integer DCT; TurboJPEG needs TJFLAG_ACCURATEDCT below quality 96.
+  unsigned char* jpeg = nullptr;
+  unsigned long size = 0;
+  if (tjCompress2(enc.get(), in.data, in.cols, static_cast<int>(in.step[0]), in.rows, TJPF_RGB, &jpeg, &size,
+                  TJSAMP_420, jpeg_compression_quality(severity), TJFLAG_ACCURATEDCT) != 0) {
+    if (jpeg) tjFree(jpeg);
+    return Status(StatusCode::kInternal,
+                  std::string("jpeg_compression: TurboJPEG encode failed: ") + tjGetErrorStr2(enc.get()));
+  }
+  cv::Mat out(in.size(), CV_8UC3);
+  const int rc = tjDecompress2(dec.get(), jpeg, size, out.data, out.cols, static_cast<int>(out.step[0]), out.rows,
+                               TJPF_RGB, TJFLAG_ACCURATEDCT);
+  tjFree(jpeg);
+  if (rc != 0) {
+    return Status(StatusCode::kInternal,
+                  std::string("jpeg_compression: TurboJPEG decode failed: ") + tjGetErrorStr2(dec.get()));
+  }
+  return out;
+}
+
+}  // namespace faultline::corruption
