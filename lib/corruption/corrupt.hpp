@@ -1,9 +1,10 @@
-// One entry point per RNG mode for the six image corruptions. Pure: no I/O, no clocks, no globals.
+// One entry point per RNG mode for the image corruptions. Pure: no I/O, no clocks, no globals.
 // Input: CV_8UC3 in OpenCV's BGR order (what cv::imread returns), any size >= 1x1. Output: same size and type.
 // Severity 0 is "off" and returns a copy without drawing; 1..5 follow the reference (spec corruptions.md).
 #pragma once
 
 #include <optional>
+#include <vector>
 
 #include <opencv2/core.hpp>
 
@@ -16,6 +17,9 @@ namespace faultline::corruption {
 
 struct CorruptOptions {
   std::optional<double> angle_deg;  // Motion Blur: use this angle (degrees) instead of drawing it; no draw then
+  // Frost: textures (CV_8UC3 BGR, non-empty) to draw from instead of the five built-in ones; not owned, must outlive
+  // the call. nullptr = built-in.
+  const std::vector<cv::Mat>* frost_textures = nullptr;
 };
 
 // numpy mode: bit-exact with the reference called right after np.random.seed(seed) when `rng` is a fresh

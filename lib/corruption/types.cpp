@@ -11,6 +11,12 @@ const char* to_string(Corruption c) {
     case Corruption::Snow: return "snow";
     case Corruption::MotionBlur: return "motion_blur";
     case Corruption::ColorQuant: return "color_quant";
+    case Corruption::DefocusBlur: return "defocus_blur";
+    case Corruption::GlassBlur: return "glass_blur";
+    case Corruption::ZoomBlur: return "zoom_blur";
+    case Corruption::Frost: return "frost";
+    case Corruption::ElasticTransform: return "elastic_transform";
+    case Corruption::Spatter: return "spatter";
   }
   return "unknown";
 }
@@ -56,7 +62,13 @@ int severity_for(Corruption c, Level level) {
     case Corruption::Dark: return 2 + index;
     case Corruption::Brightness:
     case Corruption::Fog:
-    case Corruption::MotionBlur: return index == 0 ? 2 : (index == 1 ? 4 : 5);
+    case Corruption::MotionBlur:
+    case Corruption::DefocusBlur:
+    case Corruption::GlassBlur:
+    case Corruption::ZoomBlur:
+    case Corruption::Frost:
+    case Corruption::ElasticTransform:
+    case Corruption::Spatter: return index == 0 ? 2 : (index == 1 ? 4 : 5);
   }
   return 1;
 }
@@ -68,6 +80,9 @@ Status validate_severity(int severity) {
   return Status::ok();
 }
 
-bool is_random(Corruption c) { return c != Corruption::Brightness && c != Corruption::ColorQuant; }
+bool is_random(Corruption c) {
+  return c != Corruption::Brightness && c != Corruption::ColorQuant && c != Corruption::DefocusBlur &&
+         c != Corruption::ZoomBlur;
+}
 
 }  // namespace faultline::corruption

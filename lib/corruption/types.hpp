@@ -9,11 +9,27 @@
 
 namespace faultline::corruption {
 
-// The six image corruptions. to_string/from_string use the imagecorruptions names ("motion_blur").
-enum class Corruption { Brightness, Dark, Fog, Snow, MotionBlur, ColorQuant };
+// The image corruptions: nuScenes-C's six, then imagecorruptions 1.1.2's blur/weather/digital ones.
+// to_string/from_string use the imagecorruptions names ("motion_blur").
+enum class Corruption {
+  Brightness,
+  Dark,
+  Fog,
+  Snow,
+  MotionBlur,
+  ColorQuant,
+  DefocusBlur,
+  GlassBlur,
+  ZoomBlur,
+  Frost,
+  ElasticTransform,
+  Spatter
+};
 
-inline constexpr Corruption kAllCorruptions[] = {Corruption::Brightness, Corruption::Dark, Corruption::Fog,
-                                                 Corruption::Snow, Corruption::MotionBlur, Corruption::ColorQuant};
+inline constexpr Corruption kAllCorruptions[] = {
+    Corruption::Brightness, Corruption::Dark,      Corruption::Fog,      Corruption::Snow,
+    Corruption::MotionBlur, Corruption::ColorQuant, Corruption::DefocusBlur, Corruption::GlassBlur,
+    Corruption::ZoomBlur,   Corruption::Frost,     Corruption::ElasticTransform, Corruption::Spatter};
 
 // The paper's three levels; each corruption maps them to its own severities.
 enum class Level { Easy, Mid, Hard };
@@ -32,13 +48,14 @@ std::optional<Level> level_from_string(std::string_view name);
 const char* to_string(RngMode mode);
 std::optional<RngMode> rng_mode_from_string(std::string_view name);
 
-// Severity used by nuScenes-C for a level: Bright/Fog/MotionBlur 2/4/5, ColorQuant/Snow 1/2/3, Dark 2/3/4.
+// Severity used by nuScenes-C for a level: Bright/Fog/MotionBlur 2/4/5, ColorQuant/Snow 1/2/3, Dark 2/3/4. The
+// corruptions nuScenes-C does not have take 2/4/5 as its other imagecorruptions-derived ones do.
 int severity_for(Corruption c, Level level);
 
 // Severity 0 means "off" (identity); 1..5 are the reference's numbers. Anything else is kInvalidArgument.
 Status validate_severity(int severity);
 
-// Whether the corruption draws random numbers (Bright and Color Quant do not).
+// Whether the corruption draws random numbers (Bright, Color Quant, Defocus Blur and Zoom Blur do not).
 bool is_random(Corruption c);
 
 }  // namespace faultline::corruption
