@@ -23,7 +23,8 @@ GlassParams glass_params(int severity);
 // numpy mode: draws randint(-d, d, size=2) (dx, then dy) per visited pixel; exact.
 cv::Mat glass_blur_numpy(const cv::Mat& bgr, int severity, rng::NumpyRandomState& rng);
 
-// fast mode: the same pixel walk with FastRng offsets and float32 blurs (OpenCV separable filter, same weights).
+// fast mode: the same blurs and pixel walk with FastRng offsets (the walk, one Python iteration per pixel, is what
+// makes the reference take minutes).
 cv::Mat glass_blur_fast(const cv::Mat& bgr, int severity, rng::FastRng& rng);
 
 }  // namespace faultline::corruption
