@@ -27,29 +27,6 @@ void shuffle_pixels(cv::Mat& img, const GlassParams& p, Draw&& draw) {
   }
 }
 
-// skimage gaussian of u8 / 255 (float64, per channel, edge-replicating): the float64 result.
-cv::Mat blur_unit(const cv::Mat& bgr, double sigma) {
-  cv::Mat x(bgr.size(), CV_64FC3);
-  for (int y = 0; y < bgr.rows; ++y) {
-    const unsigned char* s = bgr.ptr<unsigned char>(y);
-    double* d = x.ptr<double>(y);
-    for (int i = 0; i < bgr.cols * 3; ++i) d[i] = s[i] / 255.0;
-  }
-  nd::gaussian_filter(x, sigma, sigma, nd::Extend::Nearest);
-  return x;
-}
-
-cv::Mat truncate_to_u8(const cv::Mat& m, double scale) {
-  cv::Mat out(m.size(), CV_8UC3);
-  const int width = m.cols * 3;
-  for (int y = 0; y < m.rows; ++y) {
-    unsigned char* o = out.ptr<unsigned char>(y);
-    const double* s = m.ptr<double>(y);
-    for (int i = 0; i < width; ++i) o[i] = static_cast<unsigned char>(std::min(std::max(s[i], 0.0), 1.0) * scale);
-  }
-  return out;
-}
-
 }  // namespace
 
 GlassParams glass_params(int severity) {
@@ -59,10 +36,11 @@ GlassParams glass_params(int severity) {
 
 cv::Mat glass_blur_numpy(const cv::Mat& bgr, int severity, rng::NumpyRandomState& rng) {
   const GlassParams p = glass_params(severity);
-  // np.uint8(gaussian(...) * 255): the blurred values are within [0, 1], so clipping changes nothing.
-  cv::Mat img = truncate_to_u8(blur_unit(bgr, p.sigma), 255.0);
+  // np.uint8(gaussian(...) * 255): the blurred values are within [0, 1], so the clip in gaussian_blur_u8 changes
+  // nothing.
+  cv::Mat img = nd::gaussian_blur_u8(bgr, p.sigma);
   shuffle_pixels(img, p, [&] { return static_cast<int>(rng.randint(-p.delta, p.delta)); });
-  return truncate_to_u8(blur_unit(img, p.sigma), 255.0);
+  return nd::gaussian_blur_u8(img, p.sigma);
 }
 
 cv::Mat glass_blur_fast(const cv::Mat& bgr, int severity, rng::FastRng& rng) {
@@ -70,10 +48,10 @@ cv::Mat glass_blur_fast(const cv::Mat& bgr, int severity, rng::FastRng& rng) {
   // The blurs are numpy mode's: a float32 blur truncates flat areas differently (the reference's float64 sums land
   // a hair below or on an integer), which moved ~9 % of the histogram at severity 5; the pixel walk dominates the
   // cost of the reference, not the blurs.
-  cv::Mat img = truncate_to_u8(blur_unit(bgr, p.sigma), 255.0);
+  cv::Mat img = nd::gaussian_blur_u8(bgr, p.sigma);
   const auto span = static_cast<std::uint32_t>(2 * p.delta);
   shuffle_pixels(img, p, [&] { return static_cast<int>(rng.bounded(span)) - p.delta; });
-  return truncate_to_u8(blur_unit(img, p.sigma), 255.0);
+  return nd::gaussian_blur_u8(img, p.sigma);
 }
 
 }  // namespace faultline::corruption

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstring>
+#include <algorithm>
 #include <limits>
 
 namespace faultline::corruption::nd {
@@ -170,6 +171,50 @@ void gaussian_filter(cv::Mat& img, double sigma_y, double sigma_x, Extend mode, 
     cur = out;
   }
   cur.convertTo(img, img.type());  // float32: round to nearest, as ndimage's (float) cast
+}
+
+cv::Mat gaussian_blur_u8(const cv::Mat& bgr, double sigma) {
+  CV_Assert(bgr.type() == CV_8UC3);
+  const auto w = gaussian_kernel(sigma, gaussian_radius(sigma, 4.0));
+  const int r = static_cast<int>(w.size()) - 1, rows = bgr.rows, cols = bgr.cols, width = cols * 3;
+  const int slots = 2 * r + 1;
+  // Source row j (as u8 / 255 in float64) lives in slot j % slots while output rows i - r .. i + r need it.
+  std::vector<double> ring(static_cast<std::size_t>(slots) * static_cast<std::size_t>(width));
+  auto slot = [&](int j) { return ring.data() + static_cast<std::size_t>(j % slots) * static_cast<std::size_t>(width); };
+  int loaded = -1;
+  std::vector<double> mid(static_cast<std::size_t>(width)), ext(static_cast<std::size_t>(cols + 2 * r)),
+      line(static_cast<std::size_t>(cols));
+  cv::Mat out(bgr.size(), CV_8UC3);
+  for (int i = 0; i < rows; ++i) {
+    for (; loaded < std::min(i + r, rows - 1); ++loaded) {
+      const unsigned char* s = bgr.ptr<unsigned char>(loaded + 1);
+      double* d = slot(loaded + 1);
+      for (int x = 0; x < width; ++x) d[x] = s[x] / 255.0;
+    }
+    // Axis 0, as correlate_rows: centre times w[0], then the pairs from the outermost in.
+    const double* c = slot(i);
+    for (int x = 0; x < width; ++x) mid[static_cast<std::size_t>(x)] = c[x] * w[0];
+    for (int k = r; k >= 1; --k) {
+      const double* a = slot(extend_index(i - k, rows, Extend::Nearest));
+      const double* b = slot(extend_index(i + k, rows, Extend::Nearest));
+      const double wk = w[static_cast<std::size_t>(k)];
+      for (int x = 0; x < width; ++x) mid[static_cast<std::size_t>(x)] += (a[x] + b[x]) * wk;
+    }
+    // Axis 1 per channel, then the truncating store.
+    unsigned char* o = out.ptr<unsigned char>(i);
+    for (int ch = 0; ch < 3; ++ch) {
+      for (int x = -r; x < cols + r; ++x) {
+        ext[static_cast<std::size_t>(x + r)] =
+            mid[static_cast<std::size_t>(extend_index(x, cols, Extend::Nearest) * 3 + ch)];
+      }
+      correlate_line(ext.data(), cols, r, w, line.data());
+      for (int x = 0; x < cols; ++x) {
+        o[3 * x + ch] =
+            static_cast<unsigned char>(std::min(std::max(line[static_cast<std::size_t>(x)], 0.0), 1.0) * 255.0);
+      }
+    }
+  }
+  return out;
 }
 
 namespace {

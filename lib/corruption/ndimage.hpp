@@ -33,6 +33,11 @@ int extend_index(int i, int n, Extend mode);
 // this with sigma_y = sigma_x (mode Nearest, truncate 4 by default).
 void gaussian_filter(cv::Mat& img, double sigma_y, double sigma_x, Extend mode, double truncate = 4.0);
 
+// clip(skimage.filters.gaussian(u8 / 255, sigma, channel_axis=-1), 0, 1) * 255 truncated to uint8, for a CV_8UC3
+// image: the same arithmetic as gaussian_filter (Nearest, truncate 4) on the float64 image, evaluated row by row
+// without holding float64 images (the full-frame buffers cost more in page faults than the filter itself).
+cv::Mat gaussian_blur_u8(const cv::Mat& bgr, double sigma);
+
 // scipy.ndimage.zoom(img, (zy, zx, 1), order=1, mode='constant') of a CV_32FC3 image to out_rows x out_cols, with
 // SciPy's corner-aligned coordinates (in - 1) / (out - 1): output CV_32FC3.
 cv::Mat zoom_linear(const cv::Mat& img32, int out_rows, int out_cols);

@@ -97,17 +97,17 @@ cv::Mat zoom_blur_fast(const cv::Mat& bgr, int severity) {
   const int rows = bgr.rows, cols = bgr.cols;
   cv::Mat sum;
   bgr.convertTo(sum, CV_16UC3);
-  cv::Mat layer, layer16;
+  cv::Mat layer;
   for (const double z : factors) {
     const Crop c = crop_for(rows, cols, z);
-    // Output pixel (i, j) samples the crop at (i, j) * (crop - 1) / (zoomed - 1): an affine map from the output to
-    // the source image.
-    const double sy = c.out_rows > 1 ? static_cast<double>(c.rows - 1) / (c.out_rows - 1) : 1.0;
-    const double sx = c.out_cols > 1 ? static_cast<double>(c.cols - 1) / (c.out_cols - 1) : 1.0;
-    const cv::Matx23d m(sx, 0, c.left, 0, sy, c.top);
-    cv::warpAffine(bgr, layer, m, bgr.size(), cv::INTER_LINEAR | cv::WARP_INVERSE_MAP, cv::BORDER_REPLICATE);
-    layer.convertTo(layer16, CV_16UC3);
-    sum += layer16;
+    const cv::Rect roi = cv::Rect(c.left, c.top, c.cols, c.rows) & cv::Rect(0, 0, cols, rows);
+    // OpenCV's bilinear resize samples at (i + 0.5) * in / out - 0.5 rather than the reference's corner-aligned
+    // i * (in - 1) / (out - 1): at most half a source pixel apart at the far edges, and about twice as fast as an
+    // equivalent warp.
+    cv::resize(bgr(roi), layer, cv::Size(c.out_cols, c.out_rows), 0, 0, cv::INTER_LINEAR);
+    const cv::Rect keep(0, 0, std::min(cols, layer.cols), std::min(rows, layer.rows));
+    cv::Mat target = sum(keep);
+    cv::add(target, layer(keep), target, cv::noArray(), CV_16U);
   }
   const double n = static_cast<double>(factors.size() + 1);
   cv::Mat out(bgr.size(), CV_8UC3);
