@@ -42,8 +42,8 @@ int run(int argc, char** argv) {
                  "TOPIC=TYPE:LEVEL on every frame of TOPIC, e.g. /cam/image_raw=fog:mid, "
                  "/cam/image_raw=snow:3, "
                  "/cam/compressed=frame_lost:hard (repeatable; TYPE: brightness, dark, fog, snow, "
-                 "motion_blur, "
-                 "color_quant, camera_crash, frame_lost, black, freeze, drop, delay; LEVEL "
+                 "motion_blur, color_quant, defocus_blur, glass_blur, zoom_blur, frost, elastic_transform, "
+                 "spatter, camera_crash, frame_lost, black, freeze, drop, delay; LEVEL "
                  "easy|mid|hard or 1..5)");
   app.add_option("--faults", schedule,
                  "YAML schedule: topic -> list of faults with the injector's keys (type, "

@@ -5,6 +5,7 @@
 
 #include "campaign/benchmark.hpp"
 #include "cli/command.hpp"
+#include "corruption/types.hpp"
 #include "cli/parse.hpp"
 #include "cli/live_run.hpp"
 #include "common/shutdown.hpp"
@@ -39,7 +40,9 @@ int run(int argc, char** argv) {
   app.add_option(
          "--corruptions", corruptions,
          "comma list of "
-         "camera_crash,frame_lost,color_quant,motion_blur,brightness,low_light,fog,snow or all")
+         "camera_crash,frame_lost,color_quant,motion_blur,brightness,low_light,fog,snow or all (RoboBEV's "
+         "eight), or any other image corruption of faultline corrupt --type (e.g. defocus_blur, glass_blur, "
+         "zoom_blur, frost, elastic_transform, spatter)")
       ->capture_default_str();
   app.add_option("--levels", levels, "comma list of easy,mid,hard (default: mid; --full: all)");
   app.add_flag("--full", full, "the full matrix: 8 corruptions x 3 levels");
@@ -91,7 +94,9 @@ int run(int argc, char** argv) {
   } else {
     for (const auto& c : split(corruptions)) {
       const std::string canon = scoring::canonical_corruption(c);
-      bool known = false;
+      // RoboBEV's eight (scored against the paper's baseline), or any other image corruption the injector has
+      // (its CE against a baseline without it is left out of mCE; its RR counts).
+      bool known = corruption::corruption_from_string(canon).has_value();
       for (const char* k : scoring::kRoboBevCorruptions) known |= canon == k;
       if (!known) {
         std::fprintf(stderr, "faultline benchmark: --corruptions: unknown corruption '%s'\n",

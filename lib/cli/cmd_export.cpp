@@ -60,7 +60,9 @@ int run(int argc, char** argv) {
   app.add_option("--version", cfg.version, "table folder, e.g. v1.0-trainval");
   app.add_option("--out", cfg.out_dir, "output root");
   app.add_option("--corruptions", corruptions,
-                 "all or a list of CameraCrash, FrameLost, MotionBlur, ColorQuant, Brightness, LowLight, Fog, Snow");
+                 "all (nuScenes-C's eight) or a list of CameraCrash, FrameLost, MotionBlur, ColorQuant, Brightness, "
+                 "LowLight, Fog, Snow, DefocusBlur, GlassBlur, ZoomBlur, Frost, ElasticTransform, Spatter "
+                 "(or their snake_case names)");
   app.add_option("--levels", levels, "comma-separated easy, mid, hard");
   auto* scenes_opt = app.add_option("--scenes", scenes, "comma-separated scene names (default: all scenes)");
   app.add_option("--split", cfg.split, "devkit split (val, mini_val, ...) or a splits.json entry")->excludes(scenes_opt);

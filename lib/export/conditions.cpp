@@ -41,13 +41,19 @@ const char* class_name(Condition c) {
     case Condition::LowLight: return "LowLight";
     case Condition::Fog: return "Fog";
     case Condition::Snow: return "Snow";
+    case Condition::DefocusBlur: return "DefocusBlur";
+    case Condition::GlassBlur: return "GlassBlur";
+    case Condition::ZoomBlur: return "ZoomBlur";
+    case Condition::Frost: return "Frost";
+    case Condition::ElasticTransform: return "ElasticTransform";
+    case Condition::Spatter: return "Spatter";
   }
   return "?";
 }
 
 std::optional<Condition> condition_from_string(std::string_view name) {
   const std::string key = lower_without_underscores(name);
-  for (Condition c : kAllConditions) {
+  for (Condition c : kEveryCondition) {
     if (key == lower_without_underscores(class_name(c))) return c;
   }
   if (key == "dark") return Condition::LowLight;
@@ -64,6 +70,12 @@ std::optional<corruption::Corruption> image_corruption(Condition c) {
     case Condition::LowLight: return Corruption::Dark;
     case Condition::Fog: return Corruption::Fog;
     case Condition::Snow: return Corruption::Snow;
+    case Condition::DefocusBlur: return Corruption::DefocusBlur;
+    case Condition::GlassBlur: return Corruption::GlassBlur;
+    case Condition::ZoomBlur: return Corruption::ZoomBlur;
+    case Condition::Frost: return Corruption::Frost;
+    case Condition::ElasticTransform: return Corruption::ElasticTransform;
+    case Condition::Spatter: return Corruption::Spatter;
     default: return std::nullopt;
   }
 }
@@ -82,7 +94,7 @@ Result<std::vector<Condition>> parse_conditions(const std::string& list) {
   if (lower_without_underscores(list) == "all") {
     return std::vector<Condition>(std::begin(kAllConditions), std::end(kAllConditions));
   }
-  std::vector<bool> wanted(std::size(kAllConditions), false);
+  std::vector<bool> wanted(std::size(kEveryCondition), false);
   const auto parts = split_commas(list);
   if (parts.empty()) return Status(StatusCode::kInvalidArgument, "empty corruption list");
   for (const auto& p : parts) {
@@ -91,12 +103,12 @@ Result<std::vector<Condition>> parse_conditions(const std::string& list) {
       return Status(StatusCode::kInvalidArgument,
                     "unknown corruption '" + p +
                         "' (expected all or CameraCrash, FrameLost, MotionBlur, ColorQuant, Brightness, LowLight, "
-                        "Fog, Snow)");
+                        "Fog, Snow, DefocusBlur, GlassBlur, ZoomBlur, Frost, ElasticTransform, Spatter)");
     }
     wanted[static_cast<std::size_t>(*c)] = true;
   }
   std::vector<Condition> out;
-  for (Condition c : kAllConditions) {
+  for (Condition c : kEveryCondition) {
     if (wanted[static_cast<std::size_t>(c)]) out.push_back(c);
   }
   return out;

@@ -1,4 +1,5 @@
-// The eight nuScenes-C conditions as RoboBEV's generator names its output folders (spec corruptions.md §1.6-1.7).
+// The eight nuScenes-C conditions as RoboBEV's generator names its output folders (spec corruptions.md §1.6-1.7),
+// plus the imagecorruptions 1.1.2 corruptions nuScenes-C does not have (folders named by their PascalCase names).
 #pragma once
 
 #include <optional>
@@ -12,11 +13,33 @@
 namespace faultline::exporter {
 
 // Reference loop order (spec §1.6): CameraCrash, FrameLost, MotionBlur, ColorQuant, Brightness, LowLight, Fog, Snow.
-enum class Condition { CameraCrash, FrameLost, MotionBlur, ColorQuant, Brightness, LowLight, Fog, Snow };
+enum class Condition {
+  CameraCrash,
+  FrameLost,
+  MotionBlur,
+  ColorQuant,
+  Brightness,
+  LowLight,
+  Fog,
+  Snow,
+  DefocusBlur,
+  GlassBlur,
+  ZoomBlur,
+  Frost,
+  ElasticTransform,
+  Spatter
+};
 
+// nuScenes-C's eight: what "all" selects.
 inline constexpr Condition kAllConditions[] = {Condition::CameraCrash, Condition::FrameLost, Condition::MotionBlur,
                                                Condition::ColorQuant,  Condition::Brightness, Condition::LowLight,
                                                Condition::Fog,         Condition::Snow};
+// Every condition, selectable by name.
+inline constexpr Condition kEveryCondition[] = {
+    Condition::CameraCrash, Condition::FrameLost, Condition::MotionBlur, Condition::ColorQuant,
+    Condition::Brightness,  Condition::LowLight,  Condition::Fog,        Condition::Snow,
+    Condition::DefocusBlur, Condition::GlassBlur, Condition::ZoomBlur,   Condition::Frost,
+    Condition::ElasticTransform, Condition::Spatter};
 
 // RoboBEV class name, used as the folder name ("CameraCrash").
 const char* class_name(Condition c);
@@ -31,7 +54,8 @@ std::optional<corruption::Corruption> image_corruption(Condition c);
 // Severity nuScenes-C uses: CameraCrash/FrameLost 2/4/5, the others per corruption::severity_for.
 int severity_of(Condition c, corruption::Level level);
 
-// Parses "all" or a comma-separated list; the result is in reference loop order without duplicates.
+// Parses "all" (nuScenes-C's eight) or a comma-separated list of any conditions; the result is in the order of
+// kEveryCondition (reference loop order first) without duplicates.
 Result<std::vector<Condition>> parse_conditions(const std::string& list);
 // Parses a comma-separated list of easy, mid, hard; result in easy, mid, hard order.
 Result<std::vector<corruption::Level>> parse_levels(const std::string& list);

@@ -88,7 +88,8 @@ FaultSpec parse_one(const YAML::Node& node, const std::string& where) {
   const auto type = read<std::string>(node["type"], where, "type", "string");
   if (!set_type(spec, type)) {
     fail(where, "type", type,
-         "expected brightness|dark|fog|snow|motion_blur|color_quant|camera_crash|frame_lost|black|freeze|drop|delay");
+         "expected brightness|dark|fog|snow|motion_blur|color_quant|defocus_blur|glass_blur|zoom_blur|frost|"
+         "elastic_transform|spatter|camera_crash|frame_lost|black|freeze|drop|delay");
   }
   if (node["level"] && node["severity"]) fail(where, "level", config::yaml_to_string(node["level"]), "give level or severity, not both");
   // Scripted actions (black, freeze, drop, delay) have no strength: severity 1 unless given.
