@@ -6,6 +6,7 @@
 #include <cctype>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <iterator>
 #include <opencv2/imgcodecs.hpp>
@@ -48,9 +49,43 @@ Result<cv::Mat> read_input(const std::string& path, bool allow_partial) {
   return image;
 }
 
+// "brightness, dark, ... or spatter": every corruption's name.
+std::string type_names() {
+  std::string names;
+  const std::size_t n = std::size(corruption::kAllCorruptions);
+  for (std::size_t i = 0; i < n; ++i) {
+    names += corruption::to_string(corruption::kAllCorruptions[i]);
+    names += i + 2 < n ? ", " : (i + 1 < n ? " or " : "");
+  }
+  return names;
+}
+
+// Frost textures from a directory: every .png/.jpg/.jpeg in it, in name order, read as BGR.
+Result<std::vector<cv::Mat>> read_frost_textures(const std::string& dir) {
+  std::error_code ec;
+  std::vector<std::string> paths;
+  for (const auto& entry : std::filesystem::directory_iterator(dir, ec)) {
+    std::string ext = entry.path().extension().string();
+    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+    if (entry.is_regular_file() && (ext == ".png" || ext == ".jpg" || ext == ".jpeg")) {
+      paths.push_back(entry.path().string());
+    }
+  }
+  if (ec) return Status(StatusCode::kNotFound, "--frost-dir '" + dir + "': " + ec.message());
+  std::sort(paths.begin(), paths.end());
+  if (paths.empty()) return Status(StatusCode::kNotFound, "--frost-dir '" + dir + "': no .png or .jpg textures");
+  std::vector<cv::Mat> textures;
+  for (const auto& p : paths) {
+    cv::Mat t = cv::imread(p, cv::IMREAD_COLOR);
+    if (t.empty()) return Status(StatusCode::kCorruptData, "--frost-dir: cannot decode texture '" + p + "'");
+    textures.push_back(t);
+  }
+  return textures;
+}
+
 int run(int argc, char** argv) {
-  CLI::App app("Apply an image corruption (nuScenes-C, imagecorruptions, RoboBEV) to an image (read and written with "
-               "OpenCV, BGR order).",
+  CLI::App app("Apply an image corruption (nuScenes-C's, imagecorruptions 1.1.2's and RoboBEV's ISONoise) to an "
+               "image (read and written with OpenCV, BGR order).",
                argv[0]);
   std::string type_name, level_name, rng_name = "fast", in_path, out_path;
   int severity = -1;
@@ -58,13 +93,17 @@ int run(int argc, char** argv) {
   std::optional<double> angle;
   bool allow_partial = false;
   int jpeg_quality = 95;
-  app.add_option("--type", type_name, "one of: " + corruption::corruption_names())->required();
+  app.add_option("--type", type_name, type_names())->required();
   auto* sev_opt = app.add_option("--severity", severity, "1..5 as the reference numbers them (0 = off)");
   auto* level_opt = app.add_option("--level", level_name, "easy, mid or hard (nuScenes-C's mapping)");
   sev_opt->excludes(level_opt);
   app.add_option("--seed", seed, "RNG seed (numpy mode: as np.random.seed(seed) before the call)");
   app.add_option("--rng", rng_name, "numpy (bit-exact with the reference) or fast (default)");
   app.add_option("--angle", angle, "motion_blur: inject the blur angle in degrees instead of drawing it");
+  std::string frost_dir;
+  app.add_option("--frost-dir", frost_dir,
+                 "frost: draw from the .png/.jpg textures in this directory (name order) instead of the five "
+                 "built-in imagecorruptions textures");
   app.add_option("--in", in_path, "input image")->required();
   app.add_option("--out", out_path, "output image (use .png for lossless)")->required();
   app.add_option("--jpeg-quality", jpeg_quality, "quality of a .jpg/.jpeg output (TurboJPEG, 4:2:0)")
@@ -80,8 +119,8 @@ int run(int argc, char** argv) {
   }
   const auto type = corruption::corruption_from_string(type_name);
   if (!type) {
-    std::fprintf(stderr, "faultline corrupt: unknown --type '%s' (expected one of: %s)\n", type_name.c_str(),
-                 corruption::corruption_names().c_str());
+    std::fprintf(stderr, "faultline corrupt: unknown --type '%s' (expected %s)\n", type_name.c_str(),
+                 type_names().c_str());
     return 2;
   }
   if (!level_name.empty()) {
@@ -118,6 +157,16 @@ int run(int argc, char** argv) {
   const cv::Mat& in = *input;
   corruption::CorruptOptions options;
   options.angle_deg = angle;
+  std::vector<cv::Mat> frost_textures;
+  if (!frost_dir.empty()) {
+    auto t = read_frost_textures(frost_dir);
+    if (!t) {
+      std::fprintf(stderr, "faultline corrupt: %s\n", t.status().message().c_str());
+      return 2;
+    }
+    frost_textures = std::move(*t);
+    options.frost_textures = &frost_textures;
+  }
   Result<cv::Mat> out = Status(StatusCode::kInternal, "not run");
   if (*mode == corruption::RngMode::Numpy) {
     rng::NumpyRandomState rng(seed);
@@ -159,5 +208,5 @@ int run(int argc, char** argv) {
 }
 
 }  // namespace
-FAULTLINE_COMMAND(corrupt, "corrupt", "apply a nuScenes-C image corruption to a file", &run);
+FAULTLINE_COMMAND(corrupt, "corrupt", "apply an image corruption (nuScenes-C, imagecorruptions) to a file", &run);
 }  // namespace faultline::cli

@@ -8,10 +8,16 @@
 #include "corruption/color_quant.hpp"
 #include "corruption/dark.hpp"
 #include "corruption/digital.hpp"
+#include "corruption/defocus_blur.hpp"
+#include "corruption/elastic_transform.hpp"
 #include "corruption/fog.hpp"
+#include "corruption/frost.hpp"
+#include "corruption/glass_blur.hpp"
 #include "corruption/motion_blur.hpp"
 #include "corruption/noise.hpp"
 #include "corruption/snow.hpp"
+#include "corruption/spatter.hpp"
+#include "corruption/zoom_blur.hpp"
 
 namespace faultline::corruption {
 
@@ -29,6 +35,16 @@ namespace {
 
 // An injected angle must be a number: the tap geometry of a NaN or infinite angle is undefined.
 Status validate_options(const CorruptOptions& options) {
+  if (options.frost_textures) {
+    if (options.frost_textures->empty()) return {StatusCode::kInvalidArgument, "frost textures: the list is empty"};
+    for (std::size_t i = 0; i < options.frost_textures->size(); ++i) {
+      const cv::Mat& t = (*options.frost_textures)[i];
+      if (t.empty() || t.type() != CV_8UC3) {
+        return {StatusCode::kInvalidArgument,
+                "frost texture " + std::to_string(i) + ": expected a non-empty 8-bit 3-channel (BGR) image"};
+      }
+    }
+  }
   if (options.angle_deg && !std::isfinite(*options.angle_deg)) {
     return {StatusCode::kInvalidArgument,
             "motion blur angle must be a finite number of degrees, got " +
@@ -46,6 +62,11 @@ Result<cv::Mat> deterministic(const cv::Mat& bgr, Corruption type, int severity)
     case Corruption::JpegCompression: return jpeg_compression(bgr, severity);
     default: return Status(StatusCode::kInternal, std::string("not a shared deterministic corruption: ") + to_string(type));
   }
+}
+
+const std::vector<cv::Mat>& frost_set(const CorruptOptions& options) {
+  static const std::vector<cv::Mat> kBuiltIn;  // empty: the frost functions use their built-in textures
+  return options.frost_textures ? *options.frost_textures : kBuiltIn;
 }
 
 }  // namespace
@@ -77,6 +98,12 @@ Result<cv::Mat> corrupt(const cv::Mat& bgr, Corruption type, int severity, rng::
     case Corruption::Saturate:
     case Corruption::Pixelate:
     case Corruption::JpegCompression: return deterministic(bgr, type, severity);
+    case Corruption::DefocusBlur: return defocus_blur_exact(bgr, severity);
+    case Corruption::GlassBlur: return glass_blur_numpy(bgr, severity, rng);
+    case Corruption::ZoomBlur: return zoom_blur_exact(bgr, severity);
+    case Corruption::Frost: return frost_numpy(bgr, severity, rng, frost_set(options));
+    case Corruption::ElasticTransform: return elastic_transform_numpy(bgr, severity, rng);
+    case Corruption::Spatter: return spatter_numpy(bgr, severity, rng);
   }
   return Status(StatusCode::kInvalidArgument, "unknown corruption");
 }
@@ -108,6 +135,12 @@ Result<cv::Mat> corrupt(const cv::Mat& bgr, Corruption type, int severity, rng::
     case Corruption::Contrast:
     case Corruption::Pixelate:
     case Corruption::JpegCompression: return deterministic(bgr, type, severity);
+    case Corruption::DefocusBlur: return defocus_blur_fast(bgr, severity);
+    case Corruption::GlassBlur: return glass_blur_fast(bgr, severity, rng);
+    case Corruption::ZoomBlur: return zoom_blur_fast(bgr, severity);
+    case Corruption::Frost: return frost_fast(bgr, severity, rng, frost_set(options));
+    case Corruption::ElasticTransform: return elastic_transform_fast(bgr, severity, rng);
+    case Corruption::Spatter: return spatter_fast(bgr, severity, rng);
   }
   return Status(StatusCode::kInvalidArgument, "unknown corruption");
 }

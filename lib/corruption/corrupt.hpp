@@ -4,6 +4,7 @@
 #pragma once
 
 #include <optional>
+#include <vector>
 
 #include <opencv2/core.hpp>
 
@@ -16,6 +17,9 @@ namespace faultline::corruption {
 
 struct CorruptOptions {
   std::optional<double> angle_deg;  // Motion Blur: use this angle (degrees) instead of drawing it; no draw then
+  // Frost: textures (CV_8UC3 BGR, non-empty) to draw from instead of the five built-in ones; not owned, must outlive
+  // the call. nullptr = built-in.
+  const std::vector<cv::Mat>* frost_textures = nullptr;
 };
 
 // numpy mode: bit-exact with the reference called right after np.random.seed(seed) when `rng` is a fresh

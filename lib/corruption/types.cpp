@@ -21,6 +21,12 @@ const char* to_string(Corruption c) {
     case Corruption::Pixelate: return "pixelate";
     case Corruption::JpegCompression: return "jpeg_compression";
     case Corruption::GaussianBlur: return "gaussian_blur";
+    case Corruption::DefocusBlur: return "defocus_blur";
+    case Corruption::GlassBlur: return "glass_blur";
+    case Corruption::ZoomBlur: return "zoom_blur";
+    case Corruption::Frost: return "frost";
+    case Corruption::ElasticTransform: return "elastic_transform";
+    case Corruption::Spatter: return "spatter";
   }
   return "unknown";
 }
@@ -76,7 +82,13 @@ int severity_for(Corruption c, Level level) {
     case Corruption::IsoNoise: return 2 + index;
     case Corruption::Brightness:
     case Corruption::Fog:
-    case Corruption::MotionBlur: return index == 0 ? 2 : (index == 1 ? 4 : 5);
+    case Corruption::MotionBlur:
+    case Corruption::DefocusBlur:
+    case Corruption::GlassBlur:
+    case Corruption::ZoomBlur:
+    case Corruption::Frost:
+    case Corruption::ElasticTransform:
+    case Corruption::Spatter: return index == 0 ? 2 : (index == 1 ? 4 : 5);
     case Corruption::GaussianNoise:
     case Corruption::ShotNoise:
     case Corruption::ImpulseNoise:
@@ -105,7 +117,9 @@ bool is_random(Corruption c) {
     case Corruption::Saturate:
     case Corruption::Pixelate:
     case Corruption::JpegCompression:
-    case Corruption::GaussianBlur: return false;
+    case Corruption::GaussianBlur:
+    case Corruption::DefocusBlur:
+    case Corruption::ZoomBlur: return false;
     default: return true;
   }
 }

@@ -57,6 +57,12 @@ const char* class_name(Condition c) {
     case Condition::Pixelate: return "Pixelate";
     case Condition::JpegCompression: return "JpegCompression";
     case Condition::GaussianBlur: return "GaussianBlur";
+    case Condition::DefocusBlur: return "DefocusBlur";
+    case Condition::GlassBlur: return "GlassBlur";
+    case Condition::ZoomBlur: return "ZoomBlur";
+    case Condition::Frost: return "Frost";
+    case Condition::ElasticTransform: return "ElasticTransform";
+    case Condition::Spatter: return "Spatter";
   }
   return "?";
 }
@@ -90,6 +96,12 @@ std::optional<corruption::Corruption> image_corruption(Condition c) {
     case Condition::Pixelate: return Corruption::Pixelate;
     case Condition::JpegCompression: return Corruption::JpegCompression;
     case Condition::GaussianBlur: return Corruption::GaussianBlur;
+    case Condition::DefocusBlur: return Corruption::DefocusBlur;
+    case Condition::GlassBlur: return Corruption::GlassBlur;
+    case Condition::ZoomBlur: return Corruption::ZoomBlur;
+    case Condition::Frost: return Corruption::Frost;
+    case Condition::ElasticTransform: return Corruption::ElasticTransform;
+    case Condition::Spatter: return Corruption::Spatter;
     case Condition::CameraCrash:
     case Condition::FrameLost: return std::nullopt;
   }

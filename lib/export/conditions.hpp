@@ -1,4 +1,5 @@
-// The eight nuScenes-C conditions as RoboBEV's generator names its output folders (spec corruptions.md §1.6-1.7).
+// The eight nuScenes-C conditions as RoboBEV's generator names its output folders (spec corruptions.md §1.6-1.7),
+// plus the imagecorruptions 1.1.2 corruptions nuScenes-C does not have (folders named by their PascalCase names).
 #pragma once
 
 #include <optional>
@@ -32,6 +33,12 @@ enum class Condition {
   Pixelate,
   JpegCompression,
   GaussianBlur,
+  DefocusBlur,
+  GlassBlur,
+  ZoomBlur,
+  Frost,
+  ElasticTransform,
+  Spatter
 };
 
 // nuScenes-C's eight: what "all" selects.
@@ -44,7 +51,8 @@ inline constexpr Condition kEveryCondition[] = {
     Condition::Brightness,    Condition::LowLight,     Condition::Fog,          Condition::Snow,
     Condition::GaussianNoise, Condition::ShotNoise,    Condition::ImpulseNoise, Condition::SpeckleNoise,
     Condition::IsoNoise,      Condition::Contrast,     Condition::Saturate,     Condition::Pixelate,
-    Condition::JpegCompression, Condition::GaussianBlur};
+    Condition::JpegCompression, Condition::GaussianBlur, Condition::DefocusBlur, Condition::GlassBlur,
+    Condition::ZoomBlur,      Condition::Frost,        Condition::ElasticTransform, Condition::Spatter};
 
 // RoboBEV class name, used as the folder name ("CameraCrash"; "ISONoise" as RoboBEV spells it; CamelCase of the
 // imagecorruptions name for the corruptions RoboBEV has no class for).
@@ -60,8 +68,8 @@ std::optional<corruption::Corruption> image_corruption(Condition c);
 // Severity nuScenes-C uses: CameraCrash/FrameLost 2/4/5, the others per corruption::severity_for.
 int severity_of(Condition c, corruption::Level level);
 
-// Parses "all" (nuScenes-C's eight) or a comma-separated list of any conditions; the result is in kEveryCondition
-// order without duplicates.
+// Parses "all" (nuScenes-C's eight) or a comma-separated list of any conditions; the result is in the order of
+// kEveryCondition (reference loop order first) without duplicates.
 Result<std::vector<Condition>> parse_conditions(const std::string& list);
 // Parses a comma-separated list of easy, mid, hard; result in easy, mid, hard order.
 Result<std::vector<corruption::Level>> parse_levels(const std::string& list);

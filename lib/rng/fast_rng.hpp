@@ -57,6 +57,16 @@ class FastRng {
   // Poisson(lam): inversion for lam < 10, PTRS otherwise; lam <= 0 gives 0.
   std::int64_t poisson(double lam);
 
+  // Uniform integer in [0, n) for n >= 1 (Lemire's multiply-and-reject, unbiased).
+  std::uint32_t bounded(std::uint32_t n) {
+    std::uint64_t m = static_cast<std::uint64_t>(next_u32()) * n;
+    if (static_cast<std::uint32_t>(m) < n) {
+      const std::uint32_t threshold = static_cast<std::uint32_t>(-n) % n;
+      while (static_cast<std::uint32_t>(m) < threshold) m = static_cast<std::uint64_t>(next_u32()) * n;
+    }
+    return static_cast<std::uint32_t>(m >> 32);
+  }
+
   // Same as NumpyRandomState::choice6 in distribution: uniform on 0..5.
   int choice6() {
     for (;;) {

@@ -480,4 +480,24 @@ double numpy_loggam(double x) {
   return gl;
 }
 
+std::int64_t NumpyRandomState::randint(std::int64_t low, std::int64_t high) {
+  const auto rng = static_cast<std::uint64_t>(high - 1) - static_cast<std::uint64_t>(low);
+  if (rng == 0) return low;
+  std::uint64_t mask = rng;  // smallest 2^k - 1 >= rng
+  for (int shift = 1; shift < 64; shift <<= 1) mask |= mask >> shift;
+  std::uint64_t v = 0;
+  if (rng <= 0xFFFFFFFFull) {
+    if (rng == 0xFFFFFFFFull) return low + static_cast<std::int64_t>(next_u32());
+    do {
+      v = next_u32() & mask;
+    } while (v > rng);
+  } else {
+    do {
+      const std::uint64_t hi = next_u32();
+      v = ((hi << 32) | next_u32()) & mask;
+    } while (v > rng);
+  }
+  return static_cast<std::int64_t>(static_cast<std::uint64_t>(low) + v);
+}
+
 }  // namespace faultline::rng

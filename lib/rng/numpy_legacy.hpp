@@ -160,6 +160,11 @@ class NumpyRandomState {
     }
   }
 
+  // randint(low, high) for the default int64 dtype (high exclusive): NumPy's masked rejection sampling, 32-bit
+  // draws while high - low - 1 fits in 32 bits (64-bit draws beyond). A range of one value draws nothing.
+  // Requires low < high.
+  std::int64_t randint(std::int64_t low, std::int64_t high);
+
   bool gauss_cache_pending() const { return has_gauss_; }
 
  private:

@@ -96,6 +96,45 @@ TEST(CorruptCliTest, BadTypeSeverityAndFilesAreNamedErrors) {
   EXPECT_NE(r.output.find("mersenne"), std::string::npos) << r.output;
 }
 
+// The imagecorruptions types by name through files, in numpy mode the reference's output (ext/<type>.json);
+// --frost-dir swaps frost's textures; a directory without textures is a named error.
+TEST(CorruptCliTest, ImagecorruptionsTypesAndFrostTextures) {
+  const std::string in = test_data::fixture(golden_dir() + "/inputs/chart_333x197.png");
+  const std::string out = temp_png("ext");
+  const auto frost = load_golden_json("ext/frost.json");
+  const auto& rec = frost["outputs"][0];  // chart_333x197, severity 1
+  ASSERT_STREQ(rec["input"].GetString(), "chart_333x197");
+  auto r = run_faultline("corrupt --type frost --severity " + std::to_string(rec["severity"].GetInt()) +
+                         " --seed " + std::to_string(rec["seed"].GetUint()) + " --rng numpy --in " + in +
+                         " --out " + out);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(pixel_sha256(cv::imread(out, cv::IMREAD_COLOR)), rec["sha256_bgr_pixels"].GetString());
+  // One flat grey texture: the output is clip(a * image + b * 128) everywhere.
+  const std::string dir = ::testing::TempDir() + "/faultline_frost_" + std::to_string(::getpid());
+  std::filesystem::create_directories(dir);
+  cv::imwrite(dir + "/grey.png", cv::Mat(400, 500, CV_8UC3, cv::Scalar::all(128)));
+  r = run_faultline("corrupt --type frost --severity 1 --frost-dir " + dir + " --in " + in + " --out " + out);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const cv::Mat image = cv::imread(in, cv::IMREAD_COLOR), got = cv::imread(out, cv::IMREAD_COLOR);
+  cv::Mat expected;
+  image.convertTo(expected, CV_64FC3, 1.0, 0.4 * 128);
+  cv::min(expected, 255.0, expected);
+  expected.convertTo(expected, CV_8UC3, 1.0, -0.4999);  // truncation
+  EXPECT_LE(cv::norm(got, expected, cv::NORM_INF), 0.0);
+  std::filesystem::remove(dir + "/grey.png");
+  r = run_faultline("corrupt --type frost --severity 1 --frost-dir " + dir + " --in " + in + " --out " + out);
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.output.find("--frost-dir"), std::string::npos) << r.output;
+  std::filesystem::remove_all(dir);
+  for (const char* type : {"defocus_blur", "glass_blur", "zoom_blur", "elastic_transform", "spatter"}) {
+    r = run_faultline(std::string("corrupt --type ") + type + " --level mid --in " + in + " --out " + out);
+    EXPECT_EQ(r.exit_code, 0) << type << ": " << r.output;
+  }
+  r = run_faultline("corrupt --type rain --severity 2 --in " + in + " --out " + out);
+  EXPECT_NE(r.output.find("elastic_transform"), std::string::npos) << r.output;
+  std::remove(out.c_str());
+}
+
 TEST(CorruptCliTest, NonFiniteAngleIsAnErrorNamingTheOption) {
   const std::string in = test_data::fixture(golden_dir() + "/inputs/chart_333x197.png");
   const std::string out = temp_png("angle");

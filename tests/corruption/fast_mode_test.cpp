@@ -114,7 +114,7 @@ TEST_P(FastGoldenTest, MatchesGoldenExactlyOrWithinSeedToSeedRange) {
       }
       return;
     }
-    default: FAIL() << "not one of the nuScenes-C goldens (the others: fast_ext_test.cpp)";
+    default: FAIL() << "not one of the nuScenes-C goldens (the others: fast_ext_test.cpp, fast_mode_ext_spatial_test.cpp)";
   }
 }
 

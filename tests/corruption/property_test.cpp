@@ -14,6 +14,8 @@
 #include "corruption/fog.hpp"
 #include "corruption/corrupt.hpp"
 #include "corruption/noise.hpp"
+#include "corruption/frost.hpp"
+#include "corruption/spatter.hpp"
 #include "corruption/test_images.hpp"
 
 namespace faultline::corruption {
@@ -95,6 +97,24 @@ void ExpectPointwiseBounds(const cv::Mat& in, const cv::Mat& out, Corruption c, 
   }
 }
 
+// Sum of absolute differences between horizontal and vertical neighbours (all channels).
+double total_variation(const cv::Mat& m) {
+  cv::Mat f;
+  m.convertTo(f, CV_32F);
+  const cv::Rect body(0, 0, m.cols - 1, m.rows - 1);
+  return cv::norm(f(body), f(body + cv::Point(1, 0)), cv::NORM_L1) +
+         cv::norm(f(body), f(body + cv::Point(0, 1)), cv::NORM_L1);
+}
+
+// Values of `a` more than `slack` below the same values of `b`.
+int count_below(const cv::Mat& a, const cv::Mat& b, int slack) {
+  cv::Mat a16, b16, mask;
+  a.convertTo(a16, CV_16S);
+  b.convertTo(b16, CV_16S, 1.0, -slack);
+  cv::compare(a16.reshape(1), b16.reshape(1), mask, cv::CMP_LT);
+  return cv::countNonZero(mask);
+}
+
 class CorruptionPropertyTest : public ::testing::TestWithParam<Param> {
  protected:
   Corruption type() const { return std::get<0>(GetParam()); }
@@ -162,6 +182,34 @@ TEST_P(CorruptionPropertyTest, StaysWithinTheCorruptionsBounds) {
     case Corruption::Snow: EXPECT_GT(mean_out, mean_in); break;
     case Corruption::Fog:
     case Corruption::MotionBlur: EXPECT_NEAR(mean_out, mean_in, 0.5 * mean_in); break;
+    case Corruption::DefocusBlur:
+    case Corruption::ZoomBlur:
+    case Corruption::GlassBlur:
+      // Blurs keep the mean (less the truncation) and smooth: less total variation than the input.
+      EXPECT_NEAR(mean_out, mean_in, 0.05 * mean_in);
+      EXPECT_LT(total_variation(out), total_variation(in));
+      break;
+    case Corruption::ElasticTransform: EXPECT_NEAR(mean_out, mean_in, 0.05 * mean_in); break;
+    case Corruption::Frost: {
+      // a * image + b * texture with b * texture >= 0: never below trunc(a * image).
+      cv::Mat floor_in;
+      in.convertTo(floor_in, CV_8UC3, frost_params(severity()).image_weight, -0.5);
+      EXPECT_EQ(count_below(out, floor_in, 1), 0);
+      break;
+    }
+    case Corruption::Spatter:
+      if (!spatter_params(severity()).mud) {
+        EXPECT_EQ(count_below(out, in, 1), 0) << "water only adds";
+      } else {
+        // Mud blends each value towards the mud colour (63, 42, 20 in stored order): between the two.
+        const cv::Mat mud(in.size(), CV_8UC3, cv::Scalar(63, 42, 20));
+        cv::Mat lo, hi;
+        cv::min(in, mud, lo);
+        cv::max(in, mud, hi);
+        EXPECT_EQ(count_below(out, lo, 1), 0);
+        EXPECT_EQ(count_below(hi, out, 1), 0);
+      }
+      break;
     default: ExpectPointwiseBounds(in, out, type(), severity()); break;
   }
 }
@@ -303,6 +351,51 @@ TEST(DegenerateBehaviourTest, FogOnBlackStaysBlack) {
   rng::FastRng rng(0);
   auto out = corrupt(cv::Mat(16, 16, CV_8UC3, cv::Scalar::all(0)), Corruption::Fog, 3, rng);
   EXPECT_EQ(cv::countNonZero(out->reshape(1)), 0);
+}
+
+// The blurs and the elastic warp keep a flat frame flat (up to the last-step truncation of float noise), in both
+// modes, on every size down to 1 x 1.
+TEST(DegenerateBehaviourTest, BlursAndWarpsKeepFlatFramesFlat) {
+  for (const Corruption c :
+       {Corruption::DefocusBlur, Corruption::ZoomBlur, Corruption::GlassBlur, Corruption::ElasticTransform}) {
+    for (const cv::Size size : {cv::Size(1, 1), cv::Size(2, 2), cv::Size(23, 17)}) {
+      for (const cv::Scalar& v : {cv::Scalar::all(0), cv::Scalar::all(255), cv::Scalar(80, 120, 160)}) {
+        const cv::Mat flat(size, CV_8UC3, v);
+        for (int sev = 1; sev <= 5; ++sev) {
+          for (const RngMode mode : {RngMode::Numpy, RngMode::Fast}) {
+            const cv::Mat out = run(flat, c, sev, mode, 3);
+            // Defocus at severity 4 (radius 8 on its 17 x 17 grid): the anti-aliasing blur's reflect-101 border
+            // folds the disk's rim back in, the kernel sums to 1.013, and the reference itself brightens flat
+            // areas by up to 2 levels.
+            const double allowed = c == Corruption::DefocusBlur && sev == 4 ? 2.0 : 1.0;
+            EXPECT_LE(cv::norm(out, flat, cv::NORM_INF), allowed)
+                << to_string(c) << " sev " << sev << " " << size << " " << to_string(mode);
+          }
+        }
+      }
+    }
+  }
+}
+
+// Spatter's water where the field holds no liquid: the frame comes back unchanged (the reference divides 0 by 0
+// there and returns black).
+TEST(DegenerateBehaviourTest, SpatterWithoutLiquidIsTheIdentity) {
+  const cv::Mat in = faultline::testing::scene(30, 40);
+  const cv::Mat dry = cv::Mat::zeros(in.size(), CV_64F);
+  for (int sev = 1; sev <= 3; ++sev) EXPECT_EQ(cv::norm(spatter_apply(in, dry, sev, true), in, cv::NORM_INF), 0.0);
+}
+
+// Frost on black is the texture alone, b * texture: bright somewhere, never above 255 * b + 1.
+TEST(DegenerateBehaviourTest, FrostOnBlackIsTheScaledTexture) {
+  const cv::Mat black(40, 60, CV_8UC3, cv::Scalar::all(0));
+  for (int sev = 1; sev <= 5; ++sev) {
+    rng::NumpyRandomState rng(static_cast<std::uint32_t>(sev));
+    const cv::Mat out = *corrupt(black, Corruption::Frost, sev, rng);
+    double lo = 0, hi = 0;
+    cv::minMaxLoc(out.reshape(1), &lo, &hi);
+    EXPECT_GT(hi, 50.0);
+    EXPECT_LE(hi, 255.0 * frost_params(sev).texture_weight + 1.0);
+  }
 }
 
 TEST(BrightnessPathsTest, TablePathEqualsHsvMirrorOnEveryColourClass) {
@@ -511,6 +604,11 @@ TEST(NamesTest, RoundTripAndLevelMapping) {
   EXPECT_EQ(severity_for(Corruption::Snow, Level::Easy), 1);
   EXPECT_EQ(severity_for(Corruption::Dark, Level::Easy), 2);
   EXPECT_EQ(severity_for(Corruption::Dark, Level::Hard), 4);
+  EXPECT_EQ(corruption_from_string("elastic_transform"), Corruption::ElasticTransform);
+  EXPECT_EQ(severity_for(Corruption::Frost, Level::Mid), 4);
+  EXPECT_FALSE(is_random(Corruption::DefocusBlur));
+  EXPECT_FALSE(is_random(Corruption::ZoomBlur));
+  EXPECT_TRUE(is_random(Corruption::GlassBlur));
 }
 
 }  // namespace

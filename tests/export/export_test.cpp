@@ -6,6 +6,7 @@
 #include "corruption/corrupt.hpp"
 #include "export/export_fixture.hpp"  // tests/export/
 #include "export/seeds.hpp"
+#include "export/stats_table.hpp"
 #include "policy/temporal_draws.hpp"
 
 namespace faultline::exporter {
@@ -212,6 +213,18 @@ TEST(ExportConditionsTest, AcceptsThePointwiseCorruptionsByName) {
   const auto bad = parse_conditions("rain");
   ASSERT_FALSE(bad);
   EXPECT_NE(bad.status().message().find("SpeckleNoise"), std::string::npos) << bad.status().message();
+}
+
+// The imagecorruptions corruptions are exportable by name (not part of "all", nuScenes-C's eight), after the eight.
+TEST(ExportConditionsTest, ImagecorruptionsConditionsByName) {
+  auto some = parse_conditions("spatter,DefocusBlur,fog,zoom_blur");
+  ASSERT_TRUE(some);
+  EXPECT_EQ(*some, (std::vector<Condition>{Condition::Fog, Condition::DefocusBlur, Condition::ZoomBlur,
+                                           Condition::Spatter}));
+  EXPECT_EQ(image_corruption(Condition::ElasticTransform), corruption::Corruption::ElasticTransform);
+  EXPECT_STREQ(class_name(Condition::GlassBlur), "GlassBlur");
+  EXPECT_EQ(severity_of(Condition::Frost, corruption::Level::Easy), 2);
+  EXPECT_GT(reference_ms_per_image(Condition::GlassBlur), 1e5);
 }
 
 }  // namespace

@@ -126,6 +126,21 @@ TEST(FaultSpecTest, AcceptsEveryImageCorruptionName) {
   EXPECT_EQ(Parse("[{type: pixelate, severity: 2}]")[0].corruption, corruption::Corruption::Pixelate);
 }
 
+// The imagecorruptions corruptions are injector faults like the nuScenes-C ones (levels 2/4/5).
+TEST(FaultSpecTest, ImagecorruptionsTypesAreFaults) {
+  const auto frost = parse_corruption_shorthand("frost/hard", "fault_injector");
+  ASSERT_TRUE(frost);
+  EXPECT_EQ(frost->kind, FaultKind::Corruption);
+  EXPECT_EQ(frost->corruption, corruption::Corruption::Frost);
+  EXPECT_EQ(frost->severity, 5);
+  const auto f = Parse("[{type: elastic_transform, severity: 2}, {type: glass_blur, level: easy}]");
+  ASSERT_EQ(f.size(), 2u);
+  EXPECT_EQ(f[0].corruption, corruption::Corruption::ElasticTransform);
+  EXPECT_EQ(f[1].corruption, corruption::Corruption::GlassBlur);
+  EXPECT_EQ(f[1].severity, 2);
+  EXPECT_NE(ErrorOf("[{type: rain}]").find("spatter"), std::string::npos);
+}
+
 TEST(FaultSpecTest, WindowOpensAtStartAndClosesAfterDuration) {
   const auto f = Parse("[{type: black, start_s: 12, duration_s: 3}]")[0];
   EXPECT_EQ(severity_at(f, Sec(0)), 0);

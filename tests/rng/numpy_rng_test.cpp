@@ -77,6 +77,26 @@ TEST_F(NumpyRngVectorsTest, ChoiceOfSix) {
   }
 }
 
+// randint(0, 6) is choice(6)'s draw (NumPy's masked rejection with mask 7), so the reference's vectors hold for it;
+// randint(-d, d) offsets the same draws; a one-value range consumes nothing.
+TEST_F(NumpyRngVectorsTest, RandintIsMaskedRejection) {
+  for (const auto& s : seeds().GetArray()) {
+    NumpyRandomState rng(s["seed"].GetUint());
+    for (const auto& v : s["choice6"].GetArray()) EXPECT_EQ(rng.randint(0, 6), v.GetInt());
+    NumpyRandomState a(s["seed"].GetUint()), b(s["seed"].GetUint());
+    for (int i = 0; i < 50; ++i) EXPECT_EQ(a.randint(-3, 3), b.randint(0, 6) - 3);
+  }
+  NumpyRandomState r(1), fresh(1);
+  EXPECT_EQ(r.randint(7, 8), 7);
+  EXPECT_EQ(r.next_u32(), fresh.next_u32());
+  // A range of 2^32 values takes one 32-bit draw as is; wider ranges take 64-bit draws (high word first).
+  NumpyRandomState w(5), w_ref(5);
+  EXPECT_EQ(w.randint(0, std::int64_t{1} << 32), static_cast<std::int64_t>(w_ref.next_u32()));
+  const std::int64_t wide = w.randint(0, (std::int64_t{1} << 40) + 1);
+  EXPECT_GE(wide, 0);
+  EXPECT_LE(wide, std::int64_t{1} << 40);
+}
+
 TEST(Mt19937Test, BlockGeneratorEqualsStdMt19937) {
   for (std::uint32_t seed : {0u, 1u, 5489u, 4294967295u}) {
     Mt19937 mine(seed);

@@ -82,7 +82,7 @@ struct Row {
   double cpu_ms = 0;
   std::optional<double> psnr_db;       // against numpy mode (same seed / injected field)
   std::optional<double> max_abs_diff;  // against numpy mode
-  std::string fidelity;                // exact | injected | statistical | reference
+  std::string fidelity;                // exact | close | injected | statistical | reference
   std::optional<double> psnr_seed_to_seed_db, hist_l1_value, mean_diff;
   double reference_ms = 0;
 };
@@ -120,6 +120,15 @@ double reference_ms(Corruption c, Level l) {
     case Corruption::Snow: return std::vector<double>{171, 177, 178}[static_cast<std::size_t>(i)];
     case Corruption::MotionBlur: return std::vector<double>{211, 192, 267}[static_cast<std::size_t>(i)];
     case Corruption::ColorQuant: return 2.4;
+    // imagecorruptions 1.1.2 itself has no 1600x900 timings: the median ref_ms of its golden outputs (severities
+    // 2/4/5, 333x197 to 640x360 inputs, a loaded machine) scaled by pixel count. Indicative only; numpy mode, which
+    // mirrors the reference's arithmetic in C++, is timed beside it.
+    case Corruption::DefocusBlur: return std::vector<double>{943, 1742, 3226}[static_cast<std::size_t>(i)];
+    case Corruption::GlassBlur: return std::vector<double>{121584, 234651, 289411}[static_cast<std::size_t>(i)];
+    case Corruption::ZoomBlur: return std::vector<double>{24500, 21204, 16631}[static_cast<std::size_t>(i)];
+    case Corruption::Frost: return std::vector<double>{3029, 671, 574}[static_cast<std::size_t>(i)];
+    case Corruption::ElasticTransform: return std::vector<double>{4989, 7027, 9314}[static_cast<std::size_t>(i)];
+    case Corruption::Spatter: return std::vector<double>{1454, 1281, 2465}[static_cast<std::size_t>(i)];
     default: return 0;  // no 1600x900 reference timing (spec §12 covers nuScenes-C's six): printed as n/a
   }
 }
@@ -213,9 +222,10 @@ int run_corrupt(const CorruptOptions& o) {
           fast_row.psnr_seed_to_seed_db = numpy_row.psnr_seed_to_seed_db;
         }
         if (!corruption::is_random(c)) {
-          fast_row.fidelity = "exact";
           fast_row.psnr_db = psnr(fast_out, numpy_out);
           fast_row.max_abs_diff = cv::norm(fast_out, numpy_out, cv::NORM_INF);
+          // Deterministic, but fast Defocus/Zoom Blur use other arithmetic: "close" unless equal.
+          fast_row.fidelity = *fast_row.max_abs_diff == 0.0 ? "exact" : "close";
         } else if (auto injected = fast_with_injected_field(frame, c, sev, seed)) {
           fast_row.fidelity = "injected";
           fast_row.psnr_db = psnr(*injected, numpy_out);
@@ -275,12 +285,12 @@ int run_corrupt(const CorruptOptions& o) {
   std::printf("frame %dx%d, single-threaded, median of %d runs; TurboJPEG decode (q95 4:2:0): %.3f ms (cpu %.3f)\n",
               width, height, reps, jpeg_ms, jpeg_t.cpu_ms);
   if (common::scalar_forced()) std::printf("FAULTLINE_SCALAR is set: the corruptions' vector paths are off\n");
-  std::printf("%-16s %-5s %-6s %10s %10s %9s %9s %10s", "type", "level", "mode", "ms", "cpu_ms", "xJPEG", "ref_ms",
+  std::printf("%-17s %-5s %-6s %10s %10s %9s %9s %10s", "type", "level", "mode", "ms", "cpu_ms", "xJPEG", "ref_ms",
               "speedup");
   if (fidelity) std::printf(" %-11s %9s %7s", "fidelity", "psnr_db", "maxdiff");
   std::printf("\n");
   for (const Row& r : rows) {
-    std::printf("%-16s %-5s %-6s %10.3f %10.3f %9.2f", r.type.c_str(), r.level.c_str(), r.mode.c_str(), r.ms, r.cpu_ms,
+    std::printf("%-17s %-5s %-6s %10.3f %10.3f %9.2f", r.type.c_str(), r.level.c_str(), r.mode.c_str(), r.ms, r.cpu_ms,
                 r.ms / jpeg_ms);
     if (r.reference_ms > 0) {
       std::printf(" %9.1f %9.1fx", r.reference_ms, r.reference_ms / r.ms);

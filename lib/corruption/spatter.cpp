@@ -1,0 +1,147 @@
+// Spatter: liquid field, then the water (OpenCV edge pipeline) or mud (blurred mask) blend.
+#include "corruption/spatter.hpp"
+
+#include <algorithm>
+
+#include <opencv2/imgproc.hpp>
+
+#include "corruption/ndimage.hpp"
+
+namespace faultline::corruption {
+
+namespace {
+
+// The water tint per pixel (float32, before the colour): the emboss-filtered edge distance times the liquid.
+cv::Mat water_strength(const cv::Mat& liquid, float& max_value) {
+  cv::Mat liquid8(liquid.size(), CV_8U);
+  for (int y = 0; y < liquid.rows; ++y) {
+    const double* s = liquid.ptr<double>(y);
+    unsigned char* o = liquid8.ptr<unsigned char>(y);
+    for (int x = 0; x < liquid.cols; ++x) o[x] = nd::to_u8_wrap(s[x] * 255);  // astype(np.uint8)
+  }
+  cv::Mat edges, dist;
+  cv::Canny(liquid8, edges, 50, 150);
+  edges = 255 - edges;
+  cv::distanceTransform(edges, dist, cv::DIST_L2, 5);
+  cv::threshold(dist, dist, 20, 20, cv::THRESH_TRUNC);
+  cv::blur(dist, dist, cv::Size(3, 3));
+  cv::Mat dist8(dist.size(), CV_8U);
+  for (int y = 0; y < dist.rows; ++y) {
+    const float* s = dist.ptr<float>(y);
+    unsigned char* o = dist8.ptr<unsigned char>(y);
+    for (int x = 0; x < dist.cols; ++x) o[x] = nd::to_u8_wrap(s[x]);
+  }
+  cv::equalizeHist(dist8, dist8);
+  const cv::Mat_<int> emboss = (cv::Mat_<int>(3, 3) << -2, -1, 0, -1, 1, 1, 0, 1, 2);
+  cv::filter2D(dist8, dist8, CV_8U, emboss);
+  cv::blur(dist8, dist8, cv::Size(3, 3));
+  cv::Mat m(liquid.size(), CV_32F);
+  max_value = 0.f;
+  for (int y = 0; y < m.rows; ++y) {
+    const unsigned char* l = liquid8.ptr<unsigned char>(y);
+    const unsigned char* d = dist8.ptr<unsigned char>(y);
+    float* o = m.ptr<float>(y);
+    for (int x = 0; x < m.cols; ++x) {
+      o[x] = static_cast<float>(l[x]) * static_cast<float>(d[x]);
+      max_value = std::max(max_value, o[x]);
+    }
+  }
+  return m;
+}
+
+cv::Mat water_blend(const cv::Mat& bgr, const cv::Mat& liquid, const SpatterParams& p) {
+  float max_value = 0.f;
+  const cv::Mat m = water_strength(liquid, max_value);
+  if (max_value == 0.f) return bgr.clone();  // no liquid: see the header
+  const float intensity = static_cast<float>(p.intensity);
+  const float colour[3] = {static_cast<float>(175 / 255.), static_cast<float>(238 / 255.),
+                           static_cast<float>(238 / 255.)};
+  cv::Mat out(bgr.size(), CV_8UC3);
+  for (int y = 0; y < bgr.rows; ++y) {
+    const unsigned char* s = bgr.ptr<unsigned char>(y);
+    const float* mm = m.ptr<float>(y);
+    unsigned char* o = out.ptr<unsigned char>(y);
+    for (int x = 0; x < bgr.cols; ++x) {
+      const float k = (mm[x] / max_value) * intensity;
+      for (int c = 0; c < 3; ++c) {
+        const float v = static_cast<float>(s[3 * x + c]) / 255.f + k * colour[c];
+        o[3 * x + c] = static_cast<unsigned char>(std::min(std::max(v, 0.f), 1.f) * 255.f);
+      }
+    }
+  }
+  return out;
+}
+
+cv::Mat mud_blend(const cv::Mat& bgr, const cv::Mat& liquid, const SpatterParams& p, bool exact_blur) {
+  cv::Mat mask(liquid.size(), CV_32F);
+  for (int y = 0; y < liquid.rows; ++y) {
+    const double* s = liquid.ptr<double>(y);
+    float* o = mask.ptr<float>(y);
+    for (int x = 0; x < liquid.cols; ++x) o[x] = s[x] > p.threshold ? 1.f : 0.f;
+  }
+  if (exact_blur) {
+    nd::gaussian_filter(mask, p.intensity, p.intensity, nd::Extend::Nearest);
+  } else {
+    cv::GaussianBlur(mask, mask, cv::Size(), p.intensity, p.intensity, cv::BORDER_REPLICATE);
+  }
+  const double colour[3] = {63 / 255., 42 / 255., 20 / 255.};
+  cv::Mat out(bgr.size(), CV_8UC3);
+  for (int y = 0; y < bgr.rows; ++y) {
+    const unsigned char* s = bgr.ptr<unsigned char>(y);
+    const float* mm = mask.ptr<float>(y);
+    unsigned char* o = out.ptr<unsigned char>(y);
+    for (int x = 0; x < bgr.cols; ++x) {
+      const float m = mm[x] < 0.8f ? 0.f : mm[x];
+      for (int c = 0; c < 3; ++c) {
+        const float kept = (static_cast<float>(s[3 * x + c]) / 255.f) * (1.f - m);
+        const double v = static_cast<double>(kept) + colour[c] * static_cast<double>(m);
+        o[3 * x + c] = static_cast<unsigned char>(std::min(std::max(v, 0.0), 1.0) * 255.0);
+      }
+    }
+  }
+  return out;
+}
+
+}  // namespace
+
+SpatterParams spatter_params(int severity) {
+  static constexpr SpatterParams kParams[] = {{0.65, 0.3, 4, 0.69, 0.6, false},
+                                              {0.65, 0.3, 3, 0.68, 0.6, false},
+                                              {0.65, 0.3, 2, 0.68, 0.5, false},
+                                              {0.65, 0.3, 1, 0.65, 1.5, true},
+                                              {0.67, 0.4, 1, 0.65, 1.5, true}};
+  return kParams[severity - 1];
+}
+
+cv::Mat spatter_apply(const cv::Mat& bgr, const cv::Mat& liquid, int severity, bool exact_blur) {
+  const SpatterParams p = spatter_params(severity);
+  return p.mud ? mud_blend(bgr, liquid, p, exact_blur) : water_blend(bgr, liquid, p);
+}
+
+cv::Mat spatter_numpy(const cv::Mat& bgr, int severity, rng::NumpyRandomState& rng) {
+  const SpatterParams p = spatter_params(severity);
+  cv::Mat liquid(bgr.size(), CV_64F);
+  for (int y = 0; y < bgr.rows; ++y) {
+    double* o = liquid.ptr<double>(y);
+    for (int x = 0; x < bgr.cols; ++x) o[x] = rng.normal(p.loc, p.scale);
+  }
+  nd::gaussian_filter(liquid, p.sigma, p.sigma, nd::Extend::Nearest);
+  liquid.setTo(0.0, liquid < p.threshold);
+  return spatter_apply(bgr, liquid, severity, true);
+}
+
+cv::Mat spatter_fast(const cv::Mat& bgr, int severity, rng::FastRng& rng) {
+  const SpatterParams p = spatter_params(severity);
+  cv::Mat field(bgr.size(), CV_32F);
+  for (int y = 0; y < bgr.rows; ++y) {
+    float* o = field.ptr<float>(y);
+    for (int x = 0; x < bgr.cols; ++x) o[x] = static_cast<float>(rng.normal(p.loc, p.scale));
+  }
+  cv::GaussianBlur(field, field, cv::Size(), p.sigma, p.sigma, cv::BORDER_REPLICATE);
+  cv::Mat liquid;
+  field.convertTo(liquid, CV_64F);
+  liquid.setTo(0.0, liquid < p.threshold);
+  return spatter_apply(bgr, liquid, severity, false);
+}
+
+}  // namespace faultline::corruption
