@@ -376,10 +376,10 @@ int InjectorLoop::run(const std::atomic<bool>& stop) {
   if (!finished) m.pub.set_linger(0);  // shutdown: exit promptly
   counts_.oversize_refused = m.pub.oversize_refused();
   m.log->info("injector done: in {} out {} boundaries {} injected_drops {} corrupt_jpeg {} malformed {} "
-              "transport_drops {} superseded {} oversize_refused {} input_disconnects {}",
+              "transport_drops {} superseded {} oversize_refused {} input_disconnects {} input_reconnects {}",
               counts_.frames_in, counts_.frames_out, counts_.boundaries, counts_.injected_drops,
               counts_.corrupt_jpeg, counts_.malformed, counts_.transport_drops, counts_.superseded,
-              counts_.oversize_refused, m.sub ? m.sub->disconnects() : 0);
+              counts_.oversize_refused, m.sub ? m.sub->disconnects() : 0, m.sub ? m.sub->reconnects() : 0);
   return rc;
 }
 
