@@ -11,6 +11,7 @@
 #include "transport/context.hpp"
 #include "transport/endpoint.hpp"
 #include "transport/log_limiter.hpp"
+#include "transport/zap.hpp"
 
 namespace faultline::transport {
 
@@ -48,10 +49,17 @@ void RawSubscriber::open_socket() {
   if (config_.pattern == Pattern::PubSub) {
     for (const auto& t : config_.topics) socket_.set(zmq::sockopt::subscribe, t);
   }
+  if (config_.bind) {
+    for (const auto& ep : config_.endpoints) check_bind_allowed(config_.access, ep);
+  }
+  const std::string domain = apply_curve(socket_, config_.access, /*server=*/config_.bind);
+  if (!domain.empty()) zap_domain_ = domain;
   // Monitor before connecting, so that no closed connection goes unseen.
   static std::atomic<std::uint64_t> monitor_ids{0};
   const std::string monitor_address = "inproc://faultline-subscriber-monitor-" + std::to_string(++monitor_ids);
-  constexpr int kEvents = ZMQ_EVENT_DISCONNECTED | ZMQ_EVENT_CONNECT_RETRIED | ZMQ_EVENT_CONNECTED;
+  constexpr int kEvents = ZMQ_EVENT_DISCONNECTED | ZMQ_EVENT_CONNECT_RETRIED | ZMQ_EVENT_CONNECTED |
+                          ZMQ_EVENT_HANDSHAKE_FAILED_NO_DETAIL | ZMQ_EVENT_HANDSHAKE_FAILED_PROTOCOL |
+                          ZMQ_EVENT_HANDSHAKE_FAILED_AUTH;
   if (zmq_socket_monitor(socket_.handle(), monitor_address.c_str(), kEvents) != 0) {
     throw ConfigError("cannot monitor the subscriber socket: " + std::string(zmq_strerror(zmq_errno())));
   }
@@ -64,9 +72,6 @@ void RawSubscriber::open_socket() {
       if (config_.bind) {
         socket_.bind(ep);
         endpoints_.push_back(socket_.get(zmq::sockopt::last_endpoint));
-        if (!is_loopback_endpoint(endpoints_.back())) {
-          spdlog::warn("receiver bound to non-loopback endpoint {}", endpoints_.back());
-        }
       } else {
         socket_.connect(ep);
         endpoints_.push_back(ep);
@@ -91,6 +96,20 @@ void RawSubscriber::handle_monitor_events() {
     if (event.size() >= sizeof id) std::memcpy(&id, event.data(), sizeof id);
     // A connecting session names its endpoint the same way in every event (the connecter's address).
     std::string where(static_cast<const char*>(address.data()), address.size());
+    if (id == ZMQ_EVENT_HANDSHAKE_FAILED_NO_DETAIL || id == ZMQ_EVENT_HANDSHAKE_FAILED_PROTOCOL ||
+        id == ZMQ_EVENT_HANDSHAKE_FAILED_AUTH) {
+      ++handshake_failures_;
+      thread_local LogLimiter limiter;
+      if (limiter.allow()) {
+        spdlog::error("handshake with {} failed ({}; {} so far): wrong CURVE keys on either side, or a peer "
+                      "with{} CURVE; not retried",
+                      where, id == ZMQ_EVENT_HANDSHAKE_FAILED_AUTH ? "refused by the server" : "protocol",
+                      handshake_failures_, config_.access.curve() ? "out" : "");
+      }
+      refused_endpoints_.insert(where);
+      awaiting_reconnect_.erase(where);
+      continue;
+    }
     if (id != ZMQ_EVENT_DISCONNECTED) {
       awaiting_reconnect_.erase(where);  // libzmq reconnects (or has) by itself
       continue;
@@ -98,8 +117,11 @@ void RawSubscriber::handle_monitor_events() {
     ++disconnects_;
     spdlog::info("connection {} closed ({} so far): the peer exited, or sent a part over max_msg_bytes ({} bytes)",
                  where, disconnects_, config_.max_msg_bytes);
-    // A bound socket's peers reconnect themselves; a connecting one waits to see whether libzmq does.
-    if (!config_.bind) awaiting_reconnect_[std::move(where)] = monotonic_now_ns() + kReconnectGraceNs;
+    // A bound socket's peers reconnect themselves; a connecting one waits to see whether libzmq does. A refused
+    // handshake is not retried: the keys will not change by themselves.
+    if (!config_.bind && refused_endpoints_.count(where) == 0) {
+      awaiting_reconnect_[std::move(where)] = monotonic_now_ns() + kReconnectGraceNs;
+    }
   }
 }
 
@@ -138,6 +160,8 @@ void RawSubscriber::reconnect_if_abandoned() {
                "show as seq gaps",
                cut, config_.max_msg_bytes, reconnects_);
 }
+
+std::uint64_t RawSubscriber::auth_refused() const { return zap_domain_.empty() ? 0 : zap_refused(zap_domain_); }
 
 long RawSubscriber::cap_wait_ms(long wait_ms) const {
   if (awaiting_reconnect_.empty()) return wait_ms;

@@ -24,6 +24,7 @@
 #include <cstdint>
 #include <deque>
 #include <map>
+#include <set>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -42,6 +43,7 @@ struct SubscriberConfig {
   int rcv_hwm = 4;                      // messages; 1-8 for image topics, ~64 for lockstep
   bool latest_only = false;             // see above
   std::int64_t max_msg_bytes = kDefaultMaxMessageBytes;  // ZMQ_MAXMSGSIZE per part; -1 = unlimited
+  AccessConfig access;  // loopback-only binds unless allow_remote; CURVE (transport/access.hpp)
 };
 
 // How long a connecting subscriber waits for libzmq to announce its own reconnect after a closed
@@ -99,6 +101,11 @@ class RawSubscriber {
   std::uint64_t disconnects() const { return disconnects_; }
   // Times this (connecting) socket was recreated because libzmq did not reconnect a closed connection.
   std::uint64_t reconnects() const { return reconnects_; }
+  // Handshakes that failed (CURVE: a wrong key on either side, a peer without CURVE; each logged). libzmq does
+  // not retry a refused connection, and neither does this socket.
+  std::uint64_t handshake_failures() const { return handshake_failures_; }
+  // A binding CURVE socket: clients refused by its allowed-clients list.
+  std::uint64_t auth_refused() const;
 
  private:
   friend int wait_readable(const std::vector<RawSubscriber*>& subscribers, DurationNs timeout_ns);
@@ -120,6 +127,9 @@ class RawSubscriber {
   std::uint64_t malformed_ = 0;
   std::uint64_t disconnects_ = 0;
   std::uint64_t reconnects_ = 0;
+  std::uint64_t handshake_failures_ = 0;
+  std::string zap_domain_;
+  std::set<std::string> refused_endpoints_;  // handshake failed: not reconnected when closed
   // Connecting endpoints closed without a reconnect announced yet, with the deadline of their grace.
   std::map<std::string, StampNs> awaiting_reconnect_;
 };
