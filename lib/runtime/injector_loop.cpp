@@ -78,6 +78,7 @@ struct InjectorLoop::Impl {
         pub([&] {
           transport::PublisherConfig pc;
           pc.endpoint = cfg.output_endpoint;
+          pc.access = cfg.access;
           pc.snd_hwm = cfg.output_hwm;
           pc.linger_ms = cfg.linger_ms;
           return pc;
@@ -167,6 +168,7 @@ int InjectorLoop::run(const std::atomic<bool>& stop) {
   // Subscribing only now chains readiness: the upstream publisher sees us once our consumers are here.
   transport::SubscriberConfig sc;
   sc.endpoints = m.cfg.input_endpoints;
+  sc.access = m.cfg.access;
   sc.topics = m.cfg.input_topics;
   const bool end_covered = std::any_of(sc.topics.begin(), sc.topics.end(), [&](const std::string& prefix) {
     return m.cfg.end_topic.compare(0, prefix.size(), prefix) == 0;

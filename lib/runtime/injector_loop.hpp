@@ -20,6 +20,8 @@
 #include "stats/topic_stats.hpp"
 #include "transport/publisher.hpp"
 
+#include "transport/access.hpp"
+
 namespace faultline::runtime {
 
 struct InjectorConfig {
@@ -47,6 +49,8 @@ struct InjectorConfig {
   std::uint64_t seed = 0;                            // run seed of every fault draw
   int jpeg_quality = 95;                             // re-encoded faulted JPEG frames (nuScenes-C: 95)
 
+  transport::AccessConfig access;  // allow_remote and CURVE keys of every socket (transport/access.hpp)
+
   template <class V>
   void visit(V& v) {
     v("input_endpoints", input_endpoints, "publishers to subscribe to");
@@ -72,6 +76,7 @@ struct InjectorConfig {
     v("corruption", corruption, "shorthand for one fault on all cameras, e.g. fog/mid");
     v("seed", seed, "run seed of the fault draws");
     v("jpeg_quality", jpeg_quality, "JPEG quality of faulted frames re-encoded in JPEG mode, 1..100 (nuScenes-C: 95)");
+    access.visit(v);
   }
   void validate() const;  // throws ConfigError
 };
