@@ -9,6 +9,7 @@
 #include <fstream>
 #include <system_error>
 
+#include "common/bounded_read.hpp"
 #include "ros2/schema.hpp"
 
 namespace faultline::bag {
@@ -112,7 +113,9 @@ Result<Rosbag2Metadata> read_rosbag2_metadata(const std::string& bag_dir) {
   if (!fs::exists(path)) return Status(StatusCode::kNotFound, path + ": no such file");
   std::string key = "rosbag2_bagfile_information";
   try {
-    const YAML::Node root = YAML::LoadFile(path)["rosbag2_bagfile_information"];
+    auto text = read_file_bounded(path, kMaxRosbag2MetadataBytes, "rosbag2 metadata");
+    if (!text.is_ok()) return text.status();
+    const YAML::Node root = YAML::Load(*text)["rosbag2_bagfile_information"];
     if (!root || !root.IsMap()) return Status(StatusCode::kCorruptData, path + ": missing rosbag2_bagfile_information");
     auto need = [&](const YAML::Node& parent, const char* name) {
       key = name;

@@ -20,6 +20,18 @@ std::string describe_bytes(std::size_t bytes) {
   return std::to_string(bytes) + " B";
 }
 
+Status check_file_size(const std::string& path, std::uint64_t max_bytes, const std::string& what) {
+  struct stat st {};
+  if (::stat(path.c_str(), &st) != 0) return Status::ok();
+  if (S_ISDIR(st.st_mode)) return {StatusCode::kInvalidArgument, what + " " + path + ": is a directory, not a file"};
+  if (S_ISREG(st.st_mode) && static_cast<std::uint64_t>(st.st_size) > max_bytes) {
+    return {StatusCode::kInvalidArgument, what + " " + path + ": " + std::to_string(st.st_size) +
+                                              " bytes, larger than the limit of " + describe_bytes(max_bytes) +
+                                              " (" + std::to_string(max_bytes) + " bytes)"};
+  }
+  return Status::ok();
+}
+
 Result<std::string> read_file_bounded(const std::string& path, std::size_t max_bytes, const std::string& what) {
   struct stat st {};
   if (::stat(path.c_str(), &st) == 0 && S_ISDIR(st.st_mode)) {
