@@ -1,5 +1,5 @@
-// `faultline keys generate`: a CURVE key pair for a node (transport/access.hpp), written as PREFIX.secret (0600)
-// and PREFIX.public.
+// `faultline keys generate`: a CURVE key pair for a node (transport/access.hpp), written as
+// PREFIX.secret (0600) and PREFIX.public.
 #include <CLI/CLI.hpp>
 #include <cstdio>
 #include <string>
@@ -11,10 +11,12 @@
 namespace faultline::cli {
 namespace {
 int run(int argc, char** argv) {
-  CLI::App app{"Writes a new ZeroMQ CURVE key pair: PREFIX.secret (mode 0600; this node's curve_secret_key_file) "
-               "and PREFIX.public (for its peers: curve_server_public_key_file, or a line of "
-               "curve_allowed_clients_file).",
-               argv[0]};
+  CLI::App app{
+      "Writes a new ZeroMQ CURVE key pair: PREFIX.secret (mode 0600; this node's "
+      "curve_secret_key_file) "
+      "and PREFIX.public (for its peers: curve_server_public_key_file, or a line of "
+      "curve_allowed_clients_file).",
+      argv[0]};
   std::string prefix;
   bool force = false;
   app.add_option("prefix", prefix, "path prefix of the two files, e.g. keys/injector")->required();
@@ -35,5 +37,6 @@ int run(int argc, char** argv) {
   return 0;
 }
 }  // namespace
-FAULTLINE_COMMAND(keys_generate, "keys generate", "write a CURVE key pair for authenticated transport", &run);
+FAULTLINE_COMMAND(keys_generate, "keys generate",
+                  "write a CURVE key pair for authenticated transport", &run);
 }  // namespace faultline::cli

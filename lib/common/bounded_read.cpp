@@ -23,29 +23,35 @@ std::string describe_bytes(std::size_t bytes) {
 Status check_file_size(const std::string& path, std::uint64_t max_bytes, const std::string& what) {
   struct stat st {};
   if (::stat(path.c_str(), &st) != 0) return Status::ok();
-  if (S_ISDIR(st.st_mode)) return {StatusCode::kInvalidArgument, what + " " + path + ": is a directory, not a file"};
+  if (S_ISDIR(st.st_mode))
+    return {StatusCode::kInvalidArgument, what + " " + path + ": is a directory, not a file"};
   if (S_ISREG(st.st_mode) && static_cast<std::uint64_t>(st.st_size) > max_bytes) {
     return {StatusCode::kInvalidArgument, what + " " + path + ": " + std::to_string(st.st_size) +
-                                              " bytes, larger than the limit of " + describe_bytes(max_bytes) +
-                                              " (" + std::to_string(max_bytes) + " bytes)"};
+                                              " bytes, larger than the limit of " +
+                                              describe_bytes(max_bytes) + " (" +
+                                              std::to_string(max_bytes) + " bytes)"};
   }
   return Status::ok();
 }
 
-Result<std::string> read_file_bounded(const std::string& path, std::size_t max_bytes, const std::string& what) {
+Result<std::string> read_file_bounded(const std::string& path, std::size_t max_bytes,
+                                      const std::string& what) {
   struct stat st {};
   if (::stat(path.c_str(), &st) == 0 && S_ISDIR(st.st_mode)) {
     return Status{StatusCode::kInvalidArgument, what + " " + path + ": is a directory, not a file"};
   }
-  std::unique_ptr<std::FILE, int (*)(std::FILE*)> file(std::fopen(path.c_str(), "rb"), &std::fclose);
+  std::unique_ptr<std::FILE, int (*)(std::FILE*)> file(std::fopen(path.c_str(), "rb"),
+                                                       &std::fclose);
   if (!file) {
-    return Status{StatusCode::kNotFound, what + " " + path + ": cannot open (" + std::strerror(errno) + ")"};
+    return Status{StatusCode::kNotFound,
+                  what + " " + path + ": cannot open (" + std::strerror(errno) + ")"};
   }
-  const std::string over = what + " " + path + ": larger than the limit of " + describe_bytes(max_bytes) +
-                           " (" + std::to_string(max_bytes) + " bytes)";
+  const std::string over = what + " " + path + ": larger than the limit of " +
+                           describe_bytes(max_bytes) + " (" + std::to_string(max_bytes) + " bytes)";
   std::string bytes;
   if (S_ISREG(st.st_mode)) {
-    if (static_cast<std::uint64_t>(st.st_size) > max_bytes) return Status{StatusCode::kInvalidArgument, over};
+    if (static_cast<std::uint64_t>(st.st_size) > max_bytes)
+      return Status{StatusCode::kInvalidArgument, over};
     bytes.reserve(static_cast<std::size_t>(st.st_size));
   }
   char chunk[1 << 16];
@@ -58,7 +64,8 @@ Result<std::string> read_file_bounded(const std::string& path, std::size_t max_b
     if (n < sizeof chunk) break;
   }
   if (std::ferror(file.get())) {
-    return Status{StatusCode::kIoError, what + " " + path + ": read error (" + std::strerror(errno) + ")"};
+    return Status{StatusCode::kIoError,
+                  what + " " + path + ": read error (" + std::strerror(errno) + ")"};
   }
   return bytes;
 }

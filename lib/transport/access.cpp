@@ -39,12 +39,16 @@ std::string read_text(const std::string& path, std::size_t limit, const char* wh
 void check_bind_allowed(const AccessConfig& access, const std::string& endpoint) {
   if (is_loopback_endpoint(endpoint)) return;
   if (!access.allow_remote) {
-    throw ConfigError("endpoint = " + endpoint + ": binds beyond loopback; set allow_remote: true "
-                      "(-p allow_remote:=true) to expose it, with CURVE keys (curve_secret_key_file) to authenticate");
+    throw ConfigError("endpoint = " + endpoint +
+                      ": binds beyond loopback; set allow_remote: true "
+                      "(-p allow_remote:=true) to expose it, with CURVE keys "
+                      "(curve_secret_key_file) to authenticate");
   }
   if (!access.curve()) {
-    spdlog::warn("{} bound beyond loopback without CURVE: anyone on the network can read and send its streams",
-                 endpoint);
+    spdlog::warn(
+        "{} bound beyond loopback without CURVE: anyone on the network can read and send its "
+        "streams",
+        endpoint);
   }
 }
 
@@ -58,7 +62,8 @@ std::string read_curve_key(const std::string& path) {
     key = line;
   }
   if (!is_z85_key(key)) {
-    throw ConfigError("CURVE key file " + path + ": expected one 40-character Z85 key (faultline keys generate)");
+    throw ConfigError("CURVE key file " + path +
+                      ": expected one 40-character Z85 key (faultline keys generate)");
   }
   return key;
 }
@@ -82,11 +87,13 @@ std::set<std::string> read_allowed_clients(const std::string& path) {
 
 std::string apply_curve(zmq::socket_t& socket, const AccessConfig& access, bool server) {
   if (!access.curve()) return {};
-  if (!zmq_has("curve")) throw ConfigError("curve_secret_key_file is set but this libzmq has no CURVE support");
+  if (!zmq_has("curve"))
+    throw ConfigError("curve_secret_key_file is set but this libzmq has no CURVE support");
   const std::string secret = read_curve_key(access.curve_secret_key_file);
   char derived[41] = {};
   if (zmq_curve_public(derived, secret.c_str()) != 0) {
-    throw ConfigError("CURVE key file " + access.curve_secret_key_file + ": not a valid secret key");
+    throw ConfigError("CURVE key file " + access.curve_secret_key_file +
+                      ": not a valid secret key");
   }
   std::string domain;
   if (server) {
@@ -99,7 +106,8 @@ std::string apply_curve(zmq::socket_t& socket, const AccessConfig& access, bool 
     return domain;
   }
   if (access.curve_server_public_key_file.empty()) {
-    throw ConfigError("curve_server_public_key_file: required to connect with CURVE (the binding peer's key)");
+    throw ConfigError(
+        "curve_server_public_key_file: required to connect with CURVE (the binding peer's key)");
   }
   socket.set(zmq::sockopt::curve_serverkey, read_curve_key(access.curve_server_public_key_file));
   socket.set(zmq::sockopt::curve_publickey, std::string(derived));
@@ -108,11 +116,13 @@ std::string apply_curve(zmq::socket_t& socket, const AccessConfig& access, bool 
 }
 
 Result<CurveKeyPair> generate_curve_keypair() {
-  if (!zmq_has("curve")) return Status{StatusCode::kUnsupported, "this libzmq has no CURVE support"};
+  if (!zmq_has("curve"))
+    return Status{StatusCode::kUnsupported, "this libzmq has no CURVE support"};
   char pub[41] = {};
   char sec[41] = {};
   if (zmq_curve_keypair(pub, sec) != 0) {
-    return Status{StatusCode::kInternal, std::string("zmq_curve_keypair: ") + zmq_strerror(zmq_errno())};
+    return Status{StatusCode::kInternal,
+                  std::string("zmq_curve_keypair: ") + zmq_strerror(zmq_errno())};
   }
   return CurveKeyPair{pub, sec};
 }
@@ -132,8 +142,10 @@ Status write_curve_key_files(const CurveKeyPair& pair, const std::string& prefix
     if (f) std::fclose(f);
     return {StatusCode::kIoError, secret_path + ": cannot write"};
   }
-  const bool secret_ok = std::fprintf(f, "# Faultline CURVE secret key: keep private\n%s\n", pair.secret_key.c_str()) > 0;
-  if (std::fclose(f) != 0 || !secret_ok) return {StatusCode::kIoError, secret_path + ": write failed"};
+  const bool secret_ok = std::fprintf(f, "# Faultline CURVE secret key: keep private\n%s\n",
+                                      pair.secret_key.c_str()) > 0;
+  if (std::fclose(f) != 0 || !secret_ok)
+    return {StatusCode::kIoError, secret_path + ": write failed"};
   std::ofstream out(public_path, std::ios::trunc);
   out << "# Faultline CURVE public key\n" << pair.public_key << "\n";
   if (!out) return {StatusCode::kIoError, public_path + ": write failed"};

@@ -1,12 +1,12 @@
 #include "transport/zap.hpp"
 
 #include <spdlog/spdlog.h>
-#include <zmq.hpp>
 
 #include <map>
 #include <mutex>
 #include <thread>
 #include <vector>
+#include <zmq.hpp>
 
 #include "common/config.hpp"
 #include "transport/context.hpp"
@@ -34,7 +34,9 @@ std::string text(const zmq::message_t& m) { return {static_cast<const char*>(m.d
 
 std::string z85(const std::string& binary_key) {
   char out[41] = {};
-  if (binary_key.size() != 32 || zmq_z85_encode(out, reinterpret_cast<const std::uint8_t*>(binary_key.data()), 32) == nullptr) {
+  if (binary_key.size() != 32 ||
+      zmq_z85_encode(out, reinterpret_cast<const std::uint8_t*>(binary_key.data()), 32) ==
+          nullptr) {
     return "(not a 32-byte key)";
   }
   return out;
@@ -64,9 +66,11 @@ bool decide(const std::vector<zmq::message_t>& request, std::string& why) {
   const std::uint64_t n = ++s.refused[domain];
   thread_local LogLimiter limiter;
   if (limiter.allow()) {
-    spdlog::warn("refused a {} client from {} with public key {} (not in the allowed-clients list; {} refused in "
-                 "this domain so far)",
-                 mechanism, address, z85(key), n);
+    spdlog::warn(
+        "refused a {} client from {} with public key {} (not in the allowed-clients list; {} "
+        "refused in "
+        "this domain so far)",
+        mechanism, address, z85(key), n);
   }
   why = "client key not allowed";
   return false;
@@ -106,7 +110,8 @@ std::string register_zap_domain(const std::set<std::string>& allowed_public_keys
   std::set<std::string> binary;
   for (const auto& k : allowed_public_keys_z85) {
     std::string key(32, '\0');
-    if (k.size() != 40 || zmq_z85_decode(reinterpret_cast<std::uint8_t*>(key.data()), k.c_str()) == nullptr) {
+    if (k.size() != 40 ||
+        zmq_z85_decode(reinterpret_cast<std::uint8_t*>(key.data()), k.c_str()) == nullptr) {
       throw ConfigError("allowed client key " + k + ": not a 40-character Z85 key");
     }
     binary.insert(std::move(key));
@@ -120,7 +125,8 @@ std::string register_zap_domain(const std::set<std::string>& allowed_public_keys
     try {
       socket.bind(kZapEndpoint);
     } catch (const zmq::error_t& e) {
-      throw ConfigError(std::string("cannot start the ZAP handler at ") + kZapEndpoint + ": " + e.what());
+      throw ConfigError(std::string("cannot start the ZAP handler at ") + kZapEndpoint + ": " +
+                        e.what());
     }
     std::thread(serve, std::move(socket)).detach();
     s.started = true;

@@ -1,5 +1,6 @@
-// Size limits of the bag readers (#22): rosbag2's metadata.yaml one byte over kMaxRosbag2MetadataBytes is refused
-// naming the file and the limit; an MCAP record over max_record_bytes is named with the limit.
+// Size limits of the bag readers (#22): rosbag2's metadata.yaml one byte over
+// kMaxRosbag2MetadataBytes is refused naming the file and the limit; an MCAP record over
+// max_record_bytes is named with the limit.
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -28,8 +29,8 @@ TEST(BagLimitsTest, Rosbag2MetadataOneByteOverTheLimitIsRefusedNamingIt) {
   (void)std::system(("rm -rf " + dir).c_str());
 }
 
-// The MCAP limit is per record (a chunk), not per file: a record one byte over max_record_bytes is skipped and
-// named as a problem with the limit; the rest of the bag is read.
+// The MCAP limit is per record (a chunk), not per file: a record one byte over max_record_bytes is
+// skipped and named as a problem with the limit; the rest of the bag is read.
 TEST(BagLimitsTest, AnMcapRecordOneByteOverTheLimitIsAProblemNamingTheLimit) {
   std::string bag;
   WriterOptions opts;
@@ -39,9 +40,11 @@ TEST(BagLimitsTest, AnMcapRecordOneByteOverTheLimitIsAProblemNamingTheLimit) {
   auto reader = Reader::open(std::make_unique<BufferSource>(bag));
   ASSERT_TRUE(reader->load_summary().is_ok());
   std::uint64_t largest = 0;
-  for (const auto& ci : reader->summary().chunk_indexes) largest = std::max(largest, ci.chunk_length);
+  for (const auto& ci : reader->summary().chunk_indexes)
+    largest = std::max(largest, ci.chunk_length);
   std::size_t at_largest = 0;
-  for (const auto& ci : reader->summary().chunk_indexes) at_largest += ci.chunk_length == largest ? 1 : 0;
+  for (const auto& ci : reader->summary().chunk_indexes)
+    at_largest += ci.chunk_length == largest ? 1 : 0;
   const std::uint64_t content = largest - kRecordPrefixBytes;
   ReadOptions at_limit;
   at_limit.max_record_bytes = content;
@@ -51,7 +54,8 @@ TEST(BagLimitsTest, AnMcapRecordOneByteOverTheLimitIsAProblemNamingTheLimit) {
   one_under.max_record_bytes = content - 1;
   const auto cut = testing::read_linear_all(bag, one_under);
   ASSERT_EQ(cut.problems.size(), at_largest);
-  EXPECT_NE(cut.problems[0].to_string().find("exceeds the limit of " + std::to_string(content - 1)), std::string::npos)
+  EXPECT_NE(cut.problems[0].to_string().find("exceeds the limit of " + std::to_string(content - 1)),
+            std::string::npos)
       << cut.problems[0].to_string();
   EXPECT_LT(cut.messages.size(), whole.messages.size());
   EXPECT_GT(cut.messages.size(), 0u);

@@ -1,5 +1,7 @@
-// Size limits of the readers of outside bytes (#22): a file at the limit is read, one byte over is refused with an
-// error naming the file and the limit, and devices stop at the limit too.
+// Size limits of the readers of outside bytes (#22): a file at the limit is read, one byte over is
+// refused with an error naming the file and the limit, and devices stop at the limit too.
+#include "common/bounded_read.hpp"
+
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -7,7 +9,6 @@
 #include <fstream>
 #include <string>
 
-#include "common/bounded_read.hpp"
 #include "common/config.hpp"
 
 namespace faultline {
@@ -38,14 +39,17 @@ TEST_F(BoundedReadTest, AFileAtTheLimitIsReadAndOneByteOverIsRefusedNamingFileAn
   const std::string over = Sparse("over", 4097);
   auto refused = read_file_bounded(over, 4096, "test file");
   ASSERT_EQ(refused.status().code(), StatusCode::kInvalidArgument);
-  EXPECT_NE(refused.status().message().find("test file " + over), std::string::npos) << refused.status().message();
-  EXPECT_NE(refused.status().message().find("4 KiB (4096 bytes)"), std::string::npos) << refused.status().message();
+  EXPECT_NE(refused.status().message().find("test file " + over), std::string::npos)
+      << refused.status().message();
+  EXPECT_NE(refused.status().message().find("4 KiB (4096 bytes)"), std::string::npos)
+      << refused.status().message();
 }
 
 TEST_F(BoundedReadTest, DevZeroStopsAtTheLimit) {
   auto r = read_file_bounded("/dev/zero", 1 << 20, "test file");
   EXPECT_EQ(r.status().code(), StatusCode::kInvalidArgument);
-  EXPECT_NE(r.status().message().find("/dev/zero: larger than the limit of 1 MiB"), std::string::npos)
+  EXPECT_NE(r.status().message().find("/dev/zero: larger than the limit of 1 MiB"),
+            std::string::npos)
       << r.status().message();
 }
 
@@ -64,8 +68,11 @@ TEST_F(BoundedReadTest, CheckFileSizeRefusesARegularFileOneByteOverAndLetsDevice
   EXPECT_EQ(s.code(), StatusCode::kInvalidArgument);
   EXPECT_NE(s.message().find(over), std::string::npos) << s.message();
   EXPECT_NE(s.message().find("16 GiB"), std::string::npos) << s.message();
-  EXPECT_TRUE(check_file_size(Sparse("at.json", kMaxNuScenesTableBytes), kMaxNuScenesTableBytes, "t").is_ok());
-  EXPECT_TRUE(check_file_size("/dev/zero", 1, "t").is_ok());  // the caller's parser stops on the first NUL
+  EXPECT_TRUE(
+      check_file_size(Sparse("at.json", kMaxNuScenesTableBytes), kMaxNuScenesTableBytes, "t")
+          .is_ok());
+  EXPECT_TRUE(
+      check_file_size("/dev/zero", 1, "t").is_ok());  // the caller's parser stops on the first NUL
 }
 
 TEST_F(BoundedReadTest, ParamsFileOneByteOverTheLimitIsAConfigErrorNamingIt) {

@@ -1,5 +1,5 @@
-// Size limits of the dataset readers (#22): a nuScenes table one byte over kMaxNuScenesTableBytes, and an image
-// over its limit (or /dev/zero), are refused naming the file and the limit.
+// Size limits of the dataset readers (#22): a nuScenes table one byte over kMaxNuScenesTableBytes,
+// and an image over its limit (or /dev/zero), are refused naming the file and the limit.
 #include <gtest/gtest.h>
 #include <rapidjson/document.h>
 #include <unistd.h>
@@ -15,7 +15,8 @@ namespace faultline::dataset {
 namespace {
 
 std::string Sparse(const std::string& stem, std::uint64_t size) {
-  const std::string path = "/tmp/faultline-dataset-limit-" + stem + "-" + std::to_string(::getpid());
+  const std::string path =
+      "/tmp/faultline-dataset-limit-" + stem + "-" + std::to_string(::getpid());
   std::ofstream(path).close();
   EXPECT_EQ(::truncate(path.c_str(), static_cast<off_t>(size)), 0);
   return path;
@@ -36,7 +37,8 @@ TEST(DatasetLimitsTest, AnImageOverItsLimitOrDevZeroIsRefused) {
   const std::string path = Sparse("image.jpg", 1025);
   auto over = read_file(path, 1024);
   EXPECT_EQ(over.status().code(), StatusCode::kInvalidArgument);
-  EXPECT_NE(over.status().message().find(path + ": larger than the limit of 1 KiB"), std::string::npos)
+  EXPECT_NE(over.status().message().find(path + ": larger than the limit of 1 KiB"),
+            std::string::npos)
       << over.status().message();
   EXPECT_TRUE(read_file(path, 1025).is_ok());
   ::unlink(path.c_str());

@@ -1,5 +1,5 @@
-// Launch files are read with a size limit (#22): one byte over kMaxParamsFileBytes, or /dev/zero, is a
-// ConfigError naming the file and the limit.
+// Launch files are read with a size limit (#22): one byte over kMaxParamsFileBytes, or /dev/zero,
+// is a ConfigError naming the file and the limit.
 #include <gtest/gtest.h>
 #include <unistd.h>
 

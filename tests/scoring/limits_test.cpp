@@ -1,5 +1,6 @@
-// Size limits of the scorer's readers (#22): the nuScenes table scanner refuses a table one byte over
-// kMaxNuScenesTableBytes, and a custom splits.json over kMaxParamsFileBytes, naming the file and the limit.
+// Size limits of the scorer's readers (#22): the nuScenes table scanner refuses a table one byte
+// over kMaxNuScenesTableBytes, and a custom splits.json over kMaxParamsFileBytes, naming the file
+// and the limit.
 #include <gtest/gtest.h>
 #include <sys/stat.h>
 #include <unistd.h>
@@ -18,7 +19,8 @@ TEST(ScoringLimitsTest, TableScannerRefusesATableOneByteOverTheLimit) {
   const std::string path = "/tmp/faultline-scoring-limit-" + std::to_string(::getpid()) + ".json";
   std::ofstream(path).close();
   ASSERT_EQ(::truncate(path.c_str(), static_cast<off_t>(kMaxNuScenesTableBytes + 1)), 0);
-  const Status s = stream_table(path, {"token"}, [](const TableRecord&, std::size_t) { return Status::ok(); });
+  const Status s =
+      stream_table(path, {"token"}, [](const TableRecord&, std::size_t) { return Status::ok(); });
   EXPECT_EQ(s.code(), StatusCode::kInvalidArgument);
   EXPECT_NE(s.message().find(path), std::string::npos) << s.message();
   EXPECT_NE(s.message().find("16 GiB"), std::string::npos) << s.message();

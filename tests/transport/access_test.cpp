@@ -1,5 +1,7 @@
-// Limits and access (#22): binds beyond loopback need allow_remote, and CURVE keys from files admit the right
-// subscriber and refuse a wrong one (counted and logged on both sides).
+// Limits and access (#22): binds beyond loopback need allow_remote, and CURVE keys from files admit
+// the right subscriber and refuse a wrong one (counted and logged on both sides).
+#include "transport/access.hpp"
+
 #include <gtest/gtest.h>
 #include <sys/stat.h>
 #include <unistd.h>
@@ -13,7 +15,6 @@
 
 #include "common/config.hpp"
 #include "test_util.hpp"
-#include "transport/access.hpp"
 #include "transport/publisher.hpp"
 #include "transport/subscriber.hpp"
 
@@ -104,16 +105,19 @@ TEST_F(CurveTest, TheRightKeyReceivesAndAWrongClientKeyIsRefusedCountedAndGetsNo
   PublisherConfig pc;
   pc.endpoint = "tcp://127.0.0.1:*";
   pc.access = Server();
-  pc.snd_hwm = 64;  // lockstep sends can outrun libzmq's credit refresh at a small HWM (drops, not this test)
+  pc.snd_hwm = 64;  // lockstep sends can outrun libzmq's credit refresh at a small HWM (drops, not
+                    // this test)
   Publisher pub(pc);
   RawSubscriber good(Sub(pub.endpoint(), Client("good")));
   RawSubscriber bad(Sub(pub.endpoint(), Client("bad")));
   ASSERT_TRUE(pub.wait_for_subscribers("/raw", 1, 20 * kNsPerSec).is_ok());
   // The refusal is counted by the publisher's ZAP handler and seen by the refused client's monitor.
-  ASSERT_TRUE(testing::eventually([&] {
-    (void)bad.receive(10 * kNsPerMs);
-    return pub.auth_refused() >= 1 && bad.handshake_failures() >= 1;
-  }, 30 * kNsPerSec));
+  ASSERT_TRUE(testing::eventually(
+      [&] {
+        (void)bad.receive(10 * kNsPerMs);
+        return pub.auth_refused() >= 1 && bad.handshake_failures() >= 1;
+      },
+      30 * kNsPerSec));
   for (int seq = 0; seq < 10; ++seq) {
     ASSERT_TRUE(pub.send("/raw", std::to_string(seq), BytesPayload(32, 1)).is_ok());
     auto r = good.receive(10 * kNsPerSec);
@@ -133,11 +137,13 @@ TEST_F(CurveTest, AWrongServerKeyOrNoCurveAtAllGetsNothing) {
   Publisher pub(pc);
   RawSubscriber wrong_server(Sub(pub.endpoint(), Client("good", /*server_key=*/"bad")));
   RawSubscriber plain(Sub(pub.endpoint(), AccessConfig{}));
-  ASSERT_TRUE(testing::eventually([&] {
-    (void)wrong_server.receive(10 * kNsPerMs);
-    (void)plain.receive(10 * kNsPerMs);
-    return wrong_server.handshake_failures() >= 1 && plain.handshake_failures() >= 1;
-  }, 30 * kNsPerSec));
+  ASSERT_TRUE(testing::eventually(
+      [&] {
+        (void)wrong_server.receive(10 * kNsPerMs);
+        (void)plain.receive(10 * kNsPerMs);
+        return wrong_server.handshake_failures() >= 1 && plain.handshake_failures() >= 1;
+      },
+      30 * kNsPerSec));
   EXPECT_EQ(pub.subscriber_count("/raw"), 0);
   ASSERT_TRUE(pub.send("/raw", "0", BytesPayload(32, 1)).is_ok());
   EXPECT_FALSE(wrong_server.receive(100 * kNsPerMs).is_ok());
@@ -174,22 +180,27 @@ TEST_F(CurveTest, KeyFileErrorsNameTheFile) {
   const std::string big = ThrownMessage([&] { (void)read_curve_key(dir_ + "/big"); });
   EXPECT_NE(big.find(dir_ + "/big"), std::string::npos) << big;
   EXPECT_NE(big.find("4 KiB"), std::string::npos) << big;
-  EXPECT_NE(ThrownMessage([&] { (void)read_curve_key("/dev/zero"); }).find("/dev/zero"), std::string::npos);
+  EXPECT_NE(ThrownMessage([&] { (void)read_curve_key("/dev/zero"); }).find("/dev/zero"),
+            std::string::npos);
   std::ofstream(dir_ + "/allowed_bad") << read_curve_key(dir_ + "/good.public") << "\nnot-a-key\n";
-  EXPECT_NE(ThrownMessage([&] { (void)read_allowed_clients(dir_ + "/allowed_bad"); }).find("allowed_bad:2"),
+  EXPECT_NE(ThrownMessage([&] {
+              (void)read_allowed_clients(dir_ + "/allowed_bad");
+            }).find("allowed_bad:2"),
             std::string::npos);
   // A client without the server's key is a configuration error, not a silent plain connection.
   AccessConfig half;
   half.curve_secret_key_file = dir_ + "/good.secret";
-  EXPECT_NE(ThrownMessage([&] { RawSubscriber s(Sub("tcp://127.0.0.1:5600", half)); })
-                .find("curve_server_public_key_file"),
+  EXPECT_NE(ThrownMessage([&] {
+              RawSubscriber s(Sub("tcp://127.0.0.1:5600", half));
+            }).find("curve_server_public_key_file"),
             std::string::npos);
 }
 
 TEST_F(CurveTest, GeneratedKeyFilesAreNotOverwrittenAndTheSecretIsPrivate) {
   auto pair = generate_curve_keypair();
   ASSERT_TRUE(pair.is_ok());
-  EXPECT_EQ(write_curve_key_files(*pair, dir_ + "/server", false).code(), StatusCode::kInvalidArgument);
+  EXPECT_EQ(write_curve_key_files(*pair, dir_ + "/server", false).code(),
+            StatusCode::kInvalidArgument);
   ASSERT_TRUE(write_curve_key_files(*pair, dir_ + "/server", true).is_ok());
   EXPECT_EQ(read_curve_key(dir_ + "/server.public"), pair->public_key);
   EXPECT_EQ(read_curve_key(dir_ + "/server.secret"), pair->secret_key);
