@@ -9,6 +9,7 @@
 #include <fstream>
 #include <system_error>
 
+#include "common/bounded_read.hpp"
 #include "ros2/schema.hpp"
 
 namespace faultline::bag {
@@ -198,18 +199,9 @@ Result<Rosbag2Metadata> read_rosbag2_metadata(const std::string& bag_dir) {
   const std::string path = (fs::path(bag_dir) / kRosbag2MetadataFile).string();
   std::error_code ec;
   if (!fs::exists(path, ec)) return Status(StatusCode::kNotFound, path + ": no such file");
-  const auto size = fs::file_size(path, ec);
-  if (ec) return Status(StatusCode::kIoError, path + ": " + ec.message());
-  if (size > kMaxRosbag2MetadataBytes) {
-    return Status(StatusCode::kCorruptData, path + ": " + std::to_string(size) + " bytes: over the limit of " +
-                                                std::to_string(kMaxRosbag2MetadataBytes) + " for metadata.yaml");
-  }
-  std::ifstream in(path, std::ios::binary);
-  std::string text(static_cast<std::size_t>(size), '\0');
-  if (!in.read(text.data(), static_cast<std::streamsize>(size))) {
-    return Status(StatusCode::kIoError, path + ": cannot read");
-  }
-  return parse_rosbag2_metadata(text, path);
+  auto text = read_file_bounded(path, kMaxRosbag2MetadataBytes, "rosbag2 metadata");
+  if (!text.is_ok()) return text.status();
+  return parse_rosbag2_metadata(*text, path);
 }
 
 Result<std::unique_ptr<Rosbag2Writer>> Rosbag2Writer::open(const std::string& dir, WriterOptions mcap) {

@@ -79,13 +79,11 @@ std::string rosbag2_metadata_yaml(const Rosbag2Metadata& metadata);
 // The same map without the top-level key: the "serialized_metadata" of the MCAP Metadata record "rosbag2".
 std::string rosbag2_serialized_metadata(const Rosbag2Metadata& metadata);
 // Reads <bag_dir>/metadata.yaml. kNotFound without it; kCorruptData naming the file and key when a required
-// field is missing or malformed, or the file is over kMaxRosbag2MetadataBytes; kUnsupported for a storage
+// field is missing or malformed, or the file is over kMaxRosbag2MetadataBytes (common/bounded_read.hpp); kUnsupported for a storage
 // other than mcap.
 Result<Rosbag2Metadata> read_rosbag2_metadata(const std::string& bag_dir);
 // The same from metadata.yaml's text; `path` names it in errors.
 Result<Rosbag2Metadata> parse_rosbag2_metadata(const std::string& text, const std::string& path);
-// A metadata.yaml lists each topic and file once: a few KB for real bags.
-inline constexpr std::uintmax_t kMaxRosbag2MetadataBytes = 16u << 20;
 
 class Rosbag2Writer {
  public:

@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "cli/command.hpp"
+#include "common/bounded_read.hpp"
 #include "cli/parse.hpp"
 #include "codec/jpeg.hpp"
 #include "corruption/corrupt.hpp"
@@ -26,10 +27,9 @@ namespace {
 // file that OpenCV would silently render half grey; `allow_partial` then keeps OpenCV's partial
 // rendering, with a warning.
 Result<cv::Mat> read_input(const std::string& path, bool allow_partial) {
-  std::ifstream file(path, std::ios::binary);
-  if (!file) return Status(StatusCode::kNotFound, "cannot read input image '" + path + "'");
-  const std::vector<std::uint8_t> bytes((std::istreambuf_iterator<char>(file)),
-                                        std::istreambuf_iterator<char>());
+  auto read = read_file_bounded(path, kMaxImageFileBytes, "input image");
+  if (!read.is_ok()) return read.status();
+  const std::vector<std::uint8_t> bytes(read->begin(), read->end());
   const bool is_jpeg = bytes.size() >= 2 && bytes[0] == 0xFF && bytes[1] == 0xD8;
   if (is_jpeg) {
     auto decoded = codec::decode_jpeg(bytes.data(), bytes.size());

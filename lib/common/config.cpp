@@ -1,5 +1,7 @@
 #include "common/config.hpp"
 
+#include "common/bounded_read.hpp"
+
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
@@ -132,10 +134,10 @@ ParamSource build_source(const NodeOptions& options) {
   ParamSource source;
   for (const auto& file : options.params_files) {
     YAML::Node doc;
+    auto text = read_file_bounded(file, kMaxParamsFileBytes, "parameters file");
+    if (!text.is_ok()) throw ConfigError(text.status().message());
     try {
-      doc = YAML::LoadFile(file);
-    } catch (const YAML::BadFile&) {
-      throw ConfigError(file + ": cannot open parameters file");
+      doc = YAML::Load(*text);
     } catch (const YAML::Exception& e) {
       throw ConfigError(file + ":" + std::to_string(e.mark.line + 1) + ": " + e.msg);
     }

@@ -1,6 +1,8 @@
 // SAX record streamer and DOM loader for nuScenes tables.
 #include "dataset/json_table.hpp"
 
+#include "common/bounded_read.hpp"
+
 #include <rapidjson/error/en.h>
 #include <rapidjson/filereadstream.h>
 #include <rapidjson/reader.h>
@@ -195,6 +197,7 @@ constexpr unsigned kParseFlags = rapidjson::kParseNanAndInfFlag;
 }  // namespace
 
 Status stream_table(const std::string& path, const RecordFn& on_record) {
+  if (Status size = check_file_size(path, kMaxNuScenesTableBytes, "nuScenes table"); !size) return size;
   std::unique_ptr<std::FILE, FileCloser> file(std::fopen(path.c_str(), "rb"));
   if (!file) return Status(StatusCode::kNotFound, path + ": table not found");
   std::vector<char> buffer(1 << 16);
@@ -212,6 +215,7 @@ Status stream_table(const std::string& path, const RecordFn& on_record) {
 }
 
 Status parse_document(const std::string& path, rapidjson::Document* doc) {
+  if (Status size = check_file_size(path, kMaxNuScenesTableBytes, "nuScenes table"); !size) return size;
   std::unique_ptr<std::FILE, FileCloser> file(std::fopen(path.c_str(), "rb"));
   if (!file) return Status(StatusCode::kNotFound, path + ": table not found");
   std::vector<char> buffer(1 << 16);

@@ -7,6 +7,7 @@
 #include <memory>
 #include <unordered_set>
 
+#include "common/bounded_read.hpp"
 #include "dataset/json_table.hpp"
 
 namespace faultline::dataset {
@@ -362,13 +363,19 @@ Result<std::map<std::string, SceneFrameCounts>> NuScenesReader::count_frames(con
   return counts;
 }
 
-Result<std::vector<std::uint8_t>> read_file(const std::string& path) {
+Result<std::vector<std::uint8_t>> read_file(const std::string& path, std::size_t max_bytes) {
   std::unique_ptr<std::FILE, int (*)(std::FILE*)> file(std::fopen(path.c_str(), "rb"), &std::fclose);
   if (!file) return Status(StatusCode::kNotFound, path + ": file not found");
   std::vector<std::uint8_t> data;
   std::uint8_t buf[1 << 16];
   std::size_t n = 0;
-  while ((n = std::fread(buf, 1, sizeof(buf), file.get())) > 0) data.insert(data.end(), buf, buf + n);
+  while ((n = std::fread(buf, 1, sizeof(buf), file.get())) > 0) {
+    if (data.size() + n > max_bytes) {
+      return Status(StatusCode::kInvalidArgument, path + ": larger than the limit of " + describe_bytes(max_bytes) +
+                                                      " (" + std::to_string(max_bytes) + " bytes)");
+    }
+    data.insert(data.end(), buf, buf + n);
+  }
   if (std::ferror(file.get())) return Status(StatusCode::kIoError, path + ": read failed");
   return data;
 }

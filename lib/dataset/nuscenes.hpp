@@ -11,6 +11,7 @@
 #include <unordered_map>
 #include <vector>
 
+#include "common/bounded_read.hpp"
 #include "common/status.hpp"
 
 namespace faultline::dataset {
@@ -92,7 +93,8 @@ class NuScenesReader {
   std::unordered_map<std::string, Calibration> calibrations_;
 };
 
-// Reads a whole file into memory; missing file -> kNotFound naming the path.
-Result<std::vector<std::uint8_t>> read_file(const std::string& path);
+// Reads a whole file (an image) into memory; missing file -> kNotFound naming the path, more than `max_bytes`
+// (kMaxImageFileBytes, 1 GiB, by default) -> kInvalidArgument naming the path and the limit.
+Result<std::vector<std::uint8_t>> read_file(const std::string& path, std::size_t max_bytes = kMaxImageFileBytes);
 
 }  // namespace faultline::dataset

@@ -115,6 +115,7 @@ struct DetectorLoop::Impl {
         sub([&] {
           transport::SubscriberConfig s;
           s.endpoints = cfg.input_endpoints;
+          s.access = cfg.access;
           s.topics = {cfg.input_prefix, cfg.sync_topic};
           s.rcv_hwm = cfg.input_hwm;
           return s;
@@ -122,6 +123,7 @@ struct DetectorLoop::Impl {
         push([&] {
           transport::PublisherConfig p;
           p.endpoint = cfg.sink_endpoint;
+          p.access = cfg.access;
           p.bind = false;
           p.pattern = transport::Pattern::PushPull;
           p.linger_ms = cfg.linger_ms;

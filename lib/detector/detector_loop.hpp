@@ -10,6 +10,8 @@
 #include <string>
 #include <vector>
 
+#include "transport/access.hpp"
+
 namespace faultline::detector {
 
 struct DetectorLoopConfig {
@@ -25,6 +27,8 @@ struct DetectorLoopConfig {
   bool exit_on_last = true;                            // stop after the last_in_run boundary
   int linger_ms = 2000;                                // time to deliver the last DetectionArrays
 
+  transport::AccessConfig access;  // allow_remote and CURVE keys of every socket (transport/access.hpp)
+
   template <class V>
   void visit(V& v) {
     v("input_endpoints", input_endpoints, "camera publishers to subscribe to");
@@ -38,6 +42,7 @@ struct DetectorLoopConfig {
     v("normalise", normalise, "exposure and contrast normalisation before segmentation (docs/detector.md)");
     v("exit_on_last", exit_on_last, "stop after the last sample");
     v("linger_ms", linger_ms, "end of run: time to deliver queued detections (ms)");
+    access.visit(v);
   }
   void validate() const;  // throws ConfigError
 };

@@ -10,6 +10,7 @@
 #include <set>
 #include <sstream>
 
+#include "common/bounded_read.hpp"
 #include "common/config.hpp"
 
 namespace faultline::launch {
@@ -286,11 +287,9 @@ LaunchFile parse_launch(const std::string& text, const std::string& path, const 
 }
 
 LaunchFile load_launch(const std::string& path, const LoadOptions& options) {
-  std::ifstream in(path);
-  if (!in) throw ConfigError(path + ": cannot open launch file");
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return parse_launch(ss.str(), path, options);
+  auto text = read_file_bounded(path, kMaxParamsFileBytes, "launch file");
+  if (!text.is_ok()) throw ConfigError(text.status().message());
+  return parse_launch(*text, path, options);
 }
 
 void apply_override(LaunchFile& launch, const std::string& assignment) {

@@ -22,6 +22,7 @@
 #include <thread>
 
 #include "bag/format.hpp"
+#include "common/bounded_read.hpp"
 #include "bag/reader.hpp"
 #include "bag/rosbag2.hpp"
 #include "bag/writer.hpp"
@@ -135,8 +136,10 @@ Result<InputBag> open_input(const std::string& path) {
     auto meta = bag::read_rosbag2_metadata(path);
     if (!meta) return meta.status();
     const std::string yaml_path = (fs::path(path) / bag::kRosbag2MetadataFile).string();
+    auto text = read_file_bounded(yaml_path, kMaxRosbag2MetadataBytes, "rosbag2 metadata");
+    if (!text.is_ok()) return text.status();
     try {
-      in.metadata = YAML::LoadFile(yaml_path);
+      in.metadata = YAML::Load(*text);
     } catch (const YAML::Exception& e) {
       return Status(StatusCode::kCorruptData, yaml_path + ": " + e.what());
     }
@@ -1213,10 +1216,10 @@ TopicFault parse_topic_fault(const std::string& text, corruption::RngMode rng) {
 std::vector<TopicFault> load_fault_schedule(const std::string& path,
                                             corruption::RngMode default_rng) {
   YAML::Node root;
+  auto text = read_file_bounded(path, kMaxParamsFileBytes, "fault schedule");
+  if (!text.is_ok()) throw ConfigError(text.status().message());
   try {
-    root = YAML::LoadFile(path);
-  } catch (const YAML::BadFile&) {
-    throw ConfigError(path + ": cannot read the fault schedule");
+    root = YAML::Load(*text);
   } catch (const YAML::Exception& e) {
     throw ConfigError(path + ": " + e.what());
   }

@@ -120,6 +120,7 @@ struct InjectorLoop::Impl {
         pub([&] {
           transport::PublisherConfig pc;
           pc.endpoint = cfg.output_endpoint;
+          pc.access = cfg.access;
           pc.snd_hwm = cfg.output_hwm;
           pc.linger_ms = cfg.linger_ms;
           return pc;
@@ -170,6 +171,7 @@ Status InjectorLoop::Impl::start(const std::atomic<bool>& stop) {
   // Subscribing only now chains readiness: the upstream publisher sees us once our consumers are here.
   transport::SubscriberConfig sc;
   sc.endpoints = cfg.input_endpoints;
+  sc.access = cfg.access;
   sc.topics = cfg.input_topics;
   const bool end_covered = std::any_of(sc.topics.begin(), sc.topics.end(), [&](const std::string& prefix) {
     return cfg.end_topic.compare(0, prefix.size(), prefix) == 0;
@@ -311,11 +313,12 @@ void InjectorLoop::Impl::finish(bool finished) {
   counts.oversize_refused = pub.oversize_refused();
   const std::uint64_t handled = std::max<std::uint64_t>(1, counts.frames_in);
   log->info("injector done: in {} out {} boundaries {} injected_drops {} corrupt_jpeg {} malformed {} "
-            "transport_drops {} superseded {} oversize_refused {} input_disconnects {} window_full_waits {} "
+            "transport_drops {} superseded {} oversize_refused {} input_disconnects {} input_reconnects {} "
+            "window_full_waits {} "
             "discarded_at_stop {}; {} worker(s), CPU per frame in: receive {:.2f} ms workers {:.2f} ms send {:.2f} ms",
             counts.frames_in, counts.frames_out, counts.boundaries, counts.injected_drops, counts.corrupt_jpeg,
             counts.malformed, counts.transport_drops, counts.superseded, counts.oversize_refused,
-            sub ? sub->disconnects() : 0, counts.window_full_waits, counts.discarded_at_stop, counts.workers,
+            sub ? sub->disconnects() : 0, sub ? sub->reconnects() : 0, counts.window_full_waits, counts.discarded_at_stop, counts.workers,
             static_cast<double>(counts.dispatch_cpu_ns) / 1e6 / static_cast<double>(handled),
             static_cast<double>(counts.worker_cpu_ns) / 1e6 / static_cast<double>(handled),
             static_cast<double>(counts.output_cpu_ns) / 1e6 / static_cast<double>(handled));

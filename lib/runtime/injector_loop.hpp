@@ -24,6 +24,8 @@
 #include "stats/topic_stats.hpp"
 #include "transport/publisher.hpp"
 
+#include "transport/access.hpp"
+
 namespace faultline::runtime {
 
 struct InjectorConfig {
@@ -52,6 +54,8 @@ struct InjectorConfig {
   int jpeg_quality = 95;                             // re-encoded faulted JPEG frames (nuScenes-C: 95)
   int workers = 0;                                   // decode/fault/encode threads; 0 = cores available - 1, >= 1
   int queue_frames = 0;                              // frames in flight receive -> send; 0 = 4 x workers
+
+  transport::AccessConfig access;  // allow_remote and CURVE keys of every socket (transport/access.hpp)
 
   template <class V>
   void visit(V& v) {
@@ -84,6 +88,7 @@ struct InjectorConfig {
     v("queue_frames", queue_frames,
       "frames in flight between receive and send (0 = 4 x workers); when full, receiving waits and the input "
       "queue (input_hwm) absorbs");
+    access.visit(v);
   }
   void validate() const;  // throws ConfigError
 };

@@ -54,6 +54,7 @@ struct PlayerLoop::Impl {
         pub([&] {
           transport::PublisherConfig pc;
           pc.endpoint = cfg.endpoint;
+          pc.access = cfg.access;
           pc.snd_hwm = cfg.hwm;
           pc.linger_ms = cfg.linger_ms;
           return pc;
@@ -66,6 +67,7 @@ struct PlayerLoop::Impl {
     if (cfg.lockstep) {
       transport::SubscriberConfig sc;
       sc.endpoints = {cfg.ack_endpoint};
+      sc.access = cfg.access;
       sc.pattern = transport::Pattern::PushPull;
       sc.bind = true;
       sc.rcv_hwm = 1000;

@@ -46,6 +46,7 @@ struct SinkLoop::Impl {
         detections([&] {
           transport::SubscriberConfig sc;
           sc.endpoints = {cfg.detections_endpoint};
+          sc.access = cfg.access;
           sc.pattern = transport::Pattern::PushPull;
           sc.bind = true;
           sc.rcv_hwm = cfg.detections_hwm;
@@ -70,6 +71,7 @@ struct SinkLoop::Impl {
     if (!cfg.sync_endpoints.empty()) {
       transport::SubscriberConfig sc;
       sc.endpoints = cfg.sync_endpoints;
+      sc.access = cfg.access;
       sc.topics = {sync_topic};
       sc.rcv_hwm = 1000;
       sync = std::make_unique<transport::RawSubscriber>(sc);
@@ -77,6 +79,7 @@ struct SinkLoop::Impl {
     if (cfg.lockstep) {
       transport::PublisherConfig pc;
       pc.endpoint = cfg.ack_endpoint;
+      pc.access = cfg.access;
       pc.bind = false;
       pc.pattern = transport::Pattern::PushPull;
       pc.snd_hwm = 1000;

@@ -16,6 +16,7 @@
 
 #include "runtime/remap.hpp"
 #include "stats/topic_stats.hpp"
+#include "transport/access.hpp"
 
 namespace faultline::runtime {
 
@@ -47,6 +48,8 @@ struct SinkConfig {
   double stats_log_period_s = 5.0;                           // info log of statistics every this many s
   std::map<std::string, std::string> remap;                  // topic remaps (from -> to)
 
+  transport::AccessConfig access;  // allow_remote and CURVE keys of every socket (transport/access.hpp)
+
   template <class V>
   void visit(V& v) {
     v("detections_endpoint", detections_endpoint, "PULL bind address for detectors");
@@ -70,6 +73,7 @@ struct SinkConfig {
     v("stats_window_s", stats_window_s, "statistics window (s)");
     v("stats_log_period_s", stats_log_period_s, "info log period of statistics (s)");
     v("remap", remap, "topic remaps from -> to");
+    access.visit(v);
   }
   void validate() const;  // throws ConfigError
 };

@@ -11,6 +11,8 @@
 #include <sstream>
 #include <utility>
 
+#include "common/bounded_read.hpp"
+
 namespace faultline::scoring {
 namespace {
 
@@ -97,13 +99,9 @@ Result<std::vector<std::string>> predefined_split_scenes(const std::string& spli
 Result<std::vector<std::string>> custom_split_scenes(const std::string& split, const std::string& dataroot,
                                                      const std::string& version) {
   const std::string path = dataroot + "/" + version + "/splits.json";
-  std::ifstream in(path, std::ios::binary);
-  if (!in) {
-    return Status(StatusCode::kNotFound, "custom split '" + split + "': " + path + " not found");
-  }
-  std::stringstream ss;
-  ss << in.rdbuf();
-  const std::string text = ss.str();
+  auto read = read_file_bounded(path, kMaxParamsFileBytes, "custom split '" + split + "': splits file");
+  if (!read.is_ok()) return read.status();
+  const std::string text = std::move(read).value();
   rapidjson::Document doc;
   doc.Parse(text.c_str(), text.size());
   if (doc.HasParseError()) {

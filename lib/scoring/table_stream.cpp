@@ -11,6 +11,7 @@
 
 #include <charconv>
 
+#include "common/bounded_read.hpp"
 #include "common/simd.hpp"
 #ifdef __SSE2__
 #include <emmintrin.h>
@@ -739,6 +740,7 @@ Status scan_table(const char* data, std::size_t size, bool release, const std::s
 Status stream_table(const std::string& path, const std::vector<std::string>& wanted,
                     const std::function<Status(const TableRecord&, std::size_t)>& on_record,
                     const RecordFilter& filter) {
+  if (Status size = check_file_size(path, kMaxNuScenesTableBytes, "nuScenes table"); !size) return size;
   MappedFile file(path);
   if (!file.opened()) return Status(StatusCode::kNotFound, path + ": table not found");
   const char* data = file.data() ? file.data() : "";

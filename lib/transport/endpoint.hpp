@@ -1,4 +1,4 @@
-// Endpoint strings: loopback checks (non-loopback binds are warned about) and defaults.
+// Endpoint strings: loopback checks (a bind beyond loopback needs allow_remote, transport/access.hpp) and schemes.
 #pragma once
 
 #include <string>

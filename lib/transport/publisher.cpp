@@ -8,6 +8,7 @@
 #include "common/config.hpp"
 #include "transport/context.hpp"
 #include "transport/endpoint.hpp"
+#include "transport/zap.hpp"
 
 namespace faultline::transport {
 
@@ -38,14 +39,12 @@ Publisher::Publisher(const PublisherConfig& config)
       socket_.set(zmq::sockopt::sndtimeo, static_cast<int>(config.send_timeout_ns / kNsPerMs));
     }
   }
+  if (config.bind) check_bind_allowed(config.access, config.endpoint);
+  zap_domain_ = apply_curve(socket_, config.access, /*server=*/config.bind);
   try {
     if (config.bind) {
       socket_.bind(config.endpoint);
       endpoint_ = socket_.get(zmq::sockopt::last_endpoint);
-      if (!is_loopback_endpoint(endpoint_)) {
-        spdlog::warn("publisher bound to non-loopback endpoint {}: streams are exposed without "
-                     "authentication", endpoint_);
-      }
     } else {
       socket_.connect(config.endpoint);
       endpoint_ = config.endpoint;
@@ -96,6 +95,8 @@ Status Publisher::send_parts(std::string_view topic, const std::string_view* mid
 Status Publisher::send(std::string_view topic, std::string_view header, const Payload& payload) {
   return send_parts(topic, &header, &payload);
 }
+
+std::uint64_t Publisher::auth_refused() const { return zap_domain_.empty() ? 0 : zap_refused(zap_domain_); }
 
 void Publisher::set_linger(int linger_ms) {
   try {

@@ -20,6 +20,7 @@
 
 #include "common/clock.hpp"
 #include "common/status.hpp"
+#include "transport/access.hpp"
 #include "transport/payload.hpp"
 
 namespace faultline::transport {
@@ -46,12 +47,13 @@ struct PublisherConfig {
   // A message part larger than this is refused (kInvalidArgument, counted in oversize_refused()); keep it
   // <= the receivers' max_msg_bytes. -1 = no limit.
   std::int64_t max_msg_bytes = kDefaultMaxMessageBytes;
+  AccessConfig access;  // loopback-only binds unless allow_remote; CURVE (transport/access.hpp)
 };
 
 class Publisher {
  public:
-  // Throws ConfigError naming the endpoint when the socket cannot bind/connect. Logs a warning on a
-  // non-loopback bind.
+  // Throws ConfigError naming the endpoint when the socket cannot bind/connect, or binds beyond loopback
+  // without access.allow_remote; naming the file when a CURVE key cannot be read.
   explicit Publisher(const PublisherConfig& config);
   Publisher(Publisher&&) noexcept = default;
   Publisher& operator=(Publisher&&) noexcept = default;
@@ -78,6 +80,8 @@ class Publisher {
   std::uint64_t would_block_count() const { return would_block_; }
   // Messages refused because one part exceeded max_msg_bytes (never sent).
   std::uint64_t oversize_refused() const { return oversize_refused_; }
+  // CURVE clients refused because their key is not in access.curve_allowed_clients_file (each logged).
+  std::uint64_t auth_refused() const;
   // Changes ZMQ_LINGER, e.g. to 0 before closing on shutdown so exit stays prompt.
   void set_linger(int linger_ms);
 
@@ -91,6 +95,7 @@ class Publisher {
   std::map<std::string, int> subscriptions_;  // prefix -> live subscriptions (XPUB_VERBOSE)
   std::uint64_t would_block_ = 0;
   std::uint64_t oversize_refused_ = 0;
+  std::string zap_domain_;  // set when a CURVE server checks an allowed-clients list
 };
 
 }  // namespace faultline::transport

@@ -2,6 +2,7 @@
 
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cstring>
@@ -10,6 +11,7 @@
 #include "transport/context.hpp"
 #include "transport/endpoint.hpp"
 #include "transport/log_limiter.hpp"
+#include "transport/zap.hpp"
 
 namespace faultline::transport {
 
@@ -36,39 +38,46 @@ RawSubscriber::~RawSubscriber() {
   if (socket_.handle() != nullptr) (void)zmq_socket_monitor(socket_.handle(), nullptr, 0);
 }
 
-RawSubscriber::RawSubscriber(const SubscriberConfig& config)
-    : config_(config),
-      socket_(shared_context(), config.pattern == Pattern::PubSub ? zmq::socket_type::sub
-                                                                   : zmq::socket_type::pull) {
+RawSubscriber::RawSubscriber(const SubscriberConfig& config) : config_(config) { open_socket(); }
+
+void RawSubscriber::open_socket() {
+  socket_ = zmq::socket_t(shared_context(), config_.pattern == Pattern::PubSub ? zmq::socket_type::sub
+                                                                              : zmq::socket_type::pull);
   socket_.set(zmq::sockopt::linger, 0);
-  socket_.set(zmq::sockopt::rcvhwm, config.rcv_hwm);
-  socket_.set(zmq::sockopt::maxmsgsize, config.max_msg_bytes);
-  if (config.pattern == Pattern::PubSub) {
-    for (const auto& t : config.topics) socket_.set(zmq::sockopt::subscribe, t);
+  socket_.set(zmq::sockopt::rcvhwm, config_.rcv_hwm);
+  socket_.set(zmq::sockopt::maxmsgsize, config_.max_msg_bytes);
+  if (config_.pattern == Pattern::PubSub) {
+    for (const auto& t : config_.topics) socket_.set(zmq::sockopt::subscribe, t);
   }
+  if (config_.bind) {
+    for (const auto& ep : config_.endpoints) check_bind_allowed(config_.access, ep);
+  }
+  const std::string domain = apply_curve(socket_, config_.access, /*server=*/config_.bind);
+  if (!domain.empty()) zap_domain_ = domain;
   // Monitor before connecting, so that no closed connection goes unseen.
   static std::atomic<std::uint64_t> monitor_ids{0};
   const std::string monitor_address = "inproc://faultline-subscriber-monitor-" + std::to_string(++monitor_ids);
-  if (zmq_socket_monitor(socket_.handle(), monitor_address.c_str(), ZMQ_EVENT_DISCONNECTED) != 0) {
+  constexpr int kEvents = ZMQ_EVENT_DISCONNECTED | ZMQ_EVENT_CONNECT_RETRIED | ZMQ_EVENT_CONNECTED |
+                          ZMQ_EVENT_HANDSHAKE_FAILED_NO_DETAIL | ZMQ_EVENT_HANDSHAKE_FAILED_PROTOCOL |
+                          ZMQ_EVENT_HANDSHAKE_FAILED_AUTH;
+  if (zmq_socket_monitor(socket_.handle(), monitor_address.c_str(), kEvents) != 0) {
     throw ConfigError("cannot monitor the subscriber socket: " + std::string(zmq_strerror(zmq_errno())));
   }
   monitor_ = zmq::socket_t(shared_context(), zmq::socket_type::pair);
   monitor_.set(zmq::sockopt::linger, 0);
   monitor_.connect(monitor_address);
-  for (const auto& ep : config.endpoints) {
+  endpoints_.clear();
+  for (const auto& ep : config_.endpoints) {
     try {
-      if (config.bind) {
+      if (config_.bind) {
         socket_.bind(ep);
         endpoints_.push_back(socket_.get(zmq::sockopt::last_endpoint));
-        if (!is_loopback_endpoint(endpoints_.back())) {
-          spdlog::warn("receiver bound to non-loopback endpoint {}", endpoints_.back());
-        }
       } else {
         socket_.connect(ep);
         endpoints_.push_back(ep);
       }
     } catch (const zmq::error_t& e) {
-      throw ConfigError("endpoint = " + ep + ": cannot " + (config.bind ? "bind" : "connect") +
+      throw ConfigError("endpoint = " + ep + ": cannot " + (config_.bind ? "bind" : "connect") +
                         " (" + e.what() + ")");
     }
   }
@@ -85,15 +94,82 @@ void RawSubscriber::handle_monitor_events() {
     }
     std::uint16_t id = 0;
     if (event.size() >= sizeof id) std::memcpy(&id, event.data(), sizeof id);
-    if (id != ZMQ_EVENT_DISCONNECTED) continue;
+    // A connecting session names its endpoint the same way in every event (the connecter's address).
+    std::string where(static_cast<const char*>(address.data()), address.size());
+    if (id == ZMQ_EVENT_HANDSHAKE_FAILED_NO_DETAIL || id == ZMQ_EVENT_HANDSHAKE_FAILED_PROTOCOL ||
+        id == ZMQ_EVENT_HANDSHAKE_FAILED_AUTH) {
+      ++handshake_failures_;
+      thread_local LogLimiter limiter;
+      if (limiter.allow()) {
+        spdlog::error("handshake with {} failed ({}; {} so far): wrong CURVE keys on either side, or a peer "
+                      "with{} CURVE; not retried",
+                      where, id == ZMQ_EVENT_HANDSHAKE_FAILED_AUTH ? "refused by the server" : "protocol",
+                      handshake_failures_, config_.access.curve() ? "out" : "");
+      }
+      refused_endpoints_.insert(where);
+      awaiting_reconnect_.erase(where);
+      continue;
+    }
+    if (id != ZMQ_EVENT_DISCONNECTED) {
+      awaiting_reconnect_.erase(where);  // libzmq reconnects (or has) by itself
+      continue;
+    }
     ++disconnects_;
-    const std::string where(static_cast<const char*>(address.data()), address.size());
-    // Counted and logged only. libzmq reconnects by itself after a peer's exit; after an oversize part it does
-    // not, and reconnecting for it (zmq_disconnect + zmq_connect) can kill a pipe that still holds a message
-    // (libzmq 4.3.4 then aborts in fq.cpp), so that case needs a reconnect that waits to see libzmq give up.
     spdlog::info("connection {} closed ({} so far): the peer exited, or sent a part over max_msg_bytes ({} bytes)",
                  where, disconnects_, config_.max_msg_bytes);
+    // A bound socket's peers reconnect themselves; a connecting one waits to see whether libzmq does. A refused
+    // handshake is not retried: the keys will not change by themselves.
+    if (!config_.bind && refused_endpoints_.count(where) == 0) {
+      awaiting_reconnect_[std::move(where)] = monotonic_now_ns() + kReconnectGraceNs;
+    }
   }
+}
+
+void RawSubscriber::reconnect_if_abandoned() {
+  if (awaiting_reconnect_.empty()) return;
+  const StampNs now = monotonic_now_ns();
+  std::string cut;
+  for (const auto& [ep, deadline] : awaiting_reconnect_) {
+    if (deadline <= now) cut = ep;
+  }
+  if (cut.empty()) return;
+  // Between messages: keep every whole message already queued, then close the socket. zmq_close, unlike
+  // zmq_disconnect, is safe whatever its pipes hold.
+  if (config_.latest_only) {
+    drain_latest();
+  } else {
+    for (auto r = read_one(false); r.status().code() != StatusCode::kWouldBlock; r = read_one(false)) {
+      if (!r.is_ok() && r.status().code() != StatusCode::kCorruptData) break;  // e.g. terminated
+      if (r.is_ok()) pending_.push_back(std::move(r).value());
+    }
+  }
+  handle_monitor_events();  // count what the old socket saw last
+  awaiting_reconnect_.clear();
+  (void)zmq_socket_monitor(socket_.handle(), nullptr, 0);  // stop events before the reading end closes
+  socket_.close();
+  monitor_.close();
+  try {
+    open_socket();
+  } catch (const std::exception& e) {
+    spdlog::error("cannot reopen the subscriber socket after {} was cut: {}", cut, e.what());
+    return;
+  }
+  ++reconnects_;
+  spdlog::warn("connection {} was cut and libzmq did not reconnect it (a protocol error, e.g. a part over "
+               "max_msg_bytes = {} bytes): socket recreated and reconnected ({} so far); messages in flight "
+               "show as seq gaps",
+               cut, config_.max_msg_bytes, reconnects_);
+}
+
+std::uint64_t RawSubscriber::auth_refused() const { return zap_domain_.empty() ? 0 : zap_refused(zap_domain_); }
+
+long RawSubscriber::cap_wait_ms(long wait_ms) const {
+  if (awaiting_reconnect_.empty()) return wait_ms;
+  StampNs first = awaiting_reconnect_.begin()->second;
+  for (const auto& entry : awaiting_reconnect_) first = std::min(first, entry.second);
+  const DurationNs left = first - monotonic_now_ns();
+  const long cap = left <= 0 ? 0 : static_cast<long>((left + kNsPerMs - 1) / kNsPerMs);
+  return wait_ms < 0 ? cap : std::min(wait_ms, cap);
 }
 
 Result<ReceivedMessage> RawSubscriber::read_one(bool wait) {
@@ -161,14 +237,15 @@ Result<ReceivedMessage> RawSubscriber::receive(DurationNs timeout_ns) {
       wait_ms = left <= 0 ? 0 : static_cast<long>((left + kNsPerMs - 1) / kNsPerMs);
     }
     zmq::pollitem_t items[2] = {{socket_.handle(), 0, ZMQ_POLLIN, 0}, {monitor_.handle(), 0, ZMQ_POLLIN, 0}};
-    int ready = 0;
     try {
-      ready = zmq::poll(items, 2, std::chrono::milliseconds(wait_ms));
+      (void)zmq::poll(items, 2, std::chrono::milliseconds(cap_wait_ms(wait_ms)));
     } catch (const zmq::error_t& e) {
       if (e.num() == ETERM) return Status{StatusCode::kCancelled, "context terminated"};
       if (e.num() != EINTR) return Status{StatusCode::kIoError, std::string("poll: ") + e.what()};
     }
     if (items[1].revents & ZMQ_POLLIN) handle_monitor_events();
+    reconnect_if_abandoned();
+    if (!pending_.empty()) continue;  // kept from a recreated socket
     if (items[0].revents & ZMQ_POLLIN) {
       if (config_.latest_only) {
         drain_latest();
@@ -188,21 +265,23 @@ Result<ReceivedMessage> RawSubscriber::receive(DurationNs timeout_ns) {
 
 int wait_readable(const std::vector<RawSubscriber*>& subscribers, DurationNs timeout_ns) {
   const std::size_t n = subscribers.size();
-  std::vector<zmq::pollitem_t> items;  // n data sockets, then their n monitors
-  for (std::size_t i = 0; i < n; ++i) {
-    if (!subscribers[i]->pending_.empty()) return static_cast<int>(i);
-    items.push_back({subscribers[i]->socket_.handle(), 0, ZMQ_POLLIN, 0});
-  }
-  for (std::size_t i = 0; i < n; ++i) items.push_back({subscribers[i]->monitor_.handle(), 0, ZMQ_POLLIN, 0});
   const StampNs deadline = timeout_ns < 0 ? 0 : monotonic_now_ns() + timeout_ns;
   for (;;) {
+    // Rebuilt each round: a recreated socket has new handles.
+    std::vector<zmq::pollitem_t> items;  // n data sockets, then their n monitors
+    for (std::size_t i = 0; i < n; ++i) {
+      if (!subscribers[i]->pending_.empty()) return static_cast<int>(i);
+      items.push_back({subscribers[i]->socket_.handle(), 0, ZMQ_POLLIN, 0});
+    }
+    for (std::size_t i = 0; i < n; ++i) items.push_back({subscribers[i]->monitor_.handle(), 0, ZMQ_POLLIN, 0});
     long wait_ms = -1;
     if (timeout_ns >= 0) {
       const DurationNs left = deadline - monotonic_now_ns();
       wait_ms = left <= 0 ? 0 : static_cast<long>((left + kNsPerMs - 1) / kNsPerMs);
     }
+    for (const auto* s : subscribers) wait_ms = s->cap_wait_ms(wait_ms);
     try {
-      if (zmq::poll(items.data(), items.size(), std::chrono::milliseconds(wait_ms)) <= 0) return -1;
+      (void)zmq::poll(items.data(), items.size(), std::chrono::milliseconds(wait_ms));
     } catch (const zmq::error_t&) {
       return -1;
     }
@@ -211,6 +290,10 @@ int wait_readable(const std::vector<RawSubscriber*>& subscribers, DurationNs tim
     }
     for (std::size_t i = 0; i < n; ++i) {
       if (items[i].revents & ZMQ_POLLIN) return static_cast<int>(i);
+    }
+    for (std::size_t i = 0; i < n; ++i) {
+      subscribers[i]->reconnect_if_abandoned();
+      if (!subscribers[i]->pending_.empty()) return static_cast<int>(i);
     }
     if (timeout_ns >= 0 && monotonic_now_ns() >= deadline) return -1;  // only connection events
   }

@@ -8,8 +8,13 @@
 // Two-part messages ([topic][body], e.g. /sync/sample) are never superseded.
 //
 // ZMQ_MAXMSGSIZE is set (kDefaultMaxMessageBytes): libzmq answers a larger part by closing the connection
-// and, for that protocol error, never reconnects. Faultline's publishers refuse such parts; a socket monitor
-// sees every closed connection, which is counted (disconnects()) and logged, so a cut is never silent.
+// and, for that protocol error, never reconnects (session_base.cpp: only a connection or timeout error on a
+// connecting session reconnects; ZMQ_RECONNECT_IVL does not apply). Faultline's publishers refuse such parts.
+// A socket monitor sees every closed connection, which is counted (disconnects()) and logged. On a connecting
+// socket, libzmq announces its own reconnect (ZMQ_EVENT_CONNECT_RETRIED) right after the close; when that does
+// not come within kReconnectGraceNs, the whole socket is recreated between messages (whole messages already
+// queued are kept; a zmq_disconnect on a pipe that may hold a message aborted libzmq 4.3.4 in fq.cpp) and
+// counted in reconnects(). Messages in flight at that moment are lost and show as seq gaps downstream.
 // Messages with a wrong frame count are counted as malformed and skipped (receive() returns the
 // next good one). A RawSubscriber belongs to one thread.
 #pragma once
@@ -18,6 +23,8 @@
 
 #include <cstdint>
 #include <deque>
+#include <map>
+#include <set>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -36,7 +43,13 @@ struct SubscriberConfig {
   int rcv_hwm = 4;                      // messages; 1-8 for image topics, ~64 for lockstep
   bool latest_only = false;             // see above
   std::int64_t max_msg_bytes = kDefaultMaxMessageBytes;  // ZMQ_MAXMSGSIZE per part; -1 = unlimited
+  AccessConfig access;  // loopback-only binds unless allow_remote; CURVE (transport/access.hpp)
 };
+
+// How long a connecting subscriber waits for libzmq to announce its own reconnect after a closed
+// connection before it recreates the socket (libzmq announces it within microseconds; a late
+// announcement only costs an unneeded, harmless socket recreation).
+inline constexpr DurationNs kReconnectGraceNs = 500 * kNsPerMs;
 
 // One received multipart message, owning its zmq frames: the views stay valid while it lives.
 class ReceivedMessage {
@@ -86,13 +99,22 @@ class RawSubscriber {
   void count_malformed() { ++malformed_; }
   // Connections closed under this socket (a peer's exit, or a part over max_msg_bytes).
   std::uint64_t disconnects() const { return disconnects_; }
+  // Times this (connecting) socket was recreated because libzmq did not reconnect a closed connection.
+  std::uint64_t reconnects() const { return reconnects_; }
+  // Handshakes that failed (CURVE: a wrong key on either side, a peer without CURVE; each logged). libzmq does
+  // not retry a refused connection, and neither does this socket.
+  std::uint64_t handshake_failures() const { return handshake_failures_; }
+  // A binding CURVE socket: clients refused by its allowed-clients list.
+  std::uint64_t auth_refused() const;
 
  private:
   friend int wait_readable(const std::vector<RawSubscriber*>& subscribers, DurationNs timeout_ns);
   Result<ReceivedMessage> read_one(bool wait);  // kWouldBlock when nothing is queued
   void drain_latest();
-  void handle_monitor_events();  // counts and logs closed connections
-
+  void open_socket();            // creates socket_ and monitor_, connects or binds every endpoint
+  void handle_monitor_events();  // counts and logs closed connections, notes libzmq's reconnects
+  void reconnect_if_abandoned();  // recreates the socket once a cut connection's grace has passed
+  long cap_wait_ms(long wait_ms) const;  // shortens a poll so the grace deadline is not overslept
 
   SubscriberConfig config_;
   std::vector<std::string> endpoints_;
@@ -104,6 +126,12 @@ class RawSubscriber {
   std::uint64_t superseded_ = 0;
   std::uint64_t malformed_ = 0;
   std::uint64_t disconnects_ = 0;
+  std::uint64_t reconnects_ = 0;
+  std::uint64_t handshake_failures_ = 0;
+  std::string zap_domain_;
+  std::set<std::string> refused_endpoints_;  // handshake failed: not reconnected when closed
+  // Connecting endpoints closed without a reconnect announced yet, with the deadline of their grace.
+  std::map<std::string, StampNs> awaiting_reconnect_;
 };
 
 // Waits up to `timeout_ns` (-1 = forever) until one of `subscribers` has a message; returns its

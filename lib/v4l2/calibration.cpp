@@ -4,6 +4,7 @@
 
 #include <cmath>
 
+#include "common/bounded_read.hpp"
 #include "common/config.hpp"
 
 namespace faultline::v4l2 {
@@ -31,10 +32,10 @@ std::array<double, N> read_array(const YAML::Node& node, const std::string& path
 
 Calibration load_calibration(const std::string& path) {
   YAML::Node doc;
+  auto text = read_file_bounded(path, kMaxParamsFileBytes, "calibration file");
+  if (!text.is_ok()) throw ConfigError(text.status().message());
   try {
-    doc = YAML::LoadFile(path);
-  } catch (const YAML::BadFile&) {
-    throw ConfigError(path + ": cannot open calibration file");
+    doc = YAML::Load(*text);
   } catch (const YAML::Exception& e) {
     throw ConfigError(path + ":" + std::to_string(e.mark.line + 1) + ": " + e.msg);
   }

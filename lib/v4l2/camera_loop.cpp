@@ -55,6 +55,7 @@ int run_camera_node(const CameraNodeConfig& cfg, const std::string& node, Captur
   transport::PublisherConfig pc;
   pc.endpoint = cfg.endpoint;
   pc.snd_hwm = cfg.hwm;
+  pc.access = cfg.access;
   transport::Publisher pub(pc);
   if (on_bound) on_bound(pub.endpoint());
   transport::TopicRegistry registry(node);

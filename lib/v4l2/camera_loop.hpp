@@ -15,6 +15,8 @@
 #include "v4l2/calibration.hpp"
 #include "v4l2/capture.hpp"
 
+#include "transport/access.hpp"
+
 namespace faultline::v4l2 {
 
 struct CameraNodeConfig {
@@ -36,6 +38,8 @@ struct CameraNodeConfig {
   int wait_timeout_ms = 10000;              // ... at most this long (then start anyway)
   double stats_log_period_s = 5.0;          // info log of capture statistics every this many s
 
+  transport::AccessConfig access;  // allow_remote and CURVE keys of every socket (transport/access.hpp)
+
   template <class V>
   void visit(V& v) {
     v("device", device, "V4L2 device node");
@@ -55,6 +59,7 @@ struct CameraNodeConfig {
     v("wait_subscribers", wait_subscribers, "subscribers to wait for before capturing");
     v("wait_timeout_ms", wait_timeout_ms, "how long to wait for them (ms)");
     v("stats_log_period_s", stats_log_period_s, "capture statistics log period (s)");
+    access.visit(v);
   }
   void validate() const;  // throws ConfigError
   CaptureConfig capture() const;

@@ -246,20 +246,7 @@ TEST_F(Rosbag2Test, MetadataReaderNamesMissingKeys) {
   EXPECT_EQ(read_rosbag2_metadata((root_ / "nothing").string()).status().code(), StatusCode::kNotFound);
 }
 
-TEST_F(Rosbag2Test, MetadataOverTheSizeLimitIsRefusedNamingTheFile) {
-  const fs::path dir = root_ / "big";
-  fs::create_directories(dir);
-  {
-    std::ofstream out(dir / "metadata.yaml");
-    out << "rosbag2_bagfile_information:\n  version: 5\n#";
-    out << std::string(kMaxRosbag2MetadataBytes, 'x') << "\n";
-  }
-  const auto m = read_rosbag2_metadata(dir.string());
-  ASSERT_FALSE(m.is_ok());
-  EXPECT_EQ(m.status().code(), StatusCode::kCorruptData);
-  EXPECT_NE(m.status().message().find((dir / "metadata.yaml").string() + ": "), std::string::npos);
-  EXPECT_NE(m.status().message().find("over the limit"), std::string::npos) << m.status().message();
-}
+// The size limit of metadata.yaml: tests/bag/limits_test.cpp (BagLimitsTest).
 
 TEST_F(Rosbag2Test, MetadataTextThatIsNotAMappingNamesTheFile) {
   for (const char* text :

@@ -3,10 +3,14 @@
 #include "cli/command.hpp"
 
 #include <gtest/gtest.h>
+#include <unistd.h>
 
+#include <cstdio>
 #include <sstream>
 #include <string>
 #include <vector>
+
+#include "transport/access.hpp"
 
 namespace faultline::cli {
 namespace {
@@ -47,6 +51,20 @@ TEST(DispatchTest, UnknownCommandAndBareGroupExitTwo) {
   EXPECT_EQ(run({"no-such-command"}), 2);
   EXPECT_EQ(run({"bag"}), 2);
   EXPECT_EQ(run({"bag", "no-such-subcommand"}), 2);
+}
+
+// `keys generate` writes a pair the transport reads back, and refuses to replace it without --force.
+TEST(DispatchTest, KeysGenerateWritesAPairAndKeepsAnExistingOne) {
+  const std::string prefix = ::testing::TempDir() + "/faultline_keys_" + std::to_string(::getpid());
+  EXPECT_EQ(run({"keys generate", prefix}), 0);
+  const std::string secret = transport::read_curve_key(prefix + ".secret");
+  EXPECT_EQ(transport::read_curve_key(prefix + ".public").size(), 40u);
+  EXPECT_EQ(run({"keys generate", prefix}), 1);
+  EXPECT_EQ(transport::read_curve_key(prefix + ".secret"), secret);
+  EXPECT_EQ(run({"keys generate", "--force", prefix}), 0);
+  EXPECT_NE(transport::read_curve_key(prefix + ".secret"), secret);
+  std::remove((prefix + ".secret").c_str());
+  std::remove((prefix + ".public").c_str());
 }
 
 }  // namespace

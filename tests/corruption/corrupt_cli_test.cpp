@@ -135,6 +135,18 @@ TEST(CorruptCliTest, ImagecorruptionsTypesAndFrostTextures) {
   std::remove(out.c_str());
 }
 
+// #22: the input is read with a limit (kMaxImageFileBytes, 1 GiB); one byte over is refused unread (a sparse
+// file), and /dev/zero stops at the limit.
+TEST(CorruptCliTest, AnInputOneByteOverTheImageLimitIsRefusedNamingIt) {
+  const std::string in = ::testing::TempDir() + "/faultline_big_" + std::to_string(::getpid()) + ".png";
+  std::ofstream(in).close();
+  std::filesystem::resize_file(in, (std::uint64_t{1} << 30) + 1);  // sparse: no disk used
+  auto r = run_faultline("corrupt --type fog --severity 2 --in " + in + " --out " + temp_png("big"));
+  std::filesystem::remove(in);
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.output.find("input image " + in + ": larger than the limit of 1 GiB"), std::string::npos) << r.output;
+}
+
 TEST(CorruptCliTest, NonFiniteAngleIsAnErrorNamingTheOption) {
   const std::string in = test_data::fixture(golden_dir() + "/inputs/chart_333x197.png");
   const std::string out = temp_png("angle");

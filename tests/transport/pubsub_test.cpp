@@ -194,7 +194,8 @@ TEST(PubSubTest, FrameLargerThanMaxMessageSizeIsRefused) {
 }
 
 // #22 item 1: libzmq answers a part over the subscriber's ZMQ_MAXMSGSIZE by closing the connection (and does not
-// reopen it). The subscriber's monitor sees the close and counts it, so the cut is never silent.
+// reopen it). The subscriber's monitor sees the close and counts it, so the cut is never silent; the reconnect
+// that follows is in reconnect_test.cpp.
 TEST(PubSubTest, OversizePartFromAForeignPublisherIsCountedAsAClosedConnection) {
   PublisherConfig pc;
   pc.endpoint = "tcp://127.0.0.1:*";
