@@ -7,56 +7,21 @@
 #include <opencv2/imgproc.hpp>
 
 #include "corruption/digital.hpp"
+#include "corruption/ndimage.hpp"
 
 namespace faultline::corruption {
 namespace {
 
-// numpy's pairwise sum of a float64 array of n <= 128 values (8 accumulators, then the tail in order).
-double numpy_pairwise_sum(const std::vector<double>& a) {
-  const std::size_t n = a.size();
-  if (n < 8) {
-    double res = 0.0;
-    for (double v : a) res += v;
-    return res;
-  }
-  double r[8];
-  for (int j = 0; j < 8; ++j) r[j] = a[static_cast<std::size_t>(j)];
-  std::size_t i = 8;
-  for (; i < n - (n % 8); i += 8) {
-    for (std::size_t j = 0; j < 8; ++j) r[j] += a[i + j];
-  }
-  double res = ((r[0] + r[1]) + (r[2] + r[3])) + ((r[4] + r[5]) + (r[6] + r[7]));
-  for (; i < n; ++i) res += a[i];
-  return res;
-}
-
-// The reference's np.exp is NumPy's SIMD (SVML) exp on the AVX-512 machine that made the goldens, which differs
-// from glibc's exp by an ulp on some arguments. Per severity (sigma 1, 2, 3), the ulps to move glibc's exp(k j^2)
-// for j = 1..12: found by searching +-1 ulp per value against the golden hashes, and confirmed on all three
-// golden inputs (sigma 4 and 6 match with glibc's values). Not derived from SVML itself: on other images an
-// output value may still differ by one where a truncation hangs on the last ulp of a weight.
-constexpr int kExpUlps[3][12] = {
-    {0, -1, 1, -1},
-    {-1, 0, 0, -1, -1, 1, -1, -1},
-    {0, 0, 0, 0, 0, 1, 0, 0, 1, 0, 0, -1},
-};
-
 // scipy's _gaussian_kernel1d(sigma, 0, radius): exp(-0.5 / sigma^2 * x^2) for x = -radius..radius, divided by its
-// numpy sum. Index radius + j holds the weight of offset j (the kernel is exactly symmetric).
+// numpy sum. Index radius + j holds the weight of offset j (the kernel is exactly symmetric). The exp is NumPy's
+// (nd::numpy_exp): glibc's differs by an ulp on some of these arguments, which moves truncated outputs.
 std::vector<double> gaussian_kernel(double sigma, int radius) {
   std::vector<double> phi(static_cast<std::size_t>(2 * radius + 1));
   const double k = -0.5 / (sigma * sigma);
-  const int table = sigma == 1.0 ? 0 : (sigma == 2.0 ? 1 : (sigma == 3.0 ? 2 : -1));
   for (int x = -radius; x <= radius; ++x) {
-    double e = std::exp(k * static_cast<double>(x * x));
-    const int j = std::abs(x);
-    if (table >= 0 && j >= 1 && j <= 12) {
-      for (int u = kExpUlps[table][j - 1]; u > 0; --u) e = std::nextafter(e, 2.0);
-      for (int u = kExpUlps[table][j - 1]; u < 0; ++u) e = std::nextafter(e, 0.0);
-    }
-    phi[static_cast<std::size_t>(x + radius)] = e;
+    phi[static_cast<std::size_t>(x + radius)] = nd::numpy_exp(k * static_cast<double>(x * x));
   }
-  const double sum = numpy_pairwise_sum(phi);
+  const double sum = nd::pairwise_sum(phi.data(), phi.size());
   for (double& w : phi) w = w / sum;
   return phi;
 }
@@ -94,7 +59,7 @@ cv::Mat gaussian_blur_exact(const cv::Mat& bgr, int severity) {
 namespace detail {
 
 std::vector<double> normalized_kernel(const std::vector<double>& phi) {
-  const double sum = numpy_pairwise_sum(phi);
+  const double sum = nd::pairwise_sum(phi.data(), phi.size());
   std::vector<double> w(phi);
   for (double& v : w) v = v / sum;
   return w;

@@ -61,9 +61,9 @@ ExtRecord find_record(const ExtCase& c) {
                            ext_file(c.type));
 }
 
-class GoldenExtTest : public ::testing::TestWithParam<ExtCase> {};
+class GoldenExtSpatialTest : public ::testing::TestWithParam<ExtCase> {};
 
-TEST_P(GoldenExtTest, NumpyModeHashesToTheReferenceOutput) {
+TEST_P(GoldenExtSpatialTest, NumpyModeHashesToTheReferenceOutput) {
   const ExtCase& c = GetParam();
   const ExtRecord r = find_record(c);
   const cv::Mat in = read_golden_png("inputs/" + c.input + ".png");
@@ -74,14 +74,14 @@ TEST_P(GoldenExtTest, NumpyModeHashesToTheReferenceOutput) {
                                           << c.severity;
 }
 
-INSTANTIATE_TEST_SUITE_P(Reference, GoldenExtTest, ::testing::ValuesIn(ext_case_ids()),
+INSTANTIATE_TEST_SUITE_P(Reference, GoldenExtSpatialTest, ::testing::ValuesIn(ext_case_ids()),
                          [](const ::testing::TestParamInfo<ExtCase>& param_info) {
                            return pascal_case(std::string(corruption::to_string(param_info.param.type)) + "_" +
                                               param_info.param.input + "_sev" + std::to_string(param_info.param.severity));
                          });
 
 // Every output the reference files list is enumerated above (80 in all), so none goes untested.
-TEST(GoldenExtManifestTest, EnumeratedCasesAreExactlyTheListedOutputs) {
+TEST(GoldenExtSpatialManifestTest, EnumeratedCasesAreExactlyTheListedOutputs) {
   std::set<std::string> enumerated, listed;
   for (const auto& c : ext_case_ids()) {
     enumerated.insert(std::string(corruption::to_string(c.type)) + "/" + c.input + "/" + std::to_string(c.severity));
