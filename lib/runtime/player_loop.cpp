@@ -94,12 +94,39 @@ struct PlayerLoop::Impl {
     }
   }
 
+  void advertise(const std::set<std::string>& camera_topics) {
+    for (const auto& t : camera_topics) (void)registry.advertise(t, "faultline.msgs.CameraFrame", pub.endpoint());
+    (void)registry.advertise(sync_topic, "faultline.msgs.SampleBoundary", pub.endpoint());
+    (void)registry.advertise(end_topic, "faultline.msgs.StreamEnd", pub.endpoint());
+    (void)registry.advertise(stats.stats_topic(), "faultline.msgs.TopicStats", pub.endpoint());
+  }
+
+  // End of run: the stream end (a run that was neither looped nor stopped), the last statistics and the summary.
+  int finish(bool stopped, const std::atomic<bool>& stop, const PlayerCounts& counts) {
+    if (!cfg.loop && !stopped && !stop.load()) {
+      // Consumers that want every frame (the injector) wait for this, not for last_in_run: sweeps after the last
+      // sample's key frames come between the two.
+      msgs::StreamEnd end;
+      end.set_frames_sent(counts.frames_sent);
+      end.set_boundaries_sent(static_cast<std::uint32_t>(counts.boundaries_sent));
+      stamp(end.mutable_header(), end_topic);
+      if (transport::send_message(pub, end_topic, end).code() == StatusCode::kCancelled) return 0;
+    }
+    // Statistics run on the wire's monotonic stamps (those of the samples), not on the pacing clock.
+    stats.tick(monotonic_now_ns() + static_cast<DurationNs>(cfg.stats_window_s * 1e9), &pub);
+    stats.log_totals(monotonic_now_ns());
+    if (stopped || stop.load()) pub.set_linger(0);  // shutdown: exit promptly, do not flush
+    log->info("player done: {} frames, {} boundaries, {} missing images, {} ack timeouts{}", counts.frames_sent,
+              counts.boundaries_sent, counts.missing_images, counts.ack_timeouts, stopped ? " (stopped)" : "");
+    return 0;
+  }
+
   // Lockstep: waits for the SampleAck of `token`; false on shutdown.
   bool wait_ack(const std::string& token, const std::atomic<bool>& stop, PlayerCounts& counts) {
-    const StampNs deadline = monotonic_now_ns() + static_cast<DurationNs>(cfg.ack_timeout_ms) * kNsPerMs;
+    const StampNs deadline = clock.now_ns() + static_cast<DurationNs>(cfg.ack_timeout_ms) * kNsPerMs;
     for (;;) {
       if (stop.load()) return false;
-      if (cfg.ack_timeout_ms > 0 && monotonic_now_ns() >= deadline) {
+      if (cfg.ack_timeout_ms > 0 && clock.now_ns() >= deadline) {
         ++counts.ack_timeouts;
         log->warn("lockstep: no SampleAck for sample {} within {} ms, continuing", token, cfg.ack_timeout_ms);
         return true;
@@ -126,6 +153,152 @@ PlayerLoop::~PlayerLoop() = default;
 std::string PlayerLoop::endpoint() const { return impl_->pub.endpoint(); }
 std::string PlayerLoop::ack_endpoint() const { return impl_->acks ? impl_->acks->endpoints().front() : ""; }
 
+namespace {
+
+// Where the run's boundaries go: after the last key frame of each sample, stamped with the sample's time.
+struct RunPlan {
+  std::vector<bool> boundary_after;
+  std::size_t last_boundary = 0;  // index of the run's last boundary (frames.size() when there is none)
+  std::map<std::string, std::int64_t> sample_time;
+  std::set<std::string> topics;
+};
+
+RunPlan plan_run(const std::vector<dataset::CameraFrameRecord>& frames, std::map<std::string, std::int64_t> sample_time,
+                 const std::map<std::string, std::string>& remap) {
+  RunPlan plan;
+  plan.boundary_after.assign(frames.size(), false);
+  plan.sample_time = std::move(sample_time);
+  std::map<std::string, std::size_t> last_key_index;
+  for (std::size_t i = 0; i < frames.size(); ++i) {
+    plan.topics.insert(remap_topic(remap, camera_topic(frames[i].channel)));
+    if (!frames[i].is_key_frame) continue;
+    last_key_index[frames[i].sample_token] = i;
+    plan.sample_time.emplace(frames[i].sample_token, frames[i].timestamp_us);  // earliest key frame if unknown
+  }
+  plan.last_boundary = frames.size();
+  for (const auto& [token, index] : last_key_index) {
+    plan.boundary_after[index] = true;
+    if (plan.last_boundary == frames.size() || index > plan.last_boundary) plan.last_boundary = index;
+  }
+  return plan;
+}
+
+// How a step of the run ended: go on; stopped (stop flag, a wait cut short: the run still finishes); cancelled
+// (a send refused by shutdown: return at once); a fatal socket error.
+enum class Step { kOk, kStopped, kCancelled, kFatal };
+
+}  // namespace
+
+// One pass over the frames (the run, or one turn of a loop).
+struct PlayerLoop::Pass {
+  Impl& m;
+  PlayerCounts& counts;
+  const std::vector<dataset::CameraFrameRecord>& frames;
+  const RunPlan& plan;
+  const std::atomic<bool>& stop;
+  std::map<std::string, std::uint32_t> keys_sent;
+  // Real-time pacing, restarted at each scene change (scenes are recorded hours or days apart) and after a
+  // lockstep wait.
+  bool anchored = false;
+  StampNs anchor_ns = 0;
+  std::int64_t anchor_us = 0;
+
+  Pass(Impl& impl, PlayerCounts& c, const std::vector<dataset::CameraFrameRecord>& f, const RunPlan& p,
+       const std::atomic<bool>& s)
+      : m(impl), counts(c), frames(f), plan(p), stop(s) {}
+
+  Step pace(std::size_t i) {
+    const auto& f = frames[i];
+    if (m.cfg.rate <= 0) return Step::kOk;
+    if (i > 0 && f.scene_token != frames[i - 1].scene_token) anchored = false;
+    if (!anchored) {
+      anchored = true;
+      anchor_ns = m.clock.now_ns();
+      anchor_us = f.timestamp_us;
+    }
+    const auto offset_ns = static_cast<StampNs>(static_cast<double>(f.timestamp_us - anchor_us) * 1e3 / m.cfg.rate);
+    return m.sleep_until(anchor_ns + offset_ns, stop) ? Step::kOk : Step::kStopped;
+  }
+
+  Step send_frame(const dataset::CameraFrameRecord& f) {
+    auto image = m.source->read_image(f);
+    if (!image) {
+      ++counts.missing_images;
+      if (m.missing_limiter.allow()) {
+        m.log->warn("skipping frame {} ({}): {} ({} missing so far)", f.sample_data_token, f.channel,
+                    image.status().message(), counts.missing_images);
+      }
+      return Step::kOk;
+    }
+    const std::string topic = remap_topic(m.cfg.remap, camera_topic(f.channel));
+    msgs::CameraFrame h = camera_frame_header(f);
+    m.stamp(h.mutable_header(), topic);
+    h.set_source_seq(h.header().seq());
+    const Status s = transport::send_camera_frame(m.pub, topic, h, transport::Payload::of(*image));
+    if (s.code() == StatusCode::kCancelled) return Step::kCancelled;
+    if (s.code() == StatusCode::kInvalidArgument) {
+      // Over max_msg_bytes: refused and counted; the run goes on, and the unused seq is a gap downstream.
+      ++counts.send_failures;
+      if (m.missing_limiter.allow()) m.log->warn("{} ({} send failures so far)", s.message(), counts.send_failures);
+      return Step::kOk;
+    }
+    if (!s.is_ok()) {
+      ++counts.send_failures;
+      m.log->error("send on {} failed: {}", topic, s.message());
+      return Step::kFatal;
+    }
+    ++counts.frames_sent;
+    if (f.is_key_frame) ++keys_sent[f.sample_token];
+    stats::Sample sample;
+    sample.receive_mono_ns = h.header().publish_mono_ns();
+    sample.receive_realtime_ns = h.header().publish_stamp_ns();
+    sample.size_bytes = (*image)->size();
+    m.stats.collector().record(topic, m.node, sample);
+    m.log->trace("sent {} seq={} sample_data={}", topic, h.header().seq(), f.sample_data_token);
+    return Step::kOk;
+  }
+
+  // The boundary after frame i, then in lockstep the wait for its SampleAck.
+  Step send_boundary(std::size_t i) {
+    const auto& f = frames[i];
+    const std::int64_t sample_us = plan.sample_time.at(f.sample_token);
+    msgs::SampleBoundary b;
+    b.set_sample_token(f.sample_token);
+    b.set_scene_token(f.scene_token);
+    b.set_scene_name(f.scene_name);
+    b.set_timestamp_us(sample_us);
+    b.set_frames_sent(keys_sent[f.sample_token]);
+    b.set_last_in_run(!m.cfg.loop && i == plan.last_boundary);
+    b.set_stream_end_follows(b.last_in_run());
+    b.mutable_header()->set_capture_stamp_ns(sample_us * 1000);
+    b.mutable_header()->set_capture_clock(msgs::CAPTURE_CLOCK_DATASET);
+    b.mutable_header()->set_frame_id("base_link");
+    m.stamp(b.mutable_header(), m.sync_topic);
+    if (transport::send_message(m.pub, m.sync_topic, b).code() == StatusCode::kCancelled) return Step::kCancelled;
+    ++counts.boundaries_sent;
+    m.log->debug("boundary sample={} frames_sent={} last={}", b.sample_token(), b.frames_sent(), b.last_in_run());
+    if (!m.cfg.lockstep) return Step::kOk;
+    if (!m.wait_ack(f.sample_token, stop, counts)) return Step::kStopped;
+    anchored = false;  // re-anchor pacing after waiting
+    return Step::kOk;
+  }
+
+  Step run(std::int64_t start_us) {
+    keys_sent.clear();
+    anchored = false;
+    for (std::size_t i = 0; i < frames.size(); ++i) {
+      if (frames[i].timestamp_us < start_us) continue;
+      if (stop.load()) return Step::kStopped;
+      Step step = pace(i);
+      if (step == Step::kOk) step = send_frame(frames[i]);
+      if (step == Step::kOk && plan.boundary_after[i]) step = send_boundary(i);
+      if (step != Step::kOk) return step;
+      m.stats.tick(monotonic_now_ns(), &m.pub);
+    }
+    return Step::kOk;
+  }
+};
+
 int PlayerLoop::run(const std::atomic<bool>& stop) {
   Impl& m = *impl_;
   const auto& frames = m.source->frames();
@@ -133,27 +306,8 @@ int PlayerLoop::run(const std::atomic<bool>& stop) {
     m.log->warn("no camera frames to play");
     return 0;
   }
-  // A boundary follows the last key frame of each sample; its stamp is the sample's time.
-  std::vector<bool> boundary_after(frames.size(), false);
-  std::map<std::string, std::size_t> last_key_index;
-  std::map<std::string, std::int64_t> sample_time = m.source->sample_timestamps_us();
-  std::set<std::string> topics;
-  for (std::size_t i = 0; i < frames.size(); ++i) {
-    topics.insert(remap_topic(m.cfg.remap, camera_topic(frames[i].channel)));
-    if (!frames[i].is_key_frame) continue;
-    last_key_index[frames[i].sample_token] = i;
-    sample_time.emplace(frames[i].sample_token, frames[i].timestamp_us);  // earliest key frame if unknown
-  }
-  std::size_t last_boundary = frames.size();
-  for (const auto& [token, index] : last_key_index) {
-    boundary_after[index] = true;
-    if (last_boundary == frames.size() || index > last_boundary) last_boundary = index;
-  }
-  for (const auto& t : topics) (void)m.registry.advertise(t, "faultline.msgs.CameraFrame", m.pub.endpoint());
-  (void)m.registry.advertise(m.sync_topic, "faultline.msgs.SampleBoundary", m.pub.endpoint());
-  (void)m.registry.advertise(m.end_topic, "faultline.msgs.StreamEnd", m.pub.endpoint());
-  (void)m.registry.advertise(m.stats.stats_topic(), "faultline.msgs.TopicStats", m.pub.endpoint());
-
+  const RunPlan plan = plan_run(frames, m.source->sample_timestamps_us(), m.cfg.remap);
+  m.advertise(plan.topics);
   if (m.cfg.wait_subscribers > 0) {
     // Every consumer that matters (injector, sink, detectors) subscribes to the boundaries.
     const Status s = m.pub.wait_for_subscribers(m.sync_topic, m.cfg.wait_subscribers,
@@ -163,111 +317,14 @@ int PlayerLoop::run(const std::atomic<bool>& stop) {
   }
 
   const std::int64_t start_us = frames.front().timestamp_us + static_cast<std::int64_t>(m.cfg.start_offset_s * 1e6);
-  std::map<std::string, std::uint32_t> keys_sent;
-  bool stopped = false;
+  Pass pass(m, counts_, frames, plan, stop);
+  Step ended = Step::kOk;
   do {
-    bool anchored = false;
-    StampNs anchor_ns = 0;
-    std::int64_t anchor_us = 0;
-    keys_sent.clear();
-    for (std::size_t i = 0; i < frames.size() && !stopped; ++i) {
-      const auto& f = frames[i];
-      if (f.timestamp_us < start_us) continue;
-      if (stop.load()) {
-        stopped = true;
-        break;
-      }
-      if (m.cfg.rate > 0) {
-        // Scenes are recorded hours or days apart: pacing restarts at each scene change.
-        if (i > 0 && f.scene_token != frames[i - 1].scene_token) anchored = false;
-        if (!anchored) {
-          anchored = true;
-          anchor_ns = m.clock.now_ns();
-          anchor_us = f.timestamp_us;
-        }
-        const auto offset_ns = static_cast<StampNs>(static_cast<double>(f.timestamp_us - anchor_us) * 1e3 / m.cfg.rate);
-        if (!m.sleep_until(anchor_ns + offset_ns, stop)) {
-          stopped = true;
-          break;
-        }
-      }
-      auto image = m.source->read_image(f);
-      if (!image) {
-        ++counts_.missing_images;
-        if (m.missing_limiter.allow()) {
-          m.log->warn("skipping frame {} ({}): {} ({} missing so far)", f.sample_data_token, f.channel,
-                      image.status().message(), counts_.missing_images);
-        }
-      } else {
-        const std::string topic = remap_topic(m.cfg.remap, camera_topic(f.channel));
-        msgs::CameraFrame h = camera_frame_header(f);
-        m.stamp(h.mutable_header(), topic);
-        h.set_source_seq(h.header().seq());
-        const Status s = transport::send_camera_frame(m.pub, topic, h, transport::Payload::of(*image));
-        if (s.code() == StatusCode::kCancelled) return 0;
-        if (s.code() == StatusCode::kInvalidArgument) {
-          // Over max_msg_bytes: refused and counted; the run goes on, and the unused seq is a gap downstream.
-          ++counts_.send_failures;
-          if (m.missing_limiter.allow()) m.log->warn("{} ({} send failures so far)", s.message(), counts_.send_failures);
-        } else if (!s.is_ok()) {
-          ++counts_.send_failures;
-          m.log->error("send on {} failed: {}", topic, s.message());
-          return 1;
-        } else {
-          ++counts_.frames_sent;
-          if (f.is_key_frame) ++keys_sent[f.sample_token];
-          stats::Sample sample;
-          sample.receive_mono_ns = h.header().publish_mono_ns();
-          sample.receive_realtime_ns = h.header().publish_stamp_ns();
-          sample.size_bytes = (*image)->size();
-          m.stats.collector().record(topic, m.node, sample);
-          m.log->trace("sent {} seq={} sample_data={}", topic, h.header().seq(), f.sample_data_token);
-        }
-      }
-      if (boundary_after[i]) {
-        msgs::SampleBoundary b;
-        b.set_sample_token(f.sample_token);
-        b.set_scene_token(f.scene_token);
-        b.set_scene_name(f.scene_name);
-        b.set_timestamp_us(sample_time[f.sample_token]);
-        b.set_frames_sent(keys_sent[f.sample_token]);
-        b.set_last_in_run(!m.cfg.loop && i == last_boundary);
-        b.set_stream_end_follows(b.last_in_run());
-        b.mutable_header()->set_capture_stamp_ns(sample_time[f.sample_token] * 1000);
-        b.mutable_header()->set_capture_clock(msgs::CAPTURE_CLOCK_DATASET);
-        b.mutable_header()->set_frame_id("base_link");
-        m.stamp(b.mutable_header(), m.sync_topic);
-        const Status s = transport::send_message(m.pub, m.sync_topic, b);
-        if (s.code() == StatusCode::kCancelled) return 0;
-        ++counts_.boundaries_sent;
-        m.log->debug("boundary sample={} frames_sent={} last={}", b.sample_token(), b.frames_sent(), b.last_in_run());
-        if (m.cfg.lockstep) {
-          if (!m.wait_ack(f.sample_token, stop, counts_)) {
-            stopped = true;
-            break;
-          }
-          anchored = false;  // re-anchor pacing after waiting
-        }
-      }
-      m.stats.tick(monotonic_now_ns(), &m.pub);
-    }
-  } while (m.cfg.loop && !stopped && !stop.load());
-  if (!m.cfg.loop && !stopped && !stop.load()) {
-    // Consumers that want every frame (the injector) wait for this, not for last_in_run: sweeps after the last
-    // sample's key frames come between the two.
-    msgs::StreamEnd end;
-    end.set_frames_sent(counts_.frames_sent);
-    end.set_boundaries_sent(static_cast<std::uint32_t>(counts_.boundaries_sent));
-    m.stamp(end.mutable_header(), m.end_topic);
-    if (transport::send_message(m.pub, m.end_topic, end).code() == StatusCode::kCancelled) return 0;
-  }
-  m.stats.tick(monotonic_now_ns() + static_cast<DurationNs>(m.cfg.stats_window_s * 1e9), &m.pub);
-  m.stats.log_totals(monotonic_now_ns());
-  if (stopped || stop.load()) m.pub.set_linger(0);  // shutdown: exit promptly, do not flush
-  m.log->info("player done: {} frames, {} boundaries, {} missing images, {} ack timeouts{}", counts_.frames_sent,
-              counts_.boundaries_sent, counts_.missing_images, counts_.ack_timeouts,
-              stopped ? " (stopped)" : "");
-  return 0;
+    ended = pass.run(start_us);
+  } while (ended == Step::kOk && m.cfg.loop && !stop.load());
+  if (ended == Step::kCancelled) return 0;
+  if (ended == Step::kFatal) return 1;
+  return m.finish(ended == Step::kStopped, stop, counts_);
 }
 
 std::vector<stats::TopicWindow> PlayerLoop::stats_totals() const {

@@ -103,6 +103,7 @@ class PlayerLoop {
 
  private:
   struct Impl;
+  struct Pass;
   std::unique_ptr<Impl> impl_;
   PlayerCounts counts_;
 };
