@@ -40,6 +40,89 @@ double seconds_since(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
+// The submission's samples must be the split's (predefined; custom splits are equal by construction); then every
+// box learns the index of the GT sample it is matched in (by its sample_token field). Returns each submission
+// sample's GT index.
+Result<std::vector<int>> match_samples(Submission& sub, const GroundTruth& gt, const EvalOptions& opts) {
+  std::vector<int> pred_to_gt(sub.boxes.sample_tokens.size(), -1);
+  std::size_t missing = 0, extra = 0;
+  std::string first_extra, first_missing;
+  std::unordered_set<std::string> in_results;
+  for (std::size_t i = 0; i < sub.boxes.sample_tokens.size(); ++i) {
+    const auto& tok = sub.boxes.sample_tokens[i];
+    in_results.insert(tok);
+    auto it = gt.sample_index.find(tok);
+    if (it == gt.sample_index.end()) {
+      if (extra++ == 0) first_extra = tok;
+    } else {
+      pred_to_gt[i] = it->second;
+    }
+  }
+  for (const auto& tok : gt.boxes.sample_tokens) {
+    if (!in_results.count(tok) && missing++ == 0) first_missing = tok;
+  }
+  if (missing || extra) {
+    std::string msg =
+        "Samples in split doesn't match samples in predictions. " + opts.results_path + ": ";
+    msg +=
+        std::to_string(missing) + " sample(s) of split " + opts.eval_set + " missing from results";
+    if (missing) msg += " (first: " + first_missing + ")";
+    msg += ", " + std::to_string(extra) + " sample(s) not in the split";
+    if (extra) msg += " (first: " + first_extra + ")";
+    return Status(StatusCode::kInvalidArgument, msg);
+  }
+  for (std::size_t i = 0; i < sub.boxes.boxes.size(); ++i) {
+    for (EvalBox& b : sub.boxes.boxes[i]) {
+      if (b.match_sample == kMatchSampleIsKey) {
+        b.match_sample = pred_to_gt[i];
+      } else {
+        auto it =
+            gt.sample_index.find(sub.odd_sample_fields[static_cast<std::size_t>(b.match_sample)]);
+        b.match_sample = it == gt.sample_index.end() ? -1 : it->second;
+      }
+    }
+  }
+  return pred_to_gt;
+}
+
+// Classes are independent (read-only shared inputs) but very unequal (cars are ~40 % of the boxes): two threads
+// take them largest first from a shared counter.
+Status accumulate_classes(const GroundTruth& gt, const Submission& sub, const EvalOptions& opts,
+                          EvalOutcome& out) {
+  std::array<Status, kNumClasses> class_status;
+  std::array<std::size_t, kNumClasses> class_boxes{};
+  for (const auto& sample : sub.boxes.boxes) {
+    for (const auto& b : sample) ++class_boxes[static_cast<std::size_t>(b.cls)];
+  }
+  for (const auto& sample : gt.boxes.boxes) {
+    for (const auto& b : sample) ++class_boxes[static_cast<std::size_t>(b.cls)];
+  }
+  std::array<int, kNumClasses> order{};
+  for (int c = 0; c < kNumClasses; ++c) order[static_cast<std::size_t>(c)] = c;
+  std::stable_sort(order.begin(), order.end(), [&](int a, int b) {
+    return class_boxes[static_cast<std::size_t>(a)] > class_boxes[static_cast<std::size_t>(b)];
+  });
+  std::atomic<int> next{0};
+  auto run_classes = [&](int) {
+    for (int k = next++; k < kNumClasses; k = next++) {
+      const int c = order[static_cast<std::size_t>(k)];
+      auto mds = accumulate_class(gt.boxes, sub.boxes, c);
+      if (mds) {
+        out.curves[static_cast<std::size_t>(c)] = std::move(*mds);
+      } else {
+        class_status[static_cast<std::size_t>(c)] = mds.status();
+      }
+    }
+  };
+  auto odd = std::async(std::launch::async, run_classes, 1);
+  run_classes(0);
+  odd.get();
+  for (const Status& st : class_status) {
+    if (!st) return Status(st.code(), opts.results_path + ": " + st.message());
+  }
+  return Status::ok();
+}
+
 }  // namespace
 
 Result<std::vector<std::string>> eval_set_samples(const std::string& dataroot,
@@ -110,46 +193,8 @@ Result<EvalOutcome> evaluate_detection(const EvalOptions& opts, std::FILE* log) 
   logf(log, "Loaded ground truth annotations for " +
                 std::to_string(gt->boxes.sample_tokens.size()) + " samples.");
 
-  // Key set must equal the split (predefined); custom splits are equal by construction.
-  std::vector<int> pred_to_gt(sub->boxes.sample_tokens.size(), -1);
-  std::size_t missing = 0, extra = 0;
-  std::string first_extra, first_missing;
-  std::unordered_set<std::string> in_results;
-  for (std::size_t i = 0; i < sub->boxes.sample_tokens.size(); ++i) {
-    const auto& tok = sub->boxes.sample_tokens[i];
-    in_results.insert(tok);
-    auto it = gt->sample_index.find(tok);
-    if (it == gt->sample_index.end()) {
-      if (extra++ == 0) first_extra = tok;
-    } else {
-      pred_to_gt[i] = it->second;
-    }
-  }
-  for (const auto& tok : gt->boxes.sample_tokens) {
-    if (!in_results.count(tok) && missing++ == 0) first_missing = tok;
-  }
-  if (missing || extra) {
-    std::string msg =
-        "Samples in split doesn't match samples in predictions. " + opts.results_path + ": ";
-    msg +=
-        std::to_string(missing) + " sample(s) of split " + opts.eval_set + " missing from results";
-    if (missing) msg += " (first: " + first_missing + ")";
-    msg += ", " + std::to_string(extra) + " sample(s) not in the split";
-    if (extra) msg += " (first: " + first_extra + ")";
-    return Status(StatusCode::kInvalidArgument, msg);
-  }
-  // Matching looks GT up by each box's sample_token field.
-  for (std::size_t i = 0; i < sub->boxes.boxes.size(); ++i) {
-    for (EvalBox& b : sub->boxes.boxes[i]) {
-      if (b.match_sample == kMatchSampleIsKey) {
-        b.match_sample = pred_to_gt[i];
-      } else {
-        auto it =
-            gt->sample_index.find(sub->odd_sample_fields[static_cast<std::size_t>(b.match_sample)]);
-        b.match_sample = it == gt->sample_index.end() ? -1 : it->second;
-      }
-    }
-  }
+  auto pred_to_gt = match_samples(*sub, *gt, opts);
+  if (!pred_to_gt) return pred_to_gt.status();
   if (sub->boxes.total() == 0) {
     logf(log,
          "Warning: the submission holds no box at all; every class scores AP 0 (the devkit crashes "
@@ -160,7 +205,7 @@ Result<EvalOutcome> evaluate_detection(const EvalOptions& opts, std::FILE* log) 
   out.meta = sub->meta;
   const auto filter_start = std::chrono::steady_clock::now();
   logf(log, "Filtering predictions");
-  out.pred_counts = filter_boxes(sub->boxes, pred_to_gt, *gt);
+  out.pred_counts = filter_boxes(sub->boxes, *pred_to_gt, *gt);
   log_counts(log, out.pred_counts);
   logf(log, "Filtering ground truth annotations");
   std::vector<int> identity(gt->boxes.sample_tokens.size());
@@ -171,39 +216,7 @@ Result<EvalOutcome> evaluate_detection(const EvalOptions& opts, std::FILE* log) 
   timings.filter_s = seconds_since(filter_start);
   const auto accumulate_start = std::chrono::steady_clock::now();
   logf(log, "Accumulating metric data...");
-  // Classes are independent (read-only shared inputs) but very unequal (cars are ~40 % of the boxes): two threads
-  // take them largest first from a shared counter.
-  std::array<Status, kNumClasses> class_status;
-  std::array<std::size_t, kNumClasses> class_boxes{};
-  for (const auto& sample : sub->boxes.boxes) {
-    for (const auto& b : sample) ++class_boxes[static_cast<std::size_t>(b.cls)];
-  }
-  for (const auto& sample : gt->boxes.boxes) {
-    for (const auto& b : sample) ++class_boxes[static_cast<std::size_t>(b.cls)];
-  }
-  std::array<int, kNumClasses> order{};
-  for (int c = 0; c < kNumClasses; ++c) order[static_cast<std::size_t>(c)] = c;
-  std::stable_sort(order.begin(), order.end(), [&](int a, int b) {
-    return class_boxes[static_cast<std::size_t>(a)] > class_boxes[static_cast<std::size_t>(b)];
-  });
-  std::atomic<int> next{0};
-  auto run_classes = [&](int) {
-    for (int k = next++; k < kNumClasses; k = next++) {
-      const int c = order[static_cast<std::size_t>(k)];
-      auto mds = accumulate_class(gt->boxes, sub->boxes, c);
-      if (mds) {
-        out.curves[static_cast<std::size_t>(c)] = std::move(*mds);
-      } else {
-        class_status[static_cast<std::size_t>(c)] = mds.status();
-      }
-    }
-  };
-  auto odd = std::async(std::launch::async, run_classes, 1);
-  run_classes(0);
-  odd.get();
-  for (const Status& st : class_status) {
-    if (!st) return Status(st.code(), opts.results_path + ": " + st.message());
-  }
+  if (Status accumulated = accumulate_classes(*gt, *sub, opts, out); !accumulated) return accumulated;
   timings.accumulate_s = seconds_since(accumulate_start);
   out.timings = timings;
   logf(log, "Calculating metrics...");
