@@ -268,16 +268,9 @@ std::string variant_bars(const std::vector<DetectorVariantRun>& runs,
   return s + "</svg>\n";
 }
 
-}  // namespace
-
-std::string render_html(const ReportData& data) {
-  std::string h =
-      "<!DOCTYPE html>\n<html><head><meta charset=\"utf-8\"><title>" + svg::esc(data.title) +
-      "</title><style>body{font-family:sans-serif;margin:24px;background:#fff;color:#222}"
-      "table{border-collapse:collapse;margin:12px 0}td,th{border:1px solid #ccc;padding:4px 10px;"
-      "text-align:right}th{background:#f0f0f0}.row{display:flex;flex-wrap:wrap;gap:16px}"
-      ".note{color:#666;font-size:13px}</style></head><body>\n";
-  h += "<h1>" + svg::esc(data.title) + "</h1>\n";
+// Summary, radar, per-level bars and, for several detectors, the accuracy-vs-robustness scatter plots.
+std::string robustness_sections(const ReportData& data) {
+  std::string h;
   if (data.detectors.empty()) h += "<p class=\"note\">No robustness results were given.</p>\n";
   if (!data.detectors.empty()) {
     h += "<h2>Summary</h2>\n" + summary_table(data.detectors) + "\n";
@@ -299,6 +292,34 @@ std::string render_html(const ReportData& data) {
     h += "<p class=\"note\">NDS vs mCE / mRR scatter plots appear when several detectors are "
          "scored.</p>\n";
   }
+  return h;
+}
+
+// The detector configurations' names and conditions, in first-seen order.
+struct VariantAxes {
+  std::vector<std::string> variant_names, variant_conditions;
+};
+
+VariantAxes variant_axes(const ReportData& data) {
+  VariantAxes axes;
+  auto& variant_names = axes.variant_names;
+  auto& variant_conditions = axes.variant_conditions;
+  for (const auto& v : data.variants) {
+    if (std::find(variant_names.begin(), variant_names.end(), v.variant) == variant_names.end()) {
+      variant_names.push_back(v.variant);
+    }
+    if (std::find(variant_conditions.begin(), variant_conditions.end(), v.condition) ==
+        variant_conditions.end()) {
+      variant_conditions.push_back(v.condition);
+    }
+  }
+  return axes;
+}
+
+// Detector latency, input scales (fps on the clean condition) and the corruption engine's time against accuracy.
+std::string speed_section(const ReportData& data, const VariantAxes& axes) {
+  const auto& variant_names = axes.variant_names;
+  std::string h;
   std::vector<Point> speed;
   for (std::size_t i = 0; i < data.detectors.size(); ++i) {
     const auto& d = data.detectors[i];
@@ -317,19 +338,7 @@ std::string render_html(const ReportData& data) {
          p.type + (p.level.empty() ? "" : "/" + p.level) + (p.mode.empty() ? "" : " " + p.mode),
          ci});
   }
-  // Detector configurations: NDS against fps on the clean condition (input scales), and temporal vs
-  // single-frame NDS per condition.
   std::vector<Point> scales;
-  std::vector<std::string> variant_names, variant_conditions;
-  for (const auto& v : data.variants) {
-    if (std::find(variant_names.begin(), variant_names.end(), v.variant) == variant_names.end()) {
-      variant_names.push_back(v.variant);
-    }
-    if (std::find(variant_conditions.begin(), variant_conditions.end(), v.condition) ==
-        variant_conditions.end()) {
-      variant_conditions.push_back(v.condition);
-    }
-  }
   for (const auto& v : data.variants) {
     if (v.condition != "clean" || v.fps <= 0) continue;
     const auto ci = static_cast<std::size_t>(
@@ -364,6 +373,14 @@ std::string render_html(const ReportData& data) {
       h += "</table>\n";
     }
   }
+  return h;
+}
+
+// NDS per detector configuration and condition (temporal vs single-frame, input scales).
+std::string variants_section(const ReportData& data, const VariantAxes& axes) {
+  const auto& variant_names = axes.variant_names;
+  const auto& variant_conditions = axes.variant_conditions;
+  std::string h;
   if (!data.variants.empty()) {
     h += "<h2>Detector configurations</h2>\n<table><tr><th>configuration</th>";
     for (const auto& c : variant_conditions) h += "<th>" + svg::esc(c) + " NDS</th>";
@@ -386,6 +403,23 @@ std::string render_html(const ReportData& data) {
     h += "</table>\n";
     h += variant_bars(data.variants, variant_names, variant_conditions);
   }
+  return h;
+}
+
+}  // namespace
+
+std::string render_html(const ReportData& data) {
+  std::string h =
+      "<!DOCTYPE html>\n<html><head><meta charset=\"utf-8\"><title>" + svg::esc(data.title) +
+      "</title><style>body{font-family:sans-serif;margin:24px;background:#fff;color:#222}"
+      "table{border-collapse:collapse;margin:12px 0}td,th{border:1px solid #ccc;padding:4px 10px;"
+      "text-align:right}th{background:#f0f0f0}.row{display:flex;flex-wrap:wrap;gap:16px}"
+      ".note{color:#666;font-size:13px}</style></head><body>\n";
+  h += "<h1>" + svg::esc(data.title) + "</h1>\n";
+  h += robustness_sections(data);
+  const VariantAxes axes = variant_axes(data);
+  h += speed_section(data, axes);
+  h += variants_section(data, axes);
   h += "<p class=\"note\">mCE: mean corruption error against the baseline (RoboBEV, arXiv "
        "2304.06719); mRR: mean "
        "resilience rate against the detector's own clean NDS.</p>\n</body></html>\n";
