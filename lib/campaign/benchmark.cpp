@@ -10,99 +10,14 @@
 #include <thread>
 
 #include "campaign/benchmark_plan.hpp"
+#include "campaign/pipeline.hpp"
 #include "campaign/text_file.hpp"
+#include "common/config.hpp"
 #include "launch/supervisor.hpp"
 #include "scoring/evaluate.hpp"
 
 namespace faultline::campaign {
 namespace fs = std::filesystem;
-namespace {
-
-// `text` as a single-quoted YAML scalar, so that a `-p key:=value` keeps it a string verbatim.
-std::string yaml_quote(const std::string& text) {
-  std::string out = "'";
-  for (char c : text) out += c == '\'' ? std::string("''") : std::string(1, c);
-  return out + "'";
-}
-
-// One run's processes: sink (required: the run ends when it has finalized), injector, detector,
-// player.
-std::vector<launch::ChildSpec> run_children(const BenchmarkOptions& o, const std::string& sock,
-                                            const std::string& run_dir,
-                                            const std::string& corruption, const std::string& level,
-                                            int seed,
-                                            const std::vector<std::string>& variant_params) {
-  const std::string player = "ipc://" + sock + "/player", frames = "ipc://" + sock + "/frames",
-                    det = "ipc://" + sock + "/det", ack = "ipc://" + sock + "/ack";
-  auto node = [&](const char* name, std::vector<std::string> params, bool required) {
-    return node_child(o.bin_dir, name, std::move(params), required);
-  };
-  std::vector<launch::ChildSpec> children;
-  // The sink refuses tokens outside the scored split, and records the run's identity in the results
-  // meta ("faultline_run").
-  std::string detector = o.detector_cmd;
-  if (detector.empty()) {
-    detector = "detector";
-    for (const auto& p : o.detector_params) detector += " " + p;
-    for (const auto& p : variant_params) detector += " " + p;
-  }
-  children.push_back(node(
-      "detection_sink",
-      {"detections_endpoint:=" + det, "sync_endpoints:=[" + frames + "]",
-       "output:=" + run_dir + "/results.json", "lockstep:=true", "ack_endpoint:=" + ack,
-       "resume:=false", "finalize_grace_ms:=30000", "stats_log_period_s:=1000",
-       "dataroot:=" + yaml_quote(o.dataroot), "version:=" + yaml_quote(o.version),
-       "eval_set:=" + yaml_quote(o.eval_set),
-       "run.dataset:=" + yaml_quote(o.dataroot + "/" + o.version),
-       "run.split:=" + yaml_quote(o.eval_set),
-       "run.corruption:=" + yaml_quote(corruption.empty() ? "clean" : corruption + "/" + level),
-       "run.seed:=" + yaml_quote(std::to_string(seed)), "run.detector:=" + yaml_quote(detector)},
-      true));
-  std::vector<std::string> inj = {"input_endpoints:=[" + player + "]",
-                                  "output_endpoint:=" + frames,
-                                  "input_hwm:=256",
-                                  "output_hwm:=256",
-                                  "decode:=true",
-                                  "wait_subscribers:=2",
-                                  "wait_timeout_ms:=60000",
-                                  "seed:=" + std::to_string(seed),
-                                  "stats_log_period_s:=1000"};
-  if (!corruption.empty())
-    inj.push_back("corruption:=" + injector_corruption_name(corruption) + "/" + level);
-  children.push_back(node("fault_injector", inj, false));
-  if (o.detector_cmd.empty()) {
-    std::vector<std::string> dp = {"input_endpoints:=[" + frames + "]", "sink_endpoint:=" + det,
-                                   "input_hwm:=256"};
-    for (const auto& p : o.detector_params) dp.push_back(p);
-    for (const auto& p : variant_params) dp.push_back(p);  // later -p overrides earlier ones
-    children.push_back(node("detector", dp, false));
-  } else {
-    launch::ChildSpec c;
-    c.name = "detector";
-    c.required = false;
-    c.argv = {"/bin/sh", "-c", o.detector_cmd};
-    children.push_back(c);
-  }
-  std::vector<std::string> pp = {"dataroot:=" + o.dataroot,
-                                 "version:=" + o.version,
-                                 "endpoint:=" + player,
-                                 "rate:=0",
-                                 "hwm:=256",
-                                 "lockstep:=true",
-                                 "ack_endpoint:=" + ack,
-                                 "wait_subscribers:=1",
-                                 "wait_timeout_ms:=60000",
-                                 "stats_log_period_s:=1000"};
-  if (!o.scenes.empty()) {
-    std::string list = "scenes:=[";
-    for (std::size_t i = 0; i < o.scenes.size(); ++i) list += (i ? "," : "") + o.scenes[i];
-    pp.push_back(list + "]");
-  }
-  children.push_back(node("nusc_player", pp, false));
-  return children;
-}
-
-}  // namespace
 
 ConditionResult run_one(const BenchmarkOptions& o, const RunSpec& run,
                         const std::atomic<bool>& stop) {
@@ -149,8 +64,16 @@ ConditionResult run_one(const BenchmarkOptions& o, const RunSpec& run,
                    " after " + when + " s";
     run_stop.store(true);
   };
-  launch::Supervisor sup(
-      run_children(o, sock, run_dir.string(), corruption, level, seed, run.variant_params), so);
+  RunPipeline pipeline;
+  try {
+    pipeline = run_pipeline(o, run, sock, run_dir.string());
+  } catch (const ConfigError& e) {
+    fs::remove_all(sock);
+    r.error = std::string("pipeline: ") + e.what();
+    return r;
+  }
+  for (const auto& [k, v] : pipeline.env) so.env.emplace(k, v);
+  launch::Supervisor sup(std::move(pipeline.children), so);
   // Stop the run on the user's request or when it exceeds its time budget.
   std::atomic<bool> done{false};
   std::thread watchdog([&] {

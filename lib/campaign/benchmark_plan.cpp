@@ -105,6 +105,7 @@ void write_options(Writer& w, const BenchmarkOptions& o) {
   w.Int(o.seeds);
   put(w, "detector_cmd", o.detector_cmd);
   put(w, "detector_params", o.detector_params);
+  put(w, "pipeline_file", o.pipeline_file);
   put(w, "baseline_manifest", o.baseline_manifest);
   put(w, "corrupt_bench", o.corrupt_bench);
   w.Key("run_timeout_s");
@@ -126,6 +127,7 @@ BenchmarkOptions read_options(Fields& f) {
   o.seeds = f.integer("seeds");
   o.detector_cmd = f.str("detector_cmd");
   o.detector_params = f.strings("detector_params");
+  o.pipeline_file = f.str("pipeline_file");
   o.baseline_manifest = f.str("baseline_manifest");
   o.corrupt_bench = f.str("corrupt_bench");
   o.run_timeout_s = f.integer("run_timeout_s");

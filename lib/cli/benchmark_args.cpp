@@ -55,6 +55,11 @@ void add_benchmark_options(CLI::App& app, BenchmarkArgs& args) {
                  "set (docs/protocol.md)");
   app.add_option("--detector-param", o.detector_params,
                  "key:=value for Faultline's detector (repeatable)");
+  app.add_option("--pipeline", o.pipeline_file,
+                 "launch file of one run's nodes, with the variables of launch/benchmark.yaml (default: that "
+                 "file, built in); each run keeps its nodes' parameters in runs/<run>/params/")
+      ->check(CLI::ExistingFile)
+      ->transform([](std::string path) { return std::filesystem::absolute(path).string(); });
   app.add_option("--baseline", o.baseline_manifest,
                  "manifest of a scored baseline detector (default: paper DETR3D)");
   app.add_option("--synth-dir", args.synth_dir,

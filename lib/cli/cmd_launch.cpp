@@ -63,12 +63,6 @@ class ParamsDir {
   std::vector<std::string> files_;
 };
 
-std::string params_yaml(const launch::NodeSpec& node) {
-  YAML::Emitter e;
-  e << launch::node_params_document(node);
-  return e.c_str();
-}
-
 int run(int argc, char** argv) {
   CLI::App app{"Start the nodes of a launch file, prefix their output, stop them all together.", argv[0]};
   std::string file;
@@ -118,14 +112,7 @@ int run(int argc, char** argv) {
   ParamsDir dir;
   std::vector<launch::ChildSpec> children;
   for (const auto& node : lf.nodes) {
-    launch::ChildSpec child;
-    child.name = node.name;
-    child.argv = launch::node_command(node, dir.write(node.name, params_yaml(node)));
-    child.required = node.required;
-    child.respawn = node.respawn;
-    child.respawn_delay_ns = static_cast<DurationNs>(node.respawn_delay_s * 1e9);
-    child.max_respawns = node.respawn_max_retries;
-    children.push_back(std::move(child));
+    children.push_back(launch::child_spec(node, dir.write(node.name, launch::node_params_yaml(node))));
   }
   launch::SupervisorOptions opts;
   opts.grace_ns = static_cast<DurationNs>(grace_s * 1e9);

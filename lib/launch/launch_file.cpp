@@ -152,7 +152,8 @@ NodeSpec parse_node(const YAML::Node& n, const std::string& file, const std::str
              file, at + ".");
   if (!n["exec"].IsDefined()) fail_missing(file, at + ".exec");
   spec.exec = scalar(n["exec"], file, at + ".exec");
-  const auto resolved = resolve_exec(spec.exec, options);
+  const auto resolved = options.replaced_nodes.count(spec.name) ? std::optional<std::string>(spec.exec)
+                                                                : resolve_exec(spec.exec, options);
   if (!resolved) {
     fail(file, at + ".exec", n["exec"],
          spec.exec.find('/') != std::string::npos
@@ -339,6 +340,23 @@ YAML::Node node_params_document(const NodeSpec& node) {
     doc["remap"] = remap;
   }
   return doc;
+}
+
+std::string node_params_yaml(const NodeSpec& node) {
+  YAML::Emitter e;
+  e << node_params_document(node);
+  return e.c_str();
+}
+
+ChildSpec child_spec(const NodeSpec& node, const std::string& params_file) {
+  ChildSpec child;
+  child.name = node.name;
+  child.argv = node_command(node, params_file);
+  child.required = node.required;
+  child.respawn = node.respawn;
+  child.respawn_delay_ns = static_cast<DurationNs>(node.respawn_delay_s * 1e9);
+  child.max_respawns = node.respawn_max_retries;
+  return child;
 }
 
 std::vector<std::string> node_command(const NodeSpec& node, const std::string& params_file) {

@@ -22,8 +22,11 @@
 #include <functional>
 #include <map>
 #include <optional>
+#include <set>
 #include <string>
 #include <vector>
+
+#include "launch/supervisor.hpp"
 
 namespace faultline::launch {
 
@@ -58,6 +61,7 @@ struct LoadOptions {
   std::string bin_dir;       // where bare exec names are looked for first (the faultline binary's dir)
   EnvLookup env = process_env;
   bool search_path = true;   // also look bare names up in $PATH
+  std::set<std::string> replaced_nodes;  // nodes the caller starts otherwise: their exec is not looked up
 };
 
 // Parses and validates a launch file from text; `path` names it in errors.
@@ -79,6 +83,13 @@ YAML::Node node_params_document(const NodeSpec& node);
 
 // argv for a node: exec_path --name NAME --params PARAMS_FILE args...
 std::vector<std::string> node_command(const NodeSpec& node, const std::string& params_file);
+
+// node_params_document() as YAML text, what a node's --params file holds.
+std::string node_params_yaml(const NodeSpec& node);
+
+// The supervisor's child for a node whose parameters were written to `params_file`: its command, whether it is
+// required, and its respawn settings.
+ChildSpec child_spec(const NodeSpec& node, const std::string& params_file);
 
 // Directory of the running executable (/proc/self/exe), or "" when unknown.
 std::string self_exe_dir();
