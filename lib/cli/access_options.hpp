@@ -37,7 +37,7 @@ inline void add_access_options(CLI::App& app, transport::AccessConfig& access, S
       return "--" + key;
     }
   };
-  Adder adder{app.add_option_group("Access", "who may reach the sockets (transport/access.hpp, docs/protocol.md)"),
+  Adder adder{app.add_option_group("Access", "who may reach the sockets (transport/access.hpp, docs/reliability.md)"),
               sides};
   access.visit(adder);
 }
