@@ -3,6 +3,7 @@
 
 #include <cstdio>
 
+#include "cli/access_options.hpp"
 #include "cli/command.hpp"
 #include "cli/parse.hpp"
 #include "transport/context.hpp"
@@ -20,6 +21,8 @@ int run(int argc, char** argv) {
       ->required()
       ->check(CLI::IsMember({"pause", "resume", "toggle", "step"}));
   app.add_option("count", count, "messages per step")->check(CLI::PositiveNumber);
+  transport::AccessConfig access;
+  add_access_options(app, access, SocketSides::Connect);
   FAULTLINE_PARSE(app, argc, argv);
   if (command == "step" && count > 1) command += " " + std::to_string(count);
   int rc = 0;
@@ -30,6 +33,7 @@ int run(int argc, char** argv) {
     pc.bind = false;
     pc.linger_ms = 2000;                // deliver the command before exiting
     pc.send_timeout_ns = 5 * kNsPerSec;  // no player listening: fail instead of blocking
+    pc.access = access;
     transport::Publisher push(pc);
     const Status s = push.send("/bag_play/control", command);
     if (!s.is_ok()) {

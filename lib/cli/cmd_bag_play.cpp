@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <thread>
 
+#include "cli/access_options.hpp"
 #include "cli/command.hpp"
 #include "cli/parse.hpp"
 #include "common/config.hpp"
@@ -93,6 +94,7 @@ int run(int argc, char** argv) {
       ->capture_default_str();
   bool keys = true;
   app.add_flag("!--no-keys", keys, "ignore the keyboard even when stdin is a terminal");
+  add_access_options(app, cfg.access, SocketSides::Bind);
   FAULTLINE_PARSE(app, argc, argv);
   for (const auto& r : remaps) {
     const auto sep = r.find(":=");

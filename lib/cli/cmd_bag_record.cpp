@@ -3,6 +3,7 @@
 
 #include <cstdio>
 
+#include "cli/access_options.hpp"
 #include "cli/command.hpp"
 #include "cli/parse.hpp"
 #include "common/config.hpp"
@@ -35,6 +36,7 @@ int run(int argc, char** argv) {
   app.add_option("--meta", meta, "KEY=VALUE added to the faultline.run metadata (repeatable)");
   std::string level = "info";
   app.add_option("--log-level", level, "trace|debug|info|warn|error");
+  add_access_options(app, cfg.access, SocketSides::Connect);
   FAULTLINE_PARSE(app, argc, argv);
   cfg.split_bytes = static_cast<std::uint64_t>(split_mb * 1024 * 1024);
   for (const auto& kv : meta) {

@@ -4,6 +4,7 @@
 #include <cinttypes>
 #include <cstdio>
 
+#include "cli/access_options.hpp"
 #include "cli/command.hpp"
 #include "cli/parse.hpp"
 #include "cli/topic_tools.hpp"
@@ -48,12 +49,15 @@ int run(int argc, char** argv) {
   app.add_option("--type", type, "protobuf type of the body (default: from the registry)");
   app.add_option("-n,--count", max_messages, "exit after N messages");
   app.add_option("--duration", duration_s, "exit after S seconds")->check(CLI::NonNegativeNumber);
+  transport::AccessConfig access;
+  add_access_options(app, access, SocketSides::Connect);
   FAULTLINE_PARSE(app, argc, argv);
 
   const topic::Target target = topic::resolve(topic_name, endpoints, type);
   transport::SubscriberConfig sc;
   sc.endpoints = target.endpoints;
   sc.topics = {target.topic};
+  sc.access = access;
   transport::RawSubscriber sub(sc);
   const auto& stop = shutdown_requested();
   const StampNs start = monotonic_now_ns();

@@ -3,6 +3,7 @@
 #include <CLI/CLI.hpp>
 #include <cstdio>
 
+#include "cli/access_options.hpp"
 #include "cli/command.hpp"
 #include "cli/parse.hpp"
 #include "cli/topic_tools.hpp"
@@ -36,6 +37,8 @@ int run_probe_command(int argc, char** argv, ProbeKind kind) {
     app.add_option("--stamp", stamp, "header stamp to age against: capture (dataset time on replays) or publish")
         ->check(CLI::IsMember({"capture", "publish"}));
   }
+  transport::AccessConfig access;
+  add_access_options(app, access, SocketSides::Connect);
   app.footer("Ends on Ctrl-C, --duration or -n and prints one `summary key=value ...` line.");
   FAULTLINE_PARSE(app, argc, argv);
 
@@ -44,6 +47,7 @@ int run_probe_command(int argc, char** argv, ProbeKind kind) {
   sc.endpoints = target.endpoints;
   sc.topics = {target.topic};
   sc.rcv_hwm = hwm;
+  sc.access = access;
   transport::RawSubscriber sub(sc);
 
   // Per message: a receive stamp and a size (and the small header parse for delay). The payload stays

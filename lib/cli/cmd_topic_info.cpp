@@ -4,6 +4,7 @@
 #include <cinttypes>
 #include <cstdio>
 
+#include "cli/access_options.hpp"
 #include "cli/command.hpp"
 #include "cli/parse.hpp"
 #include "cli/topic_tools.hpp"
@@ -13,9 +14,11 @@
 namespace faultline::cli {
 namespace {
 
-int probe_first_message(const std::string& topic, const std::vector<std::string>& endpoints, double timeout_s) {
+int probe_first_message(const std::string& topic, const std::vector<std::string>& endpoints, double timeout_s,
+                        const transport::AccessConfig& access) {
   transport::SubscriberConfig sc;
   sc.endpoints = endpoints;
+  sc.access = access;
   sc.topics = {topic};
   transport::RawSubscriber sub(sc);
   const auto& stop = shutdown_requested();
@@ -51,10 +54,12 @@ int run(int argc, char** argv) {
   app.add_option("--endpoint", endpoints, "bypass the registry: listen here for one message");
   app.add_option("--duration", duration_s, "seconds to wait for a message with --endpoint")
       ->check(CLI::PositiveNumber);
+  transport::AccessConfig access;
+  add_access_options(app, access, SocketSides::Connect);
   FAULTLINE_PARSE(app, argc, argv);
   if (!endpoints.empty()) {
     std::printf("Topic: %s\nEndpoints: %zu\n", topic.c_str(), endpoints.size());
-    return probe_first_message(topic, endpoints, duration_s);
+    return probe_first_message(topic, endpoints, duration_s, access);
   }
   std::vector<transport::TopicInfo> publishers;
   for (const auto& t : transport::list_topics()) {

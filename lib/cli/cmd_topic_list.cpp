@@ -13,6 +13,7 @@
 #include <memory>
 
 #include "camera_frame.pb.h"
+#include "cli/access_options.hpp"
 #include "cli/command.hpp"
 #include "cli/parse.hpp"
 #include "cli/topic_tools.hpp"
@@ -119,9 +120,11 @@ struct Seen {
   std::string publisher;
 };
 
-int list_endpoint(const std::vector<std::string>& endpoints, double duration_s) {
+int list_endpoint(const std::vector<std::string>& endpoints, double duration_s,
+                  const transport::AccessConfig& access) {
   transport::SubscriberConfig sc;
   sc.endpoints = endpoints;
+  sc.access = access;
   sc.topics = {""};
   transport::RawSubscriber sub(sc);
   std::map<std::string, Seen> seen;
@@ -151,9 +154,11 @@ int run(int argc, char** argv) {
   double duration_s = 1.0;
   app.add_option("--endpoint", endpoints, "listen on this endpoint instead of reading the registry");
   app.add_option("--duration", duration_s, "seconds to listen with --endpoint")->check(CLI::PositiveNumber);
+  transport::AccessConfig access;
+  add_access_options(app, access, SocketSides::Connect);
   app.footer("Registry: $FAULTLINE_RUN_DIR or /tmp/faultline-<uid>/graph (one file per publishing node).");
   FAULTLINE_PARSE(app, argc, argv);
-  if (!endpoints.empty()) return list_endpoint(endpoints, duration_s);
+  if (!endpoints.empty()) return list_endpoint(endpoints, duration_s, access);
 
   const auto topics = transport::list_topics();
   std::printf("%-44s %-30s %-24s %s\n", "TOPIC", "TYPE", "NODE (PID)", "ENDPOINT");

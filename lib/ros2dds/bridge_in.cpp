@@ -151,6 +151,7 @@ struct InBridge::Impl {
     transport::PublisherConfig pc;
     pc.endpoint = c.endpoint;
     pc.snd_hwm = c.hwm;
+    pc.access = c.access;
     return pc;
   }
 
@@ -394,6 +395,7 @@ InBridge::InBridge(InBridgeConfig config, std::string node, std::shared_ptr<spdl
 InBridge::~InBridge() = default;
 
 std::string InBridge::endpoint() const { return impl_->pub.endpoint(); }
+std::uint64_t InBridge::auth_refused() const { return impl_->pub.auth_refused(); }
 
 const InBridgeCounts& InBridge::counts() const { return impl_->counts; }
 
@@ -440,9 +442,10 @@ int InBridge::run(const std::atomic<bool>& stop) {
   m.check_losses();
   if (!stop.load()) m.pub.set_linger(1000);  // a finite run delivers what is queued
   m.log->info("stopped: frames_in={} frames_out={} bad_images={} camera_infos={} tf_static={} type_mismatch={} "
-              "incompatible_qos={} history_replaced={} dds_lost={}",
+              "incompatible_qos={} history_replaced={} dds_lost={} auth_refused={}",
               c.frames_in.load(), c.frames_out.load(), c.bad_images.load(), c.camera_infos.load(), c.tf_static.load(),
-              c.type_mismatch.load(), c.incompatible_qos.load(), c.history_replaced.load(), c.dds_lost.load());
+              c.type_mismatch.load(), c.incompatible_qos.load(), c.history_replaced.load(), c.dds_lost.load(),
+              m.pub.auth_refused());
   return rc;
 }
 

@@ -25,6 +25,8 @@
 #include <string>
 #include <vector>
 
+#include "transport/access.hpp"
+
 namespace faultline::ros2dds {
 
 struct InBridgeConfig {
@@ -46,6 +48,7 @@ struct InBridgeConfig {
   int wait_subscribers = 0;                 // before subscribing, wait for this many ZeroMQ subscribers
   int wait_timeout_ms = 10000;              // ... at most this long
   double stats_log_period_s = 5.0;          // info log of counts every this many s
+  transport::AccessConfig access;  // allow_remote and CURVE keys of the ZeroMQ socket (transport/access.hpp)
 
   template <class V>
   void visit(V& v) {
@@ -67,6 +70,7 @@ struct InBridgeConfig {
     v("wait_subscribers", wait_subscribers, "ZeroMQ subscribers to wait for before subscribing to ROS 2");
     v("wait_timeout_ms", wait_timeout_ms, "how long to wait for them (ms)");
     v("stats_log_period_s", stats_log_period_s, "counts log period (s)");
+    access.visit(v);
   }
   void validate() const;  // throws ConfigError naming the key and value
 };
@@ -99,6 +103,8 @@ class InBridge {
   InBridge(InBridgeConfig config, std::string node, std::shared_ptr<spdlog::logger> log);
   ~InBridge();
   std::string endpoint() const;
+  // CURVE clients refused by access.curve_allowed_clients_file (each logged); safe from any thread.
+  std::uint64_t auth_refused() const;
   // Runs until `stop` or max_frames (0), or a fatal error (1).
   int run(const std::atomic<bool>& stop);
   const InBridgeCounts& counts() const;

@@ -144,6 +144,7 @@ struct OutBridge::Impl {
     if (!c.faults_topic.empty()) sc.topics.push_back(c.faults_topic);
     sc.topics.push_back(c.end_topic);
     sc.rcv_hwm = c.input_hwm;
+    sc.access = c.access;
     return sc;
   }
 
@@ -455,9 +456,9 @@ int OutBridge::run(const std::atomic<bool>& stop) {
   m.check_qos();
   if (finished) m.flush();
   m.log->info("stopped: frames_in={} frames_out={} events={} malformed={} transport_drops={} write_failures={} "
-              "incompatible_qos={}",
+              "incompatible_qos={} handshake_failures={}",
               c.frames_in.load(), c.frames_out.load(), c.events.load(), c.malformed.load(), c.transport_drops.load(), c.write_failures.load(),
-              c.incompatible_qos.load());
+              c.incompatible_qos.load(), m.sub.handshake_failures());
   return rc;
 }
 

@@ -26,6 +26,8 @@
 #include <string>
 #include <vector>
 
+#include "transport/access.hpp"
+
 namespace faultline::ros2dds {
 
 struct OutBridgeConfig {
@@ -55,6 +57,7 @@ struct OutBridgeConfig {
   int wait_readers = 0;                      // before a writer's first sample, wait for this many matched readers
   int wait_timeout_ms = 10000;               // ... at most this long per writer (then write anyway)
   double stats_log_period_s = 5.0;           // info log of counts every this many s
+  transport::AccessConfig access;  // CURVE keys of the ZeroMQ input (transport/access.hpp)
 
   template <class V>
   void visit(V& v) {
@@ -86,6 +89,7 @@ struct OutBridgeConfig {
     v("wait_readers", wait_readers, "matched DDS readers to wait for before a topic's first sample");
     v("wait_timeout_ms", wait_timeout_ms, "how long to wait for them per topic (ms)");
     v("stats_log_period_s", stats_log_period_s, "counts log period (s)");
+    access.visit(v);
   }
   void validate() const;  // throws ConfigError naming the key and value
 };

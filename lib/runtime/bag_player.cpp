@@ -149,6 +149,7 @@ BagPlayer::BagPlayer(BagPlayerConfig config, std::shared_ptr<spdlog::logger> log
   pc.snd_hwm = m.cfg.hwm;
   pc.zero_copy = false;  // the bag buffer only lives during the read callback
   pc.linger_ms = m.cfg.linger_ms;
+  pc.access = m.cfg.access;
   m.pub = std::make_unique<transport::Publisher>(pc);
   if (m.cfg.lockstep) {
     transport::SubscriberConfig sc;
@@ -156,6 +157,7 @@ BagPlayer::BagPlayer(BagPlayerConfig config, std::shared_ptr<spdlog::logger> log
     sc.pattern = transport::Pattern::PushPull;
     sc.bind = true;
     sc.rcv_hwm = 64;
+    sc.access = m.cfg.access;
     m.acks = std::make_unique<transport::RawSubscriber>(sc);
   }
   if (!m.cfg.control_endpoint.empty()) {
@@ -165,6 +167,7 @@ BagPlayer::BagPlayer(BagPlayerConfig config, std::shared_ptr<spdlog::logger> log
     sc.bind = true;
     sc.rcv_hwm = 64;
     sc.max_msg_bytes = 4096;
+    sc.access = m.cfg.access;
     m.control = std::make_unique<transport::RawSubscriber>(sc);
   }
   paused_.store(m.cfg.start_paused);
@@ -176,6 +179,10 @@ std::string BagPlayer::endpoint() const { return impl_->pub->endpoint(); }
 std::string BagPlayer::ack_endpoint() const { return impl_->acks ? impl_->acks->endpoints().front() : ""; }
 std::string BagPlayer::control_endpoint() const {
   return impl_->control ? impl_->control->endpoints().front() : "";
+}
+std::uint64_t BagPlayer::auth_refused() const {
+  const Impl& m = *impl_;
+  return m.pub->auth_refused() + (m.acks ? m.acks->auth_refused() : 0) + (m.control ? m.control->auth_refused() : 0);
 }
 
 int BagPlayer::run(const std::atomic<bool>& stop) {

@@ -20,6 +20,8 @@
 #include <string>
 #include <vector>
 
+#include "transport/access.hpp"
+
 namespace faultline::runtime {
 
 struct BagPlayerConfig {
@@ -47,6 +49,7 @@ struct BagPlayerConfig {
   double max_gap_s = 10.0;                  // longer log-time gaps are skipped when pacing; 0 = never
   bool start_paused = false;                // wait for resume/step before the first message
   std::string control_endpoint;             // PULL bind address for pause/resume/step; "" = none
+  transport::AccessConfig access;           // allow_remote and CURVE keys of every socket (transport/access.hpp)
   void validate() const;                    // throws ConfigError
 };
 
@@ -68,6 +71,8 @@ class BagPlayer {
   std::string endpoint() const;
   std::string ack_endpoint() const;
   std::string control_endpoint() const;  // "" without a control socket
+  // CURVE clients refused by access.curve_allowed_clients_file on any of the sockets (each logged).
+  std::uint64_t auth_refused() const;
 
   // Thread-safe pause control (also reachable through the control socket).
   void pause() { paused_.store(true); }

@@ -86,6 +86,7 @@ struct BagRecorder::Impl {
     sc.topics = cfg.all || select_re ? std::vector<std::string>{""}
                                      : std::vector<std::string>(wanted.begin(), wanted.end());
     sc.rcv_hwm = cfg.hwm;
+    sc.access = cfg.access;
     subs.push_back(std::make_unique<transport::RawSubscriber>(sc));
     connected.insert(endpoint);
     log->info("recording from {}", endpoint);

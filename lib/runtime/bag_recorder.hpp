@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "bag/writer.hpp"
+#include "transport/access.hpp"
 #include "transport/drop_counter.hpp"
 
 namespace faultline::runtime {
@@ -34,6 +35,7 @@ struct RecorderConfig {
   int hwm = 64;                         // receive queue per socket (messages)
   double discover_period_s = 0.5;       // registry re-scan period for late publishers
   std::map<std::string, std::string> run_metadata;  // extra faultline.run entries (seeds, config)
+  transport::AccessConfig access;       // CURVE keys of the subscribing sockets (transport/access.hpp)
 
   template <class V>
   void visit(V& v) {
@@ -51,6 +53,7 @@ struct RecorderConfig {
     v("hwm", hwm, "receive queue per socket (messages)");
     v("discover_period_s", discover_period_s, "registry re-scan period (s)");
     v("run_metadata", run_metadata, "extra faultline.run metadata (seeds, config)");
+    access.visit(v);
   }
   void validate() const;  // throws ConfigError
 };

@@ -16,7 +16,11 @@ from typing import Dict, Iterator, List, Optional, Tuple
 
 import numpy as np
 import zmq
+from zmq.utils import z85
 
+# Key files as the C++ nodes read them (lib/transport/access.hpp): one 40-character Z85 key, '#' comment lines and
+# blank lines ('#' is a Z85 digit, but never the first of a key: a group of five digits stays below 2**32).
+MAX_KEY_FILE_BYTES = 4096
 CAMERAS = ("CAM_FRONT", "CAM_FRONT_RIGHT", "CAM_FRONT_LEFT", "CAM_BACK", "CAM_BACK_LEFT", "CAM_BACK_RIGHT")
 _RAW_CHANNELS = {"bgr8": 3, "rgb8": 3, "mono8": 1}
 
@@ -90,6 +94,59 @@ def _transform(t) -> np.ndarray:
     return m
 
 
+class CurveKeyError(ValueError):
+    """A CURVE key file that cannot be used; the message names the file."""
+
+
+def _is_z85_key(text: str) -> bool:
+    if len(text) != 40:
+        return False
+    try:
+        return len(z85.decode(text.encode("ascii"))) == 32
+    except (ValueError, KeyError, UnicodeEncodeError):
+        return False
+
+
+def read_curve_key(path: str) -> bytes:
+    """The Z85 key (40 bytes) held in a key file written by `faultline keys generate`."""
+    try:
+        with open(path, "rb") as f:
+            data = f.read(MAX_KEY_FILE_BYTES + 1)
+    except OSError as e:
+        raise CurveKeyError(f"CURVE key file {path}: cannot read: {e.strerror}") from None
+    if len(data) > MAX_KEY_FILE_BYTES:
+        raise CurveKeyError(f"CURVE key file {path}: larger than the limit of {MAX_KEY_FILE_BYTES // 1024} KiB")
+    keys = []
+    for line in data.decode("ascii", errors="replace").splitlines():
+        line = line.strip(" \t\r")
+        if line and not line.startswith("#"):
+            keys.append(line)
+    if len(keys) > 1:
+        raise CurveKeyError(f"CURVE key file {path}: more than one key")
+    if not keys or not _is_z85_key(keys[0]):
+        raise CurveKeyError(f"CURVE key file {path}: expected one 40-character Z85 key (faultline keys generate)")
+    return keys[0].encode("ascii")
+
+
+def curve_client_options(curve_secret_key_file: Optional[str],
+                         curve_server_public_key_file: Optional[str]) -> Dict[int, bytes]:
+    """Socket options that make a socket a CURVE client (set them before it connects), as a connecting C++ node
+    with the same two parameters; {} without curve_secret_key_file."""
+    if not curve_secret_key_file:
+        return {}
+    if not zmq.has("curve"):
+        raise CurveKeyError("curve_secret_key_file is set but this libzmq has no CURVE support")
+    if not curve_server_public_key_file:
+        raise CurveKeyError("curve_server_public_key_file: required to connect with CURVE (the binding peer's key)")
+    secret = read_curve_key(curve_secret_key_file)
+    try:
+        public = zmq.curve_public(secret)
+    except zmq.ZMQError:
+        raise CurveKeyError(f"CURVE key file {curve_secret_key_file}: not a valid secret key") from None
+    return {zmq.CURVE_SERVERKEY: read_curve_key(curve_server_public_key_file), zmq.CURVE_PUBLICKEY: public,
+            zmq.CURVE_SECRETKEY: secret}
+
+
 def decode_payload(header, payload: memoryview) -> Optional[np.ndarray]:
     """Pixels of a frame as numpy (BGR order for colour); JPEG is decoded with OpenCV."""
     if header.encoding == "jpeg":
@@ -110,11 +167,16 @@ class FaultlineClient:
 
     frames_endpoint / detections_endpoint default to $FAULTLINE_FRAMES and $FAULTLINE_DETECTIONS
     (set by `faultline benchmark --detector-cmd`), else tcp://127.0.0.1:5601 and :5602.
+    With curve_secret_key_file (this client's secret key) and curve_server_public_key_file (the injector's and the
+    sink's server key), both sockets use ZeroMQ CURVE, as the C++ nodes' parameters of the same names do; a key
+    file that cannot be used raises CurveKeyError naming it. A refused key shows as no traffic at all (libzmq does
+    not report it to the client).
     """
 
     def __init__(self, frames_endpoint: Optional[str] = None, detections_endpoint: Optional[str] = None,
                  frame_prefix: Optional[str] = None, sync_topic: str = "/sync/sample",
-                 end_topic: str = "/sync/end", end_wait_s: float = 10.0, detector_name: str = "python", rcv_hwm: int = 256, msgs_dir: Optional[str] = None):
+                 end_topic: str = "/sync/end", end_wait_s: float = 10.0, detector_name: str = "python", rcv_hwm: int = 256, msgs_dir: Optional[str] = None,
+                 curve_secret_key_file: Optional[str] = None, curve_server_public_key_file: Optional[str] = None):
         self.msgs = load_messages(msgs_dir)
         self.frames_endpoint = frames_endpoint or os.environ.get("FAULTLINE_FRAMES", "tcp://127.0.0.1:5601")
         self.detections_endpoint = detections_endpoint or os.environ.get("FAULTLINE_DETECTIONS",
@@ -124,6 +186,7 @@ class FaultlineClient:
         self.end_topic = end_topic.encode()
         self.end_wait_s = end_wait_s
         self.detector_name = detector_name
+        curve = curve_client_options(curve_secret_key_file, curve_server_public_key_file)  # raises before any socket
         self.ctx = zmq.Context.instance()
         self.sub = self.ctx.socket(zmq.SUB)
         self.sub.setsockopt(zmq.RCVHWM, rcv_hwm)
@@ -132,10 +195,14 @@ class FaultlineClient:
         self.sub.setsockopt(zmq.SUBSCRIBE, self.frame_prefix)
         self.sub.setsockopt(zmq.SUBSCRIBE, self.sync_topic)
         self.sub.setsockopt(zmq.SUBSCRIBE, self.end_topic)
+        for option, value in curve.items():
+            self.sub.setsockopt(option, value)
         self.sub.connect(self.frames_endpoint)
         self.push = self.ctx.socket(zmq.PUSH)
         self.push.setsockopt(zmq.LINGER, 2000)
         self.push.setsockopt(zmq.IMMEDIATE, 1)
+        for option, value in curve.items():
+            self.push.setsockopt(option, value)
         self.push.connect(self.detections_endpoint)
         self.seq = 0
         self.malformed = 0
