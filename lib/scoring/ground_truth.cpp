@@ -7,12 +7,19 @@
 #include <limits>
 #include <unordered_set>
 
+#include "nuscenes/schema.hpp"
+#include "nuscenes/table_reader.hpp"
 #include "scoring/detection_config.hpp"
-#include "scoring/table_stream.hpp"
 #include "scoring/token_set.hpp"
 
 namespace faultline::scoring {
 namespace {
+
+namespace schema = nuscenes::schema;
+using nuscenes::RecordFilter;
+using nuscenes::stream_table;
+using nuscenes::TableField;
+using nuscenes::TableRecord;
 
 struct SampleRec {
   std::string token;
@@ -27,10 +34,6 @@ struct AnnRec {
   std::array<double, 4> rotation{};
   double num_pts = 0;
 };
-
-std::string table_path(const std::string& dataroot, const std::string& version, const char* table) {
-  return dataroot + "/" + version + "/" + table + ".json";
-}
 
 Status need(const TableRecord& r, std::size_t i, const std::string& path, std::size_t index,
             const char* name) {
@@ -55,26 +58,26 @@ Status load_samples(const std::string& dataroot, const std::string& version,
                     const std::vector<std::string>& scenes, std::vector<SampleRec>& samples) {
   const std::unordered_set<std::string> wanted(scenes.begin(), scenes.end());
   std::unordered_set<std::string> scene_tokens;
-  const std::string scene_path = table_path(dataroot, version, "scene");
-  Status s = stream_table(scene_path, {"token", "name"}, [&](const TableRecord& r, std::size_t i) {
-    if (Status e = need(r, 0, scene_path, i, "token"); !e) return e;
-    if (Status e = need(r, 1, scene_path, i, "name"); !e) return e;
-    if (wanted.count(r.fields[1].str)) scene_tokens.insert(r.fields[0].str);
+  const std::string scene_path = schema::table_path(dataroot, version, schema::kScene);
+  using Scene = schema::TokenName;
+  Status s = stream_table(scene_path, Scene::fields(), [&](const TableRecord& r, std::size_t i) {
+    if (Status e = need(r, Scene::kToken, scene_path, i, "token"); !e) return e;
+    if (Status e = need(r, Scene::kName, scene_path, i, "name"); !e) return e;
+    if (wanted.count(r.fields[Scene::kName].str)) scene_tokens.insert(r.fields[Scene::kToken].str);
     return Status::ok();
   });
   if (!s) return s;
-  const std::string sample_path = table_path(dataroot, version, "sample");
-  return stream_table(sample_path, {"token", "timestamp", "scene_token"},
-                      [&](const TableRecord& r, std::size_t i) {
-                        for (std::size_t k = 0; k < 3; ++k) {
-                          const char* names[] = {"token", "timestamp", "scene_token"};
-                          if (Status e = need(r, k, sample_path, i, names[k]); !e) return e;
-                        }
-                        if (scene_tokens.count(r.fields[2].str)) {
-                          samples.push_back({r.fields[0].str, r.fields[1].num});
-                        }
-                        return Status::ok();
-                      });
+  const std::string sample_path = schema::table_path(dataroot, version, schema::kSample);
+  using Sample = schema::ScoringSample;
+  return stream_table(sample_path, Sample::fields(), [&](const TableRecord& r, std::size_t i) {
+    for (std::size_t k = 0; k < Sample::fields().size(); ++k) {
+      if (Status e = need(r, k, sample_path, i, Sample::fields()[k].c_str()); !e) return e;
+    }
+    if (scene_tokens.count(r.fields[Sample::kSceneToken].str)) {
+      samples.push_back({r.fields[Sample::kToken].str, r.fields[Sample::kTimestamp].num});
+    }
+    return Status::ok();
+  });
 }
 
 }  // namespace
@@ -106,21 +109,23 @@ Result<GroundTruth> load_ground_truth(const std::string& dataroot, const std::st
 
   // Categories, attributes, instances (small tables).
   TokenMap<std::string> category_name, attribute_name, instance_category;
-  const std::string cat_path = table_path(dataroot, version, "category");
-  Status s = stream_table(cat_path, {"token", "name"}, [&](const TableRecord& r, std::size_t) {
-    category_name[r.fields[0].str] = r.fields[1].str;
+  const std::string cat_path = schema::table_path(dataroot, version, schema::kCategory);
+  using Named = schema::TokenName;
+  Status s = stream_table(cat_path, Named::fields(), [&](const TableRecord& r, std::size_t) {
+    category_name[r.fields[Named::kToken].str] = r.fields[Named::kName].str;
     return Status::ok();
   });
   if (!s) return s;
-  const std::string attr_path = table_path(dataroot, version, "attribute");
-  s = stream_table(attr_path, {"token", "name"}, [&](const TableRecord& r, std::size_t) {
-    attribute_name[r.fields[0].str] = r.fields[1].str;
+  const std::string attr_path = schema::table_path(dataroot, version, schema::kAttribute);
+  s = stream_table(attr_path, Named::fields(), [&](const TableRecord& r, std::size_t) {
+    attribute_name[r.fields[Named::kToken].str] = r.fields[Named::kName].str;
     return Status::ok();
   });
   if (!s) return s;
-  const std::string inst_path = table_path(dataroot, version, "instance");
-  s = stream_table(inst_path, {"token", "category_token"}, [&](const TableRecord& r, std::size_t) {
-    instance_category[r.fields[0].str] = r.fields[1].str;
+  const std::string inst_path = schema::table_path(dataroot, version, schema::kInstance);
+  using Instance = schema::InstanceCategory;
+  s = stream_table(inst_path, Instance::fields(), [&](const TableRecord& r, std::size_t) {
+    instance_category[r.fields[Instance::kToken].str] = r.fields[Instance::kCategoryToken].str;
     return Status::ok();
   });
   if (!s) return s;
@@ -133,7 +138,7 @@ Result<GroundTruth> load_ground_truth(const std::string& dataroot, const std::st
   // index).
   std::vector<AnnRec> anns;
   TokenMap<int> ann_index;
-  const std::string ann_path = table_path(dataroot, version, "sample_annotation");
+  const std::string ann_path = schema::table_path(dataroot, version, schema::kSampleAnnotation);
   auto ann_future = std::async(std::launch::async, [&]() -> Status {
     {
       // ~480 bytes per record in nuScenes tables; reserving avoids rehashing 1M-entry maps.
@@ -141,36 +146,36 @@ Result<GroundTruth> load_ground_truth(const std::string& dataroot, const std::st
       const auto bytes = std::filesystem::file_size(ann_path, ec);
       if (!ec) ann_index.reserve(static_cast<std::size_t>(bytes / 480));
     }
-    const std::vector<std::string> ann_fields = {
-        "token", "sample_token", "instance_token", "attribute_tokens", "translation",
-        "size",  "rotation",     "num_lidar_pts",  "num_radar_pts",    "prev",
-        "next"};
+    using Ann = schema::ScoringAnnotation;
+    const std::vector<std::string>& ann_fields = Ann::fields();
     Status scan = stream_table(
         ann_path, ann_fields,
         [&](const TableRecord& r, std::size_t i) {
-          auto it = gt.sample_index.find(r.fields[1].str);
+          auto it = gt.sample_index.find(r.fields[Ann::kSampleToken].str);
           if (it == gt.sample_index.end()) return Status::ok();
           for (std::size_t k = 0; k < ann_fields.size(); ++k) {
             if (Status e = need(r, k, ann_path, i, ann_fields[k].c_str()); !e) return e;
           }
           AnnRec a;
-          a.token = r.fields[0].str;
+          a.token = r.fields[Ann::kToken].str;
           a.sample = it->second;
-          a.instance = r.fields[2].str;
-          a.attrs = r.fields[3].strs;
+          a.instance = r.fields[Ann::kInstanceToken].str;
+          a.attrs = r.fields[Ann::kAttributeTokens].strs;
           const std::string where =
               ann_path + " record " + std::to_string(i) + " (" + a.token + ")";
-          if (Status e = copy_vec(r.fields[4], a.translation, where + " translation"); !e) return e;
-          if (Status e = copy_vec(r.fields[5], a.size, where + " size"); !e) return e;
-          if (Status e = copy_vec(r.fields[6], a.rotation, where + " rotation"); !e) return e;
-          a.num_pts = r.fields[7].num + r.fields[8].num;
-          a.prev = r.fields[9].str;
-          a.next = r.fields[10].str;
+          if (Status e = copy_vec(r.fields[Ann::kTranslation], a.translation, where + " translation"); !e) {
+            return e;
+          }
+          if (Status e = copy_vec(r.fields[Ann::kSize], a.size, where + " size"); !e) return e;
+          if (Status e = copy_vec(r.fields[Ann::kRotation], a.rotation, where + " rotation"); !e) return e;
+          a.num_pts = r.fields[Ann::kNumLidarPts].num + r.fields[Ann::kNumRadarPts].num;
+          a.prev = r.fields[Ann::kPrev].str;
+          a.next = r.fields[Ann::kNext].str;
           ann_index.emplace(a.token, static_cast<int>(anns.size()));
           anns.push_back(std::move(a));
           return Status::ok();
         },
-        RecordFilter{{{1, in_split}}});
+        RecordFilter{{{static_cast<int>(Ann::kSampleToken), in_split}}});
     return scan;
   });
   // Every early return waits for the annotation thread (it references this frame).
@@ -180,35 +185,39 @@ Result<GroundTruth> load_ground_truth(const std::string& dataroot, const std::st
   };
   // LIDAR_TOP calibrations -> key-frame sample_data -> ego pose.
   std::unordered_set<std::string> lidar_sensors, lidar_calibs;
-  const std::string sensor_path = table_path(dataroot, version, "sensor");
-  s = stream_table(sensor_path, {"token", "channel"}, [&](const TableRecord& r, std::size_t) {
-    if (r.fields[1].str == "LIDAR_TOP") lidar_sensors.insert(r.fields[0].str);
+  const std::string sensor_path = schema::table_path(dataroot, version, schema::kSensor);
+  using Sensor = schema::SensorChannel;
+  s = stream_table(sensor_path, Sensor::fields(), [&](const TableRecord& r, std::size_t) {
+    if (r.fields[Sensor::kChannel].str == "LIDAR_TOP") lidar_sensors.insert(r.fields[Sensor::kToken].str);
     return Status::ok();
   });
   if (!s) return join(s);
-  const std::string calib_path = table_path(dataroot, version, "calibrated_sensor");
-  s = stream_table(calib_path, {"token", "sensor_token"}, [&](const TableRecord& r, std::size_t) {
-    if (lidar_sensors.count(r.fields[1].str)) lidar_calibs.insert(r.fields[0].str);
+  const std::string calib_path = schema::table_path(dataroot, version, schema::kCalibratedSensor);
+  using Calib = schema::CalibrationSensor;
+  s = stream_table(calib_path, Calib::fields(), [&](const TableRecord& r, std::size_t) {
+    if (lidar_sensors.count(r.fields[Calib::kSensorToken].str)) lidar_calibs.insert(r.fields[Calib::kToken].str);
     return Status::ok();
   });
   if (!s) return join(s);
   const TokenSet lidar_calib_set(lidar_calibs);
   std::vector<std::string> pose_token(n);
-  const std::string sd_path = table_path(dataroot, version, "sample_data");
+  const std::string sd_path = schema::table_path(dataroot, version, schema::kSampleData);
+  using Sd = schema::ScoringSampleData;
   s = stream_table(
-      sd_path, {"sample_token", "ego_pose_token", "calibrated_sensor_token", "is_key_frame"},
+      sd_path, Sd::fields(),
       [&](const TableRecord& r, std::size_t) {
-        if (!r.fields[3].boolean) return Status::ok();
-        auto it = gt.sample_index.find(r.fields[0].str);
-        if (it == gt.sample_index.end() || !lidar_calibs.count(r.fields[2].str)) {
+        if (!r.fields[Sd::kIsKeyFrame].boolean) return Status::ok();
+        auto it = gt.sample_index.find(r.fields[Sd::kSampleToken].str);
+        if (it == gt.sample_index.end() || !lidar_calibs.count(r.fields[Sd::kCalibratedSensorToken].str)) {
           return Status::ok();
         }
-        pose_token[static_cast<std::size_t>(it->second)] = r.fields[1].str;  // last wins
+        pose_token[static_cast<std::size_t>(it->second)] = r.fields[Sd::kEgoPoseToken].str;  // last wins
         return Status::ok();
       },
-      RecordFilter{{{0, in_split}, {2, [&lidar_calib_set](const std::string& calib) {
-                                      return lidar_calib_set.contains(calib);
-                                    }}}});
+      RecordFilter{{{static_cast<int>(Sd::kSampleToken), in_split},
+                    {static_cast<int>(Sd::kCalibratedSensorToken), [&lidar_calib_set](const std::string& calib) {
+                       return lidar_calib_set.contains(calib);
+                     }}}});
   if (!s) return join(s);
   TokenMap<std::vector<int>> pose_users;
   for (std::size_t i = 0; i < n; ++i) {
@@ -221,14 +230,15 @@ Result<GroundTruth> load_ground_truth(const std::string& dataroot, const std::st
   }
   const TokenSet wanted_poses(pose_token);
   std::size_t poses_found = 0;
-  const std::string pose_path = table_path(dataroot, version, "ego_pose");
+  const std::string pose_path = schema::table_path(dataroot, version, schema::kEgoPose);
+  using Pose = schema::ScoringEgoPose;
   s = stream_table(
-      pose_path, {"token", "translation"},
+      pose_path, Pose::fields(),
       [&](const TableRecord& r, std::size_t i) {
-        auto it = pose_users.find(r.fields[0].str);
+        auto it = pose_users.find(r.fields[Pose::kToken].str);
         if (it == pose_users.end()) return Status::ok();
         std::array<double, 3> t{};
-        if (Status e = copy_vec(r.fields[1], t,
+        if (Status e = copy_vec(r.fields[Pose::kTranslation], t,
                                 pose_path + " record " + std::to_string(i) + " translation");
             !e) {
           return e;
@@ -238,8 +248,8 @@ Result<GroundTruth> load_ground_truth(const std::string& dataroot, const std::st
         pose_users.erase(it);  // a duplicated pose token counts once
         return Status::ok();
       },
-      RecordFilter{
-          {{0, [&wanted_poses](const std::string& token) { return wanted_poses.contains(token); }}}});
+      RecordFilter{{{static_cast<int>(Pose::kToken),
+                     [&wanted_poses](const std::string& token) { return wanted_poses.contains(token); }}}});
   if (!s) return join(s);
   if (poses_found < n) {
     return join(Status(StatusCode::kNotFound,
