@@ -1,4 +1,5 @@
-// Scene-scoped nuScenes reader: DOM for the small tables, SAX streaming for sample_data and ego_pose.
+// Scene-scoped nuScenes reader: every table is read with nuscenes::stream_table (the one table reader), the
+// small ones whole at open(), sample_data and ego_pose per request keeping only the selected scenes' records.
 #include "dataset/nuscenes.hpp"
 
 #include <algorithm>
@@ -8,10 +9,13 @@
 #include <unordered_set>
 
 #include "common/bounded_read.hpp"
-#include "dataset/json_table.hpp"
+#include "nuscenes/schema.hpp"
+#include "nuscenes/table_reader.hpp"
 
 namespace faultline::dataset {
 namespace fs = std::filesystem;
+namespace schema = nuscenes::schema;
+using Fields = std::vector<nuscenes::TableField>;
 
 const std::array<const char*, 6>& camera_channels() {
   static const std::array<const char*, 6> kChannels = {"CAM_FRONT", "CAM_FRONT_RIGHT", "CAM_FRONT_LEFT",
@@ -29,42 +33,8 @@ int channel_rank(const std::string& channel) {
   return static_cast<int>(channels.size());
 }
 
-Status bad_record(const std::string& path, rapidjson::SizeType index, const std::string& why) {
+Status bad_record(const std::string& path, std::size_t index, const std::string& why) {
   return Status(StatusCode::kCorruptData, path + ": record " + std::to_string(index) + ": " + why);
-}
-
-// Field readers for DOM records; each returns false when the key is missing or mistyped.
-bool dom_string(const rapidjson::Value& v, const char* key, std::string* out) {
-  auto it = v.FindMember(key);
-  if (it == v.MemberEnd() || !it->value.IsString()) return false;
-  out->assign(it->value.GetString(), it->value.GetStringLength());
-  return true;
-}
-
-bool dom_int(const rapidjson::Value& v, const char* key, std::int64_t* out) {
-  auto it = v.FindMember(key);
-  if (it == v.MemberEnd() || !it->value.IsInt64()) return false;
-  *out = it->value.GetInt64();
-  return true;
-}
-
-bool dom_numbers(const rapidjson::Value& v, const char* key, std::vector<double>* out) {
-  auto it = v.FindMember(key);
-  if (it == v.MemberEnd() || !it->value.IsArray()) return false;
-  out->clear();
-  for (const auto& e : it->value.GetArray()) {
-    if (e.IsNumber()) {
-      out->push_back(e.GetDouble());
-    } else if (e.IsArray()) {  // camera_intrinsic is a list of rows
-      for (const auto& x : e.GetArray()) {
-        if (!x.IsNumber()) return false;
-        out->push_back(x.GetDouble());
-      }
-    } else {
-      return false;
-    }
-  }
-  return true;
 }
 
 bool to_pose(const std::vector<double>& t, const std::vector<double>& r, Pose* pose) {
@@ -74,15 +44,18 @@ bool to_pose(const std::vector<double>& t, const std::vector<double>& r, Pose* p
   return true;
 }
 
-// Runs `fn(record, index)` over every record of a small table; the first failure names file and record.
-template <typename Fn>
-Status for_each_dom_record(const std::string& path, Fn&& fn) {
-  rapidjson::Document doc;
-  if (Status s = parse_document(path, &doc); !s) return s;
-  for (rapidjson::SizeType i = 0; i < doc.Size(); ++i) {
-    if (!doc[i].IsObject()) return bad_record(path, i, "not an object");
-    if (Status s = fn(doc[i], i); !s) return s;
-  }
+// Runs `fn(fields, index)` over every record of a small table, read with `View`'s fields. Every element of the
+// array must be a record (the reader skips other elements; the gap in the indices reveals them); the first
+// failure names the file and the record.
+template <typename View, typename Fn>
+Status for_each_record(const std::string& path, Fn&& fn) {
+  std::size_t next = 0;
+  Status s = nuscenes::stream_table(path, View::fields(), [&](const nuscenes::TableRecord& r, std::size_t i) {
+    if (i != next) return bad_record(path, next, "not an object");
+    ++next;
+    return fn(r.fields, i);
+  });
+  if (!s) return s;
   return Status::ok();
 }
 
@@ -106,63 +79,73 @@ Result<NuScenesReader> NuScenesReader::open(const std::string& dataroot, const s
   if (!fs::is_directory(dir, ec)) {
     return Status(StatusCode::kNotFound, dir.string() + ": nuScenes table folder not found");
   }
-  for (const char* big : {"sample_data", "ego_pose"}) {
+  for (const char* big : {schema::kSampleData, schema::kEgoPose}) {
     if (!fs::is_regular_file(r.table_path(big), ec)) {
       return Status(StatusCode::kNotFound, r.table_path(big) + ": table not found");
     }
   }
+  if (Status s = r.load_scenes(); !s) return s;
+  if (Status s = r.load_samples(); !s) return s;
+  if (Status s = r.load_calibrations(); !s) return s;
+  if (Status s = r.check_logs(); !s) return s;
+  return r;
+}
 
-  std::string path = r.table_path("scene");
-  Status s = for_each_dom_record(path, [&](const rapidjson::Value& v, rapidjson::SizeType i) {
+Status NuScenesReader::load_scenes() {
+  using V = schema::ReplayScene;
+  const std::string path = table_path(schema::kScene);
+  return for_each_record<V>(path, [&](const Fields& f, std::size_t i) {
     SceneRecord sc;
     std::int64_t n = 0;
-    if (!dom_string(v, "token", &sc.token) || !dom_string(v, "name", &sc.name) ||
-        !dom_string(v, "log_token", &sc.log_token) || !dom_string(v, "first_sample_token", &sc.first_sample_token) ||
-        !dom_string(v, "last_sample_token", &sc.last_sample_token) || !dom_int(v, "nbr_samples", &n)) {
+    if (!f[V::kToken].get(&sc.token) || !f[V::kName].get(&sc.name) || !f[V::kLogToken].get(&sc.log_token) ||
+        !f[V::kFirstSampleToken].get(&sc.first_sample_token) ||
+        !f[V::kLastSampleToken].get(&sc.last_sample_token) || !f[V::kNbrSamples].get(&n)) {
       return bad_record(path, i, "missing or mistyped scene field");
     }
-    dom_string(v, "description", &sc.description);
+    f[V::kDescription].get(&sc.description);
     sc.nbr_samples = static_cast<int>(n);
-    r.scenes_.push_back(std::move(sc));
+    scenes_.push_back(std::move(sc));
     return Status::ok();
   });
-  if (!s) return s;
+}
 
-  path = r.table_path("sample");
-  s = for_each_dom_record(path, [&](const rapidjson::Value& v, rapidjson::SizeType i) {
+Status NuScenesReader::load_samples() {
+  using V = schema::ReplaySample;
+  const std::string path = table_path(schema::kSample);
+  return for_each_record<V>(path, [&](const Fields& f, std::size_t i) {
     SampleRecord sa;
-    if (!dom_string(v, "token", &sa.token) || !dom_string(v, "scene_token", &sa.scene_token) ||
-        !dom_string(v, "prev", &sa.prev) || !dom_string(v, "next", &sa.next) ||
-        !dom_int(v, "timestamp", &sa.timestamp_us)) {
+    if (!f[V::kToken].get(&sa.token) || !f[V::kSceneToken].get(&sa.scene_token) || !f[V::kPrev].get(&sa.prev) ||
+        !f[V::kNext].get(&sa.next) || !f[V::kTimestamp].get(&sa.timestamp_us)) {
       return bad_record(path, i, "missing or mistyped sample field");
     }
-    r.sample_index_.emplace(sa.token, r.samples_.size());
-    r.samples_.push_back(std::move(sa));
+    sample_index_.emplace(sa.token, samples_.size());
+    samples_.push_back(std::move(sa));
     return Status::ok();
   });
-  if (!s) return s;
+}
 
+Status NuScenesReader::load_calibrations() {
   std::unordered_map<std::string, std::pair<std::string, std::string>> sensors;  // token -> channel, modality
-  path = r.table_path("sensor");
-  s = for_each_dom_record(path, [&](const rapidjson::Value& v, rapidjson::SizeType i) {
+  std::string path = table_path(schema::kSensor);
+  Status s = for_each_record<schema::ReplaySensor>(path, [&](const Fields& f, std::size_t i) {
+    using V = schema::ReplaySensor;
     std::string token, channel, modality;
-    if (!dom_string(v, "token", &token) || !dom_string(v, "channel", &channel) ||
-        !dom_string(v, "modality", &modality)) {
+    if (!f[V::kToken].get(&token) || !f[V::kChannel].get(&channel) || !f[V::kModality].get(&modality)) {
       return bad_record(path, i, "missing or mistyped sensor field");
     }
     sensors[token] = {channel, modality};
     return Status::ok();
   });
   if (!s) return s;
-
-  path = r.table_path("calibrated_sensor");
-  s = for_each_dom_record(path, [&](const rapidjson::Value& v, rapidjson::SizeType i) {
+  path = table_path(schema::kCalibratedSensor);
+  std::vector<double> t, q, k;
+  return for_each_record<schema::ReplayCalibration>(path, [&](const Fields& f, std::size_t i) {
+    using V = schema::ReplayCalibration;
     std::string token, sensor_token;
-    std::vector<double> t, q, k;
     Calibration c;
-    if (!dom_string(v, "token", &token) || !dom_string(v, "sensor_token", &sensor_token) ||
-        !dom_numbers(v, "translation", &t) || !dom_numbers(v, "rotation", &q) ||
-        !dom_numbers(v, "camera_intrinsic", &k) || !to_pose(t, q, &c.sensor_to_ego)) {
+    if (!f[V::kToken].get(&token) || !f[V::kSensorToken].get(&sensor_token) ||
+        !f[V::kTranslation].get_numbers(&t) || !f[V::kRotation].get_numbers(&q) ||
+        !f[V::kCameraIntrinsic].get_numbers(&k) || !to_pose(t, q, &c.sensor_to_ego)) {
       return bad_record(path, i, "missing or mistyped calibrated_sensor field");
     }
     auto it = sensors.find(sensor_token);
@@ -173,30 +156,31 @@ Result<NuScenesReader> NuScenesReader::open(const std::string& dataroot, const s
       if (k.size() != 9) return bad_record(path, i, "camera_intrinsic is not 3x3");
       std::copy(k.begin(), k.end(), c.intrinsics.begin());
     }
-    r.calibrations_[token] = std::move(c);
+    calibrations_[token] = std::move(c);
     return Status::ok();
   });
-  if (!s) return s;
+}
 
-  path = r.table_path("log");
+Status NuScenesReader::check_logs() const {
+  const std::string path = table_path(schema::kLog);
   std::unordered_set<std::string> logs;
-  s = for_each_dom_record(path, [&](const rapidjson::Value& v, rapidjson::SizeType i) {
+  Status s = for_each_record<schema::ReplayLog>(path, [&](const Fields& f, std::size_t i) {
+    using V = schema::ReplayLog;
     std::string token, logfile;
-    if (!dom_string(v, "token", &token) || !dom_string(v, "logfile", &logfile)) {
+    if (!f[V::kToken].get(&token) || !f[V::kLogfile].get(&logfile)) {
       return bad_record(path, i, "missing or mistyped log field");
     }
     logs.insert(token);
     return Status::ok();
   });
   if (!s) return s;
-  for (const auto& sc : r.scenes_) {
+  for (const auto& sc : scenes_) {
     if (!logs.count(sc.log_token)) {
-      return Status(StatusCode::kCorruptData, r.table_path("scene") + ": " + sc.name + " has unknown log_token");
+      return Status(StatusCode::kCorruptData, table_path(schema::kScene) + ": " + sc.name + " has unknown log_token");
     }
   }
-  return r;
+  return Status::ok();
 }
-
 Result<std::vector<const SceneRecord*>> NuScenesReader::resolve(const std::vector<std::string>& scene_names) const {
   std::vector<const SceneRecord*> out;
   if (scene_names.empty()) {
@@ -243,84 +227,10 @@ Result<std::vector<CameraFrameRecord>> NuScenesReader::load_camera_frames(
     auto it = scene_by_token.find(sa.scene_token);
     if (it != scene_by_token.end()) scene_of_sample.emplace(sa.token, it->second);
   }
-
   std::vector<CameraFrameRecord> frames;
   std::unordered_map<std::string, std::size_t> frame_of_pose;  // ego_pose_token -> index in frames
-  const std::string sd_path = table_path("sample_data");
-  std::string sample_token, cs_token, pose_token;
-  Status s = stream_table(sd_path, [&](const JsonRecord& rec) {
-    if (!rec.get("sample_token", &sample_token)) {
-      if (on_problem) on_problem(bad_record(sd_path, static_cast<rapidjson::SizeType>(rec.index()), "no sample_token"));
-      return Status::ok();
-    }
-    auto scene_it = scene_of_sample.find(sample_token);
-    if (scene_it == scene_of_sample.end()) return Status::ok();  // another scene
-    const auto report = [&](const std::string& why) {
-      if (on_problem) on_problem(bad_record(sd_path, static_cast<rapidjson::SizeType>(rec.index()), why));
-      return Status::ok();
-    };
-    if (!rec.get("calibrated_sensor_token", &cs_token)) return report("no calibrated_sensor_token");
-    auto cal_it = calibrations_.find(cs_token);
-    if (cal_it == calibrations_.end()) return report("unknown calibrated_sensor_token " + cs_token);
-    const Calibration& cal = cal_it->second;
-    if (cal.modality != "camera") return Status::ok();
-    CameraFrameRecord f;
-    std::int64_t width = 0, height = 0;
-    if (!rec.get("token", &f.sample_data_token) || !rec.get("filename", &f.filename) ||
-        !rec.get("timestamp", &f.timestamp_us) || !rec.get("is_key_frame", &f.is_key_frame) ||
-        !rec.get("width", &width) || !rec.get("height", &height) || !rec.get("ego_pose_token", &pose_token)) {
-      return report("missing or mistyped sample_data field");
-    }
-    f.channel = cal.channel;
-    f.sample_token = sample_token;
-    f.scene_token = scene_it->second->token;
-    f.scene_name = scene_it->second->name;
-    f.width = static_cast<int>(width);
-    f.height = static_cast<int>(height);
-    f.intrinsics = cal.intrinsics;
-    f.sensor_to_ego = cal.sensor_to_ego;
-    if (!frame_of_pose.emplace(pose_token, frames.size()).second) {
-      return report("ego_pose_token " + pose_token + " shared by two camera frames");
-    }
-    frames.push_back(std::move(f));
-    return Status::ok();
-  });
-  if (!s) return s;
-
-  const std::string pose_path = table_path("ego_pose");
-  std::vector<bool> posed(frames.size(), false);
-  std::string token;
-  std::vector<double> t, q;
-  s = stream_table(pose_path, [&](const JsonRecord& rec) {
-    if (!rec.get("token", &token)) return Status::ok();
-    auto it = frame_of_pose.find(token);
-    if (it == frame_of_pose.end()) return Status::ok();
-    if (!rec.get_numbers("translation", &t) || !rec.get_numbers("rotation", &q) ||
-        !to_pose(t, q, &frames[it->second].ego_pose)) {
-      if (on_problem) {
-        on_problem(bad_record(pose_path, static_cast<rapidjson::SizeType>(rec.index()), "bad translation/rotation"));
-      }
-      return Status::ok();
-    }
-    posed[it->second] = true;
-    return Status::ok();
-  });
-  if (!s) return s;
-
-  // Frames without an ego pose cannot be placed in the world: report and drop them.
-  std::size_t kept = 0;
-  for (std::size_t i = 0; i < frames.size(); ++i) {
-    if (!posed[i]) {
-      if (on_problem) {
-        on_problem(Status(StatusCode::kNotFound,
-                          pose_path + ": no ego_pose for sample_data " + frames[i].sample_data_token));
-      }
-      continue;
-    }
-    if (kept != i) frames[kept] = std::move(frames[i]);
-    ++kept;
-  }
-  frames.resize(kept);
+  if (Status s = stream_camera_frames(scene_of_sample, on_problem, frames, frame_of_pose); !s) return s;
+  if (Status s = attach_ego_poses(frame_of_pose, on_problem, frames); !s) return s;
   std::sort(frames.begin(), frames.end(), [](const CameraFrameRecord& a, const CameraFrameRecord& b) {
     if (a.timestamp_us != b.timestamp_us) return a.timestamp_us < b.timestamp_us;
     const int ra = channel_rank(a.channel), rb = channel_rank(b.channel);
@@ -330,24 +240,118 @@ Result<std::vector<CameraFrameRecord>> NuScenesReader::load_camera_frames(
   return frames;
 }
 
+Status NuScenesReader::stream_camera_frames(
+    const std::unordered_map<std::string, const SceneRecord*>& scene_of_sample, const ProblemFn& on_problem,
+    std::vector<CameraFrameRecord>& frames, std::unordered_map<std::string, std::size_t>& frame_of_pose) const {
+  using V = schema::ReplaySampleData;
+  const std::string sd_path = table_path(schema::kSampleData);
+  std::string sample_token, cs_token, pose_token;
+  // Records of other scenes are skipped undecoded; those without a string sample_token reach the callback,
+  // which reports them.
+  const nuscenes::RecordFilter other_scenes{{{static_cast<int>(V::kSampleToken), [&](const std::string& token) {
+                                                return token.empty() || scene_of_sample.count(token) != 0;
+                                              }}}};
+  return nuscenes::stream_table(
+      sd_path, V::fields(),
+      [&](const nuscenes::TableRecord& rec, std::size_t index) {
+        const Fields& f = rec.fields;
+        const auto report = [&](const std::string& why) {
+          if (on_problem) on_problem(bad_record(sd_path, index, why));
+          return Status::ok();
+        };
+        if (!f[V::kSampleToken].get(&sample_token)) return report("no sample_token");
+        auto scene_it = scene_of_sample.find(sample_token);
+        if (scene_it == scene_of_sample.end()) return Status::ok();  // another scene
+        if (!f[V::kCalibratedSensorToken].get(&cs_token)) return report("no calibrated_sensor_token");
+        auto cal_it = calibrations_.find(cs_token);
+        if (cal_it == calibrations_.end()) return report("unknown calibrated_sensor_token " + cs_token);
+        const Calibration& cal = cal_it->second;
+        if (cal.modality != "camera") return Status::ok();
+        CameraFrameRecord fr;
+        std::int64_t width = 0, height = 0;
+        if (!f[V::kToken].get(&fr.sample_data_token) || !f[V::kFilename].get(&fr.filename) ||
+            !f[V::kTimestamp].get(&fr.timestamp_us) || !f[V::kIsKeyFrame].get(&fr.is_key_frame) ||
+            !f[V::kWidth].get(&width) || !f[V::kHeight].get(&height) || !f[V::kEgoPoseToken].get(&pose_token)) {
+          return report("missing or mistyped sample_data field");
+        }
+        fr.channel = cal.channel;
+        fr.sample_token = sample_token;
+        fr.scene_token = scene_it->second->token;
+        fr.scene_name = scene_it->second->name;
+        fr.width = static_cast<int>(width);
+        fr.height = static_cast<int>(height);
+        fr.intrinsics = cal.intrinsics;
+        fr.sensor_to_ego = cal.sensor_to_ego;
+        if (!frame_of_pose.emplace(pose_token, frames.size()).second) {
+          return report("ego_pose_token " + pose_token + " shared by two camera frames");
+        }
+        frames.push_back(std::move(fr));
+        return Status::ok();
+      },
+      other_scenes);
+}
+
+Status NuScenesReader::attach_ego_poses(const std::unordered_map<std::string, std::size_t>& frame_of_pose,
+                                        const ProblemFn& on_problem, std::vector<CameraFrameRecord>& frames) const {
+  using V = schema::ReplayEgoPose;
+  const std::string pose_path = table_path(schema::kEgoPose);
+  std::vector<bool> posed(frames.size(), false);
+  std::string token;
+  std::vector<double> t, q;
+  const nuscenes::RecordFilter other_poses{{{static_cast<int>(V::kToken), [&](const std::string& pose) {
+                                               return frame_of_pose.count(pose) != 0;
+                                             }}}};
+  Status s = nuscenes::stream_table(
+      pose_path, V::fields(),
+      [&](const nuscenes::TableRecord& rec, std::size_t index) {
+        const Fields& f = rec.fields;
+        if (!f[V::kToken].get(&token)) return Status::ok();
+        auto it = frame_of_pose.find(token);
+        if (it == frame_of_pose.end()) return Status::ok();
+        if (!f[V::kTranslation].get_numbers(&t) || !f[V::kRotation].get_numbers(&q) ||
+            !to_pose(t, q, &frames[it->second].ego_pose)) {
+          if (on_problem) on_problem(bad_record(pose_path, index, "bad translation/rotation"));
+          return Status::ok();
+        }
+        posed[it->second] = true;
+        return Status::ok();
+      },
+      other_poses);
+  if (!s) return s;
+  // Frames without an ego pose cannot be placed in the world: report and drop them.
+  std::size_t kept = 0;
+  for (std::size_t i = 0; i < frames.size(); ++i) {
+    if (!posed[i]) {
+      if (on_problem) {
+        on_problem(Status(StatusCode::kNotFound, pose_path + ": no ego_pose for sample_data " + frames[i].sample_data_token));
+      }
+      continue;
+    }
+    if (kept != i) frames[kept] = std::move(frames[i]);
+    ++kept;
+  }
+  frames.resize(kept);
+  return Status::ok();
+}
+
 Result<std::map<std::string, SceneFrameCounts>> NuScenesReader::count_frames(const ProblemFn& on_problem) const {
+  using V = schema::FrameCountSampleData;
   std::map<std::string, SceneFrameCounts> counts;
   for (const auto& sc : scenes_) counts[sc.token];
-  const std::string sd_path = table_path("sample_data");
+  const std::string sd_path = table_path(schema::kSampleData);
   std::string sample_token, cs_token;
-  Status s = stream_table(sd_path, [&](const JsonRecord& rec) {
+  Status s = nuscenes::stream_table(sd_path, V::fields(), [&](const nuscenes::TableRecord& rec, std::size_t index) {
+    const Fields& f = rec.fields;
     bool key = false;
-    if (!rec.get("sample_token", &sample_token) || !rec.get("calibrated_sensor_token", &cs_token) ||
-        !rec.get("is_key_frame", &key)) {
-      if (on_problem) on_problem(bad_record(sd_path, static_cast<rapidjson::SizeType>(rec.index()), "bad record"));
+    if (!f[V::kSampleToken].get(&sample_token) || !f[V::kCalibratedSensorToken].get(&cs_token) ||
+        !f[V::kIsKeyFrame].get(&key)) {
+      if (on_problem) on_problem(bad_record(sd_path, index, "bad record"));
       return Status::ok();
     }
     auto sa = sample_index_.find(sample_token);
     auto cal = calibrations_.find(cs_token);
     if (sa == sample_index_.end() || cal == calibrations_.end()) {
-      if (on_problem) {
-        on_problem(bad_record(sd_path, static_cast<rapidjson::SizeType>(rec.index()), "unknown sample or sensor"));
-      }
+      if (on_problem) on_problem(bad_record(sd_path, index, "unknown sample or sensor"));
       return Status::ok();
     }
     SceneFrameCounts& c = counts[samples_[sa->second].scene_token];

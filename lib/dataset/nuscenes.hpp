@@ -1,6 +1,7 @@
 // nuScenes database reader for camera replay (<dataroot>/<version>/*.json, samples/, sweeps/), scene-scoped:
 // small tables (scene, sample, sensor, calibrated_sensor, log) are loaded at open(); the big ones (sample_data
-// ~1.3 GB and ego_pose ~0.5 GB in trainval) are stream-parsed per request, keeping only the selected scenes' records.
+// ~1.3 GB and ego_pose ~0.5 GB in trainval) are streamed per request, keeping only the selected scenes' records.
+// Every table is read with nuscenes::stream_table, the fields listed in nuscenes/schema.hpp.
 #pragma once
 
 #include <array>
@@ -85,6 +86,18 @@ class NuScenesReader {
     Pose sensor_to_ego;
   };
   Result<std::vector<const SceneRecord*>> resolve(const std::vector<std::string>& scene_names) const;
+  // open()'s steps, one per small table (check_logs: every scene's log_token is in log.json).
+  Status load_scenes();
+  Status load_samples();
+  Status load_calibrations();
+  Status check_logs() const;
+  // load_camera_frames' two scans: sample_data (camera frames of the selected samples, indexed by ego pose
+  // token), then ego_pose (frames without a pose are reported and dropped).
+  Status stream_camera_frames(const std::unordered_map<std::string, const SceneRecord*>& scene_of_sample,
+                              const ProblemFn& on_problem, std::vector<CameraFrameRecord>& frames,
+                              std::unordered_map<std::string, std::size_t>& frame_of_pose) const;
+  Status attach_ego_poses(const std::unordered_map<std::string, std::size_t>& frame_of_pose,
+                          const ProblemFn& on_problem, std::vector<CameraFrameRecord>& frames) const;
 
   std::string dataroot_, version_;
   std::vector<SceneRecord> scenes_;

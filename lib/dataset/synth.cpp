@@ -19,10 +19,12 @@
 #include "dataset/geometry.hpp"
 #include "dataset/synth_render.hpp"
 #include "dataset/synth_world.hpp"
-#include "dataset/table_writer.hpp"
+#include "nuscenes/table_writer.hpp"
 
 namespace faultline::dataset {
 namespace fs = std::filesystem;
+using nuscenes::format_double;
+using nuscenes::TableWriter;
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;

@@ -4,8 +4,9 @@
 #include <sstream>
 
 #include "common/config.hpp"
-#include "dataset/json_table.hpp"
 #include "fault.pb.h"
+#include "nuscenes/schema.hpp"
+#include "nuscenes/table_reader.hpp"
 #include "runtime/bag_layout.hpp"
 #include "runtime/player_loop.hpp"
 #include "runtime/remap.hpp"
@@ -25,45 +26,64 @@ void ConvertConfig::validate() const {
 Result<std::map<std::string, std::vector<bag::GtBox>>> load_gt_boxes(const std::string& dataroot,
                                                                      const std::string& version,
                                                                      const std::set<std::string>& sample_tokens) {
-  const std::string dir = dataroot + "/" + version + "/";
+  namespace schema = nuscenes::schema;
+  using Fields = std::vector<nuscenes::TableField>;
   std::map<std::string, std::string> category_name;  // category token -> name
-  Status s = dataset::stream_table(dir + "category.json", [&](const dataset::JsonRecord& r) {
-    std::string token, name;
-    if (r.get("token", &token) && r.get("name", &name)) category_name[token] = name;
-    return Status::ok();
-  });
+  Status s = nuscenes::stream_table(
+      schema::table_path(dataroot, version, schema::kCategory), schema::TokenName::fields(),
+      [&](const nuscenes::TableRecord& r, std::size_t) {
+        std::string token, name;
+        if (r.fields[schema::TokenName::kToken].get(&token) && r.fields[schema::TokenName::kName].get(&name)) {
+          category_name[token] = name;
+        }
+        return Status::ok();
+      });
   if (!s) return s;
   std::map<std::string, std::string> instance_category;  // instance token -> category name
-  s = dataset::stream_table(dir + "instance.json", [&](const dataset::JsonRecord& r) {
-    std::string token, category;
-    if (!r.get("token", &token) || !r.get("category_token", &category)) return Status::ok();
-    const auto it = category_name.find(category);
-    instance_category[token] = it == category_name.end() ? "unknown" : it->second;
-    return Status::ok();
-  });
+  s = nuscenes::stream_table(
+      schema::table_path(dataroot, version, schema::kInstance), schema::InstanceCategory::fields(),
+      [&](const nuscenes::TableRecord& r, std::size_t) {
+        using V = schema::InstanceCategory;
+        std::string token, category;
+        if (!r.fields[V::kToken].get(&token) || !r.fields[V::kCategoryToken].get(&category)) return Status::ok();
+        const auto it = category_name.find(category);
+        instance_category[token] = it == category_name.end() ? "unknown" : it->second;
+        return Status::ok();
+      });
   if (!s) return s;
   std::map<std::string, std::vector<bag::GtBox>> out;
-  const std::string ann_path = dir + "sample_annotation.json";
+  const std::string ann_path = schema::table_path(dataroot, version, schema::kSampleAnnotation);
   std::vector<double> t, sz, rot;
-  s = dataset::stream_table(ann_path, [&](const dataset::JsonRecord& r) {
-    std::string sample;
-    if (!r.get("sample_token", &sample)) return Status::ok();
-    if (!sample_tokens.empty() && sample_tokens.count(sample) == 0) return Status::ok();
-    bag::GtBox box;
-    if (!r.get("instance_token", &box.instance_token) || !r.get_numbers("translation", &t) ||
-        !r.get_numbers("size", &sz) || !r.get_numbers("rotation", &rot) || t.size() != 3 || sz.size() != 3 ||
-        rot.size() != 4) {
-      return Status(StatusCode::kCorruptData,
-                    ann_path + ": record " + std::to_string(r.index()) + ": missing or malformed box fields");
-    }
-    const auto cat = instance_category.find(box.instance_token);
-    box.category = cat == instance_category.end() ? "unknown" : cat->second;
-    std::copy(t.begin(), t.end(), box.translation.begin());
-    std::copy(sz.begin(), sz.end(), box.size.begin());
-    std::copy(rot.begin(), rot.end(), box.rotation.begin());
-    out[sample].push_back(std::move(box));
-    return Status::ok();
-  });
+  using V = schema::BoxAnnotation;
+  // Annotations of other samples are skipped undecoded (those without a string sample_token are ignored).
+  nuscenes::RecordFilter other_samples;
+  if (!sample_tokens.empty()) {
+    other_samples.all_of.push_back(
+        {static_cast<int>(V::kSampleToken), [&](const std::string& sample) { return sample_tokens.count(sample) != 0; }});
+  }
+  s = nuscenes::stream_table(
+      ann_path, V::fields(),
+      [&](const nuscenes::TableRecord& r, std::size_t index) {
+        const Fields& f = r.fields;
+        std::string sample;
+        if (!f[V::kSampleToken].get(&sample)) return Status::ok();
+        if (!sample_tokens.empty() && sample_tokens.count(sample) == 0) return Status::ok();
+        bag::GtBox box;
+        if (!f[V::kInstanceToken].get(&box.instance_token) || !f[V::kTranslation].get_numbers(&t) ||
+            !f[V::kSize].get_numbers(&sz) || !f[V::kRotation].get_numbers(&rot) || t.size() != 3 ||
+            sz.size() != 3 || rot.size() != 4) {
+          return Status(StatusCode::kCorruptData,
+                        "record " + std::to_string(index) + ": missing or malformed box fields");
+        }
+        const auto cat = instance_category.find(box.instance_token);
+        box.category = cat == instance_category.end() ? "unknown" : cat->second;
+        std::copy(t.begin(), t.end(), box.translation.begin());
+        std::copy(sz.begin(), sz.end(), box.size.begin());
+        std::copy(rot.begin(), rot.end(), box.rotation.begin());
+        out[sample].push_back(std::move(box));
+        return Status::ok();
+      },
+      other_samples);
   if (!s) return s;
   return out;
 }

@@ -1,6 +1,6 @@
 // Loads the ground truth of a split from the nuScenes tables (spec §3): only the split's samples, their
 // annotations (sample_annotation.json order), bike racks and LIDAR_TOP key-frame ego positions.
-// Large tables are streamed (table_stream.hpp); nothing outside the split is kept.
+// Large tables are streamed (nuscenes/table_reader.hpp); nothing outside the split is kept.
 #pragma once
 
 #include <array>

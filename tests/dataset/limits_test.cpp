@@ -1,14 +1,15 @@
-// Size limits of the dataset readers (#22): a nuScenes table one byte over kMaxNuScenesTableBytes,
-// and an image over its limit (or /dev/zero), are refused naming the file and the limit.
+// Size limits of the dataset readers (#22): a nuScenes table one byte over kMaxNuScenesTableBytes (read with the
+// table reader, tests/nuscenes), and an image over its limit (or /dev/zero), are refused naming the file and the
+// limit.
 #include <gtest/gtest.h>
-#include <rapidjson/document.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
+#include <cstdlib>
 #include <fstream>
 #include <string>
 
 #include "common/bounded_read.hpp"
-#include "dataset/json_table.hpp"
 #include "dataset/nuscenes.hpp"
 
 namespace faultline::dataset {
@@ -22,15 +23,20 @@ std::string Sparse(const std::string& stem, std::uint64_t size) {
   return path;
 }
 
-TEST(DatasetLimitsTest, ATableOneByteOverTheLimitIsRefusedByBothReaders) {
-  const std::string path = Sparse("sample_data.json", kMaxNuScenesTableBytes + 1);
-  const Status streamed = stream_table(path, [](const JsonRecord&) { return Status::ok(); });
-  EXPECT_EQ(streamed.code(), StatusCode::kInvalidArgument);
-  EXPECT_NE(streamed.message().find(path), std::string::npos) << streamed.message();
-  EXPECT_NE(streamed.message().find("16 GiB"), std::string::npos) << streamed.message();
-  rapidjson::Document doc;
-  EXPECT_EQ(parse_document(path, &doc).code(), StatusCode::kInvalidArgument);
-  ::unlink(path.c_str());
+TEST(DatasetLimitsTest, ATableOneByteOverTheLimitIsRefusedAtOpen) {
+  char tmpl[] = "/tmp/faultline-dataset-limit-root-XXXXXX";
+  const std::string root = ::mkdtemp(tmpl);
+  const std::string dir = root + "/v1.0-mini";
+  ASSERT_EQ(::mkdir(dir.c_str(), 0755), 0);
+  for (const char* table : {"sample_data", "ego_pose"}) std::ofstream(dir + "/" + table + ".json") << "[]";
+  const std::string path = dir + "/scene.json";
+  std::ofstream(path).close();
+  ASSERT_EQ(::truncate(path.c_str(), static_cast<off_t>(kMaxNuScenesTableBytes + 1)), 0);
+  auto reader = NuScenesReader::open(root, "v1.0-mini");
+  EXPECT_EQ(reader.status().code(), StatusCode::kInvalidArgument);
+  EXPECT_NE(reader.status().message().find(path), std::string::npos) << reader.status().message();
+  EXPECT_NE(reader.status().message().find("16 GiB"), std::string::npos) << reader.status().message();
+  (void)std::system(("rm -rf " + root).c_str());
 }
 
 TEST(DatasetLimitsTest, AnImageOverItsLimitOrDevZeroIsRefused) {

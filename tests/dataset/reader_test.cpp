@@ -154,7 +154,8 @@ TEST_F(BrokenTablesTest, MalformedJsonNamesFileAndOffset) {
   ASSERT_FALSE(r.is_ok());
   EXPECT_EQ(r.status().code(), StatusCode::kCorruptData);
   EXPECT_NE(r.status().message().find("sample.json"), std::string::npos);
-  EXPECT_NE(r.status().message().find("byte " + std::to_string(pos)), std::string::npos) << r.status().message();
+  EXPECT_NE(r.status().message().find("malformed JSON at offset " + std::to_string(pos)), std::string::npos)
+      << r.status().message();
 }
 
 TEST_F(BrokenTablesTest, MalformedStreamedTableNamesFileAndOffset) {
@@ -167,7 +168,7 @@ TEST_F(BrokenTablesTest, MalformedStreamedTableNamesFileAndOffset) {
   auto frames = reader->load_camera_frames({});
   ASSERT_FALSE(frames.is_ok());
   EXPECT_NE(frames.status().message().find("ego_pose.json"), std::string::npos);
-  EXPECT_NE(frames.status().message().find("at byte " + std::to_string(pos + 1)), std::string::npos)
+  EXPECT_NE(frames.status().message().find("malformed JSON at offset " + std::to_string(pos + 1)), std::string::npos)
       << frames.status().message();
 }
 

@@ -1,6 +1,5 @@
-// Size limits of the scorer's readers (#22): the nuScenes table scanner refuses a table one byte
-// over kMaxNuScenesTableBytes, and a custom splits.json over kMaxParamsFileBytes, naming the file
-// and the limit.
+// Size limits of the scorer's readers (#22): a custom splits.json over kMaxParamsFileBytes is refused, naming the
+// file and the limit. The nuScenes table reader's limit is tested with it (tests/nuscenes/limits_test.cpp).
 #include <gtest/gtest.h>
 #include <sys/stat.h>
 #include <unistd.h>
@@ -10,22 +9,9 @@
 
 #include "common/bounded_read.hpp"
 #include "scoring/splits.hpp"
-#include "scoring/table_stream.hpp"
 
 namespace faultline::scoring {
 namespace {
-
-TEST(ScoringLimitsTest, TableScannerRefusesATableOneByteOverTheLimit) {
-  const std::string path = "/tmp/faultline-scoring-limit-" + std::to_string(::getpid()) + ".json";
-  std::ofstream(path).close();
-  ASSERT_EQ(::truncate(path.c_str(), static_cast<off_t>(kMaxNuScenesTableBytes + 1)), 0);
-  const Status s =
-      stream_table(path, {"token"}, [](const TableRecord&, std::size_t) { return Status::ok(); });
-  EXPECT_EQ(s.code(), StatusCode::kInvalidArgument);
-  EXPECT_NE(s.message().find(path), std::string::npos) << s.message();
-  EXPECT_NE(s.message().find("16 GiB"), std::string::npos) << s.message();
-  ::unlink(path.c_str());
-}
 
 TEST(ScoringLimitsTest, CustomSplitsFileOverTheLimitIsRefused) {
   char tmpl[] = "/tmp/faultline-splits-limit-XXXXXX";

@@ -1,4 +1,5 @@
-// Synthetic val-sized tables and submission, written with stdio for speed.
+// Synthetic val-sized tables, written through the one table writer (nuscenes/table_writer.hpp) in its compact
+// layout, and a submission.
 #include "bench/synthetic_val.hpp"
 
 #include <algorithm>
@@ -9,6 +10,8 @@
 #include <random>
 #include <vector>
 
+#include "nuscenes/schema.hpp"
+#include "nuscenes/table_writer.hpp"
 #include "scoring/detection_config.hpp"
 #include "scoring/splits.hpp"
 
@@ -20,6 +23,9 @@ using scoring::kClassNames;
 using scoring::kNumClasses;
 using scoring::predefined_split_scenes;
 using File = std::unique_ptr<std::FILE, int (*)(std::FILE*)>;
+using nuscenes::Number;
+using nuscenes::TableWriter;
+namespace schema = nuscenes::schema;
 
 class Tokens {
  public:
@@ -41,25 +47,39 @@ class Tokens {
   std::uint64_t state_;
 };
 
-// Writes a JSON array record by record ("[", ",\n", "]").
-class ArrayWriter {
+// The tables of one synthetic set, each open for writing in the compact layout (one record per line).
+class Tables {
  public:
-  ArrayWriter(const std::string& path) : f_(std::fopen(path.c_str(), "wb"), &std::fclose) {
-    if (f_) std::fputs("[\n", f_.get());
+  explicit Tables(std::string dir) : dir_(std::move(dir)) {}
+  // Opens <dir>/<table>.json; the first failure is kept and returned by close_all().
+  TableWriter& open(const char* table) {
+    auto& w = writers_.emplace_back(std::make_unique<TableWriter>(nuscenes::TableLayout::kCompact));
+    if (Status s = w->open(dir_ + "/" + table + ".json"); !s && first_error_.is_ok()) first_error_ = s;
+    return *w;
   }
-  bool ok() const { return static_cast<bool>(f_); }
-  std::FILE* next() {
-    if (count_++) std::fputs(",\n", f_.get());
-    return f_.get();
-  }
-  ~ArrayWriter() {
-    if (f_) std::fputs("\n]\n", f_.get());
+  bool failed() const { return !first_error_.is_ok(); }
+  Status close_all() {
+    for (auto& w : writers_) {
+      if (Status s = w->close(); !s && first_error_.is_ok()) first_error_ = s;
+    }
+    writers_.clear();
+    return first_error_;
   }
 
  private:
-  File f_;
-  std::size_t count_ = 0;
+  std::string dir_;
+  std::vector<std::unique_ptr<TableWriter>> writers_;
+  Status first_error_;
 };
+
+// One record of the token/name/description tables (category, attribute).
+void named_record(TableWriter& w, const std::string& token, const char* name) {
+  w.begin_record();
+  w.field("token", token);
+  w.field("name", name);
+  w.field("description", "synthetic");
+  w.end_record();
+}
 
 struct Category {
   const char* name;
@@ -118,48 +138,42 @@ Result<SyntheticValStats> write_synthetic_val(const std::string& dir,
   std::discrete_distribution<int> pick_cat(std::begin(kWeights), std::end(kWeights));
 
   // Small tables.
+  Tables small(tdir);
   std::vector<std::string> cat_tokens, attr_tokens;
-  {
-    ArrayWriter w(tdir + "/category.json");
-    if (!w.ok()) return Status(StatusCode::kIoError, tdir + "/category.json: cannot write");
-    for (const auto& c : kCategories) {
-      cat_tokens.push_back(tok.next());
-      std::fprintf(w.next(),
-                   "{\"token\": \"%s\", \"name\": \"%s\", \"description\": \"synthetic\"}",
-                   cat_tokens.back().c_str(), c.name);
-    }
+  TableWriter& category_w = small.open(schema::kCategory);
+  if (small.failed()) return small.close_all();
+  for (const auto& c : kCategories) {
+    cat_tokens.push_back(tok.next());
+    named_record(category_w, cat_tokens.back(), c.name);
   }
-  {
-    ArrayWriter w(tdir + "/attribute.json");
-    for (const char* a : kAttributeNames) {
-      attr_tokens.push_back(tok.next());
-      std::fprintf(w.next(),
-                   "{\"token\": \"%s\", \"name\": \"%s\", \"description\": \"synthetic\"}",
-                   attr_tokens.back().c_str(), a);
-    }
+  TableWriter& attribute_w = small.open(schema::kAttribute);
+  for (const char* a : kAttributeNames) {
+    attr_tokens.push_back(tok.next());
+    named_record(attribute_w, attr_tokens.back(), a);
   }
-  {
-    ArrayWriter w(tdir + "/visibility.json");
-    for (int v = 1; v <= 4; ++v) {
-      std::fprintf(w.next(),
-                   "{\"token\": \"%d\", \"level\": \"v%d\", \"description\": \"synthetic\"}", v, v);
-    }
+  TableWriter& visibility_w = small.open(schema::kVisibility);
+  for (int v = 1; v <= 4; ++v) {
+    visibility_w.begin_record();
+    visibility_w.field("token", std::to_string(v));
+    visibility_w.field("level", "v" + std::to_string(v));
+    visibility_w.field("description", "synthetic");
+    visibility_w.end_record();
   }
   const char* channels[] = {"CAM_FRONT",         "CAM_FRONT_RIGHT", "CAM_FRONT_LEFT",
                             "CAM_BACK",          "CAM_BACK_LEFT",   "CAM_BACK_RIGHT",
                             "LIDAR_TOP",         "RADAR_FRONT",     "RADAR_FRONT_LEFT",
                             "RADAR_FRONT_RIGHT", "RADAR_BACK_LEFT", "RADAR_BACK_RIGHT"};
   std::vector<std::string> sensor_tokens;
-  {
-    ArrayWriter w(tdir + "/sensor.json");
-    for (const char* ch : channels) {
-      const std::string t = tok.next();
-      sensor_tokens.push_back(t);
-      const char* mod = ch[0] == 'C' ? "camera" : (ch[0] == 'L' ? "lidar" : "radar");
-      std::fprintf(w.next(), "{\"token\": \"%s\", \"channel\": \"%s\", \"modality\": \"%s\"}",
-                   t.c_str(), ch, mod);
-    }
+  TableWriter& sensor_w = small.open(schema::kSensor);
+  for (const char* ch : channels) {
+    sensor_tokens.push_back(tok.next());
+    sensor_w.begin_record();
+    sensor_w.field("token", sensor_tokens.back());
+    sensor_w.field("channel", ch);
+    sensor_w.field("modality", ch[0] == 'C' ? "camera" : (ch[0] == 'L' ? "lidar" : "radar"));
+    sensor_w.end_record();
   }
+  if (Status s = small.close_all(); !s) return s;
   // Scenes in name order, as scene.json lists them; val scenes also get predictions.
   std::vector<std::pair<std::string, bool>> scene_list;
   for (const auto& n : scene_names) scene_list.emplace_back(n, true);
@@ -177,12 +191,14 @@ Result<SyntheticValStats> write_synthetic_val(const std::string& dir,
   // Frames per 0.5 s sample period for each channel (12 Hz cameras, 20 Hz LIDAR, ~13 Hz radar).
   const int frames_per_sample[] = {6, 6, 6, 6, 6, 6, 10, 7, 6, 7, 6, 7};
 
-  ArrayWriter scene_w(tdir + "/scene.json"), log_w(tdir + "/log.json"),
-      calib_w(tdir + "/calibrated_sensor.json"), sample_w(tdir + "/sample.json"),
-      sd_w(tdir + "/sample_data.json"), pose_w(tdir + "/ego_pose.json"),
-      inst_w(tdir + "/instance.json"), ann_w(tdir + "/sample_annotation.json");
+  Tables big(tdir);
+  TableWriter &scene_w = big.open(schema::kScene), &log_w = big.open(schema::kLog),
+              &calib_w = big.open(schema::kCalibratedSensor), &sample_w = big.open(schema::kSample),
+              &sd_w = big.open(schema::kSampleData), &pose_w = big.open(schema::kEgoPose),
+              &inst_w = big.open(schema::kInstance), &ann_w = big.open(schema::kSampleAnnotation);
+  if (big.failed()) return big.close_all();
   File res(std::fopen((dir + "/results.json").c_str(), "wb"), &std::fclose);
-  if (!ann_w.ok() || !res) return Status(StatusCode::kIoError, dir + ": cannot write the tables");
+  if (!res) return Status(StatusCode::kIoError, dir + "/results.json: cannot write");
   std::fputs(
       "{\"meta\": {\"use_camera\": true, \"use_lidar\": false, \"use_radar\": false, \"use_map\": "
       "false, "
@@ -204,25 +220,36 @@ Result<SyntheticValStats> write_synthetic_val(const std::string& dir,
     log_tokens.push_back(log_tok);
     std::vector<std::string> sample_toks(static_cast<std::size_t>(n_samples));
     for (auto& t : sample_toks) t = tok.next();
-    std::fprintf(log_w.next(),
-                 "{\"token\": \"%s\", \"logfile\": \"n000-synthetic-%03d\", \"vehicle\": \"n000\", "
-                 "\"date_captured\": \"2018-08-01\", \"location\": \"boston-seaport\"}",
-                 log_tok.c_str(), s);
-    std::fprintf(
-        scene_w.next(),
-        "{\"token\": \"%s\", \"log_token\": \"%s\", \"nbr_samples\": %d, \"first_sample_token\": "
-        "\"%s\", "
-        "\"last_sample_token\": \"%s\", \"name\": \"%s\", \"description\": \"synthetic %s scene\"}",
-        scene_tok.c_str(), log_tok.c_str(), n_samples, sample_toks.front().c_str(),
-        sample_toks.back().c_str(), scene_list[static_cast<std::size_t>(s)].first.c_str(),
-        is_val ? "val" : "train");
+    char logfile[32];
+    std::snprintf(logfile, sizeof logfile, "n000-synthetic-%03d", s);
+    log_w.begin_record();
+    log_w.field("token", log_tok);
+    log_w.field("logfile", logfile);
+    log_w.field("vehicle", "n000");
+    log_w.field("date_captured", "2018-08-01");
+    log_w.field("location", "boston-seaport");
+    log_w.end_record();
+    scene_w.begin_record();
+    scene_w.field("token", scene_tok);
+    scene_w.field("log_token", log_tok);
+    scene_w.field("nbr_samples", n_samples);
+    scene_w.field("first_sample_token", sample_toks.front());
+    scene_w.field("last_sample_token", sample_toks.back());
+    scene_w.field("name", scene_list[static_cast<std::size_t>(s)].first);
+    scene_w.field("description", std::string("synthetic ") + (is_val ? "val" : "train") + " scene");
+    scene_w.end_record();
     for (std::size_t c = 0; c < std::size(channels); ++c) {
-      std::fprintf(
-          calib_w.next(),
-          "{\"token\": \"%s\", \"sensor_token\": \"%s\", \"translation\": [0.94, 0.0, 1.84], "
-          "\"rotation\": [0.7071, 0.0, 0.0, -0.7071], \"camera_intrinsic\": %s}",
-          calib_toks[c].c_str(), sensor_tokens[c].c_str(),
-          c < 6 ? "[[1266.4, 0.0, 816.3], [0.0, 1266.4, 491.5], [0.0, 0.0, 1.0]]" : "[]");
+      calib_w.begin_record();
+      calib_w.field("token", calib_toks[c]);
+      calib_w.field("sensor_token", sensor_tokens[c]);
+      calib_w.field("translation", std::vector<double>{0.94, 0.0, 1.84});
+      calib_w.field("rotation", std::vector<double>{0.7071, 0.0, 0.0, -0.7071});
+      if (c < 6) {
+        calib_w.matrix("camera_intrinsic", {{1266.4, 0.0, 816.3}, {0.0, 1266.4, 491.5}, {0.0, 0.0, 1.0}});
+      } else {
+        calib_w.matrix("camera_intrinsic", {});
+      }
+      calib_w.end_record();
     }
     // Ego drives straight along a random heading at a random speed.
     const double ex0 = 300 + 2000 * unif(rng), ey0 = 300 + 2000 * unif(rng),
@@ -236,11 +263,13 @@ Result<SyntheticValStats> write_synthetic_val(const std::string& dir,
       ts[uk] = t0 + static_cast<long long>(k) * 500000LL + static_cast<long long>(unif(rng) * 4000);
       const double d = speed * 0.5 * k;
       ego[uk] = {ex0 + d * std::cos(heading), ey0 + d * std::sin(heading)};
-      std::fprintf(sample_w.next(),
-                   "{\"token\": \"%s\", \"timestamp\": %lld, \"prev\": \"%s\", \"next\": \"%s\", "
-                   "\"scene_token\": \"%s\"}",
-                   sample_toks[uk].c_str(), ts[uk], k ? sample_toks[uk - 1].c_str() : "",
-                   k + 1 < n_samples ? sample_toks[uk + 1].c_str() : "", scene_tok.c_str());
+      sample_w.begin_record();
+      sample_w.field("token", sample_toks[uk]);
+      sample_w.field("timestamp", static_cast<std::int64_t>(ts[uk]));
+      sample_w.field("prev", k ? sample_toks[uk - 1] : std::string());
+      sample_w.field("next", k + 1 < n_samples ? sample_toks[uk + 1] : std::string());
+      sample_w.field("scene_token", scene_tok);
+      sample_w.end_record();
     }
     // sample_data + ego_pose, one pose per record with the record's token, channel by channel. The
     // key frame of each channel opens each sample period; sweeps follow it (without sweeps: LIDAR
@@ -258,22 +287,32 @@ Result<SyntheticValStats> write_synthetic_val(const std::string& dir,
         const long long t = ts[uk] + static_cast<long long>(f) * 500000LL / per_sample;
         const double d = speed * (1e-6 * static_cast<double>(t - t0));
         const bool camera = c < 6, lidar = c == 6;
-        std::fprintf(
-            sd_w.next(),
-            "{\"token\": \"%s\", \"sample_token\": \"%s\", \"ego_pose_token\": \"%s\", "
-            "\"calibrated_sensor_token\": \"%s\", \"timestamp\": %lld, \"fileformat\": \"%s\", "
-            "\"is_key_frame\": %s, \"height\": %d, \"width\": %d, \"filename\": "
-            "\"%s/%s/n000-synthetic-%03d__%s__%lld.%s\", \"prev\": \"%s\", \"next\": \"%s\"}",
-            cur.c_str(), sample_toks[uk].c_str(), cur.c_str(), calib_toks[c].c_str(), t,
-            camera ? "jpg" : "pcd", f == 0 ? "true" : "false", camera ? 900 : 0, camera ? 1600 : 0,
-            f == 0 ? "samples" : "sweeps", channels[c], s, channels[c], t,
-            camera ? "jpg" : (lidar ? "pcd.bin" : "pcd"), prev.c_str(), next.c_str());
-        std::fprintf(
-            pose_w.next(),
-            "{\"token\": \"%s\", \"timestamp\": %lld, \"rotation\": [%.9f, 0.0, 0.0, %.9f], "
-            "\"translation\": [%.6f, %.6f, 0.0]}",
-            cur.c_str(), t, std::cos(heading / 2), std::sin(heading / 2),
-            ex0 + d * std::cos(heading), ey0 + d * std::sin(heading));
+        char filename[128];
+        std::snprintf(filename, sizeof filename, "%s/%s/n000-synthetic-%03d__%s__%lld.%s",
+                      f == 0 ? "samples" : "sweeps", channels[c], s, channels[c], t,
+                      camera ? "jpg" : (lidar ? "pcd.bin" : "pcd"));
+        sd_w.begin_record();
+        sd_w.field("token", cur);
+        sd_w.field("sample_token", sample_toks[uk]);
+        sd_w.field("ego_pose_token", cur);
+        sd_w.field("calibrated_sensor_token", calib_toks[c]);
+        sd_w.field("timestamp", static_cast<std::int64_t>(t));
+        sd_w.field("fileformat", camera ? "jpg" : "pcd");
+        sd_w.field("is_key_frame", f == 0);
+        sd_w.field("height", camera ? 900 : 0);
+        sd_w.field("width", camera ? 1600 : 0);
+        sd_w.field("filename", filename);
+        sd_w.field("prev", prev);
+        sd_w.field("next", next);
+        sd_w.end_record();
+        pose_w.begin_record();
+        pose_w.field("token", cur);
+        pose_w.field("timestamp", static_cast<std::int64_t>(t));
+        pose_w.field("rotation", {Number{std::cos(heading / 2), 9}, Number{0.0}, Number{0.0},
+                                  Number{std::sin(heading / 2), 9}});
+        pose_w.field("translation", {Number{ex0 + d * std::cos(heading), 6},
+                                     Number{ey0 + d * std::sin(heading), 6}, Number{0.0}});
+        pose_w.end_record();
         ++stats.sample_data;
         prev = std::move(cur);
         cur = std::move(next);
@@ -307,11 +346,13 @@ Result<SyntheticValStats> write_synthetic_val(const std::string& dir,
       o.anns.resize(static_cast<std::size_t>(n_samples));
       for (auto& t : o.anns) t = tok.next();
       o.inst = tok.next();
-      std::fprintf(inst_w.next(),
-                   "{\"token\": \"%s\", \"category_token\": \"%s\", \"nbr_annotations\": %d, "
-                   "\"first_annotation_token\": \"%s\", \"last_annotation_token\": \"%s\"}",
-                   o.inst.c_str(), cat_tokens[static_cast<std::size_t>(o.cat)].c_str(), n_samples,
-                   o.anns.front().c_str(), o.anns.back().c_str());
+      inst_w.begin_record();
+      inst_w.field("token", o.inst);
+      inst_w.field("category_token", cat_tokens[static_cast<std::size_t>(o.cat)]);
+      inst_w.field("nbr_annotations", n_samples);
+      inst_w.field("first_annotation_token", o.anns.front());
+      inst_w.field("last_annotation_token", o.anns.back());
+      inst_w.end_record();
     }
     for (int k = 0; k < n_samples; ++k) {
       const auto uk = static_cast<std::size_t>(k);
@@ -339,19 +380,23 @@ Result<SyntheticValStats> write_synthetic_val(const std::string& dir,
         const double t = 0.5 * k;
         const double x = o.x0 + o.vx * t, y = o.y0 + o.vy * t, z = o.h / 2;
         const int lidar = unif(rng) < 0.04 ? 0 : 1 + static_cast<int>(200 * unif(rng));
-        std::fprintf(
-            ann_w.next(),
-            "{\"token\": \"%s\", \"sample_token\": \"%s\", \"instance_token\": \"%s\", "
-            "\"visibility_token\": \"4\", \"attribute_tokens\": [%s%s%s], \"translation\": [%.6f, "
-            "%.6f, %.6f], "
-            "\"size\": [%.3f, %.3f, %.3f], \"rotation\": [%.9f, 0.0, 0.0, %.9f], \"prev\": \"%s\", "
-            "\"next\": \"%s\", \"num_lidar_pts\": %d, \"num_radar_pts\": %d}",
-            o.anns[uk].c_str(), sample_toks[uk].c_str(), o.inst.c_str(), o.attr >= 0 ? "\"" : "",
-            o.attr >= 0 ? attr_tokens[static_cast<std::size_t>(o.attr)].c_str() : "",
-            o.attr >= 0 ? "\"" : "", x, y, z, o.w, o.l, o.h, std::cos(o.yaw / 2),
-            std::sin(o.yaw / 2), k ? o.anns[uk - 1].c_str() : "",
-            k + 1 < n_samples ? o.anns[uk + 1].c_str() : "", lidar,
-            static_cast<int>(5 * unif(rng)));
+        ann_w.begin_record();
+        ann_w.field("token", o.anns[uk]);
+        ann_w.field("sample_token", sample_toks[uk]);
+        ann_w.field("instance_token", o.inst);
+        ann_w.field("visibility_token", "4");
+        ann_w.field("attribute_tokens", o.attr >= 0
+                                            ? std::vector<std::string>{attr_tokens[static_cast<std::size_t>(o.attr)]}
+                                            : std::vector<std::string>{});
+        ann_w.field("translation", std::vector<double>{x, y, z}, 6);
+        ann_w.field("size", std::vector<double>{o.w, o.l, o.h}, 3);
+        ann_w.field("rotation", {Number{std::cos(o.yaw / 2), 9}, Number{0.0}, Number{0.0},
+                                 Number{std::sin(o.yaw / 2), 9}});
+        ann_w.field("prev", k ? o.anns[uk - 1] : std::string());
+        ann_w.field("next", k + 1 < n_samples ? o.anns[uk + 1] : std::string());
+        ann_w.field("num_lidar_pts", lidar);
+        ann_w.field("num_radar_pts", static_cast<int>(5 * unif(rng)));
+        ann_w.end_record();
         ++stats.annotations;
         if (!is_val || c.cls < 0 || unif(rng) > cfg.detection_rate) continue;
         const double noise = 0.3 + 0.5 * unif(rng);
@@ -373,16 +418,15 @@ Result<SyntheticValStats> write_synthetic_val(const std::string& dir,
     if (is_val) stats.samples += n_samples;
   }
   std::fputs("\n}}\n", res.get());
-  {
-    ArrayWriter w(tdir + "/map.json");
-    std::string logs;
-    for (std::size_t i = 0; i < log_tokens.size(); ++i)
-      logs += (i ? ", \"" : "\"") + log_tokens[i] + "\"";
-    std::fprintf(w.next(),
-                 "{\"token\": \"%s\", \"log_tokens\": [%s], \"category\": \"semantic_prior\", "
-                 "\"filename\": \"maps/synthetic.png\"}",
-                 tok.next().c_str(), logs.c_str());
-  }
+  if (Status s = big.close_all(); !s) return s;
+  TableWriter& map_w = small.open(schema::kMap);
+  map_w.begin_record();
+  map_w.field("token", tok.next());
+  map_w.field("log_tokens", log_tokens);
+  map_w.field("category", "semantic_prior");
+  map_w.field("filename", "maps/synthetic.png");
+  map_w.end_record();
+  if (Status s = small.close_all(); !s) return s;
   return stats;
 }
 

@@ -1,6 +1,6 @@
-// The table scanner: decoded fields, skipped fields, Python's JSON extensions, errors with byte
+// The table reader: decoded fields, skipped fields, Python's JSON extensions, errors with byte
 // offsets.
-#include "scoring/table_stream.hpp"
+#include "nuscenes/table_reader.hpp"
 
 #include <gtest/gtest.h>
 
@@ -8,13 +8,13 @@
 
 #include "test_util.hpp"
 
-namespace faultline::scoring {
+namespace faultline::nuscenes {
 namespace {
 
 using testing::TempDir;
 using testing::write_text;
 
-class TableStreamTest : public ::testing::Test {
+class TableReaderTest : public ::testing::Test {
  protected:
   // Scans `json` for the given fields; returns the status and keeps every record.
   Status scan(const std::string& json, const std::vector<std::string>& wanted) {
@@ -27,11 +27,11 @@ class TableStreamTest : public ::testing::Test {
       return Status::ok();
     });
   }
-  TempDir dir_{"table_stream"};
+  TempDir dir_{"table_reader"};
   std::vector<TableRecord> records_;
 };
 
-TEST_F(TableStreamTest, DecodesWantedFieldsAndSkipsTheRest) {
+TEST_F(TableReaderTest, DecodesWantedFieldsAndSkipsTheRest) {
   const std::string json = R"([
 {"token": "a1", "skip": {"nested": [1, {"x": "}"}]}, "translation": [1.5, -2e3, 0], "flag": true},
 {"flag": false, "token": "b\"2\\", "translation": [], "extra": null}
@@ -48,7 +48,7 @@ TEST_F(TableStreamTest, DecodesWantedFieldsAndSkipsTheRest) {
   EXPECT_FALSE(records_[1].fields[2].boolean);
 }
 
-TEST_F(TableStreamTest, FlattensNestedListsAndKeepsStringLists) {
+TEST_F(TableReaderTest, FlattensNestedListsAndKeepsStringLists) {
   const std::string json =
       R"([{"camera_intrinsic": [[1, 0, 2], [0, 3, 4], [0, 0, 1]], "attribute_tokens": ["x", "y"]}])";
   ASSERT_TRUE(scan(json, {"camera_intrinsic", "attribute_tokens"}).is_ok());
@@ -57,7 +57,7 @@ TEST_F(TableStreamTest, FlattensNestedListsAndKeepsStringLists) {
   EXPECT_EQ(records_[0].fields[1].strs, (std::vector<std::string>{"x", "y"}));
 }
 
-TEST_F(TableStreamTest, ReadsPythonNanInfinityAndUnicodeEscapes) {
+TEST_F(TableReaderTest, ReadsPythonNanInfinityAndUnicodeEscapes) {
   const std::string json =
       R"([{"a": NaN, "b": -Infinity, "c": Infinity, "d": "\u00e9\ud83d\ude00", "e": null}])";
   ASSERT_TRUE(scan(json, {"a", "b", "c", "d", "e"}).is_ok());
@@ -69,7 +69,7 @@ TEST_F(TableStreamTest, ReadsPythonNanInfinityAndUnicodeEscapes) {
   EXPECT_TRUE(records_[0].fields[4].is_null);
 }
 
-TEST_F(TableStreamTest, ParsesNumbersExactly) {
+TEST_F(TableReaderTest, ParsesNumbersExactly) {
   const std::string json =
       R"([{"t": 1533151603547590, "x": 0.1, "y": 2.220446049250313e-16, "z": -0}])";
   ASSERT_TRUE(scan(json, {"t", "x", "y", "z"}).is_ok());
@@ -79,12 +79,12 @@ TEST_F(TableStreamTest, ParsesNumbersExactly) {
   EXPECT_TRUE(std::signbit(records_[0].fields[3].num));
 }
 
-TEST_F(TableStreamTest, EmptyArrayHasNoRecords) {
+TEST_F(TableReaderTest, EmptyArrayHasNoRecords) {
   ASSERT_TRUE(scan(" [ ] \n", {"token"}).is_ok());
   EXPECT_TRUE(records_.empty());
 }
 
-TEST_F(TableStreamTest, ErrorsNameTheFileAndTheByteOffset) {
+TEST_F(TableReaderTest, ErrorsNameTheFileAndTheByteOffset) {
   struct Case {
     const char* json;
     std::size_t offset;
@@ -106,7 +106,7 @@ TEST_F(TableStreamTest, ErrorsNameTheFileAndTheByteOffset) {
   }
 }
 
-TEST_F(TableStreamTest, RejectsAnObjectRootAndAMissingFile) {
+TEST_F(TableReaderTest, RejectsAnObjectRootAndAMissingFile) {
   const Status s = scan(R"({"token": "a"})", {"token"});
   EXPECT_NE(s.message().find("must be a JSON array"), std::string::npos) << s.message();
   const Status missing = stream_table(dir_.file("nope.json"), {"token"},
@@ -115,7 +115,7 @@ TEST_F(TableStreamTest, RejectsAnObjectRootAndAMissingFile) {
   EXPECT_NE(missing.message().find("nope.json: table not found"), std::string::npos);
 }
 
-TEST_F(TableStreamTest, CallbackErrorStopsTheScan) {
+TEST_F(TableReaderTest, CallbackErrorStopsTheScan) {
   const std::string path = dir_.file("t.json");
   write_text(path, R"([{"token": "a"}, {"token": "b"}, {"token": "c"}])");
   int seen = 0;
@@ -129,7 +129,7 @@ TEST_F(TableStreamTest, CallbackErrorStopsTheScan) {
   EXPECT_NE(s.message().find("t.json: stop at b"), std::string::npos);
 }
 
-TEST_F(TableStreamTest, FilterSkipsRejectedRecordsButChecksTheirStructure) {
+TEST_F(TableReaderTest, FilterSkipsRejectedRecordsButChecksTheirStructure) {
   const std::string path = dir_.file("f.json");
   write_text(
       path,
@@ -165,7 +165,7 @@ TEST_F(TableStreamTest, FilterSkipsRejectedRecordsButChecksTheirStructure) {
 // Rejected records longer than one 64-byte block go through the block skipper: brackets inside strings, strings
 // and arrays across block boundaries, escapes, and errors deep inside a record must behave exactly as in the
 // byte-level path.
-TEST_F(TableStreamTest, BlockSkipperAgreesWithTheByteLevelPathOnLongRecords) {
+TEST_F(TableReaderTest, BlockSkipperAgreesWithTheByteLevelPathOnLongRecords) {
   const std::string path = dir_.file("long.json");
   std::string json = "[";
   std::vector<std::string> expected;
@@ -215,5 +215,74 @@ TEST_F(TableStreamTest, BlockSkipperAgreesWithTheByteLevelPathOnLongRecords) {
   }
 }
 
+
+// The typed reads dataset and bag convert use: a field of another type, or a fractional number where an
+// integer is expected, is refused (the caller reports the record), never converted.
+TEST_F(TableReaderTest, TypedReadsRefuseOtherTypes) {
+  const std::string json =
+      R"([{"s": "x", "i": 1533151603547590, "f": 1.5, "e": 1e3, "b": true, "n": null, "l": [[1, 2], [3]],)"
+      R"( "ls": ["a"], "o": {"k": 1}, "big": 99999999999999999999}])";
+  ASSERT_TRUE(scan(json, {"s", "i", "f", "e", "b", "n", "l", "ls", "o", "big", "missing"}).is_ok());
+  ASSERT_EQ(records_.size(), 1u);
+  const auto& f = records_[0].fields;
+  std::string s;
+  std::int64_t i = 0;
+  bool b = false;
+  std::vector<double> v;
+  EXPECT_TRUE(f[0].get(&s));
+  EXPECT_EQ(s, "x");
+  EXPECT_FALSE(f[0].get(&i));
+  EXPECT_TRUE(f[1].get(&i));
+  EXPECT_EQ(i, 1533151603547590);
+  EXPECT_FALSE(f[1].get(&s));
+  EXPECT_FALSE(f[2].get(&i));  // 1.5
+  EXPECT_FALSE(f[3].get(&i));  // 1e3 is written as a float
+  EXPECT_TRUE(f[4].get(&b));
+  EXPECT_TRUE(b);
+  EXPECT_EQ(f[5].kind, FieldKind::kNull);
+  EXPECT_FALSE(f[5].get(&b));
+  EXPECT_TRUE(f[6].get_numbers(&v));
+  EXPECT_EQ(v, (std::vector<double>{1, 2, 3}));
+  EXPECT_FALSE(f[7].get_numbers(&v));  // strings
+  EXPECT_EQ(f[8].kind, FieldKind::kObject);
+  EXPECT_EQ(f[9].kind, FieldKind::kNumber);
+  EXPECT_FALSE(f[9].get(&i));  // beyond int64
+  EXPECT_EQ(f[10].kind, FieldKind::kMissing);
+  EXPECT_FALSE(f[10].present);
+}
+
+// A table cut short is kTruncated (the download or copy stopped), anything else malformed is kCorruptData;
+// both name the file and the byte offset.
+TEST_F(TableReaderTest, ATableCutShortIsTruncated) {
+  const std::string whole = R"([{"token": "a", "timestamp": 1533151603547590, "flag": true}])";
+  for (std::size_t cut : {std::size_t{1}, whole.find("\"a\"") + 1, whole.find("1533") + 4, whole.find("true") + 2,
+                          whole.size() - 1}) {
+    const Status s = scan(whole.substr(0, cut), {"token", "timestamp", "flag"});
+    EXPECT_EQ(s.code(), StatusCode::kTruncated) << cut << ": " << s.message();
+    EXPECT_NE(s.message().find("table.json: malformed JSON at offset"), std::string::npos) << s.message();
+  }
+  const Status bad = scan(R"([{"token": "a"} x])", {"token"});
+  EXPECT_EQ(bad.code(), StatusCode::kCorruptData) << bad.message();
+}
+
+TEST_F(TableReaderTest, BadEscapesAreReportedAtTheirByte) {
+  struct Case {
+    std::string json, message;
+    std::size_t offset;
+  };
+  const std::vector<Case> cases = {
+      {R"([{"token": "ab\q"}])", "invalid escape in a string", 15},
+      {R"([{"token": "ab\u12G4"}])", "invalid \\u escape in a string", 15},
+      {R"([{"token": "ab\ud83dx"}])", "invalid surrogate pair in a string", 19},
+  };
+  for (const auto& c : cases) {
+    const Status s = scan(c.json, {"token"});
+    EXPECT_EQ(s.code(), StatusCode::kCorruptData);
+    EXPECT_NE(s.message().find("malformed JSON at offset " + std::to_string(c.offset) + ": " + c.message),
+              std::string::npos)
+        << c.json << " -> " << s.message();
+  }
+}
+
 }  // namespace
-}  // namespace faultline::scoring
+}  // namespace faultline::nuscenes
