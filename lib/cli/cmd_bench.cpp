@@ -2,6 +2,8 @@
 // in bench/lib (faultline_bench); each command here fills its options struct and calls it.
 #include <CLI/CLI.hpp>
 #include <cstdio>
+#include <map>
+#include <string>
 
 #include "bench/bag.hpp"
 #include "bench/corrupt.hpp"
@@ -19,9 +21,20 @@
 namespace faultline::cli {
 namespace {
 
+// `--frames realistic|noisy`, shared by every bench command that makes its own frames (bench/frames.hpp).
+void add_frames_option(CLI::App& app, bench::FrameKind& kind, const std::string& noisy_what) {
+  static const std::map<std::string, bench::FrameKind> kKinds = {{"realistic", bench::FrameKind::kRealistic},
+                                                                 {"noisy", bench::FrameKind::kNoisy}};
+  app.add_option("--frames", kind,
+                 "realistic (default): rendered synthetic-dataset scenes with sensor noise, q90 JPEGs of 130-165 KB "
+                 "at 1600x900, as nuScenes ships; noisy: the worst case, " + noisy_what)
+      ->transform(CLI::CheckedTransformer(kKinds))
+      ->option_text("realistic|noisy");
+}
+
 int run_bag(int argc, char** argv) {
   CLI::App app{
-      "Bag throughput: 6 cameras x 12 Hz of ~400 KB JPEGs written as fast as possible "
+      "Bag throughput: 6 cameras x 12 Hz of 1600x900 JPEGs written as fast as possible "
       "(CPU per second of data), linear read speed (x real time), and stored vs raw size "
       "for JPEG and raw bgr8 frames with each compression. Medians over --repeats runs.",
       argv[0]};
@@ -33,6 +46,7 @@ int run_bag(int argc, char** argv) {
   app.add_option("--repeats", o.repeats, "runs per configuration (median reported)")
       ->check(CLI::Range(1, 50));
   app.add_option("--dir", o.dir, "scratch directory for the bags (deleted after each run)");
+  add_frames_option(app, o.frames, "the noisy road scene (noise 32, JPEG nearest 400 KB)");
   FAULTLINE_PARSE(app, argc, argv);
   return bench::run_bag(o);
 }
@@ -46,8 +60,9 @@ int run_corrupt(int argc, char** argv) {
                  "timed repetitions per case (median reported; one warm-up run first)");
   app.add_option(
       "--image", o.image_path,
-      "benchmark on this image (read with OpenCV, BGR) instead of the built-in road scene; "
-      "--width/--height are then ignored");
+      "benchmark on this image (read with OpenCV, BGR) instead of a built-in frame; "
+      "--width/--height/--frames are then ignored");
+  add_frames_option(app, o.frames, "the noisy road scene (noise 6, q95: ~560 KB)");
   app.add_option("--width", o.width, "frame width");
   app.add_option("--height", o.height, "frame height");
   app.add_option("--seed", o.seed, "seed for the random corruptions");
@@ -131,8 +146,9 @@ int run_injector(int argc, char** argv) {
   bench::InjectorOptions o;
   app.add_option("--seconds", o.seconds, "real-time duration of each run (s)");
   app.add_option("--images", o.images,
-                 "JPEG files to stream instead of the built-in road scene (camera k sends file k "
+                 "JPEG files to stream instead of built-in frames (camera k sends file k "
                  "mod count), e.g. one frame per camera from a dataset's samples/CAM_*/");
+  add_frames_option(app, o.frames, "the noisy road scene (noise 2, q95: ~370 KB)");
   app.add_option("--rate-hz", o.rate_hz,
                  "frames per second per camera; 0 = as fast as the injector takes them (closed loop, "
                  "4 frames per worker outstanding): throughput");
@@ -171,7 +187,8 @@ int run_ros2(int argc, char** argv) {
   app.add_option("--cameras", o.cameras, "1..6")->check(CLI::Range(1, 6))->capture_default_str();
   app.add_option("--width", o.width, "frame width")->check(CLI::Range(16, 8192))->capture_default_str();
   app.add_option("--height", o.height, "frame height")->check(CLI::Range(16, 8192))->capture_default_str();
-  app.add_option("--noise", o.noise, "frame sensor noise: 2 ~380 KB JPEGs, 6 the heavy worst case (~550 KB)")
+  add_frames_option(app, o.frames, "the noisy road scene at --noise, q95");
+  app.add_option("--noise", o.noise, "--frames noisy only: 2 ~380 KB JPEGs, 6 the heavy worst case (~550 KB)")
       ->check(CLI::Range(0, 64))->capture_default_str();
   app.add_option("--corruption", o.corruption, "the corrupted configuration, e.g. fog/mid")->capture_default_str();
   app.add_option("--repeats", o.repeats, "runs per configuration")->check(CLI::Range(1, 50))->capture_default_str();
@@ -199,8 +216,8 @@ int run_record(int argc, char** argv) {
       ->capture_default_str();
   app.add_flag("!--no-foxglove-view", o.foxglove_view, "replay channels only");
   app.add_option("--images", o.images, "folder of JPEGs to send (first N files, one per camera)");
-  app.add_flag("--noise", o.noise,
-               "noisy built-in road scene JPEGs instead of a rendered synthetic scene");
+  add_frames_option(app, o.frames, "the noisy road scene (noise 13, q90: ~470 KB)");
+  app.add_flag("--noise", o.noise, "the same as --frames noisy (kept for older scripts)");
   app.add_option("--compression", o.compression, "recorder compression: none | zstd | lz4")
       ->capture_default_str();
   FAULTLINE_PARSE(app, argc, argv);
@@ -256,6 +273,7 @@ int run_transport(int argc, char** argv) {
   app.add_option("--mode", o.mode, "injector output: bgr8 (decode) or jpeg (passthrough)")
       ->check(CLI::IsMember({"bgr8", "jpeg"}));
   app.add_flag("--json", o.json, "print one JSON object");
+  add_frames_option(app, o.frames, "the noisy road scene (noise 11, q90: ~440 KB)");
   FAULTLINE_PARSE(app, argc, argv);
   return bench::run_transport(o);
 }

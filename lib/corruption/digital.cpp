@@ -4,6 +4,9 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <vector>
+
+#include "common/simd.hpp"
 
 namespace faultline::corruption {
 namespace {
@@ -87,15 +90,14 @@ constexpr double kSatA[] = {0.3, 0.1, 2, 5, 20};
 constexpr double kSatB[] = {0, 0, 0, 0.1, 0.2};
 }  // namespace
 
-cv::Mat saturate_fast(const cv::Mat& bgr, int severity) {
-  const float a = static_cast<float>(kSatA[sev_index(severity)]), b = static_cast<float>(kSatB[sev_index(severity)]);
-  const cv::Mat in = continuous(bgr);
-  cv::Mat out(in.size(), CV_8UC3);
-  const std::size_t n = in.total();
-  const std::uint8_t* src = in.data;
-  std::uint8_t* dst = out.data;
-  for (std::size_t i = 0; i < n; ++i) {
-    const float c0 = src[3 * i], c1 = src[3 * i + 1], c2 = src[3 * i + 2];
+namespace {
+
+// One row of saturate_fast on planar float copies of its channels (p0, p1, p2; pixels from..n-1, overwritten with
+// the results). The interleaved byte loop does not vectorise; the planar one runs 8 pixels per AVX2 step below.
+// Both do the same operations in the same order as one pixel at a time, so they give the same bytes.
+void saturate_planar(float* p0, float* p1, float* p2, std::size_t from, std::size_t n, float a, float b) {
+  for (std::size_t i = from; i < n; ++i) {
+    const float c0 = p0[i], c1 = p1[i], c2 = p2[i];
     const float v = std::max(std::max(c0, c1), c2), lo = std::min(std::min(c0, c1), c2);
     const float s = v > 0.0f ? (v - lo) / v : 0.0f;
     const float s2 = std::min(std::max(s * a + b, 0.0f), 1.0f);
@@ -103,10 +105,66 @@ cv::Mat saturate_fast(const cv::Mat& bgr, int severity) {
     // hue 0 (channel 0) in skimage, so an offset b tints it: (v, v (1 - s2), v (1 - s2)).
     const float k = v > lo ? s2 * v / (v - lo) : 0.0f;
     const float grey_tail = v > lo ? 0.0f : v * s2;
-    const float o0 = v - (v - c0) * k, o1 = v - (v - c1) * k - grey_tail, o2 = v - (v - c2) * k - grey_tail;
-    dst[3 * i] = static_cast<std::uint8_t>(std::min(std::max(o0, 0.0f), 255.0f));
-    dst[3 * i + 1] = static_cast<std::uint8_t>(std::min(std::max(o1, 0.0f), 255.0f));
-    dst[3 * i + 2] = static_cast<std::uint8_t>(std::min(std::max(o2, 0.0f), 255.0f));
+    p0[i] = std::min(std::max(v - (v - c0) * k, 0.0f), 255.0f);
+    p1[i] = std::min(std::max(v - (v - c1) * k - grey_tail, 0.0f), 255.0f);
+    p2[i] = std::min(std::max(v - (v - c2) * k - grey_tail, 0.0f), 255.0f);
+  }
+}
+
+#if FAULTLINE_X86_SIMD
+// Returns how many pixels it did (whole steps of 8). The divisions run on every lane, so their divisors are kept
+// >= 1: the values are integers, so max(x, 1) = x wherever a quotient is used, and v = 0 means lo = 0, s = 0.
+// max/min of non-NaN values equal std::max/min's; no FMA (products rounded before the adds, as above).
+FAULTLINE_TARGET("avx2") std::size_t saturate_planar_avx2(float* p0, float* p1, float* p2, std::size_t n, float a,
+                                                          float b) {
+  const __m256 va = _mm256_set1_ps(a), vb = _mm256_set1_ps(b), zero = _mm256_setzero_ps();
+  const __m256 one = _mm256_set1_ps(1.0f), top = _mm256_set1_ps(255.0f);
+  std::size_t i = 0;
+  for (; i + 8 <= n; i += 8) {
+    const __m256 c0 = _mm256_loadu_ps(p0 + i), c1 = _mm256_loadu_ps(p1 + i), c2 = _mm256_loadu_ps(p2 + i);
+    const __m256 v = _mm256_max_ps(_mm256_max_ps(c0, c1), c2), lo = _mm256_min_ps(_mm256_min_ps(c0, c1), c2);
+    const __m256 span = _mm256_sub_ps(v, lo);
+    const __m256 s = _mm256_div_ps(span, _mm256_max_ps(v, one));
+    const __m256 s2 = _mm256_min_ps(_mm256_max_ps(_mm256_add_ps(_mm256_mul_ps(s, va), vb), zero), one);
+    const __m256 coloured = _mm256_cmp_ps(v, lo, _CMP_GT_OQ);
+    const __m256 k = _mm256_and_ps(coloured, _mm256_div_ps(_mm256_mul_ps(s2, v), _mm256_max_ps(span, one)));
+    const __m256 grey_tail = _mm256_andnot_ps(coloured, _mm256_mul_ps(v, s2));
+    const auto channel = [&](__m256 c, __m256 tail) FAULTLINE_TARGET_INLINE("avx2") {
+      const __m256 o = _mm256_sub_ps(_mm256_sub_ps(v, _mm256_mul_ps(_mm256_sub_ps(v, c), k)), tail);
+      return _mm256_min_ps(_mm256_max_ps(o, zero), top);
+    };
+    _mm256_storeu_ps(p0 + i, channel(c0, zero));
+    _mm256_storeu_ps(p1 + i, channel(c1, grey_tail));
+    _mm256_storeu_ps(p2 + i, channel(c2, grey_tail));
+  }
+  return i;
+}
+#endif
+
+}  // namespace
+
+cv::Mat saturate_fast(const cv::Mat& bgr, int severity) {
+  const float a = static_cast<float>(kSatA[sev_index(severity)]), b = static_cast<float>(kSatB[sev_index(severity)]);
+  cv::Mat out(bgr.size(), CV_8UC3);
+  const std::size_t cols = static_cast<std::size_t>(bgr.cols);
+  std::vector<float> planes(3 * cols);
+  float *p0 = planes.data(), *p1 = p0 + cols, *p2 = p1 + cols;
+  for (int y = 0; y < bgr.rows; ++y) {
+    const std::uint8_t* src = bgr.ptr<std::uint8_t>(y);
+    std::uint8_t* dst = out.ptr<std::uint8_t>(y);
+    for (std::size_t i = 0; i < cols; ++i) {
+      p0[i] = src[3 * i], p1[i] = src[3 * i + 1], p2[i] = src[3 * i + 2];
+    }
+    std::size_t done = 0;
+#if FAULTLINE_X86_SIMD
+    if (common::cpu_has_avx2()) done = saturate_planar_avx2(p0, p1, p2, cols, a, b);
+#endif
+    saturate_planar(p0, p1, p2, done, cols, a, b);
+    for (std::size_t i = 0; i < cols; ++i) {  // the values are in 0..255: truncation as before
+      dst[3 * i] = static_cast<std::uint8_t>(p0[i]);
+      dst[3 * i + 1] = static_cast<std::uint8_t>(p1[i]);
+      dst[3 * i + 2] = static_cast<std::uint8_t>(p2[i]);
+    }
   }
   return out;
 }

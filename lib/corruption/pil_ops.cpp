@@ -87,16 +87,21 @@ cv::Mat pil_box_resize(const cv::Mat& in, int out_w, int out_h) {
       for (int ch = 0; ch < 3; ++ch) dst[xx * 3 + ch] = clip8(ss[ch]);
     }
   }
+  // Vertical pass, tap by tap over whole rows (a loop that vectorises), with the same integer sums.
   cv::Mat out(out_h, out_w, CV_8UC3);
+  const std::size_t row_len = static_cast<std::size_t>(out_w) * 3;
+  std::vector<int> acc(row_len);
   for (int yy = 0; yy < out_h; ++yy) {
     const int* k = &v.k[static_cast<std::size_t>(yy * v.ksize)];
     const int ymin = v.first[static_cast<std::size_t>(yy)] - y_first;
-    std::uint8_t* dst = out.ptr<std::uint8_t>(yy);
-    for (int e = 0; e < out_w * 3; ++e) {
-      int ss = 1 << (kPrecisionBits - 1);
-      for (int y = 0; y < v.count[static_cast<std::size_t>(yy)]; ++y) ss += tmp.ptr<std::uint8_t>(ymin + y)[e] * k[y];
-      dst[e] = clip8(ss);
+    std::fill(acc.begin(), acc.end(), 1 << (kPrecisionBits - 1));
+    for (int y = 0; y < v.count[static_cast<std::size_t>(yy)]; ++y) {
+      const std::uint8_t* src = tmp.ptr<std::uint8_t>(ymin + y);
+      const int ky = k[y];
+      for (std::size_t e = 0; e < row_len; ++e) acc[e] += src[e] * ky;
     }
+    std::uint8_t* dst = out.ptr<std::uint8_t>(yy);
+    for (std::size_t e = 0; e < row_len; ++e) dst[e] = clip8(acc[e]);
   }
   return out;
 }
@@ -118,10 +123,17 @@ std::vector<int> nearest_map(int in_size, int out_size) {
 cv::Mat pil_nearest_resize(const cv::Mat& in, int out_w, int out_h) {
   const std::vector<int> xs = nearest_map(in.cols, out_w), ys = nearest_map(in.rows, out_h);
   cv::Mat out(out_h, out_w, CV_8UC3, cv::Scalar::all(0));
+  const std::size_t row_bytes = static_cast<std::size_t>(out_w) * 3;
   for (int y = 0; y < out_h; ++y) {
-    if (ys[static_cast<std::size_t>(y)] < 0) continue;
-    const auto* src = in.ptr<cv::Vec3b>(ys[static_cast<std::size_t>(y)]);
+    const int sy = ys[static_cast<std::size_t>(y)];
+    if (sy < 0) continue;
     auto* dst = out.ptr<cv::Vec3b>(y);
+    // An upscale maps runs of output rows to one source row: build the row once, copy it for the rest of the run.
+    if (y > 0 && ys[static_cast<std::size_t>(y - 1)] == sy) {
+      std::copy_n(out.ptr<std::uint8_t>(y - 1), row_bytes, out.ptr<std::uint8_t>(y));
+      continue;
+    }
+    const auto* src = in.ptr<cv::Vec3b>(sy);
     for (int x = 0; x < out_w; ++x) {
       if (xs[static_cast<std::size_t>(x)] >= 0) dst[x] = src[xs[static_cast<std::size_t>(x)]];
     }

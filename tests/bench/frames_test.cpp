@@ -1,11 +1,13 @@
-// The benchmarks' synthetic frame: deterministic per spec, varied by seed, noise bounded by
-// FrameSpec::noise, and the default spec still the frame the published `bench corrupt` figures were
-// measured on.
+// The benchmarks' frames: the noisy road scene deterministic per spec, varied by seed, noise bounded by
+// FrameSpec::noise, and the default spec still the frame the published worst-case `bench corrupt` figures were
+// measured on; the realistic frames (every bench command's default) weighing what nuScenes' JPEGs weigh.
 #include "bench/frames.hpp"
 
 #include <gtest/gtest.h>
 
 #include <cstdint>
+
+#include "codec/jpeg.hpp"
 
 namespace faultline::bench {
 namespace {
@@ -59,6 +61,65 @@ TEST(SyntheticFrameTest, DefaultSpecIsTheCorruptBenchmarksFrame) {
   ASSERT_EQ(f.cols, 1600);
   ASSERT_EQ(f.rows, 900);
   EXPECT_EQ(fingerprint(f), 0xbcda08f18d537f74ull);
+}
+
+// Every speed figure is measured on these: each of the six camera mounts at 1600x900 gives a JPEG in nuScenes'
+// 130-165 KB (the noisy scene is 2.5-4x heavier, the flat render half as heavy).
+TEST(RealisticFrameTest, FullSizeJpegsOfEveryMountWeighWhatNuScenesImagesWeigh) {
+  for (std::uint64_t seed = 0; seed < 12; ++seed) {
+    BenchFrame f;
+    f.seed = seed;
+    const auto jpeg = bench_jpeg(f);
+    ASSERT_TRUE(jpeg.is_ok()) << jpeg.status().to_string();
+    const double kb = static_cast<double>(jpeg->size()) / 1024.0;
+    EXPECT_GE(kb, 130.0) << "seed " << seed;
+    EXPECT_LE(kb, 165.0) << "seed " << seed;
+    const auto decoded = codec::decode_jpeg(jpeg->data(), jpeg->size());
+    ASSERT_TRUE(decoded.is_ok());
+    EXPECT_EQ(decoded->cols, 1600);
+    EXPECT_EQ(decoded->rows, 900);
+  }
+}
+
+TEST(RealisticFrameTest, SameSeedSameBytesOtherSeedOtherFrame) {
+  const cv::Mat a = realistic_frame(320, 180, 3);
+  ASSERT_EQ(a.cols, 320);
+  ASSERT_EQ(a.rows, 180);
+  ASSERT_EQ(a.type(), CV_8UC3);
+  EXPECT_EQ(cv::norm(a, realistic_frame(320, 180, 3), cv::NORM_INF), 0);
+  EXPECT_GT(cv::norm(a, realistic_frame(320, 180, 4), cv::NORM_INF), 0);
+}
+
+TEST(BenchFrameTest, NoisyKindIsTheRoadSceneAtItsNoiseAndQuality) {
+  BenchFrame f;
+  f.kind = FrameKind::kNoisy;
+  f.width = 320;
+  f.height = 180;
+  f.seed = 5;
+  f.noisy_noise = 2;
+  f.noisy_quality = 80;
+  EXPECT_EQ(cv::norm(bench_pixels(f), synthetic_frame(Spec(5, 2)), cv::NORM_INF), 0);
+  const auto jpeg = bench_jpeg(f);
+  ASSERT_TRUE(jpeg.is_ok());
+  const auto expected = codec::encode_jpeg(synthetic_frame(Spec(5, 2)), 80);
+  ASSERT_TRUE(expected.is_ok());
+  EXPECT_EQ(*jpeg, *expected);
+}
+
+TEST(BenchFrameTest, RejectsTinyFramesAndBadQuality) {
+  BenchFrame f;
+  f.width = 8;
+  EXPECT_EQ(bench_jpeg(f).status().code(), StatusCode::kInvalidArgument);
+  f.width = 64;
+  f.kind = FrameKind::kNoisy;
+  f.noisy_quality = 101;
+  EXPECT_EQ(bench_jpeg(f).status().code(), StatusCode::kInvalidArgument);
+}
+
+TEST(BenchFrameTest, KindNamesRoundTrip) {
+  for (FrameKind k : {FrameKind::kRealistic, FrameKind::kNoisy}) EXPECT_EQ(frame_kind_from_string(to_string(k)), k);
+  EXPECT_FALSE(frame_kind_from_string("Realistic").has_value());
+  EXPECT_FALSE(frame_kind_from_string("").has_value());
 }
 
 }  // namespace

@@ -1,5 +1,5 @@
-// `faultline bench injector` and `faultline bench export` run for real through the tool: their JSON
-// is complete and consistent, and a missing input is an error that names it.
+// `faultline bench injector`, `bench corrupt` and `bench export` run for real through the tool: their JSON
+// is complete and consistent, and a missing input or an unknown frame kind is an error that names it.
 #include <gtest/gtest.h>
 #include <rapidjson/document.h>
 #include <unistd.h>
@@ -64,6 +64,38 @@ TEST(BenchRunTest, InjectorStreamsGivenImagesAndNamesAMissingOne) {
   EXPECT_EQ(
       run_faultline("bench injector --seconds 1 --images " + missing, root / "inj_missing.log"), 2);
   EXPECT_NE(read_text(root / "inj_missing.log").find(missing), std::string::npos);
+  fs::remove_all(root);
+}
+
+// `bench corrupt` measures the realistic frame by default (a q90 JPEG in nuScenes' 130-165 KB) and the noisy road
+// scene on request (q95, several times heavier); its JSON says which, and an unknown --frames value is refused.
+TEST(BenchRunTest, CorruptRunsOnRealisticFramesByDefaultAndNoisyOnRequest) {
+  const fs::path root = scratch_dir("corrupt");
+  for (const std::string kind : {"", "noisy"}) {
+    const fs::path log_path = root / ("corrupt_" + kind + ".log");
+    const int rc = run_faultline("bench corrupt --json --reps 1 --only brightness" +
+                                     (kind.empty() ? std::string() : " --frames " + kind),
+                                 log_path);
+    const std::string log = read_text(log_path);
+    ASSERT_EQ(rc, 0) << log;
+    rapidjson::Document d;
+    d.Parse(log.c_str() + log.find('['));
+    ASSERT_FALSE(d.HasParseError()) << log;
+    ASSERT_EQ(d.Size(), 7u);  // brightness x 3 levels x 2 modes, then the decode
+    const auto& decode = d[6];
+    EXPECT_STREQ(decode["type"].GetString(), "jpeg_decode");
+    EXPECT_STREQ(decode["frames"].GetString(), kind.empty() ? "realistic" : "noisy");
+    const double kb = decode["jpeg_bytes"].GetDouble() / 1024.0;
+    if (kind.empty()) {
+      EXPECT_GE(kb, 130.0);
+      EXPECT_LE(kb, 165.0);
+    } else {
+      EXPECT_GT(kb, 400.0);
+    }
+    EXPECT_GT(d[0]["cpu_x_jpeg_decode"].GetDouble(), 0.0);
+  }
+  EXPECT_EQ(run_faultline("bench corrupt --frames grainy", root / "corrupt_bad.log"), 2);
+  EXPECT_NE(read_text(root / "corrupt_bad.log").find("grainy"), std::string::npos);
   fs::remove_all(root);
 }
 

@@ -112,14 +112,23 @@ RunFigures run_once(const std::string& path, bag::Compression compression, int f
 int run_bag(const BagOptions& o) {
   const int seconds = o.seconds, repeats = o.repeats, raw_seconds = o.raw_seconds;
   const std::string dir = o.dir.empty() ? std::filesystem::temp_directory_path().string() : o.dir;
-  std::vector<cv::Mat> frames;
   std::vector<std::string> jpegs, raws;
   for (int s = 0; s < 12; ++s) {
-    FrameSpec spec;
-    spec.seed = static_cast<std::uint64_t>(s);
-    spec.noise = 32;  // heavy: the decoded frames stay noisy, so lz4 gains nothing on them and zstd ~13%
-    frames.push_back(synthetic_frame(spec));
-    jpegs.push_back(jpeg_near(frames.back(), 400 * 1024));
+    if (o.frames == FrameKind::kRealistic) {
+      BenchFrame spec;
+      spec.seed = static_cast<std::uint64_t>(s);
+      auto bytes = bench_jpeg(spec);
+      if (!bytes) {
+        std::fprintf(stderr, "faultline bench bag: %s\n", bytes.status().to_string().c_str());
+        return 1;
+      }
+      jpegs.emplace_back(bytes->begin(), bytes->end());
+    } else {
+      FrameSpec spec;
+      spec.seed = static_cast<std::uint64_t>(s);
+      spec.noise = 32;  // heavy: the decoded frames stay noisy, so lz4 gains nothing on them and zstd ~13%
+      jpegs.push_back(jpeg_near(synthetic_frame(spec), 400 * 1024));
+    }
     // Raw frames are decoded JPEGs, as the injector produces them from nuScenes images.
     const cv::Mat decoded = cv::imdecode(cv::Mat(1, static_cast<int>(jpegs.back().size()), CV_8UC1,
                                                  jpegs.back().data()), cv::IMREAD_COLOR);
@@ -127,8 +136,8 @@ int run_bag(const BagOptions& o) {
   }
   double jpeg_mean = 0;
   for (const auto& j : jpegs) jpeg_mean += static_cast<double>(j.size()) / jpegs.size();
-  std::printf("payloads: 12 synthetic 1600x900 frames; JPEG mean %.0f KB; raw bgr8 (decoded JPEG) %zu KB\n",
-              jpeg_mean / 1024, raws[0].size() / 1024);
+  std::printf("payloads: 12 %s 1600x900 frames; JPEG mean %.0f KB; raw bgr8 (decoded JPEG) %zu KB\n",
+              to_string(o.frames), jpeg_mean / 1024, raws[0].size() / 1024);
   std::printf("%-6s %-5s %8s %10s %12s %11s %12s %10s %9s\n", "data", "comp", "msgs", "cpu ms/s",
               "core %", "write MB/s", "read x real", "stored/raw", "raw chunks");
   for (const bool raw : {false, true}) {

@@ -251,10 +251,11 @@ int run_injector(const InjectorOptions& o) {
   std::vector<Frame> frames;
   if (images.empty()) {
     for (int cam = 0; cam < policy::kNumCameras; ++cam) {
-      FrameSpec spec;
-      spec.seed = static_cast<std::uint64_t>(cam);
-      spec.noise = 2;  // q95 JPEGs of ~360 KB, as nuScenes' CAM_* frames
-      auto bytes = codec::encode_jpeg(synthetic_frame(spec), 95);
+      BenchFrame spec;
+      spec.kind = o.frames;
+      spec.seed = static_cast<std::uint64_t>(cam);  // realistic: camera k's mount; noisy: its own buildings
+      spec.noisy_noise = 2;                         // noisy: q95 JPEGs of ~370 KB
+      auto bytes = bench_jpeg(spec);
       if (!bytes) {
         std::fprintf(stderr, "faultline bench injector: %s\n", bytes.status().message().c_str());
         return 1;
@@ -294,7 +295,10 @@ int run_injector(const InjectorOptions& o) {
     }
     std::fprintf(json ? stderr : stdout, "frames: %zu JPEG(s) %s, %dx%d, mean %.0f KB, TurboJPEG decode median %.2f ms "
                                          "(thread CPU)\n",
-                 frames.size(), images.empty() ? "(built-in road scene)" : "(--images)", frames[0].width,
+                 frames.size(),
+                 !images.empty() ? "(--images)"
+                 : o.frames == FrameKind::kRealistic ? "(built-in realistic)" : "(built-in noisy)",
+                 frames[0].width,
                  frames[0].height, kb, pct(ms, 0.5));
   }
   std::fprintf(json ? stderr : stdout, "load: %s (the machine's 1/5/15-min load average when the runs start)\n",

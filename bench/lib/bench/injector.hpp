@@ -6,6 +6,8 @@
 #include <string>
 #include <vector>
 
+#include "bench/frames.hpp"
+
 namespace faultline::bench {
 
 struct InjectorOptions {
@@ -18,8 +20,10 @@ struct InjectorOptions {
   // Corruptions, one run each; "none" = decode only.
   std::vector<std::string> types = {"none", "brightness",  "dark",       "fog",
                                     "snow", "motion_blur", "color_quant"};
-  // JPEG files to stream (camera k sends file k mod count); empty = the built-in road scene.
+  // JPEG files to stream (camera k sends file k mod count); empty = built-in frames of this kind (noisy: the road
+  // scene at noise 2, q95, ~370 KB, the frames of the earlier figures).
   std::vector<std::string> images;
+  FrameKind frames = FrameKind::kRealistic;
 };
 
 // Prints one line per run (or the JSON array) on stdout. Returns the exit code: 0; 2 when an

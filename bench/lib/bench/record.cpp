@@ -1,8 +1,8 @@
 // `faultline bench record`: recorder CPU for N cameras x R Hz of JPEG frames over ipc (the recorder
 // thread, and the whole process for honesty: publisher and zmq I/O threads included), player speed
 // (rate 0 into a draining subscriber) and bag size versus the raw message bytes. Frames: JPEGs from
-// --images DIR (e.g. nuScenes samples/CAM_FRONT), else a synthetic nuScenes-like scene rendered by
-// the dataset generator, else (--noise) the benchmarks' noisy road scene (frames.hpp).
+// --images DIR (e.g. nuScenes samples/CAM_FRONT), else the benchmarks' built-in frames (frames.hpp): realistic, or
+// (--frames noisy) the noisy road scene at noise 13, quality 90 (~470 KB, the frames of the earlier figures).
 #include "bench/record.hpp"
 
 #include <spdlog/sinks/null_sink.h>
@@ -25,7 +25,6 @@
 #include "bench/frames.hpp"
 #include "camera_frame.pb.h"
 #include "dataset/nuscenes.hpp"
-#include "dataset/synth.hpp"
 #include "runtime/bag_player.hpp"
 #include "runtime/bag_recorder.hpp"
 #include "stats/percentile.hpp"
@@ -41,38 +40,6 @@ const char* const kCameras[] = {"CAM_FRONT", "CAM_FRONT_LEFT", "CAM_FRONT_RIGHT"
 
 // The upper median, as this benchmark has always reported it.
 double median(std::vector<double> v) { return stats::median(std::move(v), stats::Interpolation::NearestHalfUp); }
-
-// The built-in road scene with heavy noise, JPEG quality 90: ~470 KB, like the busiest nuScenes frames.
-std::vector<std::uint8_t> noisy_jpeg(int seed) {
-  FrameSpec spec;
-  spec.seed = static_cast<std::uint64_t>(seed);
-  spec.noise = 13;
-  std::vector<std::uint8_t> out;
-  cv::imencode(".jpg", synthetic_frame(spec), out, {cv::IMWRITE_JPEG_QUALITY, 90});
-  return out;
-}
-
-// The first sample's six camera JPEGs of a freshly generated 1600x900 synthetic scene.
-std::vector<std::vector<std::uint8_t>> synth_jpegs(const std::string& dir, int cameras) {
-  dataset::SynthOptions o;
-  o.out_dir = dir + "/bench_record_synth";
-  o.scenes = 1;
-  o.seconds = 0.5;
-  auto r = dataset::write_synthetic_dataset(o);
-  std::vector<std::vector<std::uint8_t>> out;
-  if (!r) return out;
-  auto reader = dataset::NuScenesReader::open(o.out_dir, o.version);
-  if (reader) {
-    if (auto frames = reader->load_camera_frames({})) {
-      for (const auto& f : *frames) {
-        if (static_cast<int>(out.size()) == cameras) break;
-        if (auto bytes = dataset::read_file(reader->path_of(f))) out.push_back(std::move(bytes).value());
-      }
-    }
-  }
-  std::filesystem::remove_all(o.out_dir);
-  return out;
-}
 
 std::vector<std::vector<std::uint8_t>> dir_jpegs(const std::string& dir, int cameras) {
   std::vector<std::string> files;
@@ -200,21 +167,33 @@ RunFigures run_once(const std::vector<std::vector<std::uint8_t>>& jpegs, double 
 int run_record(const RecordOptions& o) {
   const double seconds = o.seconds, rate_hz = o.rate_hz;
   const int cameras = o.cameras, reps = o.reps;
-  const bool view = o.foxglove_view, noise = o.noise;
+  const bool view = o.foxglove_view;
   const std::string &images = o.images, &compression = o.compression;
   const std::string dir = std::filesystem::temp_directory_path().string();
   std::vector<std::vector<std::uint8_t>> jpegs;
-  std::string source = "rendered synthetic scene";
+  std::string source = images;
   if (!images.empty()) {
     jpegs = dir_jpegs(images, cameras);
-    source = images;
-  } else if (!noise) {
-    jpegs = synth_jpegs(dir, cameras);
-  }
-  if (jpegs.empty() || noise) {
-    jpegs.clear();
-    for (int c = 0; c < cameras; ++c) jpegs.push_back(noisy_jpeg(c));
-    source = "noisy road scene";
+    if (jpegs.empty()) {
+      std::fprintf(stderr, "faultline bench record: --images %s: no readable .jpg/.jpeg file\n", images.c_str());
+      return 2;
+    }
+  } else {
+    const FrameKind kind = o.noise ? FrameKind::kNoisy : o.frames;
+    source = std::string(to_string(kind)) + " built-in frames";
+    for (int c = 0; c < cameras; ++c) {
+      BenchFrame spec;
+      spec.kind = kind;
+      spec.seed = static_cast<std::uint64_t>(c);
+      spec.noisy_noise = 13;
+      spec.noisy_quality = 90;
+      auto bytes = bench_jpeg(spec);
+      if (!bytes) {
+        std::fprintf(stderr, "faultline bench record: %s\n", bytes.status().to_string().c_str());
+        return 1;
+      }
+      jpegs.push_back(std::move(bytes).value());
+    }
   }
   while (static_cast<int>(jpegs.size()) < cameras) jpegs.push_back(jpegs.front());
   std::size_t jpeg_bytes = 0;

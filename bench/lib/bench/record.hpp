@@ -5,6 +5,8 @@
 
 #include <string>
 
+#include "bench/frames.hpp"
+
 namespace faultline::bench {
 
 struct RecordOptions {
@@ -13,12 +15,14 @@ struct RecordOptions {
   int cameras = 6;            // 1..6
   int reps = 3;               // repetitions; medians are printed
   bool foxglove_view = true;  // also the recorder's Foxglove view channels
-  std::string images;         // folder of JPEGs to send (first N, one per camera); "" = generated
-  bool noise = false;         // the noisy built-in road scene, not a rendered dataset scene
+  std::string images;         // folder of JPEGs to send (first N, one per camera); "" = built-in frames
+  FrameKind frames = FrameKind::kRealistic;  // built-in frames (bench/frames.hpp)
+  bool noise = false;         // the older spelling of frames = kNoisy
   std::string compression = "lz4";  // recorder compression: none | zstd | lz4 (its default)
 };
 
-// Prints one line per rep and the medians on stdout. Returns the exit code (0).
+// Prints one line per rep and the medians on stdout. Returns the exit code: 0; 1 when a frame cannot be encoded;
+// 2 when --images holds no readable JPEG.
 int run_record(const RecordOptions& o);
 
 }  // namespace faultline::bench

@@ -322,12 +322,14 @@ int run_ros2(const Ros2Options& o) {
   std::vector<std::vector<std::uint8_t>> jpegs;
   double kb = 0;
   for (int c = 0; c < o.cameras; ++c) {
-    FrameSpec spec;
+    BenchFrame spec;
+    spec.kind = o.frames;
     spec.width = o.width;
     spec.height = o.height;
-    spec.seed = 7 + static_cast<std::uint64_t>(c);
-    spec.noise = o.noise;
-    auto bytes = codec::encode_jpeg(synthetic_frame(spec), 95);
+    // Realistic: camera c's mount; noisy: the seeds of the earlier figures.
+    spec.seed = o.frames == FrameKind::kRealistic ? static_cast<std::uint64_t>(c) : 7 + static_cast<std::uint64_t>(c);
+    spec.noisy_noise = o.noise;
+    auto bytes = bench_jpeg(spec);
     if (!bytes) {
       std::fprintf(stderr, "faultline bench ros2: %s\n", bytes.status().message().c_str());
       return 1;
@@ -336,9 +338,9 @@ int run_ros2(const Ros2Options& o) {
     jpegs.push_back(std::move(bytes).value());
   }
   std::fprintf(o.json ? stderr : stdout,
-               "ros2 proxy: %d cameras x %.1f Hz of %dx%d JPEG (mean %.0f KB), %.0f s per run, DDS domain %d, "
+               "ros2 proxy: %d cameras x %.1f Hz of %dx%d %s JPEG (mean %.0f KB), %.0f s per run, DDS domain %d, "
                "CYCLONEDDS_URI %s\n",
-               o.cameras, o.rate_hz, o.width, o.height, kb, o.seconds, domain,
+               o.cameras, o.rate_hz, o.width, o.height, to_string(o.frames), kb, o.seconds, domain,
                std::getenv("CYCLONEDDS_URI")[0] == '<' ? "(loopback XML)" : std::getenv("CYCLONEDDS_URI"));
   std::vector<Row> rows;
   const std::pair<std::string, std::string> configs[] = {{"passthrough", ""}, {o.corruption, o.corruption}};

@@ -8,6 +8,8 @@
 
 #include <string>
 
+#include "bench/frames.hpp"
+
 namespace faultline::bench {
 
 struct Ros2Options {
@@ -16,8 +18,8 @@ struct Ros2Options {
   int cameras = 6;                         // 1..6
   int width = 1600;                        // frame size (pixels)
   int height = 900;
-  int noise = 2;                           // the frames' sensor noise (bench/frames.hpp): 2 gives ~380 KB at q95,
-                                           // 6 the heavy worst case (~550 KB)
+  FrameKind frames = FrameKind::kRealistic;  // bench/frames.hpp: realistic (q90, 130-165 KB) or noisy
+  int noise = 2;                           // noisy frames' noise: 2 gives ~380 KB at q95, 6 the worst case (~550 KB)
   std::string corruption = "brightness/mid";  // the corrupted configuration (injector `corruption` shorthand)
   int repeats = 3;                         // runs per configuration (medians and ranges reported)
   int domain_id = -1;                      // -1: 100 + pid % 100 (a domain no real ROS 2 graph uses)

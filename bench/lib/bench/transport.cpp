@@ -30,14 +30,17 @@ namespace {
 const char* const kCameras[] = {"CAM_FRONT", "CAM_FRONT_RIGHT", "CAM_FRONT_LEFT",
                                 "CAM_BACK",  "CAM_BACK_LEFT",   "CAM_BACK_RIGHT"};
 
-// The road scene per camera, JPEG-encoded once (quality 90: ~440 KB, within nuScenes' ~300-600 KB).
-runtime::ImageBytes make_jpeg(int index) {
-  FrameSpec spec;
+// Camera `index`'s frame, JPEG-encoded once: realistic (q90, 130-165 KB) or the noisy road scene at noise 11,
+// quality 90 (~440 KB, the frames of the earlier figures). Empty bytes if it cannot be encoded.
+runtime::ImageBytes make_jpeg(FrameKind kind, int index) {
+  BenchFrame spec;
+  spec.kind = kind;
   spec.seed = static_cast<std::uint64_t>(index);
-  spec.noise = 11;
-  std::vector<std::uint8_t> bytes;
-  cv::imencode(".jpg", synthetic_frame(spec), bytes, {cv::IMWRITE_JPEG_QUALITY, 90});
-  return std::make_shared<const std::vector<std::uint8_t>>(std::move(bytes));
+  spec.noisy_noise = 11;
+  spec.noisy_quality = 90;
+  auto bytes = bench_jpeg(spec);
+  return std::make_shared<const std::vector<std::uint8_t>>(bytes ? std::move(bytes).value()
+                                                                 : std::vector<std::uint8_t>{});
 }
 
 struct Tap {  // the downstream subscriber: hop-2 and end-to-end latency, seq gaps
@@ -103,7 +106,13 @@ int run_transport(const TransportOptions& o) {
   std::vector<dataset::CameraFrameRecord> frames;
   std::size_t jpeg_bytes = 0;
   for (int c = 0; c < 6; ++c) {
-    images["cam" + std::to_string(c)] = make_jpeg(c);
+    images["cam" + std::to_string(c)] = make_jpeg(o.frames, c);
+    if (images["cam" + std::to_string(c)]->empty()) {
+      std::fprintf(stderr, "faultline bench transport: camera %d's %s frame cannot be encoded\n", c,
+                   to_string(o.frames));
+      std::system(("rm -rf " + dir).c_str());
+      return 1;
+    }
     jpeg_bytes += images["cam" + std::to_string(c)]->size();
   }
   const int ticks = static_cast<int>(seconds * 12);
@@ -185,20 +194,23 @@ int run_transport(const TransportOptions& o) {
 
   if (json) {
     std::printf(
-        "{\"mode\":\"%s\",\"seconds\":%.1f,\"frames_sent\":%llu,\"frames_received\":%llu,\"fps\":%.2f,"
+        "{\"mode\":\"%s\",\"frames\":\"%s\",\"seconds\":%.1f,\"frames_sent\":%llu,\"frames_received\":%llu,"
+        "\"fps\":%.2f,"
         "\"jpeg_kb_mean\":%.0f,\"latency_ms_p50\":%.3f,\"latency_ms_p99\":%.3f,\"hop1_ms_p50\":%.3f,"
         "\"hop1_ms_p99\":%.3f,\"injector_ms_p50\":%.3f,\"injector_ms_p99\":%.3f,\"hop2_ms_p50\":%.3f,"
         "\"hop2_ms_p99\":%.3f,\"cpu_ms_per_frame\":%.3f,\"cpu_ms_per_frame_player\":%.3f,"
         "\"cpu_ms_per_frame_injector\":%.3f,\"cpu_ms_per_frame_subscriber\":%.3f,\"unintended_drops\":%llu,"
         "\"injector_seq_gaps\":%llu,\"wall_s\":%.2f}\n",
-        mode.c_str(), seconds, static_cast<unsigned long long>(sent), static_cast<unsigned long long>(result.frames),
+        mode.c_str(), to_string(o.frames), seconds, static_cast<unsigned long long>(sent),
+        static_cast<unsigned long long>(result.frames),
         fps, static_cast<double>(jpeg_bytes) / 6 / 1024, result.e2e_ms.percentile(0.5), result.e2e_ms.percentile(0.99),
         hop1_p50, hop1_p99, inj_p50, inj_p99, result.hop2_ms.percentile(0.5), result.hop2_ms.percentile(0.99),
         total_cpu * 1e3 / n, player_cpu * 1e3 / n, injector_cpu * 1e3 / n, result.cpu_s * 1e3 / n,
         static_cast<unsigned long long>(unintended), static_cast<unsigned long long>(injector_gaps), wall_s);
   } else {
-    std::printf("bench transport: 6 cameras x 12 Hz, 1600x900 JPEG (mean %.0f KB), injector output %s, ipc, %.0f s\n",
-                static_cast<double>(jpeg_bytes) / 6 / 1024, mode.c_str(), seconds);
+    std::printf("bench transport: 6 cameras x 12 Hz, 1600x900 %s JPEG (mean %.0f KB), injector output %s, ipc, "
+                "%.0f s\n",
+                to_string(o.frames), static_cast<double>(jpeg_bytes) / 6 / 1024, mode.c_str(), seconds);
     std::printf("  frames sent %llu, received %llu, %.1f frames/s\n", static_cast<unsigned long long>(sent),
                 static_cast<unsigned long long>(result.frames), fps);
     std::printf("  latency ms p50/p99: player->injector %.2f/%.2f, injector %.2f/%.2f, injector->subscriber "
