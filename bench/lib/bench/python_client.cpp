@@ -40,7 +40,8 @@ struct Run {
   double sent = 0, injector_in = 0, injector_out = 0, injector_input_drops = 0;
   double received = 0, transport_drops = 0, shm_overwritten = 0, torn = 0, malformed = 0;
   double latency_p50 = 0, latency_p99 = 0, client_cpu_ms = 0, client_core = 0, injector_p50 = 0;
-  double injector_cpu_ms = 0;
+  double injector_cpu_ms = 0;  // every injector thread (receive, decode workers, send), per frame in
+  double send_cpu_ms = 0;      // the injector's sending thread (the shm copy or the ZeroMQ send), per frame out
   double lost() const { return sent - received; }  // everything the client did not get, wherever it was lost
 };
 
@@ -130,18 +131,14 @@ bool run_once(const std::string& path, const PythonClientOptions& o, const Strea
     return false;
   }
   std::atomic<bool> stop{false};
-  auto inj_cpu = std::async(std::launch::async, [&] {
-    const double c0 = thread_cpu_s();
-    (void)injector.run(stop);
-    return thread_cpu_s() - c0;
-  });
+  auto inj = std::async(std::launch::async, [&] { return injector.run(stop); });
   (void)player.run(stop);
   // The client ends at the forwarded StreamEnd (or after 20 s without traffic) and prints its figures.
   std::string report;
   while (std::fgets(line, sizeof line, child)) report = line;
   const int rc = ::pclose(child);
   stop = true;
-  const double injector_cpu = inj_cpu.get();
+  (void)inj.get();
   std::system(("rm -rf " + quote(dir)).c_str());
   if (rc != 0 || json_number(report, "received") < 0) {
     std::fprintf(stderr, "faultline bench python-client: the client (%s) exited with %d without figures\n",
@@ -168,7 +165,10 @@ bool run_once(const std::string& path, const PythonClientOptions& o, const Strea
   r.client_cpu_ms = json_number(report, "cpu_s") * 1e3 / n;
   const double wall = json_number(report, "wall_s");
   r.client_core = wall > 0 ? json_number(report, "cpu_s") / wall : 0;
-  r.injector_cpu_ms = injector_cpu * 1e3 / std::max(1.0, r.injector_out);
+  const auto& ic_counts = injector.counts();
+  r.injector_cpu_ms = static_cast<double>(ic_counts.dispatch_cpu_ns + ic_counts.worker_cpu_ns + ic_counts.output_cpu_ns) /
+                      1e6 / std::max(1.0, r.injector_in);
+  r.send_cpu_ms = static_cast<double>(ic_counts.output_cpu_ns) / 1e6 / std::max(1.0, r.injector_out);
   for (const auto& w : injector.stats_totals()) {
     if (w.topic.rfind("/faulty/", 0) == 0) r.injector_p50 = std::max(r.injector_p50, w.latency_pct_ms.p50);
   }
@@ -187,7 +187,7 @@ Run median_run(const std::vector<Run>& runs) {
   double Run::*fields[] = {&Run::sent, &Run::injector_in, &Run::injector_out, &Run::injector_input_drops,
                            &Run::received, &Run::transport_drops, &Run::shm_overwritten, &Run::torn,
                            &Run::malformed, &Run::latency_p50, &Run::latency_p99, &Run::client_cpu_ms,
-                           &Run::client_core, &Run::injector_p50, &Run::injector_cpu_ms};
+                           &Run::client_core, &Run::injector_p50, &Run::injector_cpu_ms, &Run::send_cpu_ms};
   for (auto f : fields) {
     std::vector<double> v;
     for (const auto& r : runs) v.push_back(r.*f);
@@ -201,10 +201,11 @@ void print_json(const Run& r, int repeat, double load) {
               "\"shm_overwritten\":%.0f,\"torn\":%.0f,\"malformed\":%.0f,\"injector_input_drops\":%.0f,"
               "\"latency_ms_p50\":%.3f,\"latency_ms_p99\":%.3f,\"client_cpu_ms_per_frame\":%.3f,"
               "\"client_cpu_cores\":%.3f,\"injector_ms_p50\":%.3f,\"injector_cpu_ms_per_frame\":%.3f,"
+              "\"injector_send_cpu_ms_per_frame\":%.3f,"
               "\"loadavg_1m\":%.2f}\n",
               r.path.c_str(), repeat, r.sent, r.received, r.lost(), r.transport_drops, r.shm_overwritten, r.torn,
               r.malformed, r.injector_input_drops, r.latency_p50, r.latency_p99, r.client_cpu_ms, r.client_core,
-              r.injector_p50, r.injector_cpu_ms, load);
+              r.injector_p50, r.injector_cpu_ms, r.send_cpu_ms, load);
 }
 
 }  // namespace
@@ -229,16 +230,16 @@ int run_python_client(const PythonClientOptions& o) {
                 "average %.2f -> %.2f\n",
                 stream.jpeg_kb, o.seconds, o.repeats, load0, load1);
     std::printf("  %-4s %6s %6s %6s  %-22s %-16s %-22s %s\n", "path", "sent", "recv", "lost", "client gaps/overwr/torn",
-                "latency p50/p99", "client CPU ms/frame", "injector p50 ms, CPU ms/frame");
+                "latency p50/p99", "client CPU ms/frame", "injector p50 ms, CPU ms/frame (send)");
   }
   for (const auto& path : o.paths) {
     const Run m = median_run(runs[path]);
     if (path == "shm" && m.lost() > 0) shm_lost = true;
     if (o.json) continue;
-    std::printf("  %-4s %6.0f %6.0f %6.0f  %6.0f/%6.0f/%6.0f    %6.2f/%7.2f   %6.2f (%4.0f%% core)      %6.2f, %5.2f\n",
+    std::printf("  %-4s %6.0f %6.0f %6.0f  %6.0f/%6.0f/%6.0f    %6.2f/%7.2f   %6.2f (%4.0f%% core)      %6.2f, %5.2f (%4.2f)\n",
                 m.path.c_str(), m.sent, m.received, m.lost(), m.transport_drops, m.shm_overwritten, m.torn,
                 m.latency_p50, m.latency_p99, m.client_cpu_ms, 100 * m.client_core, m.injector_p50,
-                m.injector_cpu_ms);
+                m.injector_cpu_ms, m.send_cpu_ms);
   }
   if (!o.json) {
     std::printf("  lost = sent - received (anywhere); latency = client has the numpy image - injector publish "
