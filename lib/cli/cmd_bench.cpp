@@ -10,6 +10,7 @@
 #include "bench/dataset.hpp"
 #include "bench/export.hpp"
 #include "bench/injector.hpp"
+#include "bench/python_client.hpp"
 #include "bench/record.hpp"
 #include "bench/ros2.hpp"
 #include "bench/score.hpp"
@@ -174,6 +175,30 @@ int run_injector(int argc, char** argv) {
   return bench::run_injector(o);
 }
 
+int run_python_client(int argc, char** argv) {
+  CLI::App app{
+      "The official Python client (clients/python) as a real-time subscriber: 6 cameras x 12 Hz of 1600x900 frames "
+      "decoded to bgr8 by the injector, over plain ZeroMQ (4.3 MB frames on the socket) and over shared memory "
+      "(output_shm: pixels in a /dev/shm ring, mapped as numpy arrays), alternating: frames received, losses, added "
+      "latency p50/p99 (injector publish -> numpy image in the client), client CPU. Exit 1 when the shared-memory "
+      "path lost frames.",
+      argv[0]};
+  bench::PythonClientOptions o;
+  app.add_option("--seconds", o.seconds, "real-time length of each run (s)")->check(CLI::Range(1.0, 3600.0))
+      ->capture_default_str();
+  app.add_option("--repeats", o.repeats, "runs per path, alternating (medians printed)")->check(CLI::Range(1, 50))
+      ->capture_default_str();
+  app.add_option("--paths", o.paths, "paths to run: zmq, shm")->check(CLI::IsMember({"zmq", "shm"}));
+  app.add_option("--python", o.python, "Python with python3-zmq, numpy and protobuf")->capture_default_str();
+  app.add_option("--client-dir", o.client_dir, "directory holding faultline_client (default: the source tree's)");
+  app.add_option("--script", o.script, "bench driver (default: the source tree's bench/python/client_rate.py)");
+  app.add_option("--workers", o.workers, "injector worker threads (0 = its default, cores - 1)")
+      ->check(CLI::Range(0, 256));
+  app.add_flag("--json", o.json, "print one JSON object per run");
+  FAULTLINE_PARSE(app, argc, argv);
+  return bench::run_python_client(o);
+}
+
 int run_ros2(int argc, char** argv) {
   CLI::App app{
       "ROS 2 proxy benchmark: N cameras x 12 Hz of 1600x900 JPEG CompressedImages over Cyclone DDS (loopback) "
@@ -294,6 +319,9 @@ FAULTLINE_COMMAND(
 FAULTLINE_COMMAND(bench_injector, "bench injector",
                   "real-time injector benchmark: CPU, added latency and drops per corruption",
                   &run_injector);
+FAULTLINE_COMMAND(bench_python_client, "bench python-client",
+                  "official Python client at 6 x 12 Hz bgr8: ZeroMQ vs shared memory, drops, latency, CPU",
+                  &run_python_client);
 FAULTLINE_COMMAND(bench_record, "bench record", "recorder CPU, player speed and bag size",
                   &run_record);
 FAULTLINE_COMMAND(bench_ros2, "bench ros2",

@@ -61,6 +61,7 @@ struct DetectorLoop::Impl {
   std::string node;
   std::shared_ptr<spdlog::logger> log;
   transport::RawSubscriber sub;
+  transport::ShmCameraReader shm;  // frames whose pixels are in a publisher's shared-memory ring
   transport::Publisher push;
   Detector detector;
   transport::LogLimiter bad_limiter;
@@ -213,7 +214,12 @@ int DetectorLoop::run(const std::atomic<bool>& stop) {
       if (b.last_in_run() && m.cfg.exit_on_last) return 0;
       continue;
     }
-    auto view = transport::parse_camera_frame(*r);
+    auto view = r->has_payload() ? transport::parse_camera_frame(*r) : m.shm.read(*r);
+    if (!view && view.status().code() == StatusCode::kNotFound && !r->has_payload()) {
+      counts_.shm_overwritten = m.shm.overwritten();  // read too late: the ring slot was reused (or its ring is gone)
+      if (m.bad_limiter.allow()) m.log->warn("lost frame on {}: {}", topic, view.status().message());
+      continue;
+    }
     if (!view) {
       ++counts_.malformed;
       if (m.bad_limiter.allow()) m.log->warn("malformed frame on {}: {}", topic, view.status().message());
@@ -225,6 +231,10 @@ int DetectorLoop::run(const std::atomic<bool>& stop) {
     if (m.cfg.temporal) {
       const auto t0 = Clock::now();
       auto in = to_input(h, view->payload, view->payload_size);
+      if (!r->has_payload() && !m.shm.intact(*view)) {  // overwritten while decoding: the pixels may be torn
+        counts_.shm_overwritten = m.shm.overwritten();
+        continue;
+      }
       if (!in) {
         ++counts_.undecodable;  // a frame the injector broke: the tracks coast through it
         if (m.bad_limiter.allow()) m.log->warn("undecodable frame on {}: {}", topic, in.status().message());
@@ -239,9 +249,14 @@ int DetectorLoop::run(const std::atomic<bool>& stop) {
       if (it != m.pending.end() && it->second.header.sample_token() == h.sample_token() &&
           it->second.header.is_key_frame() && !h.is_key_frame())
         continue;  // keep the key frame of this sample
+      std::vector<std::uint8_t> bytes(view->payload, view->payload + view->payload_size);
+      if (!r->has_payload() && !m.shm.intact(*view)) {  // overwritten while copying
+        counts_.shm_overwritten = m.shm.overwritten();
+        continue;
+      }
       auto& p = m.pending[h.camera()];
       p.header = h;
-      p.payload.assign(view->payload, view->payload + view->payload_size);
+      p.payload = std::move(bytes);
     }
   }
   return 0;

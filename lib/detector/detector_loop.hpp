@@ -58,6 +58,8 @@ struct DetectorLoopCounts {
   // Samples after a break in the stream (joined mid-run, publisher restarted, boundaries lost): detected
   // without the ego-motion history of the samples before (the road curvature estimate starts over).
   std::uint64_t stream_breaks = 0;
+  // Shared-memory frames (the injector's output_shm) whose ring slot was reused before or while they were read.
+  std::uint64_t shm_overwritten = 0;
 };
 
 class DetectorLoop {

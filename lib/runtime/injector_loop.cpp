@@ -46,6 +46,11 @@ void InjectorConfig::validate() const {
   if (stats_window_s <= 0) fail("stats_window_s", std::to_string(stats_window_s), "expected > 0");
   if (workers < 0) fail("workers", std::to_string(workers), "expected >= 0 (0 = the cores available minus one)");
   if (queue_frames < 0) fail("queue_frames", std::to_string(queue_frames), "expected >= 0 (0 = 4 x workers)");
+  if (shm_slots < 2 || shm_slots > 65536) fail("shm_slots", std::to_string(shm_slots), "expected 2..65536");
+  if (shm_slot_bytes < 1 || shm_slot_bytes > (std::int64_t{1} << 32)) {
+    fail("shm_slot_bytes", std::to_string(shm_slot_bytes), "expected 1..4294967296");
+  }
+  if (output_shm && output_shm_dir.empty()) fail("output_shm_dir", "\"\"", "expected a directory");
 }
 
 std::string faulted_topic(const InjectorConfig& config, const std::string& input_topic) {
@@ -67,6 +72,7 @@ struct InjectorLoop::Impl {
   std::shared_ptr<spdlog::logger> log;
   Clock& clock;
   transport::Publisher pub;
+  std::unique_ptr<transport::ShmRingWriter> ring;  // output_shm: the camera frames' pixels (output thread only)
   std::unique_ptr<transport::RawSubscriber> sub;
   StatsReporter stats;
   std::mutex stats_mutex;
@@ -84,6 +90,7 @@ struct InjectorLoop::Impl {
   struct Sink final : PipelineSink {
     explicit Sink(Impl& impl) : m(impl) {}
     Status send_frame(const std::string& topic, msgs::CameraFrame& h, const transport::Payload& p) override {
+      if (m.ring) return transport::send_camera_frame_shm(m.pub, *m.ring, topic, h, p);
       return transport::send_camera_frame(m.pub, topic, h, p);
     }
     Status send_message(const std::string& topic, const google::protobuf::MessageLite& message) override {
@@ -131,7 +138,17 @@ struct InjectorLoop::Impl {
         sync_out(remap_topic(cfg.remap, cfg.sync_topic)),
         end_out(remap_topic(cfg.remap, cfg.end_topic)),
         faults_topic(remap_topic(cfg.remap, cfg.faults_topic)),
-        counts(out_counts) {}
+        counts(out_counts) {
+    if (cfg.output_shm) {
+      transport::ShmRingConfig rc;
+      rc.path = transport::shm_ring_path(cfg.output_shm_dir, node, pub.endpoint());
+      rc.slot_count = static_cast<std::uint32_t>(cfg.shm_slots);
+      rc.slot_bytes = static_cast<std::uint64_t>(cfg.shm_slot_bytes);
+      ring = std::make_unique<transport::ShmRingWriter>(rc);
+      log->info("camera frames through shared memory: {} ({} slots of {} bytes)", rc.path, rc.slot_count,
+                rc.slot_bytes);
+    }
+  }
 
   template <class F>
   void with_stats(F&& f) {
@@ -310,7 +327,7 @@ void InjectorLoop::Impl::finish(bool finished) {
   stats.tick(clock.now_ns() + static_cast<DurationNs>(cfg.stats_window_s * 1e9), &pub);
   stats.log_totals(clock.now_ns());
   if (!finished) pub.set_linger(0);  // shutdown: exit promptly
-  counts.oversize_refused = pub.oversize_refused();
+  counts.oversize_refused = pub.oversize_refused() + (ring ? ring->oversize_refused() : 0);
   const std::uint64_t handled = std::max<std::uint64_t>(1, counts.frames_in);
   log->info("injector done: in {} out {} boundaries {} injected_drops {} corrupt_jpeg {} malformed {} "
             "transport_drops {} superseded {} oversize_refused {} input_disconnects {} input_reconnects {} "
@@ -339,6 +356,8 @@ InjectorLoop::InjectorLoop(InjectorConfig config, std::string node, std::unique_
 InjectorLoop::~InjectorLoop() = default;
 
 std::string InjectorLoop::output_endpoint() const { return impl_->pub.endpoint(); }
+
+std::string InjectorLoop::output_shm_path() const { return impl_->ring ? impl_->ring->path() : std::string(); }
 
 int InjectorLoop::run(const std::atomic<bool>& stop) {
   Impl& m = *impl_;

@@ -23,6 +23,7 @@
 #include "runtime/remap.hpp"
 #include "stats/topic_stats.hpp"
 #include "transport/publisher.hpp"
+#include "transport/shm_ring.hpp"
 
 #include "transport/access.hpp"
 
@@ -54,6 +55,12 @@ struct InjectorConfig {
   int jpeg_quality = 95;                             // re-encoded faulted JPEG frames (nuScenes-C: 95)
   int workers = 0;                                   // decode/fault/encode threads; 0 = cores available - 1, >= 1
   int queue_frames = 0;                              // frames in flight receive -> send; 0 = 4 x workers
+  // Shared-memory output (docs/protocol.md §16): camera frames go into a ring file under output_shm_dir and only a
+  // descriptor travels on the socket, so local subscribers map the pixels without a copy. Off by default.
+  bool output_shm = false;
+  std::string output_shm_dir = "/dev/shm";           // where the ring file is created (removed at exit)
+  int shm_slots = 32;                                // ring slots: a frame is readable until this many more are sent
+  std::int64_t shm_slot_bytes = static_cast<std::int64_t>(transport::kShmDefaultSlotBytes);  // largest frame
 
   transport::AccessConfig access;  // allow_remote and CURVE keys of every socket (transport/access.hpp)
 
@@ -88,6 +95,13 @@ struct InjectorConfig {
     v("queue_frames", queue_frames,
       "frames in flight between receive and send (0 = 4 x workers); when full, receiving waits and the input "
       "queue (input_hwm) absorbs");
+    v("output_shm", output_shm,
+      "send camera frames through a shared-memory ring (local subscribers only; docs/protocol.md §16): the pixels "
+      "are written once into the ring and a small descriptor goes on the socket");
+    v("output_shm_dir", output_shm_dir, "directory of the ring file (tmpfs; the file is removed at exit)");
+    v("shm_slots", shm_slots,
+      "ring slots (>= 2): a frame stays readable until this many more frames were sent; the publisher never waits");
+    v("shm_slot_bytes", shm_slot_bytes, "largest frame a slot holds (bytes); larger frames are refused and counted");
     access.visit(v);
   }
   void validate() const;  // throws ConfigError
@@ -103,7 +117,7 @@ struct InjectorCounts {
   std::uint64_t malformed = 0;
   std::uint64_t transport_drops = 0;
   std::uint64_t superseded = 0;
-  std::uint64_t oversize_refused = 0;  // output frames over max_msg_bytes: refused by the publisher, not sent
+  std::uint64_t oversize_refused = 0;  // output frames over max_msg_bytes (or a shm slot): refused, not sent
   std::uint64_t window_full_waits = 0;   // receives that waited for room in queue_frames (backpressure, no loss)
   std::uint64_t discarded_at_stop = 0;   // in flight or delayed when the run was stopped: not sent
   int workers = 0;                       // worker threads used
@@ -127,6 +141,8 @@ class InjectorLoop {
                std::shared_ptr<spdlog::logger> log, Clock& clock);
   ~InjectorLoop();
   std::string output_endpoint() const;
+  // The shared-memory ring file of the output ("" without output_shm).
+  std::string output_shm_path() const;
   // Runs until `stop` (0), the end of the run with exit_on_last (0), or a fatal socket error (1). The end of
   // the run is a forwarded StreamEnd when the last_in_run boundary announced one (stream_end_follows: the
   // sweeps after the last sample are still corrupted and forwarded), else that boundary itself.

@@ -12,9 +12,9 @@ int main(int argc, char** argv) {
         const int rc = loop.run(stop);
         const auto& c = loop.counts();
         log->info("done: {} frames, {} samples sent, {} malformed, {} undecodable, {} boundaries lost, {} "
-                  "incomplete samples ({} key frames missing), {} stream breaks",
+                  "incomplete samples ({} key frames missing), {} stream breaks, {} shm frames overwritten",
                   c.frames, c.arrays_sent, c.malformed, c.undecodable, c.boundaries_lost, c.incomplete_samples,
-                  c.key_frames_missing, c.stream_breaks);
+                  c.key_frames_missing, c.stream_breaks, c.shm_overwritten);
         return rc;
       });
 }

@@ -18,6 +18,8 @@ import numpy as np
 import zmq
 from zmq.utils import z85
 
+from .shm import ShmReader
+
 # Key files as the C++ nodes read them (lib/transport/access.hpp): one 40-character Z85 key, '#' comment lines and
 # blank lines ('#' is a Z85 digit, but never the first of a key: a group of five digits stays below 2**32).
 MAX_KEY_FILE_BYTES = 4096
@@ -63,6 +65,15 @@ class Frame:
     sample_token: str
     is_key_frame: bool
     fault: object                    # faultline.msgs.FaultState (what the injector did)
+    header: object = None            # faultline.msgs.Header: seq, publisher, publish_mono_ns, ...
+    # Set when the pixels are mapped from the publisher's shared-memory ring (docs/protocol.md §16).
+    _shm: Optional[Tuple[ShmReader, object]] = dataclasses.field(default=None, repr=False)
+
+    def intact(self) -> bool:
+        """False when `image` lives in a shared-memory ring and its slot was overwritten since the frame was
+        received (the pixels may be torn; counted in FaultlineClient.shm_overwritten). Check it after using image.
+        Always True for frames that came over ZeroMQ."""
+        return self._shm is None or self._shm[0].intact(self._shm[1])
 
 
 @dataclasses.dataclass
@@ -210,6 +221,13 @@ class FaultlineClient:
         self.transport_drops = 0
         self.boundaries_lost = 0  # SampleBoundary messages lost in transport (seq gaps on the sync topic)
         self._last_seq: Dict[bytes, int] = {}
+        self.shm = ShmReader()  # maps publishers' shared-memory rings on first use
+
+    @property
+    def shm_overwritten(self) -> int:
+        """Shared-memory frames lost because their slot was reused before they were read (not in frames_received)
+        or while they were in use (Frame.intact() False)."""
+        return self.shm.overwritten
 
     def close(self):
         self.sub.close(0)
@@ -224,6 +242,60 @@ class FaultlineClient:
 
     def _count_gap(self, topic: bytes, header) -> None:
         self.transport_drops += self._gap(topic, header)
+
+    def _frame(self, topic: bytes, parts, h, decode: bool, keep: bool) -> Optional[Frame]:
+        """Checks and counts one camera frame message (header `h` parsed): [topic][CameraFrame][payload], or
+        [topic][CameraFrame] with the pixels in a shared-memory ring. None when it is not kept (keep False, or its
+        shared-memory slot was already reused: counted in shm_overwritten, not in frames_received). Raises
+        ValueError on a malformed message."""
+        shm = len(parts) == 2
+        if shm and not h.HasField("shm"):
+            raise ValueError("2-frame camera message without shm descriptor")
+        payload = None if shm else parts[2].buffer
+        if payload is not None and h.payload_bytes and h.payload_bytes != len(payload):
+            raise ValueError("payload size mismatch")
+        self._count_gap(topic, h.header)
+        if shm:
+            payload = self.shm.pixels(h)  # a view into the ring, no copy
+            if payload is None:
+                return None
+        self.frames_received += 1
+        if not keep:
+            return None
+        image = decode_payload(h, payload) if decode else None
+        return Frame(h.camera, image, h.encoding, np.array(h.intrinsics, float).reshape(3, 3),
+                     _transform(h.sensor_to_ego), _transform(h.ego_pose), h.header.capture_stamp_ns, h.source_seq,
+                     h.sample_token, h.is_key_frame, h.fault, h.header, (self.shm, h) if shm else None)
+
+    def frames(self, timeout_s: Optional[float] = None, decode: bool = True) -> Iterator[Frame]:
+        """Yields every camera frame (key frames and sweeps) in arrival order, e.g. for temporal models; boundaries
+        are only counted (boundaries_lost). Ends at /sync/end, at a last_in_run boundary without a stream end
+        following, or after timeout_s without traffic. With shared memory the image is a view into the ring: use it
+        before about shm slot_count more frames arrive, and check Frame.intact() after use."""
+        poller = zmq.Poller()
+        poller.register(self.sub, zmq.POLLIN)
+        while True:
+            if self.sub not in dict(poller.poll(None if timeout_s is None else int(timeout_s * 1000))):
+                return
+            parts = self.sub.recv_multipart(copy=False)
+            topic = parts[0].bytes
+            try:
+                if topic == self.sync_topic and len(parts) == 2:
+                    b = self.msgs.SampleBoundary.FromString(parts[1].bytes)
+                    self.boundaries_lost += self._gap(topic, b.header)
+                    if b.last_in_run and not b.stream_end_follows:
+                        return
+                elif topic == self.end_topic and len(parts) == 2:
+                    return
+                elif len(parts) == 3 or (len(parts) == 2 and topic.startswith(self.frame_prefix)):
+                    h = self.msgs.CameraFrame.FromString(parts[1].bytes)
+                    frame = self._frame(topic, parts, h, decode, keep=True)
+                    if frame is not None:
+                        yield frame
+                else:
+                    raise ValueError(f"{len(parts)} frames")
+            except Exception:  # a malformed message is counted and skipped, never fatal
+                self.malformed += 1
 
     def samples(self, timeout_s: Optional[float] = None, decode: bool = True) -> Iterator[Sample]:
         """Yields one Sample per SampleBoundary; stops after last_in_run or timeout_s without traffic.
@@ -269,20 +341,13 @@ class FaultlineClient:
                 elif topic == self.end_topic and len(parts) == 2:
                     self.msgs.StreamEnd.FromString(parts[1].bytes)
                     return
-                elif len(parts) == 3:
+                elif len(parts) == 3 or (len(parts) == 2 and topic.startswith(self.frame_prefix)):
+                    # Sweeps are counted only (a temporal model would consume them: see frames()).
                     h = self.msgs.CameraFrame.FromString(parts[1].bytes)
-                    payload = parts[2].buffer
-                    if h.payload_bytes and h.payload_bytes != len(payload):
-                        raise ValueError("payload size mismatch")
-                    self._count_gap(topic, h.header)
-                    self.frames_received += 1
-                    if not h.is_key_frame or draining_until is not None:
-                        continue  # sweeps: a temporal model would consume them here
-                    image = decode_payload(h, payload) if decode else None
-                    pending[(h.sample_token, h.camera)] = Frame(
-                        h.camera, image, h.encoding, np.array(h.intrinsics, float).reshape(3, 3),
-                        _transform(h.sensor_to_ego), _transform(h.ego_pose), h.header.capture_stamp_ns,
-                        h.source_seq, h.sample_token, h.is_key_frame, h.fault)
+                    keep = h.is_key_frame and draining_until is None
+                    frame = self._frame(topic, parts, h, decode, keep)
+                    if frame is not None:
+                        pending[(frame.sample_token, frame.camera)] = frame
                 else:
                     raise ValueError(f"{len(parts)} frames")
             except Exception:  # a malformed message is counted and skipped, never fatal
