@@ -9,6 +9,7 @@ packages=(
   libzmq3-dev cppzmq-dev                 # transport
   libprotobuf-dev protobuf-compiler      # messages
   libopencv-dev libturbojpeg0-dev        # images
+  libjpeg62-turbo-dev                    # libjpeg API: transport_corruption's restart markers
   libspdlog-dev libfmt-dev               # logging
   libyaml-cpp-dev                        # node parameters and launch files
   rapidjson-dev                          # JSON: SAX streaming for big tables, NaN literals like the devkit

@@ -41,7 +41,8 @@ void add_benchmark_options(CLI::App& app, BenchmarkArgs& args) {
          "--corruptions", args.corruptions,
          "comma list of camera_crash, frame_lost, low_light or any image corruption (" +
              corruption::corruption_names(",") +
-             "), or all (nuScenes-C's eight); mCE covers those the baseline has")
+             ", and Faultline's message faults calibration_drift, timestamp_skew), or all (nuScenes-C's eight); "
+             "mCE covers those the baseline has")
       ->capture_default_str();
   app.add_option("--levels", args.levels,
                  "comma list of easy,mid,hard (default: mid; --full: all)");
@@ -87,6 +88,9 @@ int resolve_benchmark_options(BenchmarkArgs& args, const char* command) {
       bool known = false;
       for (const char* k : scoring::kRoboBevCorruptions) known |= canon == k;
       known |= corruption::corruption_from_string(canon).has_value();
+      // Faultline's message faults run in the injector like any fault (the detector lifts boxes with the drifted
+      // calibration and the skewed stamps).
+      known |= canon == "calibration_drift" || canon == "timestamp_skew";
       if (!known) {
         std::fprintf(stderr, "faultline %s: --corruptions: unknown corruption '%s'\n", command,
                      c.c_str());

@@ -67,7 +67,7 @@ int run(int argc, char** argv) {
   app.add_option("--corrupt", corrupt,
                  "TYPE:LEVEL fault on all cameras, e.g. fog:mid, snow:3, iso_noise:hard, camera_crash:hard "
                  "(repeatable; the injector's `corruption` shorthand; TYPE: " +
-                     corruption::corruption_names() + ", camera_crash, frame_lost)");
+                     corruption::corruption_names() + ", camera_crash, frame_lost, calibration_drift, timestamp_skew)");
   app.add_option("--seed", cfg.run_metadata["seed"], "run seed of the fault draws")->default_str("0");
   app.add_flag("!--no-clean", cfg.clean_frames,
                "with --corrupt: store only the faulted stream (--format ros2: on the plain camera topics)");

@@ -100,6 +100,12 @@ int run(int argc, char** argv) {
   app.add_option("--seed", seed, "RNG seed (numpy mode: as np.random.seed(seed) before the call)");
   app.add_option("--rng", rng_name, "numpy (bit-exact with the reference) or fast (default)");
   app.add_option("--angle", angle, "motion_blur: inject the blur angle in degrees instead of drawing it");
+  std::optional<double> yaw_rate_deg_s;
+  double focal_px = 0;
+  app.add_option("--yaw-rate", yaw_rate_deg_s,
+                 "rolling_shutter: the ego yaw rate in degrees per second (> 0 turning left); without it there is "
+                 "no motion and the image is unchanged");
+  app.add_option("--focal-px", focal_px, "rolling_shutter: horizontal focal length in pixels (default 0.8 x width)");
   std::string frost_dir;
   app.add_option("--frost-dir", frost_dir,
                  "frost: draw from the .png/.jpg textures in this directory (name order) instead of the five "
@@ -157,6 +163,11 @@ int run(int argc, char** argv) {
   const cv::Mat& in = *input;
   corruption::CorruptOptions options;
   options.angle_deg = angle;
+  if (yaw_rate_deg_s) options.yaw_rate_rad_s = *yaw_rate_deg_s * M_PI / 180.0;
+  options.focal_px = focal_px;
+  if (*type == corruption::Corruption::RollingShutter && !yaw_rate_deg_s && severity > 0) {
+    std::fprintf(stderr, "faultline corrupt: rolling_shutter without --yaw-rate: no motion, image unchanged\n");
+  }
   std::vector<cv::Mat> frost_textures;
   if (!frost_dir.empty()) {
     auto t = read_frost_textures(frost_dir);

@@ -15,8 +15,11 @@
 #include "corruption/glass_blur.hpp"
 #include "corruption/motion_blur.hpp"
 #include "corruption/noise.hpp"
+#include "corruption/recompression.hpp"
+#include "corruption/rolling_shutter.hpp"
 #include "corruption/snow.hpp"
 #include "corruption/spatter.hpp"
+#include "corruption/transport_corruption.hpp"
 #include "corruption/zoom_blur.hpp"
 
 namespace faultline::corruption {
@@ -45,6 +48,10 @@ Status validate_options(const CorruptOptions& options) {
       }
     }
   }
+  if (options.yaw_rate_rad_s && !std::isfinite(*options.yaw_rate_rad_s)) {
+    return {StatusCode::kInvalidArgument, "rolling shutter yaw rate must be a finite number of rad/s, got " +
+                                              std::to_string(*options.yaw_rate_rad_s)};
+  }
   if (options.angle_deg && !std::isfinite(*options.angle_deg)) {
     return {StatusCode::kInvalidArgument,
             "motion blur angle must be a finite number of degrees, got " +
@@ -62,6 +69,11 @@ Result<cv::Mat> deterministic(const cv::Mat& bgr, Corruption type, int severity)
     case Corruption::JpegCompression: return jpeg_compression(bgr, severity);
     default: return Status(StatusCode::kInternal, std::string("not a shared deterministic corruption: ") + to_string(type));
   }
+}
+
+cv::Mat rolling_shutter_of(const cv::Mat& bgr, int severity, const CorruptOptions& options) {
+  if (!options.yaw_rate_rad_s) return bgr.clone();
+  return rolling_shutter(bgr, severity, *options.yaw_rate_rad_s, options.focal_px);
 }
 
 const std::vector<cv::Mat>& frost_set(const CorruptOptions& options) {
@@ -104,6 +116,9 @@ Result<cv::Mat> corrupt(const cv::Mat& bgr, Corruption type, int severity, rng::
     case Corruption::Frost: return frost_numpy(bgr, severity, rng, frost_set(options));
     case Corruption::ElasticTransform: return elastic_transform_numpy(bgr, severity, rng);
     case Corruption::Spatter: return spatter_numpy(bgr, severity, rng);
+    case Corruption::TransportCorruption: return transport_corruption(bgr, severity, rng);
+    case Corruption::Recompression: return recompression(bgr, severity);
+    case Corruption::RollingShutter: return rolling_shutter_of(bgr, severity, options);
   }
   return Status(StatusCode::kInvalidArgument, "unknown corruption");
 }
@@ -141,6 +156,9 @@ Result<cv::Mat> corrupt(const cv::Mat& bgr, Corruption type, int severity, rng::
     case Corruption::Frost: return frost_fast(bgr, severity, rng, frost_set(options));
     case Corruption::ElasticTransform: return elastic_transform_fast(bgr, severity, rng);
     case Corruption::Spatter: return spatter_fast(bgr, severity, rng);
+    case Corruption::TransportCorruption: return transport_corruption(bgr, severity, rng);
+    case Corruption::Recompression: return recompression(bgr, severity);
+    case Corruption::RollingShutter: return rolling_shutter_of(bgr, severity, options);
   }
   return Status(StatusCode::kInvalidArgument, "unknown corruption");
 }

@@ -20,6 +20,10 @@ struct CorruptOptions {
   // Frost: textures (CV_8UC3 BGR, non-empty) to draw from instead of the five built-in ones; not owned, must outlive
   // the call. nullptr = built-in.
   const std::vector<cv::Mat>* frost_textures = nullptr;
+  // Rolling Shutter: the ego yaw rate (rad/s, > 0 turning left) and the horizontal focal length (pixels; <= 0: 0.8 x
+  // width). No yaw rate: the frame is returned unchanged (no motion to skew by).
+  std::optional<double> yaw_rate_rad_s;
+  double focal_px = 0;
 };
 
 // numpy mode: bit-exact with the reference called right after np.random.seed(seed) when `rng` is a fresh

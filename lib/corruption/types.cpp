@@ -27,6 +27,9 @@ const char* to_string(Corruption c) {
     case Corruption::Frost: return "frost";
     case Corruption::ElasticTransform: return "elastic_transform";
     case Corruption::Spatter: return "spatter";
+    case Corruption::TransportCorruption: return "transport_corruption";
+    case Corruption::Recompression: return "recompression";
+    case Corruption::RollingShutter: return "rolling_shutter";
   }
   return "unknown";
 }
@@ -97,7 +100,10 @@ int severity_for(Corruption c, Level level) {
     case Corruption::Saturate:
     case Corruption::Pixelate:
     case Corruption::JpegCompression:
-    case Corruption::GaussianBlur: return 1 + 2 * index;
+    case Corruption::GaussianBlur:
+    case Corruption::TransportCorruption:
+    case Corruption::Recompression:
+    case Corruption::RollingShutter: return 1 + 2 * index;
   }
   return 1;
 }
@@ -119,7 +125,9 @@ bool is_random(Corruption c) {
     case Corruption::JpegCompression:
     case Corruption::GaussianBlur:
     case Corruption::DefocusBlur:
-    case Corruption::ZoomBlur: return false;
+    case Corruption::ZoomBlur:
+    case Corruption::Recompression:
+    case Corruption::RollingShutter: return false;
     default: return true;
   }
 }

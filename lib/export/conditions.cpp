@@ -63,6 +63,8 @@ const char* class_name(Condition c) {
     case Condition::Frost: return "Frost";
     case Condition::ElasticTransform: return "ElasticTransform";
     case Condition::Spatter: return "Spatter";
+    case Condition::TransportCorruption: return "TransportCorruption";
+    case Condition::Recompression: return "Recompression";
   }
   return "?";
 }
@@ -102,6 +104,8 @@ std::optional<corruption::Corruption> image_corruption(Condition c) {
     case Condition::Frost: return Corruption::Frost;
     case Condition::ElasticTransform: return Corruption::ElasticTransform;
     case Condition::Spatter: return Corruption::Spatter;
+    case Condition::TransportCorruption: return Corruption::TransportCorruption;
+    case Condition::Recompression: return Corruption::Recompression;
     case Condition::CameraCrash:
     case Condition::FrameLost: return std::nullopt;
   }

@@ -2,8 +2,10 @@
 #include "policy/fault_engine.hpp"
 
 #include <algorithm>
+#include <cmath>
 
 #include "corruption/corrupt.hpp"
+#include "corruption/rolling_shutter.hpp"
 #include "policy/seeding.hpp"
 #include "rng/fast_rng.hpp"
 #include "rng/numpy_legacy.hpp"
@@ -34,6 +36,35 @@ Action action_of(OutputMode mode) {
 std::uint32_t numpy_seed(std::uint64_t seed) { return static_cast<std::uint32_t>(seed & 0xFFFFFFFFull); }
 
 }  // namespace
+
+// One calibration_drift or timestamp_skew hit: adds to the frame's edit and reports the values it used.
+void FaultEngine::add_message_fault(const FaultSpec& spec, std::size_t i, int cam, int severity, MessageEdit& edit,
+                                    AppliedFault& f) const {
+  constexpr double kDeg = 180.0 / 3.14159265358979323846;
+  if (spec.kind == FaultKind::TimestampSkew) {
+    const DurationNs offset = timestamp_skew_ns(severity, spec.offset_ms);
+    edit.stamp_offset_ns += offset;
+    f.params["offset_ms"] = static_cast<double>(offset) / 1e6;
+    return;
+  }
+  f.seed = stream_seed(config_.seed, i, 0xCA1B0000ull + static_cast<std::uint64_t>(cam));
+  const CalibrationDrift d = calibration_drift(severity, f.seed);
+  CalibrationDrift& sum = edit.calibration ? *edit.calibration : edit.calibration.emplace();
+  sum.roll_rad += d.roll_rad;
+  sum.pitch_rad += d.pitch_rad;
+  sum.yaw_rad += d.yaw_rad;
+  sum.dx_m += d.dx_m;
+  sum.dy_m += d.dy_m;
+  sum.dz_m += d.dz_m;
+  sum.focal_scale *= d.focal_scale;
+  f.params["roll_deg"] = d.roll_rad * kDeg;
+  f.params["pitch_deg"] = d.pitch_rad * kDeg;
+  f.params["yaw_deg"] = d.yaw_rad * kDeg;
+  f.params["dx_m"] = d.dx_m;
+  f.params["dy_m"] = d.dy_m;
+  f.params["dz_m"] = d.dz_m;
+  f.params["focal_scale"] = d.focal_scale;
+}
 
 const char* to_string(Action action) {
   switch (action) {
@@ -101,10 +132,25 @@ double FaultEngine::lost_uniform(std::size_t i, const FaultSpec& spec, int camer
   return u;
 }
 
+// Yaw rate from the previous frame of this camera with a pose (heading difference wrapped to +-pi over the stamp
+// difference); every frame with a pose becomes the next one's reference.
+std::optional<double> FaultEngine::yaw_rate(int cam, const FrameInfo& frame) {
+  auto& last = last_heading_[static_cast<std::size_t>(cam)];
+  std::optional<double> rate;
+  if (!frame.ego_yaw_rad || !std::isfinite(*frame.ego_yaw_rad)) return rate;
+  if (last && frame.capture_stamp_ns > last->stamp_ns) {
+    const double d = std::remainder(*frame.ego_yaw_rad - last->yaw_rad, 2.0 * M_PI);
+    rate = d / (static_cast<double>(frame.capture_stamp_ns - last->stamp_ns) * 1e-9);
+  }
+  last = Heading{frame.capture_stamp_ns, *frame.ego_yaw_rad};
+  return rate;
+}
+
 FramePlan FaultEngine::decide(const FrameInfo& frame) {
   FramePlan plan;
   plan.camera = camera_index(frame.camera);
   if (plan.camera < 0) return plan;
+  const std::optional<double> yaw_rate_rad_s = yaw_rate(plan.camera, frame);
   if (!first_stamp_ns_) first_stamp_ns_ = frame.capture_stamp_ns;
   const DurationNs elapsed = frame.capture_stamp_ns - *first_stamp_ns_;
   const int cam = plan.camera;
@@ -136,7 +182,17 @@ FramePlan FaultEngine::decide(const FrameInfo& frame) {
                                : frame_seed(config_.seed, cam, frame.source_seq, i);
         if (spec.rng == corruption::RngMode::Numpy) f.seed = numpy_seed(f.seed);
         if (spec.coherent) f.params["coherent"] = 1;
-        plan.corruptions.push_back({i, plan.faults.size(), severity, f.seed});
+        if (spec.corruption == corruption::Corruption::RollingShutter && !yaw_rate_rad_s) {
+          // No previous ego pose of this camera: nothing to skew by, so no pixel work (the frame passes unchanged,
+          // not even re-encoded), and the fault says why.
+          f.params["no_yaw_rate"] = 1;
+          break;
+        }
+        plan.corruptions.push_back({i, plan.faults.size(), severity, f.seed, yaw_rate_rad_s, frame.focal_px});
+        if (yaw_rate_rad_s) {
+          f.params["yaw_rate_deg_s"] = *yaw_rate_rad_s * 180.0 / M_PI;
+          f.params["readout_ms"] = corruption::rolling_shutter_readout_ms(severity);
+        }
         break;
       }
       case FaultKind::CameraCrash: {
@@ -158,6 +214,12 @@ FramePlan FaultEngine::decide(const FrameInfo& frame) {
         f.params["p"] = p;
         f.params["instant"] = static_cast<double>(lost_counters_[i][static_cast<std::size_t>(cam)] - 1);
         hit(action_of(spec.mode), delay_ns);
+        break;
+      }
+      case FaultKind::CalibrationDrift:
+      case FaultKind::TimestampSkew: {
+        if (!spec.applies_to(cam)) continue;
+        add_message_fault(spec, i, cam, severity, plan.edit, f);
         break;
       }
       case FaultKind::Black:
@@ -215,6 +277,8 @@ Status FaultEngine::render(FramePlan& plan, cv::Mat& image) {
       } else {
         // The motion-blur angle is the corruption's first draw either way; drawing it here lets us report it.
         corruption::CorruptOptions options;
+        options.yaw_rate_rad_s = step.yaw_rate_rad_s;
+        options.focal_px = step.focal_px;
         if (spec.rng == corruption::RngMode::Numpy) {
           rng::NumpyRandomState r(static_cast<std::uint32_t>(step.seed));
           if (spec.corruption == corruption::Corruption::MotionBlur) options.angle_deg = r.uniform(-45.0, 45.0);

@@ -14,6 +14,11 @@
 //   depend on the interleaving of cameras. Dropped iff u < severity/6.
 // - Several faults on one frame: corruptions stack in list order; the strongest temporal outcome wins
 //   (drop > black > freeze > delay).
+// - rolling_shutter: the ego yaw rate between a camera's consecutive frames with ego poses (decide() keeps the
+//   last heading per camera); without a previous pose the frame passes unchanged (no pixel work) and the fault says
+//   no_yaw_rate.
+// - calibration_drift / timestamp_skew: no action of their own; they fill FramePlan::edit (message_faults.hpp), with
+//   the drift's direction seeded per (run seed, fault, camera) so it persists across the camera's frames.
 #pragma once
 
 #include <opencv2/core.hpp>
@@ -30,6 +35,7 @@
 #include "common/status.hpp"
 #include "corruption/coherent.hpp"
 #include "policy/fault_spec.hpp"
+#include "policy/message_faults.hpp"
 #include "policy/temporal_draws.hpp"
 #include "rng/numpy_legacy.hpp"
 
@@ -40,6 +46,8 @@ struct FrameInfo {
   std::uint64_t source_seq = 0;  // the source's seq of this frame (per camera)
   StampNs capture_stamp_ns = 0;
   bool is_key_frame = true;
+  std::optional<double> ego_yaw_rad;  // ego heading at capture (from the frame's ego pose); none = no pose
+  double focal_px = 0;                // horizontal focal length (K[0]); 0 = unknown
 };
 
 enum class Action { Pass, Corrupt, Drop, Black, Freeze, Delay };
@@ -63,8 +71,11 @@ struct FramePlan {
     std::size_t applied_index = 0;  // its entry in `faults`
     int severity = 0;
     std::uint64_t seed = 0;
+    std::optional<double> yaw_rate_rad_s;  // rolling_shutter: from this and the camera's previous ego pose
+    double focal_px = 0;
   };
   std::vector<Step> corruptions;
+  MessageEdit edit;             // message faults: stamp offset, calibration error (no pixels)
   bool needs_pixels() const;    // render() has work to do
 };
 
@@ -93,6 +104,8 @@ class FaultEngine {
 
  private:
   double lost_uniform(std::size_t i, const FaultSpec& spec, int camera);
+  void add_message_fault(const FaultSpec& spec, std::size_t i, int cam, int severity, MessageEdit& edit,
+                         AppliedFault& f) const;
 
   EngineConfig config_;
   bool freezes_ = false;
@@ -108,6 +121,12 @@ class FaultEngine {
   };
   std::array<std::map<std::size_t, Coherent>, kNumCameras> coherent_;  // fault index -> its corruptor
   std::array<cv::Mat, kNumCameras> last_good_;
+  struct Heading {
+    StampNs stamp_ns = 0;
+    double yaw_rad = 0;
+  };
+  std::array<std::optional<Heading>, kNumCameras> last_heading_;  // decide() only
+  std::optional<double> yaw_rate(int cam, const FrameInfo& frame);
 };
 
 }  // namespace faultline::policy

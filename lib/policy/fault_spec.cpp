@@ -13,7 +13,7 @@ namespace faultline::policy {
 namespace {
 
 const std::set<std::string> kKeys = {"type",  "level",   "severity",   "cameras", "rng",    "coherent", "mode",
-                                     "delay_ms", "start_s", "duration_s", "ramp_s", "frames"};
+                                     "delay_ms", "start_s", "duration_s", "ramp_s", "frames", "offset_ms"};
 
 [[noreturn]] void fail(const std::string& where, const std::string& key, const std::string& value,
                        const std::string& why) {
@@ -38,7 +38,9 @@ struct TypeName {
 };
 constexpr TypeName kTemporal[] = {{"camera_crash", FaultKind::CameraCrash}, {"frame_lost", FaultKind::FrameLost},
                                   {"black", FaultKind::Black},  {"freeze", FaultKind::Freeze},
-                                  {"drop", FaultKind::Drop},    {"delay", FaultKind::Delay}};
+                                  {"drop", FaultKind::Drop},    {"delay", FaultKind::Delay},
+                                  {"calibration_drift", FaultKind::CalibrationDrift},
+                                  {"timestamp_skew", FaultKind::TimestampSkew}};
 
 // camera_crash / frame_lost levels: the severities nuScenes-C used (p = 1/3, 2/3, 5/6 for frame_lost).
 int temporal_severity(corruption::Level level) {
@@ -80,7 +82,7 @@ FaultSpec parse_one(const YAML::Node& node, const std::string& where) {
     if (!kKeys.count(key)) {
       fail(where, key, config::yaml_to_string(kv.second),
            "unknown key (expected type, level, severity, cameras, rng, coherent, mode, delay_ms, start_s, "
-           "duration_s, ramp_s, frames)");
+           "duration_s, ramp_s, frames, offset_ms)");
     }
   }
   FaultSpec spec;
@@ -88,12 +90,14 @@ FaultSpec parse_one(const YAML::Node& node, const std::string& where) {
   const auto type = read<std::string>(node["type"], where, "type", "string");
   if (!set_type(spec, type)) {
     fail(where, "type", type,
-         "expected " + corruption::corruption_names("|") + "|camera_crash|frame_lost|black|freeze|drop|delay");
+         "expected " + corruption::corruption_names("|") +
+             "|camera_crash|frame_lost|black|freeze|drop|delay|calibration_drift|timestamp_skew");
   }
   if (node["level"] && node["severity"]) fail(where, "level", config::yaml_to_string(node["level"]), "give level or severity, not both");
   // Scripted actions (black, freeze, drop, delay) have no strength: severity 1 unless given.
   const bool graded = spec.kind == FaultKind::Corruption || spec.kind == FaultKind::CameraCrash ||
-                      spec.kind == FaultKind::FrameLost;
+                      spec.kind == FaultKind::FrameLost || spec.kind == FaultKind::CalibrationDrift ||
+                      spec.kind == FaultKind::TimestampSkew;
   spec.severity = graded ? level_severity(spec, corruption::Level::Mid) : 1;
   if (node["level"]) {
     const auto text = read<std::string>(node["level"], where, "level", "string");
@@ -131,6 +135,9 @@ FaultSpec parse_one(const YAML::Node& node, const std::string& where) {
   if (node["coherent"]) spec.coherent = read<bool>(node["coherent"], where, "coherent", "bool");
   if (spec.coherent && spec.rng == corruption::RngMode::Numpy) fail(where, "coherent", "true", "coherent needs rng: fast");
   if (spec.coherent && spec.kind != FaultKind::Corruption) fail(where, "coherent", "true", "only image corruptions are coherent");
+  if (spec.coherent && spec.corruption == corruption::Corruption::RollingShutter) {
+    fail(where, "coherent", "true", "rolling_shutter follows the ego poses of the stream and keeps no other state");
+  }
   if (node["mode"]) {
     const auto text = read<std::string>(node["mode"], where, "mode", "string");
     if (spec.kind != FaultKind::CameraCrash && spec.kind != FaultKind::FrameLost) {
@@ -154,6 +161,14 @@ FaultSpec parse_one(const YAML::Node& node, const std::string& where) {
     double d = 0;
     non_negative("duration_s", d);
     spec.duration_s = d;
+  }
+  if (node["offset_ms"]) {
+    const double ms = read<double>(node["offset_ms"], where, "offset_ms", "number");
+    if (spec.kind != FaultKind::TimestampSkew) fail(where, "offset_ms", config::yaml_to_string(node["offset_ms"]), "only timestamp_skew takes offset_ms");
+    if (!std::isfinite(ms) || std::abs(ms) > 1e6) {
+      fail(where, "offset_ms", config::yaml_to_string(node["offset_ms"]), "expected a finite number of ms within +-1e6");
+    }
+    spec.offset_ms = ms;
   }
   if (node["frames"]) {
     const auto text = read<std::string>(node["frames"], where, "frames", "string");

@@ -15,8 +15,9 @@
 
 namespace faultline::policy {
 
-// What a fault does: an image corruption, one of the two RoboBEV temporal faults, or a scripted output action.
-enum class FaultKind { Corruption, CameraCrash, FrameLost, Black, Freeze, Drop, Delay };
+// What a fault does: an image corruption, one of the two RoboBEV temporal faults, a scripted output action, or one
+// of Faultline's message faults (policy/message_faults.hpp: the frame's calibration or stamp, pixels untouched).
+enum class FaultKind { Corruption, CameraCrash, FrameLost, Black, Freeze, Drop, Delay, CalibrationDrift, TimestampSkew };
 // How a camera_crash / frame_lost hit is rendered. Black is the reference's behaviour.
 enum class OutputMode { Black, Drop, Freeze, Delay };
 // Which frames a fault may touch: key frames only (nuScenes-C) or every frame incl. sweeps (streaming).
@@ -31,6 +32,7 @@ struct FaultSpec {
   bool coherent = false;                              // CoherentCorruptor per camera (fast mode only)
   OutputMode mode = OutputMode::Black;                // camera_crash / frame_lost
   double delay_ms = 200;                              // mode delay / kind Delay
+  std::optional<double> offset_ms;                    // timestamp_skew: stamp offset (either sign); none = severity's
   double start_s = 0;                                 // window start, relative to the first frame's capture time
   std::optional<double> duration_s;                   // none = until the end
   double ramp_s = 0;                                  // linear severity ramp 1 -> severity over this time

@@ -199,6 +199,7 @@ struct BagConverter::Impl {
     }
     const std::string out_topic = cfg.output_prefix + in_topic;
     msgs::CameraFrame out = in;
+    apply_message_edit(d.edit, out);  // the faulted topic's calibration and TF carry the drift, stamps the skew
     *out.mutable_fault() = state;
     const StampNs out_log = log_ns + (d.action == msgs::FAULT_ACTION_DELAY ? d.delay_ns : 0);
     out.mutable_header()->set_seq(next_seq(out_topic));

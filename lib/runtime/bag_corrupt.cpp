@@ -675,6 +675,14 @@ Status Corrupter::plan_topics() {
   }
   std::vector<std::string> order;
   for (const auto& f : config_.faults) {
+    // Message faults rewrite a frame's calibration or stamps; this tool rewrites pixels only (ROS 2 bags carry
+    // calibration on CameraInfo topics), so it refuses them rather than pass them silently.
+    if (f.spec.kind == policy::FaultKind::CalibrationDrift || f.spec.kind == policy::FaultKind::TimestampSkew) {
+      return Status(StatusCode::kInvalidArgument,
+                    "fault " + f.spec.name() + " on " + f.topic +
+                        ": bag corrupt rewrites pixels only; calibration_drift and timestamp_skew apply in the "
+                        "injector and in bag convert --corrupt");
+    }
     if (std::find(order.begin(), order.end(), f.topic) == order.end()) order.push_back(f.topic);
   }
   std::array<bool, policy::kNumCameras> taken{};

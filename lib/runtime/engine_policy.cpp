@@ -1,6 +1,10 @@
 // policy::FaultEngine -> FramePolicy: JPEG handling and the mapping to FaultDecision / ActiveFault.
 #include "runtime/engine_policy.hpp"
 
+#include <spdlog/spdlog.h>
+
+#include <cmath>
+
 #include "codec/jpeg.hpp"
 #include "common/config.hpp"
 
@@ -32,6 +36,12 @@ FrameInfo info_of(const transport::CameraFrameView& frame) {
   info.source_seq = h.source_seq() != 0 ? h.source_seq() : h.header().seq();
   info.capture_stamp_ns = h.header().capture_stamp_ns();
   info.is_key_frame = h.is_key_frame();
+  if (h.has_ego_pose()) {
+    // Heading about the global z axis from the ego -> global quaternion (w, x, y, z).
+    const auto& q = h.ego_pose().rotation();
+    info.ego_yaw_rad = std::atan2(2.0 * (q.w() * q.z() + q.x() * q.y()), 1.0 - 2.0 * (q.y() * q.y() + q.z() * q.z()));
+  }
+  if (h.intrinsics_size() == 9) info.focal_px = h.intrinsics(0);
   return info;
 }
 
@@ -55,6 +65,7 @@ FaultDecision EnginePolicy::finish(FramePlan& plan, const Status& rendered) {
   FaultDecision d;
   d.action = to_msg(plan.action);
   d.delay_ns = plan.action == Action::Delay ? plan.delay_ns : 0;
+  d.edit = plan.edit;
   for (const auto& f : plan.faults) {
     msgs::ActiveFault& a = d.faults.emplace_back();
     a.set_name(f.name);
@@ -82,6 +93,13 @@ EnginePolicy::Bytes EnginePolicy::black_jpeg(const transport::CameraFrameView& f
 PlannedFrame EnginePolicy::plan(const transport::CameraFrameView& frame) {
   PlannedFrame p;
   p.plan = engine_.decide(info_of(frame));
+  for (const auto& f : p.plan.faults) {
+    if (f.params.count("no_yaw_rate") && !frame.header.has_ego_pose() && !warned_no_pose_.exchange(true)) {
+      spdlog::warn("rolling_shutter: {} frames carry no ego pose, so there is no yaw rate to skew by: they pass "
+                   "unchanged (said once)",
+                   frame.header.camera());
+    }
+  }
   p.drop = p.plan.action == Action::Drop;
   p.lane = engine_.stateful(p.plan) ? p.plan.camera : -1;
   return p;

@@ -10,6 +10,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include <array>
+#include <atomic>
 #include <map>
 #include <memory>
 #include <mutex>
@@ -40,6 +41,7 @@ class EnginePolicy final : public FramePolicy {
   std::mutex black_mutex_;                            // guards black_cache_ (any lane may fill it)
   std::map<std::pair<int, int>, Bytes> black_cache_;  // (width, height) -> encoded black frame
   std::array<Bytes, policy::kNumCameras> last_good_jpeg_;  // per camera: touched only by that camera's lane
+  std::atomic<bool> warned_no_pose_{false};                // rolling_shutter without ego poses: logged once
 };
 
 // The injector's policy from its parameters: the `faults` list plus the `corruption: fog/mid` shorthand (appended

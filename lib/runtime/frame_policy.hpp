@@ -23,7 +23,14 @@ struct FaultDecision {
   DurationNs delay_ns = 0;                // FAULT_ACTION_DELAY: forward this much later
   // JPEG passthrough only: replacement encoded bytes (e.g. a black or frozen JPEG); null = original.
   std::shared_ptr<const std::vector<std::uint8_t>> replacement_jpeg;
+  // Message faults (calibration_drift, timestamp_skew): applied to the output header with apply_message_edit.
+  policy::MessageEdit edit;
 };
+
+// Applies a decision's message faults to an output frame: capture_stamp_ns += the offset; the calibration drift to
+// the intrinsics (when the frame carries all 9) and to sensor_to_ego (when present). What the frame does not carry
+// stays absent. The FaultEvent keeps the true stamp.
+void apply_message_edit(const policy::MessageEdit& edit, msgs::CameraFrame& frame);
 
 // One frame's decision from plan(), handed to render().
 struct PlannedFrame {

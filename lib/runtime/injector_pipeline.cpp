@@ -232,6 +232,7 @@ void InjectorPipeline::render(Slot& slot) {
   if (!slot.undecodable.is_ok() || slot.decision.action == msgs::FAULT_ACTION_DROP) return;
 
   slot.out = in;
+  apply_message_edit(slot.decision.edit, slot.out);
   msgs::FaultState& state = *slot.out.mutable_fault();
   state.set_action(slot.decision.action);
   for (auto& f : slot.decision.faults) *state.add_faults() = std::move(f);

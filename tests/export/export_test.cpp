@@ -228,4 +228,14 @@ TEST(ExportConditionsTest, ImagecorruptionsConditionsByName) {
 }
 
 }  // namespace
+// Faultline's pixel stream faults export by name too, after the imagecorruptions ones; no reference timing exists.
+TEST(ExportConditionsTest, StreamFaultConditionsByName) {
+  auto some = parse_conditions("recompression,TransportCorruption,fog");
+  ASSERT_TRUE(some);
+  EXPECT_EQ(*some, (std::vector<Condition>{Condition::Fog, Condition::TransportCorruption, Condition::Recompression}));
+  EXPECT_EQ(image_corruption(Condition::TransportCorruption), corruption::Corruption::TransportCorruption);
+  EXPECT_EQ(severity_of(Condition::Recompression, corruption::Level::Mid), 3);
+  EXPECT_EQ(reference_ms_per_image(Condition::Recompression), 0.0);
+}
+
 }  // namespace faultline::exporter

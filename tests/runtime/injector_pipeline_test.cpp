@@ -1,11 +1,13 @@
 // The parallel injector without sockets: the same frames through 1, 2 and 4 workers give byte-identical output
 // (headers, seqs, payloads, FaultEvents, control messages, order), with coherent faults, a schedule, freeze,
-// frame_lost, delay and crash; a stateful lane renders in plan order; the delay queue's order.
+// frame_lost, delay and crash, Faultline's stream faults (a coherent transport corruption, recompression,
+// timestamp skew, calibration drift, rolling shutter from the ego poses); a stateful lane renders in plan order; the delay queue's order.
 #include <google/protobuf/io/coded_stream.h>
 #include <google/protobuf/io/zero_copy_stream_impl_lite.h>
 #include <gtest/gtest.h>
 
 #include <atomic>
+#include <cmath>
 #include <map>
 #include <mutex>
 #include <opencv2/imgproc.hpp>
@@ -89,6 +91,12 @@ std::vector<Input> MakeInputs(int instants) {
       in.header.mutable_header()->set_publisher("source");
       in.header.mutable_header()->set_capture_stamp_ns(kT0 + k * kNsPerSec / 12);
       in.header.set_payload_bytes(in.bytes->size());
+      for (double v : {1266.4, 0.0, 80.0, 0.0, 1266.4, 45.0, 0.0, 0.0, 1.0}) in.header.add_intrinsics(v);
+      in.header.mutable_sensor_to_ego()->mutable_rotation()->set_w(1.0);
+      in.header.mutable_sensor_to_ego()->mutable_translation()->set_x(1.7);
+      // The ego turns left at 0.6 rad/s (0.05 rad per 1/12 s): rolling_shutter's yaw rate.
+      in.header.mutable_ego_pose()->mutable_rotation()->set_w(std::cos(0.025 * k));
+      in.header.mutable_ego_pose()->mutable_rotation()->set_z(std::sin(0.025 * k));
       inputs.push_back(std::move(in));
     }
   }
@@ -106,7 +114,12 @@ constexpr const char* kFaults = R"([
   {type: freeze, cameras: CAM_BACK_LEFT, start_s: 0.2, duration_s: 0.2},
   {type: frame_lost, severity: 2, rng: numpy, mode: drop},
   {type: delay, cameras: CAM_BACK_RIGHT, delay_ms: 100, start_s: 0.25},
-  {type: camera_crash, severity: 1, mode: black, start_s: 0.7}
+  {type: camera_crash, severity: 1, mode: black, start_s: 0.7},
+  {type: transport_corruption, severity: 3, coherent: true, cameras: CAM_BACK_RIGHT, start_s: 0.5},
+  {type: recompression, severity: 2, cameras: CAM_FRONT},
+  {type: timestamp_skew, severity: 3, cameras: CAM_FRONT_RIGHT},
+  {type: calibration_drift, severity: 4, cameras: CAM_BACK_LEFT},
+  {type: rolling_shutter, severity: 5, cameras: CAM_FRONT_LEFT}
 ])";
 
 std::vector<Sent> RunPipeline(const std::vector<Input>& inputs, int workers, bool decode, int queue_frames) {
@@ -171,6 +184,21 @@ TEST_P(InjectorPipelineTest, OutputIsByteIdenticalForAnyWorkerCount) {
       ++frames;
       EXPECT_EQ(h.header().seq(), ++last_seq[s.topic]) << s.topic;  // the injector's own seq, gap-free
       EXPECT_EQ(h.encoding(), decode ? "bgr8" : "jpeg");
+      // Message faults: CAM_FRONT_RIGHT's stamps 20 ms late, CAM_BACK_LEFT's calibration off, the rest as sent.
+      const StampNs sent_stamp = kT0 + static_cast<StampNs>(h.source_seq() - 1) * kNsPerSec / 12;
+      EXPECT_EQ(h.header().capture_stamp_ns(), sent_stamp + (h.camera() == "CAM_FRONT_RIGHT" ? 20 * kNsPerMs : 0));
+      const bool drifted = h.camera() == "CAM_BACK_LEFT";
+      EXPECT_EQ(h.intrinsics(0) != 1266.4, drifted) << h.camera();
+      EXPECT_EQ(h.intrinsics(2), 80.0);
+      EXPECT_EQ(h.sensor_to_ego().rotation().w() != 1.0, drifted) << h.camera();
+      EXPECT_EQ(h.sensor_to_ego().translation().x() != 1.7, drifted) << h.camera();
+      if (h.camera() == "CAM_FRONT_LEFT" && h.source_seq() > 1) {
+        bool skewed = false;
+        for (const auto& f : h.fault().faults()) {
+          if (f.name() == "rolling_shutter") skewed = std::abs(f.params().at("yaw_rate_deg_s") - 0.6 * 180 / M_PI) < 1e-6;
+        }
+        EXPECT_TRUE(skewed) << "seq " << h.source_seq();
+      }
     }
   }
   EXPECT_EQ(events, inputs.size());  // one FaultEvent per source frame
