@@ -40,6 +40,9 @@ struct FrameInfo {
   std::uint64_t source_seq = 0;  // the source's seq of this frame (per camera)
   StampNs capture_stamp_ns = 0;
   bool is_key_frame = true;
+  // The camera's orientation in the world (ego pose x calibration) and intrinsics, when the frame carries them:
+  // the glare source follows it.
+  std::optional<corruption::CameraGeometry> geometry;
 };
 
 enum class Action { Pass, Corrupt, Drop, Black, Freeze, Delay };
@@ -65,6 +68,7 @@ struct FramePlan {
     std::uint64_t seed = 0;
   };
   std::vector<Step> corruptions;
+  corruption::FrameContext context;  // time since the first frame and the camera geometry, for the sensor faults
   bool needs_pixels() const;    // render() has work to do
 };
 

@@ -3,6 +3,7 @@
 
 #include "codec/jpeg.hpp"
 #include "common/config.hpp"
+#include "runtime/frame_geometry.hpp"
 
 namespace faultline::runtime {
 namespace {
@@ -32,6 +33,7 @@ FrameInfo info_of(const transport::CameraFrameView& frame) {
   info.source_seq = h.source_seq() != 0 ? h.source_seq() : h.header().seq();
   info.capture_stamp_ns = h.header().capture_stamp_ns();
   info.is_key_frame = h.is_key_frame();
+  info.geometry = frame_geometry(h);
   return info;
 }
 

@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <atomic>
+#include <cmath>
 #include <map>
 #include <mutex>
 #include <opencv2/imgproc.hpp>
@@ -89,6 +90,14 @@ std::vector<Input> MakeInputs(int instants) {
       in.header.mutable_header()->set_publisher("source");
       in.header.mutable_header()->set_capture_stamp_ns(kT0 + k * kNsPerSec / 12);
       in.header.set_payload_bytes(in.bytes->size());
+      // The ego turns left 2 degrees per instant (the glare follows it); every camera looks along the ego's x axis.
+      const double half_yaw = 0.5 * (2.0 * k) * M_PI / 180.0;
+      auto* ego = in.header.mutable_ego_pose()->mutable_rotation();
+      ego->set_w(std::cos(half_yaw));
+      ego->set_z(std::sin(half_yaw));
+      auto* cam_rot = in.header.mutable_sensor_to_ego()->mutable_rotation();
+      cam_rot->set_w(0.5), cam_rot->set_x(-0.5), cam_rot->set_y(0.5), cam_rot->set_z(-0.5);
+      for (double v : {120.0, 0.0, 80.0, 0.0, 120.0, 45.0, 0.0, 0.0, 1.0}) in.header.add_intrinsics(v);
       inputs.push_back(std::move(in));
     }
   }
@@ -96,7 +105,8 @@ std::vector<Input> MakeInputs(int instants) {
 }
 
 // Coherent faults, a ramp and a window (schedule), per-frame seeds in numpy mode, freeze history, frame_lost,
-// delay and a crash: every kind of state the engine carries between frames.
+// delay and a crash, the sensor faults (coherent by default; glare following the ego pose): every kind of state the
+// engine carries between frames.
 constexpr const char* kFaults = R"([
   {type: fog, severity: 3, coherent: true, cameras: [CAM_FRONT, CAM_FRONT_LEFT]},
   {type: motion_blur, severity: 4, coherent: true, cameras: CAM_BACK, ramp_s: 0.6},
@@ -106,7 +116,11 @@ constexpr const char* kFaults = R"([
   {type: freeze, cameras: CAM_BACK_LEFT, start_s: 0.2, duration_s: 0.2},
   {type: frame_lost, severity: 2, rng: numpy, mode: drop},
   {type: delay, cameras: CAM_BACK_RIGHT, delay_ms: 100, start_s: 0.25},
-  {type: camera_crash, severity: 1, mode: black, start_s: 0.7}
+  {type: camera_crash, severity: 1, mode: black, start_s: 0.7},
+  {type: soiling, severity: 4, cameras: CAM_FRONT},
+  {type: glare, severity: 5, cameras: CAM_BACK_RIGHT},
+  {type: water_drops, severity: 5, cameras: CAM_BACK_LEFT},
+  {type: exposure_flicker, severity: 5, cameras: CAM_FRONT_LEFT, start_s: 0.2}
 ])";
 
 std::vector<Sent> RunPipeline(const std::vector<Input>& inputs, int workers, bool decode, int queue_frames) {
@@ -156,6 +170,7 @@ TEST_P(InjectorPipelineTest, OutputIsByteIdenticalForAnyWorkerCount) {
 
   // The reference run exercised every kind of fault: read the actions from its FaultEvents.
   std::map<int, int> actions;
+  std::map<std::string, int> fault_names;
   std::size_t frames = 0, events = 0;
   std::map<std::string, std::uint64_t> last_seq;
   for (const Sent& s : one) {
@@ -163,6 +178,7 @@ TEST_P(InjectorPipelineTest, OutputIsByteIdenticalForAnyWorkerCount) {
       msgs::FaultEvent e;
       ASSERT_TRUE(e.ParseFromString(s.header));
       ++actions[e.state().action()];
+      for (const auto& f : e.state().faults()) ++fault_names[f.name()];
       ++events;
       EXPECT_EQ(e.header().seq(), events);
     } else if (s.topic.rfind("/faulty/", 0) == 0) {
@@ -178,6 +194,9 @@ TEST_P(InjectorPipelineTest, OutputIsByteIdenticalForAnyWorkerCount) {
   for (auto a : {msgs::FAULT_ACTION_PASS, msgs::FAULT_ACTION_CORRUPT, msgs::FAULT_ACTION_DROP, msgs::FAULT_ACTION_BLACK,
                  msgs::FAULT_ACTION_FREEZE, msgs::FAULT_ACTION_DELAY}) {
     EXPECT_GT(actions[a], 0) << "action " << a;
+  }
+  for (const char* name : {"soiling", "water_drops", "glare", "exposure_flicker"}) {
+    EXPECT_GT(fault_names[name], 0) << name;
   }
   // Delayed frames (the clock stands still) leave just before the stream end, which stays last.
   ASSERT_FALSE(one.empty());
