@@ -38,7 +38,11 @@ enum class Condition {
   ZoomBlur,
   Frost,
   ElasticTransform,
-  Spatter
+  Spatter,
+  Soiling,
+  WaterDrops,
+  Glare,
+  ExposureFlicker
 };
 
 // nuScenes-C's eight: what "all" selects.
@@ -52,7 +56,8 @@ inline constexpr Condition kEveryCondition[] = {
     Condition::GaussianNoise, Condition::ShotNoise,    Condition::ImpulseNoise, Condition::SpeckleNoise,
     Condition::IsoNoise,      Condition::Contrast,     Condition::Saturate,     Condition::Pixelate,
     Condition::JpegCompression, Condition::GaussianBlur, Condition::DefocusBlur, Condition::GlassBlur,
-    Condition::ZoomBlur,      Condition::Frost,        Condition::ElasticTransform, Condition::Spatter};
+    Condition::ZoomBlur,      Condition::Frost,        Condition::ElasticTransform, Condition::Spatter,
+    Condition::Soiling, Condition::WaterDrops, Condition::Glare, Condition::ExposureFlicker};
 
 // RoboBEV class name, used as the folder name ("CameraCrash"; "ISONoise" as RoboBEV spells it; CamelCase of the
 // imagecorruptions name for the corruptions RoboBEV has no class for).
