@@ -118,7 +118,7 @@ constexpr const char* kFaults = R"([
   {type: delay, cameras: CAM_BACK_RIGHT, delay_ms: 100, start_s: 0.25},
   {type: camera_crash, severity: 1, mode: black, start_s: 0.7},
   {type: soiling, severity: 4, cameras: CAM_FRONT},
-  {type: glare, severity: 5, cameras: CAM_BACK_RIGHT},
+  {type: glare, severity: 5, cameras: CAM_BACK_RIGHT, start_s: 0.1},
   {type: water_drops, severity: 5, cameras: CAM_BACK_LEFT},
   {type: exposure_flicker, severity: 5, cameras: CAM_FRONT_LEFT, start_s: 0.2}
 ])";
