@@ -33,7 +33,9 @@ void add_export_options(CLI::App& app, ExportArgs& args) {
                  "all (nuScenes-C's eight: CameraCrash, FrameLost, MotionBlur, ColorQuant, Brightness, LowLight, Fog, "
                  "Snow) or a list of those and GaussianNoise, ShotNoise, ImpulseNoise, SpeckleNoise, ISONoise, "
                  "Contrast, Saturate, Pixelate, JpegCompression, GaussianBlur, DefocusBlur, GlassBlur, ZoomBlur, Frost, "
-                 "ElasticTransform, Spatter, TransportCorruption, Recompression (class or snake_case names)");
+                 "ElasticTransform, Spatter, Faultline's sensor faults Soiling, WaterDrops, Glare, "
+                 "ExposureFlicker (one model per camera and scene), TransportCorruption, Recompression (class or "
+                 "snake_case names)");
   app.add_option("--levels", args.levels, "comma-separated easy, mid, hard");
   args.scenes_option =
       app.add_option("--scenes", args.scenes, "comma-separated scene names (default: all scenes)");

@@ -62,6 +62,7 @@ void CoherentCorruptor::reset_state(cv::Size size) {
 }
 
 Result<cv::Mat> CoherentCorruptor::apply(const cv::Mat& bgr) {
+  if (is_sensor_fault(config_.type)) return apply(bgr, FrameContext{});
   if (Status s = validate_input(bgr, config_.severity); !s) return s;
   if (config_.severity == 0) {
     ++frames_;
@@ -97,6 +98,15 @@ Result<cv::Mat> CoherentCorruptor::apply(const cv::Mat& bgr) {
     }
     default: return corrupt(bgr, config_.type, config_.severity, rng_);
   }
+}
+
+Result<cv::Mat> CoherentCorruptor::apply(const cv::Mat& bgr, const FrameContext& ctx) {
+  if (!is_sensor_fault(config_.type)) return apply(bgr);
+  if (Status s = validate_input(bgr, config_.severity); !s) return s;
+  const std::int64_t index = frames_++;
+  if (config_.severity == 0) return bgr.clone();
+  if (!sensor_) sensor_ = std::make_unique<SensorFaultState>(config_.type, config_.severity, config_.seed);
+  return sensor_->apply(bgr, index, ctx);
 }
 
 }  // namespace faultline::corruption

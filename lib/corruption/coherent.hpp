@@ -7,14 +7,18 @@
 // - Dark: the tone curve is fixed by the severity; the sensor noise is redrawn each frame (it is temporally white).
 // - Bright, Color Quant, Contrast, Saturate, Pixelate, JPEG, Gaussian blur: deterministic, identical every frame.
 // - The pointwise noises (gaussian, shot, impulse, speckle, ISO): redrawn each frame, as sensor noise is white in time.
+// - The sensor faults (soiling, water_drops, glare, exposure_flicker): one model per camera drawn from the seed
+//   (sensor_fault.hpp), rendered at each frame's time and pose.
 // Fast-mode generators throughout. Same config + same frames -> same outputs. Not thread-safe; one per camera.
 #pragma once
 
 #include <cstdint>
+#include <memory>
 
 #include <opencv2/core.hpp>
 
 #include "common/status.hpp"
+#include "corruption/sensor_fault.hpp"
 #include "corruption/types.hpp"
 #include "rng/fast_rng.hpp"
 
@@ -35,6 +39,8 @@ class CoherentCorruptor {
 
   // Corrupts the next frame of this camera (CV_8UC3 BGR). A change of frame size restarts the persistent state.
   Result<cv::Mat> apply(const cv::Mat& bgr);
+  // The same with what the frame carries besides pixels (time, camera pose); only the sensor faults read it.
+  Result<cv::Mat> apply(const cv::Mat& bgr, const FrameContext& ctx);
 
   std::int64_t frames() const { return frames_; }
   double angle_deg() const { return angle_deg_; }  // Motion Blur's current angle (or Snow's streak angle)
@@ -51,6 +57,7 @@ class CoherentCorruptor {
   double fog_dir_y_ = 0, fog_dir_x_ = 0;
   cv::Mat snow_layer_;   // CV_8U H x W
   double angle_deg_ = 0;
+  std::unique_ptr<SensorFaultState> sensor_;  // the sensor faults' model, made on first use
 };
 
 }  // namespace faultline::corruption

@@ -17,6 +17,7 @@
 #include "corruption/noise.hpp"
 #include "corruption/recompression.hpp"
 #include "corruption/rolling_shutter.hpp"
+#include "corruption/sensor_fault.hpp"
 #include "corruption/snow.hpp"
 #include "corruption/spatter.hpp"
 #include "corruption/transport_corruption.hpp"
@@ -76,6 +77,12 @@ cv::Mat rolling_shutter_of(const cv::Mat& bgr, int severity, const CorruptOption
   return rolling_shutter(bgr, severity, *options.yaw_rate_rad_s, options.focal_px);
 }
 
+// Two 32-bit draws make a sensor fault's 64-bit model seed.
+std::uint64_t numpy_model_seed(rng::NumpyRandomState& rng) {
+  const std::uint64_t hi = rng.next_u32();
+  return (hi << 32) | rng.next_u32();
+}
+
 const std::vector<cv::Mat>& frost_set(const CorruptOptions& options) {
   static const std::vector<cv::Mat> kBuiltIn;  // empty: the frost functions use their built-in textures
   return options.frost_textures ? *options.frost_textures : kBuiltIn;
@@ -116,6 +123,11 @@ Result<cv::Mat> corrupt(const cv::Mat& bgr, Corruption type, int severity, rng::
     case Corruption::Frost: return frost_numpy(bgr, severity, rng, frost_set(options));
     case Corruption::ElasticTransform: return elastic_transform_numpy(bgr, severity, rng);
     case Corruption::Spatter: return spatter_numpy(bgr, severity, rng);
+    // Faultline's own: no reference to match; the model's seed is drawn from the numpy stream.
+    case Corruption::Soiling:
+    case Corruption::WaterDrops:
+    case Corruption::Glare:
+    case Corruption::ExposureFlicker: return sensor_fault(bgr, type, severity, numpy_model_seed(rng));
     case Corruption::TransportCorruption: return transport_corruption(bgr, severity, rng);
     case Corruption::Recompression: return recompression(bgr, severity);
     case Corruption::RollingShutter: return rolling_shutter_of(bgr, severity, options);
@@ -156,6 +168,10 @@ Result<cv::Mat> corrupt(const cv::Mat& bgr, Corruption type, int severity, rng::
     case Corruption::Frost: return frost_fast(bgr, severity, rng, frost_set(options));
     case Corruption::ElasticTransform: return elastic_transform_fast(bgr, severity, rng);
     case Corruption::Spatter: return spatter_fast(bgr, severity, rng);
+    case Corruption::Soiling:
+    case Corruption::WaterDrops:
+    case Corruption::Glare:
+    case Corruption::ExposureFlicker: return sensor_fault(bgr, type, severity, rng.next_u64());
     case Corruption::TransportCorruption: return transport_corruption(bgr, severity, rng);
     case Corruption::Recompression: return recompression(bgr, severity);
     case Corruption::RollingShutter: return rolling_shutter_of(bgr, severity, options);

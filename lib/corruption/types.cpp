@@ -27,6 +27,10 @@ const char* to_string(Corruption c) {
     case Corruption::Frost: return "frost";
     case Corruption::ElasticTransform: return "elastic_transform";
     case Corruption::Spatter: return "spatter";
+    case Corruption::Soiling: return "soiling";
+    case Corruption::WaterDrops: return "water_drops";
+    case Corruption::Glare: return "glare";
+    case Corruption::ExposureFlicker: return "exposure_flicker";
     case Corruption::TransportCorruption: return "transport_corruption";
     case Corruption::Recompression: return "recompression";
     case Corruption::RollingShutter: return "rolling_shutter";
@@ -91,7 +95,11 @@ int severity_for(Corruption c, Level level) {
     case Corruption::ZoomBlur:
     case Corruption::Frost:
     case Corruption::ElasticTransform:
-    case Corruption::Spatter: return index == 0 ? 2 : (index == 1 ? 4 : 5);
+    case Corruption::Spatter:
+    case Corruption::Soiling:
+    case Corruption::WaterDrops:
+    case Corruption::Glare:
+    case Corruption::ExposureFlicker: return index == 0 ? 2 : (index == 1 ? 4 : 5);
     case Corruption::GaussianNoise:
     case Corruption::ShotNoise:
     case Corruption::ImpulseNoise:

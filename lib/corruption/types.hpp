@@ -10,8 +10,8 @@
 namespace faultline::corruption {
 
 // The image corruptions: nuScenes-C's six, then imagecorruptions 1.1.2's pointwise ones and RoboBEV's ISONoise,
-// then its blur/weather/digital ones, then Faultline's own stream and system faults (docs/faults.md, "Stream and
-// system faults"). to_string/from_string use the imagecorruptions names ("motion_blur", "iso_noise").
+// then its blur/weather/digital ones, then Faultline's own sensor faults and its stream and system faults
+// (docs/faults.md). to_string/from_string use the imagecorruptions names ("motion_blur", "iso_noise").
 enum class Corruption {
   Brightness,
   Dark,
@@ -35,6 +35,11 @@ enum class Corruption {
   Frost,
   ElasticTransform,
   Spatter,
+  // Faultline's own sensor faults (sensor_fault.hpp); no reference has them.
+  Soiling,
+  WaterDrops,
+  Glare,
+  ExposureFlicker,
   // Faultline's own stream and system faults (no reference has them).
   TransportCorruption,
   Recompression,
@@ -48,6 +53,7 @@ inline constexpr Corruption kAllCorruptions[] = {
     Corruption::Saturate,        Corruption::Pixelate,     Corruption::JpegCompression, Corruption::GaussianBlur,
     Corruption::DefocusBlur,     Corruption::GlassBlur,    Corruption::ZoomBlur,      Corruption::Frost,
     Corruption::ElasticTransform, Corruption::Spatter,
+    Corruption::Soiling, Corruption::WaterDrops, Corruption::Glare, Corruption::ExposureFlicker,
     Corruption::TransportCorruption, Corruption::Recompression, Corruption::RollingShutter};
 
 // The paper's three levels; each corruption maps them to its own severities.
@@ -72,7 +78,7 @@ std::optional<RngMode> rng_mode_from_string(std::string_view name);
 // Severity used by nuScenes-C for a level: Bright/Fog/MotionBlur 2/4/5, ColorQuant/Snow 1/2/3, Dark 2/3/4.
 // The pointwise corruptions nuScenes-C does not have use 1/3/5, except ISONoise: it indexes its list like Dark (and
 // stops at 4 in the reference), so it takes Dark's 2/3/4; the blur/weather/digital ones take 2/4/5 like Fog and
-// Motion Blur; Faultline's stream faults use 1/3/5 (docs/faults.md).
+// Motion Blur (docs/faults.md); so do the sensor faults; Faultline's stream faults use 1/3/5.
 int severity_for(Corruption c, Level level);
 
 // Severity 0 means "off" (identity); 1..5 are the reference's numbers. Anything else is kInvalidArgument.

@@ -63,6 +63,10 @@ const char* class_name(Condition c) {
     case Condition::Frost: return "Frost";
     case Condition::ElasticTransform: return "ElasticTransform";
     case Condition::Spatter: return "Spatter";
+    case Condition::Soiling: return "Soiling";
+    case Condition::WaterDrops: return "WaterDrops";
+    case Condition::Glare: return "Glare";
+    case Condition::ExposureFlicker: return "ExposureFlicker";
     case Condition::TransportCorruption: return "TransportCorruption";
     case Condition::Recompression: return "Recompression";
   }
@@ -104,6 +108,10 @@ std::optional<corruption::Corruption> image_corruption(Condition c) {
     case Condition::Frost: return Corruption::Frost;
     case Condition::ElasticTransform: return Corruption::ElasticTransform;
     case Condition::Spatter: return Corruption::Spatter;
+    case Condition::Soiling: return Corruption::Soiling;
+    case Condition::WaterDrops: return Corruption::WaterDrops;
+    case Condition::Glare: return Corruption::Glare;
+    case Condition::ExposureFlicker: return Corruption::ExposureFlicker;
     case Condition::TransportCorruption: return Corruption::TransportCorruption;
     case Condition::Recompression: return Corruption::Recompression;
     case Condition::CameraCrash:

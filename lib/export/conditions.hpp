@@ -39,6 +39,10 @@ enum class Condition {
   Frost,
   ElasticTransform,
   Spatter,
+  Soiling,
+  WaterDrops,
+  Glare,
+  ExposureFlicker,
   TransportCorruption,  // Faultline's own pixel stream faults (docs/faults.md, "Stream and system faults")
   Recompression
 };
@@ -55,6 +59,7 @@ inline constexpr Condition kEveryCondition[] = {
     Condition::IsoNoise,      Condition::Contrast,     Condition::Saturate,     Condition::Pixelate,
     Condition::JpegCompression, Condition::GaussianBlur, Condition::DefocusBlur, Condition::GlassBlur,
     Condition::ZoomBlur,      Condition::Frost,        Condition::ElasticTransform, Condition::Spatter,
+    Condition::Soiling, Condition::WaterDrops, Condition::Glare, Condition::ExposureFlicker,
     Condition::TransportCorruption, Condition::Recompression};
 
 // RoboBEV class name, used as the folder name ("CameraCrash"; "ISONoise" as RoboBEV spells it; CamelCase of the

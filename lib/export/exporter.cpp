@@ -16,6 +16,7 @@
 #include <unistd.h>
 
 #include "corruption/corrupt.hpp"
+#include "corruption/sensor_fault.hpp"
 #include "dataset/nuscenes.hpp"
 #include "export/manifest.hpp"
 #include "export/seeds.hpp"
@@ -85,7 +86,8 @@ constexpr const char* kSeedDerivation =
     "seed64 = splitmix64(run_seed ^ splitmix64(fnv1a64(\"<ClassName>/<level>/<key>\"))); numpy mode: "
     "np.random.seed(seed64 >> 32) before each draw; fast mode: FastRng(seed64). key: image corruptions "
     "\"<CAM_X>/<file>\", FrameLost the sample token (6 uniforms in camera order; sweeps: the file key), "
-    "CameraCrash \"run\"";
+    "CameraCrash \"run\", sensor faults \"<scene_token>/<CAM_X>\" (the fault's model drawn from seed64, at the "
+    "frame's timestamp, both modes)";
 
 // The settings that change output bytes; a resume only trusts an earlier run that used the same ones.
 std::string config_mismatch(const std::map<std::string, std::string>& before,
@@ -231,7 +233,14 @@ class Runner {
         e.kind = "corrupted";
         const auto type = *image_corruption(o->condition);
         Result<cv::Mat> out = Status(StatusCode::kInternal, "not run");
-        if (cfg_.rng == corruption::RngMode::Numpy) {
+        if (corruption::is_sensor_fault(type)) {
+          // The cause persists: one model per camera and scene (the dirt stays on that lens), rendered at the
+          // frame's time; the same in both rng modes (Faultline's own, no reference).
+          e.seed = derive_seed64(cfg_.seed, o->condition, o->level, f.scene_token + "/" + f.channel);
+          corruption::FrameContext ctx;
+          ctx.time_s = static_cast<double>(f.timestamp_us) * 1e-6;
+          out = corruption::sensor_fault(bgr, type, o->severity, e.seed, ctx);
+        } else if (cfg_.rng == corruption::RngMode::Numpy) {
           rng::NumpyRandomState rng(numpy_seed(e.seed));
           out = corruption::corrupt(bgr, type, o->severity, rng);
         } else {

@@ -154,6 +154,8 @@ FramePlan FaultEngine::decide(const FrameInfo& frame) {
   if (!first_stamp_ns_) first_stamp_ns_ = frame.capture_stamp_ns;
   const DurationNs elapsed = frame.capture_stamp_ns - *first_stamp_ns_;
   const int cam = plan.camera;
+  plan.context.time_s = static_cast<double>(elapsed) * 1e-9;
+  plan.context.geometry = frame.geometry;
   auto hit = [&](Action a, DurationNs delay_ns) {
     if (rank(a) > rank(plan.action)) plan.action = a;
     if (a == Action::Delay) plan.delay_ns = std::max(plan.delay_ns, delay_ns);
@@ -272,7 +274,7 @@ Status FaultEngine::render(FramePlan& plan, cv::Mat& image) {
           c.corruptor = std::make_unique<corruption::CoherentCorruptor>(cc);
           c.severity = step.severity;
         }
-        out = c.corruptor->apply(image);
+        out = c.corruptor->apply(image, plan.context);
         if (spec.corruption == corruption::Corruption::MotionBlur) f.params["angle_deg"] = c.corruptor->angle_deg();
       } else {
         // The motion-blur angle is the corruption's first draw either way; drawing it here lets us report it.

@@ -48,6 +48,9 @@ struct FrameInfo {
   bool is_key_frame = true;
   std::optional<double> ego_yaw_rad;  // ego heading at capture (from the frame's ego pose); none = no pose
   double focal_px = 0;                // horizontal focal length (K[0]); 0 = unknown
+  // The camera's orientation in the world (ego pose x calibration) and intrinsics, when the frame carries them:
+  // the glare source follows it.
+  std::optional<corruption::CameraGeometry> geometry;
 };
 
 enum class Action { Pass, Corrupt, Drop, Black, Freeze, Delay };
@@ -76,6 +79,7 @@ struct FramePlan {
   };
   std::vector<Step> corruptions;
   MessageEdit edit;             // message faults: stamp offset, calibration error (no pixels)
+  corruption::FrameContext context;  // time since the first frame and the camera geometry, for the sensor faults
   bool needs_pixels() const;    // render() has work to do
 };
 

@@ -7,6 +7,7 @@
 #include <set>
 
 #include "common/config.hpp"
+#include "corruption/sensor_fault.hpp"
 #include "policy/temporal_draws.hpp"
 
 namespace faultline::policy {
@@ -133,6 +134,12 @@ FaultSpec parse_one(const YAML::Node& node, const std::string& where) {
     spec.rng = *mode;
   }
   if (node["coherent"]) spec.coherent = read<bool>(node["coherent"], where, "coherent", "bool");
+  // A sensor fault's cause (dirt, drops, a light source, a hunting exposure loop) persists: coherent by default in
+  // fast mode; `coherent: false` (or rng: numpy) redraws it for every frame instead.
+  if (!node["coherent"] && spec.kind == FaultKind::Corruption && corruption::is_sensor_fault(spec.corruption) &&
+      spec.rng == corruption::RngMode::Fast) {
+    spec.coherent = true;
+  }
   if (spec.coherent && spec.rng == corruption::RngMode::Numpy) fail(where, "coherent", "true", "coherent needs rng: fast");
   if (spec.coherent && spec.kind != FaultKind::Corruption) fail(where, "coherent", "true", "only image corruptions are coherent");
   if (spec.coherent && spec.corruption == corruption::Corruption::RollingShutter) {

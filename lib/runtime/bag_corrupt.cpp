@@ -35,6 +35,7 @@
 #include "ros2/messages.hpp"
 #include "ros2/schema.hpp"
 #include "runtime/bag_layout.hpp"
+#include "runtime/frame_geometry.hpp"
 
 namespace faultline::runtime {
 namespace {
@@ -1031,6 +1032,7 @@ Status Corrupter::on_message(std::size_t file, const bag::MessageView& m) {
         info.source_seq = frame.source_seq() != 0 ? frame.source_seq() : frame.header().seq();
         info.capture_stamp_ns = frame.header().capture_stamp_ns();
         info.is_key_frame = frame.is_key_frame();
+        info.geometry = frame_geometry(frame);  // the glare source follows the recorded ego pose
         job.source_seq = info.source_seq;
         job.frame = std::move(frame);
       }

@@ -7,6 +7,7 @@
 
 #include "codec/jpeg.hpp"
 #include "common/config.hpp"
+#include "runtime/frame_geometry.hpp"
 
 namespace faultline::runtime {
 namespace {
@@ -42,6 +43,7 @@ FrameInfo info_of(const transport::CameraFrameView& frame) {
     info.ego_yaw_rad = std::atan2(2.0 * (q.w() * q.z() + q.x() * q.y()), 1.0 - 2.0 * (q.y() * q.y() + q.z() * q.z()));
   }
   if (h.intrinsics_size() == 9) info.focal_px = h.intrinsics(0);
+  info.geometry = frame_geometry(h);
   return info;
 }
 

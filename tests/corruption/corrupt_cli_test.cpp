@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "corruption/corrupt.hpp"
 #include "corruption/golden_cases.hpp"
 #include "rng/golden_json.hpp"
 #include "test_data.hpp"
@@ -132,6 +133,28 @@ TEST(CorruptCliTest, ImagecorruptionsTypesAndFrostTextures) {
   }
   r = run_faultline("corrupt --type rain --severity 2 --in " + in + " --out " + out);
   EXPECT_NE(r.output.find("elastic_transform"), std::string::npos) << r.output;
+  std::remove(out.c_str());
+}
+
+// Faultline's sensor faults by name: the CLI's frame is the library's fast-mode frame for the seed (one model at
+// time 0); the help lists them.
+TEST(CorruptCliTest, SensorFaultsByName) {
+  const std::string in = test_data::fixture(golden_dir() + "/inputs/chart_333x197.png");
+  const std::string out = temp_png("sensor");
+  const cv::Mat image = cv::imread(in, cv::IMREAD_COLOR);
+  for (const char* type : {"soiling", "water_drops", "glare", "exposure_flicker"}) {
+    auto r =
+        run_faultline(std::string("corrupt --type ") + type + " --severity 4 --seed 9 --in " + in + " --out " + out);
+    ASSERT_EQ(r.exit_code, 0) << type << ": " << r.output;
+    rng::FastRng rng(9);
+    auto expected = corruption::corrupt(image, *corruption::corruption_from_string(type), 4, rng);
+    ASSERT_TRUE(expected);
+    EXPECT_EQ(cv::norm(cv::imread(out, cv::IMREAD_COLOR), *expected, cv::NORM_INF), 0.0) << type;
+    EXPECT_GT(cv::norm(*expected, image, cv::NORM_INF), 0.0) << type;
+  }
+  const auto help = run_faultline("corrupt --help");
+  EXPECT_NE(help.output.find("water_drops"), std::string::npos) << help.output;
+  EXPECT_NE(help.output.find("exposure_flicker"), std::string::npos) << help.output;
   std::remove(out.c_str());
 }
 

@@ -2,8 +2,10 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <map>
 
 #include "corruption/corrupt.hpp"
+#include "corruption/sensor_fault.hpp"
 #include "export/export_fixture.hpp"  // tests/export/
 #include "export/seeds.hpp"
 #include "export/stats_table.hpp"
@@ -139,6 +141,37 @@ TEST_F(ExportTest, NumpyModeEqualsCorruptingTheDecodedInputWithTheDerivedSeed) {
   }
 }
 
+// The sensor faults draw one model per camera and scene (the dirt stays on that lens for the whole scene) and render
+// it at each frame's timestamp, the same in both rng modes.
+TEST_F(ExportTest, SensorFaultsKeepOneModelPerCameraAndScene) {
+  const auto out = testing_util::scratch_dir("sensor");
+  auto c = config(out);
+  c.conditions = {Condition::Soiling, Condition::ExposureFlicker};
+  c.levels = {corruption::Level::Hard};
+  run_ok(c);
+  const auto frames = key_frames();
+  std::map<std::string, std::uint64_t> seed_of_lens;
+  for (const auto& f : frames) {
+    const cv::Mat input = decode(fs::path(dataroot()) / f.filename);
+    for (Condition cond : c.conditions) {
+      const auto level = corruption::Level::Hard;
+      const std::uint64_t seed64 = derive_seed64(c.seed, cond, level, f.scene_token + "/" + f.channel);
+      corruption::FrameContext ctx;
+      ctx.time_s = static_cast<double>(f.timestamp_us) * 1e-6;
+      auto corrupted = corruption::sensor_fault(input, *image_corruption(cond), severity_of(cond, level), seed64, ctx);
+      ASSERT_TRUE(corrupted);
+      const auto dir = out / class_name(cond) / corruption::to_string(level);
+      EXPECT_EQ(bytes_of(dir / rel_of(f)), reencode(*corrupted)) << class_name(cond) << " " << rel_of(f);
+      const std::uint64_t recorded = manifest_at(dir / "manifest.json").files.at(rel_of(f)).seed;
+      EXPECT_EQ(recorded, seed64);
+      const std::string lens = std::string(class_name(cond)) + "/" + f.scene_token + "/" + f.channel;
+      const auto [it, fresh] = seed_of_lens.emplace(lens, recorded);
+      EXPECT_EQ(it->second, recorded) << lens << ": one model per camera and scene";
+    }
+  }
+  EXPECT_LT(seed_of_lens.size(), 2 * frames.size()) << "some camera has several frames in one scene";
+}
+
 TEST_F(ExportTest, FastModeDiffersFromNumpyModeButIsDeterministic) {
   const auto a = testing_util::scratch_dir("fast_a");
   const auto b = testing_util::scratch_dir("fast_b");
@@ -225,6 +258,17 @@ TEST(ExportConditionsTest, ImagecorruptionsConditionsByName) {
   EXPECT_STREQ(class_name(Condition::GlassBlur), "GlassBlur");
   EXPECT_EQ(severity_of(Condition::Frost, corruption::Level::Easy), 2);
   EXPECT_GT(reference_ms_per_image(Condition::GlassBlur), 1e5);
+}
+
+TEST(ExportConditionsTest, SensorFaultsByNameAfterTheImagecorruptions) {
+  auto some = parse_conditions("exposure_flicker,Soiling,water_drops,glare,spatter");
+  ASSERT_TRUE(some);
+  EXPECT_EQ(*some, (std::vector<Condition>{Condition::Spatter, Condition::Soiling, Condition::WaterDrops,
+                                           Condition::Glare, Condition::ExposureFlicker}));
+  EXPECT_EQ(image_corruption(Condition::WaterDrops), corruption::Corruption::WaterDrops);
+  EXPECT_STREQ(class_name(Condition::ExposureFlicker), "ExposureFlicker");
+  EXPECT_EQ(severity_of(Condition::Glare, corruption::Level::Mid), 4);
+  EXPECT_EQ(reference_ms_per_image(Condition::Soiling), 0.0) << "no reference has it";
 }
 
 }  // namespace

@@ -126,6 +126,20 @@ TEST(FaultSpecTest, AcceptsEveryImageCorruptionName) {
   EXPECT_EQ(Parse("[{type: pixelate, severity: 2}]")[0].corruption, corruption::Corruption::Pixelate);
 }
 
+// The sensor faults persist on the lens: coherent by default in fast mode; numpy mode or `coherent: false` redraws
+// them per frame.
+TEST(FaultSpecTest, SensorFaultsAreCoherentByDefault) {
+  for (const char* name : {"soiling", "water_drops", "glare", "exposure_flicker"}) {
+    const auto f = parse_corruption_shorthand(std::string(name) + "/mid", "fault_injector");
+    ASSERT_TRUE(f) << name;
+    EXPECT_TRUE(f->coherent) << name;
+    EXPECT_EQ(f->severity, 4) << name;
+  }
+  EXPECT_FALSE(Parse("[{type: glare, coherent: false}]")[0].coherent);
+  EXPECT_FALSE(Parse("[{type: soiling, rng: numpy}]")[0].coherent);
+  EXPECT_FALSE(Parse("[{type: fog}]")[0].coherent) << "the other corruptions keep their default";
+}
+
 // The imagecorruptions corruptions are injector faults like the nuScenes-C ones (levels 2/4/5).
 TEST(FaultSpecTest, ImagecorruptionsTypesAreFaults) {
   const auto frost = parse_corruption_shorthand("frost/hard", "fault_injector");

@@ -91,12 +91,15 @@ std::vector<Input> MakeInputs(int instants) {
       in.header.mutable_header()->set_publisher("source");
       in.header.mutable_header()->set_capture_stamp_ns(kT0 + k * kNsPerSec / 12);
       in.header.set_payload_bytes(in.bytes->size());
-      for (double v : {1266.4, 0.0, 80.0, 0.0, 1266.4, 45.0, 0.0, 0.0, 1.0}) in.header.add_intrinsics(v);
-      in.header.mutable_sensor_to_ego()->mutable_rotation()->set_w(1.0);
+      // The ego turns left at 0.6 rad/s (0.05 rad per 1/12 s): rolling_shutter's yaw rate, and the glare follows
+      // it; every camera looks along the ego's x axis.
+      auto* ego = in.header.mutable_ego_pose()->mutable_rotation();
+      ego->set_w(std::cos(0.025 * k));
+      ego->set_z(std::sin(0.025 * k));
+      auto* cam_rot = in.header.mutable_sensor_to_ego()->mutable_rotation();
+      cam_rot->set_w(0.5), cam_rot->set_x(-0.5), cam_rot->set_y(0.5), cam_rot->set_z(-0.5);
       in.header.mutable_sensor_to_ego()->mutable_translation()->set_x(1.7);
-      // The ego turns left at 0.6 rad/s (0.05 rad per 1/12 s): rolling_shutter's yaw rate.
-      in.header.mutable_ego_pose()->mutable_rotation()->set_w(std::cos(0.025 * k));
-      in.header.mutable_ego_pose()->mutable_rotation()->set_z(std::sin(0.025 * k));
+      for (double v : {120.0, 0.0, 80.0, 0.0, 120.0, 45.0, 0.0, 0.0, 1.0}) in.header.add_intrinsics(v);
       inputs.push_back(std::move(in));
     }
   }
@@ -104,7 +107,8 @@ std::vector<Input> MakeInputs(int instants) {
 }
 
 // Coherent faults, a ramp and a window (schedule), per-frame seeds in numpy mode, freeze history, frame_lost,
-// delay and a crash: every kind of state the engine carries between frames.
+// delay and a crash, the sensor faults (coherent by default; glare following the ego pose): every kind of state the
+// engine carries between frames.
 constexpr const char* kFaults = R"([
   {type: fog, severity: 3, coherent: true, cameras: [CAM_FRONT, CAM_FRONT_LEFT]},
   {type: motion_blur, severity: 4, coherent: true, cameras: CAM_BACK, ramp_s: 0.6},
@@ -119,7 +123,11 @@ constexpr const char* kFaults = R"([
   {type: recompression, severity: 2, cameras: CAM_FRONT},
   {type: timestamp_skew, severity: 3, cameras: CAM_FRONT_RIGHT},
   {type: calibration_drift, severity: 4, cameras: CAM_BACK_LEFT},
-  {type: rolling_shutter, severity: 5, cameras: CAM_FRONT_LEFT}
+  {type: rolling_shutter, severity: 5, cameras: CAM_FRONT_LEFT},
+  {type: soiling, severity: 4, cameras: CAM_FRONT},
+  {type: glare, severity: 5, cameras: CAM_BACK_RIGHT, start_s: 0.1},
+  {type: water_drops, severity: 5, cameras: CAM_BACK_LEFT},
+  {type: exposure_flicker, severity: 5, cameras: CAM_FRONT_LEFT, start_s: 0.2}
 ])";
 
 std::vector<Sent> RunPipeline(const std::vector<Input>& inputs, int workers, bool decode, int queue_frames) {
@@ -169,6 +177,7 @@ TEST_P(InjectorPipelineTest, OutputIsByteIdenticalForAnyWorkerCount) {
 
   // The reference run exercised every kind of fault: read the actions from its FaultEvents.
   std::map<int, int> actions;
+  std::map<std::string, int> fault_names;
   std::size_t frames = 0, events = 0;
   std::map<std::string, std::uint64_t> last_seq;
   for (const Sent& s : one) {
@@ -176,6 +185,7 @@ TEST_P(InjectorPipelineTest, OutputIsByteIdenticalForAnyWorkerCount) {
       msgs::FaultEvent e;
       ASSERT_TRUE(e.ParseFromString(s.header));
       ++actions[e.state().action()];
+      for (const auto& f : e.state().faults()) ++fault_names[f.name()];
       ++events;
       EXPECT_EQ(e.header().seq(), events);
     } else if (s.topic.rfind("/faulty/", 0) == 0) {
@@ -188,9 +198,9 @@ TEST_P(InjectorPipelineTest, OutputIsByteIdenticalForAnyWorkerCount) {
       const StampNs sent_stamp = kT0 + static_cast<StampNs>(h.source_seq() - 1) * kNsPerSec / 12;
       EXPECT_EQ(h.header().capture_stamp_ns(), sent_stamp + (h.camera() == "CAM_FRONT_RIGHT" ? 20 * kNsPerMs : 0));
       const bool drifted = h.camera() == "CAM_BACK_LEFT";
-      EXPECT_EQ(h.intrinsics(0) != 1266.4, drifted) << h.camera();
+      EXPECT_EQ(h.intrinsics(0) != 120.0, drifted) << h.camera();
       EXPECT_EQ(h.intrinsics(2), 80.0);
-      EXPECT_EQ(h.sensor_to_ego().rotation().w() != 1.0, drifted) << h.camera();
+      EXPECT_EQ(h.sensor_to_ego().rotation().w() != 0.5, drifted) << h.camera();
       EXPECT_EQ(h.sensor_to_ego().translation().x() != 1.7, drifted) << h.camera();
       if (h.camera() == "CAM_FRONT_LEFT" && h.source_seq() > 1) {
         bool skewed = false;
@@ -206,6 +216,9 @@ TEST_P(InjectorPipelineTest, OutputIsByteIdenticalForAnyWorkerCount) {
   for (auto a : {msgs::FAULT_ACTION_PASS, msgs::FAULT_ACTION_CORRUPT, msgs::FAULT_ACTION_DROP, msgs::FAULT_ACTION_BLACK,
                  msgs::FAULT_ACTION_FREEZE, msgs::FAULT_ACTION_DELAY}) {
     EXPECT_GT(actions[a], 0) << "action " << a;
+  }
+  for (const char* name : {"soiling", "water_drops", "glare", "exposure_flicker"}) {
+    EXPECT_GT(fault_names[name], 0) << name;
   }
   // Delayed frames (the clock stands still) leave just before the stream end, which stays last.
   ASSERT_FALSE(one.empty());
