@@ -158,6 +158,9 @@ int run_injector(int argc, char** argv) {
                  "and report the fps ratio (0 = the injector's default, cores - 1)");
   app.add_option("--level", o.level, "easy|mid|hard");
   app.add_option("--types", o.types, "corruptions to run (\"none\" = decode only)");
+  app.add_flag("--coherent", o.coherent,
+               "also run each corruption as a coherent fault (coherent: true, per-camera state), right after its "
+               "non-coherent fast form; rows marked \"coh\" (JSON: \"coherent\": true)");
   app.add_option("--output", o.output, "bgr8 (republish decoded) or jpeg (re-encode q95)")
       ->check(CLI::IsMember({"bgr8", "jpeg"}));
   app.add_flag("--json", o.json, "print a JSON array");

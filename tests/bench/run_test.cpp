@@ -7,6 +7,8 @@
 #include <filesystem>
 #include <set>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "dataset/synth.hpp"
 #include "export/stats_table.hpp"
@@ -28,7 +30,8 @@ fs::path scratch_dir(const std::string& name) {
 }
 
 // `bench injector --images` streams the given JPEGs (their own size, here a 1600x900 dataset frame)
-// through the real injector and reports every frame received; a missing file is an error naming it.
+// through the real injector and reports every frame received; --coherent adds a coherent run of each
+// corruption (not of "none") after its non-coherent one; a missing file is an error naming it.
 TEST(BenchRunTest, InjectorStreamsGivenImagesAndNamesAMissingOne) {
   const fs::path root = scratch_dir("injector");
   dataset::SynthOptions so;
@@ -42,7 +45,7 @@ TEST(BenchRunTest, InjectorStreamsGivenImagesAndNamesAMissingOne) {
     frame = e.path();
   ASSERT_FALSE(frame.empty());
   const int rc = run_faultline(
-      "bench injector --json --seconds 1 --rate-hz 4 --types none color_quant --images " +
+      "bench injector --json --seconds 1 --rate-hz 4 --coherent --types none fog --images " +
           frame.string(),
       root / "inj.log");
   const std::string log = read_text(root / "inj.log");
@@ -53,7 +56,12 @@ TEST(BenchRunTest, InjectorStreamsGivenImagesAndNamesAMissingOne) {
   rapidjson::Document d;
   d.Parse(log.c_str() + json_at);
   ASSERT_FALSE(d.HasParseError()) << log;
-  ASSERT_EQ(d.Size(), 2u);
+  ASSERT_EQ(d.Size(), 3u);
+  const std::vector<std::pair<std::string, bool>> runs = {{"none", false}, {"fog", false}, {"fog", true}};
+  for (rapidjson::SizeType i = 0; i < d.Size(); ++i) {
+    EXPECT_EQ(d[i]["corruption"].GetString(), runs[i].first) << i;
+    EXPECT_EQ(d[i]["coherent"].GetBool(), runs[i].second) << i;
+  }
   for (const auto& row : d.GetArray()) {
     EXPECT_EQ(row["sent"].GetUint64(), 24u);  // 4 ticks x 6 cameras
     EXPECT_EQ(row["received"].GetUint64(), 24u);

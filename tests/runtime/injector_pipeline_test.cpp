@@ -106,11 +106,12 @@ std::vector<Input> MakeInputs(int instants) {
   return inputs;
 }
 
-// Coherent faults, a ramp and a window (schedule), per-frame seeds in numpy mode, freeze history, frame_lost,
-// delay and a crash, the sensor faults (coherent by default; glare following the ego pose): every kind of state the
-// engine carries between frames.
+// Coherent faults (fog ramping up, so its per-camera state restarts at each step), a ramp and a window (schedule),
+// per-frame seeds in numpy mode, freeze history, frame_lost, delay and a crash, the sensor faults (coherent by
+// default; glare following the ego pose), the stream and message faults: every kind of state the engine carries
+// between frames.
 constexpr const char* kFaults = R"([
-  {type: fog, severity: 3, coherent: true, cameras: [CAM_FRONT, CAM_FRONT_LEFT]},
+  {type: fog, severity: 3, coherent: true, cameras: [CAM_FRONT, CAM_FRONT_LEFT], ramp_s: 0.4},
   {type: motion_blur, severity: 4, coherent: true, cameras: CAM_BACK, ramp_s: 0.6},
   {type: snow, severity: 2, coherent: true, cameras: CAM_FRONT_RIGHT, start_s: 0.1, duration_s: 0.5},
   {type: dark, level: mid, rng: numpy, cameras: CAM_FRONT_RIGHT},

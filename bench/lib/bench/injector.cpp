@@ -3,7 +3,8 @@
 // as the injector takes them (--rate-hz 0: at most 4 frames per worker outstanding). Each corruption runs once per
 // --workers count, side by side. Reports frames/s, the injector's CPU (its threads' CLOCK_THREAD_CPUTIME_ID: % of
 // one core and ms per frame; the whole process's CPU per frame beside it), p50/p99 added latency per frame (capture -> received downstream, and the injector's
-// own receive -> publish), and unintended drops.
+// own receive -> publish), and unintended drops. With --coherent, each corruption also runs as a coherent fault
+// (`coherent: true`: one persistent CoherentCorruptor per camera) right after its non-coherent fast form.
 #include "bench/injector.hpp"
 
 #include <unistd.h>
@@ -20,6 +21,7 @@
 #include <vector>
 
 #include <opencv2/core.hpp>
+#include <yaml-cpp/yaml.h>
 
 #include "bench/cpu_time.hpp"
 #include "bench/frames.hpp"
@@ -39,6 +41,7 @@ namespace {
 
 struct Row {
   std::string corruption;
+  bool coherent = false;
   int severity = 0;
   int workers = 1;
   double fps = 0, cpu_ms_per_frame = 0, process_cpu_ms_per_frame = 0;
@@ -106,10 +109,22 @@ std::uint64_t send_frames(transport::Publisher& source, const std::vector<Frame>
   return sent;
 }
 
-Row run_one(const std::string& spec, double seconds, double rate_hz, bool decode, int workers,
-            const std::vector<Frame>& frames, const std::string& dir, int run_index) {
+// The fault schedule of a coherent run: the shorthand's corruption and level with `coherent: true`.
+YAML::Node coherent_faults(const std::string& type, const std::string& level) {
+  YAML::Node fault;
+  fault["type"] = type;
+  fault["level"] = level;
+  fault["coherent"] = true;
+  YAML::Node faults;
+  faults.push_back(fault);
+  return faults;
+}
+
+Row run_one(const std::string& type, const std::string& level, bool coherent, double seconds, double rate_hz,
+            bool decode, int workers, const std::vector<Frame>& frames, const std::string& dir, int run_index) {
   Row row;
-  row.corruption = spec;
+  row.corruption = type;
+  row.coherent = coherent;
   row.workers = workers;
   auto log = logging::make_node_logger("bench_injector", "warn");
   transport::PublisherConfig pc;
@@ -125,7 +140,9 @@ Row run_one(const std::string& spec, double seconds, double rate_hz, bool decode
   ic.decode = decode;
   ic.wait_subscribers = 1;
   ic.workers = workers;
-  auto policy = runtime::make_frame_policy(YAML::Node(), spec, 7, "bench");
+  const std::string shorthand = type == "none" ? "" : type + "/" + level;
+  auto policy = coherent ? runtime::make_frame_policy(coherent_faults(type, level), "", 7, "bench --coherent")
+                         : runtime::make_frame_policy(YAML::Node(), shorthand, 7, "bench");
   if (auto* ep = dynamic_cast<runtime::EnginePolicy*>(policy.get())) row.severity = ep->engine().config().faults[0].severity;
   runtime::InjectorLoop injector(ic, "fault_injector", std::move(policy), log);
   transport::SubscriberConfig sc;
@@ -205,10 +222,11 @@ std::string load_average() {
 
 // One run's line; with `first` (the same corruption's run with the first --workers count), the fps ratio too.
 void print_row(const Row& r, const Row* first) {
-  std::printf("%-12s sev %d  workers %d  %7.1f fps  cpu %6.1f %% of one core, %6.2f ms/frame (receive %.2f workers "
+  const std::string label = r.corruption + (r.coherent ? " coh" : "");
+  std::printf("%-16s sev %d  workers %d  %7.1f fps  cpu %6.1f %% of one core, %6.2f ms/frame (receive %.2f workers "
               "%.2f send %.2f; process %6.2f)  e2e p50 %7.2f ms p99 %7.2f ms  injector p50 %7.2f ms p99 %7.2f ms  sent %llu recv %llu unintended "
               "drops %llu (window full %llu times)",
-              r.corruption.c_str(), r.severity, r.workers, r.fps, r.cpu_pct, r.cpu_ms_per_frame,
+              label.c_str(), r.severity, r.workers, r.fps, r.cpu_pct, r.cpu_ms_per_frame,
               r.receive_ms_per_frame, r.workers_ms_per_frame, r.send_ms_per_frame, r.process_cpu_ms_per_frame,
               r.e2e_p50_ms,
               r.e2e_p99_ms, r.inj_p50_ms, r.inj_p99_ms, static_cast<unsigned long long>(r.sent),
@@ -223,13 +241,13 @@ void print_json(const std::vector<Row>& rows, const std::string& output) {
   std::printf("[\n");
   for (std::size_t i = 0; i < rows.size(); ++i) {
     const Row& r = rows[i];
-    std::printf("  {\"corruption\": \"%s\", \"severity\": %d, \"output\": \"%s\", \"workers\": %d, "
+    std::printf("  {\"corruption\": \"%s\", \"coherent\": %s, \"severity\": %d, \"output\": \"%s\", \"workers\": %d, "
                 "\"seconds\": %.1f, \"fps\": %.2f, \"cpu_pct_one_core\": %.1f, \"cpu_ms_per_frame\": %.3f, \"process_cpu_ms_per_frame\": %.3f, "
                 "\"receive_ms_per_frame\": %.3f, \"workers_ms_per_frame\": %.3f, \"send_ms_per_frame\": %.3f, "
                 "\"e2e_p50_ms\": %.2f, \"e2e_p99_ms\": %.2f, \"injector_p50_ms\": %.2f, \"injector_p99_ms\": %.2f, "
                 "\"sent\": %llu, \"received\": %llu, \"injected_drops\": %llu, \"unintended_drops\": %llu, "
                 "\"window_full_waits\": %llu}%s\n",
-                r.corruption.c_str(), r.severity, output.c_str(), r.workers, r.seconds, r.fps, r.cpu_pct,
+                r.corruption.c_str(), r.coherent ? "true" : "false", r.severity, output.c_str(), r.workers, r.seconds, r.fps, r.cpu_pct,
                 r.cpu_ms_per_frame, r.process_cpu_ms_per_frame, r.receive_ms_per_frame, r.workers_ms_per_frame,
                 r.send_ms_per_frame, r.e2e_p50_ms, r.e2e_p99_ms, r.inj_p50_ms, r.inj_p99_ms,
                 static_cast<unsigned long long>(r.sent), static_cast<unsigned long long>(r.received),
@@ -310,14 +328,16 @@ int run_injector(const InjectorOptions& o) {
   try {
     int index = 0;
     for (const auto& t : types) {
-      const std::string spec = t == "none" ? "" : t + "/" + level;
-      // Worker counts side by side, per corruption, so that they share the machine's load of the moment.
-      const std::size_t first = rows.size();
-      for (const int workers : o.workers) {
-        // "none" with bgr8 output still decodes; with jpeg output it is a pure passthrough.
-        rows.push_back(run_one(spec, seconds, rate_hz, output == "bgr8", workers, frames, dir, index++));
-        rows.back().corruption = t;
-        if (!json) print_row(rows.back(), o.workers.size() > 1 ? &rows[first] : nullptr);
+      for (const bool coherent : {false, true}) {
+        if (coherent && (!o.coherent || t == "none")) continue;
+        // Worker counts side by side, per corruption, so that they share the machine's load of the moment.
+        const std::size_t first = rows.size();
+        for (const int workers : o.workers) {
+          // "none" with bgr8 output still decodes; with jpeg output it is a pure passthrough.
+          rows.push_back(
+              run_one(t, level, coherent, seconds, rate_hz, output == "bgr8", workers, frames, dir, index++));
+          if (!json) print_row(rows.back(), o.workers.size() > 1 ? &rows[first] : nullptr);
+        }
       }
     }
   } catch (const std::exception& e) {

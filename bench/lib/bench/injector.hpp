@@ -20,6 +20,9 @@ struct InjectorOptions {
   // Corruptions, one run each; "none" = decode only.
   std::vector<std::string> types = {"none", "brightness",  "dark",       "fog",
                                     "snow", "motion_blur", "color_quant"};
+  // Also run each corruption (not "none") with `coherent: true` (one persistent CoherentCorruptor per camera),
+  // right after its non-coherent fast form, so the two share the machine's load of the moment.
+  bool coherent = false;
   // JPEG files to stream (camera k sends file k mod count); empty = built-in frames of this kind (noisy: the road
   // scene at noise 2, q95, ~370 KB, the frames of the earlier figures).
   std::vector<std::string> images;
