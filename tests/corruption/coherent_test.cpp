@@ -57,7 +57,9 @@ TEST_P(CoherentTest, SeedReproducesALongSequenceAndAnotherSeedDiffers) {
   }
   // Deterministic corruptions and a constant tone curve cannot differ by seed.
   const bool seeded = cfg.type == Corruption::Fog || cfg.type == Corruption::Snow || cfg.type == Corruption::MotionBlur;
-  if (seeded) EXPECT_TRUE(differs);
+  if (seeded) {
+    EXPECT_TRUE(differs);
+  }
 }
 
 // Consecutive frames of a persistent fault agree far better than two independent fast-mode draws do.

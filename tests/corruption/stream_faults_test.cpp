@@ -71,7 +71,7 @@ TEST(RecompressionTest, LeavesEightPixelBlockEdges) {
 }
 
 TEST(RecompressionTest, FlatFramesStayFlat) {
-  for (const cv::Scalar v : {cv::Scalar::all(0), cv::Scalar::all(255), cv::Scalar(80, 120, 160)}) {
+  for (const cv::Scalar& v : {cv::Scalar::all(0), cv::Scalar::all(255), cv::Scalar(80, 120, 160)}) {
     const cv::Mat in(24, 40, CV_8UC3, v);
     for (int sev = 1; sev <= 5; ++sev) {
       const cv::Mat out = *recompression(in, sev);
@@ -142,7 +142,9 @@ TEST(TransportCorruptionTest, BitFlipsDamageOnlyTheirRestartBands) {
       const int bottom = static_cast<int>(band) * 16 + 16 - (band + 1 < hit.size() && hit[band + 1] ? 1 : 0);
       const cv::Rect rows(0, top, in.cols, bottom - top);
       const double diff = cv::norm(out(rows), reference(rows), cv::NORM_INF);
-      if (!hit[band]) EXPECT_EQ(diff, 0.0) << "seed " << seed << " band " << band;
+      if (!hit[band]) {
+        EXPECT_EQ(diff, 0.0) << "seed " << seed << " band " << band;
+      }
       damaged_bands += hit[band] && diff > 0;
     }
   }
@@ -222,7 +224,9 @@ TEST(RollingShutterTest, DefinedOnTinyFlatAndExtremeInputs) {
       const cv::Mat out = rolling_shutter(f, sev, 3.0, 0);
       ASSERT_EQ(out.size(), f.size());
       cv::Scalar m_in = cv::mean(f), m_out = cv::mean(out);
-      if (f.rows == 20) EXPECT_EQ(m_in, m_out) << "a flat frame stays flat";
+      if (f.rows == 20) {
+        EXPECT_EQ(m_in, m_out) << "a flat frame stays flat";
+      }
     }
   }
   // A yaw rate far beyond any vehicle's: shifts clamp to the frame width, every pixel is an edge pixel.

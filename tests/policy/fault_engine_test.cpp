@@ -16,8 +16,18 @@ using faultline::testing::load_golden_json;
 
 constexpr StampNs kT0 = 1'600'000'000'000'000'000;
 
+// Member by member: FrameInfo's optional pose fields stay unset.
+FrameInfo Info(const std::string& camera, std::uint64_t seq, StampNs stamp, bool key = true) {
+  FrameInfo f;
+  f.camera = camera;
+  f.source_seq = seq;
+  f.capture_stamp_ns = stamp;
+  f.is_key_frame = key;
+  return f;
+}
+
 FrameInfo Frame(int camera, std::uint64_t seq, double t_s, bool key = true) {
-  return {kCameraNames[camera], seq, kT0 + static_cast<StampNs>(t_s * 1e9), key};
+  return Info(kCameraNames[camera], seq, kT0 + static_cast<StampNs>(t_s * 1e9), key);
 }
 
 EngineConfig Config(const std::string& yaml, std::uint64_t seed) {
@@ -267,7 +277,7 @@ TEST(FaultEngineTest, CoherentFogIsSmoothAndRestartsOnASeverityChange) {
 
 TEST(FaultEngineTest, UnknownCameraPassesUntouched) {
   FaultEngine engine(Config("[{type: drop}]", 0));
-  EXPECT_EQ(engine.decide({"LIDAR_TOP", 1, kT0, true}).action, Action::Pass);
+  EXPECT_EQ(engine.decide(Info("LIDAR_TOP", 1, kT0, true)).action, Action::Pass);
   EXPECT_EQ(engine.decide(Frame(0, 1, 0)).action, Action::Drop);
 }
 

@@ -14,6 +14,15 @@
 namespace faultline::policy {
 namespace {
 
+// Member by member: FrameInfo's optional pose fields stay unset.
+FrameInfo Info(const std::string& camera, std::uint64_t seq, StampNs stamp) {
+  FrameInfo f;
+  f.camera = camera;
+  f.source_seq = seq;
+  f.capture_stamp_ns = stamp;
+  return f;
+}
+
 constexpr double kPi = 3.14159265358979323846;
 constexpr StampNs kT0 = 1'600'000'000'000'000'000;
 
@@ -95,7 +104,7 @@ TEST(MessageFaultEngineTest, DriftPersistsPerCameraAndSkewHitsOnlyItsCameras) {
   std::optional<CalibrationDrift> front, back;
   for (int k = 0; k < 6; ++k) {
     for (int cam = 0; cam < kNumCameras; ++cam) {
-      const FramePlan p = engine.decide({kCameraNames[cam], static_cast<std::uint64_t>(k + 1), kT0 + k * 100'000'000});
+      const FramePlan p = engine.decide(Info(kCameraNames[cam], static_cast<std::uint64_t>(k + 1), kT0 + k * 100'000'000));
       EXPECT_EQ(p.action, Action::Pass);
       EXPECT_FALSE(p.needs_pixels());
       if (cam != 0 && cam != 3) {
@@ -111,8 +120,12 @@ TEST(MessageFaultEngineTest, DriftPersistsPerCameraAndSkewHitsOnlyItsCameras) {
       const CalibrationDrift want = calibration_drift(4, p.faults[0].seed);
       EXPECT_EQ(p.edit.calibration->pitch_rad, want.pitch_rad);
       EXPECT_EQ(p.faults[0].params.at("focal_scale"), want.focal_scale);
-      if (cam == 0) EXPECT_EQ(p.edit.stamp_offset_ns, (k >= 2 ? 10'000'000 : 0) - 7'000'000) << "frame " << k;
-      if (cam == 3) EXPECT_EQ(p.edit.stamp_offset_ns, 0);
+      if (cam == 0) {
+        EXPECT_EQ(p.edit.stamp_offset_ns, (k >= 2 ? 10'000'000 : 0) - 7'000'000) << "frame " << k;
+      }
+      if (cam == 3) {
+        EXPECT_EQ(p.edit.stamp_offset_ns, 0);
+      }
     }
   }
   EXPECT_NE(front->yaw_rad, back->yaw_rad) << "cameras drift independently";
@@ -146,7 +159,7 @@ TEST(RollingShutterEngineTest, YawRateFromConsecutivePosesOfOneCamera) {
                                    "test"),
                       5});
   auto frame = [](int cam, std::uint64_t seq, double t_s, std::optional<double> yaw) {
-    FrameInfo f{kCameraNames[cam], seq, kT0 + static_cast<StampNs>(t_s * 1e9)};
+    FrameInfo f = Info(kCameraNames[cam], seq, kT0 + static_cast<StampNs>(t_s * 1e9));
     f.ego_yaw_rad = yaw;
     f.focal_px = 100;
     return f;
