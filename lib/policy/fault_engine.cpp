@@ -191,7 +191,7 @@ FramePlan FaultEngine::decide(const FrameInfo& frame) {
           break;
         }
         plan.corruptions.push_back({i, plan.faults.size(), severity, f.seed, yaw_rate_rad_s, frame.focal_px});
-        if (yaw_rate_rad_s) {
+        if (spec.corruption == corruption::Corruption::RollingShutter && yaw_rate_rad_s) {
           f.params["yaw_rate_deg_s"] = *yaw_rate_rad_s * 180.0 / M_PI;
           f.params["readout_ms"] = corruption::rolling_shutter_readout_ms(severity);
         }
