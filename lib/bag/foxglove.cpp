@@ -1,5 +1,6 @@
 // Faultline -> Foxglove message conversion.
 #include "bag/foxglove.hpp"
+#include "deterministic_serialize.hpp"
 
 #include <cctype>
 
@@ -66,13 +67,13 @@ void append_bytes_field_prefix(int field, std::size_t size, std::string& out) {
 
 void compressed_image_head(const msgs::CameraFrame& frame, std::size_t image_bytes, std::string& head) {
   foxglove::CompressedImage img = to_compressed_image(frame, std::string_view("", 0));
-  img.SerializeToString(&head);
+  msgs::serialize_deterministic(img, &head);
   append_bytes_field_prefix(foxglove::CompressedImage::kDataFieldNumber, image_bytes, head);
 }
 
 void raw_image_head(const msgs::CameraFrame& frame, std::size_t image_bytes, std::string& head) {
   foxglove::RawImage img = to_raw_image(frame, std::string_view("", 0));
-  img.SerializeToString(&head);
+  msgs::serialize_deterministic(img, &head);
   append_bytes_field_prefix(foxglove::RawImage::kDataFieldNumber, image_bytes, head);
 }
 

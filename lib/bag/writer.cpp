@@ -1,5 +1,6 @@
 // MCAP writer: record order as in specs/interfaces.md §3.2.
 #include "bag/writer.hpp"
+#include "deterministic_serialize.hpp"
 
 #include <algorithm>
 
@@ -206,7 +207,7 @@ Status Writer::write_parts(std::uint16_t channel_id, std::uint64_t seq, StampNs 
 
 Status Writer::write_proto(std::uint16_t channel_id, std::uint64_t seq, StampNs log_time_ns,
                            StampNs publish_time_ns, const google::protobuf::Message& message) {
-  if (!message.SerializeToString(&proto_buf_)) {
+  if (!msgs::serialize_deterministic(message, &proto_buf_)) {
     return Status(StatusCode::kInvalidArgument, "cannot serialize " + message.GetTypeName());
   }
   return write(channel_id, seq, log_time_ns, publish_time_ns, proto_buf_);

@@ -10,6 +10,7 @@
 #include "runtime/bag_layout.hpp"
 #include "runtime/player_loop.hpp"
 #include "runtime/remap.hpp"
+#include "deterministic_serialize.hpp"
 
 namespace faultline::runtime {
 
@@ -153,7 +154,7 @@ struct BagConverter::Impl {
                    bool with_tf) {
     ImageChannels& ch = channels_for(topic);
     const std::uint64_t s = h.header().seq();
-    h.SerializeToString(&body);
+    msgs::serialize_deterministic(h, &body);
     prefix = multipart_prefix(body.size());
     check(writer->write_parts(ch.replay, s, log_ns, log_ns, {prefix, body, jpeg}));
     if (!cfg.foxglove_view) return;

@@ -36,6 +36,7 @@
 #include "ros2/schema.hpp"
 #include "runtime/bag_layout.hpp"
 #include "runtime/frame_geometry.hpp"
+#include "deterministic_serialize.hpp"
 
 namespace faultline::runtime {
 namespace {
@@ -339,7 +340,7 @@ struct ImageMessage {      // one of the three, by kind
   std::string serialize() {
     if (faultline) {
       frame.set_payload_bytes(static_cast<std::uint32_t>(payload.size()));
-      return encode_multipart(frame.SerializeAsString(), payload);
+      return encode_multipart(msgs::serialize_deterministic(frame), payload);
     }
     return compressed ? ros2::serialize(c) : ros2::serialize(raw);
   }
@@ -947,7 +948,7 @@ Status Corrupter::write_frame(Job& job) {
     }
     e.set_source_seq(job.source_seq);
     *e.mutable_state() = fault_state(job.plan, job.error);
-    event = e.SerializeAsString();
+    event = msgs::serialize_deterministic(e);
   } else {
     event = ros2::serialize(fault_event(job, topic, action, why));
   }

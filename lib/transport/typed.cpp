@@ -1,4 +1,5 @@
 #include "transport/typed.hpp"
+#include "deterministic_serialize.hpp"
 
 namespace faultline::transport {
 
@@ -77,7 +78,7 @@ Status send_camera_frame_shm(Publisher& publisher, ShmRingWriter& ring, std::str
   shm->set_slot(ref->slot);
   shm->set_sequence(ref->sequence);
   shm->set_offset(ref->offset);
-  const std::string bytes = header.SerializeAsString();
+  const std::string bytes = msgs::serialize_deterministic(header);
   header.clear_shm();  // the caller's header stays a plain frame (delay queues, retries)
   return publisher.send(topic, bytes);
 }
@@ -143,13 +144,13 @@ Status parse_message(const ReceivedMessage& message, google::protobuf::MessageLi
 Status send_camera_frame(Publisher& publisher, std::string_view topic, msgs::CameraFrame& header,
                          const Payload& payload) {
   header.set_payload_bytes(static_cast<std::uint32_t>(payload.size_bytes));
-  const std::string bytes = header.SerializeAsString();
+  const std::string bytes = msgs::serialize_deterministic(header);
   return publisher.send(topic, bytes, payload);
 }
 
 Status send_message(Publisher& publisher, std::string_view topic,
                     const google::protobuf::MessageLite& message) {
-  const std::string bytes = message.SerializeAsString();
+  const std::string bytes = msgs::serialize_deterministic(message);
   return publisher.send(topic, bytes);
 }
 
