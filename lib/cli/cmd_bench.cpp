@@ -219,6 +219,9 @@ int run_ros2(int argc, char** argv) {
   app.add_option("--noise", o.noise, "--frames noisy only: 2 ~380 KB JPEGs, 6 the heavy worst case (~550 KB)")
       ->check(CLI::Range(0, 64))->capture_default_str();
   app.add_option("--corruption", o.corruption, "the corrupted configuration, e.g. fog/mid")->capture_default_str();
+  app.add_flag("--cameras-together", o.cameras_together,
+               "fire all cameras at the same instant (the worst-case burst); default: each camera at its nuScenes "
+               "trigger offset within the frame period (4-37 ms, the lidar sweep), as the replayed dataset does");
   app.add_option("--repeats", o.repeats, "runs per configuration")->check(CLI::Range(1, 50))->capture_default_str();
   app.add_option("--domain", o.domain_id, "DDS domain (-1: 100 + pid % 100)")->check(CLI::Range(-1, 232));
   app.add_option("--bin-dir", o.bin_dir, "directory of ros2_in, fault_injector, ros2_out (default: next to faultline)");

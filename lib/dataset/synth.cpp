@@ -631,4 +631,11 @@ Result<SynthSummary> write_synthetic_dataset(const SynthOptions& opt, const Synt
   return sh.summary;
 }
 
+double camera_trigger_offset_ms(std::string_view channel) {
+  for (const SensorSpec& spec : sensor_specs()) {
+    if (spec.modality == Modality::kCamera && channel == spec.channel) return spec.offset_ms;
+  }
+  return 0;
+}
+
 }  // namespace faultline::dataset

@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <functional>
 #include <string>
+#include <string_view>
 
 #include "common/status.hpp"
 
@@ -46,5 +47,9 @@ Result<SynthSummary> write_synthetic_dataset(const SynthOptions& options, const 
 
 // Scene name of the i-th synthetic scene: mini_val names first, then mini_train, then scene-0001... skipping those.
 std::string synth_scene_name(int index);
+
+// When camera `channel` ("CAM_FRONT", ...) fires relative to its sample, in ms: the rig's cameras trigger one after
+// another as the lidar sweeps past them (4..37 ms), not together. Unknown channel -> 0.
+double camera_trigger_offset_ms(std::string_view channel);
 
 }  // namespace faultline::dataset

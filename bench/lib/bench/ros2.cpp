@@ -9,6 +9,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cctype>
 #include <atomic>
 #include <chrono>
 #include <cstdio>
@@ -24,6 +25,7 @@
 
 #include "bench/frames.hpp"
 #include "codec/jpeg.hpp"
+#include "dataset/synth.hpp"
 #include "ros2dds/convert.hpp"
 #include "ros2dds/dds.hpp"
 #include "diagnostic_msgs.h"
@@ -142,10 +144,31 @@ constexpr const char* kLoopbackConfig =
     "<Peers><Peer address=\"127.0.0.1\"/></Peers></Discovery></Domain></CycloneDDS>";
 
 // nuScenes camera names (the fault engine's cameras): /cam_front/image_raw/compressed -> CAM_FRONT.
-std::string topic_of(int cam) {
-  static const char* kNames[] = {"cam_front", "cam_front_right", "cam_front_left", "cam_back", "cam_back_left",
-                                 "cam_back_right"};
-  return std::string("/") + kNames[cam % 6] + "/image_raw/compressed";
+const char* const kCameraNames[] = {"cam_front", "cam_front_right", "cam_front_left", "cam_back", "cam_back_left",
+                                    "cam_back_right"};
+
+std::string topic_of(int cam) { return std::string("/") + kCameraNames[cam % 6] + "/image_raw/compressed"; }
+
+// When each camera fires within the frame period, in firing order.
+struct Trigger {
+  int camera = 0;
+  std::chrono::nanoseconds offset{0};
+};
+
+// The rig's cameras fire one after another as the lidar sweeps past them (the offsets the synthetic dataset
+// replays with); --cameras-together fires them all at once, the worst-case burst for every queue on the way.
+std::vector<Trigger> camera_triggers(const Ros2Options& o) {
+  std::vector<Trigger> triggers;
+  for (int c = 0; c < o.cameras; ++c) {
+    std::string channel = kCameraNames[c % 6];
+    std::transform(channel.begin(), channel.end(), channel.begin(), [](unsigned char ch) { return std::toupper(ch); });
+    // Faster than the rig's 12 Hz, the sweep shrinks with the period so every camera still fires once per frame.
+    const double ms = o.cameras_together ? 0 : dataset::camera_trigger_offset_ms(channel) * std::min(1.0, 12 / o.rate_hz);
+    triggers.push_back({c, std::chrono::nanoseconds(static_cast<std::int64_t>(ms * 1e6))});
+  }
+  std::stable_sort(triggers.begin(), triggers.end(),
+                   [](const Trigger& a, const Trigger& b) { return a.offset < b.offset; });
+  return triggers;
 }
 
 std::string params_yaml(const Ros2Options& o, const std::string& dir, int domain, const std::string& corruption) {
@@ -250,11 +273,13 @@ Row run_one(const Ros2Options& o, const std::string& config, const std::string& 
   for (auto& n : nodes) cpu0.push_back(child_cpu_s(n.pid));
   const std::uint64_t overflows0 = udp_rcvbuf_errors();
   const auto period = std::chrono::nanoseconds(static_cast<std::int64_t>(1e9 / o.rate_hz));
+  const std::vector<Trigger> triggers = camera_triggers(o);
   const auto start = std::chrono::steady_clock::now();
   const int ticks = static_cast<int>(o.seconds * o.rate_hz);
   for (int k = 0; k < ticks; ++k) {
-    std::this_thread::sleep_until(start + k * period);  // the camera rig's pacing
-    for (int c = 0; c < o.cameras; ++c) {
+    for (const Trigger& trigger : triggers) {
+      const int c = trigger.camera;
+      std::this_thread::sleep_until(start + k * period + trigger.offset);  // the camera rig's pacing
       const auto& jpeg = jpegs[static_cast<std::size_t>(c) % jpegs.size()];
       sensor_msgs_msg_dds__CompressedImage_ m{};
       const StampNs stamp = realtime_now_ns();
@@ -338,9 +363,11 @@ int run_ros2(const Ros2Options& o) {
     jpegs.push_back(std::move(bytes).value());
   }
   std::fprintf(o.json ? stderr : stdout,
-               "ros2 proxy: %d cameras x %.1f Hz of %dx%d %s JPEG (mean %.0f KB), %.0f s per run, DDS domain %d, "
+               "ros2 proxy: %d cameras x %.1f Hz of %dx%d %s JPEG (mean %.0f KB), %s, %.0f s per run, DDS domain %d, "
                "CYCLONEDDS_URI %s\n",
-               o.cameras, o.rate_hz, o.width, o.height, to_string(o.frames), kb, o.seconds, domain,
+               o.cameras, o.rate_hz, o.width, o.height, to_string(o.frames), kb,
+               o.cameras_together ? "cameras fire together" : "cameras fire at the rig's trigger offsets", o.seconds,
+               domain,
                std::getenv("CYCLONEDDS_URI")[0] == '<' ? "(loopback XML)" : std::getenv("CYCLONEDDS_URI"));
   std::vector<Row> rows;
   const std::pair<std::string, std::string> configs[] = {{"passthrough", ""}, {o.corruption, o.corruption}};
@@ -366,8 +393,10 @@ int run_ros2(const Ros2Options& o) {
     return 1;
   }
   bool passthrough_dropped = false;
-  if (o.json) std::printf("{\"cameras\": %d, \"rate_hz\": %.1f, \"seconds\": %.1f, \"configs\": [\n", o.cameras,
-                          o.rate_hz, o.seconds);
+  if (o.json) {
+    std::printf("{\"cameras\": %d, \"rate_hz\": %.1f, \"seconds\": %.1f, \"cameras_together\": %s, \"configs\": [\n",
+                o.cameras, o.rate_hz, o.seconds, o.cameras_together ? "true" : "false");
+  }
   int printed = 0;
   for (const auto& [name, corruption] : configs) {
     std::vector<double> p50, p99, drops, cpu, sent, received;

@@ -19,6 +19,7 @@ struct Ros2Options {
   int width = 1600;                        // frame size (pixels)
   int height = 900;
   FrameKind frames = FrameKind::kRealistic;  // bench/frames.hpp: realistic (q90, 130-165 KB) or noisy
+  bool cameras_together = false;           // all cameras fire at once (worst case) instead of staggered as the rig
   int noise = 2;                           // noisy frames' noise: 2 gives ~380 KB at q95, 6 the worst case (~550 KB)
   std::string corruption = "brightness/mid";  // the corrupted configuration (injector `corruption` shorthand)
   int repeats = 3;                         // runs per configuration (medians and ranges reported)
