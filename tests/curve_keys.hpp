@@ -1,5 +1,5 @@
-// CURVE key files for access tests (#22): a temporary directory with the key pairs "server", "good" and
-// "bad" (transport::write_curve_key_files) and an allowed-clients file listing only "good".
+// CURVE key files for access tests (#22): a temporary directory with the key pairs "server", "good"
+// and "bad" (transport::write_curve_key_files) and an allowed-clients file listing only "good".
 #pragma once
 
 #include <gtest/gtest.h>
@@ -40,7 +40,8 @@ class CurveKeys {
     return a;
   }
   // A connecting node with key pair `name`, trusting `server_key`'s public key.
-  transport::AccessConfig client(const std::string& name, const std::string& server_key = "server") const {
+  transport::AccessConfig client(const std::string& name,
+                                 const std::string& server_key = "server") const {
     transport::AccessConfig a;
     a.curve_secret_key_file = dir_ + "/" + name + ".secret";
     a.curve_server_public_key_file = dir_ + "/" + server_key + ".public";

@@ -1,9 +1,9 @@
 // zstd and LZ4-frame compression for chunks.
 #include "bag/compression.hpp"
 
-#include <memory>
-
 #include <lz4frame.h>
+
+#include <memory>
 #define ZSTD_STATIC_LINKING_ONLY  // ZSTD_decompressBound (exported by Debian 12's libzstd 1.5)
 #include <zstd.h>
 
@@ -13,9 +13,12 @@ namespace faultline::bag {
 
 const char* to_string(Compression c) {
   switch (c) {
-    case Compression::kZstd: return "zstd";
-    case Compression::kLz4: return "lz4";
-    case Compression::kNone: break;
+    case Compression::kZstd:
+      return "zstd";
+    case Compression::kLz4:
+      return "lz4";
+    case Compression::kNone:
+      break;
   }
   return "";
 }
@@ -36,11 +39,14 @@ Status compress(Compression c, int level, std::string_view in, std::string& out)
     return Status::ok();
   }
   if (c == Compression::kZstd) {
-    // One compression context per thread, reused: ZSTD_compress would allocate its workspace per call.
-    thread_local std::unique_ptr<ZSTD_CCtx, decltype(&ZSTD_freeCCtx)> ctx(ZSTD_createCCtx(), &ZSTD_freeCCtx);
+    // One compression context per thread, reused: ZSTD_compress would allocate its workspace per
+    // call.
+    thread_local std::unique_ptr<ZSTD_CCtx, decltype(&ZSTD_freeCCtx)> ctx(ZSTD_createCCtx(),
+                                                                          &ZSTD_freeCCtx);
     if (!ctx) return Status(StatusCode::kInternal, "zstd: cannot create context");
     out.resize(ZSTD_compressBound(in.size()));
-    const std::size_t n = ZSTD_compressCCtx(ctx.get(), out.data(), out.size(), in.data(), in.size(), level);
+    const std::size_t n =
+        ZSTD_compressCCtx(ctx.get(), out.data(), out.size(), in.data(), in.size(), level);
     if (ZSTD_isError(n)) {
       return Status(StatusCode::kInternal, std::string("zstd: ") + ZSTD_getErrorName(n));
     }
@@ -80,10 +86,11 @@ Status decompress_lz4(std::string_view in, std::string& out) {
     if (src_n == 0 && dst_n == 0) break;  // no progress: output full or input stuck
   }
   LZ4F_freeDecompressionContext(ctx);
-  if (hint != 0) return Status(StatusCode::kCorruptData, "lz4: frame incomplete or larger than declared");
+  if (hint != 0)
+    return Status(StatusCode::kCorruptData, "lz4: frame incomplete or larger than declared");
   if (dst_pos != out.size()) {
-    return Status(StatusCode::kCorruptData, "lz4: " + std::to_string(dst_pos) + " bytes, declared " +
-                                                std::to_string(out.size()));
+    return Status(StatusCode::kCorruptData, "lz4: " + std::to_string(dst_pos) +
+                                                " bytes, declared " + std::to_string(out.size()));
   }
   return Status::ok();
 }
@@ -94,7 +101,8 @@ Status decompress(std::string_view compression, std::string_view in, std::uint64
   if (compression.empty()) {
     if (in.size() != expected_size) {
       return Status(StatusCode::kCorruptData, "uncompressed chunk of " + std::to_string(in.size()) +
-                                                  " bytes declares " + std::to_string(expected_size));
+                                                  " bytes declares " +
+                                                  std::to_string(expected_size));
     }
     out.assign(in.data(), in.size());
     return Status::ok();
@@ -107,12 +115,13 @@ Status decompress(std::string_view compression, std::string_view in, std::uint64
   // grows by 255 per byte); zstd's bound reads the frame headers (exact when they carry the size).
   const std::uint64_t bound = compression == "lz4" ? std::uint64_t{in.size()} * 256
                                                    : ZSTD_decompressBound(in.data(), in.size());
-  if (bound == ZSTD_CONTENTSIZE_ERROR) return Status(StatusCode::kCorruptData, "zstd: malformed frame");
+  if (bound == ZSTD_CONTENTSIZE_ERROR)
+    return Status(StatusCode::kCorruptData, "zstd: malformed frame");
   if (expected_size > bound) {
     return Status(StatusCode::kCorruptData,
                   std::string(compression) + ": declares " + std::to_string(expected_size) +
-                      " bytes, the " + std::to_string(in.size()) + " compressed bytes hold at most " +
-                      std::to_string(bound));
+                      " bytes, the " + std::to_string(in.size()) +
+                      " compressed bytes hold at most " + std::to_string(bound));
   }
   out.resize(static_cast<std::size_t>(expected_size));
   if (compression == "lz4") return decompress_lz4(in, out);

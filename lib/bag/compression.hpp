@@ -1,4 +1,5 @@
-// Chunk compression (specs/interfaces.md §3.4): zstd frames, LZ4 *frames* (not raw blocks), or none.
+// Chunk compression (specs/interfaces.md §3.4): zstd frames, LZ4 *frames* (not raw blocks), or
+// none.
 #pragma once
 
 #include <cstdint>
@@ -11,7 +12,7 @@ namespace faultline::bag {
 
 enum class Compression { kNone, kZstd, kLz4 };
 
-const char* to_string(Compression c);  // "", "zstd", "lz4" (the MCAP compression strings)
+const char* to_string(Compression c);     // "", "zstd", "lz4" (the MCAP compression strings)
 const char* display_name(Compression c);  // "none", "zstd", "lz4"
 // Accepts "none"/"" , "zstd", "lz4".
 Result<Compression> compression_from_string(std::string_view name);

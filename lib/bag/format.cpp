@@ -7,21 +7,36 @@ namespace faultline::bag {
 
 const char* opcode_name(std::uint8_t opcode) {
   switch (static_cast<Opcode>(opcode)) {
-    case Opcode::kHeader: return "Header";
-    case Opcode::kFooter: return "Footer";
-    case Opcode::kSchema: return "Schema";
-    case Opcode::kChannel: return "Channel";
-    case Opcode::kMessage: return "Message";
-    case Opcode::kChunk: return "Chunk";
-    case Opcode::kMessageIndex: return "MessageIndex";
-    case Opcode::kChunkIndex: return "ChunkIndex";
-    case Opcode::kAttachment: return "Attachment";
-    case Opcode::kAttachmentIndex: return "AttachmentIndex";
-    case Opcode::kStatistics: return "Statistics";
-    case Opcode::kMetadata: return "Metadata";
-    case Opcode::kMetadataIndex: return "MetadataIndex";
-    case Opcode::kSummaryOffset: return "SummaryOffset";
-    case Opcode::kDataEnd: return "DataEnd";
+    case Opcode::kHeader:
+      return "Header";
+    case Opcode::kFooter:
+      return "Footer";
+    case Opcode::kSchema:
+      return "Schema";
+    case Opcode::kChannel:
+      return "Channel";
+    case Opcode::kMessage:
+      return "Message";
+    case Opcode::kChunk:
+      return "Chunk";
+    case Opcode::kMessageIndex:
+      return "MessageIndex";
+    case Opcode::kChunkIndex:
+      return "ChunkIndex";
+    case Opcode::kAttachment:
+      return "Attachment";
+    case Opcode::kAttachmentIndex:
+      return "AttachmentIndex";
+    case Opcode::kStatistics:
+      return "Statistics";
+    case Opcode::kMetadata:
+      return "Metadata";
+    case Opcode::kMetadataIndex:
+      return "MetadataIndex";
+    case Opcode::kSummaryOffset:
+      return "SummaryOffset";
+    case Opcode::kDataEnd:
+      return "DataEnd";
   }
   return "Unknown";
 }

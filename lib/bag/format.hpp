@@ -96,11 +96,11 @@ class ByteWriter {
   void u16(std::uint16_t v) { le(v, 2); }
   void u32(std::uint32_t v) { le(v, 4); }
   void u64(std::uint64_t v) { le(v, 8); }
-  void str(std::string_view s);          // u32 length + bytes
+  void str(std::string_view s);  // u32 length + bytes
   void bytes32(std::string_view s) { str(s); }
-  void bytes64(std::string_view s);      // u64 length + bytes
+  void bytes64(std::string_view s);  // u64 length + bytes
   void raw(std::string_view s) { out_.append(s.data(), s.size()); }
-  void map(const KeyValueMap& m);        // u32 byte length + (String, String)*
+  void map(const KeyValueMap& m);                             // u32 byte length + (String, String)*
   void map(const std::map<std::uint16_t, std::uint64_t>& m);  // u32 byte length + (u16, u64)*
   // Starts a record; finish_record() patches its length once the content is written.
   std::size_t begin_record(Opcode op);
@@ -121,9 +121,9 @@ class ByteReader {
   bool u16(std::uint16_t& v);
   bool u32(std::uint32_t& v);
   bool u64(std::uint64_t& v);
-  bool str(std::string& s);                  // u32 length + bytes
-  bool view32(std::string_view& s);          // u32 length + bytes, no copy
-  bool view64(std::string_view& s);          // u64 length + bytes, no copy
+  bool str(std::string& s);          // u32 length + bytes
+  bool view32(std::string_view& s);  // u32 length + bytes, no copy
+  bool view64(std::string_view& s);  // u64 length + bytes, no copy
   bool map(KeyValueMap& m);
   bool map(std::map<std::uint16_t, std::uint64_t>& m);
   std::string_view rest() const { return in_.substr(pos_); }

@@ -1,8 +1,9 @@
 // Faultline -> Foxglove message conversion.
 #include "bag/foxglove.hpp"
-#include "deterministic_serialize.hpp"
 
 #include <cctype>
+
+#include "deterministic_serialize.hpp"
 
 namespace faultline::bag {
 
@@ -31,7 +32,8 @@ void set_timestamp(StampNs stamp_ns, google::protobuf::Timestamp* out) {
   out->set_nanos(static_cast<std::int32_t>(nsec));
 }
 
-foxglove::CompressedImage to_compressed_image(const msgs::CameraFrame& frame, std::string_view jpeg) {
+foxglove::CompressedImage to_compressed_image(const msgs::CameraFrame& frame,
+                                              std::string_view jpeg) {
   foxglove::CompressedImage img;
   set_timestamp(frame.header().capture_stamp_ns(), img.mutable_timestamp());
   img.set_frame_id(camera_frame_id(frame.camera()));
@@ -65,7 +67,8 @@ void append_bytes_field_prefix(int field, std::size_t size, std::string& out) {
 }
 }  // namespace
 
-void compressed_image_head(const msgs::CameraFrame& frame, std::size_t image_bytes, std::string& head) {
+void compressed_image_head(const msgs::CameraFrame& frame, std::size_t image_bytes,
+                           std::string& head) {
   foxglove::CompressedImage img = to_compressed_image(frame, std::string_view("", 0));
   msgs::serialize_deterministic(img, &head);
   append_bytes_field_prefix(foxglove::CompressedImage::kDataFieldNumber, image_bytes, head);
@@ -85,7 +88,8 @@ foxglove::CameraCalibration to_camera_calibration(const msgs::CameraFrame& frame
   cal.set_height(frame.height());
   cal.set_distortion_model("");
   std::array<double, 9> k{};
-  for (int i = 0; i < 9 && i < frame.intrinsics_size(); ++i) k[static_cast<std::size_t>(i)] = frame.intrinsics(i);
+  for (int i = 0; i < 9 && i < frame.intrinsics_size(); ++i)
+    k[static_cast<std::size_t>(i)] = frame.intrinsics(i);
   for (double v : k) cal.add_k(v);
   for (int i = 0; i < 9; ++i) cal.add_r(i % 4 == 0 ? 1.0 : 0.0);
   for (int row = 0; row < 3; ++row) {
@@ -183,17 +187,20 @@ foxglove::SceneUpdate gt_scene_update(const std::vector<GtBox>& boxes, StampNs s
   return update;
 }
 
-foxglove::SceneUpdate detection_scene_update(const msgs::DetectionArray& detections, StampNs stamp_ns) {
+foxglove::SceneUpdate detection_scene_update(const msgs::DetectionArray& detections,
+                                             StampNs stamp_ns) {
   foxglove::SceneUpdate update;
   delete_all(update, stamp_ns);
   for (int i = 0; i < detections.detections_size(); ++i) {
     const msgs::Detection& d = detections.detections(i);
-    foxglove::SceneEntity* e = new_entity(update, stamp_ns, "det" + std::to_string(i), d.detection_name());
+    foxglove::SceneEntity* e =
+        new_entity(update, stamp_ns, "det" + std::to_string(i), d.detection_name());
     auto* score = e->add_metadata();
     score->set_key("score");
     score->set_value(std::to_string(d.detection_score()));
     std::array<double, 4> rot{1, 0, 0, 0};
-    for (int k = 0; k < 4 && k < d.rotation_size(); ++k) rot[static_cast<std::size_t>(k)] = d.rotation(k);
+    for (int k = 0; k < 4 && k < d.rotation_size(); ++k)
+      rot[static_cast<std::size_t>(k)] = d.rotation(k);
     set_box(to3(d.translation()), to3(d.size()), rot, {0.9, 0.2, 0.1, 0.5}, *e);
   }
   return update;

@@ -42,7 +42,8 @@ Result<BagInfo> inspect_bag(const std::string& path) {
         if (parse_metadata(r.content, m)) info.metadata_names.push_back(m.name);
         break;
       }
-      default: break;
+      default:
+        break;
     }
   };
   const auto on_message = [&](const MessageView& m) {
@@ -71,7 +72,8 @@ Result<BagInfo> inspect_bag(const std::string& path) {
   } else if (*scan->data_crc_stored == 0) {
     info.data_crc_status = "not computed (stored 0)";
   } else {
-    info.data_crc_status = *scan->data_crc_stored == scan->data_crc_computed.value_or(0) ? "ok" : "MISMATCH";
+    info.data_crc_status =
+        *scan->data_crc_stored == scan->data_crc_computed.value_or(0) ? "ok" : "MISMATCH";
   }
 
   if (Status s = (*reader)->load_summary(); !s) {
@@ -84,12 +86,14 @@ Result<BagInfo> inspect_bag(const std::string& path) {
     if (sum.statistics && sum.statistics->message_count != scan->messages) {
       info.problems.push_back({sum.summary_start, StatusCode::kCorruptData,
                                "Statistics count " + std::to_string(sum.statistics->message_count) +
-                                   " messages, the data section holds " + std::to_string(scan->messages)});
+                                   " messages, the data section holds " +
+                                   std::to_string(scan->messages)});
     }
     if (sum.chunk_indexes.size() != info.chunks) {
       info.problems.push_back({sum.summary_start, StatusCode::kCorruptData,
-                               std::to_string(sum.chunk_indexes.size()) + " ChunkIndex records for " +
-                                   std::to_string(info.chunks) + " chunks"});
+                               std::to_string(sum.chunk_indexes.size()) +
+                                   " ChunkIndex records for " + std::to_string(info.chunks) +
+                                   " chunks"});
     }
   }
 
@@ -148,7 +152,8 @@ Result<Rosbag2Info> inspect_rosbag2(const std::string& bag_dir) {
   }
   auto differ = [&](const std::string& what, auto yaml, auto file) {
     if (yaml != file) {
-      out.disagreements.push_back(what + ": metadata.yaml " + std::to_string(yaml) + ", files " + std::to_string(file));
+      out.disagreements.push_back(what + ": metadata.yaml " + std::to_string(yaml) + ", files " +
+                                  std::to_string(file));
     }
   };
   if (out.files.size() == m.relative_file_paths.size()) {
@@ -160,20 +165,24 @@ Result<Rosbag2Info> inspect_rosbag2(const std::string& bag_dir) {
     for (const auto& t : m.topics) {
       const auto it = counts.find(t.name);
       if (it == counts.end()) {
-        if (t.message_count > 0) out.disagreements.push_back(t.name + ": in metadata.yaml, in no file");
+        if (t.message_count > 0)
+          out.disagreements.push_back(t.name + ": in metadata.yaml, in no file");
         continue;
       }
       differ(t.name + " message_count", t.message_count, it->second);
       if (types[t.name] != t.type) {
-        out.disagreements.push_back(t.name + ": type " + t.type + " in metadata.yaml, " + types[t.name] +
-                                    " in the file");
+        out.disagreements.push_back(t.name + ": type " + t.type + " in metadata.yaml, " +
+                                    types[t.name] + " in the file");
       }
     }
     for (const auto& [topic, n] : counts) {
-      const std::string& name = topic;  // C++17 lambdas cannot capture a structured binding (clang refuses)
-      const bool listed = std::any_of(m.topics.begin(), m.topics.end(), [&](const auto& t) { return t.name == name; });
+      const std::string& name =
+          topic;  // C++17 lambdas cannot capture a structured binding (clang refuses)
+      const bool listed = std::any_of(m.topics.begin(), m.topics.end(),
+                                      [&](const auto& t) { return t.name == name; });
       if (!listed && n > 0) {
-        out.disagreements.push_back(topic + ": " + std::to_string(n) + " messages, not in metadata.yaml");
+        out.disagreements.push_back(topic + ": " + std::to_string(n) +
+                                    " messages, not in metadata.yaml");
       }
     }
   }

@@ -1,5 +1,5 @@
-// Protobuf profile helpers: the serialized FileDescriptorSet (message file + all transitive imports,
-// like `protoc --include_imports`) that MCAP stores as a protobuf schema's data.
+// Protobuf profile helpers: the serialized FileDescriptorSet (message file + all transitive
+// imports, like `protoc --include_imports`) that MCAP stores as a protobuf schema's data.
 #pragma once
 
 #include <google/protobuf/descriptor.h>

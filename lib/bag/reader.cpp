@@ -10,7 +10,9 @@
 
 namespace faultline::bag {
 
-std::string Problem::to_string() const { return "offset " + std::to_string(offset) + ": " + message; }
+std::string Problem::to_string() const {
+  return "offset " + std::to_string(offset) + ": " + message;
+}
 
 namespace {
 
@@ -23,7 +25,8 @@ std::string hex32(std::uint32_t v) {
 // Decompresses and CRC-checks a Chunk record's content into `records`.
 Status decode_chunk(std::string_view content, std::uint64_t max_bytes, ChunkHeader& header,
                     std::string& records) {
-  if (!parse_chunk(content, header)) return Status(StatusCode::kCorruptData, "malformed Chunk header");
+  if (!parse_chunk(content, header))
+    return Status(StatusCode::kCorruptData, "malformed Chunk header");
   if (header.uncompressed_size > max_bytes) {
     return Status(StatusCode::kCorruptData,
                   "Chunk declares " + std::to_string(header.uncompressed_size) +
@@ -31,8 +34,10 @@ Status decode_chunk(std::string_view content, std::uint64_t max_bytes, ChunkHead
   }
   if (Status s = decompress(header.compression, header.records, header.uncompressed_size, records);
       !s) {
-    return Status(s.code(), "Chunk (" + std::string(header.compression.empty() ? "none" : header.compression) +
-                                "): " + s.message());
+    return Status(s.code(),
+                  "Chunk (" +
+                      std::string(header.compression.empty() ? "none" : header.compression) +
+                      "): " + s.message());
   }
   if (header.uncompressed_crc != 0) {
     const std::uint32_t crc = crc32_update(0, records);
@@ -48,22 +53,24 @@ Status decode_chunk(std::string_view content, std::uint64_t max_bytes, ChunkHead
 // Like decode_chunk, but an uncompressed chunk is not copied: `records` then views `content`.
 Status decode_chunk_view(std::string_view content, std::uint64_t max_bytes, ChunkHeader& header,
                          std::string& scratch, std::string_view& records) {
-  if (!parse_chunk(content, header)) return Status(StatusCode::kCorruptData, "malformed Chunk header");
+  if (!parse_chunk(content, header))
+    return Status(StatusCode::kCorruptData, "malformed Chunk header");
   if (!header.compression.empty()) {
     if (Status s = decode_chunk(content, max_bytes, header, scratch); !s) return s;
     records = scratch;
     return Status::ok();
   }
   if (header.records.size() != header.uncompressed_size) {
-    return Status(StatusCode::kCorruptData, "Chunk (none): uncompressed chunk of " +
-                                                std::to_string(header.records.size()) + " bytes declares " +
-                                                std::to_string(header.uncompressed_size));
+    return Status(StatusCode::kCorruptData,
+                  "Chunk (none): uncompressed chunk of " + std::to_string(header.records.size()) +
+                      " bytes declares " + std::to_string(header.uncompressed_size));
   }
   if (header.uncompressed_crc != 0) {
     const std::uint32_t crc = crc32_update(0, header.records);
     if (crc != header.uncompressed_crc) {
-      return Status(StatusCode::kCorruptData, "Chunk CRC mismatch: stored " + hex32(header.uncompressed_crc) +
-                                                  ", computed " + hex32(crc));
+      return Status(StatusCode::kCorruptData, "Chunk CRC mismatch: stored " +
+                                                  hex32(header.uncompressed_crc) + ", computed " +
+                                                  hex32(crc));
     }
   }
   records = header.records;
@@ -88,7 +95,8 @@ bool for_each_inner_record(std::string_view records, std::uint64_t& bad_offset, 
       bad_offset = pos;
       return false;
     }
-    if (!visit(InnerRecord{pos, op, r.rest().substr(0, static_cast<std::size_t>(len))})) return true;
+    if (!visit(InnerRecord{pos, op, r.rest().substr(0, static_cast<std::size_t>(len))}))
+      return true;
     pos += kRecordPrefixBytes + len;
   }
   return true;
@@ -162,7 +170,8 @@ std::unique_ptr<Reader> Reader::open(std::unique_ptr<IReadable> source) {
   return std::unique_ptr<Reader>(new Reader(std::move(source)));
 }
 
-Result<LinearScan> Reader::read_linear(const ReadOptions& options, const MessageCallback& on_message,
+Result<LinearScan> Reader::read_linear(const ReadOptions& options,
+                                       const MessageCallback& on_message,
                                        const ProblemCallback& on_problem) {
   LinearScan scan;
   scan.file_bytes = source_->size();
@@ -176,7 +185,8 @@ Result<LinearScan> Reader::read_linear(const ReadOptions& options, const Message
                                               " bytes is too short for the MCAP magic");
   }
   if (Status s = source_->read(0, kMagic.size(), buf); !s) return s;
-  if (buf != kMagic) return Status(StatusCode::kCorruptData, "offset 0: not an MCAP file (bad magic)");
+  if (buf != kMagic)
+    return Status(StatusCode::kCorruptData, "offset 0: not an MCAP file (bad magic)");
 
   std::uint32_t data_crc = crc32_update(0, buf);
   const bool crc_on = options.verify_data_crc;
@@ -193,7 +203,8 @@ Result<LinearScan> Reader::read_linear(const ReadOptions& options, const Message
 
   while (true) {
     if (pos == size) {
-      report({pos, StatusCode::kTruncated, "file ends without a Footer (writer did not close; try `faultline bag recover`)"});
+      report({pos, StatusCode::kTruncated,
+              "file ends without a Footer (writer did not close; try `faultline bag recover`)"});
       break;
     }
     if (size - pos < kRecordPrefixBytes) {
@@ -228,12 +239,12 @@ Result<LinearScan> Reader::read_linear(const ReadOptions& options, const Message
                         opcode == Opcode::kChannel || opcode == Opcode::kMessage ||
                         opcode == Opcode::kFooter || opcode == Opcode::kDataEnd ||
                         opcode == Opcode::kHeader || opcode == Opcode::kMetadata ||
-                        static_cast<bool>(options.on_record) ||
-                        (crc_on && !scan.data_end_offset);
+                        static_cast<bool>(options.on_record) || (crc_on && !scan.data_end_offset);
     if (len > options.max_record_bytes) {
       report({pos, StatusCode::kCorruptData,
               std::string(opcode_name(op)) + " record of " + std::to_string(len) +
-                  " bytes exceeds the limit of " + std::to_string(options.max_record_bytes) + " (skipped)"});
+                  " bytes exceeds the limit of " + std::to_string(options.max_record_bytes) +
+                  " (skipped)"});
       pos = next;
       continue;
     }
@@ -249,11 +260,16 @@ Result<LinearScan> Reader::read_linear(const ReadOptions& options, const Message
 
     bool stop = false;
     switch (opcode) {
-      case Opcode::kSchema: tables.add_schema(content, pos, report); break;
-      case Opcode::kChannel: tables.add_channel(content, pos, report); break;
+      case Opcode::kSchema:
+        tables.add_schema(content, pos, report);
+        break;
+      case Opcode::kChannel:
+        tables.add_channel(content, pos, report);
+        break;
       case Opcode::kMessage: {
         MessageView view;
-        if (tables.make_view(content, pos, report, view) && topic_selected(options, *view.channel) &&
+        if (tables.make_view(content, pos, report, view) &&
+            topic_selected(options, *view.channel) &&
             time_selected(options, static_cast<std::uint64_t>(view.log_time_ns))) {
           view.record_offset = pos;
           scan.messages++;
@@ -264,7 +280,9 @@ Result<LinearScan> Reader::read_linear(const ReadOptions& options, const Message
       case Opcode::kChunk: {
         ChunkHeader header;
         std::string_view chunk_records;
-        if (Status s = decode_chunk_view(content, options.max_record_bytes, header, records, chunk_records); !s) {
+        if (Status s = decode_chunk_view(content, options.max_record_bytes, header, records,
+                                         chunk_records);
+            !s) {
           scan.bad_chunks++;
           report({pos, s.code(), s.message()});
           break;
@@ -273,8 +291,12 @@ Result<LinearScan> Reader::read_linear(const ReadOptions& options, const Message
         const bool ok = for_each_inner_record(chunk_records, bad, [&](const InnerRecord& r) {
           const std::uint64_t at = pos;  // problems inside a chunk name the chunk's offset
           switch (static_cast<Opcode>(r.opcode)) {
-            case Opcode::kSchema: tables.add_schema(r.content, at, report); break;
-            case Opcode::kChannel: tables.add_channel(r.content, at, report); break;
+            case Opcode::kSchema:
+              tables.add_schema(r.content, at, report);
+              break;
+            case Opcode::kChannel:
+              tables.add_channel(r.content, at, report);
+              break;
             case Opcode::kMessage: {
               MessageView view;
               if (tables.make_view(r.content, at, report, view) &&
@@ -292,8 +314,8 @@ Result<LinearScan> Reader::read_linear(const ReadOptions& options, const Message
             }
             default:
               report({at, StatusCode::kCorruptData,
-                      std::string("unexpected ") + opcode_name(r.opcode) + " record inside a Chunk at +" +
-                          std::to_string(r.offset)});
+                      std::string("unexpected ") + opcode_name(r.opcode) +
+                          " record inside a Chunk at +" + std::to_string(r.offset)});
           }
           return true;
         });
@@ -322,8 +344,9 @@ Result<LinearScan> Reader::read_linear(const ReadOptions& options, const Message
         if (crc_on) {
           scan.data_crc_computed = data_crc;
           if (stored != 0 && stored != data_crc) {
-            report({pos, StatusCode::kCorruptData, "data section CRC mismatch: stored " + hex32(stored) +
-                                                       ", computed " + hex32(data_crc)});
+            report({pos, StatusCode::kCorruptData,
+                    "data section CRC mismatch: stored " + hex32(stored) + ", computed " +
+                        hex32(data_crc)});
           }
         }
         break;
@@ -331,7 +354,8 @@ Result<LinearScan> Reader::read_linear(const ReadOptions& options, const Message
       case Opcode::kFooter: {
         scan.footer_found = true;
         std::string tail;
-        if (size - next < kMagic.size() || !source_->read(next, kMagic.size(), tail) || tail != kMagic) {
+        if (size - next < kMagic.size() || !source_->read(next, kMagic.size(), tail) ||
+            tail != kMagic) {
           report({next, StatusCode::kCorruptData, "Footer is not followed by the closing magic"});
         } else if (size - next > kMagic.size()) {
           report({next + kMagic.size(), StatusCode::kCorruptData,
@@ -340,7 +364,8 @@ Result<LinearScan> Reader::read_linear(const ReadOptions& options, const Message
         stop = true;
         break;
       }
-      default: break;  // Header, Metadata, summary records, unknown opcodes: skipped by length
+      default:
+        break;  // Header, Metadata, summary records, unknown opcodes: skipped by length
     }
     pos = next;
     scan.valid_end = pos;
@@ -365,11 +390,13 @@ Status Reader::load_summary() {
   }
   std::string buf;
   if (Status s = source_->read(0, kMagic.size(), buf); !s) return s;
-  if (buf != kMagic) return Status(StatusCode::kCorruptData, "offset 0: not an MCAP file (bad magic)");
+  if (buf != kMagic)
+    return Status(StatusCode::kCorruptData, "offset 0: not an MCAP file (bad magic)");
   if (Status s = source_->read(size - kMagic.size(), kMagic.size(), buf); !s) return s;
   if (buf != kMagic) {
-    return Status(StatusCode::kNotFound, "offset " + std::to_string(size - kMagic.size()) +
-                                             ": no closing magic (file not closed; try `faultline bag recover`)");
+    return Status(StatusCode::kNotFound,
+                  "offset " + std::to_string(size - kMagic.size()) +
+                      ": no closing magic (file not closed; try `faultline bag recover`)");
   }
   const std::uint64_t footer_offset = size - kMagic.size() - kFooterRecordBytes;
   std::string footer_bytes;
@@ -382,16 +409,20 @@ Status Reader::load_summary() {
   (void)fr.u64(len);
   if (op != static_cast<std::uint8_t>(Opcode::kFooter) || len != kFooterContentBytes ||
       !parse_footer(fr.rest(), footer)) {
-    return Status(StatusCode::kCorruptData, "offset " + std::to_string(footer_offset) + ": no Footer record");
+    return Status(StatusCode::kCorruptData,
+                  "offset " + std::to_string(footer_offset) + ": no Footer record");
   }
-  if (footer.summary_start == 0) return Status(StatusCode::kNotFound, "file is not indexed (no summary)");
-  if (footer.summary_start < kMagic.size() + kDataEndRecordBytes || footer.summary_start > footer_offset) {
-    return Status(StatusCode::kCorruptData, "offset " + std::to_string(footer_offset) +
-                                                ": Footer summary_start " +
-                                                std::to_string(footer.summary_start) + " out of range");
+  if (footer.summary_start == 0)
+    return Status(StatusCode::kNotFound, "file is not indexed (no summary)");
+  if (footer.summary_start < kMagic.size() + kDataEndRecordBytes ||
+      footer.summary_start > footer_offset) {
+    return Status(StatusCode::kCorruptData,
+                  "offset " + std::to_string(footer_offset) + ": Footer summary_start " +
+                      std::to_string(footer.summary_start) + " out of range");
   }
   std::string summary;
-  if (Status s = source_->read(footer.summary_start, footer_offset - footer.summary_start, summary); !s) {
+  if (Status s = source_->read(footer.summary_start, footer_offset - footer.summary_start, summary);
+      !s) {
     return s;
   }
   if (footer.summary_crc != 0) {
@@ -400,7 +431,8 @@ Status Reader::load_summary() {
     if (crc != footer.summary_crc) {
       return Status(StatusCode::kCorruptData, "offset " + std::to_string(footer.summary_start) +
                                                   ": summary CRC mismatch: stored " +
-                                                  hex32(footer.summary_crc) + ", computed " + hex32(crc));
+                                                  hex32(footer.summary_crc) + ", computed " +
+                                                  hex32(crc));
     }
   }
   Summary out;
@@ -442,7 +474,8 @@ Status Reader::load_summary() {
         if (good) out.statistics = std::move(st);
         break;
       }
-      default: break;
+      default:
+        break;
     }
     if (!good) {
       status = Status(StatusCode::kCorruptData, "offset " + std::to_string(at) + ": malformed " +
@@ -484,7 +517,7 @@ struct HeapEntry {
   std::uint64_t key;           // log_time or publish_time
   std::uint64_t chunk_offset;  // tie-break: file order
   std::uint64_t record_offset;
-  std::size_t chunk;           // index into loaded chunks
+  std::size_t chunk;  // index into loaded chunks
   MessageView view;
 };
 struct Later {
@@ -508,19 +541,22 @@ Status Reader::read_indexed(const ReadOptions& options, const MessageCallback& o
   }
   std::vector<const ChunkIndex*> pending;
   for (const ChunkIndex& ci : summary_.chunk_indexes) {
-    if (ci.message_start_time > static_cast<std::uint64_t>(std::numeric_limits<StampNs>::max())) continue;
+    if (ci.message_start_time > static_cast<std::uint64_t>(std::numeric_limits<StampNs>::max()))
+      continue;
     const auto start = static_cast<StampNs>(ci.message_start_time);
     const auto end = static_cast<StampNs>(std::min<std::uint64_t>(
         ci.message_end_time, static_cast<std::uint64_t>(std::numeric_limits<StampNs>::max())));
     if (start >= options.end_ns || end < options.start_ns) continue;
-    const bool has_wanted = std::any_of(ci.message_index_offsets.begin(), ci.message_index_offsets.end(),
-                                        [&](const auto& kv) { return wanted.count(kv.first) > 0; });
+    const bool has_wanted =
+        std::any_of(ci.message_index_offsets.begin(), ci.message_index_offsets.end(),
+                    [&](const auto& kv) { return wanted.count(kv.first) > 0; });
     if (!options.topics.empty() && !ci.message_index_offsets.empty() && !has_wanted) continue;
     pending.push_back(&ci);
   }
   std::sort(pending.begin(), pending.end(), [](const ChunkIndex* a, const ChunkIndex* b) {
-    return a->message_start_time != b->message_start_time ? a->message_start_time < b->message_start_time
-                                                          : a->chunk_start_offset < b->chunk_start_offset;
+    return a->message_start_time != b->message_start_time
+               ? a->message_start_time < b->message_start_time
+               : a->chunk_start_offset < b->chunk_start_offset;
   });
 
   Tables tables;
@@ -534,7 +570,8 @@ Status Reader::read_indexed(const ReadOptions& options, const MessageCallback& o
   auto load = [&](const ChunkIndex& ci) {
     const std::uint64_t at = ci.chunk_start_offset;
     if (ci.chunk_length < kRecordPrefixBytes || ci.chunk_length > options.max_record_bytes) {
-      report({at, StatusCode::kCorruptData, "ChunkIndex length " + std::to_string(ci.chunk_length) + " is invalid"});
+      report({at, StatusCode::kCorruptData,
+              "ChunkIndex length " + std::to_string(ci.chunk_length) + " is invalid"});
       return;
     }
     if (Status s = source_->read(at, ci.chunk_length, content); !s) {
@@ -546,7 +583,8 @@ Status Reader::read_indexed(const ReadOptions& options, const MessageCallback& o
     std::uint64_t len = 0;
     (void)pr.u8(op);
     (void)pr.u64(len);
-    if (op != static_cast<std::uint8_t>(Opcode::kChunk) || len != ci.chunk_length - kRecordPrefixBytes) {
+    if (op != static_cast<std::uint8_t>(Opcode::kChunk) ||
+        len != ci.chunk_length - kRecordPrefixBytes) {
       report({at, StatusCode::kCorruptData, "ChunkIndex does not point at a Chunk record"});
       return;
     }
@@ -560,33 +598,41 @@ Status Reader::read_indexed(const ReadOptions& options, const MessageCallback& o
     std::uint64_t bad = 0;
     const bool ok = for_each_inner_record(chunk->records, bad, [&](const InnerRecord& r) {
       switch (static_cast<Opcode>(r.opcode)) {
-        case Opcode::kSchema: tables.add_schema(r.content, at, report); break;
-        case Opcode::kChannel: tables.add_channel(r.content, at, report); break;
+        case Opcode::kSchema:
+          tables.add_schema(r.content, at, report);
+          break;
+        case Opcode::kChannel:
+          tables.add_channel(r.content, at, report);
+          break;
         case Opcode::kMessage: {
           MessageView view;
-          if (tables.make_view(r.content, at, report, view) && topic_selected(options, *view.channel) &&
+          if (tables.make_view(r.content, at, report, view) &&
+              topic_selected(options, *view.channel) &&
               time_selected(options, static_cast<std::uint64_t>(view.log_time_ns))) {
             view.chunk_offset = at;
             view.record_offset = r.offset;
-            const auto key = static_cast<std::uint64_t>(options.order_by_publish_time ? view.publish_time_ns
-                                                                                      : view.log_time_ns);
+            const auto key = static_cast<std::uint64_t>(
+                options.order_by_publish_time ? view.publish_time_ns : view.log_time_ns);
             heap.push(HeapEntry{key, at, r.offset, idx, view});
             chunk->pending++;
           }
           break;
         }
-        default: break;
+        default:
+          break;
       }
       return true;
     });
     if (!ok) {
-      report({at, StatusCode::kCorruptData, "Chunk record at +" + std::to_string(bad) + " overruns the chunk"});
+      report({at, StatusCode::kCorruptData,
+              "Chunk record at +" + std::to_string(bad) + " overruns the chunk"});
     }
     loaded.push_back(std::move(chunk));
   };
 
   while (true) {
-    // A chunk starting at or before the earliest queued message may hold an earlier one: load it first.
+    // A chunk starting at or before the earliest queued message may hold an earlier one: load it
+    // first.
     while (next_chunk < pending.size() &&
            (options.order_by_publish_time || heap.empty() ||
             pending[next_chunk]->message_start_time <= heap.top().key)) {
@@ -608,13 +654,15 @@ Result<std::vector<Metadata>> Reader::read_metadata() {
   std::string content;
   for (const MetadataIndex& mi : summary_.metadata_indexes) {
     if (mi.length < kRecordPrefixBytes) {
-      return Status(StatusCode::kCorruptData, "offset " + std::to_string(mi.offset) + ": bad MetadataIndex length");
+      return Status(StatusCode::kCorruptData,
+                    "offset " + std::to_string(mi.offset) + ": bad MetadataIndex length");
     }
     if (Status s = source_->read(mi.offset, mi.length, content); !s) return s;
     Metadata m;
     if (static_cast<std::uint8_t>(content[0]) != static_cast<std::uint8_t>(Opcode::kMetadata) ||
         !parse_metadata(std::string_view(content).substr(kRecordPrefixBytes), m)) {
-      return Status(StatusCode::kCorruptData, "offset " + std::to_string(mi.offset) + ": not a Metadata record");
+      return Status(StatusCode::kCorruptData,
+                    "offset " + std::to_string(mi.offset) + ": not a Metadata record");
     }
     out.push_back(std::move(m));
   }

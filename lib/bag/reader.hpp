@@ -1,7 +1,8 @@
 // MCAP reader (specs/interfaces.md §3.7). Linear mode walks every record (replay, scoring, info,
 // recover); indexed mode uses footer -> summary -> only the chunks overlapping a time range.
-// Malformed input never throws or crashes: whole-file failures come back as Status, and record-level
-// problems (bad CRC, truncated tail, unknown channel) go to a ProblemCallback naming the byte offset.
+// Malformed input never throws or crashes: whole-file failures come back as Status, and
+// record-level problems (bad CRC, truncated tail, unknown channel) go to a ProblemCallback naming
+// the byte offset.
 #pragma once
 
 #include <cstdint>
@@ -22,7 +23,8 @@
 namespace faultline::bag {
 
 struct Problem {
-  std::uint64_t offset = 0;  // file offset of the offending record (or of the byte where input ended)
+  std::uint64_t offset =
+      0;  // file offset of the offending record (or of the byte where input ended)
   StatusCode code = StatusCode::kCorruptData;
   std::string message;
   std::string to_string() const;  // "offset 1234: ..."
@@ -52,30 +54,31 @@ struct RecordView {
 using RecordCallback = std::function<void(const RecordView&)>;
 
 struct ReadOptions {
-  StampNs start_ns = 0;                                      // inclusive
-  StampNs end_ns = std::numeric_limits<StampNs>::max();      // exclusive
-  std::vector<std::string> topics;                           // empty = every topic
+  StampNs start_ns = 0;                                  // inclusive
+  StampNs end_ns = std::numeric_limits<StampNs>::max();  // exclusive
+  std::vector<std::string> topics;                       // empty = every topic
   bool order_by_publish_time = false;  // indexed mode; loads all selected chunks at once
   bool verify_data_crc = false;        // linear mode: check DataEnd's CRC (reads every byte)
-  std::uint64_t max_record_bytes = std::uint64_t{4} << 30;   // larger records/chunks are rejected
-  RecordCallback on_record;                                  // linear mode only
-  // Linear mode: start from the summary's Schema and Channel records when the summary is intact, so that
-  // a damaged chunk holding the only in-data copy of them loses its own messages and no others.
+  std::uint64_t max_record_bytes = std::uint64_t{4} << 30;  // larger records/chunks are rejected
+  RecordCallback on_record;                                 // linear mode only
+  // Linear mode: start from the summary's Schema and Channel records when the summary is intact, so
+  // that a damaged chunk holding the only in-data copy of them loses its own messages and no
+  // others.
   bool use_summary_tables = true;
 };
 
 // What a linear pass saw; problems were reported through the callback as well.
 struct LinearScan {
   std::uint64_t file_bytes = 0;
-  std::uint64_t valid_end = 0;        // just past the last complete record
-  std::uint64_t last_chunk_end = 0;   // just past the last good chunk and its MessageIndex records
+  std::uint64_t valid_end = 0;       // just past the last complete record
+  std::uint64_t last_chunk_end = 0;  // just past the last good chunk and its MessageIndex records
   bool footer_found = false;
-  bool stopped_early = false;         // the message callback returned false
+  bool stopped_early = false;  // the message callback returned false
   std::optional<std::uint64_t> data_end_offset;
   std::optional<std::uint32_t> data_crc_stored;
   std::optional<std::uint32_t> data_crc_computed;  // when verify_data_crc
-  std::uint64_t messages = 0;         // yielded (after filters)
-  std::uint64_t chunks = 0;           // decoded without error
+  std::uint64_t messages = 0;                      // yielded (after filters)
+  std::uint64_t chunks = 0;                        // decoded without error
   std::uint64_t bad_chunks = 0;
   std::uint64_t problems = 0;
 };

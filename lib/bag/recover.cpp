@@ -53,7 +53,8 @@ Result<RecoverReport> recover_bag(const std::string& in, const std::string& out,
     auto it = channel_map.find(m.channel->id);
     if (it == channel_map.end()) {
       std::uint16_t schema_id = 0;
-      if (m.schema) schema_id = writer->add_schema(m.schema->name, m.schema->encoding, m.schema->data);
+      if (m.schema)
+        schema_id = writer->add_schema(m.schema->name, m.schema->encoding, m.schema->data);
       auto ch = writer->add_channel(m.channel->topic, schema_id, m.channel->metadata,
                                     m.channel->message_encoding);
       if (!ch) {
@@ -62,7 +63,8 @@ Result<RecoverReport> recover_bag(const std::string& in, const std::string& out,
       }
       it = channel_map.emplace(m.channel->id, *ch).first;
     }
-    if (Status s = writer->write(it->second, m.sequence, m.log_time_ns, m.publish_time_ns, m.data); !s) {
+    if (Status s = writer->write(it->second, m.sequence, m.log_time_ns, m.publish_time_ns, m.data);
+        !s) {
       write_status = s;
       return false;
     }

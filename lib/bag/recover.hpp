@@ -1,5 +1,5 @@
-// `faultline bag recover`: rewrites what survives of an unclosed or damaged bag (e.g. after SIGKILL,
-// no footer) into a valid indexed file, and says what was lost.
+// `faultline bag recover`: rewrites what survives of an unclosed or damaged bag (e.g. after
+// SIGKILL, no footer) into a valid indexed file, and says what was lost.
 #pragma once
 
 #include <cstdint>
@@ -16,14 +16,15 @@ namespace faultline::bag {
 struct RecoverReport {
   std::uint64_t input_bytes = 0;
   std::uint64_t output_bytes = 0;
-  std::uint64_t messages = 0;        // recovered
-  std::uint64_t chunks = 0;          // good chunks read
-  std::uint64_t bad_chunks = 0;      // skipped (bad CRC, bad compression)
-  std::uint64_t metadata = 0;        // Metadata records copied
-  std::uint64_t valid_bytes = 0;     // input prefix made of complete records
-  std::uint64_t lost_tail_bytes = 0; // input bytes after it (an incomplete record)
+  std::uint64_t messages = 0;         // recovered
+  std::uint64_t chunks = 0;           // good chunks read
+  std::uint64_t bad_chunks = 0;       // skipped (bad CRC, bad compression)
+  std::uint64_t metadata = 0;         // Metadata records copied
+  std::uint64_t valid_bytes = 0;      // input prefix made of complete records
+  std::uint64_t lost_tail_bytes = 0;  // input bytes after it (an incomplete record)
   bool had_footer = false;
-  std::optional<std::uint64_t> summary_messages;  // the input's Statistics count, if its summary is intact
+  std::optional<std::uint64_t>
+      summary_messages;  // the input's Statistics count, if its summary is intact
   std::vector<Problem> problems;
 };
 

@@ -31,8 +31,8 @@ void emit_duration(YAML::Emitter& e, const char* key) {
   e << YAML::EndMap;
 }
 
-// Offset of the first byte that is not well-formed UTF-8 (overlong forms, surrogates and code points past
-// U+10FFFF included), or npos.
+// Offset of the first byte that is not well-formed UTF-8 (overlong forms, surrogates and code
+// points past U+10FFFF included), or npos.
 std::size_t first_bad_utf8(const std::string& s) {
   std::size_t i = 0;
   while (i < s.size()) {
@@ -89,10 +89,10 @@ void emit_metadata(YAML::Emitter& e, const Rosbag2Metadata& m) {
   e << YAML::BeginMap;
   e << YAML::Key << "version" << YAML::Value << m.version;
   e << YAML::Key << "storage_identifier" << YAML::Value << m.storage_identifier;
-  e << YAML::Key << "duration" << YAML::Value << YAML::BeginMap << YAML::Key << "nanoseconds" << YAML::Value
-    << m.duration_ns << YAML::EndMap;
-  e << YAML::Key << "starting_time" << YAML::Value << YAML::BeginMap << YAML::Key << "nanoseconds_since_epoch"
-    << YAML::Value << m.starting_time_ns << YAML::EndMap;
+  e << YAML::Key << "duration" << YAML::Value << YAML::BeginMap << YAML::Key << "nanoseconds"
+    << YAML::Value << m.duration_ns << YAML::EndMap;
+  e << YAML::Key << "starting_time" << YAML::Value << YAML::BeginMap << YAML::Key
+    << "nanoseconds_since_epoch" << YAML::Value << m.starting_time_ns << YAML::EndMap;
   e << YAML::Key << "message_count" << YAML::Value << m.message_count;
   e << YAML::Key << "topics_with_message_count" << YAML::Value << YAML::BeginSeq;
   for (const auto& t : m.topics) {
@@ -100,7 +100,8 @@ void emit_metadata(YAML::Emitter& e, const Rosbag2Metadata& m) {
     e << YAML::Key << "name" << YAML::Value << t.name;
     e << YAML::Key << "type" << YAML::Value << t.type;
     e << YAML::Key << "serialization_format" << YAML::Value << t.serialization_format;
-    e << YAML::Key << "offered_qos_profiles" << YAML::Value << YAML::DoubleQuoted << t.offered_qos_profiles;
+    e << YAML::Key << "offered_qos_profiles" << YAML::Value << YAML::DoubleQuoted
+      << t.offered_qos_profiles;
     e << YAML::EndMap;
     e << YAML::Key << "message_count" << YAML::Value << t.message_count << YAML::EndMap;
   }
@@ -114,10 +115,10 @@ void emit_metadata(YAML::Emitter& e, const Rosbag2Metadata& m) {
   for (const auto& f : m.files) {
     e << YAML::BeginMap;
     e << YAML::Key << "path" << YAML::Value << f.path;
-    e << YAML::Key << "starting_time" << YAML::Value << YAML::BeginMap << YAML::Key << "nanoseconds_since_epoch"
-      << YAML::Value << f.starting_time_ns << YAML::EndMap;
-    e << YAML::Key << "duration" << YAML::Value << YAML::BeginMap << YAML::Key << "nanoseconds" << YAML::Value
-      << f.duration_ns << YAML::EndMap;
+    e << YAML::Key << "starting_time" << YAML::Value << YAML::BeginMap << YAML::Key
+      << "nanoseconds_since_epoch" << YAML::Value << f.starting_time_ns << YAML::EndMap;
+    e << YAML::Key << "duration" << YAML::Value << YAML::BeginMap << YAML::Key << "nanoseconds"
+      << YAML::Value << f.duration_ns << YAML::EndMap;
     e << YAML::Key << "message_count" << YAML::Value << f.message_count;
     e << YAML::EndMap;
   }
@@ -142,16 +143,18 @@ std::string rosbag2_serialized_metadata(const Rosbag2Metadata& m) {
 }
 
 Result<Rosbag2Metadata> parse_rosbag2_metadata(const std::string& text, const std::string& path) {
-  // YAML is Unicode text: bytes that are not UTF-8 would not be written back as they were read (found by
-  // fuzz_rosbag2_metadata: `bag convert` would have changed a topic's QoS text).
+  // YAML is Unicode text: bytes that are not UTF-8 would not be written back as they were read
+  // (found by fuzz_rosbag2_metadata: `bag convert` would have changed a topic's QoS text).
   if (const std::size_t bad = first_bad_utf8(text); bad != std::string::npos) {
-    return Status(StatusCode::kCorruptData, path + ": byte " + std::to_string(bad) + " is not UTF-8 text");
+    return Status(StatusCode::kCorruptData,
+                  path + ": byte " + std::to_string(bad) + " is not UTF-8 text");
   }
   std::string key = "rosbag2_bagfile_information";
   try {
     const YAML::Node doc = YAML::Load(text);
     const YAML::Node root = doc.IsMap() ? doc["rosbag2_bagfile_information"] : YAML::Node();
-    if (!root || !root.IsMap()) return Status(StatusCode::kCorruptData, path + ": missing rosbag2_bagfile_information");
+    if (!root || !root.IsMap())
+      return Status(StatusCode::kCorruptData, path + ": missing rosbag2_bagfile_information");
     auto need = [&](const YAML::Node& parent, const char* name) {
       key = name;
       const YAML::Node n = parent.IsMap() ? parent[name] : YAML::Node();
@@ -162,8 +165,9 @@ Result<Rosbag2Metadata> parse_rosbag2_metadata(const std::string& text, const st
     m.version = need(root, "version").as<int>();
     m.storage_identifier = need(root, "storage_identifier").as<std::string>();
     if (m.storage_identifier != "mcap") {
-      return Status(StatusCode::kUnsupported,
-                    path + ": storage_identifier = " + m.storage_identifier + ": only mcap bags are read");
+      return Status(
+          StatusCode::kUnsupported,
+          path + ": storage_identifier = " + m.storage_identifier + ": only mcap bags are read");
     }
     m.duration_ns = need(need(root, "duration"), "nanoseconds").as<StampNs>();
     m.starting_time_ns = need(need(root, "starting_time"), "nanoseconds_since_epoch").as<StampNs>();
@@ -174,16 +178,19 @@ Result<Rosbag2Metadata> parse_rosbag2_metadata(const std::string& text, const st
       info.name = need(tm, "name").as<std::string>();
       info.type = need(tm, "type").as<std::string>();
       info.serialization_format = need(tm, "serialization_format").as<std::string>();
-      if (tm["offered_qos_profiles"]) info.offered_qos_profiles = tm["offered_qos_profiles"].as<std::string>();
+      if (tm["offered_qos_profiles"])
+        info.offered_qos_profiles = tm["offered_qos_profiles"].as<std::string>();
       info.message_count = need(t, "message_count").as<std::uint64_t>();
       m.topics.push_back(std::move(info));
     }
-    for (const YAML::Node& p : need(root, "relative_file_paths")) m.relative_file_paths.push_back(p.as<std::string>());
+    for (const YAML::Node& p : need(root, "relative_file_paths"))
+      m.relative_file_paths.push_back(p.as<std::string>());
     if (m.version >= 5 && root["files"]) {
       for (const YAML::Node& f : root["files"]) {
         Rosbag2FileInfo fi;
         fi.path = need(f, "path").as<std::string>();
-        fi.starting_time_ns = need(need(f, "starting_time"), "nanoseconds_since_epoch").as<StampNs>();
+        fi.starting_time_ns =
+            need(need(f, "starting_time"), "nanoseconds_since_epoch").as<StampNs>();
         fi.duration_ns = need(need(f, "duration"), "nanoseconds").as<StampNs>();
         fi.message_count = need(f, "message_count").as<std::uint64_t>();
         m.files.push_back(std::move(fi));
@@ -204,14 +211,16 @@ Result<Rosbag2Metadata> read_rosbag2_metadata(const std::string& bag_dir) {
   return parse_rosbag2_metadata(*text, path);
 }
 
-Result<std::unique_ptr<Rosbag2Writer>> Rosbag2Writer::open(const std::string& dir, WriterOptions mcap) {
+Result<std::unique_ptr<Rosbag2Writer>> Rosbag2Writer::open(const std::string& dir,
+                                                           WriterOptions mcap) {
   if (dir.empty()) return Status(StatusCode::kInvalidArgument, "rosbag2 directory name is empty");
   fs::path final_dir = fs::path(dir).lexically_normal();
   if (final_dir.filename().empty()) final_dir = final_dir.parent_path();  // "out/" -> "out"
   std::error_code ec;
   if (fs::exists(final_dir, ec)) {
-    return Status(StatusCode::kInvalidArgument,
-                  final_dir.string() + ": exists already; remove it or choose another output directory");
+    return Status(
+        StatusCode::kInvalidArgument,
+        final_dir.string() + ": exists already; remove it or choose another output directory");
   }
   const fs::path parent = final_dir.has_parent_path() ? final_dir.parent_path() : fs::path(".");
   fs::create_directories(parent, ec);
@@ -247,22 +256,28 @@ Rosbag2Writer::~Rosbag2Writer() {
 
 std::string Rosbag2Writer::mcap_path() const { return (fs::path(dir_) / file_name_).string(); }
 
-Result<std::uint16_t> Rosbag2Writer::add_topic(const std::string& topic, const std::string& type, const Qos& qos) {
+Result<std::uint16_t> Rosbag2Writer::add_topic(const std::string& topic, const std::string& type,
+                                               const Qos& qos) {
   auto definition = ros2::ros2msg_definition(type);
-  if (!definition) return Status(definition.status().code(), "topic " + topic + ": " + definition.status().message());
+  if (!definition)
+    return Status(definition.status().code(),
+                  "topic " + topic + ": " + definition.status().message());
   return add_topic_with_definition(topic, type, *definition, offered_qos_profiles_yaml(qos));
 }
 
-Result<std::uint16_t> Rosbag2Writer::add_topic_with_definition(const std::string& topic, const std::string& type,
-                                                               const std::string& definition,
-                                                               const std::string& offered_qos_profiles) {
+Result<std::uint16_t> Rosbag2Writer::add_topic_with_definition(
+    const std::string& topic, const std::string& type, const std::string& definition,
+    const std::string& offered_qos_profiles) {
   if (closed_) return Status(StatusCode::kInvalidArgument, "rosbag2 writer is closed");
   for (const auto& t : metadata_.topics) {
-    if (t.name == topic) return Status(StatusCode::kInvalidArgument, "topic " + topic + " added twice");
+    if (t.name == topic)
+      return Status(StatusCode::kInvalidArgument, "topic " + topic + " added twice");
   }
   const std::uint16_t schema = writer_->add_schema(type, "ros2msg", definition);
-  if (schema == 0) return Status(StatusCode::kInvalidArgument, "topic " + topic + ": too many schemas");
-  auto channel = writer_->add_channel(topic, schema, {{"offered_qos_profiles", offered_qos_profiles}}, "cdr");
+  if (schema == 0)
+    return Status(StatusCode::kInvalidArgument, "topic " + topic + ": too many schemas");
+  auto channel =
+      writer_->add_channel(topic, schema, {{"offered_qos_profiles", offered_qos_profiles}}, "cdr");
   if (!channel) return channel.status();
   topic_of_channel_[*channel] = metadata_.topics.size();
   metadata_.topics.push_back({topic, type, "cdr", offered_qos_profiles, 0});
@@ -282,27 +297,33 @@ Status Rosbag2Writer::note(std::uint16_t channel_id, StampNs log_time_ns, const 
 
 Status Rosbag2Writer::write(std::uint16_t channel_id, StampNs log_time_ns, std::string_view cdr) {
   if (topic_of_channel_.count(channel_id) == 0) {
-    return Status(StatusCode::kInvalidArgument, "rosbag2 write: unknown channel " + std::to_string(channel_id));
+    return Status(StatusCode::kInvalidArgument,
+                  "rosbag2 write: unknown channel " + std::to_string(channel_id));
   }
   const std::uint64_t seq = metadata_.topics[topic_of_channel_[channel_id]].message_count + 1;
-  return note(channel_id, log_time_ns, writer_->write(channel_id, seq, log_time_ns, log_time_ns, cdr));
+  return note(channel_id, log_time_ns,
+              writer_->write(channel_id, seq, log_time_ns, log_time_ns, cdr));
 }
 
 Status Rosbag2Writer::write_parts(std::uint16_t channel_id, StampNs log_time_ns,
                                   std::initializer_list<std::string_view> parts) {
   if (topic_of_channel_.count(channel_id) == 0) {
-    return Status(StatusCode::kInvalidArgument, "rosbag2 write: unknown channel " + std::to_string(channel_id));
+    return Status(StatusCode::kInvalidArgument,
+                  "rosbag2 write: unknown channel " + std::to_string(channel_id));
   }
   const std::uint64_t seq = metadata_.topics[topic_of_channel_[channel_id]].message_count + 1;
-  return note(channel_id, log_time_ns, writer_->write_parts(channel_id, seq, log_time_ns, log_time_ns, parts));
+  return note(channel_id, log_time_ns,
+              writer_->write_parts(channel_id, seq, log_time_ns, log_time_ns, parts));
 }
 
 Status Rosbag2Writer::close() {
   if (closed_) return Status::ok();
   metadata_.starting_time_ns = has_messages_ ? first_ns_ : 0;
   metadata_.duration_ns = has_messages_ ? last_ns_ - first_ns_ : 0;
-  metadata_.files = {{file_name_, metadata_.starting_time_ns, metadata_.duration_ns, metadata_.message_count}};
-  if (Status s = writer_->write_metadata("rosbag2", {{"serialized_metadata", rosbag2_serialized_metadata(metadata_)}});
+  metadata_.files = {
+      {file_name_, metadata_.starting_time_ns, metadata_.duration_ns, metadata_.message_count}};
+  if (Status s = writer_->write_metadata(
+          "rosbag2", {{"serialized_metadata", rosbag2_serialized_metadata(metadata_)}});
       !s) {
     return s;
   }
@@ -318,8 +339,8 @@ Status Rosbag2Writer::close() {
   fs::rename(partial_dir_, dir_, ec);
   closed_ = true;  // from here on the partial directory is kept even when the rename failed
   if (ec) {
-    return Status(StatusCode::kIoError,
-                  "cannot move " + partial_dir_ + " to " + dir_ + ": " + ec.message() + " (the bag stays there)");
+    return Status(StatusCode::kIoError, "cannot move " + partial_dir_ + " to " + dir_ + ": " +
+                                            ec.message() + " (the bag stays there)");
   }
   return Status::ok();
 }

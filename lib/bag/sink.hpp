@@ -34,7 +34,8 @@ class IWritable {
 // sync_on_flush additionally fdatasync()s (survives power loss; costs milliseconds per chunk).
 class FileSink : public IWritable {
  public:
-  static Result<std::unique_ptr<FileSink>> create(const std::string& path, bool sync_on_flush = false);
+  static Result<std::unique_ptr<FileSink>> create(const std::string& path,
+                                                  bool sync_on_flush = false);
   ~FileSink() override;
   Status write(std::string_view bytes) override;
   Status write_parts(std::initializer_list<std::string_view> parts) override;

@@ -1,8 +1,9 @@
 // MCAP writer: record order as in specs/interfaces.md §3.2.
 #include "bag/writer.hpp"
-#include "deterministic_serialize.hpp"
 
 #include <algorithm>
+
+#include "deterministic_serialize.hpp"
 
 namespace faultline::bag {
 
@@ -37,7 +38,8 @@ Result<std::unique_ptr<Writer>> Writer::open(const std::string& path, WriterOpti
   return w;
 }
 
-Result<std::unique_ptr<Writer>> Writer::open(std::unique_ptr<IWritable> sink, WriterOptions options) {
+Result<std::unique_ptr<Writer>> Writer::open(std::unique_ptr<IWritable> sink,
+                                             WriterOptions options) {
   if (!sink) return Status(StatusCode::kInvalidArgument, "null sink");
   if (options.split_bytes != 0 || options.split_ns != 0) {
     return Status(StatusCode::kInvalidArgument, "splitting needs a file path, not a sink");
@@ -226,14 +228,15 @@ Status Writer::flush_chunk() {
       failed_ = s;
       return s;
     }
-    const double limit = static_cast<double>(chunk_.size()) * (1.0 - options_.min_compression_saving);
+    const double limit =
+        static_cast<double>(chunk_.size()) * (1.0 - options_.min_compression_saving);
     if (compressed_.size() >= chunk_.size() || static_cast<double>(compressed_.size()) > limit) {
       used = Compression::kNone;  // e.g. JPEG payloads
       skip_compression_ = options_.incompressible_skip_chunks;
     }
   }
-  const std::string_view stored = used == Compression::kNone ? std::string_view(chunk_)
-                                                             : std::string_view(compressed_);
+  const std::string_view stored =
+      used == Compression::kNone ? std::string_view(chunk_) : std::string_view(compressed_);
   // The Chunk record is written as [head][stored records][message indexes] in one gather write,
   // so the records are never copied into another buffer.
   const std::string compression = to_string(used);
@@ -398,8 +401,8 @@ Status Writer::finish_file() {
   w.u64(kFooterContentBytes);
   w.u64(summary_start);
   w.u64(summary_offset_start);
-  const std::uint32_t summary_crc = crc32_update(
-      0, std::string_view(out_).substr(summary_begin, out_.size() - summary_begin));
+  const std::uint32_t summary_crc =
+      crc32_update(0, std::string_view(out_).substr(summary_begin, out_.size() - summary_begin));
   w.u32(summary_crc);
   w.raw(kMagic);
 

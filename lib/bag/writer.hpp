@@ -30,41 +30,45 @@ namespace faultline::bag {
 
 struct WriterOptions {
   Compression compression = Compression::kZstd;  // chunks that do not shrink are stored as ""
-  int compression_level = 1;                     // zstd level (1 = fast); LZ4 frame level (0 = default)
-  std::uint64_t chunk_size_bytes = 1 << 20;      // uncompressed bytes before a chunk is closed
+  int compression_level = 1;                 // zstd level (1 = fast); LZ4 frame level (0 = default)
+  std::uint64_t chunk_size_bytes = 1 << 20;  // uncompressed bytes before a chunk is closed
   // A chunk is stored uncompressed unless compression saves at least this fraction: JPEG chunks
   // shrink by ~1% (record headers), not worth decompressing on every read. 0 = any saving.
   double min_compression_saving = 0.02;
   // After a chunk that did not shrink by min_compression_saving, store this many following chunks
-  // without trying (a JPEG stream never compresses; trying costs ~as much CPU as all the rest of the
-  // write path). Every (N+1)-th chunk is probed again, so a stream that turns compressible (raw
+  // without trying (a JPEG stream never compresses; trying costs ~as much CPU as all the rest of
+  // the write path). Every (N+1)-th chunk is probed again, so a stream that turns compressible (raw
   // images) is compressed again within N chunks. 0 = try every chunk.
   int incompressible_skip_chunks = 15;
-  std::uint64_t split_bytes = 0;                 // start a new file past this size; 0 = never
-  StampNs split_ns = 0;                          // start a new file after this log-time span; 0 = never
-  bool sync_chunks = false;                      // fdatasync after each chunk (power-loss safety; slow)
-  std::string library = "faultline/0.1.0";       // Header.library
-  std::string profile;                           // Header.profile: "" (protobuf has none) or "ros2"
+  std::uint64_t split_bytes = 0;            // start a new file past this size; 0 = never
+  StampNs split_ns = 0;                     // start a new file after this log-time span; 0 = never
+  bool sync_chunks = false;                 // fdatasync after each chunk (power-loss safety; slow)
+  std::string library = "faultline/0.1.0";  // Header.library
+  std::string profile;                      // Header.profile: "" (protobuf has none) or "ros2"
 };
 
 // Totals over all files written so far (for stop lines and benchmarks).
 struct WriterStats {
   std::uint64_t messages = 0;
   std::uint64_t chunks = 0;
-  std::uint64_t message_bytes = 0;          // payload bytes given to write()
-  std::uint64_t chunk_raw_bytes = 0;        // uncompressed chunk records
-  std::uint64_t chunk_stored_bytes = 0;     // chunk records as stored
-  std::uint64_t chunks_stored_raw = 0;      // chunks kept uncompressed because compression did not shrink them
-  std::uint64_t chunks_not_tried = 0;       // ... of which compression was skipped (incompressible_skip_chunks)
+  std::uint64_t message_bytes = 0;       // payload bytes given to write()
+  std::uint64_t chunk_raw_bytes = 0;     // uncompressed chunk records
+  std::uint64_t chunk_stored_bytes = 0;  // chunk records as stored
+  std::uint64_t chunks_stored_raw =
+      0;  // chunks kept uncompressed because compression did not shrink them
+  std::uint64_t chunks_not_tried =
+      0;  // ... of which compression was skipped (incompressible_skip_chunks)
   std::uint64_t file_bytes = 0;
 };
 
 class Writer {
  public:
-  // path "run.mcap": without splitting writes run.mcap; with split_bytes/split_ns writes run_0.mcap, ...
+  // path "run.mcap": without splitting writes run.mcap; with split_bytes/split_ns writes
+  // run_0.mcap, ...
   static Result<std::unique_ptr<Writer>> open(const std::string& path, WriterOptions options);
   // In-memory or custom sink; splitting is not available (kInvalidArgument).
-  static Result<std::unique_ptr<Writer>> open(std::unique_ptr<IWritable> sink, WriterOptions options);
+  static Result<std::unique_ptr<Writer>> open(std::unique_ptr<IWritable> sink,
+                                              WriterOptions options);
   ~Writer();  // closes, ignoring errors; call close() to see them
   Writer(const Writer&) = delete;
   Writer& operator=(const Writer&) = delete;
@@ -135,7 +139,7 @@ class Writer {
   std::map<std::uint16_t, std::vector<std::pair<std::uint64_t, std::uint64_t>>> chunk_msg_index_;
   std::uint64_t chunk_start_ = 0, chunk_end_ = 0;
   std::string compressed_, out_, proto_buf_;  // reused buffers
-  int skip_compression_ = 0;      // chunks left to store without trying (incompressible stream)
+  int skip_compression_ = 0;  // chunks left to store without trying (incompressible stream)
 
   WriterStats stats_;
 };

@@ -46,21 +46,23 @@ ConditionResult run_one(const BenchmarkOptions& o, const RunSpec& run,
     so.env["FAULTLINE_DETECTIONS"] = "ipc://" + std::string(sock) + "/det";
   }
   so.sink = [&node_log](const std::string& node, std::string_view line, launch::OutputStream) {
-    node_log << "[" << node << "] " << line << std::endl;  // flushed: the log is readable while the run goes
+    node_log << "[" << node << "] " << line
+             << std::endl;  // flushed: the log is readable while the run goes
   };
   std::atomic<bool> run_stop{false};
   const auto t0 = std::chrono::steady_clock::now();
-  // A node that fails on its own (a detector that exits 1 after five samples) ends the run at once with the
-  // real cause, instead of leaving the others waiting until --run-timeout.
+  // A node that fails on its own (a detector that exits 1 after five samples) ends the run at once
+  // with the real cause, instead of leaving the others waiting until --run-timeout.
   std::string node_failure;
   so.on_exit = [&](const launch::ChildOutcome& c) {
     if (!c.failed() || !node_failure.empty()) return;
     const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     char when[32];
     std::snprintf(when, sizeof when, "%.1f", s);
-    node_failure = c.name + (!c.started       ? " did not start: " + c.start_error
-                             : c.term_signal ? " was killed by signal " + std::to_string(c.term_signal)
-                                             : " exited with code " + std::to_string(c.exit_code)) +
+    node_failure = c.name +
+                   (!c.started      ? " did not start: " + c.start_error
+                    : c.term_signal ? " was killed by signal " + std::to_string(c.term_signal)
+                                    : " exited with code " + std::to_string(c.exit_code)) +
                    " after " + when + " s";
     run_stop.store(true);
   };

@@ -29,7 +29,8 @@ struct BenchmarkOptions {
   std::vector<std::string> detector_params;  // key:=value for our detector node
   std::string baseline_manifest;             // "" = the paper's DETR3D
   std::string bin_dir;                       // where the node executables are
-  std::string pipeline_file;                 // one run's nodes (a launch file); "" = launch/benchmark.yaml built in
+  std::string
+      pipeline_file;  // one run's nodes (a launch file); "" = launch/benchmark.yaml built in
   std::string corrupt_bench;  // bench/results/corrupt.json for the report, if present
   int run_timeout_s = 600;    // a run that takes longer is stopped and marked failed
   // Faultline's detector only: also run it at input scales 0.5 and 0.25 (clean) and single-frame
@@ -53,7 +54,8 @@ struct ConditionResult {
 struct BenchmarkResult {
   std::vector<ConditionResult> runs;
   bool robustness_ok = false;
-  std::string robustness_error;  // why mCE/mRR were not computed although corruptions were asked for
+  std::string
+      robustness_error;  // why mCE/mRR were not computed although corruptions were asked for
   scoring::RobustnessSummary robustness;
   std::string report_path;
 };

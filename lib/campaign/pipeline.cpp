@@ -11,7 +11,8 @@ namespace faultline::campaign {
 namespace fs = std::filesystem;
 
 std::map<std::string, std::string> pipeline_variables(const BenchmarkOptions& o, const RunSpec& run,
-                                                      const std::string& sockets, const std::string& run_dir) {
+                                                      const std::string& sockets,
+                                                      const std::string& run_dir) {
   std::string detector = o.detector_cmd;
   if (detector.empty()) {
     detector = "detector";
@@ -30,18 +31,21 @@ std::map<std::string, std::string> pipeline_variables(const BenchmarkOptions& o,
 
 namespace {
 
-launch::LaunchFile load_pipeline(const BenchmarkOptions& o, const std::map<std::string, std::string>& vars) {
+launch::LaunchFile load_pipeline(const BenchmarkOptions& o,
+                                 const std::map<std::string, std::string>& vars) {
   launch::LoadOptions load;
   load.bin_dir = o.bin_dir;
   load.search_path = false;  // the nodes of this build, not whatever PATH holds
-  if (!o.detector_cmd.empty()) load.replaced_nodes.insert("detector");  // an external command runs instead
+  if (!o.detector_cmd.empty())
+    load.replaced_nodes.insert("detector");  // an external command runs instead
   // Only the run's variables: a benchmark must not change with the caller's environment.
   load.env = [&vars](const std::string& name) -> std::optional<std::string> {
     const auto it = vars.find(name);
     return it == vars.end() ? std::nullopt : std::optional<std::string>(it->second);
   };
   if (!o.pipeline_file.empty()) return launch::load_launch(o.pipeline_file, load);
-  return launch::parse_launch(std::string(builtin_benchmark_pipeline()), "launch/benchmark.yaml (built in)", load);
+  return launch::parse_launch(std::string(builtin_benchmark_pipeline()),
+                              "launch/benchmark.yaml (built in)", load);
 }
 
 const launch::NodeSpec& find_node(const launch::LaunchFile& pipeline, const std::string& name) {
@@ -71,13 +75,15 @@ RunPipeline run_pipeline(const BenchmarkOptions& o, const RunSpec& run, const st
     (void)find_node(pipeline, needed);
   }
   if (!run.corruption.empty()) {
-    launch::apply_override(pipeline, "fault_injector.corruption:=" + injector_corruption_name(run.corruption) +
-                                         "/" + run.level);
+    launch::apply_override(
+        pipeline,
+        "fault_injector.corruption:=" + injector_corruption_name(run.corruption) + "/" + run.level);
   }
   // Later overrides win: the variant's parameters over the detector's own.
   for (const auto& p : o.detector_params) launch::apply_override(pipeline, "detector." + p);
   for (const auto& p : run.variant_params) launch::apply_override(pipeline, "detector." + p);
-  if (!o.scenes.empty()) launch::apply_override(pipeline, "nusc_player.scenes:=" + quoted_list(o.scenes));
+  if (!o.scenes.empty())
+    launch::apply_override(pipeline, "nusc_player.scenes:=" + quoted_list(o.scenes));
 
   const fs::path params_dir = fs::path(run_dir) / "params";
   std::error_code ec;

@@ -1,5 +1,5 @@
-// launch/benchmark.yaml compiled in (PIPELINE_FILE is set by lib/campaign/CMakeLists.txt), so the tool needs no
-// files beside it to run a benchmark.
+// launch/benchmark.yaml compiled in (PIPELINE_FILE is set by lib/campaign/CMakeLists.txt), so the
+// tool needs no files beside it to run a benchmark.
 #include <cstddef>
 #include <string_view>
 
@@ -7,11 +7,13 @@
 #error "PIPELINE_FILE must name launch/benchmark.yaml"
 #endif
 
-__asm__(".section .rodata\n"
-        ".global faultline_benchmark_pipeline_begin\nfaultline_benchmark_pipeline_begin:\n"
-        ".incbin \"" PIPELINE_FILE "\"\n"
-        ".global faultline_benchmark_pipeline_end\nfaultline_benchmark_pipeline_end:\n"
-        ".previous\n");
+__asm__(
+    ".section .rodata\n"
+    ".global faultline_benchmark_pipeline_begin\nfaultline_benchmark_pipeline_begin:\n"
+    ".incbin \"" PIPELINE_FILE
+    "\"\n"
+    ".global faultline_benchmark_pipeline_end\nfaultline_benchmark_pipeline_end:\n"
+    ".previous\n");
 
 extern "C" const char faultline_benchmark_pipeline_begin[];
 extern "C" const char faultline_benchmark_pipeline_end[];
@@ -20,7 +22,8 @@ namespace faultline::campaign {
 
 std::string_view builtin_benchmark_pipeline() {
   return {faultline_benchmark_pipeline_begin,
-          static_cast<std::size_t>(faultline_benchmark_pipeline_end - faultline_benchmark_pipeline_begin)};
+          static_cast<std::size_t>(faultline_benchmark_pipeline_end -
+                                   faultline_benchmark_pipeline_begin)};
 }
 
 }  // namespace faultline::campaign

@@ -14,8 +14,8 @@
 #include <thread>
 #include <unordered_map>
 
-#include "campaign/benchmark.hpp"
 #include "camera_frame.pb.h"
+#include "campaign/benchmark.hpp"
 #include "detection.pb.h"
 #include "launch/supervisor.hpp"
 #include "scoring/evaluate.hpp"

@@ -4,7 +4,6 @@
 #pragma once
 
 #include <CLI/CLI.hpp>
-
 #include <string>
 
 #include "transport/access.hpp"
@@ -29,7 +28,9 @@ inline void add_access_options(CLI::App& app, transport::AccessConfig& access, S
       const std::string k = key;
       const bool bind_only = k == "curve_allowed_clients_file";
       const bool connect_only = k == "curve_server_public_key_file";
-      if ((bind_only && sides == SocketSides::Connect) || (connect_only && sides == SocketSides::Bind)) return;
+      if ((bind_only && sides == SocketSides::Connect) ||
+          (connect_only && sides == SocketSides::Bind))
+        return;
       group->add_option(option_name(key), field, help);
     }
     static std::string option_name(std::string key) {
@@ -37,8 +38,10 @@ inline void add_access_options(CLI::App& app, transport::AccessConfig& access, S
       return "--" + key;
     }
   };
-  Adder adder{app.add_option_group("Access", "who may reach the sockets (transport/access.hpp, docs/reliability.md)"),
-              sides};
+  Adder adder{
+      app.add_option_group("Access",
+                           "who may reach the sockets (transport/access.hpp, docs/reliability.md)"),
+      sides};
   access.visit(adder);
 }
 

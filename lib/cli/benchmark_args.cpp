@@ -37,12 +37,12 @@ void add_benchmark_options(CLI::App& app, BenchmarkArgs& args) {
   app.add_option("--eval-set", o.eval_set, "split to score: mini_val, val or a splits.json key")
       ->capture_default_str();
   app.add_option("--scenes", o.scenes, "scenes to replay (default: all)")->delimiter(',');
-  app.add_option(
-         "--corruptions", args.corruptions,
-         "comma list of camera_crash, frame_lost, low_light or any image corruption (" +
-             corruption::corruption_names(",") +
-             ", and Faultline's message faults calibration_drift, timestamp_skew), or all (nuScenes-C's eight); "
-             "mCE covers those the baseline has")
+  app.add_option("--corruptions", args.corruptions,
+                 "comma list of camera_crash, frame_lost, low_light or any image corruption (" +
+                     corruption::corruption_names(",") +
+                     ", and Faultline's message faults calibration_drift, timestamp_skew), or all "
+                     "(nuScenes-C's eight); "
+                     "mCE covers those the baseline has")
       ->capture_default_str();
   app.add_option("--levels", args.levels,
                  "comma list of easy,mid,hard (default: mid; --full: all)");
@@ -57,7 +57,8 @@ void add_benchmark_options(CLI::App& app, BenchmarkArgs& args) {
   app.add_option("--detector-param", o.detector_params,
                  "key:=value for Faultline's detector (repeatable)");
   app.add_option("--pipeline", o.pipeline_file,
-                 "launch file of one run's nodes, with the variables of launch/benchmark.yaml (default: that "
+                 "launch file of one run's nodes, with the variables of launch/benchmark.yaml "
+                 "(default: that "
                  "file, built in); each run keeps its nodes' parameters in runs/<run>/params/")
       ->check(CLI::ExistingFile)
       ->transform([](std::string path) { return std::filesystem::absolute(path).string(); });
@@ -88,8 +89,8 @@ int resolve_benchmark_options(BenchmarkArgs& args, const char* command) {
       bool known = false;
       for (const char* k : scoring::kRoboBevCorruptions) known |= canon == k;
       known |= corruption::corruption_from_string(canon).has_value();
-      // Faultline's message faults run in the injector like any fault (the detector lifts boxes with the drifted
-      // calibration and the skewed stamps).
+      // Faultline's message faults run in the injector like any fault (the detector lifts boxes
+      // with the drifted calibration and the skewed stamps).
       known |= canon == "calibration_drift" || canon == "timestamp_skew";
       if (!known) {
         std::fprintf(stderr, "faultline %s: --corruptions: unknown corruption '%s'\n", command,

@@ -1,6 +1,6 @@
-// `faultline bag control ENDPOINT pause|resume|toggle|step [N]`: drives a `bag play --control ENDPOINT`.
+// `faultline bag control ENDPOINT pause|resume|toggle|step [N]`: drives a `bag play --control
+// ENDPOINT`.
 #include <CLI/CLI.hpp>
-
 #include <cstdio>
 
 #include "cli/access_options.hpp"
@@ -13,7 +13,8 @@ namespace faultline::cli {
 namespace {
 
 int run(int argc, char** argv) {
-  CLI::App app{"Send a pause/resume/toggle/step command to `faultline bag play --control ENDPOINT`."};
+  CLI::App app{
+      "Send a pause/resume/toggle/step command to `faultline bag play --control ENDPOINT`."};
   std::string endpoint, command;
   int count = 1;
   app.add_option("endpoint", endpoint, "the player's --control address")->required();
@@ -31,7 +32,7 @@ int run(int argc, char** argv) {
     pc.endpoint = endpoint;
     pc.pattern = transport::Pattern::PushPull;
     pc.bind = false;
-    pc.linger_ms = 2000;                // deliver the command before exiting
+    pc.linger_ms = 2000;                 // deliver the command before exiting
     pc.send_timeout_ns = 5 * kNsPerSec;  // no player listening: fail instead of blocking
     pc.access = access;
     transport::Publisher push(pc);

@@ -1,9 +1,9 @@
 // `faultline bag convert --dataroot D --version V [--scenes LIST] [--format foxglove|ros2] -o OUT
-// [--corrupt TYPE:LEVEL ...]`: nuScenes scenes straight into an MCAP bag (runtime/bag_convert.hpp) or a rosbag2
-// directory (runtime/ros2_convert.hpp), unpaced, with a progress line.
-#include <CLI/CLI.hpp>
+// [--corrupt TYPE:LEVEL ...]`: nuScenes scenes straight into an MCAP bag (runtime/bag_convert.hpp)
+// or a rosbag2 directory (runtime/ros2_convert.hpp), unpaced, with a progress line.
 #include <time.h>
 
+#include <CLI/CLI.hpp>
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -40,12 +40,18 @@ double process_cpu_s() {
 
 int run(int argc, char** argv) {
   CLI::App app{
-      "Write nuScenes scenes straight into an MCAP bag: camera frames as the player publishes them (replayable "
-      "with `bag play`), /sync/sample boundaries, and the Foxglove view (CompressedImage, CameraCalibration, /tf, "
-      "ground-truth SceneUpdate on /markers/annotations; nuscenes2mcap naming). With --corrupt, the injector's "
-      "fault engine runs on every frame and the bag also holds /faulty/... frames and /faultline/faults events. "
-      "With --format ros2: a rosbag2 directory (metadata.yaml + MCAP, CDR messages) for `ros2 bag play`: "
-      "/CAM_*/image_rect_compressed, /CAM_*/camera_info, /tf_static, /tf, /markers/annotations (MarkerArray) and, "
+      "Write nuScenes scenes straight into an MCAP bag: camera frames as the player publishes them "
+      "(replayable "
+      "with `bag play`), /sync/sample boundaries, and the Foxglove view (CompressedImage, "
+      "CameraCalibration, /tf, "
+      "ground-truth SceneUpdate on /markers/annotations; nuscenes2mcap naming). With --corrupt, "
+      "the injector's "
+      "fault engine runs on every frame and the bag also holds /faulty/... frames and "
+      "/faultline/faults events. "
+      "With --format ros2: a rosbag2 directory (metadata.yaml + MCAP, CDR messages) for `ros2 bag "
+      "play`: "
+      "/CAM_*/image_rect_compressed, /CAM_*/camera_info, /tf_static, /tf, /markers/annotations "
+      "(MarkerArray) and, "
       "with --corrupt, the faulted frames and /faultline/faults (DiagnosticArray). "
       "Not paced: as fast as disk and CPU allow."};
   std::string dataroot, version = "v1.0-mini", scenes;
@@ -54,27 +60,37 @@ int run(int argc, char** argv) {
   runtime::Ros2ConvertConfig ros2_cfg;
   std::string format = "foxglove";
   bool gt = true, quiet = false;
-  app.add_option("--dataroot", dataroot, "nuScenes root (holds <version>/, samples/, sweeps/)")->required();
+  app.add_option("--dataroot", dataroot, "nuScenes root (holds <version>/, samples/, sweeps/)")
+      ->required();
   app.add_option("--version", version, "table folder")->capture_default_str();
-  app.add_option("--scenes,--scene", scenes, "comma-separated scene names (default: all scenes of the version)");
+  app.add_option("--scenes,--scene", scenes,
+                 "comma-separated scene names (default: all scenes of the version)");
   app.add_option("--format", format,
-                 "foxglove: one .mcap with Faultline's replay channels and the Foxglove view; ros2: a rosbag2 "
+                 "foxglove: one .mcap with Faultline's replay channels and the Foxglove view; "
+                 "ros2: a rosbag2 "
                  "directory (ROS 2 Humble and later)")
       ->check(CLI::IsMember({"foxglove", "ros2"}))
       ->capture_default_str();
-  app.add_option("-o,--output", cfg.output, "bag path (.mcap), or with --format ros2 the bag directory to create")
+  app.add_option("-o,--output", cfg.output,
+                 "bag path (.mcap), or with --format ros2 the bag directory to create")
       ->required();
-  app.add_option("--corrupt", corrupt,
-                 "TYPE:LEVEL fault on all cameras, e.g. fog:mid, snow:3, iso_noise:hard, camera_crash:hard "
-                 "(repeatable; the injector's `corruption` shorthand; TYPE: " +
-                     corruption::corruption_names() + ", camera_crash, frame_lost, calibration_drift, timestamp_skew)");
-  app.add_option("--seed", cfg.run_metadata["seed"], "run seed of the fault draws")->default_str("0");
-  app.add_flag("!--no-clean", cfg.clean_frames,
-               "with --corrupt: store only the faulted stream (--format ros2: on the plain camera topics)");
+  app.add_option(
+      "--corrupt", corrupt,
+      "TYPE:LEVEL fault on all cameras, e.g. fog:mid, snow:3, iso_noise:hard, camera_crash:hard "
+      "(repeatable; the injector's `corruption` shorthand; TYPE: " +
+          corruption::corruption_names() +
+          ", camera_crash, frame_lost, calibration_drift, timestamp_skew)");
+  app.add_option("--seed", cfg.run_metadata["seed"], "run seed of the fault draws")
+      ->default_str("0");
+  app.add_flag(
+      "!--no-clean", cfg.clean_frames,
+      "with --corrupt: store only the faulted stream (--format ros2: on the plain camera topics)");
   app.add_option("--compression", cfg.compression, "none | zstd | lz4")->capture_default_str();
-  app.add_flag("!--no-foxglove-view", cfg.foxglove_view, "replay channels only (--format foxglove)");
-  app.add_option("--image-qos", ros2_cfg.image_qos,
-                 "--format ros2: QoS offered on the camera topics, reliable or best_effort (sensor data)")
+  app.add_flag("!--no-foxglove-view", cfg.foxglove_view,
+               "replay channels only (--format foxglove)");
+  app.add_option(
+         "--image-qos", ros2_cfg.image_qos,
+         "--format ros2: QoS offered on the camera topics, reliable or best_effort (sensor data)")
       ->check(CLI::IsMember({"reliable", "best_effort"}))
       ->capture_default_str();
   app.add_flag("!--no-ground-truth", gt, "no /markers/annotations boxes");
@@ -87,7 +103,8 @@ int run(int argc, char** argv) {
     try {
       seed = std::stoull(cfg.run_metadata["seed"]);
     } catch (const std::exception&) {
-      throw ConfigError("bag convert: --seed " + cfg.run_metadata["seed"] + ": expected an unsigned integer");
+      throw ConfigError("bag convert: --seed " + cfg.run_metadata["seed"] +
+                        ": expected an unsigned integer");
     }
     // The injector's policy: each --corrupt TYPE:LEVEL is its `corruption: TYPE/LEVEL` shorthand.
     policy::EngineConfig engine;
@@ -101,7 +118,8 @@ int run(int argc, char** argv) {
       faults_text += (faults_text.empty() ? "" : " ") + c;
     }
     std::unique_ptr<runtime::FramePolicy> frame_policy;
-    if (!engine.faults.empty()) frame_policy = std::make_unique<runtime::EnginePolicy>(std::move(engine));
+    if (!engine.faults.empty())
+      frame_policy = std::make_unique<runtime::EnginePolicy>(std::move(engine));
 
     const auto t0 = std::chrono::steady_clock::now();
     const double c0 = process_cpu_s();
@@ -129,14 +147,16 @@ int run(int argc, char** argv) {
     cfg.run_metadata["dataset_version"] = version;
     cfg.run_metadata["scenes"] = scenes.empty() ? "all" : scenes;
     cfg.run_metadata["faults"] = faults_text;
-    const double load_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    const double load_s =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 
     const auto t1 = std::chrono::steady_clock::now();
     auto progress = [&](std::uint64_t done, std::uint64_t total) {
       if (quiet) return;
       const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count();
-      std::fprintf(stderr, "\r[convert] %llu/%llu frames  %.0f frames/s  ", static_cast<unsigned long long>(done),
-                   static_cast<unsigned long long>(total), s > 0 ? static_cast<double>(done) / s : 0.0);
+      std::fprintf(stderr, "\r[convert] %llu/%llu frames  %.0f frames/s  ",
+                   static_cast<unsigned long long>(done), static_cast<unsigned long long>(total),
+                   s > 0 ? static_cast<double>(done) / s : 0.0);
     };
     if (ros2) {
       ros2_cfg.output = cfg.output;
@@ -151,7 +171,8 @@ int run(int argc, char** argv) {
         std::fprintf(stderr, "bag convert: %s\n", counts.status().to_string().c_str());
         return 1;
       }
-      const double write_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count();
+      const double write_s =
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count();
       std::printf("%s\n", ros2_cfg.output.c_str());
       std::printf("frames %llu (missing %llu), tf_static %llu, gt boxes %llu, messages %llu\n",
                   static_cast<unsigned long long>(counts->frames),
@@ -160,43 +181,50 @@ int run(int argc, char** argv) {
                   static_cast<unsigned long long>(counts->gt_boxes),
                   static_cast<unsigned long long>(counts->messages));
       if (!faults_text.empty()) {
-        std::printf("faults %s: %llu faulted frames (%llu changed), %llu injected drops\n", faults_text.c_str(),
-                    static_cast<unsigned long long>(counts->faulted_frames),
+        std::printf("faults %s: %llu faulted frames (%llu changed), %llu injected drops\n",
+                    faults_text.c_str(), static_cast<unsigned long long>(counts->faulted_frames),
                     static_cast<unsigned long long>(counts->changed_frames),
                     static_cast<unsigned long long>(counts->injected_drops));
       }
-      std::printf("tables %.2f s, frames %.2f s wall (%.0f frames/s), %.2f s cpu; bag %.1f MB, images read %.1f MB\n",
-                  load_s, write_s, write_s > 0 ? static_cast<double>(counts->frames) / write_s : 0.0,
-                  process_cpu_s() - c0, static_cast<double>(converter.writer_stats().file_bytes) / 1e6,
-                  static_cast<double>(counts->image_bytes) / 1e6);
+      std::printf(
+          "tables %.2f s, frames %.2f s wall (%.0f frames/s), %.2f s cpu; bag %.1f MB, images read "
+          "%.1f MB\n",
+          load_s, write_s, write_s > 0 ? static_cast<double>(counts->frames) / write_s : 0.0,
+          process_cpu_s() - c0, static_cast<double>(converter.writer_stats().file_bytes) / 1e6,
+          static_cast<double>(counts->image_bytes) / 1e6);
       return shutdown_requested().load() ? 130 : 0;
     }
 
-    runtime::BagConverter converter(cfg, std::move(source).value(), std::move(boxes), std::move(frame_policy), log);
+    runtime::BagConverter converter(cfg, std::move(source).value(), std::move(boxes),
+                                    std::move(frame_policy), log);
     auto counts = converter.run(shutdown_requested(), progress);
     if (!quiet) std::fprintf(stderr, "\n");
     if (!counts) {
       std::fprintf(stderr, "bag convert: %s\n", counts.status().to_string().c_str());
       return 1;
     }
-    const double write_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count();
+    const double write_s =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count();
     const double cpu_s = process_cpu_s() - c0;
     const auto& ws = converter.writer_stats();
     std::printf("%s\n", cfg.output.c_str());
     std::printf("frames %llu (missing %llu), boundaries %llu, gt boxes %llu, messages %llu\n",
                 static_cast<unsigned long long>(counts->frames),
                 static_cast<unsigned long long>(counts->missing_images),
-                static_cast<unsigned long long>(counts->boundaries), static_cast<unsigned long long>(counts->gt_boxes),
+                static_cast<unsigned long long>(counts->boundaries),
+                static_cast<unsigned long long>(counts->gt_boxes),
                 static_cast<unsigned long long>(counts->messages));
     if (!faults_text.empty()) {
-      std::printf("faults %s: %llu faulted frames (%llu changed), %llu injected drops\n", faults_text.c_str(),
-                  static_cast<unsigned long long>(counts->faulted_frames),
+      std::printf("faults %s: %llu faulted frames (%llu changed), %llu injected drops\n",
+                  faults_text.c_str(), static_cast<unsigned long long>(counts->faulted_frames),
                   static_cast<unsigned long long>(counts->changed_frames),
                   static_cast<unsigned long long>(counts->injected_drops));
     }
-    std::printf("tables %.2f s, frames %.2f s wall (%.0f frames/s), %.2f s cpu; bag %.1f MB, images read %.1f MB\n",
-                load_s, write_s, write_s > 0 ? static_cast<double>(counts->frames) / write_s : 0.0, cpu_s,
-                static_cast<double>(ws.file_bytes) / 1e6, static_cast<double>(counts->image_bytes) / 1e6);
+    std::printf(
+        "tables %.2f s, frames %.2f s wall (%.0f frames/s), %.2f s cpu; bag %.1f MB, images read "
+        "%.1f MB\n",
+        load_s, write_s, write_s > 0 ? static_cast<double>(counts->frames) / write_s : 0.0, cpu_s,
+        static_cast<double>(ws.file_bytes) / 1e6, static_cast<double>(counts->image_bytes) / 1e6);
     return shutdown_requested().load() ? 130 : 0;
   } catch (const ConfigError& e) {
     std::fprintf(stderr, "bag convert: %s\n", e.what());
@@ -205,6 +233,6 @@ int run(int argc, char** argv) {
 }
 
 }  // namespace
-FAULTLINE_COMMAND(bag_convert, "bag convert", "write nuScenes scenes straight into an MCAP bag or a rosbag2 directory",
-                  &run);
+FAULTLINE_COMMAND(bag_convert, "bag convert",
+                  "write nuScenes scenes straight into an MCAP bag or a rosbag2 directory", &run);
 }  // namespace faultline::cli

@@ -1,7 +1,6 @@
-// `faultline bag info FILE|DIR`: topics, schemas, counts, rates, compression and integrity of a bag; a rosbag2
-// directory (metadata.yaml + MCAP files) is checked against its metadata.yaml too.
+// `faultline bag info FILE|DIR`: topics, schemas, counts, rates, compression and integrity of a
+// bag; a rosbag2 directory (metadata.yaml + MCAP files) is checked against its metadata.yaml too.
 #include <CLI/CLI.hpp>
-
 #include <cstdio>
 #include <filesystem>
 #include <string>
@@ -46,8 +45,10 @@ int print_mcap(const std::string& path, const bag::BagInfo& info) {
   for (const auto& [name, n] : info.chunks_by_compression) {
     by_comp += (by_comp.empty() ? "" : ", ") + name + ": " + std::to_string(n);
   }
-  std::printf("chunks:      %llu (%s)\n", static_cast<unsigned long long>(info.chunks), by_comp.c_str());
-  std::printf("compression: %s stored for %s raw (%.1f%%)\n", human_bytes(info.chunk_stored_bytes).c_str(),
+  std::printf("chunks:      %llu (%s)\n", static_cast<unsigned long long>(info.chunks),
+              by_comp.c_str());
+  std::printf("compression: %s stored for %s raw (%.1f%%)\n",
+              human_bytes(info.chunk_stored_bytes).c_str(),
               human_bytes(info.chunk_raw_bytes).c_str(),
               info.chunk_raw_bytes ? 100.0 * static_cast<double>(info.chunk_stored_bytes) /
                                          static_cast<double>(info.chunk_raw_bytes)
@@ -58,7 +59,8 @@ int print_mcap(const std::string& path, const bag::BagInfo& info) {
   for (const auto& t : info.topics) {
     std::printf("  %-40s %-30s %8llu msgs %8.2f Hz %12s\n", t.topic.c_str(),
                 t.schema_name.empty() ? "(no schema)" : t.schema_name.c_str(),
-                static_cast<unsigned long long>(t.messages), t.rate_hz(), human_bytes(t.bytes).c_str());
+                static_cast<unsigned long long>(t.messages), t.rate_hz(),
+                human_bytes(t.bytes).c_str());
   }
   if (!info.metadata_names.empty()) {
     std::printf("metadata:   ");
@@ -77,7 +79,8 @@ int print_mcap(const std::string& path, const bag::BagInfo& info) {
     std::printf("  %s\n", info.problems[i].to_string().c_str());
   }
   if (info.problems.size() > kShown) std::printf("  ... %zu more\n", info.problems.size() - kShown);
-  if (!info.footer_found) std::printf("hint: `faultline bag recover %s` rebuilds an indexed copy\n", path.c_str());
+  if (!info.footer_found)
+    std::printf("hint: `faultline bag recover %s` rebuilds an indexed copy\n", path.c_str());
   return 1;
 }
 
@@ -90,8 +93,8 @@ int print_rosbag2(const std::string& dir) {
   }
   const bag::Rosbag2Info& r = *result;
   const bag::Rosbag2Metadata& m = r.metadata;
-  std::printf("rosbag2:     %s (metadata.yaml version %d, storage %s, %zu file(s))\n", dir.c_str(), m.version,
-              m.storage_identifier.c_str(), m.relative_file_paths.size());
+  std::printf("rosbag2:     %s (metadata.yaml version %d, storage %s, %zu file(s))\n", dir.c_str(),
+              m.version, m.storage_identifier.c_str(), m.relative_file_paths.size());
   std::printf("messages:    %llu\n", static_cast<unsigned long long>(m.message_count));
   std::printf("duration:    %.3f s (start %lld ns)\n", static_cast<double>(m.duration_ns) / 1e9,
               static_cast<long long>(m.starting_time_ns));
@@ -115,7 +118,8 @@ int print_rosbag2(const std::string& dir) {
   if (r.disagreements.empty()) {
     std::printf("metadata.yaml: agrees with the MCAP file(s)\n");
   } else {
-    std::printf("metadata.yaml: DISAGREES with the MCAP file(s), %zu problem(s)\n", r.disagreements.size());
+    std::printf("metadata.yaml: DISAGREES with the MCAP file(s), %zu problem(s)\n",
+                r.disagreements.size());
     for (const auto& d : r.disagreements) std::printf("  %s\n", d.c_str());
     rc = 1;
   }
@@ -123,12 +127,16 @@ int print_rosbag2(const std::string& dir) {
 }
 
 int run(int argc, char** argv) {
-  CLI::App app{"Show what a bag holds and check its integrity (every chunk CRC, the data section CRC, the summary "
-               "CRC): an MCAP file (Faultline's, or a ROS 2 one with profile ros2), or a rosbag2 directory, whose "
-               "metadata.yaml is also checked against its MCAP files. Exit 0 when intact, 1 when broken or "
-               "unreadable."};
+  CLI::App app{
+      "Show what a bag holds and check its integrity (every chunk CRC, the data section CRC, the "
+      "summary "
+      "CRC): an MCAP file (Faultline's, or a ROS 2 one with profile ros2), or a rosbag2 directory, "
+      "whose "
+      "metadata.yaml is also checked against its MCAP files. Exit 0 when intact, 1 when broken or "
+      "unreadable."};
   std::string path;
-  app.add_option("bag", path, "bag (.mcap) or rosbag2 directory (metadata.yaml + .mcap)")->required();
+  app.add_option("bag", path, "bag (.mcap) or rosbag2 directory (metadata.yaml + .mcap)")
+      ->required();
   FAULTLINE_PARSE(app, argc, argv);
 
   if (std::filesystem::is_directory(path)) return print_rosbag2(path);
@@ -142,5 +150,6 @@ int run(int argc, char** argv) {
 
 }  // namespace
 FAULTLINE_COMMAND(bag_info, "bag info",
-                  "topics, counts, rates, compression and CRC check of a bag or rosbag2 directory", &run);
+                  "topics, counts, rates, compression and CRC check of a bag or rosbag2 directory",
+                  &run);
 }  // namespace faultline::cli

@@ -1,9 +1,9 @@
 // `faultline bag play FILE...`: republish a recorded bag byte for byte.
-#include <CLI/CLI.hpp>
 #include <poll.h>
 #include <termios.h>
 #include <unistd.h>
 
+#include <CLI/CLI.hpp>
 #include <atomic>
 #include <cstdio>
 #include <thread>
@@ -64,15 +64,21 @@ class KeyControl {
 int run(int argc, char** argv) {
   CLI::App app{
       "Republish the replay channels of a bag (same bytes, order and seq) on one PUB socket.\n"
-      "Pause control: with stdin on a terminal, SPACE toggles pause and 's' sends one message; with\n"
-      "--control ENDPOINT, `faultline bag control ENDPOINT pause|resume|toggle|step [N]` does the same\n"
-      "from another shell or program (text commands PUSHed to that PULL socket). --start-paused waits\n"
+      "Pause control: with stdin on a terminal, SPACE toggles pause and 's' sends one message; "
+      "with\n"
+      "--control ENDPOINT, `faultline bag control ENDPOINT pause|resume|toggle|step [N]` does the "
+      "same\n"
+      "from another shell or program (text commands PUSHed to that PULL socket). --start-paused "
+      "waits\n"
       "for the first resume or step."};
   runtime::BagPlayerConfig cfg;
   cfg.progress = true;
   std::vector<std::string> remaps;
-  app.add_option("files", cfg.files, "bag file(s), played in order (split parts)")->required()->check(CLI::ExistingFile);
-  app.add_option("-r,--rate", cfg.rate, "speed factor; 0 = as fast as possible")->capture_default_str();
+  app.add_option("files", cfg.files, "bag file(s), played in order (split parts)")
+      ->required()
+      ->check(CLI::ExistingFile);
+  app.add_option("-r,--rate", cfg.rate, "speed factor; 0 = as fast as possible")
+      ->capture_default_str();
   app.add_flag("-l,--loop", cfg.loop, "start over at the end");
   app.add_option("--start-offset", cfg.start_offset_s, "skip SECONDS from the start");
   app.add_option("--duration", cfg.duration_s, "play SECONDS of bag time (0 = all)");
@@ -81,16 +87,23 @@ int run(int argc, char** argv) {
   app.add_option("--remap", remaps, "FROM:=TO topic remap (repeatable)");
   app.add_option("--endpoint", cfg.endpoint, "PUB bind address")->capture_default_str();
   app.add_option("--hwm", cfg.hwm, "send queue per subscriber")->capture_default_str();
-  app.add_option("--wait-subscribers", cfg.wait_subscribers, "wait for N subscribers before the first message");
-  app.add_flag("--lockstep", cfg.lockstep, "wait for the sink's SampleAck after each sample boundary");
+  app.add_option("--wait-subscribers", cfg.wait_subscribers,
+                 "wait for N subscribers before the first message");
+  app.add_flag("--lockstep", cfg.lockstep,
+               "wait for the sink's SampleAck after each sample boundary");
   app.add_option("--sync-topic", cfg.sync_topic, "sample boundary topic")->capture_default_str();
-  app.add_option("--ack-endpoint", cfg.ack_endpoint, "PULL bind address for SampleAck")->capture_default_str();
-  app.add_option("--ack-timeout-ms", cfg.ack_timeout_ms, "lockstep ack timeout (0 = forever)")->capture_default_str();
+  app.add_option("--ack-endpoint", cfg.ack_endpoint, "PULL bind address for SampleAck")
+      ->capture_default_str();
+  app.add_option("--ack-timeout-ms", cfg.ack_timeout_ms, "lockstep ack timeout (0 = forever)")
+      ->capture_default_str();
   app.add_flag("!--no-progress", cfg.progress, "no progress line");
-  app.add_flag("--start-paused", cfg.start_paused, "wait for resume (SPACE, or bag control ... resume) or step");
-  app.add_option("--control", cfg.control_endpoint,
-                 "PULL bind address for pause/resume/toggle/step commands, e.g. ipc:///tmp/play.ctl");
-  app.add_option("--max-gap", cfg.max_gap_s, "skip log-time gaps longer than SECONDS when paced (0 = never)")
+  app.add_flag("--start-paused", cfg.start_paused,
+               "wait for resume (SPACE, or bag control ... resume) or step");
+  app.add_option(
+      "--control", cfg.control_endpoint,
+      "PULL bind address for pause/resume/toggle/step commands, e.g. ipc:///tmp/play.ctl");
+  app.add_option("--max-gap", cfg.max_gap_s,
+                 "skip log-time gaps longer than SECONDS when paced (0 = never)")
       ->capture_default_str();
   bool keys = true;
   app.add_flag("!--no-keys", keys, "ignore the keyboard even when stdin is a terminal");
@@ -109,9 +122,10 @@ int run(int argc, char** argv) {
     int rc = 0;
     {
       runtime::BagPlayer player(cfg, log);
-      log->info("playing on {}{}{}", player.endpoint(),
-                cfg.lockstep ? " (lockstep, acks on " + player.ack_endpoint() + ")" : "",
-                cfg.control_endpoint.empty() ? "" : " (control on " + player.control_endpoint() + ")");
+      log->info(
+          "playing on {}{}{}", player.endpoint(),
+          cfg.lockstep ? " (lockstep, acks on " + player.ack_endpoint() + ")" : "",
+          cfg.control_endpoint.empty() ? "" : " (control on " + player.control_endpoint() + ")");
       std::unique_ptr<KeyControl> key_control;
       if (keys) key_control = std::make_unique<KeyControl>(player);
       rc = player.run(shutdown_requested());

@@ -1,6 +1,5 @@
 // `faultline bag record -o FILE [TOPIC... | --regex R | --all]`: live topics into an MCAP bag.
 #include <CLI/CLI.hpp>
-
 #include <cstdio>
 
 #include "cli/access_options.hpp"
@@ -16,8 +15,10 @@ namespace faultline::cli {
 namespace {
 
 int run(int argc, char** argv) {
-  CLI::App app{"Record Faultline topics (found in the topic registry, or at --endpoint) into an MCAP bag. "
-               "Image messages are stored byte-exact for `bag play` plus a Foxglove view. SIGINT finalises."};
+  CLI::App app{
+      "Record Faultline topics (found in the topic registry, or at --endpoint) into an MCAP bag. "
+      "Image messages are stored byte-exact for `bag play` plus a Foxglove view. SIGINT "
+      "finalises."};
   runtime::RecorderConfig cfg;
   std::vector<std::string> meta;
   double split_mb = 0;
@@ -27,7 +28,8 @@ int run(int argc, char** argv) {
   app.add_flag("-a,--all", cfg.all, "record every topic");
   app.add_option("-x,--exclude", cfg.exclude, "regex of topics never recorded (repeatable)");
   app.add_option("--duration", cfg.duration_s, "stop after SECONDS (0 = until SIGINT)");
-  app.add_option("--endpoint", cfg.endpoints, "publisher endpoint (repeatable); default: topic registry");
+  app.add_option("--endpoint", cfg.endpoints,
+                 "publisher endpoint (repeatable); default: topic registry");
   app.add_option("--split-size", split_mb, "start a new file past this many MiB");
   app.add_option("--split-duration", cfg.split_s, "start a new file after SECONDS");
   app.add_option("--compression", cfg.compression, "none | zstd | lz4")->capture_default_str();

@@ -22,13 +22,16 @@
 namespace faultline::cli {
 namespace {
 
-// `--frames realistic|noisy`, shared by every bench command that makes its own frames (bench/frames.hpp).
+// `--frames realistic|noisy`, shared by every bench command that makes its own frames
+// (bench/frames.hpp).
 void add_frames_option(CLI::App& app, bench::FrameKind& kind, const std::string& noisy_what) {
-  static const std::map<std::string, bench::FrameKind> kKinds = {{"realistic", bench::FrameKind::kRealistic},
-                                                                 {"noisy", bench::FrameKind::kNoisy}};
+  static const std::map<std::string, bench::FrameKind> kKinds = {
+      {"realistic", bench::FrameKind::kRealistic}, {"noisy", bench::FrameKind::kNoisy}};
   app.add_option("--frames", kind,
-                 "realistic (default): rendered synthetic-dataset scenes with sensor noise, q90 JPEGs of 130-165 KB "
-                 "at 1600x900, as nuScenes ships; noisy: the worst case, " + noisy_what)
+                 "realistic (default): rendered synthetic-dataset scenes with sensor noise, q90 "
+                 "JPEGs of 130-165 KB "
+                 "at 1600x900, as nuScenes ships; noisy: the worst case, " +
+                     noisy_what)
       ->transform(CLI::CheckedTransformer(kKinds))
       ->option_text("realistic|noisy");
 }
@@ -59,10 +62,9 @@ int run_corrupt(int argc, char** argv) {
   bench::CorruptOptions o;
   app.add_option("--reps", o.reps,
                  "timed repetitions per case (median reported; one warm-up run first)");
-  app.add_option(
-      "--image", o.image_path,
-      "benchmark on this image (read with OpenCV, BGR) instead of a built-in frame; "
-      "--width/--height/--frames are then ignored");
+  app.add_option("--image", o.image_path,
+                 "benchmark on this image (read with OpenCV, BGR) instead of a built-in frame; "
+                 "--width/--height/--frames are then ignored");
   add_frames_option(app, o.frames, "the noisy road scene (noise 6, q95: ~560 KB)");
   app.add_option("--width", o.width, "frame width");
   app.add_option("--height", o.height, "frame height");
@@ -142,7 +144,8 @@ int run_export(int argc, char** argv) {
 
 int run_injector(int argc, char** argv) {
   CLI::App app{
-      "Injector benchmark: 6 cameras x 12 Hz of 1600x900 JPEGs, decode + one corruption, per worker count.",
+      "Injector benchmark: 6 cameras x 12 Hz of 1600x900 JPEGs, decode + one corruption, per "
+      "worker count.",
       argv[0]};
   bench::InjectorOptions o;
   app.add_option("--seconds", o.seconds, "real-time duration of each run (s)");
@@ -150,16 +153,19 @@ int run_injector(int argc, char** argv) {
                  "JPEG files to stream instead of built-in frames (camera k sends file k "
                  "mod count), e.g. one frame per camera from a dataset's samples/CAM_*/");
   add_frames_option(app, o.frames, "the noisy road scene (noise 2, q95: ~370 KB)");
-  app.add_option("--rate-hz", o.rate_hz,
-                 "frames per second per camera; 0 = as fast as the injector takes them (closed loop, "
-                 "4 frames per worker outstanding): throughput");
-  app.add_option("--workers", o.workers,
-                 "injector worker threads; several counts (--workers 1 2) run side by side per corruption "
-                 "and report the fps ratio (0 = the injector's default, cores - 1)");
+  app.add_option(
+      "--rate-hz", o.rate_hz,
+      "frames per second per camera; 0 = as fast as the injector takes them (closed loop, "
+      "4 frames per worker outstanding): throughput");
+  app.add_option(
+      "--workers", o.workers,
+      "injector worker threads; several counts (--workers 1 2) run side by side per corruption "
+      "and report the fps ratio (0 = the injector's default, cores - 1)");
   app.add_option("--level", o.level, "easy|mid|hard");
   app.add_option("--types", o.types, "corruptions to run (\"none\" = decode only)");
   app.add_flag("--coherent", o.coherent,
-               "also run each corruption as a coherent fault (coherent: true, per-camera state), right after its "
+               "also run each corruption as a coherent fault (coherent: true, per-camera state), "
+               "right after its "
                "non-coherent fast form; rows marked \"coh\" (JSON: \"coherent\": true)");
   app.add_option("--output", o.output, "bgr8 (republish decoded) or jpeg (re-encode q95)")
       ->check(CLI::IsMember({"bgr8", "jpeg"}));
@@ -180,21 +186,31 @@ int run_injector(int argc, char** argv) {
 
 int run_python_client(int argc, char** argv) {
   CLI::App app{
-      "The official Python client (clients/python) as a real-time subscriber: 6 cameras x 12 Hz of 1600x900 frames "
-      "decoded to bgr8 by the injector, over plain ZeroMQ (4.3 MB frames on the socket) and over shared memory "
-      "(output_shm: pixels in a /dev/shm ring, mapped as numpy arrays), alternating: frames received, losses, added "
-      "latency p50/p99 (injector publish -> numpy image in the client), client CPU. Exit 1 when the shared-memory "
+      "The official Python client (clients/python) as a real-time subscriber: 6 cameras x 12 Hz of "
+      "1600x900 frames "
+      "decoded to bgr8 by the injector, over plain ZeroMQ (4.3 MB frames on the socket) and over "
+      "shared memory "
+      "(output_shm: pixels in a /dev/shm ring, mapped as numpy arrays), alternating: frames "
+      "received, losses, added "
+      "latency p50/p99 (injector publish -> numpy image in the client), client CPU. Exit 1 when "
+      "the shared-memory "
       "path lost frames.",
       argv[0]};
   bench::PythonClientOptions o;
-  app.add_option("--seconds", o.seconds, "real-time length of each run (s)")->check(CLI::Range(1.0, 3600.0))
+  app.add_option("--seconds", o.seconds, "real-time length of each run (s)")
+      ->check(CLI::Range(1.0, 3600.0))
       ->capture_default_str();
-  app.add_option("--repeats", o.repeats, "runs per path, alternating (medians printed)")->check(CLI::Range(1, 50))
+  app.add_option("--repeats", o.repeats, "runs per path, alternating (medians printed)")
+      ->check(CLI::Range(1, 50))
       ->capture_default_str();
-  app.add_option("--paths", o.paths, "paths to run: zmq, shm")->check(CLI::IsMember({"zmq", "shm"}));
-  app.add_option("--python", o.python, "Python with python3-zmq, numpy and protobuf")->capture_default_str();
-  app.add_option("--client-dir", o.client_dir, "directory holding faultline_client (default: the source tree's)");
-  app.add_option("--script", o.script, "bench driver (default: the source tree's bench/python/client_rate.py)");
+  app.add_option("--paths", o.paths, "paths to run: zmq, shm")
+      ->check(CLI::IsMember({"zmq", "shm"}));
+  app.add_option("--python", o.python, "Python with python3-zmq, numpy and protobuf")
+      ->capture_default_str();
+  app.add_option("--client-dir", o.client_dir,
+                 "directory holding faultline_client (default: the source tree's)");
+  app.add_option("--script", o.script,
+                 "bench driver (default: the source tree's bench/python/client_rate.py)");
   app.add_option("--workers", o.workers, "injector worker threads (0 = its default, cores - 1)")
       ->check(CLI::Range(0, 256));
   app.add_flag("--json", o.json, "print one JSON object per run");
@@ -204,28 +220,46 @@ int run_python_client(int argc, char** argv) {
 
 int run_ros2(int argc, char** argv) {
   CLI::App app{
-      "ROS 2 proxy benchmark: N cameras x 12 Hz of 1600x900 JPEG CompressedImages over Cyclone DDS (loopback) "
-      "through ros2_in -> fault_injector -> ros2_out (child processes), passthrough and with one corruption, "
-      "alternating: frames in/out, unintended drops, added latency p50/p99, the nodes' CPU. Medians and ranges "
+      "ROS 2 proxy benchmark: N cameras x 12 Hz of 1600x900 JPEG CompressedImages over Cyclone DDS "
+      "(loopback) "
+      "through ros2_in -> fault_injector -> ros2_out (child processes), passthrough and with one "
+      "corruption, "
+      "alternating: frames in/out, unintended drops, added latency p50/p99, the nodes' CPU. "
+      "Medians and ranges "
       "over --repeats runs.",
       argv[0]};
   bench::Ros2Options o;
-  app.add_option("--seconds", o.seconds, "real-time duration of each run (s)")->capture_default_str();
+  app.add_option("--seconds", o.seconds, "real-time duration of each run (s)")
+      ->capture_default_str();
   app.add_option("--rate-hz", o.rate_hz, "frames per second per camera")->capture_default_str();
   app.add_option("--cameras", o.cameras, "1..6")->check(CLI::Range(1, 6))->capture_default_str();
-  app.add_option("--width", o.width, "frame width")->check(CLI::Range(16, 8192))->capture_default_str();
-  app.add_option("--height", o.height, "frame height")->check(CLI::Range(16, 8192))->capture_default_str();
+  app.add_option("--width", o.width, "frame width")
+      ->check(CLI::Range(16, 8192))
+      ->capture_default_str();
+  app.add_option("--height", o.height, "frame height")
+      ->check(CLI::Range(16, 8192))
+      ->capture_default_str();
   add_frames_option(app, o.frames, "the noisy road scene at --noise, q95");
-  app.add_option("--noise", o.noise, "--frames noisy only: 2 ~380 KB JPEGs, 6 the heavy worst case (~550 KB)")
-      ->check(CLI::Range(0, 64))->capture_default_str();
-  app.add_option("--corruption", o.corruption, "the corrupted configuration, e.g. fog/mid")->capture_default_str();
+  app.add_option("--noise", o.noise,
+                 "--frames noisy only: 2 ~380 KB JPEGs, 6 the heavy worst case (~550 KB)")
+      ->check(CLI::Range(0, 64))
+      ->capture_default_str();
+  app.add_option("--corruption", o.corruption, "the corrupted configuration, e.g. fog/mid")
+      ->capture_default_str();
   app.add_flag("--cameras-together", o.cameras_together,
-               "fire all cameras at the same instant (the worst-case burst); default: each camera at its nuScenes "
-               "trigger offset within the frame period (4-37 ms, the lidar sweep), as the replayed dataset does");
-  app.add_option("--repeats", o.repeats, "runs per configuration")->check(CLI::Range(1, 50))->capture_default_str();
-  app.add_option("--domain", o.domain_id, "DDS domain (-1: 100 + pid % 100)")->check(CLI::Range(-1, 232));
-  app.add_option("--bin-dir", o.bin_dir, "directory of ros2_in, fault_injector, ros2_out (default: next to faultline)");
-  app.add_option("--work-dir", o.work_dir, "scratch directory (params, sockets, node logs)")->capture_default_str();
+               "fire all cameras at the same instant (the worst-case burst); default: each camera "
+               "at its nuScenes "
+               "trigger offset within the frame period (4-37 ms, the lidar sweep), as the replayed "
+               "dataset does");
+  app.add_option("--repeats", o.repeats, "runs per configuration")
+      ->check(CLI::Range(1, 50))
+      ->capture_default_str();
+  app.add_option("--domain", o.domain_id, "DDS domain (-1: 100 + pid % 100)")
+      ->check(CLI::Range(-1, 232));
+  app.add_option("--bin-dir", o.bin_dir,
+                 "directory of ros2_in, fault_injector, ros2_out (default: next to faultline)");
+  app.add_option("--work-dir", o.work_dir, "scratch directory (params, sockets, node logs)")
+      ->capture_default_str();
   app.add_flag("--json", o.json, "print a JSON object");
   FAULTLINE_PARSE(app, argc, argv);
   if (o.seconds <= 0 || o.rate_hz <= 0) {
@@ -325,13 +359,15 @@ FAULTLINE_COMMAND(
 FAULTLINE_COMMAND(bench_injector, "bench injector",
                   "real-time injector benchmark: CPU, added latency and drops per corruption",
                   &run_injector);
-FAULTLINE_COMMAND(bench_python_client, "bench python-client",
-                  "official Python client at 6 x 12 Hz bgr8: ZeroMQ vs shared memory, drops, latency, CPU",
-                  &run_python_client);
+FAULTLINE_COMMAND(
+    bench_python_client, "bench python-client",
+    "official Python client at 6 x 12 Hz bgr8: ZeroMQ vs shared memory, drops, latency, CPU",
+    &run_python_client);
 FAULTLINE_COMMAND(bench_record, "bench record", "recorder CPU, player speed and bag size",
                   &run_record);
 FAULTLINE_COMMAND(bench_ros2, "bench ros2",
-                  "ROS 2 proxy over DDS: drops and added latency, passthrough vs a corruption", &run_ros2);
+                  "ROS 2 proxy over DDS: drops and added latency, passthrough vs a corruption",
+                  &run_ros2);
 FAULTLINE_COMMAND(bench_score, "bench score", "benchmark the scorer on a val-sized synthetic set",
                   &run_score);
 FAULTLINE_COMMAND(bench_topic_hz, "bench topic-hz",

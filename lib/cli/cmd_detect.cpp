@@ -1,7 +1,6 @@
-// `faultline detect`: runs the reference detector offline over a nuScenes-format dataset (optionally corrupted)
-// and writes a results JSON for `faultline score`.
+// `faultline detect`: runs the reference detector offline over a nuScenes-format dataset
+// (optionally corrupted) and writes a results JSON for `faultline score`.
 #include <CLI/CLI.hpp>
-
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -20,7 +19,9 @@
 namespace faultline::cli {
 namespace {
 
-dataset::Rigid to_rigid(const dataset::Pose& p) { return dataset::make_rigid(p.rotation, p.translation); }
+dataset::Rigid to_rigid(const dataset::Pose& p) {
+  return dataset::make_rigid(p.rotation, p.translation);
+}
 
 int fail(const std::string& msg) {
   std::fprintf(stderr, "faultline detect: %s\n", msg.c_str());
@@ -28,7 +29,9 @@ int fail(const std::string& msg) {
 }
 
 int run(int argc, char** argv) {
-  CLI::App app{"Runs the reference colour detector over a (synthetic) nuScenes dataset and writes results JSON."};
+  CLI::App app{
+      "Runs the reference colour detector over a (synthetic) nuScenes dataset and writes results "
+      "JSON."};
   std::string dataroot, version = "v1.0-mini", out, corrupt_spec;
   std::vector<std::string> scenes;
   double scale = 1.0;
@@ -39,17 +42,22 @@ int run(int argc, char** argv) {
   app.add_option("--version", version, "table folder")->capture_default_str();
   app.add_option("--out", out, "results JSON path")->required();
   app.add_option("--scale", scale, "input scale 1.0, 0.5 or 0.25")->capture_default_str();
-  app.add_option("--temporal", temporal, "1 = track over all frames, 0 = single key frame")->capture_default_str();
-  app.add_flag("--no-normalise", no_normalise, "skip the exposure/contrast normalisation (docs/detector.md)");
-  app.add_option("--corrupt", corrupt_spec, "corruption as type/level, e.g. fog/mid (fast RNG mode)");
-  app.add_option("--seed", seed, "corruption seed (per frame: seed + frame index)")->capture_default_str();
+  app.add_option("--temporal", temporal, "1 = track over all frames, 0 = single key frame")
+      ->capture_default_str();
+  app.add_flag("--no-normalise", no_normalise,
+               "skip the exposure/contrast normalisation (docs/detector.md)");
+  app.add_option("--corrupt", corrupt_spec,
+                 "corruption as type/level, e.g. fog/mid (fast RNG mode)");
+  app.add_option("--seed", seed, "corruption seed (per frame: seed + frame index)")
+      ->capture_default_str();
   app.add_option("--scene", scenes, "scene names (default: all)");
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     return usage_exit(app, e);
   }
-  if (scale != 1.0 && scale != 0.5 && scale != 0.25) return fail("--scale must be 1.0, 0.5 or 0.25");
+  if (scale != 1.0 && scale != 0.5 && scale != 0.25)
+    return fail("--scale must be 1.0, 0.5 or 0.25");
   std::optional<corruption::Corruption> ctype;
   int severity = 0;
   if (!corrupt_spec.empty()) {
@@ -57,8 +65,10 @@ int run(int argc, char** argv) {
     const std::string tname = corrupt_spec.substr(0, slash);
     ctype = corruption::corruption_from_string(tname);
     if (!ctype) return fail("unknown corruption '" + tname + "' in --corrupt " + corrupt_spec);
-    const auto level = corruption::level_from_string(slash == std::string::npos ? "mid" : corrupt_spec.substr(slash + 1));
-    if (!level) return fail("unknown level in --corrupt " + corrupt_spec + " (expected easy, mid or hard)");
+    const auto level = corruption::level_from_string(
+        slash == std::string::npos ? "mid" : corrupt_spec.substr(slash + 1));
+    if (!level)
+      return fail("unknown level in --corrupt " + corrupt_spec + " (expected easy, mid or hard)");
     severity = corruption::severity_for(*ctype, *level);
   }
   auto reader = dataset::NuScenesReader::open(dataroot, version);
@@ -113,25 +123,32 @@ int run(int argc, char** argv) {
       in.timestamp_us = f.timestamp_us;
       const auto t0 = std::chrono::steady_clock::now();
       det->add_frame(in);
-      if (cfg.temporal) ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+      if (cfg.temporal)
+        ms.push_back(
+            std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0)
+                .count());
     }
     auto last = last_key_index.find(f.sample_token);
     if (f.is_key_frame && last != last_key_index.end() && last->second == i) {
       const auto t0 = std::chrono::steady_clock::now();
       results[f.sample_token] = det->finish_sample(sample_time[f.sample_token]);
-      const double dt = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+      const double dt =
+          std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
       if (!cfg.temporal) ms.push_back(dt / 6.0);  // six cameras detected at the boundary
     }
   }
-  if (Status s = detector::write_results_json(out, results, cfg.describe()); !s) return fail(s.message());
+  if (Status s = detector::write_results_json(out, results, cfg.describe()); !s)
+    return fail(s.message());
   std::sort(ms.begin(), ms.end());
   std::size_t boxes = 0;
   for (const auto& [t, b] : results) boxes += b.size();
-  std::printf("detect: %zu samples, %zu boxes, %s, median %.2f ms per camera frame (%zu frames)\n", results.size(),
-              boxes, cfg.describe().c_str(), ms.empty() ? 0.0 : ms[ms.size() / 2], ms.size());
+  std::printf("detect: %zu samples, %zu boxes, %s, median %.2f ms per camera frame (%zu frames)\n",
+              results.size(), boxes, cfg.describe().c_str(), ms.empty() ? 0.0 : ms[ms.size() / 2],
+              ms.size());
   return 0;
 }
 
 }  // namespace
-FAULTLINE_COMMAND(detect, "detect", "run the reference detector offline over a dataset -> results JSON", &run);
+FAULTLINE_COMMAND(detect, "detect",
+                  "run the reference detector offline over a dataset -> results JSON", &run);
 }  // namespace faultline::cli

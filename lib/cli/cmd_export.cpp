@@ -1,5 +1,6 @@
-// `faultline export`: offline nuScenes-C generation (lib/export). Exit codes: 0 all outputs written, 3 completed
-// with errors (missing/corrupt inputs are listed in the manifests and on stderr), 2 bad arguments, 1 fatal setup error.
+// `faultline export`: offline nuScenes-C generation (lib/export). Exit codes: 0 all outputs
+// written, 3 completed with errors (missing/corrupt inputs are listed in the manifests and on
+// stderr), 2 bad arguments, 1 fatal setup error.
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
@@ -38,7 +39,8 @@ int run(int argc, char** argv) {
   bool stats = false, no_progress = false;
   add_export_options(app, args);
   app.add_option("--shard", shard, "K/N: this machine's share, split deterministically by scene");
-  app.add_option("--merge", merge, "merge the shard manifests of these export roots into --out (or in place)");
+  app.add_option("--merge", merge,
+                 "merge the shard manifests of these export roots into --out (or in place)");
   app.add_flag("--stats", stats, "print per-corruption throughput at the end");
   app.add_flag("--no-progress", no_progress, "no progress output");
   try {
@@ -50,12 +52,13 @@ int run(int argc, char** argv) {
 
   if (!merge.empty()) {
     const std::string out = cfg.out_dir.empty() ? merge.front() : cfg.out_dir;
-    if (cfg.out_dir.empty() && merge.size() > 1) return fail("--merge with several folders needs --out", 2);
+    if (cfg.out_dir.empty() && merge.size() > 1)
+      return fail("--merge with several folders needs --out", 2);
     auto m = exporter::merge_exports(merge, out, cfg.tool_version);
     if (!m) return fail(m.status().to_string(), 1);
-    std::fprintf(stderr, "merged %d folders into %s: %lld files (%lld copied), %lld failed\n", m->folders,
-                 out.c_str(), static_cast<long long>(m->files), static_cast<long long>(m->copied),
-                 static_cast<long long>(m->failed));
+    std::fprintf(stderr, "merged %d folders into %s: %lld files (%lld copied), %lld failed\n",
+                 m->folders, out.c_str(), static_cast<long long>(m->files),
+                 static_cast<long long>(m->copied), static_cast<long long>(m->failed));
     print_problems(m->problems);
     return m->failed > 0 ? kCompletedWithErrors : 0;
   }
@@ -75,7 +78,8 @@ int run(int argc, char** argv) {
   }
 
   exporter::ExportProgressFn progress;
-  if (!no_progress) progress = exporter::make_progress_printer(::isatty(STDERR_FILENO) != 0, stderr);
+  if (!no_progress)
+    progress = exporter::make_progress_printer(::isatty(STDERR_FILENO) != 0, stderr);
   auto summary = exporter::run_export(cfg, progress);
   if (!summary) return fail(summary.status().to_string(), 1);
   print_export_summary(*summary);
@@ -84,5 +88,6 @@ int run(int argc, char** argv) {
 }
 
 }  // namespace
-FAULTLINE_COMMAND(export, "export", "write nuScenes-C (RoboBEV folder layout) from a nuScenes dataroot", &run);
+FAULTLINE_COMMAND(export, "export",
+                  "write nuScenes-C (RoboBEV folder layout) from a nuScenes dataroot", &run);
 }  // namespace faultline::cli

@@ -1,6 +1,6 @@
-// `faultline faults draw`: the Camera Crash dead set or the Frame Lost masks for a seed, as the reference draws them.
+// `faultline faults draw`: the Camera Crash dead set or the Frame Lost masks for a seed, as the
+// reference draws them.
 #include <CLI/CLI.hpp>
-
 #include <cstdio>
 #include <string>
 #include <vector>
@@ -21,9 +21,11 @@ int level_severity(const std::string& level) {
 }
 
 int run(int argc, char** argv) {
-  CLI::App app("Draw the temporal faults of nuScenes-C (camera order CAM_FRONT, CAM_FRONT_RIGHT, CAM_FRONT_LEFT, "
-               "CAM_BACK, CAM_BACK_LEFT, CAM_BACK_RIGHT; RNG seeded once, reference draw order).",
-               argv[0]);
+  CLI::App app(
+      "Draw the temporal faults of nuScenes-C (camera order CAM_FRONT, CAM_FRONT_RIGHT, "
+      "CAM_FRONT_LEFT, "
+      "CAM_BACK, CAM_BACK_LEFT, CAM_BACK_RIGHT; RNG seeded once, reference draw order).",
+      argv[0]);
   std::string type, level, rng_name = "numpy";
   int severity = -1, frames = 1;
   std::uint32_t seed = 0;
@@ -42,20 +44,25 @@ int run(int argc, char** argv) {
     return usage_exit(app, e);
   }
   if (type != "camera_crash" && type != "frame_lost") {
-    std::fprintf(stderr, "faultline faults draw: unknown --type '%s' (expected camera_crash or frame_lost)\n",
-                 type.c_str());
+    std::fprintf(
+        stderr,
+        "faultline faults draw: unknown --type '%s' (expected camera_crash or frame_lost)\n",
+        type.c_str());
     return 2;
   }
   if (!level.empty()) {
     severity = level_severity(level);
     if (severity < 0) {
-      std::fprintf(stderr, "faultline faults draw: unknown --level '%s' (expected easy, mid or hard)\n",
+      std::fprintf(stderr,
+                   "faultline faults draw: unknown --level '%s' (expected easy, mid or hard)\n",
                    level.c_str());
       return 2;
     }
   }
   if (severity < 1 || severity > 5) {
-    std::fprintf(stderr, "faultline faults draw: --severity %d is invalid: expected 1..5 (or --level)\n", severity);
+    std::fprintf(stderr,
+                 "faultline faults draw: --severity %d is invalid: expected 1..5 (or --level)\n",
+                 severity);
     return 2;
   }
   if (frames < 0) {
@@ -63,15 +70,16 @@ int run(int argc, char** argv) {
     return 2;
   }
   if (rng_name != "numpy" && rng_name != "fast") {
-    std::fprintf(stderr, "faultline faults draw: unknown --rng '%s' (expected numpy or fast)\n", rng_name.c_str());
+    std::fprintf(stderr, "faultline faults draw: unknown --rng '%s' (expected numpy or fast)\n",
+                 rng_name.c_str());
     return 2;
   }
   rng::NumpyRandomState numpy_rng(seed);
   rng::FastRng fast_rng(seed);
   const bool numpy = rng_name == "numpy";
   if (type == "camera_crash") {
-    const std::vector<int> dead =
-        numpy ? policy::draw_dead_cameras(severity, numpy_rng) : policy::draw_dead_cameras(severity, fast_rng);
+    const std::vector<int> dead = numpy ? policy::draw_dead_cameras(severity, numpy_rng)
+                                        : policy::draw_dead_cameras(severity, fast_rng);
     if (json) {
       std::string s = "{\"dead_cameras\": [";
       for (std::size_t i = 0; i < dead.size(); ++i) s += (i ? ", " : "") + std::to_string(dead[i]);
@@ -103,5 +111,6 @@ int run(int argc, char** argv) {
 }
 
 }  // namespace
-FAULTLINE_COMMAND(faults_draw, "faults draw", "draw camera_crash / frame_lost faults for a seed", &run);
+FAULTLINE_COMMAND(faults_draw, "faults draw", "draw camera_crash / frame_lost faults for a seed",
+                  &run);
 }  // namespace faultline::cli

@@ -18,8 +18,10 @@ namespace faultline::cli {
 namespace {
 
 std::string shell_quote(const std::string& s) {
-  if (!s.empty() && s.find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789_-./:=@%+,") ==
-                        std::string::npos) {
+  if (!s.empty() &&
+      s.find_first_not_of(
+          "abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789_-./:=@%+,") ==
+          std::string::npos) {
     return s;
   }
   std::string out = "'";
@@ -39,7 +41,8 @@ class ParamsDir {
   ParamsDir() {
     const char* tmp = std::getenv("TMPDIR");
     std::string pattern = std::string(tmp && *tmp ? tmp : "/tmp") + "/faultline-launch-XXXXXX";
-    if (!::mkdtemp(pattern.data())) throw std::runtime_error("cannot create a temp dir for node params");
+    if (!::mkdtemp(pattern.data()))
+      throw std::runtime_error("cannot create a temp dir for node params");
     dir_ = pattern;
   }
   ~ParamsDir() {
@@ -64,7 +67,8 @@ class ParamsDir {
 };
 
 int run(int argc, char** argv) {
-  CLI::App app{"Start the nodes of a launch file, prefix their output, stop them all together.", argv[0]};
+  CLI::App app{"Start the nodes of a launch file, prefix their output, stop them all together.",
+               argv[0]};
   std::string file;
   bool dry_run = false;
   double grace_s = 2.0;
@@ -72,17 +76,25 @@ int run(int argc, char** argv) {
   std::string color = "auto";
   app.add_option("file", file, "launch file (launch/<scenario>.yaml)")->required();
   app.add_flag("--dry-run", dry_run, "print the resolved commands and parameters, start nothing");
-  app.add_option("-p,--param", overrides, "override a node parameter: node.key:=value (repeatable)");
-  app.add_option("--grace", grace_s, "seconds between the stop signal and SIGKILL")->check(CLI::NonNegativeNumber);
+  app.add_option("-p,--param", overrides,
+                 "override a node parameter: node.key:=value (repeatable)");
+  app.add_option("--grace", grace_s, "seconds between the stop signal and SIGKILL")
+      ->check(CLI::NonNegativeNumber);
   app.add_option("--color", color, "colour the [node] prefixes: auto, always, never")
       ->check(CLI::IsMember({"auto", "always", "never"}));
   app.footer(
-      "Each node runs as `<exec> --name <name> --params <tmp>/<name>.yaml [args...]`. SIGINT/SIGTERM are\n"
-      "forwarded to all nodes; when a required node exits the others get SIGTERM, then SIGKILL after\n"
-      "--grace. Exit code: that of the first failing required node (1 if it died from a signal), else 1 if\n"
-      "any other node failed on its own (non-zero exit, or a signal the launcher did not send), else 0.\n"
-      "A node with `respawn: true` that fails on its own is started again after `respawn_delay` seconds,\n"
-      "at most `respawn_max_retries` times (default 3); only its last start counts for the exit code, and\n"
+      "Each node runs as `<exec> --name <name> --params <tmp>/<name>.yaml [args...]`. "
+      "SIGINT/SIGTERM are\n"
+      "forwarded to all nodes; when a required node exits the others get SIGTERM, then SIGKILL "
+      "after\n"
+      "--grace. Exit code: that of the first failing required node (1 if it died from a signal), "
+      "else 1 if\n"
+      "any other node failed on its own (non-zero exit, or a signal the launcher did not send), "
+      "else 0.\n"
+      "A node with `respawn: true` that fails on its own is started again after `respawn_delay` "
+      "seconds,\n"
+      "at most `respawn_max_retries` times (default 3); only its last start counts for the exit "
+      "code, and\n"
       "the closing line counts the respawns.\n"
       "Scalars may use ${VAR} and ${VAR:-default}; a top-level env: map is set for every node.");
   FAULTLINE_PARSE(app, argc, argv);
@@ -99,12 +111,13 @@ int run(int argc, char** argv) {
       const auto cmd = launch::node_command(node, "<tmp>/" + node.name + ".yaml");
       char respawn[96] = "";
       if (node.respawn) {
-        std::snprintf(respawn, sizeof(respawn), " (respawn after %g s, at most %d times)", node.respawn_delay_s,
-                      node.respawn_max_retries);
+        std::snprintf(respawn, sizeof(respawn), " (respawn after %g s, at most %d times)",
+                      node.respawn_delay_s, node.respawn_max_retries);
       }
       std::printf("%s%s%s: %s\n", node.name.c_str(), node.required ? "" : " (not required)",
                   respawn, join_quoted(cmd).c_str());
-      std::printf("  params: %s\n", config::yaml_to_string(launch::node_params_document(node)).c_str());
+      std::printf("  params: %s\n",
+                  config::yaml_to_string(launch::node_params_document(node)).c_str());
     }
     return 0;
   }
@@ -112,12 +125,14 @@ int run(int argc, char** argv) {
   ParamsDir dir;
   std::vector<launch::ChildSpec> children;
   for (const auto& node : lf.nodes) {
-    children.push_back(launch::child_spec(node, dir.write(node.name, launch::node_params_yaml(node))));
+    children.push_back(
+        launch::child_spec(node, dir.write(node.name, launch::node_params_yaml(node))));
   }
   launch::SupervisorOptions opts;
   opts.grace_ns = static_cast<DurationNs>(grace_s * 1e9);
   opts.env = lf.env;
-  opts.color = color == "always" || (color == "auto" && ::isatty(STDOUT_FILENO) && ::isatty(STDERR_FILENO));
+  opts.color =
+      color == "always" || (color == "auto" && ::isatty(STDOUT_FILENO) && ::isatty(STDERR_FILENO));
   opts.stop_signal = [] { return shutdown_signal() ? shutdown_signal() : SIGTERM; };
   const auto& stop = shutdown_requested();
   launch::Supervisor supervisor(std::move(children), opts);

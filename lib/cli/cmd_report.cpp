@@ -1,6 +1,6 @@
-// `faultline report`: one self-contained HTML file from robustness results (+ corruption benchmark).
+// `faultline report`: one self-contained HTML file from robustness results (+ corruption
+// benchmark).
 #include <CLI/CLI.hpp>
-
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -23,11 +23,14 @@ bool slurp(const std::string& path, std::string& text) {
 }
 
 int run(int argc, char** argv) {
-  CLI::App app{"Renders a self-contained HTML report (inline SVG) from `faultline robustness --out` folders."};
+  CLI::App app{
+      "Renders a self-contained HTML report (inline SVG) from `faultline robustness --out` "
+      "folders."};
   std::vector<std::string> dirs;
   std::string bench, out = "report.html", title;
   app.add_option("--robustness", dirs, "folders holding robustness.json (one per detector)");
-  app.add_option("--corrupt-bench", bench, "bench/results/corrupt.json (corruption engine timings)");
+  app.add_option("--corrupt-bench", bench,
+                 "bench/results/corrupt.json (corruption engine timings)");
   app.add_option("-o,--output", out, "HTML file to write")->capture_default_str();
   app.add_option("--title", title, "page title");
   try {
@@ -70,8 +73,8 @@ int run(int argc, char** argv) {
     std::fprintf(stderr, "faultline report: error: cannot write %s\n", out.c_str());
     return 1;
   }
-  std::printf("wrote %s (%zu detector(s), %zu benchmark record(s))\n", out.c_str(), data.detectors.size(),
-              data.corrupt_bench.size());
+  std::printf("wrote %s (%zu detector(s), %zu benchmark record(s))\n", out.c_str(),
+              data.detectors.size(), data.corrupt_bench.size());
   return 0;
 }
 }  // namespace

@@ -1,6 +1,5 @@
 // `faultline robustness`: RoboBEV mCE / mRR of one detector from its scored runs.
 #include <CLI/CLI.hpp>
-
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -19,19 +18,24 @@ bool write(const std::string& path, const std::string& text) {
 }
 
 int run(int argc, char** argv) {
-  CLI::App app{"Computes per-corruption mean NDS, CE and RR and the mCE / mRR of one detector (RoboBEV), "
-               "against the paper's DETR3D baseline or another scored detector."};
+  CLI::App app{
+      "Computes per-corruption mean NDS, CE and RR and the mCE / mRR of one detector (RoboBEV), "
+      "against the paper's DETR3D baseline or another scored detector."};
   std::vector<std::string> runs;
   std::string manifest, baseline_manifest, out_dir, name;
   bool exact = false;
   double latency_ms = -1.0;
-  app.add_option("runs", runs, "scored run folders (clean, <corruption>_<level> or <corruption>/<level>)");
-  app.add_option("--manifest", manifest, "YAML/JSON mapping conditions (clean, fog/easy, ...) to run folders");
-  app.add_option("--baseline", baseline_manifest, "manifest of the baseline detector (default: paper DETR3D)");
+  app.add_option("runs", runs,
+                 "scored run folders (clean, <corruption>_<level> or <corruption>/<level>)");
+  app.add_option("--manifest", manifest,
+                 "YAML/JSON mapping conditions (clean, fog/easy, ...) to run folders");
+  app.add_option("--baseline", baseline_manifest,
+                 "manifest of the baseline detector (default: paper DETR3D)");
   app.add_option("--out", out_dir, "write robustness.md, robustness.csv, robustness.json here");
   app.add_option("--name", name, "detector name (default: manifest 'detector' or 'detector')");
   app.add_option("--latency-ms", latency_ms, "detector latency for the report's speed chart");
-  app.add_flag("--exact", exact, "use exact level means instead of the notebook's 4-decimal rounding");
+  app.add_flag("--exact", exact,
+               "use exact level means instead of the notebook's 4-decimal rounding");
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -69,7 +73,8 @@ int run(int argc, char** argv) {
     }
     auto bs = scoring::collect_detector_scores(bname, *b);
     if (!bs) {
-      std::fprintf(stderr, "faultline robustness: error: baseline: %s\n", bs.status().message().c_str());
+      std::fprintf(stderr, "faultline robustness: error: baseline: %s\n",
+                   bs.status().message().c_str());
       return 1;
     }
     baseline = *bs;
@@ -96,5 +101,6 @@ int run(int argc, char** argv) {
   return 0;
 }
 }  // namespace
-FAULTLINE_COMMAND(robustness, "robustness", "RoboBEV mCE/mRR from scored clean + corrupted runs", &run);
+FAULTLINE_COMMAND(robustness, "robustness", "RoboBEV mCE/mRR from scored clean + corrupted runs",
+                  &run);
 }  // namespace faultline::cli

@@ -1,6 +1,5 @@
 // `faultline score`: the official nuScenes detection metrics (devkit-compatible outputs).
 #include <CLI/CLI.hpp>
-
 #include <cstdio>
 
 #include "cli/command.hpp"
@@ -10,8 +9,9 @@
 namespace faultline::cli {
 namespace {
 int run(int argc, char** argv) {
-  CLI::App app{"Scores a nuScenes detection submission exactly like the devkit (NDS, mAP, TP errors) and "
-               "writes metrics_summary.json and metrics_details.json."};
+  CLI::App app{
+      "Scores a nuScenes detection submission exactly like the devkit (NDS, mAP, TP errors) and "
+      "writes metrics_summary.json and metrics_details.json."};
   scoring::EvalOptions opts;
   bool quiet = false;
   app.add_option("--results", opts.results_path, "submission JSON {meta, results}")->required();
@@ -21,7 +21,8 @@ int run(int argc, char** argv) {
   app.add_option("--eval_set,--eval-set", opts.eval_set,
                  "split: val, mini_val, mini_train, train, test, or a key of splits.json")
       ->capture_default_str();
-  app.add_option("--output_dir,--output-dir", opts.output_dir, "where the metrics files go")->required();
+  app.add_option("--output_dir,--output-dir", opts.output_dir, "where the metrics files go")
+      ->required();
   app.add_option("--max-results-bytes", opts.max_results_bytes,
                  "refuse a results file larger than this (bytes)")
       ->capture_default_str();

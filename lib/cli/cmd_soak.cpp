@@ -7,8 +7,8 @@
 
 #include "campaign/soak.hpp"
 #include "cli/command.hpp"
-#include "cli/parse.hpp"
 #include "cli/live_run.hpp"
+#include "cli/parse.hpp"
 #include "common/shutdown.hpp"
 
 namespace faultline::cli {

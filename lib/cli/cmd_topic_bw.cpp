@@ -4,7 +4,9 @@
 
 namespace faultline::cli {
 namespace {
-int run(int argc, char** argv) { return topic::run_probe_command(argc, argv, topic::ProbeKind::Bw); }
+int run(int argc, char** argv) {
+  return topic::run_probe_command(argc, argv, topic::ProbeKind::Bw);
+}
 }  // namespace
 FAULTLINE_COMMAND(topic_bw, "topic bw", "bandwidth of a topic (bytes/s incl. payload)", &run);
 }  // namespace faultline::cli

@@ -1,5 +1,5 @@
-// `faultline topic echo TOPIC`: prints each message decoded as text; payloads and `bytes` fields are
-// shown as length + hash, never dumped.
+// `faultline topic echo TOPIC`: prints each message decoded as text; payloads and `bytes` fields
+// are shown as length + hash, never dumped.
 #include <CLI/CLI.hpp>
 #include <cinttypes>
 #include <cstdio>
@@ -23,10 +23,12 @@ void print_message(const transport::ReceivedMessage& m, const std::string& type)
   std::string text = effective.empty() ? "" : topic::decode_to_text(effective, m.header());
   if (text.empty()) {
     msgs::Header h;
-    if (topic::extract_header(m.header(), &h)) text = topic::decode_to_text("faultline.msgs.Header", h.SerializeAsString());
-    std::printf("(%s; body %zu bytes; header only)\n",
-                effective.empty() ? "type unknown, pass --type" : ("cannot decode as " + effective).c_str(),
-                m.header().size());
+    if (topic::extract_header(m.header(), &h))
+      text = topic::decode_to_text("faultline.msgs.Header", h.SerializeAsString());
+    std::printf(
+        "(%s; body %zu bytes; header only)\n",
+        effective.empty() ? "type unknown, pass --type" : ("cannot decode as " + effective).c_str(),
+        m.header().size());
     if (!text.empty()) std::printf("header {\n%s}\n", text.c_str());
   } else {
     std::fputs(text.c_str(), stdout);
@@ -63,18 +65,20 @@ int run(int argc, char** argv) {
   const StampNs start = monotonic_now_ns();
   std::uint64_t count = 0;
   while (!stop.load()) {
-    if (duration_s > 0 && monotonic_now_ns() - start >= static_cast<DurationNs>(duration_s * 1e9)) break;
+    if (duration_s > 0 && monotonic_now_ns() - start >= static_cast<DurationNs>(duration_s * 1e9))
+      break;
     auto r = sub.receive(50 * kNsPerMs);
     if (r.status().code() == StatusCode::kCancelled) break;
     if (!r.is_ok() || r->topic() != target.topic) continue;  // a prefix match of another topic
     print_message(*r, target.type);
     if (++count == max_messages) break;
   }
-  std::printf("summary topic=%s count=%" PRIu64 " malformed=%" PRIu64 "\n", target.topic.c_str(), count,
-              sub.malformed());
+  std::printf("summary topic=%s count=%" PRIu64 " malformed=%" PRIu64 "\n", target.topic.c_str(),
+              count, sub.malformed());
   return count > 0 ? 0 : 1;
 }
 
 }  // namespace
-FAULTLINE_COMMAND(topic_echo, "topic echo", "print a topic's messages (decoded header, payload hash)", &run);
+FAULTLINE_COMMAND(topic_echo, "topic echo",
+                  "print a topic's messages (decoded header, payload hash)", &run);
 }  // namespace faultline::cli

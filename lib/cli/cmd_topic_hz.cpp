@@ -15,9 +15,11 @@ namespace faultline::cli {
 namespace topic {
 
 int run_probe_command(int argc, char** argv, ProbeKind kind) {
-  const char* what = kind == ProbeKind::Hz   ? "Measure a topic's message rate from receive times."
-                     : kind == ProbeKind::Bw ? "Measure a topic's bandwidth (all frames, payload included)."
-                                             : "Measure message age: receive time (realtime) - header.capture_stamp_ns.";
+  const char* what =
+      kind == ProbeKind::Hz ? "Measure a topic's message rate from receive times."
+      : kind == ProbeKind::Bw
+          ? "Measure a topic's bandwidth (all frames, payload included)."
+          : "Measure message age: receive time (realtime) - header.capture_stamp_ns.";
   CLI::App app{what, argv[0]};
   std::string topic_name;
   std::vector<std::string> endpoints;
@@ -27,14 +29,16 @@ int run_probe_command(int argc, char** argv, ProbeKind kind) {
   std::string stamp = "capture";
   app.add_option("topic", topic_name, "topic name")->required();
   app.add_option("--endpoint", endpoints, "bypass the registry: connect here");
-  app.add_option("--window", window_s, "sliding window of the periodic lines, seconds")->check(CLI::PositiveNumber);
+  app.add_option("--window", window_s, "sliding window of the periodic lines, seconds")
+      ->check(CLI::PositiveNumber);
   app.add_option("--every", every_s, "seconds between periodic lines; 0 = summary only")
       ->check(CLI::NonNegativeNumber);
   app.add_option("--duration", duration_s, "exit after S seconds")->check(CLI::NonNegativeNumber);
   app.add_option("-n,--count", max_messages, "exit after N messages");
   app.add_option("--hwm", hwm, "receive queue depth (messages)")->check(CLI::Range(1, 1000));
   if (kind == ProbeKind::Delay) {
-    app.add_option("--stamp", stamp, "header stamp to age against: capture (dataset time on replays) or publish")
+    app.add_option("--stamp", stamp,
+                   "header stamp to age against: capture (dataset time on replays) or publish")
         ->check(CLI::IsMember({"capture", "publish"}));
   }
   transport::AccessConfig access;
@@ -50,12 +54,13 @@ int run_probe_command(int argc, char** argv, ProbeKind kind) {
   sc.access = access;
   transport::RawSubscriber sub(sc);
 
-  // Per message: a receive stamp and a size (and the small header parse for delay). The payload stays
-  // in its zmq frame and is released when `r` goes out of scope.
+  // Per message: a receive stamp and a size (and the small header parse for delay). The payload
+  // stays in its zmq frame and is released when `r` goes out of scope.
   const stats::ProbeReceive receive = [&](DurationNs timeout_ns) -> Result<stats::ProbeSample> {
     auto r = sub.receive(timeout_ns);
     if (!r.is_ok()) return r.status();
-    if (r->topic() != target.topic) return Status{StatusCode::kWouldBlock, "other topic"};  // prefix match
+    if (r->topic() != target.topic)
+      return Status{StatusCode::kWouldBlock, "other topic"};  // prefix match
     stats::ProbeSample s{r->receive_mono_ns(), r->size_bytes(), stats::kNoDelay};
     if (kind == ProbeKind::Delay) {
       msgs::Header h;
@@ -77,9 +82,12 @@ int run_probe_command(int argc, char** argv, ProbeKind kind) {
     std::printf("%s\n", line.c_str());
     std::fflush(stdout);
   };
-  const stats::ProbeResult result = stats::run_probe(receive, options, shutdown_requested(), report);
-  if (result.end == stats::ProbeEnd::ReceiveError) std::fprintf(stderr, "receive error: %s\n", result.error.c_str());
-  std::printf("%s malformed=%llu end=\"%s\"\n", stats::format_summary(target.topic, result.total).c_str(),
+  const stats::ProbeResult result =
+      stats::run_probe(receive, options, shutdown_requested(), report);
+  if (result.end == stats::ProbeEnd::ReceiveError)
+    std::fprintf(stderr, "receive error: %s\n", result.error.c_str());
+  std::printf("%s malformed=%llu end=\"%s\"\n",
+              stats::format_summary(target.topic, result.total).c_str(),
               static_cast<unsigned long long>(sub.malformed()), stats::to_string(result.end));
   if (kind == ProbeKind::Delay && result.total.count > 0 && result.total.delay_ms.count == 0) {
     std::fprintf(stderr, "no message carried header.%s_stamp_ns\n", stamp.c_str());
@@ -90,7 +98,10 @@ int run_probe_command(int argc, char** argv, ProbeKind kind) {
 }  // namespace topic
 
 namespace {
-int run(int argc, char** argv) { return topic::run_probe_command(argc, argv, topic::ProbeKind::Hz); }
+int run(int argc, char** argv) {
+  return topic::run_probe_command(argc, argv, topic::ProbeKind::Hz);
+}
 }  // namespace
-FAULTLINE_COMMAND(topic_hz, "topic hz", "rate of a topic from receive times (min/max/std of period)", &run);
+FAULTLINE_COMMAND(topic_hz, "topic hz",
+                  "rate of a topic from receive times (min/max/std of period)", &run);
 }  // namespace faultline::cli

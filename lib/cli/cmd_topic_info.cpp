@@ -1,5 +1,5 @@
-// `faultline topic info TOPIC`: type and publishers from the registry; with --endpoint, the layout of
-// the first message heard.
+// `faultline topic info TOPIC`: type and publishers from the registry; with --endpoint, the layout
+// of the first message heard.
 #include <CLI/CLI.hpp>
 #include <cinttypes>
 #include <cstdio>
@@ -14,8 +14,8 @@
 namespace faultline::cli {
 namespace {
 
-int probe_first_message(const std::string& topic, const std::vector<std::string>& endpoints, double timeout_s,
-                        const transport::AccessConfig& access) {
+int probe_first_message(const std::string& topic, const std::vector<std::string>& endpoints,
+                        double timeout_s, const transport::AccessConfig& access) {
   transport::SubscriberConfig sc;
   sc.endpoints = endpoints;
   sc.access = access;
@@ -34,8 +34,8 @@ int probe_first_message(const std::string& topic, const std::vector<std::string>
     std::printf("Header frame: %zu bytes\n", r->header().size());
     if (r->has_payload()) std::printf("Payload: %zu bytes\n", r->payload_size());
     if (has_header) {
-      std::printf("Publisher: %s  frame_id: %s  seq: %" PRIu64 "\n", h.publisher().c_str(), h.frame_id().c_str(),
-                  h.seq());
+      std::printf("Publisher: %s  frame_id: %s  seq: %" PRIu64 "\n", h.publisher().c_str(),
+                  h.frame_id().c_str(), h.seq());
     }
     std::printf("summary topic=%s heard=1\n", topic.c_str());
     return 0;
@@ -70,10 +70,11 @@ int run(int argc, char** argv) {
                  transport::run_dir().c_str());
     return 1;
   }
-  std::printf("Topic: %s\nType: %s\nPublishers: %zu\n", topic.c_str(), publishers.front().type.c_str(),
-              publishers.size());
+  std::printf("Topic: %s\nType: %s\nPublishers: %zu\n", topic.c_str(),
+              publishers.front().type.c_str(), publishers.size());
   for (const auto& p : publishers) {
-    std::printf("  %s (pid %d) at %s%s\n", p.node.c_str(), static_cast<int>(p.pid), p.endpoint.c_str(),
+    std::printf("  %s (pid %d) at %s%s\n", p.node.c_str(), static_cast<int>(p.pid),
+                p.endpoint.c_str(),
                 p.type != publishers.front().type ? (" type " + p.type).c_str() : "");
   }
   std::printf("summary topic=%s publishers=%zu\n", topic.c_str(), publishers.size());

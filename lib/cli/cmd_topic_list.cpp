@@ -1,5 +1,5 @@
-// `faultline topic list`: advertised topics (registry) or, with --endpoint, topics seen on a socket.
-// Also holds the shared helpers declared in topic_tools.hpp.
+// `faultline topic list`: advertised topics (registry) or, with --endpoint, topics seen on a
+// socket. Also holds the shared helpers declared in topic_tools.hpp.
 #include <google/protobuf/descriptor.h>
 #include <google/protobuf/dynamic_message.h>
 #include <google/protobuf/io/coded_stream.h>
@@ -29,7 +29,8 @@ namespace topic {
 
 namespace pb = google::protobuf;
 
-Target resolve(const std::string& topic, const std::vector<std::string>& endpoints, const std::string& type) {
+Target resolve(const std::string& topic, const std::vector<std::string>& endpoints,
+               const std::string& type) {
   Target t{topic, type, endpoints};
   if (!endpoints.empty()) return t;
   for (const auto& info : transport::list_topics()) {
@@ -38,21 +39,23 @@ Target resolve(const std::string& topic, const std::vector<std::string>& endpoin
     if (t.type.empty()) t.type = info.type;
   }
   if (t.endpoints.empty()) {
-    throw ConfigError("topic " + topic + ": no live publisher in the registry " + transport::run_dir() +
-                      " (see `faultline topic list`, or pass --endpoint)");
+    throw ConfigError("topic " + topic + ": no live publisher in the registry " +
+                      transport::run_dir() + " (see `faultline topic list`, or pass --endpoint)");
   }
   return t;
 }
 
 bool extract_header(std::string_view bytes, msgs::Header* header) {
   using pb::internal::WireFormatLite;
-  pb::io::CodedInputStream in(reinterpret_cast<const std::uint8_t*>(bytes.data()), static_cast<int>(bytes.size()));
+  pb::io::CodedInputStream in(reinterpret_cast<const std::uint8_t*>(bytes.data()),
+                              static_cast<int>(bytes.size()));
   while (const std::uint32_t tag = in.ReadTag()) {
     if (WireFormatLite::GetTagFieldNumber(tag) == 1 &&
         WireFormatLite::GetTagWireType(tag) == WireFormatLite::WIRETYPE_LENGTH_DELIMITED) {
       std::uint32_t length = 0;
       std::string field;
-      if (!in.ReadVarint32(&length) || !in.ReadString(&field, static_cast<int>(length))) return false;
+      if (!in.ReadVarint32(&length) || !in.ReadString(&field, static_cast<int>(length)))
+        return false;
       return header->ParseFromString(field);
     }
     if (!WireFormatLite::SkipField(&in, tag)) return false;
@@ -142,21 +145,27 @@ int list_endpoint(const std::vector<std::string>& endpoints, double duration_s,
   }
   std::printf("%-44s %-8s %-8s %s\n", "TOPIC", "FRAMES", "MSGS", "PUBLISHER");
   for (const auto& [name, s] : seen) {
-    std::printf("%-44s %-8zu %-8" PRIu64 " %s\n", name.c_str(), s.frames, s.count, s.publisher.c_str());
+    std::printf("%-44s %-8zu %-8" PRIu64 " %s\n", name.c_str(), s.frames, s.count,
+                s.publisher.c_str());
   }
-  std::printf("summary topics=%zu source=%s listened_s=%.1f\n", seen.size(), endpoints.front().c_str(), duration_s);
+  std::printf("summary topics=%zu source=%s listened_s=%.1f\n", seen.size(),
+              endpoints.front().c_str(), duration_s);
   return 0;
 }
 
 int run(int argc, char** argv) {
-  CLI::App app{"List topics: from the registry of live publishers, or heard on --endpoint.", argv[0]};
+  CLI::App app{"List topics: from the registry of live publishers, or heard on --endpoint.",
+               argv[0]};
   std::vector<std::string> endpoints;
   double duration_s = 1.0;
-  app.add_option("--endpoint", endpoints, "listen on this endpoint instead of reading the registry");
-  app.add_option("--duration", duration_s, "seconds to listen with --endpoint")->check(CLI::PositiveNumber);
+  app.add_option("--endpoint", endpoints,
+                 "listen on this endpoint instead of reading the registry");
+  app.add_option("--duration", duration_s, "seconds to listen with --endpoint")
+      ->check(CLI::PositiveNumber);
   transport::AccessConfig access;
   add_access_options(app, access, SocketSides::Connect);
-  app.footer("Registry: $FAULTLINE_RUN_DIR or /tmp/faultline-<uid>/graph (one file per publishing node).");
+  app.footer(
+      "Registry: $FAULTLINE_RUN_DIR or /tmp/faultline-<uid>/graph (one file per publishing node).");
   FAULTLINE_PARSE(app, argc, argv);
   if (!endpoints.empty()) return list_endpoint(endpoints, duration_s, access);
 
@@ -164,12 +173,14 @@ int run(int argc, char** argv) {
   std::printf("%-44s %-30s %-24s %s\n", "TOPIC", "TYPE", "NODE (PID)", "ENDPOINT");
   for (const auto& t : topics) {
     const std::string node = t.node + " (" + std::to_string(t.pid) + ")";
-    std::printf("%-44s %-30s %-24s %s\n", t.topic.c_str(), t.type.c_str(), node.c_str(), t.endpoint.c_str());
+    std::printf("%-44s %-30s %-24s %s\n", t.topic.c_str(), t.type.c_str(), node.c_str(),
+                t.endpoint.c_str());
   }
   std::printf("summary topics=%zu registry=%s\n", topics.size(), transport::run_dir().c_str());
   return 0;
 }
 
 }  // namespace
-FAULTLINE_COMMAND(topic_list, "topic list", "list topics with type, publisher node and endpoint", &run);
+FAULTLINE_COMMAND(topic_list, "topic list", "list topics with type, publisher node and endpoint",
+                  &run);
 }  // namespace faultline::cli

@@ -3,7 +3,6 @@
 
 #include <cstdio>
 #include <opencv2/core/version.hpp>
-
 #include <string>
 
 #include "cli/command.hpp"
@@ -12,7 +11,8 @@ namespace faultline::cli {
 namespace {
 int run(int argc, char** argv) {
   if (argc > 1) {
-    std::printf("Usage: %s\nPrints the Faultline version and the versions of its main libraries.\n", argv[0]);
+    std::printf("Usage: %s\nPrints the Faultline version and the versions of its main libraries.\n",
+                argv[0]);
     return std::string(argv[1]) == "--help" || std::string(argv[1]) == "-h" ? 0 : 2;
   }
   int major = 0, minor = 0, patch = 0;

@@ -1,7 +1,9 @@
-// The `faultline` tool's subcommands. A lib/cli/cmd_*.cpp file defines one (or a group, as cmd_bench.cpp does) with
+// The `faultline` tool's subcommands. A lib/cli/cmd_*.cpp file defines one (or a group, as
+// cmd_bench.cpp does) with
 //   FAULTLINE_COMMAND(stem, "name", "one-line summary", &run);
-// at the start of a line, and CMake generates the registry from those lines, so adding a command touches one file.
-// Names may have two words ("bench corrupt", "topic hz"); the dispatcher matches the longest.
+// at the start of a line, and CMake generates the registry from those lines, so adding a command
+// touches one file. Names may have two words ("bench corrupt", "topic hz"); the dispatcher matches
+// the longest.
 #pragma once
 
 #include <string>
@@ -10,8 +12,8 @@
 namespace faultline::cli {
 
 struct Command {
-  const char* name;     // "score", "bench corrupt"
-  const char* summary;  // one line for `faultline --help`
+  const char* name;                   // "score", "bench corrupt"
+  const char* summary;                // one line for `faultline --help`
   int (*run)(int argc, char** argv);  // argv[0] is "faultline <name>"; returns the exit code
 };
 

@@ -18,7 +18,9 @@ namespace {
 
 void print_usage(const std::string& prefix) {
   std::printf("faultline: streaming sensor fault injection for camera perception stacks\n\n");
-  std::printf("Usage: faultline <command> [options]   (faultline <command> --help for details)\n\nCommands:\n");
+  std::printf(
+      "Usage: faultline <command> [options]   (faultline <command> --help for "
+      "details)\n\nCommands:\n");
   for (const Command* c : all_commands()) {
     if (prefix.empty() || std::string(c->name).rfind(prefix, 0) == 0) {
       std::printf("  %-20s %s\n", c->name, c->summary);

@@ -30,11 +30,15 @@ void add_export_options(CLI::App& app, ExportArgs& args) {
   app.add_option("--version", cfg.version, "table folder, e.g. v1.0-trainval");
   app.add_option("--out", cfg.out_dir, "output root");
   app.add_option("--corruptions", args.corruptions,
-                 "all (nuScenes-C's eight: CameraCrash, FrameLost, MotionBlur, ColorQuant, Brightness, LowLight, Fog, "
-                 "Snow) or a list of those and GaussianNoise, ShotNoise, ImpulseNoise, SpeckleNoise, ISONoise, "
-                 "Contrast, Saturate, Pixelate, JpegCompression, GaussianBlur, DefocusBlur, GlassBlur, ZoomBlur, Frost, "
+                 "all (nuScenes-C's eight: CameraCrash, FrameLost, MotionBlur, ColorQuant, "
+                 "Brightness, LowLight, Fog, "
+                 "Snow) or a list of those and GaussianNoise, ShotNoise, ImpulseNoise, "
+                 "SpeckleNoise, ISONoise, "
+                 "Contrast, Saturate, Pixelate, JpegCompression, GaussianBlur, DefocusBlur, "
+                 "GlassBlur, ZoomBlur, Frost, "
                  "ElasticTransform, Spatter, Faultline's sensor faults Soiling, WaterDrops, Glare, "
-                 "ExposureFlicker (one model per camera and scene), TransportCorruption, Recompression (class or "
+                 "ExposureFlicker (one model per camera and scene), TransportCorruption, "
+                 "Recompression (class or "
                  "snake_case names)");
   app.add_option("--levels", args.levels, "comma-separated easy, mid, hard");
   args.scenes_option =

@@ -1,7 +1,7 @@
 // Shared pieces of the `faultline topic ...` commands: finding a topic's endpoints in the registry,
 // extracting the Header from any message, and decoding messages for `topic echo`.
-// Definitions live in cmd_topic_list.cpp (registry, decoding) and cmd_topic_hz.cpp (probe commands),
-// because lib/cli compiles only cmd_*.cpp files.
+// Definitions live in cmd_topic_list.cpp (registry, decoding) and cmd_topic_hz.cpp (probe
+// commands), because lib/cli compiles only cmd_*.cpp files.
 #pragma once
 
 #include <cstdint>
@@ -20,9 +20,10 @@ struct Target {
   std::vector<std::string> endpoints;  // where to connect
 };
 
-// --endpoint given: use it. Otherwise every publisher of `topic` in the registry; ConfigError naming
-// the topic and the registry dir when there is none.
-Target resolve(const std::string& topic, const std::vector<std::string>& endpoints, const std::string& type);
+// --endpoint given: use it. Otherwise every publisher of `topic` in the registry; ConfigError
+// naming the topic and the registry dir when there is none.
+Target resolve(const std::string& topic, const std::vector<std::string>& endpoints,
+               const std::string& type);
 
 // Parses field 1 (`Header header = 1`, first field of every Faultline message) out of serialized
 // bytes without knowing the message type. False when absent or malformed.

@@ -1,25 +1,26 @@
-// Raw pixel frames (CameraFrame encoding/width/height/step) into the CV_8UC3 BGR image that the corruptions and
-// the JPEG encoder take: what a V4L2 camera in raw mode or a ROS 2 sensor_msgs/Image source sends.
+// Raw pixel frames (CameraFrame encoding/width/height/step) into the CV_8UC3 BGR image that the
+// corruptions and the JPEG encoder take: what a V4L2 camera in raw mode or a ROS 2
+// sensor_msgs/Image source sends.
 #pragma once
 
 #include <cstddef>
 #include <cstdint>
-#include <string_view>
-
 #include <opencv2/core.hpp>
+#include <string_view>
 
 #include "common/status.hpp"
 
 namespace faultline::codec {
 
-// True for the raw encodings raw_to_bgr understands: "bgr8", "rgb8", "mono8", and the ROS names "yuv422" (UYVY)
-// and "yuv422_yuy2" (YUYV), converted with OpenCV's BT.601 video-range coefficients.
+// True for the raw encodings raw_to_bgr understands: "bgr8", "rgb8", "mono8", and the ROS names
+// "yuv422" (UYVY) and "yuv422_yuy2" (YUYV), converted with OpenCV's BT.601 video-range
+// coefficients.
 bool is_raw_encoding(std::string_view encoding);
 
-// Copies the frame into a new CV_8UC3 BGR image (never a view: the bytes usually belong to a received message).
-// kInvalidArgument for another encoding; kCorruptData when step < width x channels or the byte count is not
-// step x height.
-Result<cv::Mat> raw_to_bgr(std::string_view encoding, std::uint32_t width, std::uint32_t height, std::uint32_t step,
-                           const std::uint8_t* data, std::size_t size);
+// Copies the frame into a new CV_8UC3 BGR image (never a view: the bytes usually belong to a
+// received message). kInvalidArgument for another encoding; kCorruptData when step < width x
+// channels or the byte count is not step x height.
+Result<cv::Mat> raw_to_bgr(std::string_view encoding, std::uint32_t width, std::uint32_t height,
+                           std::uint32_t step, const std::uint8_t* data, std::size_t size);
 
 }  // namespace faultline::codec

@@ -15,7 +15,8 @@ constexpr DurationNs kNsPerSec = 1'000'000'000;
 StampNs realtime_now_ns();   // CLOCK_REALTIME: stamps that are stored or displayed
 StampNs monotonic_now_ns();  // CLOCK_MONOTONIC: latency between processes on one host
 
-// A clock interface for loops that pace or time out; SystemClock in production, a manual one in tests.
+// A clock interface for loops that pace or time out; SystemClock in production, a manual one in
+// tests.
 class Clock {
  public:
   virtual ~Clock() = default;

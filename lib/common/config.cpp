@@ -1,11 +1,11 @@
 #include "common/config.hpp"
 
-#include "common/bounded_read.hpp"
-
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
 #include <sstream>
+
+#include "common/bounded_read.hpp"
 
 namespace faultline::config {
 
@@ -87,7 +87,8 @@ void Loader::finish() const {
 }
 
 void Loader::fail(const std::string& key, const YAML::Node& value, const std::string& why) const {
-  throw ConfigError(source_.origin_of(key) + ": " + key + " = " + yaml_to_string(value) + ": " + why);
+  throw ConfigError(source_.origin_of(key) + ": " + key + " = " + yaml_to_string(value) + ": " +
+                    why);
 }
 
 void HelpPrinter::add(const std::string& key, const std::string& type, const std::string& def,
@@ -98,13 +99,16 @@ void HelpPrinter::add(const std::string& key, const std::string& type, const std
   out_ += line;
 }
 
-void print_node_help(const std::string& name, const std::string& summary, const std::string& params) {
+void print_node_help(const std::string& name, const std::string& summary,
+                     const std::string& params) {
   std::printf(
       "%s: %s\n\n"
       "Usage: %s [--params FILE.yaml]... [-p key:=value]... [--name NAME] [--log-level LEVEL]\n"
       "          [--log-file FILE]\n\n"
-      "A params file is a flat mapping, or has a section named after the node (NAME: {params: {...}}).\n"
-      "A launch file (a 'nodes' list) is started with `faultline launch FILE`, not given as --params.\n"
+      "A params file is a flat mapping, or has a section named after the node (NAME: {params: "
+      "{...}}).\n"
+      "A launch file (a 'nodes' list) is started with `faultline launch FILE`, not given as "
+      "--params.\n"
       "SPDLOG_LEVEL (e.g. info,%s=debug) also sets levels.\n\nParameters:\n%s",
       name.c_str(), summary.c_str(), name.c_str(), name.c_str(), params.c_str());
 }
@@ -118,14 +122,22 @@ NodeOptions parse_node_args(int argc, char** argv, const std::string& default_na
   };
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
-    if (a == "-h" || a == "--help") o.help = true;
-    else if (a == "--params" || a == "--params-file") o.params_files.push_back(need(i, a));
-    else if (a == "-p") o.overrides.push_back(need(i, a));
-    else if (a.rfind("-p", 0) == 0 && a.size() > 2 && a.find(":=") != std::string::npos) o.overrides.push_back(a.substr(2));
-    else if (a == "--name") o.name = need(i, a);
-    else if (a == "--log-level") o.log_level = need(i, a);
-    else if (a == "--log-file") o.log_file = need(i, a);
-    else throw ConfigError("command line: unknown argument '" + a + "' (see --help)");
+    if (a == "-h" || a == "--help")
+      o.help = true;
+    else if (a == "--params" || a == "--params-file")
+      o.params_files.push_back(need(i, a));
+    else if (a == "-p")
+      o.overrides.push_back(need(i, a));
+    else if (a.rfind("-p", 0) == 0 && a.size() > 2 && a.find(":=") != std::string::npos)
+      o.overrides.push_back(a.substr(2));
+    else if (a == "--name")
+      o.name = need(i, a);
+    else if (a == "--log-level")
+      o.log_level = need(i, a);
+    else if (a == "--log-file")
+      o.log_file = need(i, a);
+    else
+      throw ConfigError("command line: unknown argument '" + a + "' (see --help)");
   }
   return o;
 }
@@ -141,10 +153,13 @@ ParamSource build_source(const NodeOptions& options) {
     } catch (const YAML::Exception& e) {
       throw ConfigError(file + ":" + std::to_string(e.mark.line + 1) + ": " + e.msg);
     }
-    // A launch file lists nodes and uses ${VAR:-default} substitutions that only `faultline launch` expands.
+    // A launch file lists nodes and uses ${VAR:-default} substitutions that only `faultline launch`
+    // expands.
     if (doc.IsMap() && doc["nodes"].IsSequence() && !doc[options.name].IsDefined()) {
-      throw ConfigError(file + ": a launch file (it has a 'nodes' list), not a params file: start it with "
-                        "`faultline launch " + file + "`, or give " + options.name +
+      throw ConfigError(file +
+                        ": a launch file (it has a 'nodes' list), not a params file: start it with "
+                        "`faultline launch " +
+                        file + "`, or give " + options.name +
                         " a flat params file or one with a '" + options.name + ":' section");
     }
     if (doc.IsMap() && doc[options.name].IsDefined() && doc[options.name].IsMap()) {

@@ -1,6 +1,7 @@
 // Node parameters: one plain struct per node with a visit() that names every field once. The same
 // visit() loads YAML (unknown keys and wrong types are errors naming file, key and value), applies
-// `-p key:=value` overrides, prints --help and describes the resolved parameters for the start line.
+// `-p key:=value` overrides, prints --help and describes the resolved parameters for the start
+// line.
 //
 //   struct PlayerConfig {
 //     double rate = 1.0;  // replay speed factor; 0 = as fast as possible
@@ -50,16 +51,26 @@ std::string yaml_to_string(const YAML::Node& node);
 
 template <typename T>
 const char* type_name() {
-  if constexpr (std::is_same_v<T, bool>) return "bool";
-  else if constexpr (std::is_integral_v<T> && std::is_unsigned_v<T>) return "unsigned integer";
-  else if constexpr (std::is_integral_v<T>) return "integer";
-  else if constexpr (std::is_floating_point_v<T>) return "number";
-  else if constexpr (std::is_same_v<T, std::string>) return "string";
-  else if constexpr (std::is_same_v<T, std::vector<std::string>>) return "list of strings";
-  else if constexpr (std::is_same_v<T, std::vector<double>>) return "list of numbers";
-  else if constexpr (std::is_same_v<T, std::vector<int>>) return "list of integers";
-  else if constexpr (std::is_same_v<T, std::map<std::string, std::string>>) return "map of strings";
-  else return "YAML node";
+  if constexpr (std::is_same_v<T, bool>)
+    return "bool";
+  else if constexpr (std::is_integral_v<T> && std::is_unsigned_v<T>)
+    return "unsigned integer";
+  else if constexpr (std::is_integral_v<T>)
+    return "integer";
+  else if constexpr (std::is_floating_point_v<T>)
+    return "number";
+  else if constexpr (std::is_same_v<T, std::string>)
+    return "string";
+  else if constexpr (std::is_same_v<T, std::vector<std::string>>)
+    return "list of strings";
+  else if constexpr (std::is_same_v<T, std::vector<double>>)
+    return "list of numbers";
+  else if constexpr (std::is_same_v<T, std::vector<int>>)
+    return "list of integers";
+  else if constexpr (std::is_same_v<T, std::map<std::string, std::string>>)
+    return "map of strings";
+  else
+    return "YAML node";
 }
 
 // Visitor that reads fields from a ParamSource; finish() rejects keys no field claimed.
@@ -88,7 +99,8 @@ class Loader {
     }
   }
   void finish() const;  // throws ConfigError for the first unknown key
-  [[noreturn]] void fail(const std::string& key, const YAML::Node& value, const std::string& why) const;
+  [[noreturn]] void fail(const std::string& key, const YAML::Node& value,
+                         const std::string& why) const;
 
  private:
   const ParamSource& source_;
@@ -120,7 +132,8 @@ class HelpPrinter {
     n = field;
     add(key, type_name<T>(), yaml_to_string(n), help);
   }
-  void add(const std::string& key, const std::string& type, const std::string& def, const std::string& help);
+  void add(const std::string& key, const std::string& type, const std::string& def,
+           const std::string& help);
   std::string str() const { return out_; }
 
  private:
@@ -136,9 +149,9 @@ std::string describe(const Cfg& cfg) {
 
 // Common command-line options of every node.
 struct NodeOptions {
-  std::string name;                  // node name (default: the executable's role)
-  std::string log_level = "info";   // trace, debug, info, warn, error, critical, off
-  std::string log_file;              // optional rotating log file
+  std::string name;                // node name (default: the executable's role)
+  std::string log_level = "info";  // trace, debug, info, warn, error, critical, off
+  std::string log_file;            // optional rotating log file
   std::vector<std::string> params_files;
   std::vector<std::string> overrides;  // raw "key:=value"
   bool help = false;
@@ -146,11 +159,13 @@ struct NodeOptions {
 
 // Parses argv (--params FILE, -p key:=value, --name, --log-level, --log-file, --help). Unknown
 // arguments are ConfigErrors. A params file is either flat or has a top-level key equal to the
-// node name; a launch file (a top-level `nodes:` list) is refused with a pointer to `faultline launch`.
+// node name; a launch file (a top-level `nodes:` list) is refused with a pointer to `faultline
+// launch`.
 NodeOptions parse_node_args(int argc, char** argv, const std::string& default_name);
 ParamSource build_source(const NodeOptions& options);
 
-void print_node_help(const std::string& name, const std::string& summary, const std::string& params);
+void print_node_help(const std::string& name, const std::string& summary,
+                     const std::string& params);
 
 // Loads a config struct for a node. Prints --help and exits 0 when asked.
 template <typename Cfg>

@@ -1,7 +1,8 @@
-// Which vector paths the hand-dispatched SIMD kernels may take. Each answer is the CPU's own (read once per
-// process), unless FAULTLINE_SCALAR is set in the environment to anything but "" or "0": then every answer is false,
-// so the portable fallbacks run, and can be tested against the same goldens, on a machine that has the vector units.
-// GCC target_clones functions are resolved by the loader and are not affected; their default body is the same source.
+// Which vector paths the hand-dispatched SIMD kernels may take. Each answer is the CPU's own (read
+// once per process), unless FAULTLINE_SCALAR is set in the environment to anything but "" or "0":
+// then every answer is false, so the portable fallbacks run, and can be tested against the same
+// goldens, on a machine that has the vector units. GCC target_clones functions are resolved by the
+// loader and are not affected; their default body is the same source.
 #pragma once
 
 namespace faultline::common {

@@ -8,7 +8,8 @@
 
 namespace faultline::logging {
 
-// Level from `level` ("info", "debug", ...), then SPDLOG_LEVEL overrides (e.g. "info,injector=debug").
+// Level from `level` ("info", "debug", ...), then SPDLOG_LEVEL overrides (e.g.
+// "info,injector=debug").
 std::shared_ptr<spdlog::logger> make_node_logger(const std::string& name, const std::string& level,
                                                  const std::string& file = "");
 

@@ -1,4 +1,5 @@
-// Brightness: skimage HSV round trip per pixel, plus a fast path reading the same results from tables built with it.
+// Brightness: skimage HSV round trip per pixel, plus a fast path reading the same results from
+// tables built with it.
 #include "corruption/brightness.hpp"
 
 #include <algorithm>
@@ -13,7 +14,9 @@
 namespace faultline::corruption {
 namespace {
 
-std::uint8_t to_u8(double v) { return static_cast<std::uint8_t>(std::min(std::max(v, 0.0), 1.0) * 255.0); }
+std::uint8_t to_u8(double v) {
+  return static_cast<std::uint8_t>(std::min(std::max(v, 0.0), 1.0) * 255.0);
+}
 
 // One pixel through rgb2hsv, V += c, hsv2rgb (skimage 0.19 semantics, channels in stored order).
 void hsv_shift_pixel(const std::uint8_t* in, std::uint8_t* out, double c) {
@@ -26,8 +29,8 @@ void hsv_shift_pixel(const std::uint8_t* in, std::uint8_t* out, double c) {
   if (a0 == v) h = (a1 - a2) / delta;
   if (a1 == v) h = 2.0 + (a2 - a0) / delta;
   if (a2 == v) h = 4.0 + (a0 - a1) / delta;
-  // numpy floor-mod: fmod, then shift negatives into [0, 1). h lies in [-1, 5] (or is NaN), so |h / 6| < 1 and
-  // fmod(h / 6, 1) is exactly h / 6: the libm call is skipped without changing a bit.
+  // numpy floor-mod: fmod, then shift negatives into [0, 1). h lies in [-1, 5] (or is NaN), so |h /
+  // 6| < 1 and fmod(h / 6, 1) is exactly h / 6: the libm call is skipped without changing a bit.
   double hue = h / 6.0;
   if (hue != 0.0 && hue < 0.0) hue += 1.0;
   if (delta == 0.0) hue = 0.0;
@@ -41,12 +44,24 @@ void hsv_shift_pixel(const std::uint8_t* in, std::uint8_t* out, double c) {
   const double t = v2 * (1.0 - (1.0 - f) * s);
   double r0 = 0.0, r1 = 0.0, r2 = 0.0;
   switch (static_cast<std::uint8_t>(hi) % 6) {
-    case 0: r0 = v2, r1 = t, r2 = p; break;
-    case 1: r0 = q, r1 = v2, r2 = p; break;
-    case 2: r0 = p, r1 = v2, r2 = t; break;
-    case 3: r0 = p, r1 = q, r2 = v2; break;
-    case 4: r0 = t, r1 = p, r2 = v2; break;
-    default: r0 = v2, r1 = p, r2 = q; break;
+    case 0:
+      r0 = v2, r1 = t, r2 = p;
+      break;
+    case 1:
+      r0 = q, r1 = v2, r2 = p;
+      break;
+    case 2:
+      r0 = p, r1 = v2, r2 = t;
+      break;
+    case 3:
+      r0 = p, r1 = q, r2 = v2;
+      break;
+    case 4:
+      r0 = t, r1 = p, r2 = v2;
+      break;
+    default:
+      r0 = v2, r1 = p, r2 = q;
+      break;
   }
   out[0] = to_u8(r0);
   out[1] = to_u8(r1);
@@ -75,29 +90,33 @@ cv::Mat brightness_exact(const cv::Mat& bgr, int severity) {
 
 namespace {
 
-// Slot of a pixel with three distinct channels in the ambiguity table, by key = 3 * (max position) + (middle
-// position); keys 0, 4 and 8 cannot occur.
+// Slot of a pixel with three distinct channels in the ambiguity table, by key = 3 * (max position)
+// + (middle position); keys 0, 4 and 8 cannot occur.
 constexpr int kSlotOfKey[8] = {0, 0, 1, 2, 0, 3, 4, 5};
 constexpr int kKeyOfSlot[6] = {1, 2, 3, 5, 6, 7};
 
-// Per-severity tables, built once per process (severity is fixed per stream, so every later frame reuses them).
-// Together they give the exact HSV-path output of every pixel, so neither path below ever runs the HSV path.
+// Per-severity tables, built once per process (severity is fixed per stream, so every later frame
+// reuses them). Together they give the exact HSV-path output of every pixel, so neither path below
+// ever runs the HSV path.
 //
 // Why a channel's role decides it: in every sector the maximum channel gets V2 and the minimum gets
-// p = V2 * (1 - S), which depend only on (v, min); the middle channel gets q or t, a * V2 / V up to a few ulps.
-// Ties need nothing more: two equal channels make h an integer k (the differences are exact negations of delta),
-// k / 6 * 6 == k in double for k = 0..5, so f = 0, and q (or t) comes out as exactly V2 at a tie at the max and
-// exactly p at a tie at the min; a grey pixel (S = 0) gets V2 in all three.
+// p = V2 * (1 - S), which depend only on (v, min); the middle channel gets q or t, a * V2 / V up to
+// a few ulps. Ties need nothing more: two equal channels make h an integer k (the differences are
+// exact negations of delta), k / 6 * 6 == k in double for k = 0..5, so f = 0, and q (or t) comes
+// out as exactly V2 at a tie at the max and exactly p at a tie at the min; a grey pixel (S = 0)
+// gets V2 in all three.
 struct BrightnessTables {
   // roles[v * 256 + a], for channel value a <= v in a pixel whose max is v:
   //   bits 0-7   as the minimum: to_u8(p), exact;
   //   bits 8-15  to_u8(V2), the output of the maximum (the same in every entry of row v), exact;
-  //   bits 16-31 as the middle of three distinct channels: the closed form a * V2 / V truncated, or, when that
-  //              lies within 1e-6 of a truncation boundary (float noise decides), 256 + the 16-byte block of this
-  //              (v, a) in `amb`.
+  //   bits 16-31 as the middle of three distinct channels: the closed form a * V2 / V truncated,
+  //   or, when that
+  //              lies within 1e-6 of a truncation boundary (float noise decides), 256 + the 16-byte
+  //              block of this (v, a) in `amb`.
   std::vector<std::uint32_t> roles;
-  // amb[16 * block + 6 * mn + slot]: exact output of the middle channel of a pixel (v, a, mn) whose middle value
-  // is ambiguous, by min value mn < a and slot (kSlotOfKey). Three bytes of slack for 32-bit gathers.
+  // amb[16 * block + 6 * mn + slot]: exact output of the middle channel of a pixel (v, a, mn) whose
+  // middle value is ambiguous, by min value mn < a and slot (kSlotOfKey). Three bytes of slack for
+  // 32-bit gathers.
   std::vector<std::uint8_t> amb;
 };
 
@@ -137,7 +156,8 @@ BrightnessTables build_tables(double c) {
       t.roles[static_cast<std::size_t>(v * 256 + a)] = as_min | (as_max << 8) | (as_mid << 16);
     }
   }
-  if (t.amb.size() / 16 + 256 > 0xFFFF) throw std::logic_error("brightness: ambiguity table outgrew its index");
+  if (t.amb.size() / 16 + 256 > 0xFFFF)
+    throw std::logic_error("brightness: ambiguity table outgrew its index");
   t.amb.resize(t.amb.size() + 3);
   return t;
 }
@@ -152,14 +172,18 @@ const BrightnessTables& tables_for(int severity) {
 
 // Exact output of one pixel from the tables (the scalar path, also the vector path's tail).
 inline void table_pixel(const BrightnessTables& t, const std::uint8_t* px, std::uint8_t* o) {
-  const int v = std::max(std::max(px[0], px[1]), px[2]), mn = std::min(std::min(px[0], px[1]), px[2]);
+  const int v = std::max(std::max(px[0], px[1]), px[2]),
+            mn = std::min(std::min(px[0], px[1]), px[2]);
   const int mid = px[0] + px[1] + px[2] - v - mn;
   const std::uint32_t at_min = t.roles[static_cast<std::size_t>(v * 256 + mn)];
-  const auto as_min = static_cast<std::uint8_t>(at_min), as_max = static_cast<std::uint8_t>(at_min >> 8);
+  const auto as_min = static_cast<std::uint8_t>(at_min),
+             as_max = static_cast<std::uint8_t>(at_min >> 8);
   std::uint32_t mid_out = t.roles[static_cast<std::size_t>(v * 256 + mid)] >> 16;
   if (mid_out > 255 && mid != mn) {
-    const int pmax = v == px[0] ? 0 : (v == px[1] ? 1 : 2), pmid = mid == px[0] ? 0 : (mid == px[1] ? 1 : 2);
-    mid_out = t.amb[16 * (mid_out - 256) + static_cast<std::size_t>(6 * mn + kSlotOfKey[3 * pmax + pmid])];
+    const int pmax = v == px[0] ? 0 : (v == px[1] ? 1 : 2),
+              pmid = mid == px[0] ? 0 : (mid == px[1] ? 1 : 2);
+    mid_out = t.amb[16 * (mid_out - 256) +
+                    static_cast<std::size_t>(6 * mn + kSlotOfKey[3 * pmax + pmid])];
   }
   for (int k = 0; k < 3; ++k) {
     o[k] = px[k] == v ? as_max : (px[k] == mn ? as_min : static_cast<std::uint8_t>(mid_out));
@@ -167,29 +191,34 @@ inline void table_pixel(const BrightnessTables& t, const std::uint8_t* px, std::
 }
 
 #if FAULTLINE_X86_SIMD
-// 8 pixels per step: deinterleave, max/min/middle per pixel, two gathers from the role table, a gather from the
-// ambiguity table for ambiguous middle channels (only in steps that have one), select by role, re-interleave.
-// Returns the number of pixels processed (a multiple of 8, leaving >= 32 bytes of slack for the 32-byte loads and
-// 16-byte stores).
-FAULTLINE_TARGET("avx2") std::size_t brightness_avx2(const std::uint8_t* src, std::uint8_t* dst,
-                                                     std::size_t npx, const BrightnessTables& t) {
+// 8 pixels per step: deinterleave, max/min/middle per pixel, two gathers from the role table, a
+// gather from the ambiguity table for ambiguous middle channels (only in steps that have one),
+// select by role, re-interleave. Returns the number of pixels processed (a multiple of 8, leaving
+// >= 32 bytes of slack for the 32-byte loads and 16-byte stores).
+FAULTLINE_TARGET("avx2")
+std::size_t brightness_avx2(const std::uint8_t* src, std::uint8_t* dst, std::size_t npx,
+                            const BrightnessTables& t) {
   const auto* roles = reinterpret_cast<const int*>(t.roles.data());
   const auto* amb = reinterpret_cast<const int*>(t.amb.data());
   const __m256i to_lanes = _mm256_setr_epi32(0, 1, 2, 0, 3, 4, 5, 0);
-  const __m256i pick0 = _mm256_setr_epi8(0, -1, -1, -1, 3, -1, -1, -1, 6, -1, -1, -1, 9, -1, -1, -1, 0, -1, -1, -1,
-                                         3, -1, -1, -1, 6, -1, -1, -1, 9, -1, -1, -1);
-  const __m256i pick1 = _mm256_setr_epi8(1, -1, -1, -1, 4, -1, -1, -1, 7, -1, -1, -1, 10, -1, -1, -1, 1, -1, -1,
-                                         -1, 4, -1, -1, -1, 7, -1, -1, -1, 10, -1, -1, -1);
-  const __m256i pick2 = _mm256_setr_epi8(2, -1, -1, -1, 5, -1, -1, -1, 8, -1, -1, -1, 11, -1, -1, -1, 2, -1, -1,
-                                         -1, 5, -1, -1, -1, 8, -1, -1, -1, 11, -1, -1, -1);
-  const __m256i pack = _mm256_setr_epi8(0, 1, 2, 4, 5, 6, 8, 9, 10, 12, 13, 14, -1, -1, -1, -1, 0, 1, 2, 4, 5, 6, 8,
-                                        9, 10, 12, 13, 14, -1, -1, -1, -1);
+  const __m256i pick0 =
+      _mm256_setr_epi8(0, -1, -1, -1, 3, -1, -1, -1, 6, -1, -1, -1, 9, -1, -1, -1, 0, -1, -1, -1, 3,
+                       -1, -1, -1, 6, -1, -1, -1, 9, -1, -1, -1);
+  const __m256i pick1 =
+      _mm256_setr_epi8(1, -1, -1, -1, 4, -1, -1, -1, 7, -1, -1, -1, 10, -1, -1, -1, 1, -1, -1, -1,
+                       4, -1, -1, -1, 7, -1, -1, -1, 10, -1, -1, -1);
+  const __m256i pick2 =
+      _mm256_setr_epi8(2, -1, -1, -1, 5, -1, -1, -1, 8, -1, -1, -1, 11, -1, -1, -1, 2, -1, -1, -1,
+                       5, -1, -1, -1, 8, -1, -1, -1, 11, -1, -1, -1);
+  const __m256i pack = _mm256_setr_epi8(0, 1, 2, 4, 5, 6, 8, 9, 10, 12, 13, 14, -1, -1, -1, -1, 0,
+                                        1, 2, 4, 5, 6, 8, 9, 10, 12, 13, 14, -1, -1, -1, -1);
   const __m256i slot_of_key = _mm256_setr_epi32(0, 0, 1, 2, 0, 3, 4, 5);
   const __m256i byte = _mm256_set1_epi32(0xFF);
   const __m256i k255 = _mm256_set1_epi32(255);
   const __m256i k256 = _mm256_set1_epi32(256);
-  // The previous step's input and output: a step repeating it (flat regions of rendered frames) just stores the
-  // output again. They start as 8 black pixels, which all become grey to_u8(c) (roles[0], bits 8-15).
+  // The previous step's input and output: a step repeating it (flat regions of rendered frames)
+  // just stores the output again. They start as 8 black pixels, which all become grey to_u8(c)
+  // (roles[0], bits 8-15).
   __m256i prev_in = _mm256_setzero_si256();
   const auto grey = static_cast<int>(((t.roles[0] >> 8) & 0xFF) * 0x010101u);
   __m256i prev_out = _mm256_shuffle_epi8(_mm256_set1_epi32(grey), pack);
@@ -197,7 +226,8 @@ FAULTLINE_TARGET("avx2") std::size_t brightness_avx2(const std::uint8_t* src, st
   for (; (i + 8) * 3 + 8 <= npx * 3; i += 8) {
     const __m256i in = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(src + 3 * i));
     __m256i packed = prev_out;
-    if ((static_cast<unsigned>(_mm256_movemask_epi8(_mm256_cmpeq_epi8(in, prev_in))) & 0xFFFFFFu) != 0xFFFFFFu) {
+    if ((static_cast<unsigned>(_mm256_movemask_epi8(_mm256_cmpeq_epi8(in, prev_in))) & 0xFFFFFFu) !=
+        0xFFFFFFu) {
       const __m256i raw = _mm256_permutevar8x32_epi32(in, to_lanes);
       const __m256i c0 = _mm256_shuffle_epi8(raw, pick0);
       const __m256i c1 = _mm256_shuffle_epi8(raw, pick1);
@@ -208,32 +238,36 @@ FAULTLINE_TARGET("avx2") std::size_t brightness_avx2(const std::uint8_t* src, st
           _mm256_sub_epi32(_mm256_sub_epi32(_mm256_add_epi32(_mm256_add_epi32(c0, c1), c2), v), mn);
       const __m256i base = _mm256_slli_epi32(v, 8);
       const __m256i at_min = _mm256_i32gather_epi32(roles, _mm256_add_epi32(base, mn), 4);
-      __m256i mid_out = _mm256_srli_epi32(_mm256_i32gather_epi32(roles, _mm256_add_epi32(base, mid), 4), 16);
+      __m256i mid_out =
+          _mm256_srli_epi32(_mm256_i32gather_epi32(roles, _mm256_add_epi32(base, mid), 4), 16);
       const __m256i as_min = _mm256_and_si256(at_min, byte);
       const __m256i as_max = _mm256_and_si256(_mm256_srli_epi32(at_min, 8), byte);
       const __m256i mx0 = _mm256_cmpeq_epi32(c0, v), mx1 = _mm256_cmpeq_epi32(c1, v),
                     mx2 = _mm256_cmpeq_epi32(c2, v);
       const __m256i mn0 = _mm256_cmpeq_epi32(c0, mn), mn1 = _mm256_cmpeq_epi32(c1, mn),
                     mn2 = _mm256_cmpeq_epi32(c2, mn);
-      // Ambiguous middle channel of a pixel with distinct channels: its exact value from the ambiguity table (the
-      // other lanes keep theirs, below 256 wherever it is used: a middle tied with the max or min is not).
+      // Ambiguous middle channel of a pixel with distinct channels: its exact value from the
+      // ambiguity table (the other lanes keep theirs, below 256 wherever it is used: a middle tied
+      // with the max or min is not).
       const __m256i ambiguous =
           _mm256_andnot_si256(_mm256_cmpeq_epi32(mid, mn), _mm256_cmpgt_epi32(mid_out, k255));
       if (!_mm256_testz_si256(ambiguous, ambiguous)) {
         // key = 3 * (max position) + (middle position), positions from the -1/0 compare masks.
-        const __m256i pmax =
-            _mm256_sub_epi32(_mm256_setzero_si256(), _mm256_add_epi32(mx1, _mm256_add_epi32(mx2, mx2)));
+        const __m256i pmax = _mm256_sub_epi32(_mm256_setzero_si256(),
+                                              _mm256_add_epi32(mx1, _mm256_add_epi32(mx2, mx2)));
         const __m256i md1 = _mm256_andnot_si256(_mm256_or_si256(mx1, mn1), _mm256_set1_epi32(1));
         const __m256i md2 = _mm256_andnot_si256(_mm256_or_si256(mx2, mn2), _mm256_set1_epi32(2));
-        const __m256i key =
-            _mm256_add_epi32(_mm256_add_epi32(pmax, _mm256_add_epi32(pmax, pmax)), _mm256_or_si256(md1, md2));
+        const __m256i key = _mm256_add_epi32(_mm256_add_epi32(pmax, _mm256_add_epi32(pmax, pmax)),
+                                             _mm256_or_si256(md1, md2));
         const __m256i at = _mm256_add_epi32(
             _mm256_add_epi32(_mm256_slli_epi32(_mm256_sub_epi32(mid_out, k256), 4),
                              _mm256_add_epi32(_mm256_slli_epi32(mn, 2), _mm256_slli_epi32(mn, 1))),
             _mm256_permutevar8x32_epi32(slot_of_key, key));
-        mid_out = _mm256_and_si256(_mm256_mask_i32gather_epi32(mid_out, amb, at, ambiguous, 1), byte);
+        mid_out =
+            _mm256_and_si256(_mm256_mask_i32gather_epi32(mid_out, amb, at, ambiguous, 1), byte);
       }
-      // Per channel: the max role wins, then the min role, else the middle (a lambda would lose the target).
+      // Per channel: the max role wins, then the min role, else the middle (a lambda would lose the
+      // target).
       const __m256i o0 = _mm256_blendv_epi8(_mm256_blendv_epi8(mid_out, as_min, mn0), as_max, mx0);
       const __m256i o1 = _mm256_blendv_epi8(_mm256_blendv_epi8(mid_out, as_min, mn1), as_max, mx1);
       const __m256i o2 = _mm256_blendv_epi8(_mm256_blendv_epi8(mid_out, as_min, mn2), as_max, mx2);
@@ -244,7 +278,8 @@ FAULTLINE_TARGET("avx2") std::size_t brightness_avx2(const std::uint8_t* src, st
       prev_out = packed;
     }
     _mm_storeu_si128(reinterpret_cast<__m128i*>(dst + 3 * i), _mm256_castsi256_si128(packed));
-    _mm_storeu_si128(reinterpret_cast<__m128i*>(dst + 3 * i + 12), _mm256_extracti128_si256(packed, 1));
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(dst + 3 * i + 12),
+                     _mm256_extracti128_si256(packed, 1));
   }
   return i;
 }

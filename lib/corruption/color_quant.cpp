@@ -10,10 +10,11 @@
 namespace faultline::corruption {
 namespace {
 
-// A plain loop the compiler vectorises: about three times faster on a frame than cv::bitwise_and with a Scalar,
-// which goes through OpenCV's generic binary-op dispatch.
-FAULTLINE_CLONES("avx2") void and_bytes(const std::uint8_t* __restrict src, std::uint8_t* __restrict dst, std::size_t n,
-                                        std::uint8_t mask) {
+// A plain loop the compiler vectorises: about three times faster on a frame than cv::bitwise_and
+// with a Scalar, which goes through OpenCV's generic binary-op dispatch.
+FAULTLINE_CLONES("avx2")
+void and_bytes(const std::uint8_t* __restrict src, std::uint8_t* __restrict dst, std::size_t n,
+               std::uint8_t mask) {
   for (std::size_t i = 0; i < n; ++i) dst[i] = static_cast<std::uint8_t>(src[i] & mask);
 }
 
@@ -34,9 +35,11 @@ cv::Mat color_quant(const cv::Mat& img, int severity) {
   out.create(img.size(), img.type());
   const auto row_bytes = static_cast<std::size_t>(img.cols) * img.elemSize();
   if (img.isContinuous()) {
-    and_bytes(img.data, out.data, row_bytes * static_cast<std::size_t>(img.rows), static_cast<std::uint8_t>(m));
+    and_bytes(img.data, out.data, row_bytes * static_cast<std::size_t>(img.rows),
+              static_cast<std::uint8_t>(m));
   } else {
-    for (int y = 0; y < img.rows; ++y) and_bytes(img.ptr(y), out.ptr(y), row_bytes, static_cast<std::uint8_t>(m));
+    for (int y = 0; y < img.rows; ++y)
+      and_bytes(img.ptr(y), out.ptr(y), row_bytes, static_cast<std::uint8_t>(m));
   }
   return out;
 }

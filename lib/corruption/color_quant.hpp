@@ -1,5 +1,5 @@
-// Color Quant (RoboBEV ColorQuant = PIL posterize, spec corruptions.md §7): keep 5 - severity bits per channel.
-// Deterministic; severity 5 keeps no bits (all-black output).
+// Color Quant (RoboBEV ColorQuant = PIL posterize, spec corruptions.md §7): keep 5 - severity bits
+// per channel. Deterministic; severity 5 keeps no bits (all-black output).
 #pragma once
 
 #include <opencv2/core.hpp>

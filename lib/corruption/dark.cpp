@@ -66,11 +66,12 @@ void noise_row(double y, double sigma, double* prob) {
   }
 }
 
-// Output distribution per input level. It depends only on (severity, image min, image max), which are the same for
-// most frames of a stream, so the last few table sets are kept for reuse.
+// Output distribution per input level. It depends only on (severity, image min, image max), which
+// are the same for most frames of a stream, so the last few table sets are kept for reuse.
 struct DarkTables {
   int severity = 0, lo = 0, hi = 0;
-  // 256 packed alias entries per input level v, row v - lo, for lo <= v <= hi (no other level occurs in the image).
+  // 256 packed alias entries per input level v, row v - lo, for lo <= v <= hi (no other level
+  // occurs in the image).
   std::vector<std::uint32_t> entries;
 };
 
@@ -115,7 +116,8 @@ std::shared_ptr<const DarkTables> tables_for(int severity, int lo, int hi) {
       if (t->severity == severity && t->lo == lo && t->hi == hi) return t;
     }
   }
-  auto t = build_tables(severity, lo, hi);  // outside the lock: other streams keep sampling meanwhile
+  auto t =
+      build_tables(severity, lo, hi);  // outside the lock: other streams keep sampling meanwhile
   const std::lock_guard<std::mutex> lock(mutex);
   cache.push_front(t);
   if (cache.size() > 8) cache.pop_back();

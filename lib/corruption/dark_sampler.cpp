@@ -1,5 +1,5 @@
-// Dark sampling loop: AVX2 body (two 4 x 64-bit xoshiro256++ vectors, 8-wide gathers, branch-free select) chosen at
-// run time, scalar body otherwise and for the tail.
+// Dark sampling loop: AVX2 body (two 4 x 64-bit xoshiro256++ vectors, 8-wide gathers, branch-free
+// select) chosen at run time, scalar body otherwise and for the tail.
 #include "corruption/dark_sampler.hpp"
 
 #include <array>
@@ -21,8 +21,8 @@ inline std::uint8_t sample(const std::uint32_t* row, std::uint32_t bits) {
   return static_cast<std::uint8_t>((bucket & keep) | (e & ~keep));
 }
 
-void sample_scalar(const std::uint32_t* tables, int lo, const std::uint8_t* src, std::uint8_t* dst, std::size_t n,
-                   rng::LaneRng& rng) {
+void sample_scalar(const std::uint32_t* tables, int lo, const std::uint8_t* src, std::uint8_t* dst,
+                   std::size_t n, rng::LaneRng& rng) {
   std::uint32_t r[rng::LaneRng::kValuesPerStep];
   constexpr std::size_t kStep = rng::LaneRng::kValuesPerStep;
   for (std::size_t i = 0; i < n; i += kStep) {
@@ -38,19 +38,21 @@ void sample_scalar(const std::uint32_t* tables, int lo, const std::uint8_t* src,
 #if FAULTLINE_X86_SIMD
 
 // Eight samples: levels (8 x int32, already minus lo) and random bits -> 8 x int32 outcomes.
-FAULTLINE_TARGET("avx2") inline __m256i sample8(const std::uint32_t* tables, __m256i level, __m256i bits) {
+FAULTLINE_TARGET("avx2")
+inline __m256i sample8(const std::uint32_t* tables, __m256i level, __m256i bits) {
   const __m256i bucket = _mm256_srli_epi32(bits, 24);
   const __m256i u = _mm256_and_si256(bits, _mm256_set1_epi32((1 << kDarkAliasThresholdBits) - 1));
   const __m256i idx = _mm256_or_si256(_mm256_slli_epi32(level, 8), bucket);
   const __m256i e = _mm256_i32gather_epi32(reinterpret_cast<const int*>(tables), idx, 4);
-  const __m256i keep = _mm256_cmpgt_epi32(_mm256_srli_epi32(e, 8), u);  // both < 2^24: signed compare is exact
+  const __m256i keep =
+      _mm256_cmpgt_epi32(_mm256_srli_epi32(e, 8), u);  // both < 2^24: signed compare is exact
   return _mm256_blendv_epi8(_mm256_and_si256(e, _mm256_set1_epi32(0xFF)), bucket, keep);
 }
 
 // Processes whole blocks of 32 elements (two generator steps); returns how many elements it wrote.
-FAULTLINE_TARGET("avx2") std::size_t sample_avx2(const std::uint32_t* tables, int lo,
-                                                 const std::uint8_t* src, std::uint8_t* dst, std::size_t n,
-                                                 rng::LaneRng& rng) {
+FAULTLINE_TARGET("avx2")
+std::size_t sample_avx2(const std::uint32_t* tables, int lo, const std::uint8_t* src,
+                        std::uint8_t* dst, std::size_t n, rng::LaneRng& rng) {
   rng::avx2::Xoshiro4 a = rng::avx2::load_half(rng, 0), b = rng::avx2::load_half(rng, 1);
   const __m256i vlo = _mm256_set1_epi32(lo);
   const __m256i order = _mm256_setr_epi32(0, 4, 1, 5, 2, 6, 3, 7);
@@ -78,9 +80,11 @@ FAULTLINE_TARGET("avx2") std::size_t sample_avx2(const std::uint32_t* tables, in
 }
 #endif
 
-// Plain min/max reduction the compiler vectorises (eight times faster than cv::minMaxLoc on a frame).
-FAULTLINE_CLONES("avx2") void min_max(const std::uint8_t* __restrict src, std::size_t n, std::uint8_t* lo_out,
-                                      std::uint8_t* hi_out) {
+// Plain min/max reduction the compiler vectorises (eight times faster than cv::minMaxLoc on a
+// frame).
+FAULTLINE_CLONES("avx2")
+void min_max(const std::uint8_t* __restrict src, std::size_t n, std::uint8_t* lo_out,
+             std::uint8_t* hi_out) {
   std::uint8_t lo = 255, hi = 0;
   for (std::size_t i = 0; i < n; ++i) {
     lo = src[i] < lo ? src[i] : lo;
@@ -99,8 +103,8 @@ std::pair<int, int> dark_min_max(const std::uint8_t* src, std::size_t n) {
   return {lo, hi};
 }
 
-void dark_sample(const std::uint32_t* tables, int lo, const std::uint8_t* src, std::uint8_t* dst, std::size_t n,
-                 rng::LaneRng& rng, bool allow_simd) {
+void dark_sample(const std::uint32_t* tables, int lo, const std::uint8_t* src, std::uint8_t* dst,
+                 std::size_t n, rng::LaneRng& rng, bool allow_simd) {
   std::size_t done = 0;
 #if FAULTLINE_X86_SIMD
   if (allow_simd && common::cpu_has_avx2()) done = sample_avx2(tables, lo, src, dst, n, rng);
@@ -130,7 +134,8 @@ void build_alias_entries(const double* prob, std::uint32_t* entry) {
   while (ns > 0 && nl > 0) {
     const int s = small[static_cast<std::size_t>(--ns)];
     const int l = large[static_cast<std::size_t>(nl - 1)];
-    const auto threshold = static_cast<std::uint32_t>(std::llround(scaled[static_cast<std::size_t>(s)] * kOne));
+    const auto threshold =
+        static_cast<std::uint32_t>(std::llround(scaled[static_cast<std::size_t>(s)] * kOne));
     entry[s] = (threshold << 8) | static_cast<std::uint32_t>(l);
     scaled[static_cast<std::size_t>(l)] -= 1.0 - scaled[static_cast<std::size_t>(s)];
     if (scaled[static_cast<std::size_t>(l)] < 1.0) {

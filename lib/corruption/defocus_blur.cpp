@@ -2,7 +2,6 @@
 #include "corruption/defocus_blur.hpp"
 
 #include <algorithm>
-
 #include <opencv2/imgproc.hpp>
 
 namespace faultline::corruption {
@@ -57,7 +56,8 @@ cv::Mat defocus_blur_exact(const cv::Mat& bgr, int severity) {
   for (int y = 0; y < bgr.rows; ++y) {
     const unsigned char* s = bgr.ptr<unsigned char>(y);
     for (int x = 0; x < bgr.cols; ++x) {
-      for (int c = 0; c < 3; ++c) channels[c].at<double>(y, x) = s[3 * x + c] / 255.0;  // u8 / 255. in float64
+      for (int c = 0; c < 3; ++c)
+        channels[c].at<double>(y, x) = s[3 * x + c] / 255.0;  // u8 / 255. in float64
     }
   }
   cv::Mat out(bgr.size(), CV_8UC3);
@@ -73,15 +73,17 @@ cv::Mat defocus_blur_fast(const cv::Mat& bgr, int severity) {
   const cv::Mat kernel = defocus_kernel(severity);
   cv::Mat filtered;
   cv::filter2D(bgr, filtered, CV_32F, kernel);
-  // Kernels summing a hair below 1 (severities 1-3) put the reference's flat areas just below their integer, which
-  // truncates one level down; float32 cannot resolve that deficit, so it is applied as a small bias.
+  // Kernels summing a hair below 1 (severities 1-3) put the reference's flat areas just below their
+  // integer, which truncates one level down; float32 cannot resolve that deficit, so it is applied
+  // as a small bias.
   const float bias = cv::sum(kernel)[0] < 1.0 ? -1e-3f : 0.f;
   cv::Mat out(bgr.size(), CV_8UC3);
   const int width = bgr.cols * 3;
   for (int y = 0; y < bgr.rows; ++y) {
     const float* s = filtered.ptr<float>(y);
     unsigned char* o = out.ptr<unsigned char>(y);
-    for (int x = 0; x < width; ++x) o[x] = static_cast<unsigned char>(std::min(std::max(s[x] + bias, 0.f), 255.f));
+    for (int x = 0; x < width; ++x)
+      o[x] = static_cast<unsigned char>(std::min(std::max(s[x] + bias, 0.f), 255.f));
   }
   return out;
 }

@@ -1,9 +1,10 @@
-// Defocus Blur (imagecorruptions 1.1.2 `defocus_blur`): each channel correlated with an anti-aliased disk (a
-// binary disk of the severity's radius on a grid of at least 17 x 17, normalised, then smoothed by a 3 x 3 or 5 x 5
-// Gaussian). Deterministic. OpenCV does the reference's filtering (cv2.GaussianBlur, cv2.filter2D on float64, with
-// reflect-101 borders), so calling it the same way reproduces the reference. Where the disk reaches the grid's edge
-// (severities 4 and 5) that border folds its rim back in: the kernel sums to 1.013 / 1.011, and flat areas come out
-// up to 2 levels brighter, as in the reference.
+// Defocus Blur (imagecorruptions 1.1.2 `defocus_blur`): each channel correlated with an
+// anti-aliased disk (a binary disk of the severity's radius on a grid of at least 17 x 17,
+// normalised, then smoothed by a 3 x 3 or 5 x 5 Gaussian). Deterministic. OpenCV does the
+// reference's filtering (cv2.GaussianBlur, cv2.filter2D on float64, with reflect-101 borders), so
+// calling it the same way reproduces the reference. Where the disk reaches the grid's edge
+// (severities 4 and 5) that border folds its rim back in: the kernel sums to 1.013 / 1.011, and
+// flat areas come out up to 2 levels brighter, as in the reference.
 #pragma once
 
 #include <opencv2/core.hpp>

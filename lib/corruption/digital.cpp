@@ -11,13 +11,18 @@
 namespace faultline::corruption {
 namespace {
 
-std::size_t sev_index(int severity) { return static_cast<std::size_t>(std::clamp(severity, 1, 5) - 1); }
+std::size_t sev_index(int severity) {
+  return static_cast<std::size_t>(std::clamp(severity, 1, 5) - 1);
+}
 
-inline std::uint8_t to_u8(double v) { return static_cast<std::uint8_t>(std::min(std::max(v, 0.0), 1.0) * 255.0); }
+inline std::uint8_t to_u8(double v) {
+  return static_cast<std::uint8_t>(std::min(std::max(v, 0.0), 1.0) * 255.0);
+}
 
 cv::Mat continuous(const cv::Mat& m) { return m.isContinuous() ? m : m.clone(); }
 
-// One pixel through rgb2hsv, S = clip(S * a + b, 0, 1), hsv2rgb (skimage 0.19, channels in stored order).
+// One pixel through rgb2hsv, S = clip(S * a + b, 0, 1), hsv2rgb (skimage 0.19, channels in stored
+// order).
 void saturate_pixel(const std::uint8_t* in, std::uint8_t* out, double a, double b) {
   const double a0 = in[0] / 255.0, a1 = in[1] / 255.0, a2 = in[2] / 255.0;
   const double v = std::max(std::max(a0, a1), a2);
@@ -28,7 +33,8 @@ void saturate_pixel(const std::uint8_t* in, std::uint8_t* out, double a, double 
   if (a0 == v) h = (a1 - a2) / delta;
   if (a1 == v) h = 2.0 + (a2 - a0) / delta;
   if (a2 == v) h = 4.0 + (a0 - a1) / delta;
-  // numpy's floor-mod of h / 6 by 1: |h / 6| < 1, so only negatives move (by +1, which may round to 1.0).
+  // numpy's floor-mod of h / 6 by 1: |h / 6| < 1, so only negatives move (by +1, which may round
+  // to 1.0).
   double hue = h / 6.0;
   if (hue < 0.0) hue += 1.0;
   if (delta == 0.0 || std::isnan(hue)) hue = 0.0;
@@ -41,12 +47,24 @@ void saturate_pixel(const std::uint8_t* in, std::uint8_t* out, double a, double 
   const double t = v * (1.0 - (1.0 - f) * s2);
   double r0 = 0.0, r1 = 0.0, r2 = 0.0;
   switch (static_cast<std::uint8_t>(hi) % 6) {
-    case 0: r0 = v, r1 = t, r2 = p; break;
-    case 1: r0 = q, r1 = v, r2 = p; break;
-    case 2: r0 = p, r1 = v, r2 = t; break;
-    case 3: r0 = p, r1 = q, r2 = v; break;
-    case 4: r0 = t, r1 = p, r2 = v; break;
-    default: r0 = v, r1 = p, r2 = q; break;
+    case 0:
+      r0 = v, r1 = t, r2 = p;
+      break;
+    case 1:
+      r0 = q, r1 = v, r2 = p;
+      break;
+    case 2:
+      r0 = p, r1 = v, r2 = t;
+      break;
+    case 3:
+      r0 = p, r1 = q, r2 = v;
+      break;
+    case 4:
+      r0 = t, r1 = p, r2 = v;
+      break;
+    default:
+      r0 = v, r1 = p, r2 = q;
+      break;
   }
   out[0] = to_u8(r0);
   out[1] = to_u8(r1);
@@ -61,7 +79,8 @@ cv::Mat contrast(const cv::Mat& bgr, int severity) {
   const cv::Mat in = continuous(bgr);
   double x_of[256];
   for (int v = 0; v < 256; ++v) x_of[v] = v / 255.0;
-  // numpy reduces axes (0, 1) with the channel axis innermost: one running float64 sum per channel, in pixel order.
+  // numpy reduces axes (0, 1) with the channel axis innermost: one running float64 sum per channel,
+  // in pixel order.
   double sum[3] = {0.0, 0.0, 0.0};
   const std::size_t pixels = in.total();
   const std::uint8_t* src = in.data;
@@ -92,17 +111,20 @@ constexpr double kSatB[] = {0, 0, 0, 0.1, 0.2};
 
 namespace {
 
-// One row of saturate_fast on planar float copies of its channels (p0, p1, p2; pixels from..n-1, overwritten with
-// the results). The interleaved byte loop does not vectorise; the planar one runs 8 pixels per AVX2 step below.
-// Both do the same operations in the same order as one pixel at a time, so they give the same bytes.
-void saturate_planar(float* p0, float* p1, float* p2, std::size_t from, std::size_t n, float a, float b) {
+// One row of saturate_fast on planar float copies of its channels (p0, p1, p2; pixels from..n-1,
+// overwritten with the results). The interleaved byte loop does not vectorise; the planar one runs
+// 8 pixels per AVX2 step below. Both do the same operations in the same order as one pixel at a
+// time, so they give the same bytes.
+void saturate_planar(float* p0, float* p1, float* p2, std::size_t from, std::size_t n, float a,
+                     float b) {
   for (std::size_t i = from; i < n; ++i) {
     const float c0 = p0[i], c1 = p1[i], c2 = p2[i];
     const float v = std::max(std::max(c0, c1), c2), lo = std::min(std::min(c0, c1), c2);
     const float s = v > 0.0f ? (v - lo) / v : 0.0f;
     const float s2 = std::min(std::max(s * a + b, 0.0f), 1.0f);
-    // Every channel moves towards or away from V by the same factor: c' = v - (v - c) * s2 / s. A grey pixel has
-    // hue 0 (channel 0) in skimage, so an offset b tints it: (v, v (1 - s2), v (1 - s2)).
+    // Every channel moves towards or away from V by the same factor: c' = v - (v - c) * s2 / s. A
+    // grey pixel has hue 0 (channel 0) in skimage, so an offset b tints it: (v, v (1 - s2), v (1 -
+    // s2)).
     const float k = v > lo ? s2 * v / (v - lo) : 0.0f;
     const float grey_tail = v > lo ? 0.0f : v * s2;
     p0[i] = std::min(std::max(v - (v - c0) * k, 0.0f), 255.0f);
@@ -112,22 +134,28 @@ void saturate_planar(float* p0, float* p1, float* p2, std::size_t from, std::siz
 }
 
 #if FAULTLINE_X86_SIMD
-// Returns how many pixels it did (whole steps of 8). The divisions run on every lane, so their divisors are kept
-// >= 1: the values are integers, so max(x, 1) = x wherever a quotient is used, and v = 0 means lo = 0, s = 0.
-// max/min of non-NaN values equal std::max/min's; no FMA (products rounded before the adds, as above).
-FAULTLINE_TARGET("avx2") std::size_t saturate_planar_avx2(float* p0, float* p1, float* p2, std::size_t n, float a,
-                                                          float b) {
+// Returns how many pixels it did (whole steps of 8). The divisions run on every lane, so their
+// divisors are kept
+// >= 1: the values are integers, so max(x, 1) = x wherever a quotient is used, and v = 0 means lo =
+// 0, s = 0. max/min of non-NaN values equal std::max/min's; no FMA (products rounded before the
+// adds, as above).
+FAULTLINE_TARGET("avx2")
+std::size_t saturate_planar_avx2(float* p0, float* p1, float* p2, std::size_t n, float a, float b) {
   const __m256 va = _mm256_set1_ps(a), vb = _mm256_set1_ps(b), zero = _mm256_setzero_ps();
   const __m256 one = _mm256_set1_ps(1.0f), top = _mm256_set1_ps(255.0f);
   std::size_t i = 0;
   for (; i + 8 <= n; i += 8) {
-    const __m256 c0 = _mm256_loadu_ps(p0 + i), c1 = _mm256_loadu_ps(p1 + i), c2 = _mm256_loadu_ps(p2 + i);
-    const __m256 v = _mm256_max_ps(_mm256_max_ps(c0, c1), c2), lo = _mm256_min_ps(_mm256_min_ps(c0, c1), c2);
+    const __m256 c0 = _mm256_loadu_ps(p0 + i), c1 = _mm256_loadu_ps(p1 + i),
+                 c2 = _mm256_loadu_ps(p2 + i);
+    const __m256 v = _mm256_max_ps(_mm256_max_ps(c0, c1), c2),
+                 lo = _mm256_min_ps(_mm256_min_ps(c0, c1), c2);
     const __m256 span = _mm256_sub_ps(v, lo);
     const __m256 s = _mm256_div_ps(span, _mm256_max_ps(v, one));
-    const __m256 s2 = _mm256_min_ps(_mm256_max_ps(_mm256_add_ps(_mm256_mul_ps(s, va), vb), zero), one);
+    const __m256 s2 =
+        _mm256_min_ps(_mm256_max_ps(_mm256_add_ps(_mm256_mul_ps(s, va), vb), zero), one);
     const __m256 coloured = _mm256_cmp_ps(v, lo, _CMP_GT_OQ);
-    const __m256 k = _mm256_and_ps(coloured, _mm256_div_ps(_mm256_mul_ps(s2, v), _mm256_max_ps(span, one)));
+    const __m256 k =
+        _mm256_and_ps(coloured, _mm256_div_ps(_mm256_mul_ps(s2, v), _mm256_max_ps(span, one)));
     const __m256 grey_tail = _mm256_andnot_ps(coloured, _mm256_mul_ps(v, s2));
     const auto channel = [&](__m256 c, __m256 tail) FAULTLINE_TARGET_INLINE("avx2") {
       const __m256 o = _mm256_sub_ps(_mm256_sub_ps(v, _mm256_mul_ps(_mm256_sub_ps(v, c), k)), tail);
@@ -144,7 +172,8 @@ FAULTLINE_TARGET("avx2") std::size_t saturate_planar_avx2(float* p0, float* p1, 
 }  // namespace
 
 cv::Mat saturate_fast(const cv::Mat& bgr, int severity) {
-  const float a = static_cast<float>(kSatA[sev_index(severity)]), b = static_cast<float>(kSatB[sev_index(severity)]);
+  const float a = static_cast<float>(kSatA[sev_index(severity)]),
+              b = static_cast<float>(kSatB[sev_index(severity)]);
   cv::Mat out(bgr.size(), CV_8UC3);
   const std::size_t cols = static_cast<std::size_t>(bgr.cols);
   std::vector<float> planes(3 * cols);

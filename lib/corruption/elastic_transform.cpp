@@ -1,12 +1,11 @@
-// Elastic Transform: the reference's smoothed random field and float64 bilinear resampling; a low-resolution fast
-// path.
+// Elastic Transform: the reference's smoothed random field and float64 bilinear resampling; a
+// low-resolution fast path.
 #include "corruption/elastic_transform.hpp"
 
 #include <algorithm>
 #include <cmath>
-#include <vector>
-
 #include <opencv2/imgproc.hpp>
+#include <vector>
 
 #include "corruption/ndimage.hpp"
 
@@ -46,7 +45,8 @@ Taps taps_reflect(double coord, int len) {
   t.w1 = 1.0 - t.w0;
   // Taps outside the line are mapped back with the same reflection (integer positions).
   t.i0 = start < 0 || start >= len ? static_cast<int>(map_reflect(start, len)) : start;
-  t.i1 = start + 1 >= len || start + 1 < 0 ? static_cast<int>(map_reflect(start + 1, len)) : start + 1;
+  t.i1 =
+      start + 1 >= len || start + 1 < 0 ? static_cast<int>(map_reflect(start + 1, len)) : start + 1;
   return t;
 }
 
@@ -73,7 +73,8 @@ double elastic_alpha(int severity) {
   return kAlpha[severity - 1];
 }
 
-void elastic_fields_numpy(int rows, int cols, int severity, rng::NumpyRandomState& rng, cv::Mat& dx, cv::Mat& dy) {
+void elastic_fields_numpy(int rows, int cols, int severity, rng::NumpyRandomState& rng, cv::Mat& dx,
+                          cv::Mat& dy) {
   const double max_d = rows * 0.005;
   dx = smoothed_field(rows, cols, max_d, elastic_alpha(severity), rng);
   dy = smoothed_field(rows, cols, max_d, elastic_alpha(severity), rng);
@@ -93,12 +94,15 @@ cv::Mat elastic_transform_numpy(const cv::Mat& bgr, int severity, rng::NumpyRand
   for (int y = 0; y < rows; ++y) {
     unsigned char* o = out.ptr<unsigned char>(y);
     for (int x = 0; x < cols; ++x) {
-      const Taps ty = taps_reflect(static_cast<double>(y) + static_cast<double>(dy.at<float>(y, x)), rows);
-      const Taps tx = taps_reflect(static_cast<double>(x) + static_cast<double>(dx.at<float>(y, x)), cols);
+      const Taps ty =
+          taps_reflect(static_cast<double>(y) + static_cast<double>(dy.at<float>(y, x)), rows);
+      const Taps tx =
+          taps_reflect(static_cast<double>(x) + static_cast<double>(dx.at<float>(y, x)), cols);
       const float* r0 = image.ptr<float>(ty.i0);
       const float* r1 = image.ptr<float>(ty.i1);
       for (int c = 0; c < 3; ++c) {
-        // The 2 x 2 x 2 footprint in C order; the channel axis's second tap has weight 0 and adds +0.
+        // The 2 x 2 x 2 footprint in C order; the channel axis's second tap has weight 0 and adds
+        // +0.
         double t = 0.0;
         t += static_cast<double>(r0[3 * tx.i0 + c]) * ty.w0 * tx.w0;
         t += static_cast<double>(r0[3 * tx.i1 + c]) * ty.w0 * tx.w1;
@@ -114,7 +118,8 @@ cv::Mat elastic_transform_numpy(const cv::Mat& bgr, int severity, rng::NumpyRand
 
 namespace {
 
-// Sum of squared weights of a symmetric kernel given by its half (offset 0..r): the variance gain on white noise.
+// Sum of squared weights of a symmetric kernel given by its half (offset 0..r): the variance gain
+// on white noise.
 double square_sum(const std::vector<double>& half) {
   double s = half[0] * half[0];
   for (std::size_t k = 1; k < half.size(); ++k) s += 2 * half[k] * half[k];
@@ -124,7 +129,8 @@ double square_sum(const std::vector<double>& half) {
 cv::Mat as_column(const std::vector<double>& half) {
   const int r = static_cast<int>(half.size()) - 1;
   cv::Mat k(2 * r + 1, 1, CV_32F);
-  for (int i = -r; i <= r; ++i) k.at<float>(i + r) = static_cast<float>(half[static_cast<std::size_t>(std::abs(i))]);
+  for (int i = -r; i <= r; ++i)
+    k.at<float>(i + r) = static_cast<float>(half[static_cast<std::size_t>(std::abs(i))]);
   return k;
 }
 
@@ -132,9 +138,10 @@ cv::Mat as_column(const std::vector<double>& half) {
 
 cv::Mat elastic_transform_fast(const cv::Mat& bgr, int severity, rng::FastRng& rng) {
   const int rows = bgr.rows, cols = bgr.cols;
-  // The field is smooth (sigma 1 % of the frame), so it is drawn and smoothed on a grid `factor` times coarser with
-  // sigma / factor, then interpolated up. White noise smoothed there keeps more variance; the field is rescaled so
-  // that its standard deviation equals the full-resolution field's (ratio of the kernels' squared sums).
+  // The field is smooth (sigma 1 % of the frame), so it is drawn and smoothed on a grid `factor`
+  // times coarser with sigma / factor, then interpolated up. White noise smoothed there keeps more
+  // variance; the field is rescaled so that its standard deviation equals the full-resolution
+  // field's (ratio of the kernels' squared sums).
   const int factor = std::max(1, std::min({4, rows / 8, cols / 8}));
   const int lr = std::max(1, rows / factor), lc = std::max(1, cols / factor);
   const double max_d = rows * 0.005, sy = rows * 0.01, sx = cols * 0.01;
@@ -143,8 +150,8 @@ cv::Mat elastic_transform_fast(const cv::Mat& bgr, int severity, rng::FastRng& r
   const double ly = sy * lr / rows, lx = sx * lc / cols;
   const auto kly = nd::gaussian_kernel(ly, nd::gaussian_radius(ly, 3.0));
   const auto klx = nd::gaussian_kernel(lx, nd::gaussian_radius(lx, 3.0));
-  const double scale =
-      elastic_alpha(severity) * std::sqrt(square_sum(ky) * square_sum(kx) / (square_sum(kly) * square_sum(klx)));
+  const double scale = elastic_alpha(severity) * std::sqrt(square_sum(ky) * square_sum(kx) /
+                                                           (square_sum(kly) * square_sum(klx)));
   cv::Mat maps[2];
   for (auto& m : maps) {
     cv::Mat low(lr, lc, CV_32F);
@@ -152,7 +159,8 @@ cv::Mat elastic_transform_fast(const cv::Mat& bgr, int severity, rng::FastRng& r
       float* p = low.ptr<float>(y);
       for (int x = 0; x < lc; ++x) p[x] = static_cast<float>(rng.uniform(-max_d, max_d));
     }
-    cv::sepFilter2D(low, low, CV_32F, as_column(klx), as_column(kly), cv::Point(-1, -1), 0, cv::BORDER_REFLECT);
+    cv::sepFilter2D(low, low, CV_32F, as_column(klx), as_column(kly), cv::Point(-1, -1), 0,
+                    cv::BORDER_REFLECT);
     cv::resize(low, m, bgr.size(), 0, 0, cv::INTER_LINEAR);
     m *= scale;
   }
@@ -162,7 +170,8 @@ cv::Mat elastic_transform_fast(const cv::Mat& bgr, int severity, rng::FastRng& r
     const float* dy = maps[1].ptr<float>(y);
     float* px = mx.ptr<float>(y);
     float* py = my.ptr<float>(y);
-    for (int x = 0; x < cols; ++x) px[x] = static_cast<float>(x) + dx[x], py[x] = static_cast<float>(y) + dy[x];
+    for (int x = 0; x < cols; ++x)
+      px[x] = static_cast<float>(x) + dx[x], py[x] = static_cast<float>(y) + dy[x];
   }
   cv::Mat out;
   cv::remap(bgr, out, mx, my, cv::INTER_LINEAR, cv::BORDER_REFLECT);

@@ -34,8 +34,11 @@ ExposureFlickerModel::ExposureFlickerModel(int severity, std::uint64_t seed)
 }
 
 double ExposureFlickerModel::exposure_ev(double time_s) const {
-  // Reduce the phase first: capture stamps since the epoch (~1e9 s) keep their sub-millisecond resolution.
-  auto wave = [&](double hz, double phase) { return std::sin(kTwoPi * std::fmod(hz * time_s, 1.0) + phase); };
+  // Reduce the phase first: capture stamps since the epoch (~1e9 s) keep their sub-millisecond
+  // resolution.
+  auto wave = [&](double hz, double phase) {
+    return std::sin(kTwoPi * std::fmod(hz * time_s, 1.0) + phase);
+  };
   const double envelope = 0.5 + 0.5 * wave(envelope_hz_, envelope_phase_);
   return params_.flicker_ev * wave(flicker_hz_, flicker_phase_) +
          params_.hunting_ev * envelope * wave(hunt_hz_, hunt_phase_);
@@ -44,7 +47,8 @@ double ExposureFlickerModel::exposure_ev(double time_s) const {
 double ExposureFlickerModel::band_gain(int y, int rows, double time_s) const {
   if (params_.band_depth <= 0) return 1.0;
   // The bands drift down the frame with the flicker's beat.
-  const double cycles = bands_per_frame_ * (y + 0.5) / std::max(1, rows) - std::fmod(flicker_hz_ * time_s, 1.0);
+  const double cycles =
+      bands_per_frame_ * (y + 0.5) / std::max(1, rows) - std::fmod(flicker_hz_ * time_s, 1.0);
   return 1.0 + params_.band_depth * std::sin(kTwoPi * cycles + band_phase_);
 }
 
@@ -57,7 +61,8 @@ cv::Mat ExposureFlickerModel::apply(const cv::Mat& bgr, double time_s) const {
     const auto g16 = static_cast<std::uint32_t>(std::lround(std::min(g, 255.0) * 65536.0));
     const uchar* s = bgr.ptr<uchar>(y);
     uchar* o = out.ptr<uchar>(y);
-    for (int i = 0; i < n; ++i) o[i] = static_cast<uchar>(std::min<std::uint32_t>(255u, (s[i] * g16 + 32768u) >> 16));
+    for (int i = 0; i < n; ++i)
+      o[i] = static_cast<uchar>(std::min<std::uint32_t>(255u, (s[i] * g16 + 32768u) >> 16));
   }
   return out;
 }

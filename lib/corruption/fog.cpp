@@ -1,13 +1,13 @@
-// Fog: the plasma fractal (fog_plasma.cpp) normalised or blended straight from the finest level's planes, the exact
-// and float32 blends (fog_kernels.cpp), and the fast mode's quarter-resolution field.
+// Fog: the plasma fractal (fog_plasma.cpp) normalised or blended straight from the finest level's
+// planes, the exact and float32 blends (fog_kernels.cpp), and the fast mode's quarter-resolution
+// field.
 #include "corruption/fog.hpp"
 
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
-#include <vector>
-
 #include <opencv2/imgproc.hpp>
+#include <vector>
 
 #include "corruption/fog_kernels.hpp"
 #include "corruption/fog_plasma.hpp"
@@ -18,9 +18,11 @@ namespace {
 // The largest byte of a CV_8UC3 image (a vector scan that stops at the first 255).
 double image_max(const cv::Mat& bgr) {
   const std::size_t row_bytes = static_cast<std::size_t>(bgr.cols) * 3;
-  if (bgr.isContinuous()) return fog_max_u8(bgr.data, row_bytes * static_cast<std::size_t>(bgr.rows), 0);
+  if (bgr.isContinuous())
+    return fog_max_u8(bgr.data, row_bytes * static_cast<std::size_t>(bgr.rows), 0);
   std::uint8_t mx = 0;
-  for (int y = 0; y < bgr.rows && mx < 255; ++y) mx = fog_max_u8(bgr.ptr<std::uint8_t>(y), row_bytes, mx);
+  for (int y = 0; y < bgr.rows && mx < 255; ++y)
+    mx = fog_max_u8(bgr.ptr<std::uint8_t>(y), row_bytes, mx);
   return mx;
 }
 
@@ -34,12 +36,13 @@ FastBlend fast_blend(const cv::Mat& bgr, double strength) {
   return {scale, static_cast<float>(strength) * 255.0f * scale};
 }
 
-// Fast mode's field source: the quarter-resolution plasma map's crop, normalised to float32 and upsampled
-// horizontally (factor 4) or not at all (factor 1, maps under 64). Full-resolution row y sits at low row
-// y / factor, as in the full map (corner-aligned); the last output row and column also read the low row and
-// column after them (wrapping on the torus). With an add_scale, the rows become the fixed-point blend's tripled
-// 16-bit terms (fog_fixed_field_row), built as fixed() reaches them, and only fixed() may be used. The rows (and
-// the plasma planes they read) live in per-thread scratch: one FastField at a time per thread.
+// Fast mode's field source: the quarter-resolution plasma map's crop, normalised to float32 and
+// upsampled horizontally (factor 4) or not at all (factor 1, maps under 64). Full-resolution row y
+// sits at low row y / factor, as in the full map (corner-aligned); the last output row and column
+// also read the low row and column after them (wrapping on the torus). With an add_scale, the rows
+// become the fixed-point blend's tripled 16-bit terms (fog_fixed_field_row), built as fixed()
+// reaches them, and only fixed() may be used. The rows (and the plasma planes they read) live in
+// per-thread scratch: one FastField at a time per thread.
 class FastField {
  public:
   FastField(int rows, int cols, double decay, rng::FastRng& rng, const float* add_scale = nullptr)
@@ -49,7 +52,8 @@ class FastField {
     const int nl = n / factor_;
     lr_ = std::min(nl, (rows - 1) / factor_ + 2);
     lc_ = std::min(nl, (cols - 1) / factor_ + 2);
-    rng::LaneRng lanes(rng);  // one draw of rng seeds the vector-stepped lanes that give the plasma's uniforms
+    rng::LaneRng lanes(
+        rng);  // one draw of rng seeds the vector-stepped lanes that give the plasma's uniforms
     p_ = plasma_levels(nl, decay, lanes, lr_, lc_);
     inv_range_ = 1.0 / (p_.max - p_.min);
     thread_local cv::Mat horiz, fixed;
@@ -59,16 +63,16 @@ class FastField {
     low.resize(static_cast<std::size_t>(lc_) + 1);
     low_ = low.data();
     if (add_scale) {
-      // Three fixed-point rows, built as the blend reaches them (they stay in cache): slots 0 and 1 take the
-      // even and odd low rows, slot 2 the wrapped row lr_ (row 0 again).
+      // Three fixed-point rows, built as the blend reaches them (they stay in cache): slots 0 and 1
+      // take the even and odd low rows, slot 2 the wrapped row lr_ (row 0 again).
       fixed.create(3, 3 * cols, CV_16U);
       fixed_ = fixed;
       return;
     }
     for (int r = 0; r < lr_; ++r) build(r, horiz_.ptr<float>(r));
   }
-  // Row y of the fixed-point terms: the stored rows a and b and the lerp weight k (fog_blend_fixed_row). Rows are
-  // built on first use, so call it with y increasing.
+  // Row y of the fixed-point terms: the stored rows a and b and the lerp weight k
+  // (fog_blend_fixed_row). Rows are built on first use, so call it with y increasing.
   struct Fixed {
     const std::uint16_t* a;
     const std::uint16_t* b;
@@ -105,7 +109,8 @@ class FastField {
     const double* even = p_.even(r);
     const double* odd = p_.odd(r);
     float* l = factor_ == 1 ? h : low_;
-    // Column c is even[c / 2] or odd[c / 2]: pairs first (a loop the compiler vectorises), then an odd tail.
+    // Column c is even[c / 2] or odd[c / 2]: pairs first (a loop the compiler vectorises), then an
+    // odd tail.
     const int pairs = lc_ / 2;
     for (int j = 0; j < pairs; ++j) {
       l[2 * j] = static_cast<float>((even[j] - p_.min) * inv_range_);
@@ -141,7 +146,8 @@ class FastField {
 }  // namespace
 
 FogParams fog_params(int severity) {
-  static constexpr FogParams kTable[] = {{1.5, 2.0}, {2.0, 2.0}, {2.5, 1.7}, {2.5, 1.5}, {3.0, 1.4}};
+  static constexpr FogParams kTable[] = {
+      {1.5, 2.0}, {2.0, 2.0}, {2.5, 1.7}, {2.5, 1.5}, {3.0, 1.4}};
   return kTable[std::clamp(severity, 1, 5) - 1];
 }
 
@@ -159,7 +165,8 @@ cv::Mat plasma_fractal(int mapsize, double decay, rng::FastRng& rng) {
   if (mapsize < 2) return cv::Mat(mapsize, mapsize, CV_64F, cv::Scalar(0.0));
   return plasma_normalised(plasma_levels(mapsize, decay, rng, mapsize, mapsize));
 }
-cv::Mat plasma_fractal_crop(int mapsize, double decay, rng::NumpyRandomState& rng, int rows, int cols) {
+cv::Mat plasma_fractal_crop(int mapsize, double decay, rng::NumpyRandomState& rng, int rows,
+                            int cols) {
   if (mapsize < 2) return cv::Mat(rows, cols, CV_64F, cv::Scalar(0.0));
   return plasma_normalised(plasma_levels(mapsize, decay, rng, rows, cols));
 }
@@ -169,20 +176,22 @@ cv::Mat fog_blend_exact(const cv::Mat& bgr, const cv::Mat& fractal, double stren
   const FogBlendExact b{strength, m, m + strength, 0.0, 1.0};  // (F - 0) / 1 == F
   cv::Mat out(bgr.size(), bgr.type());
   for (int y = 0; y < bgr.rows; ++y) {
-    fog_blend_exact_row(bgr.ptr<std::uint8_t>(y), fractal.ptr<double>(y), out.ptr<std::uint8_t>(y), bgr.cols, b);
+    fog_blend_exact_row(bgr.ptr<std::uint8_t>(y), fractal.ptr<double>(y), out.ptr<std::uint8_t>(y),
+                        bgr.cols, b);
   }
   return out;
 }
 
 cv::Mat fog_exact(const cv::Mat& bgr, int severity, rng::NumpyRandomState& rng) {
   const FogParams p = fog_params(severity);
-  const PlasmaLevels levels = plasma_levels(fog_map_size(bgr.rows, bgr.cols), p.decay, rng, bgr.rows, bgr.cols);
+  const PlasmaLevels levels =
+      plasma_levels(fog_map_size(bgr.rows, bgr.cols), p.decay, rng, bgr.rows, bgr.cols);
   const double m = image_max(bgr) / 255.0;
   const FogBlendExact b{p.strength, m, m + p.strength, levels.min, levels.max - levels.min};
   cv::Mat out(bgr.size(), bgr.type());
   for (int y = 0; y < bgr.rows; ++y) {
-    fog_blend_exact_pairs(bgr.ptr<std::uint8_t>(y), levels.even(y), levels.odd(y), out.ptr<std::uint8_t>(y),
-                          bgr.cols, b);
+    fog_blend_exact_pairs(bgr.ptr<std::uint8_t>(y), levels.even(y), levels.odd(y),
+                          out.ptr<std::uint8_t>(y), bgr.cols, b);
   }
   return out;
 }
@@ -191,8 +200,8 @@ cv::Mat fog_blend_fast(const cv::Mat& bgr, const cv::Mat& field, double strength
   const FastBlend b = fast_blend(bgr, strength);
   cv::Mat out(bgr.size(), bgr.type());
   for (int y = 0; y < bgr.rows; ++y) {
-    fog_blend_fast_row(bgr.ptr<std::uint8_t>(y), field.ptr<float>(y), out.ptr<std::uint8_t>(y), bgr.cols, b.scale,
-                       b.add_scale);
+    fog_blend_fast_row(bgr.ptr<std::uint8_t>(y), field.ptr<float>(y), out.ptr<std::uint8_t>(y),
+                       bgr.cols, b.scale, b.add_scale);
   }
   return out;
 }
@@ -212,20 +221,24 @@ cv::Mat fog_fast(const cv::Mat& bgr, int severity, rng::FastRng& rng) {
   const FogParams p = fog_params(severity);
   const FastBlend b = fast_blend(bgr, p.strength);
   FastField field(bgr.rows, bgr.cols, p.decay, rng, &b.add_scale);
-  const auto scale16 = static_cast<std::uint16_t>(std::min(std::lround(b.scale * 65536.0f), 65535L));
+  const auto scale16 =
+      static_cast<std::uint16_t>(std::min(std::lround(b.scale * 65536.0f), 65535L));
   cv::Mat out(bgr.size(), bgr.type());
   for (int y = 0; y < bgr.rows; ++y) {
     const auto f = field.fixed(y);
-    fog_blend_fixed_row(bgr.ptr<std::uint8_t>(y), f.a, f.b, f.k, out.ptr<std::uint8_t>(y), bgr.cols, scale16);
+    fog_blend_fixed_row(bgr.ptr<std::uint8_t>(y), f.a, f.b, f.k, out.ptr<std::uint8_t>(y), bgr.cols,
+                        scale16);
   }
   return out;
 }
 
-cv::Mat upsample_torus_window(const cv::Mat& low, int factor, double row0, double col0, int rows, int cols) {
+cv::Mat upsample_torus_window(const cv::Mat& low, int factor, double row0, double col0, int rows,
+                              int cols) {
   cv::Mat low32;
   low.convertTo(low32, CV_32F);
   const int n_r = low32.rows, n_c = low32.cols;
-  // Separable bilinear with wrap: build per-axis source coordinates, then remap over a wrapped border.
+  // Separable bilinear with wrap: build per-axis source coordinates, then remap over a wrapped
+  // border.
   cv::Mat padded;
   const int pad = 2;
   cv::copyMakeBorder(low32, padded, pad, pad, pad, pad, cv::BORDER_WRAP);

@@ -1,5 +1,6 @@
-// Fog row kernels: AVX2 intrinsics bodies (no FMA: every product is rounded before its sum, like NumPy) and the
-// scalar bodies they must equal bit for bit. The library is compiled with -ffp-contract=off.
+// Fog row kernels: AVX2 intrinsics bodies (no FMA: every product is rounded before its sum, like
+// NumPy) and the scalar bodies they must equal bit for bit. The library is compiled with
+// -ffp-contract=off.
 #include "corruption/fog_kernels.hpp"
 
 #include <algorithm>
@@ -28,12 +29,12 @@ void centre_scalar(const double* c0, const double* c1, const double* u, double* 
                    const FogStep& s) {
   for (; j < count; ++j) d[j] = ((c0[j] + c1[j]) + (c0[j + 1] + c1[j + 1])) / 4 + offset(s, u[j]);
 }
-void hedge_scalar(const double* d0, const double* dp, const double* c0, const double* u, double* e, int j,
-                  int count, const FogStep& s) {
+void hedge_scalar(const double* d0, const double* dp, const double* c0, const double* u, double* e,
+                  int j, int count, const FogStep& s) {
   for (; j < count; ++j) e[j] = ((d0[j] + dp[j]) + (c0[j] + c0[j + 1])) / 4 + offset(s, u[j]);
 }
-void vedge_scalar(const double* d0, const double* c0, const double* c1, const double* u, double* e, int j,
-                  int count, const FogStep& s) {
+void vedge_scalar(const double* d0, const double* c0, const double* c1, const double* u, double* e,
+                  int j, int count, const FogStep& s) {
   for (; j < count; ++j) e[j] = ((d0[j] + d0[j - 1]) + (c0[j] + c1[j])) / 4 + offset(s, u[j]);
 }
 // The reference's expression for one value: byte k of a pixel whose raw fractal value is p.
@@ -46,8 +47,8 @@ inline std::uint8_t exact_value(std::uint8_t k, double p, const FogBlendExact& b
 }
 // Pixels [x, cols) with raw values raw(x).
 template <typename Raw>
-void blend_exact_scalar(const std::uint8_t* src, std::uint8_t* dst, int x, int cols, const FogBlendExact& b,
-                        Raw raw) {
+void blend_exact_scalar(const std::uint8_t* src, std::uint8_t* dst, int x, int cols,
+                        const FogBlendExact& b, Raw raw) {
   for (; x < cols; ++x) {
     const double p = raw(x);
     for (int c = 0; c < 3; ++c) dst[3 * x + c] = exact_value(src[3 * x + c], p, b);
@@ -62,30 +63,34 @@ void upsample4_scalar(const float* low, float* out, int x, int count) {
 }
 // Pixels [x, cols) with field values field(x).
 template <typename Field>
-void blend_fast_scalar(const std::uint8_t* src, std::uint8_t* dst, int x, int cols, float scale, float add_scale,
-                       Field field) {
+void blend_fast_scalar(const std::uint8_t* src, std::uint8_t* dst, int x, int cols, float scale,
+                       float add_scale, Field field) {
   for (; x < cols; ++x) {
     const float a = add_scale * field(x);
     for (int c = 0; c < 3; ++c) {
       const float v = static_cast<float>(src[3 * x + c]) * scale + a;
-      dst[3 * x + c] = static_cast<std::uint8_t>(static_cast<int>(std::min(std::max(v, 0.0f), 255.0f)));
+      dst[3 * x + c] =
+          static_cast<std::uint8_t>(static_cast<int>(std::min(std::max(v, 0.0f), 255.0f)));
     }
   }
 }
-void blend_fast_scalar(const std::uint8_t* src, const float* f, std::uint8_t* dst, int x, int cols, float scale,
-                       float add_scale) {
+void blend_fast_scalar(const std::uint8_t* src, const float* f, std::uint8_t* dst, int x, int cols,
+                       float scale, float add_scale) {
   blend_fast_scalar(src, dst, x, cols, scale, add_scale, [f](int i) { return f[i]; });
 }
-void blend_fast_lerp_scalar(const std::uint8_t* src, const float* fa, const float* fb, std::uint8_t* dst, int x,
-                            int cols, float wa, float wb, float scale, float add_scale) {
-  blend_fast_scalar(src, dst, x, cols, scale, add_scale, [=](int i) { return fa[i] * wa + fb[i] * wb; });
+void blend_fast_lerp_scalar(const std::uint8_t* src, const float* fa, const float* fb,
+                            std::uint8_t* dst, int x, int cols, float wa, float wb, float scale,
+                            float add_scale) {
+  blend_fast_scalar(src, dst, x, cols, scale, add_scale,
+                    [=](int i) { return fa[i] * wa + fb[i] * wb; });
 }
 std::uint8_t max_u8_scalar(const std::uint8_t* p, std::size_t count, std::uint8_t mx) {
   for (std::size_t i = 0; i < count; ++i) mx = std::max(mx, p[i]);
   return mx;
 }
-// Fixed-point fast blend (8 fraction bits): g = trunc(f * add256 + 1) (round to nearest, plus half a unit that
-// offsets the product's truncation below), the vertical lerp by rounding averages, out = (((src << 8) * scale16)
+// Fixed-point fast blend (8 fraction bits): g = trunc(f * add256 + 1) (round to nearest, plus half
+// a unit that offsets the product's truncation below), the vertical lerp by rounding averages, out
+// = (((src << 8) * scale16)
 // >> 16 + g) >> 8, saturating at 255.
 void fixed_field_scalar(const float* f, std::uint16_t* g, int x, int cols, float add256) {
   for (; x < cols; ++x) {
@@ -93,7 +98,8 @@ void fixed_field_scalar(const float* f, std::uint16_t* g, int x, int cols, float
     for (int c = 0; c < 3; ++c) g[3 * x + c] = static_cast<std::uint16_t>(v);
   }
 }
-// A uniform on [0, 1) from 64 random bits: the top 52 as the mantissa of a double in [1, 2), minus 1 (exact).
+// A uniform on [0, 1) from 64 random bits: the top 52 as the mantissa of a double in [1, 2), minus
+// 1 (exact).
 inline double uniform52(std::uint64_t bits) {
   const std::uint64_t v = (bits >> 12) | 0x3FF0000000000000ULL;
   double d;
@@ -105,21 +111,26 @@ void fill_uniforms_scalar(rng::LaneRng& lanes, double* u, int i, int count) {
   for (; i < count; i += rng::LaneRng::kLanes) {
     lanes.next_values(r);
     for (int l = 0; l < rng::LaneRng::kLanes && i + l < count; ++l) {
-      u[i + l] = uniform52(static_cast<std::uint64_t>(r[2 * l]) | static_cast<std::uint64_t>(r[2 * l + 1]) << 32);
+      u[i + l] = uniform52(static_cast<std::uint64_t>(r[2 * l]) |
+                           static_cast<std::uint64_t>(r[2 * l + 1]) << 32);
     }
   }
 }
 inline unsigned avg_u16(unsigned a, unsigned b) { return (a + b + 1) >> 1; }
 inline unsigned lerp_u16(unsigned a, unsigned b, int k) {
   switch (k) {
-    case 0: return a;
-    case 1: return avg_u16(avg_u16(a, b), a);
-    case 2: return avg_u16(a, b);
-    default: return avg_u16(avg_u16(a, b), b);
+    case 0:
+      return a;
+    case 1:
+      return avg_u16(avg_u16(a, b), a);
+    case 2:
+      return avg_u16(a, b);
+    default:
+      return avg_u16(avg_u16(a, b), b);
   }
 }
-void blend_fixed_scalar(const std::uint8_t* src, const std::uint16_t* ga, const std::uint16_t* gb, int k,
-                        std::uint8_t* dst, int i, int count, std::uint16_t scale16) {
+void blend_fixed_scalar(const std::uint8_t* src, const std::uint16_t* ga, const std::uint16_t* gb,
+                        int k, std::uint8_t* dst, int i, int count, std::uint16_t scale16) {
   for (; i < count; ++i) {
     const unsigned p = ((static_cast<unsigned>(src[i]) << 8) * scale16) >> 16;
     const unsigned v = std::min(p + lerp_u16(ga[i], k ? gb[i] : ga[i], k), 65535u);
@@ -136,13 +147,16 @@ FAULTLINE_TARGET_INLINE("avx2") inline StepVec step_vec(const FogStep& s) {
   return {_mm256_set1_pd(s.w), _mm256_set1_pd(s.lo), _mm256_set1_pd(s.span)};
 }
 // sum / 4 + w * (lo + span * u): x / 4 and x * 0.25 are the same correctly rounded value.
-FAULTLINE_TARGET_INLINE("avx2") inline __m256d point(__m256d sum, const double* u, const StepVec& v) {
-  const __m256d off = _mm256_mul_pd(v.w, _mm256_add_pd(v.lo, _mm256_mul_pd(v.span, _mm256_loadu_pd(u))));
+FAULTLINE_TARGET_INLINE("avx2")
+inline __m256d point(__m256d sum, const double* u, const StepVec& v) {
+  const __m256d off =
+      _mm256_mul_pd(v.w, _mm256_add_pd(v.lo, _mm256_mul_pd(v.span, _mm256_loadu_pd(u))));
   return _mm256_add_pd(_mm256_mul_pd(sum, _mm256_set1_pd(0.25)), off);
 }
 
-FAULTLINE_TARGET("avx2") void centre_avx2(const double* c0, const double* c1, const double* u, double* d, int count,
-                                          const FogStep& s) {
+FAULTLINE_TARGET("avx2")
+void centre_avx2(const double* c0, const double* c1, const double* u, double* d, int count,
+                 const FogStep& s) {
   const StepVec v = step_vec(s);
   int j = 0;
   for (; j + 4 <= count; j += 4) {
@@ -153,8 +167,9 @@ FAULTLINE_TARGET("avx2") void centre_avx2(const double* c0, const double* c1, co
   centre_scalar(c0, c1, u, d, j, count, s);
 }
 
-FAULTLINE_TARGET("avx2") void hedge_avx2(const double* d0, const double* dp, const double* c0, const double* u,
-                                         double* e, int count, const FogStep& s) {
+FAULTLINE_TARGET("avx2")
+void hedge_avx2(const double* d0, const double* dp, const double* c0, const double* u, double* e,
+                int count, const FogStep& s) {
   const StepVec v = step_vec(s);
   int j = 0;
   for (; j + 4 <= count; j += 4) {
@@ -165,8 +180,9 @@ FAULTLINE_TARGET("avx2") void hedge_avx2(const double* d0, const double* dp, con
   hedge_scalar(d0, dp, c0, u, e, j, count, s);
 }
 
-FAULTLINE_TARGET("avx2") void vedge_avx2(const double* d0, const double* c0, const double* c1, const double* u,
-                                         double* e, int count, const FogStep& s) {
+FAULTLINE_TARGET("avx2")
+void vedge_avx2(const double* d0, const double* c0, const double* c1, const double* u, double* e,
+                int count, const FogStep& s) {
   const StepVec v = step_vec(s);
   int j = 0;
   for (; j + 4 <= count; j += 4) {
@@ -177,11 +193,13 @@ FAULTLINE_TARGET("avx2") void vedge_avx2(const double* d0, const double* c0, con
   vedge_scalar(d0, c0, c1, u, e, j, count, s);
 }
 
-FAULTLINE_TARGET("avx2") void interleave_avx2(const double* a, const double* b, double* out, int pairs) {
+FAULTLINE_TARGET("avx2")
+void interleave_avx2(const double* a, const double* b, double* out, int pairs) {
   int j = 0;
   for (; j + 4 <= pairs; j += 4) {
     const __m256d va = _mm256_loadu_pd(a + j), vb = _mm256_loadu_pd(b + j);
-    const __m256d lo = _mm256_unpacklo_pd(va, vb), hi = _mm256_unpackhi_pd(va, vb);  // a0 b0 a2 b2 | a1 b1 a3 b3
+    const __m256d lo = _mm256_unpacklo_pd(va, vb),
+                  hi = _mm256_unpackhi_pd(va, vb);  // a0 b0 a2 b2 | a1 b1 a3 b3
     _mm256_storeu_pd(out + 2 * j, _mm256_permute2f128_pd(lo, hi, 0x20));
     _mm256_storeu_pd(out + 2 * j + 4, _mm256_permute2f128_pd(lo, hi, 0x31));
   }
@@ -217,8 +235,9 @@ FAULTLINE_TARGET("avx2") void minmax_avx2(const double* p, int count, double* mn
   *mx = hi;
 }
 
-FAULTLINE_TARGET("avx2") void interleave_normalise_avx2(const double* a, const double* b, double* out, int pairs,
-                                                        double mn, double range) {
+FAULTLINE_TARGET("avx2")
+void interleave_normalise_avx2(const double* a, const double* b, double* out, int pairs, double mn,
+                               double range) {
   const __m256d vmn = _mm256_set1_pd(mn), vr = _mm256_set1_pd(range);
   int j = 0;
   for (; j + 4 <= pairs; j += 4) {
@@ -235,13 +254,14 @@ FAULTLINE_TARGET("avx2") void interleave_normalise_avx2(const double* a, const d
 }
 
 // The exact blend without a division. With d = p - min (the reference's double), the ideal value is
-// Y = k * A + d * K, A = m / denom, K = 255 * m * a / (denom * range), all terms >= 0; the reference's
-// y = fl(fl(fl(fl(k / 255) + a * fl(d / range)) * m) / denom) * 255 is within 1e-12 of Y. The float32 candidate
-// y' = k * float(A) + float(d * K) is within 3.2 * 2^-24 * 255 < 5e-5 of Y (two roundings on the product, one on
-// the term, one on the sum). So wherever no integer lies in [y' - kNear, y' + kNear] (kNear = 2^-12, five times
-// the error, and far above the float rounding of y' +- kNear), trunc(y') is the reference's byte (clip included:
-// y <= 255 unless r > 1, and packus saturates at 255). Flagged values (about 2 * 24 * 2^-12 per 8 pixels) are
-// recomputed by the reference's expression.
+// Y = k * A + d * K, A = m / denom, K = 255 * m * a / (denom * range), all terms >= 0; the
+// reference's y = fl(fl(fl(fl(k / 255) + a * fl(d / range)) * m) / denom) * 255 is within 1e-12 of
+// Y. The float32 candidate y' = k * float(A) + float(d * K) is within 3.2 * 2^-24 * 255 < 5e-5 of Y
+// (two roundings on the product, one on the term, one on the sum). So wherever no integer lies in
+// [y' - kNear, y' + kNear] (kNear = 2^-12, five times the error, and far above the float rounding
+// of y' +- kNear), trunc(y') is the reference's byte (clip included: y <= 255 unless r > 1, and
+// packus saturates at 255). Flagged values (about 2 * 24 * 2^-12 per 8 pixels) are recomputed by
+// the reference's expression.
 constexpr float kNear = 1.0f / 4096.0f;
 
 struct BlendVec {
@@ -249,28 +269,33 @@ struct BlendVec {
   __m256 a;
 };
 
-// Eight pixels with raw values r0 (pixels 0..3) and r1 (4..7); returns the mask of values to recompute (bit t of
-// channel vector c is value 8c + t).
-FAULTLINE_TARGET_INLINE("avx2") inline std::uint32_t blend8(const std::uint8_t* s, std::uint8_t* d, __m256d r0,
-                                                            __m256d r1, const BlendVec& v) {
+// Eight pixels with raw values r0 (pixels 0..3) and r1 (4..7); returns the mask of values to
+// recompute (bit t of channel vector c is value 8c + t).
+FAULTLINE_TARGET_INLINE("avx2")
+inline std::uint32_t blend8(const std::uint8_t* s, std::uint8_t* d, __m256d r0, __m256d r1,
+                            const BlendVec& v) {
   const __m128 b0 = _mm256_cvtpd_ps(_mm256_mul_pd(_mm256_sub_pd(r0, v.min), v.k));
   const __m128 b1 = _mm256_cvtpd_ps(_mm256_mul_pd(_mm256_sub_pd(r1, v.min), v.k));
   const __m256 bias = _mm256_set_m128(b1, b0);
   const __m256 near = _mm256_set1_ps(kNear);
   __m256i lo[3];
   std::uint32_t flagged = 0;
-  static constexpr int kSpread[3][8] = {{0, 0, 0, 1, 1, 1, 2, 2}, {2, 3, 3, 3, 4, 4, 4, 5}, {5, 5, 6, 6, 6, 7, 7, 7}};
+  static constexpr int kSpread[3][8] = {
+      {0, 0, 0, 1, 1, 1, 2, 2}, {2, 3, 3, 3, 4, 4, 4, 5}, {5, 5, 6, 6, 6, 7, 7, 7}};
   for (int c = 0; c < 3; ++c) {
     const __m256 add = _mm256_permutevar8x32_ps(
         bias, _mm256_loadu_si256(reinterpret_cast<const __m256i*>(kSpread[c])));
-    const __m256i k = _mm256_cvtepu8_epi32(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(s + 8 * c)));
+    const __m256i k =
+        _mm256_cvtepu8_epi32(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(s + 8 * c)));
     const __m256 y = _mm256_add_ps(_mm256_mul_ps(_mm256_cvtepi32_ps(k), v.a), add);
     lo[c] = _mm256_cvttps_epi32(_mm256_sub_ps(y, near));
     const __m256i hi = _mm256_cvttps_epi32(_mm256_add_ps(y, near));
-    const auto same = static_cast<std::uint32_t>(_mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpeq_epi32(lo[c], hi))));
+    const auto same = static_cast<std::uint32_t>(
+        _mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpeq_epi32(lo[c], hi))));
     flagged |= (~same & 0xFFu) << (8 * c);
   }
-  // packs work per 128-bit lane: fix the order with 64-bit permutes (negative lo of -kNear packs to 0).
+  // packs work per 128-bit lane: fix the order with 64-bit permutes (negative lo of -kNear packs to
+  // 0).
   const __m256i w01 = _mm256_permute4x64_epi64(_mm256_packs_epi32(lo[0], lo[1]), 0xD8);
   const __m256i w2 = _mm256_permute4x64_epi64(_mm256_packs_epi32(lo[2], lo[2]), 0xD8);
   const __m256i bytes = _mm256_permute4x64_epi64(_mm256_packus_epi16(w01, w2), 0xD8);
@@ -285,8 +310,8 @@ FAULTLINE_TARGET_INLINE("avx2") inline BlendVec blend_vec(const FogBlendExact& b
   return {_mm256_set1_pd(b.min), _mm256_set1_pd(k), _mm256_set1_ps(static_cast<float>(a))};
 }
 
-inline void fix_flagged(const std::uint8_t* s, std::uint8_t* d, const double* raw8, std::uint32_t flagged,
-                        const FogBlendExact& b) {
+inline void fix_flagged(const std::uint8_t* s, std::uint8_t* d, const double* raw8,
+                        std::uint32_t flagged, const FogBlendExact& b) {
   while (flagged != 0) {
     const int t = __builtin_ctz(flagged);
     flagged &= flagged - 1;
@@ -294,8 +319,9 @@ inline void fix_flagged(const std::uint8_t* s, std::uint8_t* d, const double* ra
   }
 }
 
-FAULTLINE_TARGET("avx2") void blend_exact_avx2(const std::uint8_t* src, const double* f, std::uint8_t* dst, int cols,
-                                               const FogBlendExact& b) {
+FAULTLINE_TARGET("avx2")
+void blend_exact_avx2(const std::uint8_t* src, const double* f, std::uint8_t* dst, int cols,
+                      const FogBlendExact& b) {
   const BlendVec v = blend_vec(b);
   int x = 0;
   for (; x + 8 <= cols; x += 8) {
@@ -306,14 +332,17 @@ FAULTLINE_TARGET("avx2") void blend_exact_avx2(const std::uint8_t* src, const do
   blend_exact_scalar(src, dst, x, cols, b, [f](int i) { return f[i]; });
 }
 
-FAULTLINE_TARGET("avx2") void blend_exact_pairs_avx2(const std::uint8_t* src, const double* even, const double* odd,
-                                                     std::uint8_t* dst, int cols, const FogBlendExact& b) {
+FAULTLINE_TARGET("avx2")
+void blend_exact_pairs_avx2(const std::uint8_t* src, const double* even, const double* odd,
+                            std::uint8_t* dst, int cols, const FogBlendExact& b) {
   const BlendVec v = blend_vec(b);
   int x = 0;
   for (; x + 8 <= cols; x += 8) {
     const __m256d e = _mm256_loadu_pd(even + x / 2), o = _mm256_loadu_pd(odd + x / 2);
-    const __m256d lo = _mm256_unpacklo_pd(e, o), hi = _mm256_unpackhi_pd(e, o);  // e0 o0 e2 o2 | e1 o1 e3 o3
-    const __m256d r0 = _mm256_permute2f128_pd(lo, hi, 0x20), r1 = _mm256_permute2f128_pd(lo, hi, 0x31);
+    const __m256d lo = _mm256_unpacklo_pd(e, o),
+                  hi = _mm256_unpackhi_pd(e, o);  // e0 o0 e2 o2 | e1 o1 e3 o3
+    const __m256d r0 = _mm256_permute2f128_pd(lo, hi, 0x20),
+                  r1 = _mm256_permute2f128_pd(lo, hi, 0x31);
     const std::uint32_t flagged = blend8(src + 3 * x, dst + 3 * x, r0, r1, v);
     if (flagged != 0) {
       alignas(32) double raw[8];
@@ -322,20 +351,24 @@ FAULTLINE_TARGET("avx2") void blend_exact_pairs_avx2(const std::uint8_t* src, co
       fix_flagged(src + 3 * x, dst + 3 * x, raw, flagged, b);
     }
   }
-  blend_exact_scalar(src, dst, x, cols, b, [even, odd](int i) { return i % 2 ? odd[i / 2] : even[i / 2]; });
+  blend_exact_scalar(src, dst, x, cols, b,
+                     [even, odd](int i) { return i % 2 ? odd[i / 2] : even[i / 2]; });
 }
 
-// trunc(src * scale + add) for eight bytes, as int32. No clamps: scale, add >= 0 keep v >= 0 and v stays far
-// below 2^31, and the caller's saturating packs turn every v >= 255 into 255, as clamping first would.
-FAULTLINE_TARGET_INLINE("avx2") inline __m256i fast_channel(const std::uint8_t* s, __m256 add, __m256 vscale) {
+// trunc(src * scale + add) for eight bytes, as int32. No clamps: scale, add >= 0 keep v >= 0 and v
+// stays far below 2^31, and the caller's saturating packs turn every v >= 255 into 255, as clamping
+// first would.
+FAULTLINE_TARGET_INLINE("avx2")
+inline __m256i fast_channel(const std::uint8_t* s, __m256 add, __m256 vscale) {
   const __m256i b = _mm256_cvtepu8_epi32(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(s)));
   return _mm256_cvttps_epi32(_mm256_add_ps(_mm256_mul_ps(_mm256_cvtepi32_ps(b), vscale), add));
 }
 
 // Eight pixels (24 values) per step; field(x) loads the field values of pixels x .. x + 7.
 template <typename Field>
-FAULTLINE_TARGET_INLINE("avx2") inline void blend_fast_body(const std::uint8_t* src, std::uint8_t* dst, int cols,
-                                                            float scale, float add_scale, Field field, int* done) {
+FAULTLINE_TARGET_INLINE("avx2")
+inline void blend_fast_body(const std::uint8_t* src, std::uint8_t* dst, int cols, float scale,
+                            float add_scale, Field field, int* done) {
   const __m256 vscale = _mm256_set1_ps(scale), vadd = _mm256_set1_ps(add_scale);
   const __m256i p0 = _mm256_setr_epi32(0, 0, 0, 1, 1, 1, 2, 2);
   const __m256i p1 = _mm256_setr_epi32(2, 3, 3, 3, 4, 4, 4, 5);
@@ -348,9 +381,12 @@ FAULTLINE_TARGET_INLINE("avx2") inline void blend_fast_body(const std::uint8_t* 
     const __m256i i1 = fast_channel(s + 8, _mm256_permutevar8x32_ps(a, p1), vscale);
     const __m256i i2 = fast_channel(s + 16, _mm256_permutevar8x32_ps(a, p2), vscale);
     // packs work per 128-bit lane: fix the order with 64-bit permutes.
-    const __m256i w01 = _mm256_permute4x64_epi64(_mm256_packs_epi32(i0, i1), 0xD8);  // 16 x int16, in order
-    const __m256i w2 = _mm256_permute4x64_epi64(_mm256_packs_epi32(i2, i2), 0xD8);   // 8 x int16 twice
-    const __m256i b = _mm256_permute4x64_epi64(_mm256_packus_epi16(w01, w2), 0xD8);  // 24 bytes in order
+    const __m256i w01 =
+        _mm256_permute4x64_epi64(_mm256_packs_epi32(i0, i1), 0xD8);  // 16 x int16, in order
+    const __m256i w2 =
+        _mm256_permute4x64_epi64(_mm256_packs_epi32(i2, i2), 0xD8);  // 8 x int16 twice
+    const __m256i b =
+        _mm256_permute4x64_epi64(_mm256_packus_epi16(w01, w2), 0xD8);  // 24 bytes in order
     std::uint8_t* d = dst + 3 * x;
     _mm_storeu_si128(reinterpret_cast<__m128i*>(d), _mm256_castsi256_si128(b));
     _mm_storel_epi64(reinterpret_cast<__m128i*>(d + 16), _mm256_extracti128_si256(b, 1));
@@ -358,8 +394,9 @@ FAULTLINE_TARGET_INLINE("avx2") inline void blend_fast_body(const std::uint8_t* 
   *done = x;
 }
 
-FAULTLINE_TARGET("avx2") void blend_fast_avx2(const std::uint8_t* src, const float* f, std::uint8_t* dst, int cols,
-                                              float scale, float add_scale) {
+FAULTLINE_TARGET("avx2")
+void blend_fast_avx2(const std::uint8_t* src, const float* f, std::uint8_t* dst, int cols,
+                     float scale, float add_scale) {
   int x = 0;
   blend_fast_body(
       src, dst, cols, scale, add_scale,
@@ -367,23 +404,28 @@ FAULTLINE_TARGET("avx2") void blend_fast_avx2(const std::uint8_t* src, const flo
   blend_fast_scalar(src, f, dst, x, cols, scale, add_scale);
 }
 
-// The field row as fa * wa + fb * wb (two products, then the sum: lerp_avx2's rounding), never stored.
-FAULTLINE_TARGET("avx2") void blend_fast_lerp_avx2(const std::uint8_t* src, const float* fa, const float* fb,
-                                                   std::uint8_t* dst, int cols, float wa, float wb, float scale,
-                                                   float add_scale) {
+// The field row as fa * wa + fb * wb (two products, then the sum: lerp_avx2's rounding), never
+// stored.
+FAULTLINE_TARGET("avx2")
+void blend_fast_lerp_avx2(const std::uint8_t* src, const float* fa, const float* fb,
+                          std::uint8_t* dst, int cols, float wa, float wb, float scale,
+                          float add_scale) {
   const __m256 va = _mm256_set1_ps(wa), vb = _mm256_set1_ps(wb);
   int x = 0;
   blend_fast_body(
       src, dst, cols, scale, add_scale,
       [=](int i) FAULTLINE_TARGET_INLINE("avx2") {
-        return _mm256_add_ps(_mm256_mul_ps(_mm256_loadu_ps(fa + i), va), _mm256_mul_ps(_mm256_loadu_ps(fb + i), vb));
+        return _mm256_add_ps(_mm256_mul_ps(_mm256_loadu_ps(fa + i), va),
+                             _mm256_mul_ps(_mm256_loadu_ps(fb + i), vb));
       },
       &x);
   blend_fast_lerp_scalar(src, fa, fb, dst, x, cols, wa, wb, scale, add_scale);
 }
 
-// Byte maximum, 128 bytes per step; stops at the first 4 KB block that reaches 255 (nothing is larger).
-FAULTLINE_TARGET("avx2") std::uint8_t max_u8_avx2(const std::uint8_t* p, std::size_t count, std::uint8_t mx) {
+// Byte maximum, 128 bytes per step; stops at the first 4 KB block that reaches 255 (nothing is
+// larger).
+FAULTLINE_TARGET("avx2")
+std::uint8_t max_u8_avx2(const std::uint8_t* p, std::size_t count, std::uint8_t mx) {
   const __m256i all = _mm256_set1_epi8(static_cast<char>(0xFF));
   __m256i m = _mm256_set1_epi8(static_cast<char>(mx));
   std::size_t i = 0;
@@ -407,11 +449,12 @@ FAULTLINE_TARGET("avx2") std::uint8_t max_u8_avx2(const std::uint8_t* p, std::si
 }
 
 FAULTLINE_TARGET_INLINE("avx2") inline __m256d uniform52_avx2(__m256i bits) {
-  const __m256i v = _mm256_or_si256(_mm256_srli_epi64(bits, 12), _mm256_set1_epi64x(0x3FF0000000000000LL));
+  const __m256i v =
+      _mm256_or_si256(_mm256_srli_epi64(bits, 12), _mm256_set1_epi64x(0x3FF0000000000000LL));
   return _mm256_sub_pd(_mm256_castsi256_pd(v), _mm256_set1_pd(1.0));
 }
-// Both halves of the lanes stepped together (two independent chains); a partial last step goes through the scalar
-// definition (same values).
+// Both halves of the lanes stepped together (two independent chains); a partial last step goes
+// through the scalar definition (same values).
 FAULTLINE_TARGET("avx2") void fill_uniforms_avx2(rng::LaneRng& lanes, double* u, int count) {
   rng::avx2::Xoshiro4 a = rng::avx2::load_half(lanes, 0), b = rng::avx2::load_half(lanes, 1);
   int i = 0;
@@ -425,15 +468,18 @@ FAULTLINE_TARGET("avx2") void fill_uniforms_avx2(rng::LaneRng& lanes, double* u,
 }
 
 // Eight field values -> 24 fixed-point values (each tripled for the three channels).
-FAULTLINE_TARGET("avx2") void fixed_field_avx2(const float* f, std::uint16_t* g, int cols, float add256) {
+FAULTLINE_TARGET("avx2")
+void fixed_field_avx2(const float* f, std::uint16_t* g, int cols, float add256) {
   const __m256 vmul = _mm256_set1_ps(add256), one = _mm256_set1_ps(0.5f);
   const __m128i t0 = _mm_setr_epi8(0, 1, 0, 1, 0, 1, 2, 3, 2, 3, 2, 3, 4, 5, 4, 5);
   const __m128i t1 = _mm_setr_epi8(4, 5, 6, 7, 6, 7, 6, 7, 8, 9, 8, 9, 8, 9, 10, 11);
   const __m128i t2 = _mm_setr_epi8(10, 11, 10, 11, 12, 13, 12, 13, 12, 13, 14, 15, 14, 15, 14, 15);
   int x = 0;
   for (; x + 8 <= cols; x += 8) {
-    const __m256i v = _mm256_cvttps_epi32(_mm256_add_ps(_mm256_mul_ps(_mm256_loadu_ps(f + x), vmul), one));
-    const __m128i w = _mm256_castsi256_si128(_mm256_permute4x64_epi64(_mm256_packus_epi32(v, v), 0x08));
+    const __m256i v =
+        _mm256_cvttps_epi32(_mm256_add_ps(_mm256_mul_ps(_mm256_loadu_ps(f + x), vmul), one));
+    const __m128i w =
+        _mm256_castsi256_si128(_mm256_permute4x64_epi64(_mm256_packus_epi32(v, v), 0x08));
     auto* o = reinterpret_cast<__m128i*>(g + 3 * x);
     _mm_storeu_si128(o, _mm_shuffle_epi8(w, t0));
     _mm_storeu_si128(o + 1, _mm_shuffle_epi8(w, t1));
@@ -443,7 +489,8 @@ FAULTLINE_TARGET("avx2") void fixed_field_avx2(const float* f, std::uint16_t* g,
 }
 
 template <int K>
-FAULTLINE_TARGET_INLINE("avx2") inline __m256i fixed_lerp(const std::uint16_t* ga, const std::uint16_t* gb) {
+FAULTLINE_TARGET_INLINE("avx2")
+inline __m256i fixed_lerp(const std::uint16_t* ga, const std::uint16_t* gb) {
   const __m256i a = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(ga));
   if constexpr (K == 0) {
     return a;
@@ -457,16 +504,17 @@ FAULTLINE_TARGET_INLINE("avx2") inline __m256i fixed_lerp(const std::uint16_t* g
 }
 // 16 values: ((src << 8) * scale16 >> 16 + g) >> 8, as 16-bit lanes.
 template <int K>
-FAULTLINE_TARGET_INLINE("avx2") inline __m256i fixed_half(const std::uint8_t* s, const std::uint16_t* ga,
-                                                          const std::uint16_t* gb, __m256i vscale) {
+FAULTLINE_TARGET_INLINE("avx2")
+inline __m256i fixed_half(const std::uint8_t* s, const std::uint16_t* ga, const std::uint16_t* gb,
+                          __m256i vscale) {
   const __m256i x = _mm256_cvtepu8_epi16(_mm_loadu_si128(reinterpret_cast<const __m128i*>(s)));
   const __m256i p = _mm256_mulhi_epu16(_mm256_slli_epi16(x, 8), vscale);
   return _mm256_srli_epi16(_mm256_adds_epu16(p, fixed_lerp<K>(ga, gb)), 8);
 }
 template <int K>
-FAULTLINE_TARGET("avx2") void blend_fixed_avx2(const std::uint8_t* src, const std::uint16_t* ga,
-                                               const std::uint16_t* gb, std::uint8_t* dst, int count,
-                                               std::uint16_t scale16) {
+FAULTLINE_TARGET("avx2")
+void blend_fixed_avx2(const std::uint8_t* src, const std::uint16_t* ga, const std::uint16_t* gb,
+                      std::uint8_t* dst, int count, std::uint16_t scale16) {
   const __m256i vscale = _mm256_set1_epi16(static_cast<short>(scale16));
   int i = 0;
   for (; i + 32 <= count; i += 32) {
@@ -488,11 +536,13 @@ FAULTLINE_TARGET("avx2") void upsample4_avx2(const float* low, float* out, int c
     const __m256 v1 = _mm256_add_ps(_mm256_mul_ps(a, w3), _mm256_mul_ps(b, w1));
     const __m256 v2 = _mm256_add_ps(_mm256_mul_ps(a, w2), _mm256_mul_ps(b, w2));
     const __m256 v3 = _mm256_add_ps(_mm256_mul_ps(a, w1), _mm256_mul_ps(b, w3));
-    const __m256d t01lo = _mm256_castps_pd(_mm256_unpacklo_ps(v0, v1));  // (c0: t0 t1, c1: t0 t1 | c4, c5)
+    const __m256d t01lo =
+        _mm256_castps_pd(_mm256_unpacklo_ps(v0, v1));  // (c0: t0 t1, c1: t0 t1 | c4, c5)
     const __m256d t01hi = _mm256_castps_pd(_mm256_unpackhi_ps(v0, v1));  // (c2, c3 | c6, c7)
     const __m256d t23lo = _mm256_castps_pd(_mm256_unpacklo_ps(v2, v3));
     const __m256d t23hi = _mm256_castps_pd(_mm256_unpackhi_ps(v2, v3));
-    const __m256 q0 = _mm256_castpd_ps(_mm256_unpacklo_pd(t01lo, t23lo));  // c0 | c4, all four phases
+    const __m256 q0 =
+        _mm256_castpd_ps(_mm256_unpacklo_pd(t01lo, t23lo));  // c0 | c4, all four phases
     const __m256 q1 = _mm256_castpd_ps(_mm256_unpackhi_pd(t01lo, t23lo));  // c1 | c5
     const __m256 q2 = _mm256_castpd_ps(_mm256_unpacklo_pd(t01hi, t23hi));  // c2 | c6
     const __m256 q3 = _mm256_castpd_ps(_mm256_unpackhi_pd(t01hi, t23hi));  // c3 | c7
@@ -505,7 +555,8 @@ FAULTLINE_TARGET("avx2") void upsample4_avx2(const float* low, float* out, int c
   upsample4_scalar(low, out, 4 * c, count);
 }
 
-FAULTLINE_TARGET("avx2") void lerp_avx2(const float* a, const float* b, float* out, int count, float wa, float wb) {
+FAULTLINE_TARGET("avx2")
+void lerp_avx2(const float* a, const float* b, float* out, int count, float wa, float wb) {
   const __m256 va = _mm256_set1_ps(wa), vb = _mm256_set1_ps(wb);
   int j = 0;
   for (; j + 8 <= count; j += 8) {
@@ -519,23 +570,24 @@ FAULTLINE_TARGET("avx2") void lerp_avx2(const float* a, const float* b, float* o
 
 }  // namespace
 
-void fog_centre_row(const double* c0, const double* c1, const double* u, double* d, int count, const FogStep& s) {
+void fog_centre_row(const double* c0, const double* c1, const double* u, double* d, int count,
+                    const FogStep& s) {
 #if FAULTLINE_X86_SIMD
   if (common::cpu_has_avx2()) return centre_avx2(c0, c1, u, d, count, s);
 #endif
   centre_scalar(c0, c1, u, d, 0, count, s);
 }
 
-void fog_hedge_row(const double* d0, const double* dp, const double* c0, const double* u, double* e, int count,
-                   const FogStep& s) {
+void fog_hedge_row(const double* d0, const double* dp, const double* c0, const double* u, double* e,
+                   int count, const FogStep& s) {
 #if FAULTLINE_X86_SIMD
   if (common::cpu_has_avx2()) return hedge_avx2(d0, dp, c0, u, e, count, s);
 #endif
   hedge_scalar(d0, dp, c0, u, e, 0, count, s);
 }
 
-void fog_vedge_row(const double* d0, const double* c0, const double* c1, const double* u, double* e, int count,
-                   const FogStep& s) {
+void fog_vedge_row(const double* d0, const double* c0, const double* c1, const double* u, double* e,
+                   int count, const FogStep& s) {
 #if FAULTLINE_X86_SIMD
   if (common::cpu_has_avx2()) return vedge_avx2(d0, c0, c1, u, e, count, s);
 #endif
@@ -562,7 +614,8 @@ void fog_minmax_row(const double* p, int count, double* mn, double* mx) {
   }
 }
 
-void fog_interleave_normalise_row(const double* a, const double* b, double* out, int pairs, double mn, double range) {
+void fog_interleave_normalise_row(const double* a, const double* b, double* out, int pairs,
+                                  double mn, double range) {
 #if FAULTLINE_X86_SIMD
   if (common::cpu_has_avx2()) return interleave_normalise_avx2(a, b, out, pairs, mn, range);
 #endif
@@ -580,26 +633,29 @@ void fog_blend_exact_row(const std::uint8_t* src, const double* f, std::uint8_t*
   blend_exact_scalar(src, dst, 0, cols, b, [f](int i) { return f[i]; });
 }
 
-void fog_blend_exact_pairs(const std::uint8_t* src, const double* even, const double* odd, std::uint8_t* dst,
-                           int cols, const FogBlendExact& b) {
+void fog_blend_exact_pairs(const std::uint8_t* src, const double* even, const double* odd,
+                           std::uint8_t* dst, int cols, const FogBlendExact& b) {
 #if FAULTLINE_X86_SIMD
   if (common::cpu_has_avx2()) return blend_exact_pairs_avx2(src, even, odd, dst, cols, b);
 #endif
-  blend_exact_scalar(src, dst, 0, cols, b, [even, odd](int i) { return i % 2 ? odd[i / 2] : even[i / 2]; });
+  blend_exact_scalar(src, dst, 0, cols, b,
+                     [even, odd](int i) { return i % 2 ? odd[i / 2] : even[i / 2]; });
 }
 
-void fog_blend_fast_row(const std::uint8_t* src, const float* f, std::uint8_t* dst, int cols, float scale,
-                        float add_scale) {
+void fog_blend_fast_row(const std::uint8_t* src, const float* f, std::uint8_t* dst, int cols,
+                        float scale, float add_scale) {
 #if FAULTLINE_X86_SIMD
   if (common::cpu_has_avx2()) return blend_fast_avx2(src, f, dst, cols, scale, add_scale);
 #endif
   blend_fast_scalar(src, f, dst, 0, cols, scale, add_scale);
 }
 
-void fog_blend_fast_lerp_row(const std::uint8_t* src, const float* fa, const float* fb, std::uint8_t* dst, int cols,
-                             float wa, float wb, float scale, float add_scale) {
+void fog_blend_fast_lerp_row(const std::uint8_t* src, const float* fa, const float* fb,
+                             std::uint8_t* dst, int cols, float wa, float wb, float scale,
+                             float add_scale) {
 #if FAULTLINE_X86_SIMD
-  if (common::cpu_has_avx2()) return blend_fast_lerp_avx2(src, fa, fb, dst, cols, wa, wb, scale, add_scale);
+  if (common::cpu_has_avx2())
+    return blend_fast_lerp_avx2(src, fa, fb, dst, cols, wa, wb, scale, add_scale);
 #endif
   blend_fast_lerp_scalar(src, fa, fb, dst, 0, cols, wa, wb, scale, add_scale);
 }
@@ -626,16 +682,20 @@ void fog_fixed_field_row(const float* f, std::uint16_t* g, int cols, float add_s
   fixed_field_scalar(f, g, 0, cols, add256);
 }
 
-void fog_blend_fixed_row(const std::uint8_t* src, const std::uint16_t* ga, const std::uint16_t* gb, int k,
-                         std::uint8_t* dst, int cols, std::uint16_t scale16) {
+void fog_blend_fixed_row(const std::uint8_t* src, const std::uint16_t* ga, const std::uint16_t* gb,
+                         int k, std::uint8_t* dst, int cols, std::uint16_t scale16) {
   const int count = 3 * cols;
 #if FAULTLINE_X86_SIMD
   if (common::cpu_has_avx2()) {
     switch (k) {
-      case 0: return blend_fixed_avx2<0>(src, ga, gb, dst, count, scale16);
-      case 1: return blend_fixed_avx2<1>(src, ga, gb, dst, count, scale16);
-      case 2: return blend_fixed_avx2<2>(src, ga, gb, dst, count, scale16);
-      default: return blend_fixed_avx2<3>(src, ga, gb, dst, count, scale16);
+      case 0:
+        return blend_fixed_avx2<0>(src, ga, gb, dst, count, scale16);
+      case 1:
+        return blend_fixed_avx2<1>(src, ga, gb, dst, count, scale16);
+      case 2:
+        return blend_fixed_avx2<2>(src, ga, gb, dst, count, scale16);
+      default:
+        return blend_fixed_avx2<3>(src, ga, gb, dst, count, scale16);
     }
   }
 #endif

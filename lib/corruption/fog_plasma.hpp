@@ -1,9 +1,8 @@
-// The plasma fractal of fog (spec corruptions.md §4) computed only where a top-left crop needs it, with the exact
-// minimum and maximum of the full map.
+// The plasma fractal of fog (spec corruptions.md §4) computed only where a top-left crop needs it,
+// with the exact minimum and maximum of the full map.
 #pragma once
 
 #include <cstddef>
-
 #include <opencv2/core.hpp>
 
 #include "rng/fast_rng.hpp"
@@ -12,12 +11,12 @@
 
 namespace faultline::corruption {
 
-// The raw (un-normalised) values of the mapsize x mapsize map's top-left rows x cols crop, as the finest level
-// leaves them: with i = y / 2 and j = x / 2, map point (y, x) is C[i][j] (y, x even), H[i][j] (y even, x odd),
-// V[i][j] (y odd, x even) or D[i][j] (both odd). So crop row y is a pair of planes, even() for its even columns
-// and odd() for its odd columns. min / max are the full map's, and F = (raw - min) / (max - min) is the
-// reference's normalised fractal. The planes live in per-thread scratch: valid until the next plasma_levels call
-// on the same thread.
+// The raw (un-normalised) values of the mapsize x mapsize map's top-left rows x cols crop, as the
+// finest level leaves them: with i = y / 2 and j = x / 2, map point (y, x) is C[i][j] (y, x even),
+// H[i][j] (y even, x odd), V[i][j] (y odd, x even) or D[i][j] (both odd). So crop row y is a pair
+// of planes, even() for its even columns and odd() for its odd columns. min / max are the full
+// map's, and F = (raw - min) / (max - min) is the reference's normalised fractal. The planes live
+// in per-thread scratch: valid until the next plasma_levels call on the same thread.
 struct PlasmaLevels {
   int rows = 0, cols = 0;
   double min = 0.0, max = 0.0;
@@ -37,14 +36,16 @@ struct PlasmaLevels {
   }
 };
 
-// Every level but the finest is computed in full (a quarter of the points). On the finest level only the crop's
-// points (and the centres they read) are computed, plus the tiles whose bound from the level below could reach
-// outside the extremes known so far; the rest are provably neither the minimum nor the maximum.
-// NumpyRandomState: consumes exactly mapsize^2 - 1 uniforms in the reference's order, and every value is the
-// reference's double. FastRng: uniforms of points that are not computed are not drawn. LaneRng (fast fog): the
-// same with the uniforms from eight lock-step xoshiro256++ lanes stepped as vectors (fog_fill_uniforms).
-// mapsize: a power of two >= 2; rows, cols: 1..mapsize.
-PlasmaLevels plasma_levels(int mapsize, double decay, rng::NumpyRandomState& rng, int rows, int cols);
+// Every level but the finest is computed in full (a quarter of the points). On the finest level
+// only the crop's points (and the centres they read) are computed, plus the tiles whose bound from
+// the level below could reach outside the extremes known so far; the rest are provably neither the
+// minimum nor the maximum. NumpyRandomState: consumes exactly mapsize^2 - 1 uniforms in the
+// reference's order, and every value is the reference's double. FastRng: uniforms of points that
+// are not computed are not drawn. LaneRng (fast fog): the same with the uniforms from eight
+// lock-step xoshiro256++ lanes stepped as vectors (fog_fill_uniforms). mapsize: a power of two >=
+// 2; rows, cols: 1..mapsize.
+PlasmaLevels plasma_levels(int mapsize, double decay, rng::NumpyRandomState& rng, int rows,
+                           int cols);
 PlasmaLevels plasma_levels(int mapsize, double decay, rng::FastRng& rng, int rows, int cols);
 PlasmaLevels plasma_levels(int mapsize, double decay, rng::LaneRng& lanes, int rows, int cols);
 

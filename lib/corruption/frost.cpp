@@ -4,14 +4,14 @@
 #include <cmath>
 #include <map>
 #include <mutex>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 #include <stdexcept>
 #include <tuple>
 
-#include <opencv2/imgcodecs.hpp>
-#include <opencv2/imgproc.hpp>
-
 extern "C" {
-#define FAULTLINE_FROST_SYMBOLS(n) extern const unsigned char faultline_frost##n##_begin[], faultline_frost##n##_end[];
+#define FAULTLINE_FROST_SYMBOLS(n) \
+  extern const unsigned char faultline_frost##n##_begin[], faultline_frost##n##_end[];
 FAULTLINE_FROST_SYMBOLS(1)
 FAULTLINE_FROST_SYMBOLS(2)
 FAULTLINE_FROST_SYMBOLS(3)
@@ -26,7 +26,8 @@ namespace {
 
 cv::Mat decode_embedded(const unsigned char* begin, const unsigned char* end) {
   const cv::Mat bytes(1, static_cast<int>(end - begin), CV_8U, const_cast<unsigned char*>(begin));
-  cv::Mat m = cv::imdecode(bytes, cv::IMREAD_COLOR);  // what the reference's cv2.imread returns (alpha dropped)
+  cv::Mat m = cv::imdecode(
+      bytes, cv::IMREAD_COLOR);  // what the reference's cv2.imread returns (alpha dropped)
   if (m.empty()) throw std::runtime_error("frost: cannot decode a built-in texture");
   return m;
 }
@@ -38,7 +39,8 @@ const std::vector<cv::Mat>& pick(const std::vector<cv::Mat>& textures) {
 }  // namespace
 
 FrostParams frost_params(int severity) {
-  static constexpr FrostParams kParams[] = {{1, 0.4}, {0.8, 0.6}, {0.7, 0.7}, {0.65, 0.7}, {0.6, 0.75}};
+  static constexpr FrostParams kParams[] = {
+      {1, 0.4}, {0.8, 0.6}, {0.7, 0.7}, {0.65, 0.7}, {0.6, 0.75}};
   return kParams[severity - 1];
 }
 
@@ -65,7 +67,8 @@ cv::Mat frost_rescale(const cv::Mat& texture, int rows, int cols) {
     factor = std::max(static_cast<double>(rows) / th, static_cast<double>(cols) / tw);
   }
   factor *= 1.1;
-  const cv::Size size(static_cast<int>(std::ceil(tw * factor)), static_cast<int>(std::ceil(th * factor)));
+  const cv::Size size(static_cast<int>(std::ceil(tw * factor)),
+                      static_cast<int>(std::ceil(th * factor)));
   cv::Mat out;
   cv::resize(texture, out, size, 0, 0, cv::INTER_CUBIC);
   return out;
@@ -91,18 +94,20 @@ cv::Mat frost_blend(const cv::Mat& bgr, const cv::Mat& rescaled, int y0, int x0,
 cv::Mat frost_numpy(const cv::Mat& bgr, int severity, rng::NumpyRandomState& rng,
                     const std::vector<cv::Mat>& textures) {
   const auto& set = pick(textures);
-  const auto index = static_cast<std::size_t>(rng.randint(0, static_cast<std::int64_t>(set.size())));
+  const auto index =
+      static_cast<std::size_t>(rng.randint(0, static_cast<std::int64_t>(set.size())));
   const cv::Mat rescaled = frost_rescale(set[index], bgr.rows, bgr.cols);
   const auto y0 = static_cast<int>(rng.randint(0, rescaled.rows - bgr.rows));
   const auto x0 = static_cast<int>(rng.randint(0, rescaled.cols - bgr.cols));
   return frost_blend(bgr, rescaled, y0, x0, severity);
 }
 
-cv::Mat frost_fast(const cv::Mat& bgr, int severity, rng::FastRng& rng, const std::vector<cv::Mat>& textures) {
+cv::Mat frost_fast(const cv::Mat& bgr, int severity, rng::FastRng& rng,
+                   const std::vector<cv::Mat>& textures) {
   const auto& set = pick(textures);
   const auto index = rng.bounded(static_cast<std::uint32_t>(set.size()));
-  // The built-in textures' rescales are cached per frame size (the rescale costs more than the blend); a caller's
-  // own textures are rescaled on each call (their lifetime is the caller's).
+  // The built-in textures' rescales are cached per frame size (the rescale costs more than the
+  // blend); a caller's own textures are rescaled on each call (their lifetime is the caller's).
   cv::Mat rescaled;
   if (!textures.empty()) {
     rescaled = frost_rescale(set[index], bgr.rows, bgr.cols);
@@ -118,8 +123,10 @@ cv::Mat frost_fast(const cv::Mat& bgr, int severity, rng::FastRng& rng, const st
     }
     rescaled = it->second;
   }
-  const int y0 = static_cast<int>(rng.bounded(static_cast<std::uint32_t>(rescaled.rows - bgr.rows)));
-  const int x0 = static_cast<int>(rng.bounded(static_cast<std::uint32_t>(rescaled.cols - bgr.cols)));
+  const int y0 =
+      static_cast<int>(rng.bounded(static_cast<std::uint32_t>(rescaled.rows - bgr.rows)));
+  const int x0 =
+      static_cast<int>(rng.bounded(static_cast<std::uint32_t>(rescaled.cols - bgr.cols)));
   return frost_blend(bgr, rescaled, y0, x0, severity);
 }
 

@@ -1,10 +1,10 @@
-// gaussian_blur: scipy.ndimage's separable float64 correlation mirrored exactly, and a float32 fast path.
+// gaussian_blur: scipy.ndimage's separable float64 correlation mirrored exactly, and a float32 fast
+// path.
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
-#include <vector>
-
 #include <opencv2/imgproc.hpp>
+#include <vector>
 
 #include "corruption/digital.hpp"
 #include "corruption/ndimage.hpp"
@@ -12,9 +12,10 @@
 namespace faultline::corruption {
 namespace {
 
-// scipy's _gaussian_kernel1d(sigma, 0, radius): exp(-0.5 / sigma^2 * x^2) for x = -radius..radius, divided by its
-// numpy sum. Index radius + j holds the weight of offset j (the kernel is exactly symmetric). The exp is NumPy's
-// (nd::numpy_exp): glibc's differs by an ulp on some of these arguments, which moves truncated outputs.
+// scipy's _gaussian_kernel1d(sigma, 0, radius): exp(-0.5 / sigma^2 * x^2) for x = -radius..radius,
+// divided by its numpy sum. Index radius + j holds the weight of offset j (the kernel is exactly
+// symmetric). The exp is NumPy's (nd::numpy_exp): glibc's differs by an ulp on some of these
+// arguments, which moves truncated outputs.
 std::vector<double> gaussian_kernel(double sigma, int radius) {
   std::vector<double> phi(static_cast<std::size_t>(2 * radius + 1));
   const double k = -0.5 / (sigma * sigma);
@@ -28,10 +29,10 @@ std::vector<double> gaussian_kernel(double sigma, int radius) {
 
 int kernel_radius(double sigma) { return static_cast<int>(4.0 * sigma + 0.5); }
 
-// One output line of NI_Correlate1D's symmetric branch: out[i] = in[i] * w0, then += (in[i - j] + in[i + j]) * w_j
-// for j = radius..1. `in` points at element 0 of a line padded by radius * step on both sides; elements are `step`
-// apart, and `count` consecutive outputs are made (all elements of a padded row at once: step = 3 for a row of
-// BGR pixels, or 1 across columns of stacked rows).
+// One output line of NI_Correlate1D's symmetric branch: out[i] = in[i] * w0, then += (in[i - j] +
+// in[i + j]) * w_j for j = radius..1. `in` points at element 0 of a line padded by radius * step on
+// both sides; elements are `step` apart, and `count` consecutive outputs are made (all elements of
+// a padded row at once: step = 3 for a row of BGR pixels, or 1 across columns of stacked rows).
 void correlate_line(const double* in, double* out, std::size_t count, std::ptrdiff_t step,
                     const std::vector<double>& w, int radius) {
   const double w0 = w[static_cast<std::size_t>(radius)];
@@ -69,16 +70,19 @@ cv::Mat gaussian_blur_weights(const cv::Mat& bgr, const std::vector<double>& w) 
   const int r = static_cast<int>(w.size() / 2);
   const int rows = bgr.rows, cols = bgr.cols;
   const std::size_t row_len = static_cast<std::size_t>(cols) * 3;
-  // Pass 1 (axis 0): every row of the output from the rows above and below, edge rows replicated ('nearest').
+  // Pass 1 (axis 0): every row of the output from the rows above and below, edge rows replicated
+  // ('nearest').
   std::vector<double> x(static_cast<std::size_t>(rows) * row_len);
   for (int y = 0; y < rows; ++y) {
     const std::uint8_t* src = bgr.ptr<std::uint8_t>(y);
-    for (std::size_t e = 0; e < row_len; ++e) x[static_cast<std::size_t>(y) * row_len + e] = src[e] / 255.0;
+    for (std::size_t e = 0; e < row_len; ++e)
+      x[static_cast<std::size_t>(y) * row_len + e] = src[e] / 255.0;
   }
   std::vector<double> pass1(x.size());
   std::vector<const double*> padded(static_cast<std::size_t>(rows + 2 * r));
   for (int k = 0; k < rows + 2 * r; ++k) {
-    padded[static_cast<std::size_t>(k)] = x.data() + static_cast<std::size_t>(std::clamp(k - r, 0, rows - 1)) * row_len;
+    padded[static_cast<std::size_t>(k)] =
+        x.data() + static_cast<std::size_t>(std::clamp(k - r, 0, rows - 1)) * row_len;
   }
   const double w0 = w[static_cast<std::size_t>(r)];
   for (int y = 0; y < rows; ++y) {
@@ -118,7 +122,8 @@ cv::Mat gaussian_blur_fast(const cv::Mat& bgr, int severity) {
   const int r = kernel_radius(sigma);
   const std::vector<double> w = gaussian_kernel(sigma, r);
   cv::Mat kernel(static_cast<int>(w.size()), 1, CV_32F);
-  for (std::size_t i = 0; i < w.size(); ++i) kernel.at<float>(static_cast<int>(i)) = static_cast<float>(w[i]);
+  for (std::size_t i = 0; i < w.size(); ++i)
+    kernel.at<float>(static_cast<int>(i)) = static_cast<float>(w[i]);
   cv::Mat f, blurred;
   bgr.convertTo(f, CV_32F);
   cv::sepFilter2D(f, blurred, CV_32F, kernel, kernel, cv::Point(-1, -1), 0.0, cv::BORDER_REPLICATE);
@@ -128,7 +133,8 @@ cv::Mat gaussian_blur_fast(const cv::Mat& bgr, int severity) {
   for (int y = 0; y < bgr.rows; ++y) {
     const float* src = blurred.ptr<float>(y);
     std::uint8_t* dst = out.ptr<std::uint8_t>(y);
-    for (std::size_t e = 0; e < row_len; ++e) dst[e] = static_cast<std::uint8_t>(std::min(std::max(src[e], 0.0f), 255.0f));
+    for (std::size_t e = 0; e < row_len; ++e)
+      dst[e] = static_cast<std::uint8_t>(std::min(std::max(src[e], 0.0f), 255.0f));
   }
   return out;
 }

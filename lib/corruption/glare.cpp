@@ -1,5 +1,6 @@
-// Sun glare: the light layer is computed on a 1/4-resolution grid (everything in it is smooth or a few pixels wide
-// at full size), upsampled, and screen-blended; it is recomputed only when the source moves.
+// Sun glare: the light layer is computed on a 1/4-resolution grid (everything in it is smooth or a
+// few pixels wide at full size), upsampled, and screen-blended; it is recomputed only when the
+// source moves.
 #include "corruption/glare.hpp"
 
 #include <algorithm>
@@ -13,10 +14,12 @@ namespace faultline::corruption {
 namespace {
 
 constexpr int kGridDivisor = 4;
-constexpr double kSunTint[3] = {0.85, 0.95, 1.0};                                               // B, G, R: warm white
-constexpr double kGhostTints[3][3] = {{0.55, 1.0, 0.45}, {1.0, 0.45, 0.9}, {0.35, 0.75, 1.0}};  // green, magenta, amber
-constexpr double kDefaultHfovDeg = 70.0;  // without intrinsics: about nuScenes' camera field of view
-constexpr double kSkipExponent = 12.0;    // exp(-12) < 1e-5: below one level
+constexpr double kSunTint[3] = {0.85, 0.95, 1.0};  // B, G, R: warm white
+constexpr double kGhostTints[3][3] = {
+    {0.55, 1.0, 0.45}, {1.0, 0.45, 0.9}, {0.35, 0.75, 1.0}};  // green, magenta, amber
+constexpr double kDefaultHfovDeg =
+    70.0;                               // without intrinsics: about nuScenes' camera field of view
+constexpr double kSkipExponent = 12.0;  // exp(-12) < 1e-5: below one level
 
 double smoothstep(double lo, double hi, double v) {
   const double t = std::clamp((v - lo) / (hi - lo), 0.0, 1.0);
@@ -63,24 +66,28 @@ GlareModel::GlareModel(int severity, std::uint64_t seed, cv::Size size)
 
 void GlareModel::render_layer() {
   const cv::Size g = grid_of(size_);
-  const double sx = static_cast<double>(size_.width) / g.width, sy = static_cast<double>(size_.height) / g.height;
+  const double sx = static_cast<double>(size_.width) / g.width,
+               sy = static_cast<double>(size_.height) / g.height;
   const double diag = std::hypot(size_.width, size_.height);
   const double rv2 = std::pow(0.35 * diag, 2), rb = std::max(0.5, params_.bloom * diag);
-  const double width = std::max(1.0, 0.004 * diag), length = std::max(1e-6, params_.streak_length * diag);
+  const double width = std::max(1.0, 0.004 * diag),
+               length = std::max(1e-6, params_.streak_length * diag);
   const cv::Point2d c(size_.width / 2.0, size_.height / 2.0);
   double ux[3], uy[3];
   for (int k = 0; k < 3; ++k)
     ux[k] = std::cos(streak_angle_ + k * M_PI / 3), uy[k] = std::sin(streak_angle_ + k * M_PI / 3);
   cv::Point2d gp[4];
   double gr[4];
-  for (int k = 0; k < params_.ghosts; ++k) gp[k] = c + ghost_pos_[k] * (c - source_), gr[k] = ghost_radius_[k] * diag;
+  for (int k = 0; k < params_.ghosts; ++k)
+    gp[k] = c + ghost_pos_[k] * (c - source_), gr[k] = ghost_radius_[k] * diag;
   layer_.create(g, CV_8UC3);
   cv::Mat& small = layer_;
   for (int y = 0; y < g.height; ++y) {
     cv::Vec3b* row = small.ptr<cv::Vec3b>(y);
     const double py = (y + 0.5) * sy;
     for (int x = 0; x < g.width; ++x) {
-      const double px = (x + 0.5) * sx, dx = px - source_.x, dy = py - source_.y, r2 = dx * dx + dy * dy;
+      const double px = (x + 0.5) * sx, dx = px - source_.x, dy = py - source_.y,
+                   r2 = dx * dx + dy * dy;
       double light = params_.veil / (1.0 + r2 / rv2);
       const double bloom_arg = r2 / (2 * rb * rb);
       if (bloom_arg < kSkipExponent) light += std::exp(-bloom_arg);
@@ -93,8 +100,10 @@ void GlareModel::render_layer() {
       for (int ch = 0; ch < 3; ++ch) add[ch] = light * kSunTint[ch];
       for (int k = 0; k < params_.ghosts; ++k) {
         const double d = std::hypot(px - gp[k].x, py - gp[k].y);
-        const double disc = params_.ghost_strength * ghost_gain_[k] * (1.0 - smoothstep(0.7 * gr[k], gr[k], d));
-        for (int ch = 0; ch < 3 && disc > 0; ++ch) add[ch] += disc * kGhostTints[ghost_tint_[k]][ch];
+        const double disc =
+            params_.ghost_strength * ghost_gain_[k] * (1.0 - smoothstep(0.7 * gr[k], gr[k], d));
+        for (int ch = 0; ch < 3 && disc > 0; ++ch)
+          add[ch] += disc * kGhostTints[ghost_tint_[k]][ch];
       }
       for (int ch = 0; ch < 3; ++ch) {
         row[x][ch] = static_cast<uchar>(std::lround(255.0 * std::min(1.0, visibility_ * add[ch])));
@@ -105,7 +114,8 @@ void GlareModel::render_layer() {
 }
 
 cv::Mat GlareModel::apply(const cv::Mat& bgr, const std::optional<CameraGeometry>& geometry) {
-  // A geometry whose numbers are not finite (a singular K, a broken rotation) is ignored: the source stays put.
+  // A geometry whose numbers are not finite (a singular K, a broken rotation) is ignored: the
+  // source stays put.
   const auto finite = [](const cv::Vec3d& v) {
     return std::isfinite(v[0]) && std::isfinite(v[1]) && std::isfinite(v[2]);
   };
@@ -128,7 +138,8 @@ cv::Mat GlareModel::apply(const cv::Mat& bgr, const std::optional<CameraGeometry
       source_ = {std::clamp(p[0], -lim, lim), std::clamp(p[1], -lim, lim)};
     }
   }
-  if (!layer_at_ || (*layer_at_)[0] != source_.x || (*layer_at_)[1] != source_.y || (*layer_at_)[2] != visibility_) {
+  if (!layer_at_ || (*layer_at_)[0] != source_.x || (*layer_at_)[1] != source_.y ||
+      (*layer_at_)[2] != visibility_) {
     render_layer();
   }
   cv::Mat out(bgr.size(), bgr.type());
@@ -140,7 +151,8 @@ cv::Mat GlareModel::apply(const cv::Mat& bgr, const std::optional<CameraGeometry
     const uchar* l = light.data();
     uchar* o = out.ptr<uchar>(y);
     // Screen blend: 255 - (255 - I)(255 - L) / 255.
-    for (int i = 0; i < n; ++i) o[i] = static_cast<uchar>(s[i] + ((255u - s[i]) * l[i] + 127u) / 255u);
+    for (int i = 0; i < n; ++i)
+      o[i] = static_cast<uchar>(s[i] + ((255u - s[i]) * l[i] + 127u) / 255u);
   }
   return out;
 }

@@ -3,7 +3,6 @@
 
 #include <algorithm>
 
-
 #include "corruption/ndimage.hpp"
 
 namespace faultline::corruption {
@@ -30,14 +29,15 @@ void shuffle_pixels(cv::Mat& img, const GlassParams& p, Draw&& draw) {
 }  // namespace
 
 GlassParams glass_params(int severity) {
-  static constexpr GlassParams kParams[] = {{0.7, 1, 2}, {0.9, 2, 1}, {1, 2, 3}, {1.1, 3, 2}, {1.5, 4, 2}};
+  static constexpr GlassParams kParams[] = {
+      {0.7, 1, 2}, {0.9, 2, 1}, {1, 2, 3}, {1.1, 3, 2}, {1.5, 4, 2}};
   return kParams[severity - 1];
 }
 
 cv::Mat glass_blur_numpy(const cv::Mat& bgr, int severity, rng::NumpyRandomState& rng) {
   const GlassParams p = glass_params(severity);
-  // np.uint8(gaussian(...) * 255): the blurred values are within [0, 1], so the clip in gaussian_blur_u8 changes
-  // nothing.
+  // np.uint8(gaussian(...) * 255): the blurred values are within [0, 1], so the clip in
+  // gaussian_blur_u8 changes nothing.
   cv::Mat img = nd::gaussian_blur_u8(bgr, p.sigma);
   shuffle_pixels(img, p, [&] { return static_cast<int>(rng.randint(-p.delta, p.delta)); });
   return nd::gaussian_blur_u8(img, p.sigma);
@@ -45,9 +45,9 @@ cv::Mat glass_blur_numpy(const cv::Mat& bgr, int severity, rng::NumpyRandomState
 
 cv::Mat glass_blur_fast(const cv::Mat& bgr, int severity, rng::FastRng& rng) {
   const GlassParams p = glass_params(severity);
-  // The blurs are numpy mode's: a float32 blur truncates flat areas differently (the reference's float64 sums land
-  // a hair below or on an integer), which moved ~9 % of the histogram at severity 5; the pixel walk dominates the
-  // cost of the reference, not the blurs.
+  // The blurs are numpy mode's: a float32 blur truncates flat areas differently (the reference's
+  // float64 sums land a hair below or on an integer), which moved ~9 % of the histogram at severity
+  // 5; the pixel walk dominates the cost of the reference, not the blurs.
   cv::Mat img = nd::gaussian_blur_u8(bgr, p.sigma);
   const auto span = static_cast<std::uint32_t>(2 * p.delta);
   shuffle_pixels(img, p, [&] { return static_cast<int>(rng.bounded(span)) - p.delta; });

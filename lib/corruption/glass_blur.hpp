@@ -1,8 +1,9 @@
-// Glass Blur (imagecorruptions 1.1.2 `glass_blur`): Gaussian blur, then `iterations` passes over rows H-d down to
-// d+1 and columns W-d down to d+1 (bottom-right first), each pixel taking the value of the pixel at a random offset
-// (dx, dy) in [-d, d) (a copy, not a swap: the reference's tuple assignment of NumPy views writes only the first
-// pixel), then blur again. The blurs are skimage.filters.gaussian (edge-replicating, truncate 4) of u8 / 255 in
-// float64; the first is truncated to uint8. Images of at most 2d + 1 rows or columns skip the walk.
+// Glass Blur (imagecorruptions 1.1.2 `glass_blur`): Gaussian blur, then `iterations` passes over
+// rows H-d down to d+1 and columns W-d down to d+1 (bottom-right first), each pixel taking the
+// value of the pixel at a random offset (dx, dy) in [-d, d) (a copy, not a swap: the reference's
+// tuple assignment of NumPy views writes only the first pixel), then blur again. The blurs are
+// skimage.filters.gaussian (edge-replicating, truncate 4) of u8 / 255 in float64; the first is
+// truncated to uint8. Images of at most 2d + 1 rows or columns skip the walk.
 #pragma once
 
 #include <opencv2/core.hpp>
@@ -23,8 +24,8 @@ GlassParams glass_params(int severity);
 // numpy mode: draws randint(-d, d, size=2) (dx, then dy) per visited pixel; exact.
 cv::Mat glass_blur_numpy(const cv::Mat& bgr, int severity, rng::NumpyRandomState& rng);
 
-// fast mode: the same blurs and pixel walk with FastRng offsets (the walk, one Python iteration per pixel, is what
-// makes the reference take minutes).
+// fast mode: the same blurs and pixel walk with FastRng offsets (the walk, one Python iteration per
+// pixel, is what makes the reference take minutes).
 cv::Mat glass_blur_fast(const cv::Mat& bgr, int severity, rng::FastRng& rng);
 
 }  // namespace faultline::corruption

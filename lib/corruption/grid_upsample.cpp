@@ -1,4 +1,5 @@
-// Fixed-point bilinear taps (8-bit weights), vertical pass per output row into a grid-width buffer, then horizontal.
+// Fixed-point bilinear taps (8-bit weights), vertical pass per output row into a grid-width buffer,
+// then horizontal.
 #include "corruption/grid_upsample.hpp"
 
 #include <algorithm>
@@ -7,7 +8,8 @@
 namespace faultline::corruption {
 namespace {
 
-// Output index -> (source index, weight of source index + 1 in 1/256), half-pixel centres, clamped at the borders.
+// Output index -> (source index, weight of source index + 1 in 1/256), half-pixel centres, clamped
+// at the borders.
 void taps(int n_src, int n_dst, std::vector<int>& index, std::vector<int>& weight) {
   index.resize(static_cast<std::size_t>(n_dst));
   weight.resize(static_cast<std::size_t>(n_dst));
@@ -39,7 +41,8 @@ void GridUpsampler::row(const cv::Mat& grid, int y, int x0, int x1, uchar* out) 
   // Only the grid columns the output span reads.
   const int g0 = col_[static_cast<std::size_t>(x0)];
   const int g1 = std::min(grid.cols - 1, col_[static_cast<std::size_t>(x1 - 1)] + 1);
-  for (int i = 3 * g0; i < 3 * (g1 + 1); ++i) blend_[static_cast<std::size_t>(i)] = a[i] * (256 - wy) + b[i] * wy;
+  for (int i = 3 * g0; i < 3 * (g1 + 1); ++i)
+    blend_[static_cast<std::size_t>(i)] = a[i] * (256 - wy) + b[i] * wy;
   for (int x = x0; x < x1; ++x) {
     const int c0 = col_[static_cast<std::size_t>(x)], wx = col_w_[static_cast<std::size_t>(x)];
     const int c1 = std::min(c0 + 1, grid.cols - 1);

@@ -1,10 +1,11 @@
-// NumPy exp and sum, SciPy ndimage Gaussian filter and linear zoom, as the reference evaluates them.
+// NumPy exp and sum, SciPy ndimage Gaussian filter and linear zoom, as the reference evaluates
+// them.
 #include "corruption/ndimage.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
-#include <algorithm>
 #include <limits>
 
 namespace faultline::corruption::nd {
@@ -24,9 +25,11 @@ std::uint64_t to_bits(double d) {
   return b;
 }
 
-// One symmetric correlation pass as ndimage's NI_Correlate1D evaluates it: acc = x[i] * w[0], then the pairs from
-// the outermost in, acc += (x[i - k] + x[i + k]) * w[k]. `w[k]` is the weight at offset k (0..radius).
-void correlate_line(const double* ext, int n, int radius, const std::vector<double>& w, double* out) {
+// One symmetric correlation pass as ndimage's NI_Correlate1D evaluates it: acc = x[i] * w[0], then
+// the pairs from the outermost in, acc += (x[i - k] + x[i + k]) * w[k]. `w[k]` is the weight at
+// offset k (0..radius).
+void correlate_line(const double* ext, int n, int radius, const std::vector<double>& w,
+                    double* out) {
   for (int i = 0; i < n; ++i) {
     const double* x = ext + radius + i;
     double acc = x[0] * w[0];
@@ -60,7 +63,8 @@ void correlate_rows(const cv::Mat& in, cv::Mat& out, const std::vector<double>& 
 void correlate_cols(const cv::Mat& in, cv::Mat& out, const std::vector<double>& w, Extend mode) {
   const int radius = static_cast<int>(w.size()) - 1;
   const int cols = in.cols, ch = in.channels();
-  std::vector<double> ext(static_cast<std::size_t>(cols + 2 * radius)), line(static_cast<std::size_t>(cols));
+  std::vector<double> ext(static_cast<std::size_t>(cols + 2 * radius)),
+      line(static_cast<std::size_t>(cols));
   for (int y = 0; y < in.rows; ++y) {
     const double* s = in.ptr<double>(y);
     double* o = out.ptr<double>(y);
@@ -86,13 +90,13 @@ void round_to_float(cv::Mat& m) {
 }  // namespace
 
 double numpy_exp(double x) {
-  // NumPy 1.24 evaluates float64 exp with Intel SVML's __svml_exp8 on AVX-512 CPUs; this is its main path step by
-  // step (FMA where it has FMA). Arguments beyond its range check (|x| > ~707.7, NaN) take SVML's slow path, for
-  // which libm's exp stands in.
+  // NumPy 1.24 evaluates float64 exp with Intel SVML's __svml_exp8 on AVX-512 CPUs; this is its
+  // main path step by step (FMA where it has FMA). Arguments beyond its range check (|x| > ~707.7,
+  // NaN) take SVML's slow path, for which libm's exp stands in.
   if (!(std::fabs(x) <= 0x1.61da04cbafe44p+9)) return std::exp(x);
   const double log2e = 0x1.71547652b82fep+0, shifter = 0x1.8000000003ff0p+48;
-  // x * log2(e) + shifter rounded toward zero: the round-to-nearest FMA, stepped down when it rounded up (the sign
-  // of the exact remainder comes from a second FMA).
+  // x * log2(e) + shifter rounded toward zero: the round-to-nearest FMA, stepped down when it
+  // rounded up (the sign of the exact remainder comes from a second FMA).
   double s = std::fma(x, log2e, shifter);
   if (std::fma(x, log2e, -(s - shifter)) < 0) s = std::nextafter(s, 0.0);
   const double n = s - shifter;  // x * log2(e) truncated to 1/16
@@ -131,7 +135,9 @@ double pairwise_sum(const double* a, std::size_t n) {
   return pairwise_sum(a, n2) + pairwise_sum(a + n2, n - n2);
 }
 
-int gaussian_radius(double sigma, double truncate) { return static_cast<int>(truncate * sigma + 0.5); }
+int gaussian_radius(double sigma, double truncate) {
+  return static_cast<int>(truncate * sigma + 0.5);
+}
 
 std::vector<double> gaussian_kernel(double sigma, int radius) {
   const double scale = -0.5 / (sigma * sigma);
@@ -139,9 +145,11 @@ std::vector<double> gaussian_kernel(double sigma, int radius) {
   for (int x = -radius; x <= radius; ++x) {
     phi[static_cast<std::size_t>(x + radius)] = numpy_exp(scale * static_cast<double>(x * x));
   }
-  const double sum = 0.0 + pairwise_sum(phi.data(), phi.size());  // add.reduce starts from its identity
+  const double sum =
+      0.0 + pairwise_sum(phi.data(), phi.size());  // add.reduce starts from its identity
   std::vector<double> w(static_cast<std::size_t>(radius + 1));
-  for (int k = 0; k <= radius; ++k) w[static_cast<std::size_t>(k)] = phi[static_cast<std::size_t>(radius + k)] / sum;
+  for (int k = 0; k <= radius; ++k)
+    w[static_cast<std::size_t>(k)] = phi[static_cast<std::size_t>(radius + k)] / sum;
   return w;
 }
 
@@ -178,12 +186,15 @@ cv::Mat gaussian_blur_u8(const cv::Mat& bgr, double sigma) {
   const auto w = gaussian_kernel(sigma, gaussian_radius(sigma, 4.0));
   const int r = static_cast<int>(w.size()) - 1, rows = bgr.rows, cols = bgr.cols, width = cols * 3;
   const int slots = 2 * r + 1;
-  // Source row j (as u8 / 255 in float64) lives in slot j % slots while output rows i - r .. i + r need it.
+  // Source row j (as u8 / 255 in float64) lives in slot j % slots while output rows i - r .. i + r
+  // need it.
   std::vector<double> ring(static_cast<std::size_t>(slots) * static_cast<std::size_t>(width));
-  auto slot = [&](int j) { return ring.data() + static_cast<std::size_t>(j % slots) * static_cast<std::size_t>(width); };
+  auto slot = [&](int j) {
+    return ring.data() + static_cast<std::size_t>(j % slots) * static_cast<std::size_t>(width);
+  };
   int loaded = -1;
-  std::vector<double> mid(static_cast<std::size_t>(width)), ext(static_cast<std::size_t>(cols + 2 * r)),
-      line(static_cast<std::size_t>(cols));
+  std::vector<double> mid(static_cast<std::size_t>(width)),
+      ext(static_cast<std::size_t>(cols + 2 * r)), line(static_cast<std::size_t>(cols));
   cv::Mat out(bgr.size(), CV_8UC3);
   for (int i = 0; i < rows; ++i) {
     for (; loaded < std::min(i + r, rows - 1); ++loaded) {
@@ -209,8 +220,8 @@ cv::Mat gaussian_blur_u8(const cv::Mat& bgr, double sigma) {
       }
       correlate_line(ext.data(), cols, r, w, line.data());
       for (int x = 0; x < cols; ++x) {
-        o[3 * x + ch] =
-            static_cast<unsigned char>(std::min(std::max(line[static_cast<std::size_t>(x)], 0.0), 1.0) * 255.0);
+        o[3 * x + ch] = static_cast<unsigned char>(
+            std::min(std::max(line[static_cast<std::size_t>(x)], 0.0), 1.0) * 255.0);
       }
     }
   }
@@ -219,8 +230,9 @@ cv::Mat gaussian_blur_u8(const cv::Mat& bgr, double sigma) {
 
 namespace {
 
-// Per output index along one axis: the interpolation start and the two weights of ndimage's order-1 spline, or
-// start = -1 where the coordinate falls outside [0, len - 1] (mode 'constant' then gives cval = 0).
+// Per output index along one axis: the interpolation start and the two weights of ndimage's order-1
+// spline, or start = -1 where the coordinate falls outside [0, len - 1] (mode 'constant' then gives
+// cval = 0).
 struct LinearTap {
   int start = -1;
   int next = 0;  // index of the second tap (mirrored back inside at the last sample)
@@ -228,7 +240,8 @@ struct LinearTap {
 };
 
 std::vector<LinearTap> linear_taps(int in_len, int out_len) {
-  const double zoom = out_len > 1 ? static_cast<double>(in_len - 1) / static_cast<double>(out_len - 1) : 1.0;
+  const double zoom =
+      out_len > 1 ? static_cast<double>(in_len - 1) / static_cast<double>(out_len - 1) : 1.0;
   std::vector<LinearTap> taps(static_cast<std::size_t>(out_len));
   for (int k = 0; k < out_len; ++k) {
     const double cc = static_cast<double>(k) * zoom;
@@ -238,7 +251,8 @@ std::vector<LinearTap> linear_taps(int in_len, int out_len) {
     const double x = cc - std::floor(cc);
     t.w0 = 1.0 - x;
     t.w1 = 1.0 - t.w0;
-    t.next = t.start + 1 < in_len ? t.start + 1 : (in_len > 1 ? in_len - 2 : 0);  // mirror extension
+    t.next =
+        t.start + 1 < in_len ? t.start + 1 : (in_len > 1 ? in_len - 2 : 0);  // mirror extension
   }
   return taps;
 }
@@ -265,7 +279,8 @@ cv::Mat zoom_linear(const cv::Mat& img32, int out_rows, int out_cols) {
           o[j * 3 + c] = 0.f;
           continue;
         }
-        // The 2 x 2 x 2 footprint in C order; the channel axis's second tap has weight 0 and adds +0.
+        // The 2 x 2 x 2 footprint in C order; the channel axis's second tap has weight 0 and adds
+        // +0.
         double t = 0.0;
         t += static_cast<double>(r0[b.start * 3 + c]) * a.w0 * b.w0;
         t += static_cast<double>(r0[b.next * 3 + c]) * a.w0 * b.w1;

@@ -1,4 +1,5 @@
-// Pointwise noise: the reference's float64 arithmetic per element in numpy mode, per-level alias tables in fast mode.
+// Pointwise noise: the reference's float64 arithmetic per element in numpy mode, per-level alias
+// tables in fast mode.
 #include "corruption/noise.hpp"
 
 #include <algorithm>
@@ -15,16 +16,22 @@
 namespace faultline::corruption {
 namespace {
 
-std::size_t sev_index(int severity) { return static_cast<std::size_t>(std::clamp(severity, 1, 5) - 1); }
+std::size_t sev_index(int severity) {
+  return static_cast<std::size_t>(std::clamp(severity, 1, 5) - 1);
+}
 
 // np.uint8(np.clip(v, 0, 1) * 255): clip, scale, truncate.
-inline std::uint8_t to_u8(double v) { return static_cast<std::uint8_t>(std::min(std::max(v, 0.0), 1.0) * 255.0); }
+inline std::uint8_t to_u8(double v) {
+  return static_cast<std::uint8_t>(std::min(std::max(v, 0.0), 1.0) * 255.0);
+}
 
 cv::Mat continuous(const cv::Mat& m) { return m.isContinuous() ? m : m.clone(); }
 
-// The Poisson stage shared by shot_noise and iso_noise: counts k ~ Poisson(v / 255 * scale) for every element, in
-// memory order; counts of 255 and more saturate at 255 (both corruptions clip k / scale to 1 with scale <= 60).
-std::vector<std::uint8_t> poisson_counts(const cv::Mat& in, double scale, rng::NumpyRandomState& rng) {
+// The Poisson stage shared by shot_noise and iso_noise: counts k ~ Poisson(v / 255 * scale) for
+// every element, in memory order; counts of 255 and more saturate at 255 (both corruptions clip k /
+// scale to 1 with scale <= 60).
+std::vector<std::uint8_t> poisson_counts(const cv::Mat& in, double scale,
+                                         rng::NumpyRandomState& rng) {
   rng::PoissonParams params[256];
   for (int v = 0; v < 256; ++v) params[v] = rng::prepare_poisson((v / 255.0) * scale);
   const std::size_t n = in.total() * 3;
@@ -62,18 +69,21 @@ cv::Mat iso_numpy(const cv::Mat& in, int severity, rng::NumpyRandomState& rng) {
   const std::vector<std::uint8_t> k = poisson_counts(in, kPoisson, rng);
   // x = clip(k / 25, 0, 1) * 255., then x / 255.
   double level[256];
-  for (int j = 0; j < 256; ++j) level[j] = (std::min(std::max(j / kPoisson, 0.0), 1.0) * 255.0) / 255.0;
+  for (int j = 0; j < 256; ++j)
+    level[j] = (std::min(std::max(j / kPoisson, 0.0), 1.0) * 255.0) / 255.0;
   const double sigma = iso_noise_sigma(severity);
   std::vector<double> z(k.size());
   rng.standard_normals(z.data(), z.size());
   cv::Mat out(in.size(), CV_8UC3);
-  for (std::size_t i = 0; i < k.size(); ++i) out.data[i] = to_u8(level[k[i]] + (0.0 + sigma * z[i]));
+  for (std::size_t i = 0; i < k.size(); ++i)
+    out.data[i] = to_u8(level[k[i]] + (0.0 + sigma * z[i]));
   return out;
 }
 
-// skimage.util.random_noise(mode='s&p', amount=p): flipped = choice([True, False], p=[p, 1 - p]) over the whole
-// array, then salted = choice([True, False], p=[0.5, 0.5]); numpy's choice is u < cdf[0] with cdf normalised by its
-// last entry. Salt is 1, pepper 0 (the image is non-negative), the rest keeps x = v / 255.
+// skimage.util.random_noise(mode='s&p', amount=p): flipped = choice([True, False], p=[p, 1 - p])
+// over the whole array, then salted = choice([True, False], p=[0.5, 0.5]); numpy's choice is u <
+// cdf[0] with cdf normalised by its last entry. Salt is 1, pepper 0 (the image is non-negative),
+// the rest keeps x = v / 255.
 cv::Mat impulse_numpy(const cv::Mat& in, int severity, rng::NumpyRandomState& rng) {
   const double p = impulse_noise_amount(severity);
   const double flip_below = p / (p + (1.0 - p));
@@ -94,7 +104,8 @@ cv::Mat impulse_numpy(const cv::Mat& in, int severity, rng::NumpyRandomState& rn
 
 double normal_cdf(double z) { return 0.5 * std::erfc(-z / std::sqrt(2.0)); }
 
-// Adds weight * P(trunc(255 * clip(y + N(0, sigma), 0, 1)) = j) to prob[j]; sigma 0 is a point mass.
+// Adds weight * P(trunc(255 * clip(y + N(0, sigma), 0, 1)) = j) to prob[j]; sigma 0 is a point
+// mass.
 void add_noise_row(double y, double sigma, double weight, double* prob) {
   if (sigma <= 0.0) {
     prob[to_u8(y)] += weight;
@@ -139,8 +150,9 @@ std::shared_ptr<const LevelTables> build_tables(Corruption c, int severity) {
   return t;
 }
 
-constexpr Corruption kNoises[] = {Corruption::GaussianNoise, Corruption::ShotNoise, Corruption::ImpulseNoise,
-                                  Corruption::SpeckleNoise, Corruption::IsoNoise};
+constexpr Corruption kNoises[] = {Corruption::GaussianNoise, Corruption::ShotNoise,
+                                  Corruption::ImpulseNoise, Corruption::SpeckleNoise,
+                                  Corruption::IsoNoise};
 
 std::shared_ptr<const LevelTables> tables_for(Corruption c, int severity) {
   static std::mutex mutex;
@@ -160,7 +172,9 @@ std::shared_ptr<const LevelTables> tables_for(Corruption c, int severity) {
 
 }  // namespace
 
-bool is_pointwise_noise(Corruption c) { return std::find(std::begin(kNoises), std::end(kNoises), c) != std::end(kNoises); }
+bool is_pointwise_noise(Corruption c) {
+  return std::find(std::begin(kNoises), std::end(kNoises), c) != std::end(kNoises);
+}
 
 double gaussian_noise_sigma(int severity) {
   static constexpr double kC[] = {.08, .12, 0.18, 0.26, 0.38};
@@ -183,15 +197,22 @@ double iso_noise_sigma(int severity) {
   return 0.7 * kC[sev_index(severity)];
 }
 
-cv::Mat pointwise_noise_numpy(const cv::Mat& bgr, Corruption c, int severity, rng::NumpyRandomState& rng) {
+cv::Mat pointwise_noise_numpy(const cv::Mat& bgr, Corruption c, int severity,
+                              rng::NumpyRandomState& rng) {
   const cv::Mat in = continuous(bgr);
   switch (c) {
-    case Corruption::GaussianNoise: return gaussian_like(in, gaussian_noise_sigma(severity), false, rng);
-    case Corruption::SpeckleNoise: return gaussian_like(in, speckle_noise_sigma(severity), true, rng);
-    case Corruption::ShotNoise: return shot_numpy(in, severity, rng);
-    case Corruption::IsoNoise: return iso_numpy(in, severity, rng);
-    case Corruption::ImpulseNoise: return impulse_numpy(in, severity, rng);
-    default: return in.clone();
+    case Corruption::GaussianNoise:
+      return gaussian_like(in, gaussian_noise_sigma(severity), false, rng);
+    case Corruption::SpeckleNoise:
+      return gaussian_like(in, speckle_noise_sigma(severity), true, rng);
+    case Corruption::ShotNoise:
+      return shot_numpy(in, severity, rng);
+    case Corruption::IsoNoise:
+      return iso_numpy(in, severity, rng);
+    case Corruption::ImpulseNoise:
+      return impulse_numpy(in, severity, rng);
+    default:
+      return in.clone();
   }
 }
 
@@ -199,8 +220,12 @@ void pointwise_noise_distribution(Corruption c, int severity, int v, double prob
   std::fill(prob, prob + 256, 0.0);
   const double x = v / 255.0;
   switch (c) {
-    case Corruption::GaussianNoise: add_noise_row(x, gaussian_noise_sigma(severity), 1.0, prob); return;
-    case Corruption::SpeckleNoise: add_noise_row(x, x * speckle_noise_sigma(severity), 1.0, prob); return;
+    case Corruption::GaussianNoise:
+      add_noise_row(x, gaussian_noise_sigma(severity), 1.0, prob);
+      return;
+    case Corruption::SpeckleNoise:
+      add_noise_row(x, x * speckle_noise_sigma(severity), 1.0, prob);
+      return;
     case Corruption::ShotNoise: {
       const double s = shot_noise_scale(severity);
       poisson_pmf(x * s, [&](int k, double pk) { prob[to_u8(k / s)] += pk; });
@@ -208,7 +233,9 @@ void pointwise_noise_distribution(Corruption c, int severity, int v, double prob
     }
     case Corruption::IsoNoise: {
       const double sigma = iso_noise_sigma(severity);
-      poisson_pmf(x * 25.0, [&](int k, double pk) { add_noise_row(std::min(k / 25.0, 1.0), sigma, pk, prob); });
+      poisson_pmf(x * 25.0, [&](int k, double pk) {
+        add_noise_row(std::min(k / 25.0, 1.0), sigma, pk, prob);
+      });
       return;
     }
     case Corruption::ImpulseNoise: {
@@ -218,7 +245,9 @@ void pointwise_noise_distribution(Corruption c, int severity, int v, double prob
       prob[to_u8(x)] += 1.0 - p;
       return;
     }
-    default: prob[v] = 1.0; return;
+    default:
+      prob[v] = 1.0;
+      return;
   }
 }
 

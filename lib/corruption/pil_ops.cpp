@@ -1,4 +1,5 @@
-// pixelate and jpeg_compression: the PIL (Pillow 9.4) operations imagecorruptions calls, reproduced step by step.
+// pixelate and jpeg_compression: the PIL (Pillow 9.4) operations imagecorruptions calls, reproduced
+// step by step.
 #include <turbojpeg.h>
 
 #include <algorithm>
@@ -21,8 +22,9 @@ inline std::uint8_t clip8(int ss) {
   return static_cast<std::uint8_t>(std::min(std::max(v, 0), 255));
 }
 
-// precompute_coeffs for the BOX filter (support 0.5) from in_size to out_size over [0, in_size), then
-// normalize_coeffs_8bpc: per output index its first input index, tap count and fixed-point weights.
+// precompute_coeffs for the BOX filter (support 0.5) from in_size to out_size over [0, in_size),
+// then normalize_coeffs_8bpc: per output index its first input index, tap count and fixed-point
+// weights.
 struct Coeffs {
   int ksize = 0;
   std::vector<int> first, count;
@@ -59,7 +61,8 @@ Coeffs box_coeffs(int in_size, int out_size) {
       double v = w[static_cast<std::size_t>(x)];
       if (ww != 0.0) v /= ww;
       c.k[static_cast<std::size_t>(xx * c.ksize + x)] =
-          v < 0 ? static_cast<int>(-0.5 + v * (1 << kPrecisionBits)) : static_cast<int>(0.5 + v * (1 << kPrecisionBits));
+          v < 0 ? static_cast<int>(-0.5 + v * (1 << kPrecisionBits))
+                : static_cast<int>(0.5 + v * (1 << kPrecisionBits));
     }
     c.first[static_cast<std::size_t>(xx)] = xmin;
     c.count[static_cast<std::size_t>(xx)] = xmax;
@@ -67,8 +70,8 @@ Coeffs box_coeffs(int in_size, int out_size) {
   return c;
 }
 
-// ImagingResample with BOX: horizontal pass over the source rows the vertical pass needs, then the vertical pass;
-// both round to 8 bits.
+// ImagingResample with BOX: horizontal pass over the source rows the vertical pass needs, then the
+// vertical pass; both round to 8 bits.
 cv::Mat pil_box_resize(const cv::Mat& in, int out_w, int out_h) {
   const Coeffs h = box_coeffs(in.cols, out_w), v = box_coeffs(in.rows, out_h);
   const int y_first = v.first.front();
@@ -106,8 +109,8 @@ cv::Mat pil_box_resize(const cv::Mat& in, int out_w, int out_h) {
   return out;
 }
 
-// ImagingScaleAffine (NEAREST resize): source column of output x is int(x0 + a), a accumulated in double from
-// a / 2 in steps of a = in / out; positions outside the source stay 0 (Pillow's fill).
+// ImagingScaleAffine (NEAREST resize): source column of output x is int(x0 + a), a accumulated in
+// double from a / 2 in steps of a = in / out; positions outside the source stay 0 (Pillow's fill).
 std::vector<int> nearest_map(int in_size, int out_size) {
   const double a = static_cast<double>(static_cast<float>(in_size) - 0.0f) / out_size;
   std::vector<int> map(static_cast<std::size_t>(out_size), -1);
@@ -128,7 +131,8 @@ cv::Mat pil_nearest_resize(const cv::Mat& in, int out_w, int out_h) {
     const int sy = ys[static_cast<std::size_t>(y)];
     if (sy < 0) continue;
     auto* dst = out.ptr<cv::Vec3b>(y);
-    // An upscale maps runs of output rows to one source row: build the row once, copy it for the rest of the run.
+    // An upscale maps runs of output rows to one source row: build the row once, copy it for the
+    // rest of the run.
     if (y > 0 && ys[static_cast<std::size_t>(y - 1)] == sy) {
       std::copy_n(out.ptr<std::uint8_t>(y - 1), row_bytes, out.ptr<std::uint8_t>(y));
       continue;
@@ -153,8 +157,10 @@ using TjHandle = std::unique_ptr<void, TjDeleter>;
 cv::Mat pixelate(const cv::Mat& bgr, int severity) {
   static constexpr double kC[] = {0.6, 0.5, 0.4, 0.3, 0.25};
   const double c = kC[static_cast<std::size_t>(std::clamp(severity, 1, 5) - 1)];
-  const int w = std::max(1, static_cast<int>(bgr.cols * c)), h = std::max(1, static_cast<int>(bgr.rows * c));
-  if (w == bgr.cols && h == bgr.rows) return bgr.clone();  // PIL's resize to the same size is a copy
+  const int w = std::max(1, static_cast<int>(bgr.cols * c)),
+            h = std::max(1, static_cast<int>(bgr.rows * c));
+  if (w == bgr.cols && h == bgr.rows)
+    return bgr.clone();  // PIL's resize to the same size is a copy
   return pil_nearest_resize(pil_box_resize(bgr, w, h), bgr.cols, bgr.rows);
 }
 
@@ -166,25 +172,31 @@ int jpeg_compression_quality(int severity) {
 Result<cv::Mat> jpeg_compression(const cv::Mat& bgr, int severity) {
   // One compressor and decompressor per thread: no handle setup per frame.
   thread_local TjHandle enc(tjInitCompress()), dec(tjInitDecompress());
-  if (!enc || !dec) return Status(StatusCode::kInternal, "jpeg_compression: TurboJPEG initialisation failed");
+  if (!enc || !dec)
+    return Status(StatusCode::kInternal, "jpeg_compression: TurboJPEG initialisation failed");
   const cv::Mat in = bgr.isContinuous() ? bgr : bgr.clone();
-  // PIL sees the stored channel order as RGB: TJPF_RGB on the same bytes gives the same colour conversion.
-  // Pillow's libjpeg defaults use the accurate integer DCT; TurboJPEG needs TJFLAG_ACCURATEDCT below quality 96.
+  // PIL sees the stored channel order as RGB: TJPF_RGB on the same bytes gives the same colour
+  // conversion. Pillow's libjpeg defaults use the accurate integer DCT; TurboJPEG needs
+  // TJFLAG_ACCURATEDCT below quality 96.
   unsigned char* jpeg = nullptr;
   unsigned long size = 0;
-  if (tjCompress2(enc.get(), in.data, in.cols, static_cast<int>(in.step[0]), in.rows, TJPF_RGB, &jpeg, &size,
-                  TJSAMP_420, jpeg_compression_quality(severity), TJFLAG_ACCURATEDCT) != 0) {
+  if (tjCompress2(enc.get(), in.data, in.cols, static_cast<int>(in.step[0]), in.rows, TJPF_RGB,
+                  &jpeg, &size, TJSAMP_420, jpeg_compression_quality(severity),
+                  TJFLAG_ACCURATEDCT) != 0) {
     if (jpeg) tjFree(jpeg);
-    return Status(StatusCode::kInternal,
-                  std::string("jpeg_compression: TurboJPEG encode failed: ") + tjGetErrorStr2(enc.get()));
+    return Status(
+        StatusCode::kInternal,
+        std::string("jpeg_compression: TurboJPEG encode failed: ") + tjGetErrorStr2(enc.get()));
   }
   cv::Mat out(in.size(), CV_8UC3);
-  const int rc = tjDecompress2(dec.get(), jpeg, size, out.data, out.cols, static_cast<int>(out.step[0]), out.rows,
-                               TJPF_RGB, TJFLAG_ACCURATEDCT);
+  const int rc =
+      tjDecompress2(dec.get(), jpeg, size, out.data, out.cols, static_cast<int>(out.step[0]),
+                    out.rows, TJPF_RGB, TJFLAG_ACCURATEDCT);
   tjFree(jpeg);
   if (rc != 0) {
-    return Status(StatusCode::kInternal,
-                  std::string("jpeg_compression: TurboJPEG decode failed: ") + tjGetErrorStr2(dec.get()));
+    return Status(
+        StatusCode::kInternal,
+        std::string("jpeg_compression: TurboJPEG decode failed: ") + tjGetErrorStr2(dec.get()));
   }
   return out;
 }

@@ -1,4 +1,5 @@
-// Dispatch of the sensor faults to their models, per camera (SensorFaultState) or for one frame (sensor_fault).
+// Dispatch of the sensor faults to their models, per camera (SensorFaultState) or for one frame
+// (sensor_fault).
 #include "corruption/sensor_fault.hpp"
 
 #include <cmath>
@@ -62,15 +63,19 @@ SensorFaultState::SensorFaultState(Corruption type, int severity, std::uint64_t 
 
 SensorFaultState::~SensorFaultState() = default;
 
-Result<cv::Mat> SensorFaultState::apply(const cv::Mat& bgr, std::int64_t frame_index, const FrameContext& ctx) {
+Result<cv::Mat> SensorFaultState::apply(const cv::Mat& bgr, std::int64_t frame_index,
+                                        const FrameContext& ctx) {
   if (Status s = validate_input(bgr, impl_->severity); !s) return s;
   if (!is_sensor_fault(impl_->type)) {
-    return Status(StatusCode::kInvalidArgument, std::string("not a sensor fault: ") + to_string(impl_->type));
+    return Status(StatusCode::kInvalidArgument,
+                  std::string("not a sensor fault: ") + to_string(impl_->type));
   }
   if (impl_->severity == 0) return bgr.clone();
   if (!impl_->ready(bgr.size())) impl_->reset(bgr.size());
-  const double time_s = ctx.time_s ? *ctx.time_s : static_cast<double>(frame_index) / kDefaultRateHz;
-  if (!std::isfinite(time_s)) return Status(StatusCode::kInvalidArgument, "frame time is not a finite number");
+  const double time_s =
+      ctx.time_s ? *ctx.time_s : static_cast<double>(frame_index) / kDefaultRateHz;
+  if (!std::isfinite(time_s))
+    return Status(StatusCode::kInvalidArgument, "frame time is not a finite number");
   switch (impl_->type) {
     case Corruption::Soiling:
       return impl_->soiling->apply(bgr);

@@ -1,13 +1,12 @@
-// Snow: normal field -> centre crop -> corner-aligned bilinear zoom -> threshold -> motion blur -> 8-bit layer ->
-// whitening blend with the layer added twice.
+// Snow: normal field -> centre crop -> corner-aligned bilinear zoom -> threshold -> motion blur ->
+// 8-bit layer -> whitening blend with the layer added twice.
 #include "corruption/snow.hpp"
 
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
-#include <vector>
-
 #include <opencv2/core.hpp>
+#include <vector>
 
 #include "corruption/motion_kernel.hpp"
 #include "corruption/snow_kernels.hpp"
@@ -39,7 +38,8 @@ AxisMap axis_map(int n_in, int n_out) {
   m.i0.resize(static_cast<std::size_t>(n_out));
   m.i1.resize(static_cast<std::size_t>(n_out));
   m.w.resize(static_cast<std::size_t>(n_out));
-  const double ratio = n_out > 1 ? static_cast<double>(n_in - 1) / static_cast<double>(n_out - 1) : 0.0;
+  const double ratio =
+      n_out > 1 ? static_cast<double>(n_in - 1) / static_cast<double>(n_out - 1) : 0.0;
   for (int o = 0; o < n_out; ++o) {
     const double p = o * ratio;
     int i = static_cast<int>(std::floor(p));
@@ -64,13 +64,14 @@ SnowParams snow_params(int severity) {
 
 cv::Size snow_layer_size(int rows, int cols, double zoom) {
   const Crop c = centre_crop(rows, cols, zoom);
-  return {static_cast<int>(std::nearbyint(c.cols * zoom)), static_cast<int>(std::nearbyint(c.rows * zoom))};
+  return {static_cast<int>(std::nearbyint(c.cols * zoom)),
+          static_cast<int>(std::nearbyint(c.rows * zoom))};
 }
 
 namespace {
 
-// What both layer paths share: the zoomed layer's size, the blur kernel, its taps that fit in the layer and the edge
-// padding they need.
+// What both layer paths share: the zoomed layer's size, the blur kernel, its taps that fit in the
+// layer and the edge padding they need.
 struct LayerGeometry {
   SnowParams p;
   int lh = 0, lw = 0;
@@ -87,14 +88,17 @@ LayerGeometry layer_geometry(int rows, int cols, int severity, double blur_angle
   g.kernel = find_tabulated_kernel(g.p.radius, g.p.sigma);
   g.offsets = motion_offsets(blur_angle_deg, g.kernel->width);
   g.taps = usable_taps(g.offsets, g.lh, g.lw);
-  for (int i = 0; i < g.taps; ++i) g.pad = std::max(g.pad, std::abs(g.offsets[static_cast<std::size_t>(i)].dx));
+  for (int i = 0; i < g.taps; ++i)
+    g.pad = std::max(g.pad, std::abs(g.offsets[static_cast<std::size_t>(i)].dx));
   return g;
 }
 
-// The exact layer from the centre crop of the normal field (CV_64F, values N(loc, scale)) for an image of rows x
-// cols: zoom rows first and then columns (the reference's order), threshold and clip straight into an edge-padded
-// buffer, then blur with the tabulated kernel and round half to even to bytes, only for the top-left rows x cols.
-cv::Mat layer_exact_from_crop(const cv::Mat& crop, int rows, int cols, int severity, double blur_angle_deg) {
+// The exact layer from the centre crop of the normal field (CV_64F, values N(loc, scale)) for an
+// image of rows x cols: zoom rows first and then columns (the reference's order), threshold and
+// clip straight into an edge-padded buffer, then blur with the tabulated kernel and round half to
+// even to bytes, only for the top-left rows x cols.
+cv::Mat layer_exact_from_crop(const cv::Mat& crop, int rows, int cols, int severity,
+                              double blur_angle_deg) {
   const LayerGeometry g = layer_geometry(rows, cols, severity, blur_angle_deg);
   const SnowParams& p = g.p;
   const int lh = g.lh, lw = g.lw, taps = g.taps, pad = g.pad;
@@ -103,13 +107,14 @@ cv::Mat layer_exact_from_crop(const cv::Mat& crop, int rows, int cols, int sever
   const AxisMap rm = axis_map(crop.rows, lh);
   const snow_kernels::ColumnZoom64 column_zoom(crop.cols, lw);
   const std::size_t stride = static_cast<std::size_t>(lw + 2 * pad);
-  thread_local std::vector<double> row, padded;  // reused per thread: fresh multi-MB buffers cost page faults
+  thread_local std::vector<double> row,
+      padded;  // reused per thread: fresh multi-MB buffers cost page faults
   row.resize(static_cast<std::size_t>(crop.cols));
   padded.resize(stride * static_cast<std::size_t>(lh));
   for (int o = 0; o < lh; ++o) {
     const auto ou = static_cast<std::size_t>(o);
-    snow_kernels::lerp_row64(crop.ptr<double>(rm.i0[ou]), crop.ptr<double>(rm.i1[ou]), rm.w[ou], row.data(),
-                             crop.cols);
+    snow_kernels::lerp_row64(crop.ptr<double>(rm.i0[ou]), crop.ptr<double>(rm.i1[ou]), rm.w[ou],
+                             row.data(), crop.cols);
     double* d = padded.data() + ou * stride;
     column_zoom.run(row.data(), p.threshold, d + pad);
     std::fill(d, d + pad, d[pad]);
@@ -121,7 +126,8 @@ cv::Mat layer_exact_from_crop(const cv::Mat& crop, int rows, int cols, int sever
     for (int i = 0; i < taps; ++i) {
       const auto& o = offsets[static_cast<std::size_t>(i)];
       src[static_cast<std::size_t>(i)] =
-          padded.data() + static_cast<std::size_t>(std::clamp(y - o.dy, 0, lh - 1)) * stride + (pad - o.dx);
+          padded.data() + static_cast<std::size_t>(std::clamp(y - o.dy, 0, lh - 1)) * stride +
+          (pad - o.dx);
     }
     snow_kernels::blur_quantise64(src.data(), k->weights, taps, out.ptr<std::uint8_t>(y),
                                   static_cast<std::size_t>(cols));
@@ -133,26 +139,28 @@ cv::Mat layer_exact_from_crop(const cv::Mat& crop, int rows, int cols, int sever
 
 cv::Mat snow_layer_exact(const cv::Mat& normals, int severity, double blur_angle_deg) {
   const Crop c = centre_crop(normals.rows, normals.cols, snow_params(severity).zoom);
-  return layer_exact_from_crop(normals(cv::Rect(c.left, c.top, c.cols, c.rows)), normals.rows, normals.cols,
-                               severity, blur_angle_deg);
+  return layer_exact_from_crop(normals(cv::Rect(c.left, c.top, c.cols, c.rows)), normals.rows,
+                               normals.cols, severity, blur_angle_deg);
 }
 
 namespace {
 
-// Blends every row with `blend_row` (snow_kernels::blend_exact_row or blend_fast_row). The rotated layer's row y is
-// rot's row y, or, when rot_reversed (rot is the layer itself), its row rows - 1 - y read backwards.
+// Blends every row with `blend_row` (snow_kernels::blend_exact_row or blend_fast_row). The rotated
+// layer's row y is rot's row y, or, when rot_reversed (rot is the layer itself), its row rows - 1 -
+// y read backwards.
 template <typename BlendRow>
-cv::Mat blend_rows(const cv::Mat& bgr, const cv::Mat& layer_u8, const cv::Mat& rot, bool rot_reversed, int severity,
-                   BlendRow blend_row) {
+cv::Mat blend_rows(const cv::Mat& bgr, const cv::Mat& layer_u8, const cv::Mat& rot,
+                   bool rot_reversed, int severity, BlendRow blend_row) {
   const SnowParams p = snow_params(severity);
   const float b = static_cast<float>(p.blend);
-  const float one_minus_b = static_cast<float>(1.0 - p.blend);  // formed in double first, as NumPy does
+  const float one_minus_b =
+      static_cast<float>(1.0 - p.blend);  // formed in double first, as NumPy does
   const int rows = bgr.rows, cols = bgr.cols;
   cv::Mat out(bgr.size(), bgr.type());
   for (int y = 0; y < rows; ++y) {
     blend_row(bgr.ptr<std::uint8_t>(y), layer_u8.ptr<std::uint8_t>(y),
-              rot.ptr<std::uint8_t>(rot_reversed ? rows - 1 - y : y), rot_reversed, out.ptr<std::uint8_t>(y), cols, b,
-              one_minus_b);
+              rot.ptr<std::uint8_t>(rot_reversed ? rows - 1 - y : y), rot_reversed,
+              out.ptr<std::uint8_t>(y), cols, b, one_minus_b);
   }
   return out;
 }
@@ -170,8 +178,8 @@ cv::Mat snow_exact(const cv::Mat& bgr, int severity, rng::NumpyRandomState& rng)
   const SnowParams p = snow_params(severity);
   const int rows = bgr.rows, cols = bgr.cols;
   const Crop c = centre_crop(rows, cols, p.zoom);
-  // The reference draws H x W normals in row-major order but reads only the centre crop: the others are drawn
-  // (same stream, same cache) without being evaluated.
+  // The reference draws H x W normals in row-major order but reads only the centre crop: the others
+  // are drawn (same stream, same cache) without being evaluated.
   thread_local cv::Mat crop;
   crop.create(c.rows, c.cols, CV_64F);
   rng.standard_normals(nullptr, static_cast<std::size_t>(c.top) * static_cast<std::size_t>(cols) +
@@ -180,20 +188,23 @@ cv::Mat snow_exact(const cv::Mat& bgr, int severity, rng::NumpyRandomState& rng)
     double* d = crop.ptr<double>(r);
     rng.standard_normals(d, static_cast<std::size_t>(c.cols));
     for (int x = 0; x < c.cols; ++x) d[x] = p.loc + p.scale * d[x];
-    const std::size_t rest = r + 1 < c.rows ? static_cast<std::size_t>(cols - c.cols)
-                                            : static_cast<std::size_t>(rows - c.top - c.rows) * cols +
-                                                  static_cast<std::size_t>(cols - c.left - c.cols);
+    const std::size_t rest = r + 1 < c.rows
+                                 ? static_cast<std::size_t>(cols - c.cols)
+                                 : static_cast<std::size_t>(rows - c.top - c.rows) * cols +
+                                       static_cast<std::size_t>(cols - c.left - c.cols);
     rng.standard_normals(nullptr, rest);
   }
   const double angle = rng.uniform(-135.0, -45.0);
   return snow_blend_exact(bgr, layer_exact_from_crop(crop, rows, cols, severity, angle), severity);
 }
 
-cv::Mat snow_layer_fast(const cv::Mat& crop_field, int rows, int cols, int severity, double blur_angle_deg) {
-  // Same stages as the exact layer, reordered for speed: the zoom interpolates columns first (on the few crop rows)
-  // and then rows (contiguous) in float32; bilinear zoom is separable, so only float rounding differs. The blur runs
-  // in 16-bit fixed point (within 1 level of the float sum), makes the layer's rows as it needs them (never the
-  // whole layer) and quantises each sum at once; only the top-left rows x cols are computed.
+cv::Mat snow_layer_fast(const cv::Mat& crop_field, int rows, int cols, int severity,
+                        double blur_angle_deg) {
+  // Same stages as the exact layer, reordered for speed: the zoom interpolates columns first (on
+  // the few crop rows) and then rows (contiguous) in float32; bilinear zoom is separable, so only
+  // float rounding differs. The blur runs in 16-bit fixed point (within 1 level of the float sum),
+  // makes the layer's rows as it needs them (never the whole layer) and quantises each sum at once;
+  // only the top-left rows x cols are computed.
   const LayerGeometry g = layer_geometry(rows, cols, severity, blur_angle_deg);
   const SnowParams& p = g.p;
   const int lh = g.lh, lw = g.lw, taps = g.taps;
@@ -204,10 +215,11 @@ cv::Mat snow_layer_fast(const cv::Mat& crop_field, int rows, int cols, int sever
   const bool scale = taps < k->width && used > 0.0;
   std::vector<float> w(static_cast<std::size_t>(taps));
   for (int i = 0; i < taps; ++i) {
-    w[static_cast<std::size_t>(i)] = static_cast<float>(scale ? k->weights[i] / used : k->weights[i]);
+    w[static_cast<std::size_t>(i)] =
+        static_cast<float>(scale ? k->weights[i] / used : k->weights[i]);
   }
-  // Column pass on a crop row when a layer row first reads it, into one of two slots by the row's parity (a layer
-  // row reads crop rows i and i + 1, and i never decreases).
+  // Column pass on a crop row when a layer row first reads it, into one of two slots by the row's
+  // parity (a layer row reads crop rows i and i + 1, and i never decreases).
   const snow_kernels::ColumnZoom column_zoom(crop_field.cols, lw);
   const auto lw_u = static_cast<std::size_t>(lw);
   thread_local std::vector<float> colz;
@@ -221,8 +233,8 @@ cv::Mat snow_layer_fast(const cv::Mat& crop_field, int rows, int cols, int sever
     }
     return d;
   };
-  // Row pass + threshold, made as the blur needs the rows; blur with the edge clamp at the layer's own size, and
-  // quantise the top-left rows x cols.
+  // Row pass + threshold, made as the blur needs the rows; blur with the edge clamp at the layer's
+  // own size, and quantise the top-left rows x cols.
   const snow_kernels::ZoomAxis rm = snow_kernels::zoom_axis(crop_field.rows, lh);
   const float thr = static_cast<float>(p.threshold);
   const snow_kernels::LayerRowMaker make_row = [&](int o, std::uint16_t* d) {
@@ -237,8 +249,8 @@ cv::Mat snow_layer_fast(const cv::Mat& crop_field, int rows, int cols, int sever
     dy[static_cast<std::size_t>(i)] = offsets[static_cast<std::size_t>(i)].dy;
   }
   cv::Mat out(rows, cols, CV_8U);
-  snow_kernels::blur_quantise(make_row, lh, lw, dx.data(), dy.data(), w.data(), taps, out.ptr<std::uint8_t>(),
-                              out.step[0], rows, cols);
+  snow_kernels::blur_quantise(make_row, lh, lw, dx.data(), dy.data(), w.data(), taps,
+                              out.ptr<std::uint8_t>(), out.step[0], rows, cols);
   return out;
 }
 
@@ -246,7 +258,8 @@ cv::Mat snow_blend_fast(const cv::Mat& bgr, const cv::Mat& layer_u8, int severit
   return blend_rows(bgr, layer_u8, layer_u8, /*rot_reversed=*/true, severity, kFastRow);
 }
 
-cv::Mat snow_blend_fast(const cv::Mat& bgr, const cv::Mat& layer_u8, const cv::Mat& layer_rot_u8, int severity) {
+cv::Mat snow_blend_fast(const cv::Mat& bgr, const cv::Mat& layer_u8, const cv::Mat& layer_rot_u8,
+                        int severity) {
   return blend_rows(bgr, layer_u8, layer_rot_u8, /*rot_reversed=*/false, severity, kFastRow);
 }
 
@@ -257,7 +270,8 @@ cv::Mat snow_fast(const cv::Mat& bgr, int severity, rng::FastRng& rng) {
   rng::LaneRng lanes(rng);
   rng::fill_normals(field.ptr<float>(), field.total(), p.loc, p.scale, lanes, rng);
   const double angle = rng.uniform(-135.0, -45.0);
-  return snow_blend_fast(bgr, snow_layer_fast(field, bgr.rows, bgr.cols, severity, angle), severity);
+  return snow_blend_fast(bgr, snow_layer_fast(field, bgr.rows, bgr.cols, severity, angle),
+                         severity);
 }
 
 }  // namespace faultline::corruption

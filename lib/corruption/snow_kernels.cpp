@@ -1,4 +1,5 @@
-// Fast Snow loops. The AVX2 bodies run whole blocks and the scalar bodies (same arithmetic, same rounding) the rest.
+// Fast Snow loops. The AVX2 bodies run whole blocks and the scalar bodies (same arithmetic, same
+// rounding) the rest.
 #include "corruption/snow_kernels.hpp"
 
 #include <algorithm>
@@ -19,25 +20,28 @@ bool use_avx2(bool allow_simd) {
 #endif
 }
 
-// The fast blend's fixed-point constants: values carry 6 fraction bits (x64); products are (x * k) >> 16 with the
-// multiplicand scaled to use the 16 bits.
+// The fast blend's fixed-point constants: values carry 6 fraction bits (x64); products are (x * k)
+// >> 16 with the multiplicand scaled to use the 16 bits.
 struct BlendFixed {
-  static constexpr std::uint32_t kGrey0 = 7348, kGrey1 = 14426, kGrey2 = 2802;  // 1.5 * (0.299, 0.587, 0.114) * 2^14
-  static constexpr std::uint32_t kBrightOffset = 8160;                       // 127.5 * 64
-  std::uint32_t b14, one_minus_b15;                                          // b * 2^14, (1 - b) * 2^15
+  static constexpr std::uint32_t kGrey0 = 7348, kGrey1 = 14426,
+                                 kGrey2 = 2802;         // 1.5 * (0.299, 0.587, 0.114) * 2^14
+  static constexpr std::uint32_t kBrightOffset = 8160;  // 127.5 * 64
+  std::uint32_t b14, one_minus_b15;                     // b * 2^14, (1 - b) * 2^15
   BlendFixed(float b, float one_minus_b)
       : b14(static_cast<std::uint32_t>(std::lround(b * 16384.0f))),
         one_minus_b15(static_cast<std::uint32_t>(std::lround(one_minus_b * 32768.0f))) {}
 };
 
-void blend_scalar(const std::uint8_t* src, const std::uint8_t* layer, const std::uint8_t* rot, bool rot_reversed,
-                  std::uint8_t* dst, int x0, int cols, const BlendFixed& f) {
+void blend_scalar(const std::uint8_t* src, const std::uint8_t* layer, const std::uint8_t* rot,
+                  bool rot_reversed, std::uint8_t* dst, int x0, int cols, const BlendFixed& f) {
   for (int x = x0; x < cols; ++x) {
     const std::uint32_t c8[3] = {std::uint32_t{src[3 * x]} << 8, std::uint32_t{src[3 * x + 1]} << 8,
                                  std::uint32_t{src[3 * x + 2]} << 8};
-    const std::uint32_t bright = ((c8[0] * BlendFixed::kGrey0) >> 16) + ((c8[1] * BlendFixed::kGrey1) >> 16) +
+    const std::uint32_t bright = ((c8[0] * BlendFixed::kGrey0) >> 16) +
+                                 ((c8[1] * BlendFixed::kGrey1) >> 16) +
                                  ((c8[2] * BlendFixed::kGrey2) >> 16) + BlendFixed::kBrightOffset;
-    const std::uint32_t snow = (std::uint32_t{layer[x]} + (rot_reversed ? rot[cols - 1 - x] : rot[x])) << 6;
+    const std::uint32_t snow =
+        (std::uint32_t{layer[x]} + (rot_reversed ? rot[cols - 1 - x] : rot[x])) << 6;
     for (int k = 0; k < 3; ++k) {
       const std::uint32_t m = std::max(c8[k] >> 2, bright);
       const std::uint32_t v = ((c8[k] * f.b14) >> 16) + (((m << 1) * f.one_minus_b15) >> 16) + snow;
@@ -74,16 +78,18 @@ FAULTLINE_TARGET("avx2") inline __m128i mask(const std::int8_t* m) {
   return _mm_load_si128(reinterpret_cast<const __m128i*>(m));
 }
 
-FAULTLINE_TARGET("avx2") void column_zoom_avx2(const float* src, float* dst, int n_out,
-                                               const std::int32_t* base, const std::int32_t* rel0,
-                                               const std::int32_t* rel1, const float* w,
-                                               const float* one_minus_w) {
+FAULTLINE_TARGET("avx2")
+void column_zoom_avx2(const float* src, float* dst, int n_out, const std::int32_t* base,
+                      const std::int32_t* rel0, const std::int32_t* rel1, const float* w,
+                      const float* one_minus_w) {
   for (int blk = 0; blk * 8 < n_out; ++blk) {
     if (base[blk] < 0) continue;  // left to the scalar body
     const int o = 8 * blk;
     const __m256 v = _mm256_loadu_ps(src + base[blk]);
-    const __m256 a = _mm256_permutevar8x32_ps(v, _mm256_loadu_si256(reinterpret_cast<const __m256i*>(rel0 + o)));
-    const __m256 b = _mm256_permutevar8x32_ps(v, _mm256_loadu_si256(reinterpret_cast<const __m256i*>(rel1 + o)));
+    const __m256 a =
+        _mm256_permutevar8x32_ps(v, _mm256_loadu_si256(reinterpret_cast<const __m256i*>(rel0 + o)));
+    const __m256 b =
+        _mm256_permutevar8x32_ps(v, _mm256_loadu_si256(reinterpret_cast<const __m256i*>(rel1 + o)));
     const __m256 r = _mm256_add_ps(_mm256_mul_ps(_mm256_loadu_ps(one_minus_w + o), a),
                                    _mm256_mul_ps(_mm256_loadu_ps(w + o), b));
     _mm256_storeu_ps(dst + o, r);
@@ -97,10 +103,11 @@ FAULTLINE_TARGET("avx2") inline __m128i narrow(__m256i lo, __m256i hi) {
 }
 
 // The 16 BGR pixels at x split into B, G and R planes.
-FAULTLINE_TARGET("avx2") inline void load_planes(const Shuffles& m, const std::uint8_t* src, int x,
-                                                 __m128i plane[3]) {
+FAULTLINE_TARGET("avx2")
+inline void load_planes(const Shuffles& m, const std::uint8_t* src, int x, __m128i plane[3]) {
   __m128i blk[3];
-  for (int i = 0; i < 3; ++i) blk[i] = _mm_loadu_si128(reinterpret_cast<const __m128i*>(src + 3 * x + 16 * i));
+  for (int i = 0; i < 3; ++i)
+    blk[i] = _mm_loadu_si128(reinterpret_cast<const __m128i*>(src + 3 * x + 16 * i));
   for (int k = 0; k < 3; ++k) {
     plane[k] = _mm_or_si128(_mm_or_si128(_mm_shuffle_epi8(blk[0], mask(m.split[k][0])),
                                          _mm_shuffle_epi8(blk[1], mask(m.split[k][1]))),
@@ -108,18 +115,20 @@ FAULTLINE_TARGET("avx2") inline void load_planes(const Shuffles& m, const std::u
   }
 }
 
-// The rotated layer's 16 bytes for pixels x..x+15: read backwards from the end of the row when rot_reversed.
-FAULTLINE_TARGET("avx2") inline __m128i load_rotated(const std::uint8_t* rot, bool rot_reversed, int cols,
-                                                     int x) {
+// The rotated layer's 16 bytes for pixels x..x+15: read backwards from the end of the row when
+// rot_reversed.
+FAULTLINE_TARGET("avx2")
+inline __m128i load_rotated(const std::uint8_t* rot, bool rot_reversed, int cols, int x) {
   const __m128i reverse = _mm_setr_epi8(15, 14, 13, 12, 11, 10, 9, 8, 7, 6, 5, 4, 3, 2, 1, 0);
   return rot_reversed
-             ? _mm_shuffle_epi8(_mm_loadu_si128(reinterpret_cast<const __m128i*>(rot + cols - 16 - x)), reverse)
+             ? _mm_shuffle_epi8(
+                   _mm_loadu_si128(reinterpret_cast<const __m128i*>(rot + cols - 16 - x)), reverse)
              : _mm_loadu_si128(reinterpret_cast<const __m128i*>(rot + x));
 }
 
 // B, G and R planes of 16 bytes -> 16 interleaved BGR pixels at x.
-FAULTLINE_TARGET("avx2") inline void merge_planes(const Shuffles& m, const __m128i res[3], std::uint8_t* dst,
-                                                  int x) {
+FAULTLINE_TARGET("avx2")
+inline void merge_planes(const Shuffles& m, const __m128i res[3], std::uint8_t* dst, int x) {
   for (int i = 0; i < 3; ++i) {
     const __m128i v = _mm_or_si128(_mm_or_si128(_mm_shuffle_epi8(res[0], mask(m.merge[i][0])),
                                                 _mm_shuffle_epi8(res[1], mask(m.merge[i][1]))),
@@ -129,8 +138,8 @@ FAULTLINE_TARGET("avx2") inline void merge_planes(const Shuffles& m, const __m12
 }
 
 // Per plane two vectors of eight int32 in 0..255 -> 16 interleaved BGR pixels at x.
-FAULTLINE_TARGET("avx2") inline void store_planes(const Shuffles& m, const __m256i out[3][2],
-                                                  std::uint8_t* dst, int x) {
+FAULTLINE_TARGET("avx2")
+inline void store_planes(const Shuffles& m, const __m256i out[3][2], std::uint8_t* dst, int x) {
   __m128i res[3];
   for (int k = 0; k < 3; ++k) res[k] = narrow(out[k][0], out[k][1]);
   merge_planes(m, res, dst, x);
@@ -140,11 +149,11 @@ FAULTLINE_TARGET("avx2") inline __m256i set16(std::uint32_t v) {
   return _mm256_set1_epi16(static_cast<short>(static_cast<std::uint16_t>(v)));
 }
 
-// Whole blocks of 16 pixels, as blend_scalar in 16-bit lanes (every intermediate stays below 2^16); returns how many
-// pixels it wrote.
-FAULTLINE_TARGET("avx2") int blend_avx2(const std::uint8_t* src, const std::uint8_t* layer,
-                                        const std::uint8_t* rot, bool rot_reversed, std::uint8_t* dst,
-                                        int cols, const BlendFixed& f) {
+// Whole blocks of 16 pixels, as blend_scalar in 16-bit lanes (every intermediate stays below 2^16);
+// returns how many pixels it wrote.
+FAULTLINE_TARGET("avx2")
+int blend_avx2(const std::uint8_t* src, const std::uint8_t* layer, const std::uint8_t* rot,
+               bool rot_reversed, std::uint8_t* dst, int cols, const BlendFixed& f) {
   const Shuffles& m = shuffles();
   const __m256i grey0 = set16(BlendFixed::kGrey0), grey1 = set16(BlendFixed::kGrey1);
   const __m256i grey2 = set16(BlendFixed::kGrey2), offset = set16(BlendFixed::kBrightOffset);
@@ -155,17 +164,20 @@ FAULTLINE_TARGET("avx2") int blend_avx2(const std::uint8_t* src, const std::uint
     load_planes(m, src, x, plane);
     __m256i c8[3];
     for (int k = 0; k < 3; ++k) c8[k] = _mm256_slli_epi16(_mm256_cvtepu8_epi16(plane[k]), 8);
-    const __m256i bright =
-        _mm256_add_epi16(_mm256_add_epi16(_mm256_mulhi_epu16(c8[0], grey0), _mm256_mulhi_epu16(c8[1], grey1)),
-                         _mm256_add_epi16(_mm256_mulhi_epu16(c8[2], grey2), offset));
+    const __m256i bright = _mm256_add_epi16(
+        _mm256_add_epi16(_mm256_mulhi_epu16(c8[0], grey0), _mm256_mulhi_epu16(c8[1], grey1)),
+        _mm256_add_epi16(_mm256_mulhi_epu16(c8[2], grey2), offset));
     const __m128i l = _mm_loadu_si128(reinterpret_cast<const __m128i*>(layer + x));
     const __m128i r = load_rotated(rot, rot_reversed, cols, x);
-    const __m256i snow = _mm256_slli_epi16(_mm256_add_epi16(_mm256_cvtepu8_epi16(l), _mm256_cvtepu8_epi16(r)), 6);
+    const __m256i snow =
+        _mm256_slli_epi16(_mm256_add_epi16(_mm256_cvtepu8_epi16(l), _mm256_cvtepu8_epi16(r)), 6);
     __m128i res[3];
     for (int k = 0; k < 3; ++k) {
       const __m256i mx = _mm256_max_epu16(_mm256_srli_epi16(c8[k], 2), bright);
-      const __m256i v = _mm256_add_epi16(
-          _mm256_add_epi16(_mm256_mulhi_epu16(c8[k], bv), _mm256_mulhi_epu16(_mm256_slli_epi16(mx, 1), omb)), snow);
+      const __m256i v =
+          _mm256_add_epi16(_mm256_add_epi16(_mm256_mulhi_epu16(c8[k], bv),
+                                            _mm256_mulhi_epu16(_mm256_slli_epi16(mx, 1), omb)),
+                           snow);
       const __m256i o = _mm256_srli_epi16(v, 6);
       res[k] = _mm_packus_epi16(_mm256_castsi256_si128(o), _mm256_extracti128_si256(o, 1));
     }
@@ -174,20 +186,21 @@ FAULTLINE_TARGET("avx2") int blend_avx2(const std::uint8_t* src, const std::uint
   return x;
 }
 
-FAULTLINE_TARGET("avx2") void column_zoom64_avx2(const double* src, double threshold, double* dst,
-                                                 int blocks, const std::int32_t* base,
-                                                 const std::int32_t* idx0, const std::int32_t* idx1,
-                                                 const double* w) {
-  const __m256d one = _mm256_set1_pd(1.0), zero = _mm256_setzero_pd(), thr = _mm256_set1_pd(threshold);
+FAULTLINE_TARGET("avx2")
+void column_zoom64_avx2(const double* src, double threshold, double* dst, int blocks,
+                        const std::int32_t* base, const std::int32_t* idx0,
+                        const std::int32_t* idx1, const double* w) {
+  const __m256d one = _mm256_set1_pd(1.0), zero = _mm256_setzero_pd(),
+                thr = _mm256_set1_pd(threshold);
   for (int blk = 0; blk < blocks; ++blk) {
     if (base[blk] < 0) continue;  // left to the scalar body
     const int o = 4 * blk;
     // Four doubles as eight float lanes: moving lane pairs (2r, 2r + 1) moves double r.
     const __m256 v = _mm256_castpd_ps(_mm256_loadu_pd(src + base[blk]));
-    const __m256d a = _mm256_castps_pd(
-        _mm256_permutevar8x32_ps(v, _mm256_loadu_si256(reinterpret_cast<const __m256i*>(idx0 + 2 * o))));
-    const __m256d b = _mm256_castps_pd(
-        _mm256_permutevar8x32_ps(v, _mm256_loadu_si256(reinterpret_cast<const __m256i*>(idx1 + 2 * o))));
+    const __m256d a = _mm256_castps_pd(_mm256_permutevar8x32_ps(
+        v, _mm256_loadu_si256(reinterpret_cast<const __m256i*>(idx0 + 2 * o))));
+    const __m256d b = _mm256_castps_pd(_mm256_permutevar8x32_ps(
+        v, _mm256_loadu_si256(reinterpret_cast<const __m256i*>(idx1 + 2 * o))));
     const __m256d wv = _mm256_loadu_pd(w + o);
     __m256d t = _mm256_add_pd(_mm256_mul_pd(_mm256_sub_pd(one, wv), a), _mm256_mul_pd(wv, b));
     t = _mm256_andnot_pd(_mm256_cmp_pd(t, thr, _CMP_LT_OQ), t);
@@ -195,9 +208,11 @@ FAULTLINE_TARGET("avx2") void column_zoom64_avx2(const double* src, double thres
   }
 }
 
-// Whole blocks of 32 outputs, sums kept in registers across all taps; returns how many outputs it wrote.
-FAULTLINE_TARGET("avx2") std::size_t blur_quantise64_avx2(const double* const* rows, const double* weights,
-                                                          int taps, std::uint8_t* dst, std::size_t n) {
+// Whole blocks of 32 outputs, sums kept in registers across all taps; returns how many outputs it
+// wrote.
+FAULTLINE_TARGET("avx2")
+std::size_t blur_quantise64_avx2(const double* const* rows, const double* weights, int taps,
+                                 std::uint8_t* dst, std::size_t n) {
   constexpr int kVectors = 8;
   const __m256d k255 = _mm256_set1_pd(255.0);
   std::size_t j0 = 0;
@@ -207,46 +222,56 @@ FAULTLINE_TARGET("avx2") std::size_t blur_quantise64_avx2(const double* const* r
     for (int i = 0; i < taps; ++i) {
       const double* r = rows[i] + j0;
       const __m256d k = _mm256_set1_pd(weights[i]);
-      for (int v = 0; v < kVectors; ++v) s[v] = _mm256_add_pd(s[v], _mm256_mul_pd(k, _mm256_loadu_pd(r + 4 * v)));
+      for (int v = 0; v < kVectors; ++v)
+        s[v] = _mm256_add_pd(s[v], _mm256_mul_pd(k, _mm256_loadu_pd(r + 4 * v)));
     }
     __m128i q[kVectors];
     for (int v = 0; v < kVectors; ++v) {
-      q[v] = _mm256_cvttpd_epi32(
-          _mm256_round_pd(_mm256_mul_pd(s[v], k255), _MM_FROUND_TO_NEAREST_INT | _MM_FROUND_NO_EXC));
+      q[v] = _mm256_cvttpd_epi32(_mm256_round_pd(_mm256_mul_pd(s[v], k255),
+                                                 _MM_FROUND_TO_NEAREST_INT | _MM_FROUND_NO_EXC));
     }
     for (int v = 0; v < kVectors; v += 4) {
-      const __m128i w0 = _mm_packus_epi32(q[v], q[v + 1]), w1 = _mm_packus_epi32(q[v + 2], q[v + 3]);
+      const __m128i w0 = _mm_packus_epi32(q[v], q[v + 1]),
+                    w1 = _mm_packus_epi32(q[v + 2], q[v + 3]);
       _mm_storeu_si128(reinterpret_cast<__m128i*>(dst + j0 + 4 * v), _mm_packus_epi16(w0, w1));
     }
   }
   return j0;
 }
 
-// Four float32 values (the low or high half of an 8-lane vector) widened, plus the two snow terms, to bytes.
-// _mm_srli_si128 by 0, 4, 8 or 12 bytes. The intrinsic needs a compile-time constant; gcc folds the loop
-// counters below into one, clang 14 refuses to (with constant arguments the switch folds away).
+// Four float32 values (the low or high half of an 8-lane vector) widened, plus the two snow terms,
+// to bytes. _mm_srli_si128 by 0, 4, 8 or 12 bytes. The intrinsic needs a compile-time constant; gcc
+// folds the loop counters below into one, clang 14 refuses to (with constant arguments the switch
+// folds away).
 FAULTLINE_TARGET("avx2") inline __m128i bytes_right(__m128i v, int bytes) {
   switch (bytes) {
-    case 0: return v;
-    case 4: return _mm_srli_si128(v, 4);
-    case 8: return _mm_srli_si128(v, 8);
-    default: return _mm_srli_si128(v, 12);
+    case 0:
+      return v;
+    case 4:
+      return _mm_srli_si128(v, 4);
+    case 8:
+      return _mm_srli_si128(v, 8);
+    default:
+      return _mm_srli_si128(v, 12);
   }
 }
 
-FAULTLINE_TARGET("avx2,fma") inline __m128i finish4(__m128 whitened, __m256d snow, __m256d snow_rot) {
+FAULTLINE_TARGET("avx2,fma")
+inline __m128i finish4(__m128 whitened, __m256d snow, __m256d snow_rot) {
   __m256d v = _mm256_add_pd(_mm256_add_pd(_mm256_cvtps_pd(whitened), snow), snow_rot);
   v = _mm256_min_pd(_mm256_max_pd(v, _mm256_setzero_pd()), _mm256_set1_pd(1.0));
   return _mm256_cvttpd_epi32(_mm256_mul_pd(v, _mm256_set1_pd(255.0)));
 }
 
 // Whole blocks of 16 pixels; returns how many pixels it wrote.
-FAULTLINE_TARGET("avx2,fma") int blend_exact_avx2(const std::uint8_t* src, const std::uint8_t* layer,
-                                                  const std::uint8_t* rot, bool rot_reversed,
-                                                  std::uint8_t* dst, int cols, float b, float one_minus_b) {
+FAULTLINE_TARGET("avx2,fma")
+int blend_exact_avx2(const std::uint8_t* src, const std::uint8_t* layer, const std::uint8_t* rot,
+                     bool rot_reversed, std::uint8_t* dst, int cols, float b, float one_minus_b) {
   const Shuffles& m = shuffles();
-  const __m256 bv = _mm256_set1_ps(b), omb = _mm256_set1_ps(one_minus_b), k255f = _mm256_set1_ps(255.0f);
-  const __m256 w0 = _mm256_set1_ps(0.299f), w1 = _mm256_set1_ps(0.587f), w2 = _mm256_set1_ps(0.114f);
+  const __m256 bv = _mm256_set1_ps(b), omb = _mm256_set1_ps(one_minus_b),
+               k255f = _mm256_set1_ps(255.0f);
+  const __m256 w0 = _mm256_set1_ps(0.299f), w1 = _mm256_set1_ps(0.587f),
+               w2 = _mm256_set1_ps(0.114f);
   const __m256 k15 = _mm256_set1_ps(1.5f), k05 = _mm256_set1_ps(0.5f);
   const __m256d k255 = _mm256_set1_pd(255.0);
   int x = 0;
@@ -259,9 +284,11 @@ FAULTLINE_TARGET("avx2,fma") int blend_exact_avx2(const std::uint8_t* src, const
     for (int h = 0; h < 2; ++h) {
       __m256 c[3];
       for (int k = 0; k < 3; ++k) {
-        c[k] = _mm256_div_ps(_mm256_cvtepi32_ps(_mm256_cvtepu8_epi32(bytes_right(plane[k], 8 * h))), k255f);
+        c[k] = _mm256_div_ps(_mm256_cvtepi32_ps(_mm256_cvtepu8_epi32(bytes_right(plane[k], 8 * h))),
+                             k255f);
       }
-      const __m256 grey = _mm256_fmadd_ps(c[2], w2, _mm256_fmadd_ps(c[1], w1, _mm256_mul_ps(c[0], w0)));
+      const __m256 grey =
+          _mm256_fmadd_ps(c[2], w2, _mm256_fmadd_ps(c[1], w1, _mm256_mul_ps(c[0], w0)));
       const __m256 bright = _mm256_add_ps(_mm256_mul_ps(grey, k15), k05);
       __m256d snow[2], snow_rot[2];
       for (int q = 0; q < 2; ++q) {
@@ -272,7 +299,8 @@ FAULTLINE_TARGET("avx2,fma") int blend_exact_avx2(const std::uint8_t* src, const
         snow_rot[q] = _mm256_div_pd(_mm256_cvtepi32_pd(r4), k255);
       }
       for (int k = 0; k < 3; ++k) {
-        const __m256 wf = _mm256_add_ps(_mm256_mul_ps(bv, c[k]), _mm256_mul_ps(omb, _mm256_max_ps(c[k], bright)));
+        const __m256 wf =
+            _mm256_add_ps(_mm256_mul_ps(bv, c[k]), _mm256_mul_ps(omb, _mm256_max_ps(c[k], bright)));
         const __m128i lo = finish4(_mm256_castps256_ps128(wf), snow[0], snow_rot[0]);
         const __m128i hi = finish4(_mm256_extractf128_ps(wf, 1), snow[1], snow_rot[1]);
         out[k][h] = _mm256_set_m128i(hi, lo);
@@ -292,17 +320,20 @@ FAULTLINE_TARGET("avx2") inline __m128i quantise8(__m256 s) {
   return _mm_packus_epi16(words, words);
 }
 
-// Sixteen 16-bit layer sums (65535 = 1.0) -> bytes round(s / 257) (= round(255 * s / 65535)); `bias` (+128 for the
-// rounding, plus half an LSB per tap for the truncating products) is added with saturation.
+// Sixteen 16-bit layer sums (65535 = 1.0) -> bytes round(s / 257) (= round(255 * s / 65535));
+// `bias` (+128 for the rounding, plus half an LSB per tap for the truncating products) is added
+// with saturation.
 FAULTLINE_TARGET("avx2") inline __m256i quantise16(__m256i s, __m256i bias) {
   const __m256i t = _mm256_adds_epu16(s, bias);
   return _mm256_srli_epi16(_mm256_sub_epi16(t, _mm256_srli_epi16(t, 8)), 8);
 }
 
-// dst[j] = quantise16(sum over taps of mulhi(w[i], src[i][j]), saturating) for j < n (src readable up to n rounded
-// up to 16): blocks of 128 columns, then single vectors, sums in registers across all taps.
-FAULTLINE_TARGET("avx2") void blur_row_u16_avx2(const std::uint16_t* const* src, const std::uint16_t* w,
-                                                int taps, std::uint16_t bias, std::uint8_t* dst, int n) {
+// dst[j] = quantise16(sum over taps of mulhi(w[i], src[i][j]), saturating) for j < n (src readable
+// up to n rounded up to 16): blocks of 128 columns, then single vectors, sums in registers across
+// all taps.
+FAULTLINE_TARGET("avx2")
+void blur_row_u16_avx2(const std::uint16_t* const* src, const std::uint16_t* w, int taps,
+                       std::uint16_t bias, std::uint8_t* dst, int n) {
   constexpr int kVectors = 8, kBlock = 16 * kVectors;
   const __m256i biasv = _mm256_set1_epi16(static_cast<short>(bias));
   int j0 = 0;
@@ -318,8 +349,10 @@ FAULTLINE_TARGET("avx2") void blur_row_u16_avx2(const std::uint16_t* const* src,
       }
     }
     for (int v = 0; v < kVectors; v += 2) {
-      const __m256i bytes = _mm256_packus_epi16(quantise16(s[v], biasv), quantise16(s[v + 1], biasv));
-      _mm256_storeu_si256(reinterpret_cast<__m256i*>(dst + j0 + 16 * v), _mm256_permute4x64_epi64(bytes, 0xD8));
+      const __m256i bytes =
+          _mm256_packus_epi16(quantise16(s[v], biasv), quantise16(s[v + 1], biasv));
+      _mm256_storeu_si256(reinterpret_cast<__m256i*>(dst + j0 + 16 * v),
+                          _mm256_permute4x64_epi64(bytes, 0xD8));
     }
   }
   for (; j0 < n; j0 += 16) {
@@ -329,7 +362,8 @@ FAULTLINE_TARGET("avx2") void blur_row_u16_avx2(const std::uint16_t* const* src,
       s = _mm256_adds_epu16(s, _mm256_mulhi_epu16(_mm256_set1_epi16(static_cast<short>(w[i])), x));
     }
     const __m256i q = quantise16(s, biasv);
-    const __m128i bytes = _mm_packus_epi16(_mm256_castsi256_si128(q), _mm256_extracti128_si256(q, 1));
+    const __m128i bytes =
+        _mm_packus_epi16(_mm256_castsi256_si128(q), _mm256_extracti128_si256(q, 1));
     if (j0 + 16 <= n) {
       _mm_storeu_si128(reinterpret_cast<__m128i*>(dst + j0), bytes);
     } else {
@@ -341,16 +375,19 @@ FAULTLINE_TARGET("avx2") void blur_row_u16_avx2(const std::uint16_t* const* src,
 }
 
 // lerp_threshold_u16 in whole blocks of 16; returns how many values it wrote.
-FAULTLINE_TARGET("avx2") int lerp_threshold_u16_avx2(const float* a, const float* b, float w, float threshold,
-                                                     std::uint16_t* dst, int n) {
-  const __m256 w0 = _mm256_set1_ps(1.0f - w), w1 = _mm256_set1_ps(w), thr = _mm256_set1_ps(threshold);
+FAULTLINE_TARGET("avx2")
+int lerp_threshold_u16_avx2(const float* a, const float* b, float w, float threshold,
+                            std::uint16_t* dst, int n) {
+  const __m256 w0 = _mm256_set1_ps(1.0f - w), w1 = _mm256_set1_ps(w),
+               thr = _mm256_set1_ps(threshold);
   const __m256 zero = _mm256_setzero_ps(), one = _mm256_set1_ps(1.0f), k = _mm256_set1_ps(65535.0f);
   int x = 0;
   for (; x + 16 <= n; x += 16) {
     __m256i q[2];
     for (int h = 0; h < 2; ++h) {
       const int o = x + 8 * h;
-      __m256 v = _mm256_add_ps(_mm256_mul_ps(w0, _mm256_loadu_ps(a + o)), _mm256_mul_ps(w1, _mm256_loadu_ps(b + o)));
+      __m256 v = _mm256_add_ps(_mm256_mul_ps(w0, _mm256_loadu_ps(a + o)),
+                               _mm256_mul_ps(w1, _mm256_loadu_ps(b + o)));
       v = _mm256_andnot_ps(_mm256_cmp_ps(v, thr, _CMP_LT_OQ), v);
       q[h] = _mm256_cvtps_epi32(_mm256_mul_ps(_mm256_min_ps(_mm256_max_ps(v, zero), one), k));
     }
@@ -362,11 +399,12 @@ FAULTLINE_TARGET("avx2") int lerp_threshold_u16_avx2(const float* a, const float
 
 #endif  // FAULTLINE_X86_SIMD
 
-// The exact blend per pixel. The FMA clone turns std::fma into one instruction (same result as the library call);
-// contraction stays off, so nothing else is fused.
-FAULTLINE_CLONES("fma") void blend_exact_scalar(const std::uint8_t* src, const std::uint8_t* l,
-                                                const std::uint8_t* rot, bool rot_reversed, std::uint8_t* dst,
-                                                int x0, int cols, float b, float one_minus_b) {
+// The exact blend per pixel. The FMA clone turns std::fma into one instruction (same result as the
+// library call); contraction stays off, so nothing else is fused.
+FAULTLINE_CLONES("fma")
+void blend_exact_scalar(const std::uint8_t* src, const std::uint8_t* l, const std::uint8_t* rot,
+                        bool rot_reversed, std::uint8_t* dst, int x0, int cols, float b,
+                        float one_minus_b) {
   for (int x = x0; x < cols; ++x) {
     const float c0 = static_cast<float>(src[3 * x]) / 255.0f;
     const float c1 = static_cast<float>(src[3 * x + 1]) / 255.0f;
@@ -396,11 +434,12 @@ inline std::uint8_t quantise_u16(std::uint32_t s, std::uint32_t bias) {
   return static_cast<std::uint8_t>((t - (t >> 8)) >> 8);
 }
 
-void blur_row_u16_scalar(const std::uint16_t* const* src, const std::uint16_t* w, int taps, std::uint16_t bias,
-                         std::uint8_t* dst, int n) {
+void blur_row_u16_scalar(const std::uint16_t* const* src, const std::uint16_t* w, int taps,
+                         std::uint16_t bias, std::uint8_t* dst, int n) {
   for (int j = 0; j < n; ++j) {
     std::uint32_t s = 0;
-    for (int i = 0; i < taps; ++i) s = std::min<std::uint32_t>(65535, s + ((std::uint32_t{w[i]} * src[i][j]) >> 16));
+    for (int i = 0; i < taps; ++i)
+      s = std::min<std::uint32_t>(65535, s + ((std::uint32_t{w[i]} * src[i][j]) >> 16));
     dst[j] = quantise_u16(s, bias);
   }
 }
@@ -414,7 +453,8 @@ ZoomAxis zoom_axis(int n_in, int n_out) {
   m.i1.resize(n);
   m.w.resize(n);
   m.one_minus_w.resize(n);
-  const double ratio = n_out > 1 ? static_cast<double>(n_in - 1) / static_cast<double>(n_out - 1) : 0.0;
+  const double ratio =
+      n_out > 1 ? static_cast<double>(n_in - 1) / static_cast<double>(n_out - 1) : 0.0;
   for (std::size_t o = 0; o < n; ++o) {
     const double p = static_cast<double>(o) * ratio;
     const int i = std::clamp(static_cast<int>(std::floor(p)), 0, n_in - 1);
@@ -426,7 +466,8 @@ ZoomAxis zoom_axis(int n_in, int n_out) {
   return m;
 }
 
-ColumnZoom::ColumnZoom(int n_in, int n_out) : n_in_(n_in), n_out_(n_out), map_(zoom_axis(n_in, n_out)) {
+ColumnZoom::ColumnZoom(int n_in, int n_out)
+    : n_in_(n_in), n_out_(n_out), map_(zoom_axis(n_in, n_out)) {
   const int blocks = n_out / 8;  // whole blocks only; the tail is scalar
   base_.assign(static_cast<std::size_t>(blocks), -1);
   rel0_.assign(static_cast<std::size_t>(n_out), 0);
@@ -465,8 +506,8 @@ void ColumnZoom::run(const float* src, float* dst, bool allow_simd) const {
   }
 }
 
-void lerp_threshold_u16(const float* a, const float* b, float w, float threshold, std::uint16_t* dst, int n,
-                        bool allow_simd) {
+void lerp_threshold_u16(const float* a, const float* b, float w, float threshold,
+                        std::uint16_t* dst, int n, bool allow_simd) {
   int x = 0;
 #if FAULTLINE_X86_SIMD
   if (use_avx2(allow_simd)) x = lerp_threshold_u16_avx2(a, b, w, threshold, dst, n);
@@ -477,21 +518,25 @@ void lerp_threshold_u16(const float* a, const float* b, float w, float threshold
   for (; x < n; ++x) {
     float v = w0 * a[x] + w * b[x];
     v = v < threshold ? 0.0f : v;
-    dst[x] = static_cast<std::uint16_t>(std::nearbyint(std::min(std::max(v, 0.0f), 1.0f) * 65535.0f));
+    dst[x] =
+        static_cast<std::uint16_t>(std::nearbyint(std::min(std::max(v, 0.0f), 1.0f) * 65535.0f));
   }
 }
 
-// Element-wise float32 loop: vectorising it does not change any value, so the clones need no scalar twin.
-// Adding and removing 1.5 * 2^23 rounds half to even in the default rounding mode (nearbyint without a libm call).
-FAULTLINE_CLONES("avx2") void quantise_row(const float* __restrict src, std::uint8_t* __restrict dst, int n) {
+// Element-wise float32 loop: vectorising it does not change any value, so the clones need no scalar
+// twin. Adding and removing 1.5 * 2^23 rounds half to even in the default rounding mode (nearbyint
+// without a libm call).
+FAULTLINE_CLONES("avx2")
+void quantise_row(const float* __restrict src, std::uint8_t* __restrict dst, int n) {
   for (int x = 0; x < n; ++x) dst[x] = quantise_value(src[x]);
 }
 
-void blur_quantise(const LayerRowMaker& make_row, int lh, int lw, const int* dx, const int* dy, const float* w,
-                   int taps, std::uint8_t* dst, std::size_t dst_stride, int rows, int cols, bool allow_simd) {
+void blur_quantise(const LayerRowMaker& make_row, int lh, int lw, const int* dx, const int* dy,
+                   const float* w, int taps, std::uint8_t* dst, std::size_t dst_stride, int rows,
+                   int cols, bool allow_simd) {
   const bool simd = use_avx2(allow_simd);
-  // Taps whose 16-bit weight is 0 add exactly 0 (the Gaussian tails of the sigma-4 kernels: 6 of 25), so they are
-  // dropped; the rounding bias still counts every tap.
+  // Taps whose 16-bit weight is 0 add exactly 0 (the Gaussian tails of the sigma-4 kernels: 6 of
+  // 25), so they are dropped; the rounding bias still counts every tap.
   int pad = 0, dy_min = 0, dy_max = 0;  // tap 0 is (0, 0)
   std::vector<std::uint16_t> w16;
   std::vector<int> tap_dx, tap_dy;
@@ -505,9 +550,9 @@ void blur_quantise(const LayerRowMaker& make_row, int lh, int lw, const int* dx,
   const auto bias = static_cast<std::uint16_t>(128 + taps / 2);
   taps = static_cast<int>(w16.size());
   dx = tap_dx.data(), dy = tap_dy.data();
-  // Ring slot r & (ring_rows - 1) holds layer row r, edge-padded by `pad`, and 16 spare values so the last output
-  // vector's lanes past cols read inside the row. The ring (~110 KB at 1600 columns) stays in L2, where the whole
-  // float layer (~6 MB) did not.
+  // Ring slot r & (ring_rows - 1) holds layer row r, edge-padded by `pad`, and 16 spare values so
+  // the last output vector's lanes past cols read inside the row. The ring (~110 KB at 1600
+  // columns) stays in L2, where the whole float layer (~6 MB) did not.
   int ring_rows = 1;
   while (ring_rows < dy_max - dy_min + 1) ring_rows *= 2;
   const int stride = lw + 2 * pad, ring_stride = (stride + 16 + 15) / 16 * 16;
@@ -525,7 +570,8 @@ void blur_quantise(const LayerRowMaker& make_row, int lh, int lw, const int* dx,
     }
     for (int i = 0; i < taps; ++i) {
       const int r = std::clamp(y - dy[i], 0, lh - 1);
-      src[static_cast<std::size_t>(i)] = ring.data() + slot(r) * static_cast<std::size_t>(ring_stride) + (pad - dx[i]);
+      src[static_cast<std::size_t>(i)] =
+          ring.data() + slot(r) * static_cast<std::size_t>(ring_stride) + (pad - dx[i]);
     }
     std::uint8_t* d = dst + static_cast<std::size_t>(y) * dst_stride;
     if (!simd) {
@@ -538,8 +584,9 @@ void blur_quantise(const LayerRowMaker& make_row, int lh, int lw, const int* dx,
   }
 }
 
-void blend_fast_row(const std::uint8_t* src, const std::uint8_t* layer, const std::uint8_t* rot, bool rot_reversed,
-                    std::uint8_t* dst, int cols, float b, float one_minus_b, bool allow_simd) {
+void blend_fast_row(const std::uint8_t* src, const std::uint8_t* layer, const std::uint8_t* rot,
+                    bool rot_reversed, std::uint8_t* dst, int cols, float b, float one_minus_b,
+                    bool allow_simd) {
   const BlendFixed f(b, one_minus_b);
   int x = 0;
 #if FAULTLINE_X86_SIMD
@@ -550,8 +597,9 @@ void blend_fast_row(const std::uint8_t* src, const std::uint8_t* layer, const st
   blend_scalar(src, layer, rot, rot_reversed, dst, x, cols, f);
 }
 
-FAULTLINE_CLONES("avx2") void lerp_row64(const double* __restrict a, const double* __restrict b, double w,
-                                         double* __restrict dst, int n) {
+FAULTLINE_CLONES("avx2")
+void lerp_row64(const double* __restrict a, const double* __restrict b, double w,
+                double* __restrict dst, int n) {
   const double w0 = 1.0 - w;
   for (int x = 0; x < n; ++x) dst[x] = w0 * a[x] + w * b[x];
 }
@@ -561,7 +609,8 @@ ColumnZoom64::ColumnZoom64(int n_in, int n_out) : n_in_(n_in), n_out_(n_out) {
   i0_.resize(n);
   i1_.resize(n);
   w_.resize(n);
-  const double ratio = n_out > 1 ? static_cast<double>(n_in - 1) / static_cast<double>(n_out - 1) : 0.0;
+  const double ratio =
+      n_out > 1 ? static_cast<double>(n_in - 1) / static_cast<double>(n_out - 1) : 0.0;
   for (std::size_t o = 0; o < n; ++o) {
     const double p = static_cast<double>(o) * ratio;
     const int i = std::clamp(static_cast<int>(std::floor(p)), 0, n_in - 1);
@@ -598,7 +647,8 @@ void ColumnZoom64::run(const double* src, double threshold, double* dst, bool al
   const int blocks = static_cast<int>(base_.size());
   if (use_avx2(allow_simd)) {
 #if FAULTLINE_X86_SIMD
-    column_zoom64_avx2(src, threshold, dst, blocks, base_.data(), idx0_.data(), idx1_.data(), w_.data());
+    column_zoom64_avx2(src, threshold, dst, blocks, base_.data(), idx0_.data(), idx1_.data(),
+                       w_.data());
 #endif
     for (int blk = 0; blk < blocks; ++blk) {
       if (base_[static_cast<std::size_t>(blk)] < 0) scalar(4 * blk, 4 * blk + 4);
@@ -609,8 +659,8 @@ void ColumnZoom64::run(const double* src, double threshold, double* dst, bool al
   }
 }
 
-void blur_quantise64(const double* const* rows, const double* weights, int taps, std::uint8_t* dst, std::size_t n,
-                     bool allow_simd) {
+void blur_quantise64(const double* const* rows, const double* weights, int taps, std::uint8_t* dst,
+                     std::size_t n, bool allow_simd) {
   std::size_t j = 0;
 #if FAULTLINE_X86_SIMD
   if (use_avx2(allow_simd)) j = blur_quantise64_avx2(rows, weights, taps, dst, n);
@@ -624,11 +674,13 @@ void blur_quantise64(const double* const* rows, const double* weights, int taps,
   }
 }
 
-void blend_exact_row(const std::uint8_t* src, const std::uint8_t* layer, const std::uint8_t* rot, bool rot_reversed,
-                     std::uint8_t* dst, int cols, float b, float one_minus_b, bool allow_simd) {
+void blend_exact_row(const std::uint8_t* src, const std::uint8_t* layer, const std::uint8_t* rot,
+                     bool rot_reversed, std::uint8_t* dst, int cols, float b, float one_minus_b,
+                     bool allow_simd) {
   int x = 0;
 #if FAULTLINE_X86_SIMD
-  if (allow_simd && common::cpu_has_avx2_fma()) x = blend_exact_avx2(src, layer, rot, rot_reversed, dst, cols, b, one_minus_b);
+  if (allow_simd && common::cpu_has_avx2_fma())
+    x = blend_exact_avx2(src, layer, rot, rot_reversed, dst, cols, b, one_minus_b);
 #else
   (void)allow_simd;
 #endif

@@ -1,5 +1,5 @@
-// Lens soiling: blobs of Gaussian lobes on a 1/8-resolution grid, upsampled once; the scene behind them blurred and
-// tinted at 1/8 resolution per frame.
+// Lens soiling: blobs of Gaussian lobes on a 1/8-resolution grid, upsampled once; the scene behind
+// them blurred and tinted at 1/8 resolution per frame.
 #include "corruption/soiling.hpp"
 
 #include <algorithm>
@@ -12,7 +12,8 @@
 namespace faultline::corruption {
 namespace {
 
-constexpr int kGridDivisor = 8;  // the dirt is far out of focus: 1/8 resolution carries all its detail
+constexpr int kGridDivisor =
+    8;  // the dirt is far out of focus: 1/8 resolution carries all its detail
 // Reflectance of dried mud in B, G, R: the light the dirt absorbs leaves it brown.
 constexpr double kDirtTint[3] = {0.22, 0.30, 0.38};
 
@@ -26,12 +27,14 @@ cv::Size grid_size(cv::Size size) {
           std::max(1, (size.height + kGridDivisor - 1) / kGridDivisor)};
 }
 
-// Opacity (0..1) on the grid: each blob is the union of 3-5 offset Gaussian lobes, roughened by a grid noise and
-// cut with a soft threshold, at its own opacity; overlapping blobs take the larger opacity.
+// Opacity (0..1) on the grid: each blob is the union of 3-5 offset Gaussian lobes, roughened by a
+// grid noise and cut with a soft threshold, at its own opacity; overlapping blobs take the larger
+// opacity.
 cv::Mat draw_blobs(const SoilingParams& p, std::uint64_t seed, cv::Size size) {
   rng::FastRng rng(seed);
   const cv::Size g = grid_size(size);
-  const double sx = static_cast<double>(size.width) / g.width, sy = static_cast<double>(size.height) / g.height;
+  const double sx = static_cast<double>(size.width) / g.width,
+               sy = static_cast<double>(size.height) / g.height;
   cv::Mat noise(g, CV_64F);
   for (int y = 0; y < g.height; ++y) {
     for (int x = 0; x < g.width; ++x) noise.at<double>(y, x) = rng.uniform(-0.12, 0.12);
@@ -50,7 +53,8 @@ cv::Mat draw_blobs(const SoilingParams& p, std::uint64_t seed, cv::Size size) {
       ly[k] = cy + 0.45 * r * rng.uniform(-1, 1);
       ls[k] = std::max(1e-3, r * rng.uniform(0.45, 0.75));
     }
-    // Only cells within reach of a lobe: beyond 2.1 sd a lobe stays under the threshold whatever the noise.
+    // Only cells within reach of a lobe: beyond 2.1 sd a lobe stays under the threshold whatever
+    // the noise.
     const double reach = 0.45 * r + 2.1 * 0.75 * r;
     const int gx0 = std::max(0, static_cast<int>(std::floor((cx - reach) / sx)));
     const int gx1 = std::min(g.width, static_cast<int>(std::ceil((cx + reach) / sx)) + 1);
@@ -85,7 +89,8 @@ SoilingParams soiling_params(int severity) {
   return kTable[std::clamp(severity, 1, 5) - 1];
 }
 
-SoilingModel::SoilingModel(int severity, std::uint64_t seed, cv::Size size) : params_(soiling_params(severity)) {
+SoilingModel::SoilingModel(int severity, std::uint64_t seed, cv::Size size)
+    : params_(soiling_params(severity)) {
   cv::Mat grid8;
   draw_blobs(params_, seed, size).convertTo(grid8, CV_8U, 255.0);
   cv::resize(grid8, alpha_, size, 0, 0, cv::INTER_LINEAR);
@@ -108,12 +113,16 @@ SoilingModel::SoilingModel(int severity, std::uint64_t seed, cv::Size size) : pa
 cv::Mat SoilingModel::apply(const cv::Mat& bgr) const {
   cv::Mat out = bgr.clone();
   if (box_.empty()) return out;
-  // What the dirt passes on: the scene scattered (blurred) and partly absorbed (tinted), at 1/8 resolution. Three
-  // pyramid steps give the grid's size (ceil(n / 8)) with the Gaussian blur built in.
+  // What the dirt passes on: the scene scattered (blurred) and partly absorbed (tinted), at 1/8
+  // resolution. Three pyramid steps give the grid's size (ceil(n / 8)) with the Gaussian blur built
+  // in.
   cv::Mat small = bgr;
-  for (int i = 0; i < 3; ++i) cv::pyrDown(small, small, cv::Size((small.cols + 1) / 2, (small.rows + 1) / 2));
+  for (int i = 0; i < 3; ++i)
+    cv::pyrDown(small, small, cv::Size((small.cols + 1) / 2, (small.rows + 1) / 2));
   const double t = params_.transmission;
-  cv::multiply(small, cv::Scalar(t + (1 - t) * kDirtTint[0], t + (1 - t) * kDirtTint[1], t + (1 - t) * kDirtTint[2]),
+  cv::multiply(small,
+               cv::Scalar(t + (1 - t) * kDirtTint[0], t + (1 - t) * kDirtTint[1],
+                          t + (1 - t) * kDirtTint[2]),
                small);
   GridUpsampler up(small.size(), bgr.size());
   std::vector<uchar> behind(static_cast<std::size_t>(3 * bgr.cols));
@@ -127,7 +136,8 @@ cv::Mat SoilingModel::apply(const cv::Mat& bgr) const {
       const unsigned w = a[x];
       for (int c = 0; c < 3; ++c) {
         const int i = 3 * x + c;
-        o[i] = static_cast<uchar>((s[i] * (255u - w) + behind[static_cast<std::size_t>(i)] * w + 127u) / 255u);
+        o[i] = static_cast<uchar>(
+            (s[i] * (255u - w) + behind[static_cast<std::size_t>(i)] * w + 127u) / 255u);
       }
     }
   }

@@ -2,7 +2,6 @@
 #include "corruption/spatter.hpp"
 
 #include <algorithm>
-
 #include <opencv2/imgproc.hpp>
 
 #include "corruption/ndimage.hpp"
@@ -11,7 +10,8 @@ namespace faultline::corruption {
 
 namespace {
 
-// The water tint per pixel (float32, before the colour): the emboss-filtered edge distance times the liquid.
+// The water tint per pixel (float32, before the colour): the emboss-filtered edge distance times
+// the liquid.
 cv::Mat water_strength(const cv::Mat& liquid, float& max_value) {
   cv::Mat liquid8(liquid.size(), CV_8U);
   for (int y = 0; y < liquid.rows; ++y) {
@@ -72,7 +72,8 @@ cv::Mat water_blend(const cv::Mat& bgr, const cv::Mat& liquid, const SpatterPara
   return out;
 }
 
-cv::Mat mud_blend(const cv::Mat& bgr, const cv::Mat& liquid, const SpatterParams& p, bool exact_blur) {
+cv::Mat mud_blend(const cv::Mat& bgr, const cv::Mat& liquid, const SpatterParams& p,
+                  bool exact_blur) {
   cv::Mat mask(liquid.size(), CV_32F);
   for (int y = 0; y < liquid.rows; ++y) {
     const double* s = liquid.ptr<double>(y);

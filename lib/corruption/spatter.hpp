@@ -1,10 +1,11 @@
-// Spatter (imagecorruptions 1.1.2 `spatter`): a Gaussian-smoothed normal field thresholded into liquid.
-// Severities 1-3: water, whose edges (Canny, distance transform, histogram equalisation, an emboss kernel) tint the
-// image pale turquoise additively. Severities 4-5: mud, a blurred mask (kept where >= 0.8) that replaces the image
-// by brown. The reference's colours are applied to the BGR array as if it were RGB (its quirk, kept: the water is
-// (175, 238, 238) and the mud (63, 42, 20) in B, G, R order).
-// Where the water branch finds no liquid at all, the reference divides 0 by 0 and returns a black frame; here the
-// frame is returned unchanged instead (a defined behaviour for tiny or constant inputs).
+// Spatter (imagecorruptions 1.1.2 `spatter`): a Gaussian-smoothed normal field thresholded into
+// liquid. Severities 1-3: water, whose edges (Canny, distance transform, histogram equalisation, an
+// emboss kernel) tint the image pale turquoise additively. Severities 4-5: mud, a blurred mask
+// (kept where >= 0.8) that replaces the image by brown. The reference's colours are applied to the
+// BGR array as if it were RGB (its quirk, kept: the water is (175, 238, 238) and the mud (63, 42,
+// 20) in B, G, R order). Where the water branch finds no liquid at all, the reference divides 0 by
+// 0 and returns a black frame; here the frame is returned unchanged instead (a defined behaviour
+// for tiny or constant inputs).
 #pragma once
 
 #include <opencv2/core.hpp>
@@ -21,17 +22,20 @@ struct SpatterParams {
   double intensity;   // water: scale of the tint; mud: sigma of the mask blur
   bool mud;
 };
-// Severity 1..5 -> (0.65, 0.3, 4, 0.69, 0.6, water), (0.65, 0.3, 3, 0.68, 0.6, water), (0.65, 0.3, 2, 0.68, 0.5,
-// water), (0.65, 0.3, 1, 0.65, 1.5, mud), (0.67, 0.4, 1, 0.65, 1.5, mud).
+// Severity 1..5 -> (0.65, 0.3, 4, 0.69, 0.6, water), (0.65, 0.3, 3, 0.68, 0.6, water), (0.65, 0.3,
+// 2, 0.68, 0.5, water), (0.65, 0.3, 1, 0.65, 1.5, mud), (0.67, 0.4, 1, 0.65, 1.5, mud).
 SpatterParams spatter_params(int severity);
 
-// numpy mode: H x W legacy normals, skimage/SciPy smoothing in float64; the OpenCV steps as the reference calls them.
+// numpy mode: H x W legacy normals, skimage/SciPy smoothing in float64; the OpenCV steps as the
+// reference calls them.
 cv::Mat spatter_numpy(const cv::Mat& bgr, int severity, rng::NumpyRandomState& rng);
 
-// fast mode: FastRng normals and OpenCV's float32 Gaussian for the smoothing; the rest is numpy mode's code.
+// fast mode: FastRng normals and OpenCV's float32 Gaussian for the smoothing; the rest is numpy
+// mode's code.
 cv::Mat spatter_fast(const cv::Mat& bgr, int severity, rng::FastRng& rng);
 
-// The stages after the smoothing, given the smoothed liquid field (CV_64F, H x W): shared by both modes.
+// The stages after the smoothing, given the smoothed liquid field (CV_64F, H x W): shared by both
+// modes.
 cv::Mat spatter_apply(const cv::Mat& bgr, const cv::Mat& liquid, int severity, bool exact_blur);
 
 }  // namespace faultline::corruption

@@ -1,6 +1,8 @@
-// transport_corruption: link JPEG (libjpeg with restart markers), seeded byte damage, TurboJPEG decode.
+// transport_corruption: link JPEG (libjpeg with restart markers), seeded byte damage, TurboJPEG
+// decode.
 #include "corruption/transport_corruption.hpp"
 
+#include <jpeglib.h>
 #include <turbojpeg.h>
 
 #include <algorithm>
@@ -8,8 +10,6 @@
 #include <cstdio>
 #include <cstdlib>
 #include <memory>
-
-#include <jpeglib.h>
 
 namespace faultline::corruption {
 namespace {
@@ -28,7 +28,8 @@ struct ErrorManager {
 void on_message(j_common_ptr /*cinfo*/) {}  // libjpeg would print to stderr
 
 // C-style on purpose: nothing with a destructor lives between setjmp and a longjmp out of libjpeg.
-bool encode_c(const cv::Mat& bgr, int quality, unsigned char** buf, unsigned long* size, char* message) {
+bool encode_c(const cv::Mat& bgr, int quality, unsigned char** buf, unsigned long* size,
+              char* message) {
   jpeg_compress_struct cinfo;
   ErrorManager err;
   cinfo.err = jpeg_std_error(&err.pub);
@@ -51,7 +52,8 @@ bool encode_c(const cv::Mat& bgr, int quality, unsigned char** buf, unsigned lon
   cinfo.restart_in_rows = 1;
   jpeg_start_compress(&cinfo, TRUE);
   while (cinfo.next_scanline < cinfo.image_height) {
-    JSAMPROW row = const_cast<JSAMPROW>(bgr.ptr<unsigned char>(static_cast<int>(cinfo.next_scanline)));
+    JSAMPROW row =
+        const_cast<JSAMPROW>(bgr.ptr<unsigned char>(static_cast<int>(cinfo.next_scanline)));
     jpeg_write_scanlines(&cinfo, &row, 1);
   }
   jpeg_finish_compress(&cinfo);
@@ -68,7 +70,8 @@ bool find_scan(const std::vector<std::uint8_t>& j, std::size_t& begin, std::size
     const std::size_t len = (static_cast<std::size_t>(j[pos + 2]) << 8) | j[pos + 3];
     if (marker == 0xDA) {
       begin = pos + 2 + len;
-      end = j.size() >= 2 && j[j.size() - 2] == 0xFF && j[j.size() - 1] == 0xD9 ? j.size() - 2 : j.size();
+      end = j.size() >= 2 && j[j.size() - 2] == 0xFF && j[j.size() - 1] == 0xD9 ? j.size() - 2
+                                                                                : j.size();
       return begin <= end;
     }
     pos += 2 + len;
@@ -102,8 +105,11 @@ Result<std::vector<std::uint8_t>> encode_link_jpeg(const cv::Mat& bgr, int quali
   unsigned long size = 0;
   char message[JMSG_LENGTH_MAX] = {0};
   const bool ok = encode_c(bgr, quality, &buf, &size, message);
-  std::unique_ptr<unsigned char, decltype(&std::free)> owned(buf, &std::free);  // jpeg_mem_dest uses malloc
-  if (!ok) return Status(StatusCode::kInternal, std::string("transport_corruption: libjpeg encode failed: ") + message);
+  std::unique_ptr<unsigned char, decltype(&std::free)> owned(
+      buf, &std::free);  // jpeg_mem_dest uses malloc
+  if (!ok)
+    return Status(StatusCode::kInternal,
+                  std::string("transport_corruption: libjpeg encode failed: ") + message);
   return std::vector<std::uint8_t>(buf, buf + size);
 }
 
@@ -116,7 +122,8 @@ TransportDamage damage_jpeg(std::vector<std::uint8_t>& jpeg, const TransportPara
     const std::size_t i = pick(rng, d.scan_begin, d.scan_end);
     const auto bit = static_cast<std::uint8_t>(1u << pick(rng, 0, 8));
     const auto flipped = static_cast<std::uint8_t>(jpeg[i] ^ bit);
-    if (!flippable(jpeg, i, d.scan_begin) || flipped == 0xFF) continue;  // would touch a marker: this error misses
+    if (!flippable(jpeg, i, d.scan_begin) || flipped == 0xFF)
+      continue;  // would touch a marker: this error misses
     jpeg[i] = flipped;
     d.flipped_bytes.push_back(i);
   }
@@ -129,14 +136,17 @@ TransportDamage damage_jpeg(std::vector<std::uint8_t>& jpeg, const TransportPara
     at = std::min(at, end - len);
     if (at > d.scan_begin && jpeg[at - 1] == 0xFF) ++at;  // keep a marker's two bytes together
     if (at + len > end) continue;
-    jpeg.erase(jpeg.begin() + static_cast<std::ptrdiff_t>(at), jpeg.begin() + static_cast<std::ptrdiff_t>(at + len));
+    jpeg.erase(jpeg.begin() + static_cast<std::ptrdiff_t>(at),
+               jpeg.begin() + static_cast<std::ptrdiff_t>(at + len));
     end -= len;
     d.lost_bytes += len;
   }
   if (p.truncate_from < 1.0) {
     const std::size_t scan = end - d.scan_begin;
     const double u = p.truncate_from + (p.truncate_to - p.truncate_from) * rng.random_sample();
-    const std::size_t cut = d.scan_begin + std::max<std::size_t>(1, static_cast<std::size_t>(u * static_cast<double>(scan)));
+    const std::size_t cut =
+        d.scan_begin +
+        std::max<std::size_t>(1, static_cast<std::size_t>(u * static_cast<double>(scan)));
     if (cut < jpeg.size()) {
       jpeg.resize(cut);  // the tail (and the EOI) never arrived
       d.truncated_at = cut;
@@ -145,8 +155,10 @@ TransportDamage damage_jpeg(std::vector<std::uint8_t>& jpeg, const TransportPara
   return d;
 }
 
-template TransportDamage damage_jpeg(std::vector<std::uint8_t>&, const TransportParams&, rng::NumpyRandomState&);
-template TransportDamage damage_jpeg(std::vector<std::uint8_t>&, const TransportParams&, rng::FastRng&);
+template TransportDamage damage_jpeg(std::vector<std::uint8_t>&, const TransportParams&,
+                                     rng::NumpyRandomState&);
+template TransportDamage damage_jpeg(std::vector<std::uint8_t>&, const TransportParams&,
+                                     rng::FastRng&);
 
 Status decode_received(const std::vector<std::uint8_t>& jpeg, cv::Mat& out) {
   struct Closer {
@@ -156,10 +168,12 @@ Status decode_received(const std::vector<std::uint8_t>& jpeg, cv::Mat& out) {
   };
   thread_local std::unique_ptr<void, Closer> dec(tjInitDecompress());
   if (!dec) return {StatusCode::kInternal, "transport_corruption: TurboJPEG initialisation failed"};
-  const int rc = tjDecompress2(dec.get(), jpeg.data(), static_cast<unsigned long>(jpeg.size()), out.data, out.cols,
-                               static_cast<int>(out.step[0]), out.rows, TJPF_BGR, 0);
+  const int rc =
+      tjDecompress2(dec.get(), jpeg.data(), static_cast<unsigned long>(jpeg.size()), out.data,
+                    out.cols, static_cast<int>(out.step[0]), out.rows, TJPF_BGR, 0);
   if (rc != 0 && tjGetErrorCode(dec.get()) != TJERR_WARNING) {
-    return {StatusCode::kCorruptData, std::string("transport_corruption: decode failed: ") + tjGetErrorStr2(dec.get())};
+    return {StatusCode::kCorruptData,
+            std::string("transport_corruption: decode failed: ") + tjGetErrorStr2(dec.get())};
   }
   return Status::ok();
 }

@@ -18,8 +18,9 @@ double smoothstep(double lo, double hi, double v) {
   return t * t * (3.0 - 2.0 * t);
 }
 
-// One drop: each pixel inside it shows the blurred copy at the point opposite the centre, kMagnify times as far
-// (an inverted, wider view), darkened towards the rim and blended into the frame over the outer tenth of the radius.
+// One drop: each pixel inside it shows the blurred copy at the point opposite the centre, kMagnify
+// times as far (an inverted, wider view), darkened towards the rim and blended into the frame over
+// the outer tenth of the radius.
 void render_drop(const Drop& d, const cv::Mat& low, double sx, double sy, cv::Mat& out) {
   const int x0 = std::max(0, static_cast<int>(std::floor(d.x - d.r)));
   const int x1 = std::min(out.cols, static_cast<int>(std::ceil(d.x + d.r)) + 1);
@@ -90,7 +91,8 @@ void WaterDropsModel::set_drops(std::vector<Drop> drops) {
   merge();
 }
 
-// Pairs that touch become one drop of their summed area at their area-weighted centre, until none touch.
+// Pairs that touch become one drop of their summed area at their area-weighted centre, until none
+// touch.
 void WaterDropsModel::merge() {
   for (bool merged = true; merged;) {
     merged = false;
@@ -114,15 +116,18 @@ void WaterDropsModel::merge() {
 void WaterDropsModel::step(double dt_s) {
   const double dt = std::isfinite(dt_s) ? std::clamp(dt_s, 0.0, 1.0) : 0.0;
   if (dt == 0.0) return;
-  // Drops stick below a radius (surface tension holds them) and slide slowly above it, faster the heavier.
+  // Drops stick below a radius (surface tension holds them) and slide slowly above it, faster the
+  // heavier.
   const double stick = size_.height * params_.max_radius;
   for (Drop& d : drops_) {
     const double slide = std::max(0.0, d.r - stick);
-    const double vy = 0.6 * slide;  // px/s: a drop twice the sticking radius creeps down ~0.6 of its radius/s
+    const double vy =
+        0.6 * slide;  // px/s: a drop twice the sticking radius creeps down ~0.6 of its radius/s
     d.y += vy * dt;
     d.x += d.vx * vy * dt;
   }
-  drops_.erase(std::remove_if(drops_.begin(), drops_.end(), [&](const Drop& d) { return d.y - d.r > size_.height; }),
+  drops_.erase(std::remove_if(drops_.begin(), drops_.end(),
+                              [&](const Drop& d) { return d.y - d.r > size_.height; }),
                drops_.end());
   const std::int64_t arrivals = rng_.poisson(params_.rain_per_s * dt);
   for (std::int64_t i = 0; i < arrivals; ++i) drops_.push_back(new_drop());
@@ -136,8 +141,10 @@ cv::Mat WaterDropsModel::apply(const cv::Mat& bgr) const {
                    std::max(1, (bgr.rows + kGridDivisor - 1) / kGridDivisor));
   // Two pyramid steps: 1/4 resolution (ceil(n / 4), the grid's size) with a Gaussian blur built in.
   cv::Mat low = bgr;
-  for (int i = 0; i < 2; ++i) cv::pyrDown(low, low, cv::Size((low.cols + 1) / 2, (low.rows + 1) / 2));
-  const double sx = static_cast<double>(g.width) / bgr.cols, sy = static_cast<double>(g.height) / bgr.rows;
+  for (int i = 0; i < 2; ++i)
+    cv::pyrDown(low, low, cv::Size((low.cols + 1) / 2, (low.rows + 1) / 2));
+  const double sx = static_cast<double>(g.width) / bgr.cols,
+               sy = static_cast<double>(g.height) / bgr.rows;
   for (const Drop& d : drops_) render_drop(d, low, sx, sy, out);
   return out;
 }

@@ -3,7 +3,6 @@
 
 #include <algorithm>
 #include <cmath>
-
 #include <opencv2/imgproc.hpp>
 
 #include "corruption/ndimage.hpp"
@@ -16,8 +15,8 @@ struct Arange {
   double start, stop, step;
 };
 
-// np.arange(start, stop, step) for floats: length ceil((stop - start) / step), a[1] = start + step, then
-// a[i] = start + i * (a[1] - a[0]).
+// np.arange(start, stop, step) for floats: length ceil((stop - start) / step), a[1] = start + step,
+// then a[i] = start + i * (a[1] - a[0]).
 std::vector<double> arange(const Arange& r) {
   const auto n = static_cast<std::size_t>(std::ceil((r.stop - r.start) / r.step));
   std::vector<double> out(n);
@@ -68,7 +67,8 @@ cv::Mat zoom_blur_exact(const cv::Mat& bgr, int severity) {
   cv::Mat sum = cv::Mat::zeros(bgr.size(), CV_32FC3);
   for (const double z : factors) {
     const Crop c = crop_for(rows, cols, z);
-    // A crop larger than the image (a factor below 1) cannot occur with these factors; clamp defensively.
+    // A crop larger than the image (a factor below 1) cannot occur with these factors; clamp
+    // defensively.
     const cv::Rect roi = cv::Rect(c.left, c.top, c.cols, c.rows) & cv::Rect(0, 0, cols, rows);
     const cv::Mat layer = nd::zoom_linear(x(roi), c.out_rows, c.out_cols);
     const int h = std::min(rows, layer.rows), w = std::min(cols, layer.cols);
@@ -101,9 +101,9 @@ cv::Mat zoom_blur_fast(const cv::Mat& bgr, int severity) {
   for (const double z : factors) {
     const Crop c = crop_for(rows, cols, z);
     const cv::Rect roi = cv::Rect(c.left, c.top, c.cols, c.rows) & cv::Rect(0, 0, cols, rows);
-    // OpenCV's bilinear resize samples at (i + 0.5) * in / out - 0.5 rather than the reference's corner-aligned
-    // i * (in - 1) / (out - 1): at most half a source pixel apart at the far edges, and about twice as fast as an
-    // equivalent warp.
+    // OpenCV's bilinear resize samples at (i + 0.5) * in / out - 0.5 rather than the reference's
+    // corner-aligned i * (in - 1) / (out - 1): at most half a source pixel apart at the far edges,
+    // and about twice as fast as an equivalent warp.
     cv::resize(bgr(roi), layer, cv::Size(c.out_cols, c.out_rows), 0, 0, cv::INTER_LINEAR);
     const cv::Rect keep(0, 0, std::min(cols, layer.cols), std::min(rows, layer.rows));
     cv::Mat target = sum(keep);

@@ -1,11 +1,11 @@
-// Zoom Blur (imagecorruptions 1.1.2 `zoom_blur`): the mean of the image and of centre crops of it zoomed back up by
-// each factor of the severity (np.arange(1, 1.11, 0.01) ... np.arange(1, 1.31, 0.03): 12 to 16 layers), in
-// float32. Deterministic. The zoom is scipy.ndimage.zoom(order=1, mode='constant'): corner-aligned bilinear.
+// Zoom Blur (imagecorruptions 1.1.2 `zoom_blur`): the mean of the image and of centre crops of it
+// zoomed back up by each factor of the severity (np.arange(1, 1.11, 0.01) ... np.arange(1, 1.31,
+// 0.03): 12 to 16 layers), in float32. Deterministic. The zoom is scipy.ndimage.zoom(order=1,
+// mode='constant'): corner-aligned bilinear.
 #pragma once
 
-#include <vector>
-
 #include <opencv2/core.hpp>
+#include <vector>
 
 namespace faultline::corruption {
 
@@ -15,8 +15,8 @@ std::vector<double> zoom_blur_factors(int severity);
 // numpy mode: exact.
 cv::Mat zoom_blur_exact(const cv::Mat& bgr, int severity);
 
-// fast mode: each layer an 8-bit bilinear warp of the same crop geometry (OpenCV, 1/32-pixel positions), summed in
-// integers; within a few levels of numpy mode, mean difference below 0.5.
+// fast mode: each layer an 8-bit bilinear warp of the same crop geometry (OpenCV, 1/32-pixel
+// positions), summed in integers; within a few levels of numpy mode, mean difference below 0.5.
 cv::Mat zoom_blur_fast(const cv::Mat& bgr, int severity);
 
 }  // namespace faultline::corruption

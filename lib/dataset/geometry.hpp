@@ -1,4 +1,5 @@
-// Small rigid-body helpers for nuScenes poses: quaternions are (w, x, y, z), rotation matrices row-major.
+// Small rigid-body helpers for nuScenes poses: quaternions are (w, x, y, z), rotation matrices
+// row-major.
 #pragma once
 
 #include <array>
@@ -39,7 +40,9 @@ inline Quat matrix_to_quat(const Mat3& m) {
   return q;
 }
 
-inline Quat yaw_quat(double yaw_rad) { return {std::cos(yaw_rad / 2), 0, 0, std::sin(yaw_rad / 2)}; }
+inline Quat yaw_quat(double yaw_rad) {
+  return {std::cos(yaw_rad / 2), 0, 0, std::sin(yaw_rad / 2)};
+}
 
 inline Mat3 mat_mul(const Mat3& a, const Mat3& b) {
   Mat3 r{};
@@ -69,7 +72,8 @@ struct Rigid {
     return {r[0] + translation[0], r[1] + translation[1], r[2] + translation[2]};
   }
   Vec3 apply_inverse(const Vec3& p) const {
-    return mat_t_vec(rotation, {p[0] - translation[0], p[1] - translation[1], p[2] - translation[2]});
+    return mat_t_vec(rotation,
+                     {p[0] - translation[0], p[1] - translation[1], p[2] - translation[2]});
   }
 };
 

@@ -1,7 +1,6 @@
-// Synthetic nuScenes-format dataset: scene model -> tables (streamed per scene) and rendered camera JPEGs.
+// Synthetic nuScenes-format dataset: scene model -> tables (streamed per scene) and rendered camera
+// JPEGs.
 #include "dataset/synth.hpp"
-
-#include <opencv2/imgcodecs.hpp>
 
 #include <algorithm>
 #include <atomic>
@@ -11,6 +10,7 @@
 #include <filesystem>
 #include <map>
 #include <mutex>
+#include <opencv2/imgcodecs.hpp>
 #include <random>
 #include <set>
 #include <thread>
@@ -43,7 +43,8 @@ struct SensorSpec {
   double offset_ms;  // trigger offset of the key frame relative to the sample (cameras/radars)
 };
 
-// Mounting close to the real nuScenes rig; camera key frames trail/lead the lidar sweep by tens of ms.
+// Mounting close to the real nuScenes rig; camera key frames trail/lead the lidar sweep by tens of
+// ms.
 const std::vector<SensorSpec>& sensor_specs() {
   static const std::vector<SensorSpec> kSpecs = {
       {"CAM_FRONT", Modality::kCamera, {1.70, 0.016, 1.51}, 0, 1266.4, 12},
@@ -66,7 +67,8 @@ const char* modality_name(Modality m) {
   return m == Modality::kCamera ? "camera" : m == Modality::kLidar ? "lidar" : "radar";
 }
 
-// Sensor -> ego rotation. Cameras look along their z axis (x right, y down); other sensors use x forward, z up.
+// Sensor -> ego rotation. Cameras look along their z axis (x right, y down); other sensors use x
+// forward, z up.
 Mat3 mounting_rotation(const SensorSpec& s) {
   const Mat3 yaw = quat_to_matrix(yaw_quat(s.yaw_deg * kPi / 180));
   if (s.modality != Modality::kCamera) return yaw;
@@ -75,21 +77,37 @@ Mat3 mounting_rotation(const SensorSpec& s) {
 }
 
 const std::vector<const char*>& category_names() {  // the 23 nuScenes categories
-  static const std::vector<const char*> kNames = {
-      "animal", "human.pedestrian.adult", "human.pedestrian.child", "human.pedestrian.construction_worker",
-      "human.pedestrian.personal_mobility", "human.pedestrian.police_officer", "human.pedestrian.stroller",
-      "human.pedestrian.wheelchair", "movable_object.barrier", "movable_object.debris",
-      "movable_object.pushable_pullable", "movable_object.trafficcone", "static_object.bicycle_rack",
-      "vehicle.bicycle", "vehicle.bus.bendy", "vehicle.bus.rigid", "vehicle.car", "vehicle.construction",
-      "vehicle.emergency.ambulance", "vehicle.emergency.police", "vehicle.motorcycle", "vehicle.trailer",
-      "vehicle.truck"};
+  static const std::vector<const char*> kNames = {"animal",
+                                                  "human.pedestrian.adult",
+                                                  "human.pedestrian.child",
+                                                  "human.pedestrian.construction_worker",
+                                                  "human.pedestrian.personal_mobility",
+                                                  "human.pedestrian.police_officer",
+                                                  "human.pedestrian.stroller",
+                                                  "human.pedestrian.wheelchair",
+                                                  "movable_object.barrier",
+                                                  "movable_object.debris",
+                                                  "movable_object.pushable_pullable",
+                                                  "movable_object.trafficcone",
+                                                  "static_object.bicycle_rack",
+                                                  "vehicle.bicycle",
+                                                  "vehicle.bus.bendy",
+                                                  "vehicle.bus.rigid",
+                                                  "vehicle.car",
+                                                  "vehicle.construction",
+                                                  "vehicle.emergency.ambulance",
+                                                  "vehicle.emergency.police",
+                                                  "vehicle.motorcycle",
+                                                  "vehicle.trailer",
+                                                  "vehicle.truck"};
   return kNames;
 }
 
 const std::vector<const char*>& attribute_names() {
   static const std::vector<const char*> kNames = {
-      "vehicle.moving", "vehicle.stopped", "vehicle.parked", "cycle.with_rider", "cycle.without_rider",
-      "pedestrian.sitting_lying_down", "pedestrian.standing", "pedestrian.moving"};
+      "vehicle.moving",      "vehicle.stopped",     "vehicle.parked",
+      "cycle.with_rider",    "cycle.without_rider", "pedestrian.sitting_lying_down",
+      "pedestrian.standing", "pedestrian.moving"};
   return kNames;
 }
 
@@ -148,7 +166,8 @@ struct Frame {
 
 struct ImageJob {
   std::string path;
-  std::string filename;  // relative to the dataroot (the noise seed: files do not depend on where they are written)
+  std::string filename;  // relative to the dataroot (the noise seed: files do not depend on where
+                         // they are written)
   int camera = 0;
   double t_s = 0;
 };
@@ -165,7 +184,8 @@ struct Shared {
   const SynthProgressFn& progress;
 };
 
-Status write_bytes(const fs::path& path, const std::vector<unsigned char>& bytes, std::int64_t* total) {
+Status write_bytes(const fs::path& path, const std::vector<unsigned char>& bytes,
+                   std::int64_t* total) {
   std::FILE* f = std::fopen(path.c_str(), "wb");
   if (!f) return Status(StatusCode::kIoError, path.string() + ": cannot create file");
   const std::size_t n = std::fwrite(bytes.data(), 1, bytes.size(), f);
@@ -175,15 +195,16 @@ Status write_bytes(const fs::path& path, const std::vector<unsigned char>& bytes
   return Status::ok();
 }
 
-// The noise seed of one image: the dataset seed and the image's file name, so that files do not depend on the
-// order the workers take them in (FNV-1a of the name).
+// The noise seed of one image: the dataset seed and the image's file name, so that files do not
+// depend on the order the workers take them in (FNV-1a of the name).
 std::uint64_t noise_seed(std::uint64_t seed, const std::string& path) {
   std::uint64_t h = 1469598103934665603ULL ^ seed;
   for (unsigned char c : path) h = (h ^ c) * 1099511628211ULL;
   return h;
 }
 
-// Renders and encodes the images of one scene on `threads` workers; the files do not depend on the worker count.
+// Renders and encodes the images of one scene on `threads` workers; the files do not depend on the
+// worker count.
 Status render_images(Shared& sh, const SynthWorld& world, const std::vector<CameraModel>& cameras,
                      const std::vector<ImageJob>& jobs) {
   std::atomic<std::size_t> next{0};
@@ -199,7 +220,9 @@ Status render_images(Shared& sh, const SynthWorld& world, const std::vector<Came
       auto encoded = codec::encode_jpeg(img, sh.opt.jpeg_quality);
       if (!encoded) {
         std::lock_guard<std::mutex> lock(mu);
-        if (first_error.is_ok()) first_error = Status(encoded.status().code(), job.path + ": " + encoded.status().message());
+        if (first_error.is_ok())
+          first_error =
+              Status(encoded.status().code(), job.path + ": " + encoded.status().message());
         continue;
       }
       jpeg = std::move(encoded).value();
@@ -209,7 +232,8 @@ Status render_images(Shared& sh, const SynthWorld& world, const std::vector<Came
       bytes += written;
       if (!s && first_error.is_ok()) first_error = s;
       ++sh.summary.images_written;
-      if (sh.progress && (sh.summary.images_written % 48 == 0 || sh.summary.images_written == sh.images_total)) {
+      if (sh.progress &&
+          (sh.summary.images_written % 48 == 0 || sh.summary.images_written == sh.images_total)) {
         sh.progress("images", sh.summary.images_written, sh.images_total);
       }
     }
@@ -268,9 +292,11 @@ Status write_scene(Shared& sh, int index, const std::string& log_token, const st
   scene.field("first_sample_token", sample_tokens.front());
   scene.field("last_sample_token", sample_tokens.back());
   scene.field("name", synth_scene_name(index));
-  scene.field("description", std::string("Synthetic: ego at ") + format_double(std::round(world.ego_speed * 10) / 10) +
-                                 " m/s" + (world.road.curvature == 0 ? " on a straight road" : " on a curved road") +
-                                 ", traffic, parked cars, pedestrians, cones and barriers.");
+  scene.field("description",
+              std::string("Synthetic: ego at ") +
+                  format_double(std::round(world.ego_speed * 10) / 10) + " m/s" +
+                  (world.road.curvature == 0 ? " on a straight road" : " on a curved road") +
+                  ", traffic, parked cars, pedestrians, cones and barriers.");
   scene.end_record();
   auto& sample = sh.tables["sample"];
   for (int i = 0; i < n_samples; ++i) {
@@ -284,7 +310,8 @@ Status write_scene(Shared& sh, int index, const std::string& log_token, const st
   }
   sh.summary.samples += n_samples;
 
-  // Sensors: one calibration per sensor per scene, then each sensor's sample_data chain with its ego poses.
+  // Sensors: one calibration per sensor per scene, then each sensor's sample_data chain with its
+  // ego poses.
   std::vector<CameraModel> cameras;
   std::vector<ImageJob> jobs;
   for (std::size_t si = 0; si < specs.size(); ++si) {
@@ -348,14 +375,16 @@ Status write_scene(Shared& sh, int index, const std::string& log_token, const st
     }
     cs.end_record();
 
-    const std::string ext = spec.modality == Modality::kCamera ? ".jpg"
-                            : spec.modality == Modality::kLidar ? ".pcd.bin" : ".pcd";
+    const std::string ext = spec.modality == Modality::kCamera  ? ".jpg"
+                            : spec.modality == Modality::kLidar ? ".pcd.bin"
+                                                                : ".pcd";
     auto& sd = sh.tables["sample_data"];
     auto& ep = sh.tables["ego_pose"];
     for (std::size_t k = 0; k < frames.size(); ++k) {
       const Frame& f = frames[k];
-      const std::string filename = std::string(f.key ? "samples/" : "sweeps/") + spec.channel + "/" + logfile + "__" +
-                                   spec.channel + "__" + std::to_string(f.timestamp_us) + ext;
+      const std::string filename = std::string(f.key ? "samples/" : "sweeps/") + spec.channel +
+                                   "/" + logfile + "__" + spec.channel + "__" +
+                                   std::to_string(f.timestamp_us) + ext;
       const bool camera = spec.modality == Modality::kCamera;
       sd.begin_record();
       sd.field("token", f.token);
@@ -384,12 +413,15 @@ Status write_scene(Shared& sh, int index, const std::string& log_token, const st
       ++sh.summary.sample_data;
       if (camera) {
         ++sh.summary.camera_frames;
-        if (!opt.metadata_only) jobs.push_back({(sh.root / filename).string(), filename, static_cast<int>(cameras.size() - 1), t_s});
+        if (!opt.metadata_only)
+          jobs.push_back(
+              {(sh.root / filename).string(), filename, static_cast<int>(cameras.size() - 1), t_s});
       }
     }
   }
 
-  // Annotations: every actor within range of the ego at a sample, as one contiguous track per instance.
+  // Annotations: every actor within range of the ego at a sample, as one contiguous track per
+  // instance.
   if (opt.annotations) {
     const std::size_t n_actors = world.actors.size();
     std::vector<int> first(n_actors, -1), last(n_actors, -1);
@@ -436,20 +468,27 @@ Status write_scene(Shared& sh, int index, const std::string& log_token, const st
         std::vector<std::string> attrs;
         switch (actor.cls) {
           case SynthClass::kPedestrian:
-            attrs.push_back(sh.attribute_token[actor.motion == Motion::kMoving ? "pedestrian.moving"
-                                                                               : "pedestrian.standing"]);
+            attrs.push_back(
+                sh.attribute_token[actor.motion == Motion::kMoving ? "pedestrian.moving"
+                                                                   : "pedestrian.standing"]);
             break;
           case SynthClass::kBicycle:
-          case SynthClass::kMotorcycle: attrs.push_back(sh.attribute_token["cycle.with_rider"]); break;
+          case SynthClass::kMotorcycle:
+            attrs.push_back(sh.attribute_token["cycle.with_rider"]);
+            break;
           case SynthClass::kTrafficCone:
-          case SynthClass::kBarrier: break;
+          case SynthClass::kBarrier:
+            break;
           default:
-            attrs.push_back(sh.attribute_token[actor.motion == Motion::kMoving ? "vehicle.moving" : "vehicle.parked"]);
+            attrs.push_back(sh.attribute_token[actor.motion == Motion::kMoving ? "vehicle.moving"
+                                                                               : "vehicle.parked"]);
         }
         const double face = (actor.length * actor.height + actor.width * actor.height) / 2;
-        const int lidar_pts = std::max(1, static_cast<int>(std::lround(3000 * face / std::pow(std::max(dist, 2.0), 2))));
-        const bool radar_visible = actor.cls == SynthClass::kCar || actor.cls == SynthClass::kTruck ||
-                                   actor.cls == SynthClass::kBus || actor.cls == SynthClass::kMotorcycle;
+        const int lidar_pts = std::max(
+            1, static_cast<int>(std::lround(3000 * face / std::pow(std::max(dist, 2.0), 2))));
+        const bool radar_visible =
+            actor.cls == SynthClass::kCar || actor.cls == SynthClass::kTruck ||
+            actor.cls == SynthClass::kBus || actor.cls == SynthClass::kMotorcycle;
         const int radar_pts = radar_visible && dist < 50 ? 1 + static_cast<int>(rng() % 4) : 0;
         const char* visibility = dist < 20 ? "4" : dist < 30 ? "3" : dist < 40 ? "2" : "1";
         ann.begin_record();
@@ -503,10 +542,11 @@ Status write_static_tables(Shared& sh) {
     attribute.field("description", std::string("Synthetic-set attribute ") + name + ".");
     attribute.end_record();
   }
-  static const char* kLevels[4][2] = {{"v0-40", "visibility of whole object is between 0 and 40%"},
-                                      {"v40-60", "visibility of whole object is between 40 and 60%"},
-                                      {"v60-80", "visibility of whole object is between 60 and 80%"},
-                                      {"v80-100", "visibility of whole object is between 80 and 100%"}};
+  static const char* kLevels[4][2] = {
+      {"v0-40", "visibility of whole object is between 0 and 40%"},
+      {"v40-60", "visibility of whole object is between 40 and 60%"},
+      {"v60-80", "visibility of whole object is between 60 and 80%"},
+      {"v80-100", "visibility of whole object is between 80 and 100%"}};
   auto& visibility = sh.tables["visibility"];
   for (int i = 0; i < 4; ++i) {
     visibility.begin_record();
@@ -521,8 +561,9 @@ Status write_static_tables(Shared& sh) {
 }  // namespace
 
 std::string synth_scene_name(int index) {
-  static const char* kMini[] = {"scene-0103", "scene-0916", "scene-0061", "scene-0553", "scene-0655",
-                                "scene-0757", "scene-0796", "scene-1077", "scene-1094", "scene-1100"};
+  static const char* kMini[] = {"scene-0103", "scene-0916", "scene-0061", "scene-0553",
+                                "scene-0655", "scene-0757", "scene-0796", "scene-1077",
+                                "scene-1094", "scene-1100"};
   constexpr int kMiniCount = 10;
   if (index < kMiniCount) return kMini[index];
   std::set<int> used = {103, 916, 61, 553, 655, 757, 796, 1077, 1094, 1100};
@@ -536,24 +577,36 @@ std::string synth_scene_name(int index) {
   return buf;
 }
 
-Result<SynthSummary> write_synthetic_dataset(const SynthOptions& opt, const SynthProgressFn& progress) {
+Result<SynthSummary> write_synthetic_dataset(const SynthOptions& opt,
+                                             const SynthProgressFn& progress) {
   const auto start = std::chrono::steady_clock::now();
   if (opt.out_dir.empty()) return Status(StatusCode::kInvalidArgument, "synth: out_dir is empty");
-  if (opt.scenes < 1 || opt.scenes > 9999) return Status(StatusCode::kInvalidArgument, "synth: scenes must be 1..9999");
+  if (opt.scenes < 1 || opt.scenes > 9999)
+    return Status(StatusCode::kInvalidArgument, "synth: scenes must be 1..9999");
   if (!(opt.seconds >= 0.5 && opt.seconds <= 600)) {
     return Status(StatusCode::kInvalidArgument, "synth: seconds must be 0.5..600");
   }
-  if (opt.image_width < 16 || opt.image_height < 16 || opt.jpeg_quality < 1 || opt.jpeg_quality > 100) {
+  if (opt.image_width < 16 || opt.image_height < 16 || opt.jpeg_quality < 1 ||
+      opt.jpeg_quality > 100) {
     return Status(StatusCode::kInvalidArgument, "synth: bad image size or JPEG quality");
   }
   if (opt.sensor_noise < 0 || opt.sensor_noise > 64) {
     return Status(StatusCode::kInvalidArgument,
-                  "synth: sensor_noise = " + std::to_string(opt.sensor_noise) + ": expected 0..64 (8-bit levels)");
+                  "synth: sensor_noise = " + std::to_string(opt.sensor_noise) +
+                      ": expected 0..64 (8-bit levels)");
   }
   if (opt.version.empty() || opt.version.find('/') != std::string::npos) {
     return Status(StatusCode::kInvalidArgument, "synth: bad version '" + opt.version + "'");
   }
-  Shared sh{opt, fs::path(opt.out_dir), TokenSource(opt.seed ^ 0x6E757363656E6573ULL), {}, {}, {}, {}, {}, 0,
+  Shared sh{opt,
+            fs::path(opt.out_dir),
+            TokenSource(opt.seed ^ 0x6E757363656E6573ULL),
+            {},
+            {},
+            {},
+            {},
+            {},
+            0,
             progress};
   std::error_code ec;
   const fs::path table_dir = sh.root / opt.version;
@@ -566,10 +619,14 @@ Result<SynthSummary> write_synthetic_dataset(const SynthOptions& opt, const Synt
       fs::create_directories(sh.root / "sweeps" / spec.channel, ec);
     }
   }
-  if (ec) return Status(StatusCode::kIoError, sh.root.string() + ": cannot create folders: " + ec.message());
-  for (const char* t : {"scene", "sample", "sample_data", "ego_pose", "calibrated_sensor", "sensor", "log", "map",
-                        "instance", "sample_annotation", "category", "attribute", "visibility"}) {
-    if (Status s = sh.tables[t].open((table_dir / (std::string(t) + ".json")).string()); !s) return s;
+  if (ec)
+    return Status(StatusCode::kIoError,
+                  sh.root.string() + ": cannot create folders: " + ec.message());
+  for (const char* t :
+       {"scene", "sample", "sample_data", "ego_pose", "calibrated_sensor", "sensor", "log", "map",
+        "instance", "sample_annotation", "category", "attribute", "visibility"}) {
+    if (Status s = sh.tables[t].open((table_dir / (std::string(t) + ".json")).string()); !s)
+      return s;
   }
   if (Status s = write_static_tables(sh); !s) return s;
 
@@ -577,20 +634,25 @@ Result<SynthSummary> write_synthetic_dataset(const SynthOptions& opt, const Synt
   std::mt19937_64 log_rng(opt.seed + 0x1F2E3D4C);
   std::map<int, std::vector<std::string>> logs_at;
   const int images_per_scene_estimate = static_cast<int>(std::floor(opt.seconds * 12 + 4)) * 6;
-  sh.images_total = opt.metadata_only ? 0 : static_cast<std::int64_t>(images_per_scene_estimate) * opt.scenes;
+  sh.images_total =
+      opt.metadata_only ? 0 : static_cast<std::int64_t>(images_per_scene_estimate) * opt.scenes;
   for (int i = 0; i < opt.scenes; ++i) {
     const int loc = static_cast<int>(log_rng() % locations().size());
     const Location& L = locations()[static_cast<std::size_t>(loc)];
-    const int month = 7 + static_cast<int>(log_rng() % 3), day = 1 + static_cast<int>(log_rng() % 28);
+    const int month = 7 + static_cast<int>(log_rng() % 3),
+              day = 1 + static_cast<int>(log_rng() % 28);
     const int hour = 9 + static_cast<int>(log_rng() % 9), minute = static_cast<int>(log_rng() % 60),
               second = static_cast<int>(log_rng() % 60);
     char logfile[64], date[16];
-    std::snprintf(logfile, sizeof(logfile), "%s-2018-%02d-%02d-%02d-%02d-%02d%+03d00", L.vehicle, month, day, hour,
-                  minute, second, L.utc_offset_h);
+    std::snprintf(logfile, sizeof(logfile), "%s-2018-%02d-%02d-%02d-%02d-%02d%+03d00", L.vehicle,
+                  month, day, hour, minute, second, L.utc_offset_h);
     std::snprintf(date, sizeof(date), "2018-%02d-%02d", month, day);
-    const std::int64_t local_s = days_from_civil(2018, month, day) * 86400 + hour * 3600 + minute * 60 + second;
-    const std::int64_t t0_us = (local_s - L.utc_offset_h * 3600 + 30 + static_cast<std::int64_t>(log_rng() % 600)) *
-                                   1000000 + static_cast<std::int64_t>(log_rng() % 1000000);
+    const std::int64_t local_s =
+        days_from_civil(2018, month, day) * 86400 + hour * 3600 + minute * 60 + second;
+    const std::int64_t t0_us =
+        (local_s - L.utc_offset_h * 3600 + 30 + static_cast<std::int64_t>(log_rng() % 600)) *
+            1000000 +
+        static_cast<std::int64_t>(log_rng() % 1000000);
     const std::string log_token = sh.tokens.next();
     auto& log = sh.tables["log"];
     log.begin_record();
@@ -606,7 +668,8 @@ Result<SynthSummary> write_synthetic_dataset(const SynthOptions& opt, const Synt
       progress("scenes", i + 1, opt.scenes);
     }
   }
-  if (progress && sh.summary.images_written > 0) {  // the per-scene total above is an estimate; end on the real count
+  if (progress && sh.summary.images_written >
+                      0) {  // the per-scene total above is an estimate; end on the real count
     progress("images", sh.summary.images_written, sh.summary.images_written);
   }
   auto& map = sh.tables["map"];
@@ -627,7 +690,8 @@ Result<SynthSummary> write_synthetic_dataset(const SynthOptions& opt, const Synt
     if (Status s = writer.close(); !s) return s;
     sh.summary.bytes_written += writer.bytes();
   }
-  sh.summary.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  sh.summary.wall_seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return sh.summary;
 }
 

@@ -1,14 +1,12 @@
-// Software rasteriser for the synthetic dataset: polygons in the world are moved into the camera frame, clipped at
-// the near plane and to a guard band, projected, and filled with cv::fillConvexPoly.
+// Software rasteriser for the synthetic dataset: polygons in the world are moved into the camera
+// frame, clipped at the near plane and to a guard band, projected, and filled with
+// cv::fillConvexPoly.
 #include "dataset/synth_render.hpp"
-
-#include <random>
-#include <vector>
-
-#include <opencv2/imgproc.hpp>
 
 #include <algorithm>
 #include <cmath>
+#include <opencv2/imgproc.hpp>
+#include <random>
 #include <vector>
 
 namespace faultline::dataset {
@@ -49,7 +47,8 @@ std::vector<P> clip(const std::vector<P>& in, Dist dist) {
   return out;
 }
 
-void fill_polygon(cv::Mat& img, const View& view, const std::vector<Vec3>& world_pts, const cv::Scalar& colour) {
+void fill_polygon(cv::Mat& img, const View& view, const std::vector<Vec3>& world_pts,
+                  const cv::Scalar& colour) {
   std::vector<Vec3> cam_pts;
   cam_pts.reserve(world_pts.size());
   for (const auto& p : world_pts) cam_pts.push_back(view.world_to_cam_inv.apply_inverse(p));
@@ -59,7 +58,8 @@ void fill_polygon(cv::Mat& img, const View& view, const std::vector<Vec3>& world
   std::vector<P2> px;
   px.reserve(cam_pts.size());
   for (const auto& p : cam_pts) {
-    px.push_back({view.cam.fx * p[0] / p[2] + view.cam.cx, view.cam.fy * p[1] / p[2] + view.cam.cy});
+    px.push_back(
+        {view.cam.fx * p[0] / p[2] + view.cam.cx, view.cam.fy * p[1] / p[2] + view.cam.cy});
   }
   const double w = view.cam.width, h = view.cam.height;
   px = clip(px, [](const P2& p) { return p[0] + kGuardPx; });
@@ -77,9 +77,10 @@ void fill_polygon(cv::Mat& img, const View& view, const std::vector<Vec3>& world
 }
 
 // A ground strip between lateral offsets [d0, d1] over arc lengths [s0, s1].
-void ground_quad(cv::Mat& img, const View& view, const Road& road, double s0, double s1, double d0, double d1,
-                 const Bgr& c) {
-  fill_polygon(img, view, {road.point(s0, d0), road.point(s1, d0), road.point(s1, d1), road.point(s0, d1)},
+void ground_quad(cv::Mat& img, const View& view, const Road& road, double s0, double s1, double d0,
+                 double d1, const Bgr& c) {
+  fill_polygon(img, view,
+               {road.point(s0, d0), road.point(s1, d0), road.point(s1, d1), road.point(s0, d1)},
                shade(c, 1.0));
 }
 
@@ -96,9 +97,11 @@ void draw_road(cv::Mat& img, const View& view, const SynthWorld& world, double e
       ground_quad(img, view, road, s, s + kStep, d - half, d + half, kLaneMarkBgr);
     }
   }
-  constexpr double kDashPeriod = 9, kDashLength = 3;  // anchored to absolute s so the marks move past the ego
+  constexpr double kDashPeriod = 9,
+                   kDashLength = 3;  // anchored to absolute s so the marks move past the ego
   for (double s = std::floor(s_begin / kDashPeriod) * kDashPeriod; s < s_end; s += kDashPeriod) {
-    for (double d : {-3.5, 3.5}) ground_quad(img, view, road, s, s + kDashLength, d - 0.075, d + 0.075, kLaneMarkBgr);
+    for (double d : {-3.5, 3.5})
+      ground_quad(img, view, road, s, s + kDashLength, d - 0.075, d + 0.075, kLaneMarkBgr);
   }
 }
 
@@ -118,7 +121,8 @@ void draw_box(cv::Mat& img, const View& view, const Actor& a, const ActorState& 
   const double ln = std::sqrt(light[0] * light[0] + light[1] * light[1] + light[2] * light[2]);
   for (auto& v : light) v /= ln;
   const Bgr& body = style_of(a.cls).body_bgr;
-  // Side faces (outward normals in xy) and the top; the bottom never faces a camera above the ground.
+  // Side faces (outward normals in xy) and the top; the bottom never faces a camera above the
+  // ground.
   for (int i = 0; i < 5; ++i) {
     std::vector<Vec3> face;
     Vec3 n{};
@@ -136,7 +140,8 @@ void draw_box(cv::Mat& img, const View& view, const Actor& a, const ActorState& 
       n = {0, 0, 1};
       centre = {st.center[0], st.center[1], st.center[2] + a.height / 2};
     }
-    const double facing = (view.cam_pos[0] - centre[0]) * n[0] + (view.cam_pos[1] - centre[1]) * n[1] +
+    const double facing = (view.cam_pos[0] - centre[0]) * n[0] +
+                          (view.cam_pos[1] - centre[1]) * n[1] +
                           (view.cam_pos[2] - centre[2]) * n[2];
     if (facing <= 0) continue;  // back face
     const double lambert = std::max(0.0, n[0] * light[0] + n[1] * light[1] + n[2] * light[2]);
@@ -146,8 +151,8 @@ void draw_box(cv::Mat& img, const View& view, const Actor& a, const ActorState& 
 
 }  // namespace
 
-bool project_world_point(const Rigid& ego_to_world, const CameraModel& camera, const Vec3& p_world, double* u,
-                         double* v) {
+bool project_world_point(const Rigid& ego_to_world, const CameraModel& camera, const Vec3& p_world,
+                         double* u, double* v) {
   const Vec3 p = camera.sensor_to_ego.apply_inverse(ego_to_world.apply_inverse(p_world));
   if (p[2] < kNearM) return false;
   *u = camera.fx * p[0] / p[2] + camera.cx;
@@ -157,10 +162,12 @@ bool project_world_point(const Rigid& ego_to_world, const CameraModel& camera, c
 
 void add_sensor_noise(cv::Mat& bgr, int amplitude, std::uint64_t seed) {
   if (amplitude <= 0 || bgr.empty()) return;
-  // A table of draws read at a random offset per row: per-pixel generator calls would cost more than the render.
-  // It is one row longer than the offsets reach, so a row reads it without wrapping (a loop the compiler vectorises).
+  // A table of draws read at a random offset per row: per-pixel generator calls would cost more
+  // than the render. It is one row longer than the offsets reach, so a row reads it without
+  // wrapping (a loop the compiler vectorises).
   constexpr std::size_t kOffsets = 1 << 16;
-  const std::size_t row_len = static_cast<std::size_t>(bgr.cols) * static_cast<std::size_t>(bgr.channels());
+  const std::size_t row_len =
+      static_cast<std::size_t>(bgr.cols) * static_cast<std::size_t>(bgr.channels());
   std::vector<std::int16_t> table(kOffsets + row_len);
   std::mt19937_64 rng(seed);
   std::uniform_int_distribution<int> draw(-amplitude, amplitude);
@@ -186,7 +193,9 @@ cv::Mat render_camera(const SynthWorld& world, double t_s, const CameraModel& ca
   const Vec3& cp = view.cam_pos;
   const double g = kGroundDrawM + 20;
   fill_polygon(img, view,
-               {{cp[0] - g, cp[1] - g, 0}, {cp[0] + g, cp[1] - g, 0}, {cp[0] + g, cp[1] + g, 0},
+               {{cp[0] - g, cp[1] - g, 0},
+                {cp[0] + g, cp[1] - g, 0},
+                {cp[0] + g, cp[1] + g, 0},
                 {cp[0] - g, cp[1] + g, 0}},
                shade(kGroundBgr, 1.0));
   draw_road(img, view, world, world.ego_s(t_s));
@@ -205,7 +214,8 @@ cv::Mat render_camera(const SynthWorld& world, double t_s, const CameraModel& ca
     const double d2 = dx * dx + dy * dy;
     if (d2 < kGroundDrawM * kGroundDrawM) items.push_back({d2, &a, st});
   }
-  std::stable_sort(items.begin(), items.end(), [](const Item& x, const Item& y) { return x.dist2 > y.dist2; });
+  std::stable_sort(items.begin(), items.end(),
+                   [](const Item& x, const Item& y) { return x.dist2 > y.dist2; });
   for (const auto& it : items) draw_box(img, view, *it.actor, it.state);
   return img;
 }

@@ -20,27 +20,71 @@ Actor sized(SynthClass cls, std::mt19937_64& rng) {
   Actor a;
   a.cls = cls;
   switch (cls) {
-    case SynthClass::kCar: a.width = uniform(rng, 1.8, 2.0); a.length = uniform(rng, 4.2, 4.9); a.height = uniform(rng, 1.5, 1.8); break;
-    case SynthClass::kTruck: a.width = 2.5; a.length = uniform(rng, 6.5, 8.5); a.height = uniform(rng, 2.9, 3.4); break;
-    case SynthClass::kBus: a.width = 2.9; a.length = uniform(rng, 10.5, 12.0); a.height = 3.4; break;
-    case SynthClass::kPedestrian: a.width = uniform(rng, 0.6, 0.7); a.length = uniform(rng, 0.6, 0.8); a.height = uniform(rng, 1.6, 1.9); break;
-    case SynthClass::kMotorcycle: a.width = 0.8; a.length = uniform(rng, 2.0, 2.2); a.height = 1.5; break;
-    case SynthClass::kBicycle: a.width = 0.6; a.length = uniform(rng, 1.7, 1.8); a.height = 1.3; break;
-    case SynthClass::kTrafficCone: a.width = 0.4; a.length = 0.4; a.height = uniform(rng, 0.7, 0.8); break;
-    case SynthClass::kBarrier: a.width = uniform(rng, 2.2, 2.5); a.length = 0.5; a.height = 1.0; break;
-    case SynthClass::kTrailer: a.width = 2.6; a.length = uniform(rng, 9, 12); a.height = uniform(rng, 3.5, 4.0); break;
-    case SynthClass::kConstructionVehicle: a.width = 2.8; a.length = uniform(rng, 6, 7.5); a.height = 3.2; break;
+    case SynthClass::kCar:
+      a.width = uniform(rng, 1.8, 2.0);
+      a.length = uniform(rng, 4.2, 4.9);
+      a.height = uniform(rng, 1.5, 1.8);
+      break;
+    case SynthClass::kTruck:
+      a.width = 2.5;
+      a.length = uniform(rng, 6.5, 8.5);
+      a.height = uniform(rng, 2.9, 3.4);
+      break;
+    case SynthClass::kBus:
+      a.width = 2.9;
+      a.length = uniform(rng, 10.5, 12.0);
+      a.height = 3.4;
+      break;
+    case SynthClass::kPedestrian:
+      a.width = uniform(rng, 0.6, 0.7);
+      a.length = uniform(rng, 0.6, 0.8);
+      a.height = uniform(rng, 1.6, 1.9);
+      break;
+    case SynthClass::kMotorcycle:
+      a.width = 0.8;
+      a.length = uniform(rng, 2.0, 2.2);
+      a.height = 1.5;
+      break;
+    case SynthClass::kBicycle:
+      a.width = 0.6;
+      a.length = uniform(rng, 1.7, 1.8);
+      a.height = 1.3;
+      break;
+    case SynthClass::kTrafficCone:
+      a.width = 0.4;
+      a.length = 0.4;
+      a.height = uniform(rng, 0.7, 0.8);
+      break;
+    case SynthClass::kBarrier:
+      a.width = uniform(rng, 2.2, 2.5);
+      a.length = 0.5;
+      a.height = 1.0;
+      break;
+    case SynthClass::kTrailer:
+      a.width = 2.6;
+      a.length = uniform(rng, 9, 12);
+      a.height = uniform(rng, 3.5, 4.0);
+      break;
+    case SynthClass::kConstructionVehicle:
+      a.width = 2.8;
+      a.length = uniform(rng, 6, 7.5);
+      a.height = 3.2;
+      break;
   }
   return a;
 }
 
-// Fills one lane with vehicles moving at the lane speed (so they never collide), spaced over [s_lo, s_hi].
-void fill_lane(std::mt19937_64& rng, std::vector<Actor>* out, double d, double speed, double s_lo, double s_hi) {
+// Fills one lane with vehicles moving at the lane speed (so they never collide), spaced over [s_lo,
+// s_hi].
+void fill_lane(std::mt19937_64& rng, std::vector<Actor>* out, double d, double speed, double s_lo,
+               double s_hi) {
   double s = s_lo + uniform(rng, 0, 20);
   while (s < s_hi) {
     const double r = uniform(rng, 0, 1);
-    const SynthClass cls = r < 0.72 ? SynthClass::kCar : r < 0.82 ? SynthClass::kTruck
-                           : r < 0.90 ? SynthClass::kBus : SynthClass::kMotorcycle;
+    const SynthClass cls = r < 0.72   ? SynthClass::kCar
+                           : r < 0.82 ? SynthClass::kTruck
+                           : r < 0.90 ? SynthClass::kBus
+                                      : SynthClass::kMotorcycle;
     Actor a = sized(cls, rng);
     a.motion = Motion::kMoving;
     a.d = d;
@@ -89,7 +133,8 @@ SynthWorld make_world(std::mt19937_64& rng, double duration_s) {
   w.road.heading0 = uniform(rng, -kPi, kPi);
   w.road.curvature = chance(rng, 0.5) ? 0.0 : uniform(rng, -0.004, 0.004);
   w.ego_speed = uniform(rng, 5, 11);
-  // Keeps the ego behind its lead car and ahead of its follower for the whole scene (see fill-in below).
+  // Keeps the ego behind its lead car and ahead of its follower for the whole scene (see fill-in
+  // below).
   w.ego_accel = uniform(rng, -0.15, 0.05) * std::min(1.0, 20.0 / std::max(duration_s, 1.0));
   w.ego_lane_d = -kLaneWidth / 2;
 
@@ -111,7 +156,8 @@ SynthWorld make_world(std::mt19937_64& rng, double duration_s) {
   follower.speed = w.ego_speed - 1.5;
   a.push_back(follower);
 
-  // Other lanes: same-direction outer lane and two oncoming lanes; the spawn range covers everything that passes.
+  // Other lanes: same-direction outer lane and two oncoming lanes; the spawn range covers
+  // everything that passes.
   const double same_speed = w.ego_speed + uniform(rng, -1.5, 2.5);
   fill_lane(rng, &a, -1.5 * kLaneWidth, same_speed, s_lo - same_speed * duration_s, s_hi);
   for (double d : {0.5 * kLaneWidth, 1.5 * kLaneWidth}) {
@@ -119,12 +165,16 @@ SynthWorld make_world(std::mt19937_64& rng, double duration_s) {
     fill_lane(rng, &a, d, v, s_lo, s_hi - v * duration_s);
   }
 
-  // Parked vehicles on the left parking strip: mostly cars, some trucks, trailers and construction vehicles.
+  // Parked vehicles on the left parking strip: mostly cars, some trucks, trailers and construction
+  // vehicles.
   for (double s = s_lo; s < s_hi; s += uniform(rng, 6.5, 9)) {
     if (!chance(rng, 0.55)) continue;
     const double r = uniform(rng, 0, 1);
-    Actor p = sized(r < 0.76 ? SynthClass::kCar : r < 0.84 ? SynthClass::kTruck
-                    : r < 0.92 ? SynthClass::kTrailer : SynthClass::kConstructionVehicle, rng);
+    Actor p = sized(r < 0.76   ? SynthClass::kCar
+                    : r < 0.84 ? SynthClass::kTruck
+                    : r < 0.92 ? SynthClass::kTrailer
+                               : SynthClass::kConstructionVehicle,
+                    rng);
     p.motion = Motion::kParked;
     p.d = 8.5;
     p.s0 = s;
@@ -163,13 +213,15 @@ SynthWorld make_world(std::mt19937_64& rng, double duration_s) {
   // Cone lines and barrier rows on the right shoulder, static.
   for (double s = s_lo + uniform(rng, 0, 40); s < s_hi; s += uniform(rng, 45, 90)) {
     const bool cones = chance(rng, 0.55);
-    const int n = cones ? 4 + static_cast<int>(uniform(rng, 0, 3)) : 3 + static_cast<int>(uniform(rng, 0, 2));
+    const int n =
+        cones ? 4 + static_cast<int>(uniform(rng, 0, 3)) : 3 + static_cast<int>(uniform(rng, 0, 2));
     for (int i = 0; i < n; ++i) {
       Actor c = sized(cones ? SynthClass::kTrafficCone : SynthClass::kBarrier, rng);
       c.motion = Motion::kStatic;
       c.d = -9.4;
       c.s0 = s + i * (cones ? 2.0 : 2.6);
-      c.yaw_offset = cones ? uniform(rng, -kPi, kPi) : kPi / 2;  // barriers run along the road (their width axis)
+      c.yaw_offset = cones ? uniform(rng, -kPi, kPi)
+                           : kPi / 2;  // barriers run along the road (their width axis)
       a.push_back(c);
     }
     s += n * 2.6;

@@ -1,6 +1,7 @@
-// The 3D scene model behind the synthetic dataset: a straight or gently curved road (lanes, parking strip,
-// sidewalks), an ego vehicle driving in its lane, and actors of several classes moving along lanes or standing.
-// Everything is a pure function of the scene seed and the time, so images and tables agree exactly.
+// The 3D scene model behind the synthetic dataset: a straight or gently curved road (lanes, parking
+// strip, sidewalks), an ego vehicle driving in its lane, and actors of several classes moving along
+// lanes or standing. Everything is a pure function of the scene seed and the time, so images and
+// tables agree exactly.
 #pragma once
 
 #include <cstdint>
@@ -12,10 +13,11 @@
 
 namespace faultline::dataset {
 
-// Road centreline: arc length s (m) -> world xy and heading; d (m) is the lateral offset, positive to the left.
+// Road centreline: arc length s (m) -> world xy and heading; d (m) is the lateral offset, positive
+// to the left.
 struct Road {
-  double x0 = 0, y0 = 0, heading0 = 0;  // world position/heading at s = 0
-  double curvature = 0;                 // 1/m; 0 = straight
+  double x0 = 0, y0 = 0, heading0 = 0;   // world position/heading at s = 0
+  double curvature = 0;                  // 1/m; 0 = straight
   Vec3 point(double s, double d) const;  // z = 0
   double heading(double s) const { return heading0 + curvature * s; }
 };

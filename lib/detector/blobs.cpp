@@ -1,10 +1,9 @@
 #include "detector/blobs.hpp"
 
-#include <opencv2/imgproc.hpp>
-
 #include <algorithm>
 #include <array>
 #include <cstdint>
+#include <opencv2/imgproc.hpp>
 #include <vector>
 
 #include "dataset/synth_palette.hpp"
@@ -30,7 +29,8 @@ void bridge_label_gaps(cv::Mat& labels, int max_gap) {
     for (int x = 0; x < labels.cols; ++x) {
       if (row[x] == kNoClass) continue;
       int& ly = last_y[static_cast<std::size_t>(x)];
-      if (ly >= 0 && labels.ptr<std::uint8_t>(ly)[x] == row[x] && y - ly - 1 >= 1 && y - ly - 1 <= max_gap)
+      if (ly >= 0 && labels.ptr<std::uint8_t>(ly)[x] == row[x] && y - ly - 1 >= 1 &&
+          y - ly - 1 <= max_gap)
         for (int k = ly + 1; k < y; ++k) labels.ptr<std::uint8_t>(k)[x] = row[x];
       ly = y;
     }
@@ -38,10 +38,11 @@ void bridge_label_gaps(cv::Mat& labels, int max_gap) {
 }
 namespace {
 
-// The Blob for one kept component at (x, y, w, h) with `area` pixels; `member(cy, cx)` tells whether a pixel
-// inside the box belongs to the component.
+// The Blob for one kept component at (x, y, w, h) with `area` pixels; `member(cy, cx)` tells
+// whether a pixel inside the box belongs to the component.
 template <typename Member>
-Blob make_blob(const cv::Mat& labels, int c, int x, int y, int w, int h, int area, double inv, Member member) {
+Blob make_blob(const cv::Mat& labels, int c, int x, int y, int w, int h, int area, double inv,
+               Member member) {
   Blob b;
   b.cls = c;
   b.x0 = x * inv;
@@ -53,7 +54,8 @@ Blob make_blob(const cv::Mat& labels, int c, int x, int y, int w, int h, int are
   b.touches_top = y <= 1;
   b.touches_right = x + w >= labels.cols - 1;
   b.touches_bottom = y + h >= labels.rows - 1;
-  // Bottom edge: for every column, the lowest pixel of the blob; occluded when another class lies just below.
+  // Bottom edge: for every column, the lowest pixel of the blob; occluded when another class lies
+  // just below.
   int columns = 0, occluded = 0;
   for (int cx = x; cx < x + w; ++cx) {
     for (int cy = y + h - 1; cy >= y; --cy) {
@@ -111,8 +113,9 @@ std::vector<Blob> find_blobs(const cv::Mat& labels, double scale, const BlobConf
   CV_Assert(labels.type() == CV_8UC1);
   const int rows = labels.rows, cols = labels.cols;
   const std::size_t n_px = static_cast<std::size_t>(rows) * static_cast<std::size_t>(cols);
-  // Provisional label per pixel, then the union-find parents (at most one new label per pixel). Kept between
-  // calls: fresh multi-megabyte buffers every frame would be page-faulted in again each time.
+  // Provisional label per pixel, then the union-find parents (at most one new label per pixel).
+  // Kept between calls: fresh multi-megabyte buffers every frame would be page-faulted in again
+  // each time.
   thread_local std::vector<std::int32_t> scratch;
   thread_local std::vector<Component> comps;
   if (scratch.size() < 2 * n_px + 1) scratch.resize(2 * n_px + 1);
@@ -121,8 +124,8 @@ std::vector<Blob> find_blobs(const cv::Mat& labels, double scale, const BlobConf
   P[0] = 0;
   std::int32_t next = 1;
 
-  // Pass 1: provisional labels, 8-connected, equal class. Neighbours W, NW, N, NE (N, when equal, already
-  // joins the other three).
+  // Pass 1: provisional labels, 8-connected, equal class. Neighbours W, NW, N, NE (N, when equal,
+  // already joins the other three).
   for (int y = 0; y < rows; ++y) {
     const std::uint8_t* cur = labels.ptr<std::uint8_t>(y);
     std::int32_t* lc = prov + static_cast<std::size_t>(y) * cols;
@@ -166,7 +169,8 @@ std::vector<Blob> find_blobs(const cv::Mat& labels, double scale, const BlobConf
     }
   }
 
-  // Flatten: provisional label -> component index 1..n-1, in order of each component's smallest label.
+  // Flatten: provisional label -> component index 1..n-1, in order of each component's smallest
+  // label.
   std::int32_t n = 1;
   for (std::int32_t i = 1; i < next; ++i) P[i] = P[i] < i ? P[P[i]] : n++;
 
@@ -213,13 +217,15 @@ std::vector<Blob> find_blobs(const cv::Mat& labels, double scale, const BlobConf
   out.reserve(kept.size());
   for (const std::int32_t i : kept) {
     const Component& k = comps[static_cast<std::size_t>(i)];
-    out.push_back(make_blob(labels, k.cls, k.left, k.top, k.right - k.left + 1, k.bottom - k.top + 1, k.area, inv,
-                            [&](int cy, int cx) { return P[prov[static_cast<std::size_t>(cy) * cols + cx]] == i; }));
+    out.push_back(make_blob(
+        labels, k.cls, k.left, k.top, k.right - k.left + 1, k.bottom - k.top + 1, k.area, inv,
+        [&](int cy, int cx) { return P[prov[static_cast<std::size_t>(cy) * cols + cx]] == i; }));
   }
   return out;
 }
 
-std::vector<Blob> find_blobs_per_class(const cv::Mat& labels, double scale, const BlobConfig& config) {
+std::vector<Blob> find_blobs_per_class(const cv::Mat& labels, double scale,
+                                       const BlobConfig& config) {
   CV_Assert(labels.type() == CV_8UC1);
   std::vector<Blob> out;
   std::array<int, dataset::kSynthClassCount> counts{};
@@ -240,7 +246,8 @@ std::vector<Blob> find_blobs_per_class(const cv::Mat& labels, double scale, cons
       const int w = stats.at<int>(i, cv::CC_STAT_WIDTH), h = stats.at<int>(i, cv::CC_STAT_HEIGHT);
       const int area = stats.at<int>(i, cv::CC_STAT_AREA);
       if (area < min_area_scaled || w < config.min_side_px || h < config.min_side_px) continue;
-      out.push_back(make_blob(labels, c, x, y, w, h, area, inv, [&](int cy, int cx) { return comp.at<int>(cy, cx) == i; }));
+      out.push_back(make_blob(labels, c, x, y, w, h, area, inv,
+                              [&](int cy, int cx) { return comp.at<int>(cy, cx) == i; }));
     }
   }
   return out;

@@ -1,9 +1,8 @@
 #include "detector/detector.hpp"
 
-#include <opencv2/imgproc.hpp>
-
 #include <algorithm>
 #include <cmath>
+#include <opencv2/imgproc.hpp>
 #include <sstream>
 
 namespace faultline::detector {
@@ -31,7 +30,8 @@ std::vector<Box3d> merge_duplicates(std::vector<Box3d> boxes) {
     Group* target = nullptr;
     for (auto& g : groups) {
       if (g.box.cls != b.cls) continue;
-      if (std::hypot(g.box.center[0] - b.center[0], g.box.center[1] - b.center[1]) < prior_of(b.cls).merge_radius_m) {
+      if (std::hypot(g.box.center[0] - b.center[0], g.box.center[1] - b.center[1]) <
+          prior_of(b.cls).merge_radius_m) {
         target = &g;
         break;
       }
@@ -59,13 +59,16 @@ std::vector<Box3d> merge_duplicates(std::vector<Box3d> boxes) {
   return out;
 }
 
-Detector::Detector(const DetectorConfig& config) : config_(config), lut_(config.colors), tracker_(config.tracker) {}
+Detector::Detector(const DetectorConfig& config)
+    : config_(config), lut_(config.colors), tracker_(config.tracker) {}
 
 std::vector<Box3d> Detector::detect_camera(const CameraInput& frame) const {
   if (frame.bgr.empty() || frame.bgr.type() != CV_8UC3) return {};
   cv::Mat img = frame.bgr;
-  const int target_w = std::max(1, static_cast<int>(std::lround(frame.geometry.width * config_.scale)));
-  const int target_h = std::max(1, static_cast<int>(std::lround(frame.geometry.height * config_.scale)));
+  const int target_w =
+      std::max(1, static_cast<int>(std::lround(frame.geometry.width * config_.scale)));
+  const int target_h =
+      std::max(1, static_cast<int>(std::lround(frame.geometry.height * config_.scale)));
   if (img.cols != target_w || img.rows != target_h) {
     cv::Mat small;
     cv::resize(img, small, cv::Size(target_w, target_h), 0, 0, cv::INTER_AREA);
@@ -75,7 +78,8 @@ std::vector<Box3d> Detector::detect_camera(const CameraInput& frame) const {
   cv::Mat& labels = scratch_.labels;
   lut_.label_image(img, labels);
   const double scale_used = static_cast<double>(img.cols) / frame.geometry.width;
-  bridge_label_gaps(labels, std::max(1, static_cast<int>(std::lround(config_.blobs.max_gap_px * scale_used))));
+  bridge_label_gaps(
+      labels, std::max(1, static_cast<int>(std::lround(config_.blobs.max_gap_px * scale_used))));
   std::vector<Box3d> out;
   RoadPrior road = road_;
   const auto& r = frame.geometry.ego_to_world.rotation;
@@ -94,16 +98,17 @@ void Detector::reset_motion() {
 void Detector::observe_ego(const dataset::Rigid& ego, std::int64_t t_us) {
   const auto& r = ego.rotation;
   const double yaw = std::atan2(r[3], r[0]);
-  // A stream that starts over (a looped or restarted player) goes back in time: the motion history starts over
-  // too, so a replayed sample is detected as it was the first time. (Key frames of one sample arrive in camera
-  // order, a few tens of milliseconds apart, hence the margin.)
+  // A stream that starts over (a looped or restarted player) goes back in time: the motion history
+  // starts over too, so a replayed sample is detected as it was the first time. (Key frames of one
+  // sample arrive in camera order, a few tens of milliseconds apart, hence the margin.)
   if (have_ego_ && t_us + kStartOverUs < last_ego_us_) reset_motion();
   if (have_ego_ && t_us > last_ego_us_) {
     const auto& lr = last_ego_.rotation;
     const double dist = std::hypot(ego.translation[0] - last_ego_.translation[0],
                                    ego.translation[1] - last_ego_.translation[1]);
     if (dist > 0.2) {  // enough travel for a curvature estimate
-      const double dyaw = std::atan2(std::sin(yaw - std::atan2(lr[3], lr[0])), std::cos(yaw - std::atan2(lr[3], lr[0])));
+      const double dyaw = std::atan2(std::sin(yaw - std::atan2(lr[3], lr[0])),
+                                     std::cos(yaw - std::atan2(lr[3], lr[0])));
       road_.curvature = std::clamp(dyaw / dist, -0.02, 0.02);
       last_ego_ = ego;
       last_ego_us_ = t_us;
@@ -139,7 +144,8 @@ std::vector<Box3d> Detector::finish_sample(std::int64_t timestamp_us) {
   }
   boxes = merge_duplicates(std::move(boxes));
   if (boxes.size() > kMaxBoxesPerSample) {
-    std::stable_sort(boxes.begin(), boxes.end(), [](const Box3d& a, const Box3d& b) { return a.score > b.score; });
+    std::stable_sort(boxes.begin(), boxes.end(),
+                     [](const Box3d& a, const Box3d& b) { return a.score > b.score; });
     boxes.resize(kMaxBoxesPerSample);
   }
   return boxes;

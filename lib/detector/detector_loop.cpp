@@ -20,11 +20,13 @@ namespace {
 
 dataset::Rigid to_rigid(const msgs::Transform& t) {
   const auto& q = t.rotation();
-  return dataset::make_rigid({q.w(), q.x(), q.y(), q.z()}, {t.translation().x(), t.translation().y(), t.translation().z()});
+  return dataset::make_rigid({q.w(), q.x(), q.y(), q.z()},
+                             {t.translation().x(), t.translation().y(), t.translation().z()});
 }
 
 // Header + pixels of one received frame -> detector input; kCorruptData when it cannot be decoded.
-Result<CameraInput> to_input(const msgs::CameraFrame& h, const std::uint8_t* data, std::size_t size) {
+Result<CameraInput> to_input(const msgs::CameraFrame& h, const std::uint8_t* data,
+                             std::size_t size) {
   CameraInput in;
   in.camera = h.camera();
   if (h.encoding() == "jpeg") {
@@ -33,11 +35,13 @@ Result<CameraInput> to_input(const msgs::CameraFrame& h, const std::uint8_t* dat
     in.bgr = *img;
   } else if (h.encoding() == "bgr8") {
     in.bgr = cv::Mat(static_cast<int>(h.height()), static_cast<int>(h.width()), CV_8UC3,
-                     const_cast<std::uint8_t*>(data), h.step()).clone();
+                     const_cast<std::uint8_t*>(data), h.step())
+                 .clone();
   } else {
     return Status(StatusCode::kCorruptData, "unsupported encoding '" + h.encoding() + "'");
   }
-  if (h.intrinsics_size() != 9) return Status(StatusCode::kCorruptData, "intrinsics must have 9 values");
+  if (h.intrinsics_size() != 9)
+    return Status(StatusCode::kCorruptData, "intrinsics must have 9 values");
   for (int i = 0; i < 9; ++i) in.geometry.intrinsics[static_cast<std::size_t>(i)] = h.intrinsics(i);
   in.geometry.sensor_to_ego = to_rigid(h.sensor_to_ego());
   in.geometry.ego_to_world = to_rigid(h.ego_pose());
@@ -52,8 +56,10 @@ Result<CameraInput> to_input(const msgs::CameraFrame& h, const std::uint8_t* dat
 void DetectorLoopConfig::validate() const {
   if (scale != 1.0 && scale != 0.5 && scale != 0.25)
     throw ConfigError("detector.scale = " + std::to_string(scale) + ": expected 1.0, 0.5 or 0.25");
-  if (input_endpoints.empty()) throw ConfigError("detector.input_endpoints: at least one endpoint needed");
-  if (input_hwm < 1) throw ConfigError("detector.input_hwm = " + std::to_string(input_hwm) + ": expected >= 1");
+  if (input_endpoints.empty())
+    throw ConfigError("detector.input_endpoints: at least one endpoint needed");
+  if (input_hwm < 1)
+    throw ConfigError("detector.input_hwm = " + std::to_string(input_hwm) + ": expected >= 1");
 }
 
 struct DetectorLoop::Impl {
@@ -65,8 +71,10 @@ struct DetectorLoop::Impl {
   transport::Publisher push;
   Detector detector;
   transport::LogLimiter bad_limiter;
-  transport::DropCounter boundary_seqs;  // boundaries lost in transport show as gaps in the publisher's seq
-  // Single-frame mode: per camera, the latest frame of the current sample (key frames preferred), still encoded.
+  transport::DropCounter
+      boundary_seqs;  // boundaries lost in transport show as gaps in the publisher's seq
+  // Single-frame mode: per camera, the latest frame of the current sample (key frames preferred),
+  // still encoded.
   struct Pending {
     msgs::CameraFrame header;
     std::vector<std::uint8_t> payload;
@@ -77,22 +85,28 @@ struct DetectorLoop::Impl {
   std::map<std::string, std::uint32_t> key_frames_seen;  // per sample token, until its boundary
   transport::LogLimiter incomplete_limiter;
 
-  // A break in the sample stream: this detector joined mid-run (a respawn: the first boundary it sees is not
-  // its publisher's first), the publisher restarted, or boundaries were lost. The samples before it are not
-  // all known, so the ego-motion history starts over and the sample is named: its boxes may differ from an
-  // unbroken run's.
-  void check_break(transport::SeqOutcome outcome, const msgs::SampleBoundary& b, DetectorLoopCounts& counts) {
+  // A break in the sample stream: this detector joined mid-run (a respawn: the first boundary it
+  // sees is not its publisher's first), the publisher restarted, or boundaries were lost. The
+  // samples before it are not all known, so the ego-motion history starts over and the sample is
+  // named: its boxes may differ from an unbroken run's.
+  void check_break(transport::SeqOutcome outcome, const msgs::SampleBoundary& b,
+                   DetectorLoopCounts& counts) {
     const bool joined_late = outcome == transport::SeqOutcome::First && b.header().seq() > 1;
-    if (!joined_late && outcome != transport::SeqOutcome::Restart && outcome != transport::SeqOutcome::Gap) return;
+    if (!joined_late && outcome != transport::SeqOutcome::Restart &&
+        outcome != transport::SeqOutcome::Gap)
+      return;
     detector.reset_motion();
     ++counts.stream_breaks;
     if (counts.stream_breaks <= 20 || incomplete_limiter.allow()) {
-      log->warn("sample {} follows a break in the stream ({}): detected without the motion history before it "
-                "({} breaks so far)",
-                b.sample_token(),
-                joined_late ? "joined mid-run" : outcome == transport::SeqOutcome::Restart ? "publisher restarted"
-                                                                                          : "boundaries lost",
-                counts.stream_breaks);
+      log->warn(
+          "sample {} follows a break in the stream ({}): detected without the motion history "
+          "before it "
+          "({} breaks so far)",
+          b.sample_token(),
+          joined_late                                 ? "joined mid-run"
+          : outcome == transport::SeqOutcome::Restart ? "publisher restarted"
+                                                      : "boundaries lost",
+          counts.stream_breaks);
     }
   }
 
@@ -104,15 +118,19 @@ struct DetectorLoop::Impl {
     if (b.frames_sent() <= seen) return;
     counts.key_frames_missing += b.frames_sent() - seen;
     ++counts.incomplete_samples;
-    if (counts.incomplete_samples <= 20 || incomplete_limiter.allow()) {  // the first ones each named
-      log->warn("sample {} incomplete: {} of its {} key frames arrived; detected from those ({} samples "
-                "incomplete so far)",
-                b.sample_token(), seen, b.frames_sent(), counts.incomplete_samples);
+    if (counts.incomplete_samples <= 20 ||
+        incomplete_limiter.allow()) {  // the first ones each named
+      log->warn(
+          "sample {} incomplete: {} of its {} key frames arrived; detected from those ({} samples "
+          "incomplete so far)",
+          b.sample_token(), seen, b.frames_sent(), counts.incomplete_samples);
     }
   }
 
   Impl(DetectorLoopConfig c, std::string n, std::shared_ptr<spdlog::logger> l)
-      : cfg(std::move(c)), node(std::move(n)), log(std::move(l)),
+      : cfg(std::move(c)),
+        node(std::move(n)),
+        log(std::move(l)),
         sub([&] {
           transport::SubscriberConfig s;
           s.endpoints = cfg.input_endpoints;
@@ -139,7 +157,8 @@ struct DetectorLoop::Impl {
         }()) {}
 };
 
-DetectorLoop::DetectorLoop(DetectorLoopConfig config, std::string node, std::shared_ptr<spdlog::logger> log) {
+DetectorLoop::DetectorLoop(DetectorLoopConfig config, std::string node,
+                           std::shared_ptr<spdlog::logger> log) {
   config.validate();
   impl_ = std::make_unique<Impl>(std::move(config), std::move(node), std::move(log));
 }
@@ -164,15 +183,21 @@ int DetectorLoop::run(const std::atomic<bool>& stop) {
         continue;
       }
       ++counts_.boundaries;
-      const std::uint64_t lost_before = m.boundary_seqs.counts(b.header().publisher(), topic).transport_drops;
-      m.check_break(m.boundary_seqs.observe(b.header().publisher(), topic, b.header().seq()), b, counts_);
-      const std::uint64_t lost = m.boundary_seqs.counts(b.header().publisher(), topic).transport_drops - lost_before;
+      const std::uint64_t lost_before =
+          m.boundary_seqs.counts(b.header().publisher(), topic).transport_drops;
+      m.check_break(m.boundary_seqs.observe(b.header().publisher(), topic, b.header().seq()), b,
+                    counts_);
+      const std::uint64_t lost =
+          m.boundary_seqs.counts(b.header().publisher(), topic).transport_drops - lost_before;
       if (lost > 0) {
-        // Those samples get no DetectionArray from us (scored as empty): say so, never skip them silently.
+        // Those samples get no DetectionArray from us (scored as empty): say so, never skip them
+        // silently.
         counts_.boundaries_lost += lost;
-        m.log->warn("{} sample boundar{} lost in transport before sample {}: no detections for {} ({} lost so far)",
-                    lost, lost == 1 ? "y" : "ies", b.sample_token(), lost == 1 ? "that sample" : "those samples",
-                    counts_.boundaries_lost);
+        m.log->warn(
+            "{} sample boundar{} lost in transport before sample {}: no detections for {} ({} lost "
+            "so far)",
+            lost, lost == 1 ? "y" : "ies", b.sample_token(),
+            lost == 1 ? "that sample" : "those samples", counts_.boundaries_lost);
       }
       m.check_complete(b, counts_);
       const auto t0 = Clock::now();
@@ -195,8 +220,9 @@ int DetectorLoop::run(const std::atomic<bool>& stop) {
       d.set_sample_token(b.sample_token());
       d.set_detector(m.detector.config().describe());
       for (const auto& box : boxes) to_detection(box, d.add_detections());
-      d.set_processing_ns(m.sample_processing_ns +
-                          std::chrono::duration_cast<std::chrono::nanoseconds>(Clock::now() - t0).count());
+      d.set_processing_ns(
+          m.sample_processing_ns +
+          std::chrono::duration_cast<std::chrono::nanoseconds>(Clock::now() - t0).count());
       d.set_first_frame_capture_ns(m.first_capture_ns);
       d.mutable_header()->set_seq(++seq);
       d.mutable_header()->set_publisher(m.node);
@@ -216,13 +242,16 @@ int DetectorLoop::run(const std::atomic<bool>& stop) {
     }
     auto view = r->has_payload() ? transport::parse_camera_frame(*r) : m.shm.read(*r);
     if (!view && view.status().code() == StatusCode::kNotFound && !r->has_payload()) {
-      counts_.shm_overwritten = m.shm.overwritten();  // read too late: the ring slot was reused (or its ring is gone)
-      if (m.bad_limiter.allow()) m.log->warn("lost frame on {}: {}", topic, view.status().message());
+      counts_.shm_overwritten =
+          m.shm.overwritten();  // read too late: the ring slot was reused (or its ring is gone)
+      if (m.bad_limiter.allow())
+        m.log->warn("lost frame on {}: {}", topic, view.status().message());
       continue;
     }
     if (!view) {
       ++counts_.malformed;
-      if (m.bad_limiter.allow()) m.log->warn("malformed frame on {}: {}", topic, view.status().message());
+      if (m.bad_limiter.allow())
+        m.log->warn("malformed frame on {}: {}", topic, view.status().message());
       continue;
     }
     ++counts_.frames;
@@ -231,17 +260,20 @@ int DetectorLoop::run(const std::atomic<bool>& stop) {
     if (m.cfg.temporal) {
       const auto t0 = Clock::now();
       auto in = to_input(h, view->payload, view->payload_size);
-      if (!r->has_payload() && !m.shm.intact(*view)) {  // overwritten while decoding: the pixels may be torn
+      if (!r->has_payload() &&
+          !m.shm.intact(*view)) {  // overwritten while decoding: the pixels may be torn
         counts_.shm_overwritten = m.shm.overwritten();
         continue;
       }
       if (!in) {
         ++counts_.undecodable;  // a frame the injector broke: the tracks coast through it
-        if (m.bad_limiter.allow()) m.log->warn("undecodable frame on {}: {}", topic, in.status().message());
+        if (m.bad_limiter.allow())
+          m.log->warn("undecodable frame on {}: {}", topic, in.status().message());
         continue;
       }
       m.detector.add_frame(*in);
-      m.sample_processing_ns += std::chrono::duration_cast<std::chrono::nanoseconds>(Clock::now() - t0).count();
+      m.sample_processing_ns +=
+          std::chrono::duration_cast<std::chrono::nanoseconds>(Clock::now() - t0).count();
       const std::int64_t cap = h.header().capture_stamp_ns();
       if (m.first_capture_ns == 0 || cap < m.first_capture_ns) m.first_capture_ns = cap;
     } else {

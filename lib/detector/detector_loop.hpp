@@ -1,5 +1,6 @@
-// The detector node's loop: subscribes to the faulted camera topics (jpeg or bgr8) and the sample boundaries,
-// runs the reference detector and PUSHes one DetectionArray per key-frame sample to the sink.
+// The detector node's loop: subscribes to the faulted camera topics (jpeg or bgr8) and the sample
+// boundaries, runs the reference detector and PUSHes one DetectionArray per key-frame sample to the
+// sink.
 #pragma once
 
 #include <spdlog/logger.h>
@@ -23,11 +24,12 @@ struct DetectorLoopConfig {
   std::string detections_topic = "/detections";        // DetectionArray topic
   double scale = 1.0;                                  // input scale: 1.0, 0.5 or 0.25
   bool temporal = true;                                // track over every frame vs single key frame
-  bool normalise = true;                               // exposure/contrast normalisation (docs/detector.md)
-  bool exit_on_last = true;                            // stop after the last_in_run boundary
-  int linger_ms = 2000;                                // time to deliver the last DetectionArrays
+  bool normalise = true;     // exposure/contrast normalisation (docs/detector.md)
+  bool exit_on_last = true;  // stop after the last_in_run boundary
+  int linger_ms = 2000;      // time to deliver the last DetectionArrays
 
-  transport::AccessConfig access;  // allow_remote and CURVE keys of every socket (transport/access.hpp)
+  transport::AccessConfig
+      access;  // allow_remote and CURVE keys of every socket (transport/access.hpp)
 
   template <class V>
   void visit(V& v) {
@@ -39,7 +41,8 @@ struct DetectorLoopConfig {
     v("detections_topic", detections_topic, "DetectionArray topic");
     v("scale", scale, "input scale 1.0, 0.5 or 0.25");
     v("temporal", temporal, "track over every frame (true) or single key frame (false)");
-    v("normalise", normalise, "exposure and contrast normalisation before segmentation (docs/detector.md)");
+    v("normalise", normalise,
+      "exposure and contrast normalisation before segmentation (docs/detector.md)");
     v("exit_on_last", exit_on_last, "stop after the last sample");
     v("linger_ms", linger_ms, "end of run: time to deliver queued detections (ms)");
     access.visit(v);
@@ -48,17 +51,21 @@ struct DetectorLoopConfig {
 };
 
 struct DetectorLoopCounts {
-  std::uint64_t frames = 0, malformed = 0, undecodable = 0, boundaries = 0, arrays_sent = 0, send_failures = 0;
-  std::uint64_t boundaries_lost = 0;  // seq gaps on the sync topic: samples that got no DetectionArray
-  // Key frames a boundary announces (its frames_sent) that never arrived here: lost in transport, dropped
-  // by an injected fault, or sent before a respawned detector connected. Their samples are detected from
-  // the frames that did arrive (incomplete_samples counts those samples).
+  std::uint64_t frames = 0, malformed = 0, undecodable = 0, boundaries = 0, arrays_sent = 0,
+                send_failures = 0;
+  std::uint64_t boundaries_lost =
+      0;  // seq gaps on the sync topic: samples that got no DetectionArray
+  // Key frames a boundary announces (its frames_sent) that never arrived here: lost in transport,
+  // dropped by an injected fault, or sent before a respawned detector connected. Their samples are
+  // detected from the frames that did arrive (incomplete_samples counts those samples).
   std::uint64_t key_frames_missing = 0;
   std::uint64_t incomplete_samples = 0;
-  // Samples after a break in the stream (joined mid-run, publisher restarted, boundaries lost): detected
-  // without the ego-motion history of the samples before (the road curvature estimate starts over).
+  // Samples after a break in the stream (joined mid-run, publisher restarted, boundaries lost):
+  // detected without the ego-motion history of the samples before (the road curvature estimate
+  // starts over).
   std::uint64_t stream_breaks = 0;
-  // Shared-memory frames (the injector's output_shm) whose ring slot was reused before or while they were read.
+  // Shared-memory frames (the injector's output_shm) whose ring slot was reused before or while
+  // they were read.
   std::uint64_t shm_overwritten = 0;
 };
 

@@ -19,7 +19,8 @@ Ray pixel_ray(const CameraGeometry& cam, double u, double v) {
   const auto& k = cam.intrinsics;
   const Vec3 d_cam{(u - k[2]) / k[0], (v - k[5]) / k[4], 1.0};
   const Vec3 d_ego = dataset::mat_vec(cam.sensor_to_ego.rotation, d_cam);
-  return {cam.ego_to_world.apply(cam.sensor_to_ego.translation), dataset::mat_vec(cam.ego_to_world.rotation, d_ego)};
+  return {cam.ego_to_world.apply(cam.sensor_to_ego.translation),
+          dataset::mat_vec(cam.ego_to_world.rotation, d_ego)};
 }
 
 // Intersection with the horizontal plane z = plane_z in front of the camera.
@@ -30,7 +31,8 @@ std::optional<Vec3> hit_plane(const Ray& r, double plane_z) {
   return Vec3{r.origin[0] + t * r.dir[0], r.origin[1] + t * r.dir[1], plane_z};
 }
 
-// Extent of the footprint along (`along` = true) or across the horizontal viewing direction `azimuth`.
+// Extent of the footprint along (`along` = true) or across the horizontal viewing direction
+// `azimuth`.
 double extent(const ClassPrior& p, double yaw, double azimuth, bool along) {
   const double phi = yaw - azimuth;
   const double c = std::abs(std::cos(phi)), s = std::abs(std::sin(phi));
@@ -74,14 +76,16 @@ std::optional<Box3d> lift_blob(const Blob& blob, const CameraGeometry& cam, cons
   const double width_px = std::max(1.0, blob.x1 - blob.x0);
   const bool bottom_hidden = blob.touches_bottom || blob.bottom_occluded;
 
-  // First guess: the ground contact of the bottom edge, else the prior width seen at the blob's width.
+  // First guess: the ground contact of the bottom edge, else the prior width seen at the blob's
+  // width.
   const Ray bottom_ray = pixel_ray(cam, u, blob.y1);
   std::optional<Vec3> contact = hit_plane(bottom_ray, 0.0);
   const Ray mid_ray = pixel_ray(cam, u, 0.5 * (blob.y0 + blob.y1));
   const double az = std::atan2(mid_ray.dir[1], mid_ray.dir[0]);
   auto from_width = [&](double across_m) -> Vec3 {
     const double depth = f * across_m / width_px;  // camera-frame depth; ray dir has unit camera z
-    return {mid_ray.origin[0] + depth * mid_ray.dir[0], mid_ray.origin[1] + depth * mid_ray.dir[1], 0.0};
+    return {mid_ray.origin[0] + depth * mid_ray.dir[0], mid_ray.origin[1] + depth * mid_ray.dir[1],
+            0.0};
   };
   if (!contact) {
     if (!bottom_hidden || box.truncated) return std::nullopt;
@@ -94,7 +98,8 @@ std::optional<Box3d> lift_blob(const Blob& blob, const CameraGeometry& cam, cons
   if (bottom_hidden && !box.truncated) {
     c = from_width(extent(pr, box.yaw, az, false));
   } else {
-    const double dx = contact->at(0) - bottom_ray.origin[0], dy = contact->at(1) - bottom_ray.origin[1];
+    const double dx = contact->at(0) - bottom_ray.origin[0],
+                 dy = contact->at(1) - bottom_ray.origin[1];
     const double dn = std::max(1e-9, std::hypot(dx, dy));
     const double push = 0.5 * extent(pr, box.yaw, std::atan2(dy, dx), true);
     c = {contact->at(0) + push * dx / dn, contact->at(1) + push * dy / dn, 0.0};

@@ -1,12 +1,11 @@
 #include "detector/photometric.hpp"
 
-#include <opencv2/imgproc.hpp>
-
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdint>
 #include <cstdlib>
+#include <opencv2/imgproc.hpp>
 #include <vector>
 
 namespace faultline::detector {
@@ -66,20 +65,21 @@ double estimate_noise_sigma(const cv::Mat& bgr) {
   std::vector<int> response;
   for (int y = 1; y + 1 < bgr.rows; y += 8)
     for (int x = 1; x + 1 < bgr.cols; x += 8) {
-      const int v = sum(y - 1, x - 1) - 2 * sum(y - 1, x) + sum(y - 1, x + 1) - 2 * sum(y, x - 1) + 4 * sum(y, x) -
-                    2 * sum(y, x + 1) + sum(y + 1, x - 1) - 2 * sum(y + 1, x) + sum(y + 1, x + 1);
+      const int v = sum(y - 1, x - 1) - 2 * sum(y - 1, x) + sum(y - 1, x + 1) - 2 * sum(y, x - 1) +
+                    4 * sum(y, x) - 2 * sum(y, x + 1) + sum(y + 1, x - 1) - 2 * sum(y + 1, x) +
+                    sum(y + 1, x + 1);
       response.push_back(std::abs(v));
     }
   if (response.empty()) return 0.0;
   auto mid = response.begin() + static_cast<std::ptrdiff_t>(response.size() / 2);
   std::nth_element(response.begin(), mid, response.end());
-  // The mask's weights square-sum to 36, so its response to white noise has sigma 6 * sigma(sum of 3 channels);
-  // the median of |N(0, s)| is 0.6745 s; and sigma(sum) = sqrt(3) * sigma(channel).
+  // The mask's weights square-sum to 36, so its response to white noise has sigma 6 * sigma(sum of
+  // 3 channels); the median of |N(0, s)| is 0.6745 s; and sigma(sum) = sqrt(3) * sigma(channel).
   return *mid / (0.6745 * 6.0) / std::sqrt(3.0);
 }
 
-cv::Mat normalise_photometric(const cv::Mat& bgr, const PhotometricConfig& config, PhotometricStats* stats,
-                              cv::Mat* scratch) {
+cv::Mat normalise_photometric(const cv::Mat& bgr, const PhotometricConfig& config,
+                              PhotometricStats* stats, cv::Mat* scratch) {
   CV_Assert(bgr.type() == CV_8UC3);
   PhotometricStats s;
   if (!config.enabled || bgr.empty()) {
@@ -108,7 +108,8 @@ cv::Mat normalise_photometric(const cv::Mat& bgr, const PhotometricConfig& confi
     cv::resize(bgr, input, cv::Size(bgr.cols / 2, bgr.rows / 2), 0, 0, cv::INTER_AREA);
   }
   const long clipped = count_over_exposed(input, config.clip_level);
-  s.clipped_fraction = input.total() ? static_cast<double>(clipped) / static_cast<double>(input.total()) : 0.0;
+  s.clipped_fraction =
+      input.total() ? static_cast<double>(clipped) / static_cast<double>(input.total()) : 0.0;
   if (stats) *stats = s;
   const bool identity = s.black < 0.5 && s.gain <= 1.15;  // close enough: keep the exact pixels
   if (identity && clipped == 0) return input;

@@ -14,8 +14,10 @@ namespace faultline::detector {
 // Fills a protobuf Detection (global frame) from a box.
 void to_detection(const Box3d& box, msgs::Detection* out);
 
-// Writes {"meta": {use_camera: true, ...}, "results": {sample_token: [boxes]}}; kIoError naming the path.
-Status write_results_json(const std::string& path, const std::map<std::string, std::vector<Box3d>>& results,
+// Writes {"meta": {use_camera: true, ...}, "results": {sample_token: [boxes]}}; kIoError naming the
+// path.
+Status write_results_json(const std::string& path,
+                          const std::map<std::string, std::vector<Box3d>>& results,
                           const std::string& detector_description);
 
 }  // namespace faultline::detector

@@ -35,7 +35,8 @@ void Tracker::update(const std::vector<Box3d>& detections, std::int64_t t_us) {
   tracks_.erase(std::remove_if(tracks_.begin(), tracks_.end(),
                                [&](const Track& tr) { return t - tr.last_s > config_.delete_s; }),
                 tracks_.end());
-  // Greedy association: all (track, detection) pairs of one class by distance to the track's prediction.
+  // Greedy association: all (track, detection) pairs of one class by distance to the track's
+  // prediction.
   struct Pair {
     double d;
     std::size_t track, det;
@@ -47,7 +48,8 @@ void Tracker::update(const std::vector<Box3d>& detections, std::int64_t t_us) {
     for (std::size_t j = 0; j < detections.size(); ++j) {
       if (detections[j].cls != tracks_[i].box.cls) continue;
       const double d = std::hypot(detections[j].center[0] - px, detections[j].center[1] - py);
-      if (d < prior_of(detections[j].cls).merge_radius_m + config_.gate_m) pairs.push_back({d, i, j});
+      if (d < prior_of(detections[j].cls).merge_radius_m + config_.gate_m)
+        pairs.push_back({d, i, j});
     }
   }
   std::sort(pairs.begin(), pairs.end(), [](const Pair& a, const Pair& b) {
@@ -60,7 +62,8 @@ void Tracker::update(const std::vector<Box3d>& detections, std::int64_t t_us) {
     Track& tr = tracks_[p.track];
     const Box3d& d = detections[p.det];
     tr.history.push_back({t, d.center[0], d.center[1], d.score});
-    while (tr.history.size() > 1 && t - tr.history.front().t_s > config_.history_s) tr.history.pop_front();
+    while (tr.history.size() > 1 && t - tr.history.front().t_s > config_.history_s)
+      tr.history.pop_front();
     tr.box.score = 0.7 * tr.box.score + 0.3 * d.score;
     tr.box.center[2] = d.center[2];
     ++tr.hits;
@@ -70,7 +73,8 @@ void Tracker::update(const std::vector<Box3d>& detections, std::int64_t t_us) {
     if (det_used[j]) continue;
     Track tr;
     tr.box = detections[j];
-    tr.history.push_back({t, detections[j].center[0], detections[j].center[1], detections[j].score});
+    tr.history.push_back(
+        {t, detections[j].center[0], detections[j].center[1], detections[j].score});
     tr.hits = 1;
     tr.last_s = t;
     tracks_.push_back(std::move(tr));
@@ -93,15 +97,18 @@ std::vector<Box3d> Tracker::report(std::int64_t t_us, const dataset::Rigid& ego_
     b.vy = vy;
     apply_layout_prior(&b, ego_to_world, road);
     const auto cls = static_cast<dataset::SynthClass>(b.cls);
-    const bool static_class = cls == dataset::SynthClass::kTrafficCone || cls == dataset::SynthClass::kBarrier;
+    const bool static_class =
+        cls == dataset::SynthClass::kTrafficCone || cls == dataset::SynthClass::kBarrier;
     const double speed = std::hypot(vx, vy);
     if (static_class) {
       b.vx = b.vy = 0;
     } else if (speed > config_.moving_speed_mps) {
       b.yaw = std::atan2(vy, vx);
     }
-    if (prior_of(b.cls).vehicle) b.attribute = speed > config_.moving_speed_mps ? "vehicle.moving" : "vehicle.parked";
-    if (cls == dataset::SynthClass::kPedestrian) b.attribute = speed > 0.4 ? "pedestrian.moving" : "pedestrian.standing";
+    if (prior_of(b.cls).vehicle)
+      b.attribute = speed > config_.moving_speed_mps ? "vehicle.moving" : "vehicle.parked";
+    if (cls == dataset::SynthClass::kPedestrian)
+      b.attribute = speed > 0.4 ? "pedestrian.moving" : "pedestrian.standing";
     // Evidence grows with confirmations; coasted tracks lose confidence.
     const double confirm = 1.0 - 0.5 * std::exp(-(tr.hits - 1) / 3.0);
     b.score = std::clamp(tr.box.score * confirm * (age > 0.1 ? 0.75 : 1.0), 0.01, 1.0);

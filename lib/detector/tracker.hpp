@@ -1,6 +1,7 @@
-// Multi-object tracker over per-camera detections at the full camera rate (~12 Hz per camera): greedy nearest
-// association per class, position and velocity from a least-squares line fit over the last second of
-// measurements, yaw from the motion direction for moving objects, coasting through a few missed frames.
+// Multi-object tracker over per-camera detections at the full camera rate (~12 Hz per camera):
+// greedy nearest association per class, position and velocity from a least-squares line fit over
+// the last second of measurements, yaw from the motion direction for moving objects, coasting
+// through a few missed frames.
 #pragma once
 
 #include <cstdint>
@@ -13,10 +14,10 @@
 namespace faultline::detector {
 
 struct TrackerConfig {
-  double history_s = 1.0;       // measurement window of the line fit
-  double coast_s = 0.45;        // a track unseen for longer is not reported (about 5 frames at 12 Hz)
-  double delete_s = 1.0;        // ... and deleted after this long
-  double gate_m = 1.5;          // association gate on top of the class merge radius
+  double history_s = 1.0;  // measurement window of the line fit
+  double coast_s = 0.45;   // a track unseen for longer is not reported (about 5 frames at 12 Hz)
+  double delete_s = 1.0;   // ... and deleted after this long
+  double gate_m = 1.5;     // association gate on top of the class merge radius
   double moving_speed_mps = 1.0;  // faster tracks take their yaw from the motion direction
 };
 
@@ -25,8 +26,10 @@ class Tracker {
   explicit Tracker(const TrackerConfig& config = {}) : config_(config) {}
   // Detections of one camera frame captured at `t_us`.
   void update(const std::vector<Box3d>& detections, std::int64_t t_us);
-  // Tracks alive at `t_us`, predicted to that time; road prior for slow objects' yaw and attributes.
-  std::vector<Box3d> report(std::int64_t t_us, const dataset::Rigid& ego_to_world, const RoadPrior& road) const;
+  // Tracks alive at `t_us`, predicted to that time; road prior for slow objects' yaw and
+  // attributes.
+  std::vector<Box3d> report(std::int64_t t_us, const dataset::Rigid& ego_to_world,
+                            const RoadPrior& road) const;
   std::size_t size() const { return tracks_.size(); }
 
  private:

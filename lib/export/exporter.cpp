@@ -1,5 +1,10 @@
 #include "export/exporter.hpp"
 
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <time.h>
+#include <unistd.h>
+
 #include <algorithm>
 #include <atomic>
 #include <cerrno>
@@ -9,11 +14,6 @@
 #include <memory>
 #include <mutex>
 #include <thread>
-
-#include <fcntl.h>
-#include <sys/stat.h>
-#include <time.h>
-#include <unistd.h>
 
 #include "corruption/corrupt.hpp"
 #include "corruption/sensor_fault.hpp"
@@ -33,14 +33,16 @@ double seconds_since(Clock::time_point t0) {
   return std::chrono::duration<double>(Clock::now() - t0).count();
 }
 
-// CPU time of the calling thread: unlike wall time it does not count time spent descheduled on a loaded machine.
+// CPU time of the calling thread: unlike wall time it does not count time spent descheduled on a
+// loaded machine.
 std::int64_t thread_cpu_ns() {
   timespec ts{};
   ::clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
   return static_cast<std::int64_t>(ts.tv_sec) * 1000000000 + ts.tv_nsec;
 }
 
-// Reads a whole file into `out`, reusing its capacity. Errors as dataset::read_file: kNotFound / kIoError.
+// Reads a whole file into `out`, reusing its capacity. Errors as dataset::read_file: kNotFound /
+// kIoError.
 Status read_into(const std::string& path, std::vector<std::uint8_t>& out) {
   const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
   if (fd < 0) return Status(StatusCode::kNotFound, path + ": file not found");
@@ -83,13 +85,18 @@ std::string base_name(const std::string& path) {
 }
 
 constexpr const char* kSeedDerivation =
-    "seed64 = splitmix64(run_seed ^ splitmix64(fnv1a64(\"<ClassName>/<level>/<key>\"))); numpy mode: "
-    "np.random.seed(seed64 >> 32) before each draw; fast mode: FastRng(seed64). key: image corruptions "
-    "\"<CAM_X>/<file>\", FrameLost the sample token (6 uniforms in camera order; sweeps: the file key), "
-    "CameraCrash \"run\", sensor faults \"<scene_token>/<CAM_X>\" (the fault's model drawn from seed64, at the "
+    "seed64 = splitmix64(run_seed ^ splitmix64(fnv1a64(\"<ClassName>/<level>/<key>\"))); numpy "
+    "mode: "
+    "np.random.seed(seed64 >> 32) before each draw; fast mode: FastRng(seed64). key: image "
+    "corruptions "
+    "\"<CAM_X>/<file>\", FrameLost the sample token (6 uniforms in camera order; sweeps: the file "
+    "key), "
+    "CameraCrash \"run\", sensor faults \"<scene_token>/<CAM_X>\" (the fault's model drawn from "
+    "seed64, at the "
     "frame's timestamp, both modes)";
 
-// The settings that change output bytes; a resume only trusts an earlier run that used the same ones.
+// The settings that change output bytes; a resume only trusts an earlier run that used the same
+// ones.
 std::string config_mismatch(const std::map<std::string, std::string>& before,
                             const std::map<std::string, std::string>& now) {
   for (const char* key : {"version", "rng", "seed", "quality", "subsampling"}) {
@@ -107,7 +114,8 @@ struct Output {
   std::string dir, manifest_path;
   std::vector<int> dead_cameras;
   std::uint64_t crash_seed = 0;
-  std::map<std::string, FileEntry> previous;  // from an earlier run's manifest; read-only while workers run
+  std::map<std::string, FileEntry>
+      previous;  // from an earlier run's manifest; read-only while workers run
   std::mutex mu;
   Manifest manifest;
   std::atomic<std::int64_t> busy_ns{0};  // wall, summed over workers
@@ -138,27 +146,33 @@ bool frame_lost(corruption::RngMode mode, int severity, std::uint64_t seed64, in
   return policy::draw_lost_frame(severity, rng)[cam];
 }
 
-// Per-worker state kept across frames: TurboJPEG handles, the input bytes, the decoded frame and the encoded
-// outputs live in buffers that are reused, so the steady state allocates only what the corruption kernels do.
+// Per-worker state kept across frames: TurboJPEG handles, the input bytes, the decoded frame and
+// the encoded outputs live in buffers that are reused, so the steady state allocates only what the
+// corruption kernels do.
 struct WorkerState {
   codec::JpegDecoder decoder;
-  codec::JpegEncoder encoder;    // corrupted outputs
-  codec::JpegEncoder reencoder;  // this frame's untouched re-encode (shared by CameraCrash/FrameLost outputs)
+  codec::JpegEncoder encoder;  // corrupted outputs
+  codec::JpegEncoder
+      reencoder;  // this frame's untouched re-encode (shared by CameraCrash/FrameLost outputs)
   std::vector<std::uint8_t> input;
   cv::Mat frame;
-  codec::JpegEncoder::Bytes reencoded;  // valid for the current frame when reencoded_frame == frame index
+  codec::JpegEncoder::Bytes
+      reencoded;  // valid for the current frame when reencoded_frame == frame index
   std::size_t reencoded_frame = static_cast<std::size_t>(-1);
-  std::vector<std::uint8_t> black;  // an all-zero frame of black_size: the same bytes for every frame of that size
+  std::vector<std::uint8_t>
+      black;  // an all-zero frame of black_size: the same bytes for every frame of that size
   cv::Size black_size;
 };
 
 class Runner {
  public:
   Runner(const ExportConfig& cfg, const dataset::NuScenesReader& reader,
-         std::vector<dataset::CameraFrameRecord> frames, std::vector<std::unique_ptr<Output>> outputs)
+         std::vector<dataset::CameraFrameRecord> frames,
+         std::vector<std::unique_ptr<Output>> outputs)
       : cfg_(cfg), reader_(reader), frames_(std::move(frames)), outputs_(std::move(outputs)) {}
 
-  // Runs until every frame is taken. `lookahead`: frames ahead of the one taken whose file is prefetched.
+  // Runs until every frame is taken. `lookahead`: frames ahead of the one taken whose file is
+  // prefetched.
   void worker(std::size_t lookahead) {
     WorkerState ws;
     for (;;) {
@@ -180,7 +194,8 @@ class Runner {
     (written ? o.manifest.written : o.manifest.skipped) += 1;
     done.fetch_add(1);
   }
-  void add_error(Output& o, const std::string& rel, const std::string& input, const std::string& error) {
+  void add_error(Output& o, const std::string& rel, const std::string& input,
+                 const std::string& error) {
     std::lock_guard<std::mutex> lock(o.mu);
     o.manifest.files.erase(rel);
     o.manifest.errors[rel] = InputError{input, error};
@@ -206,7 +221,8 @@ class Runner {
     const std::int64_t c0 = thread_cpu_ns();
     Status status = read_into(input, ws.input);
     if (status) status = ws.decoder.decode(ws.input.data(), ws.input.size(), ws.frame);
-    decode_ns.fetch_add(std::chrono::duration_cast<std::chrono::nanoseconds>(Clock::now() - t0).count());
+    decode_ns.fetch_add(
+        std::chrono::duration_cast<std::chrono::nanoseconds>(Clock::now() - t0).count());
     decode_cpu_ns.fetch_add(thread_cpu_ns() - c0);
     decoded.fetch_add(1);
     if (!status) {
@@ -234,9 +250,11 @@ class Runner {
         const auto type = *image_corruption(o->condition);
         Result<cv::Mat> out = Status(StatusCode::kInternal, "not run");
         if (corruption::is_sensor_fault(type)) {
-          // The cause persists: one model per camera and scene (the dirt stays on that lens), rendered at the
-          // frame's time; the same in both rng modes (Faultline's own, no reference).
-          e.seed = derive_seed64(cfg_.seed, o->condition, o->level, f.scene_token + "/" + f.channel);
+          // The cause persists: one model per camera and scene (the dirt stays on that lens),
+          // rendered at the frame's time; the same in both rng modes (Faultline's own, no
+          // reference).
+          e.seed =
+              derive_seed64(cfg_.seed, o->condition, o->level, f.scene_token + "/" + f.channel);
           corruption::FrameContext ctx;
           ctx.time_s = static_cast<double>(f.timestamp_us) * 1e-6;
           out = corruption::sensor_fault(bgr, type, o->severity, e.seed, ctx);
@@ -249,7 +267,10 @@ class Runner {
         }
         if (out) {
           auto enc = ws.encoder.encode(*out, cfg_.quality, cfg_.subsampling);
-          if (enc) jpeg = *enc; else st = enc.status();
+          if (enc)
+            jpeg = *enc;
+          else
+            st = enc.status();
         } else {
           st = out.status();
         }
@@ -258,11 +279,13 @@ class Runner {
         e.kind = is_black ? "black" : "reencoded";
         if (is_black) {
           if (ws.black.empty() || ws.black_size != bgr.size()) {
-            auto enc = ws.reencoder.encode(cv::Mat::zeros(bgr.size(), bgr.type()), cfg_.quality, cfg_.subsampling);
+            auto enc = ws.reencoder.encode(cv::Mat::zeros(bgr.size(), bgr.type()), cfg_.quality,
+                                           cfg_.subsampling);
             if (enc) {
               ws.black.assign(enc->data, enc->data + enc->size);
               ws.black_size = bgr.size();
-              ws.reencoded_frame = static_cast<std::size_t>(-1);  // the re-encoder's buffer was overwritten
+              ws.reencoded_frame =
+                  static_cast<std::size_t>(-1);  // the re-encoder's buffer was overwritten
             } else {
               st = enc.status();
             }
@@ -282,7 +305,8 @@ class Runner {
         }
       }
       if (st) st = write_file_atomic(o->dir + "/" + rel, jpeg.data, jpeg.size);
-      o->busy_ns.fetch_add(std::chrono::duration_cast<std::chrono::nanoseconds>(Clock::now() - t1).count());
+      o->busy_ns.fetch_add(
+          std::chrono::duration_cast<std::chrono::nanoseconds>(Clock::now() - t1).count());
       o->cpu_ns.fetch_add(thread_cpu_ns() - c1);
       if (!st) {
         add_error(*o, rel, input, st.to_string());
@@ -343,13 +367,16 @@ std::optional<codec::Subsampling> subsampling_from_name(std::string_view name) {
 
 std::string manifest_name(int shard_index, int shard_count) {
   if (shard_count <= 1) return "manifest.json";
-  return "manifest.shard-" + std::to_string(shard_index) + "-of-" + std::to_string(shard_count) + ".json";
+  return "manifest.shard-" + std::to_string(shard_index) + "-of-" + std::to_string(shard_count) +
+         ".json";
 }
 
-Result<std::vector<std::string>> select_scenes(const ExportConfig& config, const std::vector<std::string>& all_scenes) {
+Result<std::vector<std::string>> select_scenes(const ExportConfig& config,
+                                               const std::vector<std::string>& all_scenes) {
   if (config.shard_count < 1 || config.shard_index < 1 || config.shard_index > config.shard_count) {
-    return Status(StatusCode::kInvalidArgument, "shard " + std::to_string(config.shard_index) + "/" +
-                                                    std::to_string(config.shard_count) + ": expected 1 <= K <= N");
+    return Status(StatusCode::kInvalidArgument, "shard " + std::to_string(config.shard_index) +
+                                                    "/" + std::to_string(config.shard_count) +
+                                                    ": expected 1 <= K <= N");
   }
   std::vector<std::string> chosen;
   if (!config.scenes.empty() && !config.split.empty()) {
@@ -362,9 +389,11 @@ Result<std::vector<std::string>> select_scenes(const ExportConfig& config, const
                      ? scoring::predefined_split_scenes(config.split, config.version)
                      : scoring::custom_split_scenes(config.split, config.dataroot, config.version);
     if (!names) return names.status();
-    // Keep only scenes the dataset has, like the devkit's create_splits_scenes filtering on available scenes.
+    // Keep only scenes the dataset has, like the devkit's create_splits_scenes filtering on
+    // available scenes.
     for (const auto& n : *names) {
-      if (std::find(all_scenes.begin(), all_scenes.end(), n) != all_scenes.end()) chosen.push_back(n);
+      if (std::find(all_scenes.begin(), all_scenes.end(), n) != all_scenes.end())
+        chosen.push_back(n);
     }
   } else {
     chosen = all_scenes;
@@ -373,7 +402,8 @@ Result<std::vector<std::string>> select_scenes(const ExportConfig& config, const
   chosen.erase(std::unique(chosen.begin(), chosen.end()), chosen.end());
   std::vector<std::string> shard;
   for (std::size_t i = 0; i < chosen.size(); ++i) {
-    if (static_cast<int>(i % static_cast<std::size_t>(config.shard_count)) == config.shard_index - 1) {
+    if (static_cast<int>(i % static_cast<std::size_t>(config.shard_count)) ==
+        config.shard_index - 1) {
       shard.push_back(chosen[i]);
     }
   }
@@ -385,7 +415,8 @@ Result<ExportSummary> run_export(const ExportConfig& cfg, const ExportProgressFn
   const auto t0 = Clock::now();
   if (cfg.out_dir.empty()) return Status(StatusCode::kInvalidArgument, "no output folder");
   if (cfg.quality < 1 || cfg.quality > 100) {
-    return Status(StatusCode::kInvalidArgument, "quality " + std::to_string(cfg.quality) + ": expected 1..100");
+    return Status(StatusCode::kInvalidArgument,
+                  "quality " + std::to_string(cfg.quality) + ": expected 1..100");
   }
   auto reader = dataset::NuScenesReader::open(cfg.dataroot, cfg.version);
   if (!reader) return reader.status();
@@ -418,7 +449,8 @@ Result<ExportSummary> run_export(const ExportConfig& cfg, const ExportProgressFn
       {"subsampling", subsampling_name(cfg.subsampling)},
       {"sweeps", cfg.sweeps ? "true" : "false"},
       {"split", cfg.split},
-      {"scenes", [&] {
+      {"scenes",
+       [&] {
          std::string s;
          for (const auto& n : *scenes) s += (s.empty() ? "" : ",") + n;
          return s;
@@ -442,8 +474,10 @@ Result<ExportSummary> run_export(const ExportConfig& cfg, const ExportProgressFn
         auto prev = read_manifest(o->manifest_path);
         // An unreadable manifest only costs a redo of everything in that folder.
         if (!prev) {
-          summary.problems.push_back("resume: " + prev.status().to_string() + " (redoing the folder)");
-        } else if (const std::string key = config_mismatch(prev->config, config_echo); !key.empty()) {
+          summary.problems.push_back("resume: " + prev.status().to_string() +
+                                     " (redoing the folder)");
+        } else if (const std::string key = config_mismatch(prev->config, config_echo);
+                   !key.empty()) {
           // Files made with another seed, rng or encoder setting are not this run's outputs.
           summary.problems.push_back("resume: " + o->manifest_path + ": " + key +
                                      " differs from the earlier run (redoing the folder)");
@@ -453,9 +487,10 @@ Result<ExportSummary> run_export(const ExportConfig& cfg, const ExportProgressFn
       }
       if (c == Condition::CameraCrash) {
         o->crash_seed = derive_seed64(cfg.seed, c, level, "run");
-        o->dead_cameras = cfg.rng == corruption::RngMode::Numpy
-                              ? dead_set<rng::NumpyRandomState>(o->severity, numpy_seed(o->crash_seed))
-                              : dead_set<rng::FastRng>(o->severity, o->crash_seed);
+        o->dead_cameras =
+            cfg.rng == corruption::RngMode::Numpy
+                ? dead_set<rng::NumpyRandomState>(o->severity, numpy_seed(o->crash_seed))
+                : dead_set<rng::FastRng>(o->severity, o->crash_seed);
       }
       Manifest& m = o->manifest;
       m.tool_version = cfg.tool_version;
@@ -472,7 +507,8 @@ Result<ExportSummary> run_export(const ExportConfig& cfg, const ExportProgressFn
   const std::int64_t total = summary.frames * static_cast<std::int64_t>(outputs.size());
   summary.expected = total;
 
-  int threads = cfg.threads > 0 ? cfg.threads : static_cast<int>(std::thread::hardware_concurrency());
+  int threads =
+      cfg.threads > 0 ? cfg.threads : static_cast<int>(std::thread::hardware_concurrency());
   threads = std::max(1, threads);
   summary.threads = threads;
   Runner runner(cfg, *reader, std::move(frames), std::move(outputs));
@@ -514,7 +550,8 @@ Result<ExportSummary> run_export(const ExportConfig& cfg, const ExportProgressFn
     summary.skipped += o->manifest.skipped;
     summary.failed += static_cast<std::int64_t>(o->manifest.errors.size());
     for (const auto& [rel, e] : o->manifest.errors) {
-      summary.problems.push_back(o->manifest.condition + "/" + o->manifest.level + "/" + rel + ": " + e.error);
+      summary.problems.push_back(o->manifest.condition + "/" + o->manifest.level + "/" + rel +
+                                 ": " + e.error);
     }
   }
   summary.read_decode_seconds = static_cast<double>(runner.decode_ns.load()) * 1e-9;

@@ -1,15 +1,15 @@
 #include "export/manifest.hpp"
 
-#include <atomic>
-#include <cstdio>
-#include <fstream>
-#include <sstream>
-
 #include <rapidjson/document.h>
 #include <rapidjson/prettywriter.h>
 #include <rapidjson/stringbuffer.h>
 #include <unistd.h>
 #include <zlib.h>
+
+#include <atomic>
+#include <cstdio>
+#include <fstream>
+#include <sstream>
 
 namespace faultline::exporter {
 
@@ -29,10 +29,14 @@ std::string manifest_json(const Manifest& m) {
   rapidjson::PrettyWriter<rapidjson::StringBuffer> w(buf);
   w.SetIndent(' ', 1);
   w.StartObject();
-  w.Key("tool_version"); w.String(m.tool_version.c_str());
-  w.Key("condition"); w.String(m.condition.c_str());
-  w.Key("level"); w.String(m.level.c_str());
-  w.Key("severity"); w.Int(m.severity);
+  w.Key("tool_version");
+  w.String(m.tool_version.c_str());
+  w.Key("condition");
+  w.String(m.condition.c_str());
+  w.Key("level");
+  w.String(m.level.c_str());
+  w.Key("severity");
+  w.Int(m.severity);
   w.Key("config");
   w.StartObject();
   for (const auto& [k, v] : m.config) {
@@ -40,7 +44,8 @@ std::string manifest_json(const Manifest& m) {
     w.String(v.c_str());
   }
   w.EndObject();
-  w.Key("seed_derivation"); w.String(m.seed_derivation.c_str());
+  w.Key("seed_derivation");
+  w.String(m.seed_derivation.c_str());
   if (!m.dead_cameras.empty() || m.condition == "CameraCrash") {
     w.Key("dead_cameras");
     w.StartArray();
@@ -49,19 +54,27 @@ std::string manifest_json(const Manifest& m) {
   }
   w.Key("counts");
   w.StartObject();
-  w.Key("expected"); w.Int64(m.expected);
-  w.Key("files"); w.Int64(static_cast<std::int64_t>(m.files.size()));
-  w.Key("written"); w.Int64(m.written);
-  w.Key("skipped"); w.Int64(m.skipped);
-  w.Key("failed"); w.Int64(static_cast<std::int64_t>(m.errors.size()));
+  w.Key("expected");
+  w.Int64(m.expected);
+  w.Key("files");
+  w.Int64(static_cast<std::int64_t>(m.files.size()));
+  w.Key("written");
+  w.Int64(m.written);
+  w.Key("skipped");
+  w.Int64(m.skipped);
+  w.Key("failed");
+  w.Int64(static_cast<std::int64_t>(m.errors.size()));
   w.EndObject();
   w.Key("errors");
   w.StartArray();
   for (const auto& [k, e] : m.errors) {
     w.StartObject();
-    w.Key("file"); w.String(k.c_str());
-    w.Key("input"); w.String(e.input.c_str());
-    w.Key("error"); w.String(e.error.c_str());
+    w.Key("file");
+    w.String(k.c_str());
+    w.Key("input");
+    w.String(e.input.c_str());
+    w.Key("error");
+    w.String(e.error.c_str());
     w.EndObject();
   }
   w.EndArray();
@@ -72,10 +85,14 @@ std::string manifest_json(const Manifest& m) {
     w.Key(k.c_str());
     w.StartObject();
     std::snprintf(hex, sizeof hex, "%08x", f.crc32);
-    w.Key("crc32"); w.String(hex);
-    w.Key("size"); w.Uint64(f.size_bytes);
-    w.Key("seed"); w.Uint64(f.seed);
-    w.Key("kind"); w.String(f.kind.c_str());
+    w.Key("crc32");
+    w.String(hex);
+    w.Key("size");
+    w.Uint64(f.size_bytes);
+    w.Key("seed");
+    w.Uint64(f.seed);
+    w.Key("kind");
+    w.String(f.kind.c_str());
     w.EndObject();
   }
   w.EndObject();
@@ -86,7 +103,9 @@ std::string manifest_json(const Manifest& m) {
 Result<Manifest> parse_manifest(const std::string& json, const std::string& origin) {
   rapidjson::Document d;
   d.Parse(json.c_str(), json.size());
-  auto bad = [&](const std::string& what) { return Status(StatusCode::kCorruptData, origin + ": " + what); };
+  auto bad = [&](const std::string& what) {
+    return Status(StatusCode::kCorruptData, origin + ": " + what);
+  };
   if (d.HasParseError() || !d.IsObject()) return bad("not a JSON object");
   Manifest m;
   auto str = [&](const char* key, std::string& out) {
@@ -115,7 +134,8 @@ Result<Manifest> parse_manifest(const std::string& json, const std::string& orig
   }
   if (d.HasMember("errors") && d["errors"].IsArray()) {
     for (const auto& e : d["errors"].GetArray()) {
-      if (!e.IsObject() || !e.HasMember("file") || !e["file"].IsString()) return bad("errors[] entry without file");
+      if (!e.IsObject() || !e.HasMember("file") || !e["file"].IsString())
+        return bad("errors[] entry without file");
       InputError err;
       if (e.HasMember("input") && e["input"].IsString()) err.input = e["input"].GetString();
       if (e.HasMember("error") && e["error"].IsString()) err.error = e["error"].GetString();

@@ -53,7 +53,8 @@ Result<MergeSummary> merge_exports(const std::vector<std::string>& inputs, const
   std::map<std::string, Group> groups;  // "<Condition>/<level>"
   for (const auto& root : inputs) {
     std::error_code ec;
-    if (!fs::is_directory(root, ec)) return Status(StatusCode::kNotFound, "merge: not a folder: " + root);
+    if (!fs::is_directory(root, ec))
+      return Status(StatusCode::kNotFound, "merge: not a folder: " + root);
     for (const auto& cond : fs::directory_iterator(root, ec)) {
       if (!cond.is_directory()) continue;
       for (const auto& lvl : fs::directory_iterator(cond.path(), ec)) {
@@ -63,7 +64,8 @@ Result<MergeSummary> merge_exports(const std::vector<std::string>& inputs, const
           if (name.rfind("manifest", 0) != 0 || file.path().extension() != ".json") continue;
           auto m = read_manifest(file.path().string());
           if (!m) return m.status();
-          const std::string key = cond.path().filename().string() + "/" + lvl.path().filename().string();
+          const std::string key =
+              cond.path().filename().string() + "/" + lvl.path().filename().string();
           Group& g = groups[key];
           if (!g.started) {
             g.merged = *m;
@@ -74,9 +76,10 @@ Result<MergeSummary> merge_exports(const std::vector<std::string>& inputs, const
           } else {
             for (const char* k : kMustAgree) {
               if (g.merged.config[k] != m->config[k]) {
-                return Status(StatusCode::kInvalidArgument, "merge: " + file.path().string() + ": config " + k +
-                                                                " = '" + m->config[k] + "' but an earlier shard has '" +
-                                                                g.merged.config[k] + "'");
+                return Status(StatusCode::kInvalidArgument,
+                              "merge: " + file.path().string() + ": config " + k + " = '" +
+                                  m->config[k] + "' but an earlier shard has '" +
+                                  g.merged.config[k] + "'");
               }
             }
           }
@@ -98,7 +101,8 @@ Result<MergeSummary> merge_exports(const std::vector<std::string>& inputs, const
   MergeSummary summary;
   for (auto& [key, g] : groups) {
     Manifest& m = g.merged;
-    for (const auto& [rel, e] : m.files) m.errors.erase(rel);  // another shard or a later run made it
+    for (const auto& [rel, e] : m.files)
+      m.errors.erase(rel);  // another shard or a later run made it
     const std::string out_dir = out + "/" + key;
     std::vector<std::string> copy_failed;
     for (const auto& [rel, e] : m.files) {
@@ -108,7 +112,8 @@ Result<MergeSummary> merge_exports(const std::vector<std::string>& inputs, const
       const std::string dst = out_dir + "/" + rel;
       auto bytes = dataset::read_file(src);
       Status s = bytes ? Status::ok() : bytes.status();
-      if (s && (bytes->size() != e.size_bytes || crc32_of(bytes->data(), bytes->size()) != e.crc32)) {
+      if (s &&
+          (bytes->size() != e.size_bytes || crc32_of(bytes->data(), bytes->size()) != e.crc32)) {
         s = Status(StatusCode::kCorruptData, "checksum mismatch in " + src);
       }
       if (s) {
@@ -138,7 +143,8 @@ Result<MergeSummary> merge_exports(const std::vector<std::string>& inputs, const
     ++summary.folders;
     summary.files += static_cast<std::int64_t>(m.files.size());
     summary.failed += static_cast<std::int64_t>(m.errors.size());
-    for (const auto& [rel, e] : m.errors) summary.problems.push_back(key + "/" + rel + ": " + e.error);
+    for (const auto& [rel, e] : m.errors)
+      summary.problems.push_back(key + "/" + rel + ": " + e.error);
   }
   return summary;
 }

@@ -1,5 +1,5 @@
-// `faultline export --merge`: unions the shard manifests of one or more export roots into <out>, copying files
-// (checksum-verified) when an input root is not <out> itself.
+// `faultline export --merge`: unions the shard manifests of one or more export roots into <out>,
+// copying files (checksum-verified) when an input root is not <out> itself.
 #pragma once
 
 #include <cstdint>

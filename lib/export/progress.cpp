@@ -10,17 +10,21 @@ std::string_view format_duration(double seconds, char* buf, std::size_t size) {
     std::snprintf(buf, size, "?");
   } else {
     const auto s = static_cast<long long>(seconds + 0.5);
-    if (s >= 3600) std::snprintf(buf, size, "%lldh%02lldm", s / 3600, (s / 60) % 60);
-    else if (s >= 60) std::snprintf(buf, size, "%lldm%02llds", s / 60, s % 60);
-    else std::snprintf(buf, size, "%llds", s);
+    if (s >= 3600)
+      std::snprintf(buf, size, "%lldh%02lldm", s / 3600, (s / 60) % 60);
+    else if (s >= 60)
+      std::snprintf(buf, size, "%lldm%02llds", s / 60, s % 60);
+    else
+      std::snprintf(buf, size, "%llds", s);
   }
   return buf;
 }
 
-std::function<void(std::int64_t, std::int64_t, double)> make_progress_printer(bool tty, std::FILE* out,
-                                                                              double log_interval_s) {
+std::function<void(std::int64_t, std::int64_t, double)> make_progress_printer(
+    bool tty, std::FILE* out, double log_interval_s) {
   auto last_log = std::make_shared<double>(-1e9);
-  return [tty, out, log_interval_s, last_log](std::int64_t done, std::int64_t total, double elapsed) {
+  return [tty, out, log_interval_s, last_log](std::int64_t done, std::int64_t total,
+                                              double elapsed) {
     const double rate = elapsed > 0 ? static_cast<double>(done) / elapsed : 0;
     const double eta = rate > 0 ? static_cast<double>(total - done) / rate : -1;
     char eta_buf[32], el_buf[32];
@@ -33,8 +37,9 @@ std::function<void(std::int64_t, std::int64_t, double)> make_progress_printer(bo
       const int filled = static_cast<int>(frac * kWidth);
       for (int i = 0; i < kWidth; ++i) bar[i] = i < filled ? '#' : '.';
       bar[kWidth] = '\0';
-      std::fprintf(out, "\r[%s] %lld/%lld %5.1f%% %.1f img/s ETA %s   ", bar, static_cast<long long>(done),
-                   static_cast<long long>(total), frac * 100, rate, eta_buf);
+      std::fprintf(out, "\r[%s] %lld/%lld %5.1f%% %.1f img/s ETA %s   ", bar,
+                   static_cast<long long>(done), static_cast<long long>(total), frac * 100, rate,
+                   eta_buf);
       if (done >= total) std::fprintf(out, "\n");
       std::fflush(out);
       return;
@@ -42,7 +47,8 @@ std::function<void(std::int64_t, std::int64_t, double)> make_progress_printer(bo
     if (elapsed - *last_log < log_interval_s && done < total) return;
     *last_log = elapsed;
     std::fprintf(out, "export: %lld/%lld outputs (%.1f%%), %.1f img/s, elapsed %s, ETA %s\n",
-                 static_cast<long long>(done), static_cast<long long>(total), frac * 100, rate, el_buf, eta_buf);
+                 static_cast<long long>(done), static_cast<long long>(total), frac * 100, rate,
+                 el_buf, eta_buf);
     std::fflush(out);
   };
 }

@@ -18,8 +18,10 @@ std::uint64_t splitmix64(std::uint64_t x) {
   return x ^ (x >> 31);
 }
 
-std::uint64_t derive_seed64(std::uint64_t run_seed, Condition c, corruption::Level level, const std::string& key) {
-  const std::string text = std::string(class_name(c)) + "/" + corruption::to_string(level) + "/" + key;
+std::uint64_t derive_seed64(std::uint64_t run_seed, Condition c, corruption::Level level,
+                            const std::string& key) {
+  const std::string text =
+      std::string(class_name(c)) + "/" + corruption::to_string(level) + "/" + key;
   return splitmix64(run_seed ^ splitmix64(fnv1a64(text)));
 }
 

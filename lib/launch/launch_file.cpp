@@ -27,9 +27,9 @@ using config::yaml_to_string;
   throw ConfigError(file + ": " + key + ": missing");
 }
 
-// A mapping key as text. A key that is itself a list or mapping (YAML's `? [a, b]: v`) is a ConfigError
-// (yaml-cpp's as<std::string> would throw its own bad-conversion error, naming neither file nor key).
-// `where` names the file and the mapping ("launch/x.yaml: nodes[0].params").
+// A mapping key as text. A key that is itself a list or mapping (YAML's `? [a, b]: v`) is a
+// ConfigError (yaml-cpp's as<std::string> would throw its own bad-conversion error, naming neither
+// file nor key). `where` names the file and the mapping ("launch/x.yaml: nodes[0].params").
 std::string key_text(const YAML::Node& key, const std::string& where) {
   if (!key.IsScalar()) {
     throw ConfigError(where + ".(key) = " + yaml_to_string(key) + ": a key must be a string");
@@ -67,14 +67,16 @@ void substitute_tree(YAML::Node node, const EnvLookup& lookup, const std::string
       substitute_tree(node[i], lookup, where + "[" + std::to_string(i) + "]");
     }
   } else if (node.IsMap()) {
-    for (auto kv : node) substitute_tree(kv.second, lookup, where + "." + key_text(kv.first, where));
+    for (auto kv : node)
+      substitute_tree(kv.second, lookup, where + "." + key_text(kv.first, where));
   }
 }
 
 void check_keys(const YAML::Node& map, const std::set<std::string>& known, const std::string& file,
                 const std::string& prefix) {
   for (const auto& kv : map) {
-    const std::string map_name = prefix.empty() ? "(top level)" : prefix.substr(0, prefix.size() - 1);
+    const std::string map_name =
+        prefix.empty() ? "(top level)" : prefix.substr(0, prefix.size() - 1);
     const auto key = key_text(kv.first, file + ": " + map_name);
     if (!known.count(key)) {
       std::string list;
@@ -101,9 +103,10 @@ std::map<std::string, std::string> string_map(const YAML::Node& n, const std::st
   return out;
 }
 
-// respawn / respawn_delay / respawn_max_retries, as ROS 2 launch spells them (a retry cap is required
-// here: a node that dies at start-up would otherwise be restarted for ever).
-void parse_respawn(const YAML::Node& n, const std::string& file, const std::string& at, NodeSpec& spec) {
+// respawn / respawn_delay / respawn_max_retries, as ROS 2 launch spells them (a retry cap is
+// required here: a node that dies at start-up would otherwise be restarted for ever).
+void parse_respawn(const YAML::Node& n, const std::string& file, const std::string& at,
+                   NodeSpec& spec) {
   if (n["respawn"].IsDefined()) {
     try {
       if (!n["respawn"].IsScalar()) throw YAML::Exception(YAML::Mark::null_mark(), "");
@@ -130,7 +133,8 @@ void parse_respawn(const YAML::Node& n, const std::string& file, const std::stri
     } catch (const YAML::Exception&) {
     }
     if (retries < 0 || retries > 1000) {
-      fail(file, at + ".respawn_max_retries", n["respawn_max_retries"], "expected an integer in 0..1000");
+      fail(file, at + ".respawn_max_retries", n["respawn_max_retries"],
+           "expected an integer in 0..1000");
     }
     spec.respawn_max_retries = retries;
   }
@@ -152,13 +156,15 @@ NodeSpec parse_node(const YAML::Node& n, const std::string& file, const std::str
              file, at + ".");
   if (!n["exec"].IsDefined()) fail_missing(file, at + ".exec");
   spec.exec = scalar(n["exec"], file, at + ".exec");
-  const auto resolved = options.replaced_nodes.count(spec.name) ? std::optional<std::string>(spec.exec)
-                                                                : resolve_exec(spec.exec, options);
+  const auto resolved = options.replaced_nodes.count(spec.name)
+                            ? std::optional<std::string>(spec.exec)
+                            : resolve_exec(spec.exec, options);
   if (!resolved) {
     fail(file, at + ".exec", n["exec"],
          spec.exec.find('/') != std::string::npos
              ? "not an executable file"
-             : "not found in " + (options.bin_dir.empty() ? std::string("bin dir") : options.bin_dir) +
+             : "not found in " +
+                   (options.bin_dir.empty() ? std::string("bin dir") : options.bin_dir) +
                    (options.search_path ? " or PATH" : ""));
   }
   spec.exec_path = *resolved;
@@ -202,7 +208,8 @@ std::optional<std::string> process_env(const std::string& name) {
   return v ? std::optional<std::string>(v) : std::nullopt;
 }
 
-std::string substitute_env(const std::string& text, const EnvLookup& lookup, const std::string& where) {
+std::string substitute_env(const std::string& text, const EnvLookup& lookup,
+                           const std::string& where) {
   std::string out;
   for (std::size_t i = 0; i < text.size();) {
     if (text[i] != '$' || i + 1 >= text.size()) {
@@ -225,8 +232,9 @@ std::string substitute_env(const std::string& text, const EnvLookup& lookup, con
     const std::string expr = text.substr(i + 2, close - i - 2);
     const auto dash = expr.find(":-");
     const std::string var = expr.substr(0, dash);
-    if (var.empty() || var.find_first_not_of("ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789_") !=
-                           std::string::npos) {
+    if (var.empty() ||
+        var.find_first_not_of("ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789_") !=
+            std::string::npos) {
       throw ConfigError(where + " = " + text + ": bad variable name '" + var + "'");
     }
     const auto value = lookup(var);
@@ -243,7 +251,8 @@ std::string substitute_env(const std::string& text, const EnvLookup& lookup, con
   return out;
 }
 
-LaunchFile parse_launch(const std::string& text, const std::string& path, const LoadOptions& options) {
+LaunchFile parse_launch(const std::string& text, const std::string& path,
+                        const LoadOptions& options) {
   YAML::Node doc;
   try {
     doc = YAML::Load(text);
@@ -273,7 +282,8 @@ LaunchFile parse_launch(const std::string& text, const std::string& path, const 
 
   YAML::Node nodes = YAML::Clone(doc["nodes"]);
   if (!nodes.IsDefined() || nodes.IsNull()) fail_missing(path, "nodes");
-  if (!nodes.IsSequence() || nodes.size() == 0) fail(path, "nodes", nodes, "expected a non-empty list");
+  if (!nodes.IsSequence() || nodes.size() == 0)
+    fail(path, "nodes", nodes, "expected a non-empty list");
   substitute_tree(nodes, lookup, path + ": nodes");
   std::set<std::string> names;
   for (std::size_t i = 0; i < nodes.size(); ++i) {

@@ -1,20 +1,21 @@
 // Launch files: one YAML per scenario listing the nodes to start, their parameters and remaps.
 //
-//   env: {FAULTLINE_RUN_DIR: /tmp/run1}          # optional; set for every child (wins over the launcher's env)
-//   nodes:
+//   env: {FAULTLINE_RUN_DIR: /tmp/run1}          # optional; set for every child (wins over the
+//   launcher's env) nodes:
 //     - name: nusc_player                         # required, unique
-//       exec: nusc_player                         # bare name: next to the faultline binary, then PATH; or a path
-//       required: true                            # the launch ends when this node exits (default true)
-//       params: {dataroot: data/synth, rate: 1.0} # written to a temp YAML passed as --params
-//       remap: {/a: /b}                           # optional; passed to the node as its `remap` parameter
-//       args: []                                  # optional extra command-line arguments
-//       respawn: false                            # start it again when it fails (killed, non-zero exit)
-//       respawn_delay: 0.0                        # seconds between its end and the new start
-//       respawn_max_retries: 3                    # respawns allowed over the launch (0..1000)
+//       exec: nusc_player                         # bare name: next to the faultline binary, then
+//       PATH; or a path required: true                            # the launch ends when this node
+//       exits (default true) params: {dataroot: data/synth, rate: 1.0} # written to a temp YAML
+//       passed as --params remap: {/a: /b}                           # optional; passed to the node
+//       as its `remap` parameter args: []                                  # optional extra
+//       command-line arguments respawn: false                            # start it again when it
+//       fails (killed, non-zero exit) respawn_delay: 0.0                        # seconds between
+//       its end and the new start respawn_max_retries: 3                    # respawns allowed over
+//       the launch (0..1000)
 //
 // Every scalar may use ${VAR} or ${VAR:-default}; VAR is looked up in `env:` first, then in the
-// launcher's environment. Unknown keys, a missing exec, a duplicate name or an unset variable without a
-// default are ConfigErrors naming the file, the key and the value.
+// launcher's environment. Unknown keys, a missing exec, a duplicate name or an unset variable
+// without a default are ConfigErrors naming the file, the key and the value.
 #pragma once
 
 #include <yaml-cpp/yaml.h>
@@ -32,15 +33,15 @@ namespace faultline::launch {
 
 struct NodeSpec {
   std::string name;
-  std::string exec;       // as written in the file
-  std::string exec_path;  // resolved executable path
-  bool required = true;   // the launch ends when this node exits
-  YAML::Node params;      // mapping (possibly empty)
+  std::string exec;                          // as written in the file
+  std::string exec_path;                     // resolved executable path
+  bool required = true;                      // the launch ends when this node exits
+  YAML::Node params;                         // mapping (possibly empty)
   std::map<std::string, std::string> remap;  // from topic -> to topic
   std::vector<std::string> args;             // extra arguments after the standard ones
-  bool respawn = false;                      // restart when it fails on its own (lib/launch/supervisor.hpp)
-  double respawn_delay_s = 0.0;              // seconds before the restart (ROS 2's respawn_delay)
-  int respawn_max_retries = 3;               // restarts allowed over the launch
+  bool respawn = false;          // restart when it fails on its own (lib/launch/supervisor.hpp)
+  double respawn_delay_s = 0.0;  // seconds before the restart (ROS 2's respawn_delay)
+  int respawn_max_retries = 3;   // restarts allowed over the launch
 };
 
 struct LaunchFile {
@@ -55,21 +56,25 @@ std::optional<std::string> process_env(const std::string& name);
 
 // Replaces ${VAR} and ${VAR:-default} in `text`; `where` names the key in errors. "$$" yields "$".
 // Throws ConfigError for an unset variable without a default or an unterminated ${.
-std::string substitute_env(const std::string& text, const EnvLookup& lookup, const std::string& where);
+std::string substitute_env(const std::string& text, const EnvLookup& lookup,
+                           const std::string& where);
 
 struct LoadOptions {
-  std::string bin_dir;       // where bare exec names are looked for first (the faultline binary's dir)
+  std::string bin_dir;  // where bare exec names are looked for first (the faultline binary's dir)
   EnvLookup env = process_env;
-  bool search_path = true;   // also look bare names up in $PATH
-  std::set<std::string> replaced_nodes;  // nodes the caller starts otherwise: their exec is not looked up
+  bool search_path = true;  // also look bare names up in $PATH
+  std::set<std::string>
+      replaced_nodes;  // nodes the caller starts otherwise: their exec is not looked up
 };
 
 // Parses and validates a launch file from text; `path` names it in errors.
-LaunchFile parse_launch(const std::string& text, const std::string& path, const LoadOptions& options);
+LaunchFile parse_launch(const std::string& text, const std::string& path,
+                        const LoadOptions& options);
 // Reads the file, then parse_launch(). A missing file is a ConfigError.
 LaunchFile load_launch(const std::string& path, const LoadOptions& options);
 
-// Applies "node.key:=value" (key may be nested: node.a.b:=v) to that node's params. Unknown node = ConfigError.
+// Applies "node.key:=value" (key may be nested: node.a.b:=v) to that node's params. Unknown node =
+// ConfigError.
 void apply_override(LaunchFile& launch, const std::string& assignment);
 
 // Gives every detection_sink node (exec named detection_sink) that sets no `run` parameter the
@@ -87,8 +92,8 @@ std::vector<std::string> node_command(const NodeSpec& node, const std::string& p
 // node_params_document() as YAML text, what a node's --params file holds.
 std::string node_params_yaml(const NodeSpec& node);
 
-// The supervisor's child for a node whose parameters were written to `params_file`: its command, whether it is
-// required, and its respawn settings.
+// The supervisor's child for a node whose parameters were written to `params_file`: its command,
+// whether it is required, and its respawn settings.
 ChildSpec child_spec(const NodeSpec& node, const std::string& params_file);
 
 // Directory of the running executable (/proc/self/exe), or "" when unknown.

@@ -20,7 +20,8 @@ extern char** environ;
 namespace faultline::launch {
 namespace {
 
-constexpr std::size_t kMaxLineBytes = 64 * 1024;  // longer lines are split, so one child cannot hog memory
+constexpr std::size_t kMaxLineBytes =
+    64 * 1024;  // longer lines are split, so one child cannot hog memory
 
 struct Pipe {
   int read_fd = -1;
@@ -60,8 +61,8 @@ std::vector<char*> c_array(std::vector<std::string>& strings) {
 }
 
 // Runs in the child between fork and exec: async-signal-safe calls only.
-[[noreturn]] void exec_child(const char* path, char* const* argv, char* const* envp, int out_fd, int err_fd,
-                             int status_fd, pid_t parent) {
+[[noreturn]] void exec_child(const char* path, char* const* argv, char* const* envp, int out_fd,
+                             int err_fd, int status_fd, pid_t parent) {
   ::setpgid(0, 0);
   ::prctl(PR_SET_PDEATHSIG, SIGTERM);
   if (::getppid() != parent) ::_exit(127);  // the launcher died before prctl took effect
@@ -119,7 +120,8 @@ void start_child(Child& c, std::vector<std::string>& env) {
   } while (n < 0 && errno == EINTR);
   ::close(status[0]);
   if (n == static_cast<ssize_t>(sizeof(exec_errno))) {
-    c.outcome.start_error = std::string("exec ") + c.spec.argv[0] + ": " + std::strerror(exec_errno);
+    c.outcome.start_error =
+        std::string("exec ") + c.spec.argv[0] + ": " + std::strerror(exec_errno);
     int wstatus = 0;
     ::waitpid(pid, &wstatus, 0);
     ::close(out[0]), ::close(err[0]);
@@ -191,14 +193,16 @@ class Loop {
 
   // A child that failed on its own, with respawns left, while the launch runs on.
   bool should_respawn(const Child& c) const {
-    return !stopping_ && c.spec.respawn && c.outcome.failed() && c.outcome.respawns < c.spec.max_respawns;
+    return !stopping_ && c.spec.respawn && c.outcome.failed() &&
+           c.outcome.respawns < c.spec.max_respawns;
   }
 
   void start_due_respawns() {
     for (auto& c : children_) {
       if (c.respawn_at_ns < 0 || monotonic_now_ns() < c.respawn_at_ns) continue;
       c.respawn_at_ns = -1;
-      close_fd(c.out.read_fd);  // a grandchild may still hold the old pipes; the new start gets new ones
+      close_fd(
+          c.out.read_fd);  // a grandchild may still hold the old pipes; the new start gets new ones
       close_fd(c.err.read_fd);
       c.out.partial.clear();
       c.err.partial.clear();
@@ -210,7 +214,8 @@ class Loop {
       start_child(c, env_);
       if (c.outcome.started) {
         note("respawned " + c.spec.name + " (pid " + std::to_string(c.outcome.pid) + "; respawn " +
-             std::to_string(c.outcome.respawns) + " of at most " + std::to_string(c.spec.max_respawns) + ")");
+             std::to_string(c.outcome.respawns) + " of at most " +
+             std::to_string(c.spec.max_respawns) + ")");
       } else {
         finish_child(c);
         if (c.spec.required && !stopping_) begin_stop(StopCause::StartFailed, c.spec.name);
@@ -224,7 +229,8 @@ class Loop {
     result_.cause_node = node;
     int sig = options_.stop_signal ? options_.stop_signal() : SIGTERM;
     if (sig <= 0) sig = SIGTERM;
-    std::string why = cause == StopCause::StopRequested ? "stop requested" : "required node " + node + " ended";
+    std::string why =
+        cause == StopCause::StopRequested ? "stop requested" : "required node " + node + " ended";
     note("stopping (" + why + "): sending " + ::strsignal(sig) + " to running nodes");
     for (auto& c : children_) {
       if (c.respawn_at_ns >= 0) {
@@ -253,8 +259,10 @@ class Loop {
     std::vector<pollfd> fds;
     std::vector<std::pair<Child*, bool>> owners;  // (child, is_stderr)
     for (auto& c : children_) {
-      if (c.out.read_fd >= 0) fds.push_back({c.out.read_fd, POLLIN, 0}), owners.push_back({&c, false});
-      if (c.err.read_fd >= 0) fds.push_back({c.err.read_fd, POLLIN, 0}), owners.push_back({&c, true});
+      if (c.out.read_fd >= 0)
+        fds.push_back({c.out.read_fd, POLLIN, 0}), owners.push_back({&c, false});
+      if (c.err.read_fd >= 0)
+        fds.push_back({c.err.read_fd, POLLIN, 0}), owners.push_back({&c, true});
     }
     const int timeout_ms = static_cast<int>(options_.poll_ns / kNsPerMs);
     // With every pipe closed (a child closed its stdout), poll() still bounds the wait.
@@ -282,7 +290,8 @@ class Loop {
       }
       p.partial.append(buf, static_cast<std::size_t>(n));
       std::size_t start = 0;
-      for (std::size_t nl; (nl = p.partial.find('\n', start)) != std::string::npos; start = nl + 1) {
+      for (std::size_t nl; (nl = p.partial.find('\n', start)) != std::string::npos;
+           start = nl + 1) {
         emit(c, std::string_view(p.partial).substr(start, nl - start), is_stderr);
       }
       p.partial.erase(0, start);
@@ -314,8 +323,9 @@ class Loop {
       finish_child(c);
       if (c.outcome.will_respawn) {
         c.respawn_at_ns = monotonic_now_ns() + c.spec.respawn_delay_ns;
-        note("respawning " + c.spec.name + " in " + std::to_string(c.spec.respawn_delay_ns / kNsPerMs) +
-             " ms (respawn " + std::to_string(c.outcome.respawns + 1) + " of at most " +
+        note("respawning " + c.spec.name + " in " +
+             std::to_string(c.spec.respawn_delay_ns / kNsPerMs) + " ms (respawn " +
+             std::to_string(c.outcome.respawns + 1) + " of at most " +
              std::to_string(c.spec.max_respawns) + ")");
       } else if (c.spec.required && !stopping_) {
         begin_stop(StopCause::RequiredExited, c.spec.name);
@@ -339,18 +349,24 @@ class Loop {
     }
     const Child* first = nullptr;
     for (const auto& c : children_) {
-      if (c.spec.required && c.outcome.failed() && c.reap_order >= 0 && (!first || c.reap_order < first->reap_order)) first = &c;
+      if (c.spec.required && c.outcome.failed() && c.reap_order >= 0 &&
+          (!first || c.reap_order < first->reap_order))
+        first = &c;
       result_.children.push_back(c.outcome);
     }
     if (first) {
       const auto& o = first->outcome;
-      result_.exit_code = !o.started ? 127 : (o.term_signal != 0 || o.exit_code == 0) ? 1 : o.exit_code;
+      result_.exit_code = !o.started                                 ? 127
+                          : (o.term_signal != 0 || o.exit_code == 0) ? 1
+                                                                     : o.exit_code;
     } else {
-      // A non-required node does not stop the launch, but one that failed on its own (a sink killed, a detector
-      // that crashed) means the run's outputs may be missing: never report that as success.
+      // A non-required node does not stop the launch, but one that failed on its own (a sink
+      // killed, a detector that crashed) means the run's outputs may be missing: never report that
+      // as success.
       for (const auto& c : children_) {
         if (!c.spec.required && c.outcome.failed()) {
-          note("exit code 1: non-required node " + c.spec.name + " failed (" + describe_end(c.outcome) + ")");
+          note("exit code 1: non-required node " + c.spec.name + " failed (" +
+               describe_end(c.outcome) + ")");
           result_.exit_code = 1;
           break;
         }
@@ -387,18 +403,24 @@ int LaunchResult::respawns() const {
 std::string respawn_summary(const LaunchResult& result) {
   std::string out;
   for (const auto& c : result.children) {
-    if (c.respawns > 0) out += (out.empty() ? "" : ", ") + c.name + " " + std::to_string(c.respawns);
+    if (c.respawns > 0)
+      out += (out.empty() ? "" : ", ") + c.name + " " + std::to_string(c.respawns);
   }
   return out;
 }
 
 const char* to_string(StopCause cause) {
   switch (cause) {
-    case StopCause::None: return "none";
-    case StopCause::RequiredExited: return "required node exited";
-    case StopCause::StopRequested: return "stop requested";
-    case StopCause::AllExited: return "all nodes exited";
-    case StopCause::StartFailed: return "a required node failed to start";
+    case StopCause::None:
+      return "none";
+    case StopCause::RequiredExited:
+      return "required node exited";
+    case StopCause::StopRequested:
+      return "stop requested";
+    case StopCause::AllExited:
+      return "all nodes exited";
+    case StopCause::StartFailed:
+      return "a required node failed to start";
   }
   return "?";
 }
@@ -424,6 +446,8 @@ LineSink make_prefix_sink(bool color) {
 Supervisor::Supervisor(std::vector<ChildSpec> children, SupervisorOptions options)
     : specs_(std::move(children)), options_(std::move(options)) {}
 
-LaunchResult Supervisor::run(const std::atomic<bool>& stop) { return Loop(specs_, options_).run(stop); }
+LaunchResult Supervisor::run(const std::atomic<bool>& stop) {
+  return Loop(specs_, options_).run(stop);
+}
 
 }  // namespace faultline::launch

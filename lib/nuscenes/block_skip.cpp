@@ -1,5 +1,5 @@
-// Record skipping 64 bytes at a time. Strings are found as in simdjson: the prefix XOR of the quote bits (a
-// carry-less multiply by all-ones) marks every byte inside a string.
+// Record skipping 64 bytes at a time. Strings are found as in simdjson: the prefix XOR of the quote
+// bits (a carry-less multiply by all-ones) marks every byte inside a string.
 #include "nuscenes/block_skip.hpp"
 
 #include <cstdint>
@@ -19,7 +19,8 @@ FAULTLINE_TARGET_INLINE("avx2") inline std::uint64_t eq_mask(__m256i lo, __m256i
   return a | (static_cast<std::uint64_t>(b) << 32);
 }
 
-// Bit i set where byte i is a control character (< 0x20): whitespace outside strings, invalid inside.
+// Bit i set where byte i is a control character (< 0x20): whitespace outside strings, invalid
+// inside.
 FAULTLINE_TARGET_INLINE("avx2") inline std::uint64_t control_mask(__m256i lo, __m256i hi) {
   const __m256i limit = _mm256_set1_epi8(0x1F);
   const auto a = static_cast<std::uint32_t>(
@@ -46,8 +47,8 @@ FAULTLINE_TARGET("avx2,pclmul") const char* skip_rest_blocks_avx2(const char* q,
             _mm_set_epi64x(0, static_cast<long long>(quotes)), _mm_set1_epi8(-1), 0))) ^
         inside;
     if ((control_mask(lo, hi) & in_string & ~quotes) != 0) return nullptr;
-    // c & 0xD9 == 0x59 for { } [ ] (and Y _ y DEL, which valid JSON never has outside strings; the loop below
-    // sends any of them to the byte-level path): one compare instead of four.
+    // c & 0xD9 == 0x59 for { } [ ] (and Y _ y DEL, which valid JSON never has outside strings; the
+    // loop below sends any of them to the byte-level path): one compare instead of four.
     const __m256i bits = _mm256_set1_epi8(static_cast<char>(0xD9));
     std::uint64_t brackets =
         eq_mask(_mm256_and_si256(lo, bits), _mm256_and_si256(hi, bits), 0x59) & ~in_string;

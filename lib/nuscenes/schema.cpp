@@ -3,7 +3,8 @@
 
 namespace faultline::nuscenes::schema {
 
-std::string table_path(const std::string& dataroot, const std::string& version, std::string_view table) {
+std::string table_path(const std::string& dataroot, const std::string& version,
+                       std::string_view table) {
   std::string path = dataroot + "/" + version + "/";
   path.append(table);
   path += ".json";
@@ -15,8 +16,9 @@ using Fields = std::vector<std::string>;
 }  // namespace
 
 const Fields& ReplayScene::fields() {
-  static const Fields f{"token", "name", "description", "log_token", "first_sample_token", "last_sample_token",
-                        "nbr_samples"};
+  static const Fields f{
+      "token",      "name", "description", "log_token", "first_sample_token", "last_sample_token",
+      "nbr_samples"};
   return f;
 }
 const Fields& ReplaySample::fields() {
@@ -36,8 +38,11 @@ const Fields& ReplayLog::fields() {
   return f;
 }
 const Fields& ReplaySampleData::fields() {
-  static const Fields f{"sample_token", "calibrated_sensor_token", "token",  "filename",      "timestamp",
-                        "is_key_frame", "width",                   "height", "ego_pose_token"};
+  static const Fields f{"sample_token",  "calibrated_sensor_token",
+                        "token",         "filename",
+                        "timestamp",     "is_key_frame",
+                        "width",         "height",
+                        "ego_pose_token"};
   return f;
 }
 const Fields& FrameCountSampleData::fields() {
@@ -65,8 +70,10 @@ const Fields& ScoringSample::fields() {
   return f;
 }
 const Fields& ScoringAnnotation::fields() {
-  static const Fields f{"token", "sample_token", "instance_token", "attribute_tokens", "translation", "size",
-                        "rotation", "num_lidar_pts", "num_radar_pts", "prev", "next"};
+  static const Fields f{
+      "token", "sample_token", "instance_token", "attribute_tokens", "translation",
+      "size",  "rotation",     "num_lidar_pts",  "num_radar_pts",    "prev",
+      "next"};
   return f;
 }
 const Fields& SensorChannel::fields() {
@@ -78,7 +85,8 @@ const Fields& CalibrationSensor::fields() {
   return f;
 }
 const Fields& ScoringSampleData::fields() {
-  static const Fields f{"sample_token", "ego_pose_token", "calibrated_sensor_token", "is_key_frame"};
+  static const Fields f{"sample_token", "ego_pose_token", "calibrated_sensor_token",
+                        "is_key_frame"};
   return f;
 }
 const Fields& ScoringEgoPose::fields() {

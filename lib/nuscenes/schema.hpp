@@ -1,7 +1,7 @@
-// The nuScenes tables this project reads and writes, and the fields each consumer reads from them. A consumer
-// passes a view's fields() to stream_table as `wanted` and indexes TableRecord::fields with the view's enum, so
-// the list and the indices cannot drift apart; a field added to a view is added in one place. Field names are
-// the devkit's (nuscenes-devkit, schema_nuscenes.md).
+// The nuScenes tables this project reads and writes, and the fields each consumer reads from them.
+// A consumer passes a view's fields() to stream_table as `wanted` and indexes TableRecord::fields
+// with the view's enum, so the list and the indices cannot drift apart; a field added to a view is
+// added in one place. Field names are the devkit's (nuscenes-devkit, schema_nuscenes.md).
 #pragma once
 
 #include <cstddef>
@@ -27,12 +27,21 @@ inline constexpr char kSensor[] = "sensor";
 inline constexpr char kVisibility[] = "visibility";
 
 // <dataroot>/<version>/<table>.json, joined with '/' exactly as given.
-std::string table_path(const std::string& dataroot, const std::string& version, std::string_view table);
+std::string table_path(const std::string& dataroot, const std::string& version,
+                       std::string_view table);
 
-// --- dataset (camera replay: dataset::NuScenesReader) ---------------------------------------------------------
+// --- dataset (camera replay: dataset::NuScenesReader)
+// ---------------------------------------------------------
 struct ReplayScene {
-  enum Field : std::size_t { kToken, kName, kDescription, kLogToken, kFirstSampleToken, kLastSampleToken,
-                             kNbrSamples };
+  enum Field : std::size_t {
+    kToken,
+    kName,
+    kDescription,
+    kLogToken,
+    kFirstSampleToken,
+    kLastSampleToken,
+    kNbrSamples
+  };
   static const std::vector<std::string>& fields();
 };
 struct ReplaySample {
@@ -51,10 +60,20 @@ struct ReplayLog {
   enum Field : std::size_t { kToken, kLogfile };
   static const std::vector<std::string>& fields();
 };
-// sample_data for camera frames; the first two are read first, to drop other scenes and sensors early.
+// sample_data for camera frames; the first two are read first, to drop other scenes and sensors
+// early.
 struct ReplaySampleData {
-  enum Field : std::size_t { kSampleToken, kCalibratedSensorToken, kToken, kFilename, kTimestamp, kIsKeyFrame,
-                             kWidth, kHeight, kEgoPoseToken };
+  enum Field : std::size_t {
+    kSampleToken,
+    kCalibratedSensorToken,
+    kToken,
+    kFilename,
+    kTimestamp,
+    kIsKeyFrame,
+    kWidth,
+    kHeight,
+    kEgoPoseToken
+  };
   static const std::vector<std::string>& fields();
 };
 // sample_data for `faultline dataset info`'s per-scene counts.
@@ -67,7 +86,8 @@ struct ReplayEgoPose {
   static const std::vector<std::string>& fields();
 };
 
-// --- bag convert (ground-truth boxes for the annotation markers) and scoring ----------------------------------
+// --- bag convert (ground-truth boxes for the annotation markers) and scoring
+// ----------------------------------
 struct TokenName {  // category and attribute: token -> name (also scene, by name)
   enum Field : std::size_t { kToken, kName };
   static const std::vector<std::string>& fields();
@@ -81,14 +101,26 @@ struct BoxAnnotation {  // bag convert: the box of each annotation of the conver
   static const std::vector<std::string>& fields();
 };
 
-// --- scoring (the devkit's load_gt: scoring::load_ground_truth) ------------------------------------------------
+// --- scoring (the devkit's load_gt: scoring::load_ground_truth)
+// ------------------------------------------------
 struct ScoringSample {
   enum Field : std::size_t { kToken, kTimestamp, kSceneToken };
   static const std::vector<std::string>& fields();
 };
 struct ScoringAnnotation {  // the sample token is the filter's field
-  enum Field : std::size_t { kToken, kSampleToken, kInstanceToken, kAttributeTokens, kTranslation, kSize,
-                             kRotation, kNumLidarPts, kNumRadarPts, kPrev, kNext };
+  enum Field : std::size_t {
+    kToken,
+    kSampleToken,
+    kInstanceToken,
+    kAttributeTokens,
+    kTranslation,
+    kSize,
+    kRotation,
+    kNumLidarPts,
+    kNumRadarPts,
+    kPrev,
+    kNext
+  };
   static const std::vector<std::string>& fields();
 };
 struct SensorChannel {

@@ -1,4 +1,5 @@
-// stream_table: the file (size limit, mmap) and the error prefix around the scanner (table_scanner.cpp).
+// stream_table: the file (size limit, mmap) and the error prefix around the scanner
+// (table_scanner.cpp).
 #include "nuscenes/table_reader.hpp"
 
 #include <fcntl.h>
@@ -51,17 +52,19 @@ class MappedFile {
 
 // The scan with `name` (the path) prefixing every error.
 Status scan_table(std::string_view bytes, bool release, const std::string& name,
-                  const std::vector<std::string>& wanted, const RecordFn& on_record, const RecordFilter& filter) {
+                  const std::vector<std::string>& wanted, const RecordFn& on_record,
+                  const RecordFilter& filter) {
   detail::ScanError error;
   Status s = detail::scan_records(bytes, release, wanted, on_record, filter, error);
   if (s.is_ok()) return s;
   if (!error.parse_failed) return Status(s.code(), name + ": " + s.message());
   if (error.truncated) {
-    return Status(StatusCode::kTruncated, name + ": malformed JSON at offset " + std::to_string(error.offset) +
-                                              ": " + s.message() + " (the table ends early: truncated?)");
+    return Status(StatusCode::kTruncated, name + ": malformed JSON at offset " +
+                                              std::to_string(error.offset) + ": " + s.message() +
+                                              " (the table ends early: truncated?)");
   }
-  return Status(StatusCode::kCorruptData,
-                name + ": malformed JSON at offset " + std::to_string(error.offset) + ": " + s.message());
+  return Status(StatusCode::kCorruptData, name + ": malformed JSON at offset " +
+                                              std::to_string(error.offset) + ": " + s.message());
 }
 
 }  // namespace
@@ -90,18 +93,22 @@ bool TableField::get_numbers(std::vector<double>* out) const {
   return true;
 }
 
-Status stream_table(const std::string& path, const std::vector<std::string>& wanted, const RecordFn& on_record,
-                    const RecordFilter& filter) {
-  if (Status size = check_file_size(path, kMaxNuScenesTableBytes, "nuScenes table"); !size) return size;
+Status stream_table(const std::string& path, const std::vector<std::string>& wanted,
+                    const RecordFn& on_record, const RecordFilter& filter) {
+  if (Status size = check_file_size(path, kMaxNuScenesTableBytes, "nuScenes table"); !size)
+    return size;
   MappedFile file(path);
   if (!file.opened()) return Status(StatusCode::kNotFound, path + ": table not found");
-  const std::string_view bytes = file.data() ? std::string_view(file.data(), file.size()) : std::string_view("");
+  const std::string_view bytes =
+      file.data() ? std::string_view(file.data(), file.size()) : std::string_view("");
   return scan_table(bytes, file.data() != nullptr, path, wanted, on_record, filter);
 }
 
-Status stream_table_bytes(std::string_view bytes, const std::string& name, const std::vector<std::string>& wanted,
-                          const RecordFn& on_record, const RecordFilter& filter) {
-  return scan_table(bytes.empty() ? std::string_view("") : bytes, false, name, wanted, on_record, filter);
+Status stream_table_bytes(std::string_view bytes, const std::string& name,
+                          const std::vector<std::string>& wanted, const RecordFn& on_record,
+                          const RecordFilter& filter) {
+  return scan_table(bytes.empty() ? std::string_view("") : bytes, false, name, wanted, on_record,
+                    filter);
 }
 
 }  // namespace faultline::nuscenes

@@ -1,6 +1,7 @@
-// A scanner specialised for nuScenes tables: one JSON array of flat records. Only the wanted fields are
-// decoded; everything else is validated and skipped without copies. A generic SAX reader spent most of its
-// time on tokens nobody asked for; this one reads a trainval-sized sample_data.json (~1 GB) at memory speed.
+// A scanner specialised for nuScenes tables: one JSON array of flat records. Only the wanted fields
+// are decoded; everything else is validated and skipped without copies. A generic SAX reader spent
+// most of its time on tokens nobody asked for; this one reads a trainval-sized sample_data.json (~1
+// GB) at memory speed.
 #include "nuscenes/table_scanner.hpp"
 
 #include <sys/mman.h>
@@ -28,7 +29,11 @@ class Scanner {
  public:
   Scanner(std::string_view bytes, const std::vector<std::string>& wanted, const RecordFn& on_record,
           const RecordFilter& filter)
-      : begin_(bytes.data()), p_(begin_), end_(begin_ + bytes.size()), wanted_(wanted), on_record_(on_record) {
+      : begin_(bytes.data()),
+        p_(begin_),
+        end_(begin_ + bytes.size()),
+        wanted_(wanted),
+        on_record_(on_record) {
     rec_.fields.resize(wanted.size());
     for (const auto& c : filter.all_of) {
       if (c.keep && c.field >= 0 && static_cast<std::size_t>(c.field) < wanted.size()) {
@@ -70,8 +75,8 @@ class Scanner {
     }
   }
 
-  // Mapped pages already scanned are dropped from this process (they stay in the page cache), so peak RSS does
-  // not grow with the table.
+  // Mapped pages already scanned are dropped from this process (they stay in the page cache), so
+  // peak RSS does not grow with the table.
   void release_scanned_pages(bool on) { release_ = on; }
   const ScanError& error() const { return error_; }
 
@@ -135,13 +140,13 @@ class Scanner {
     }
   }
 
-  // The rest of a rejected record, checked for structure only: strings (escapes, control characters) and
-  // nesting, up to the record's closing brace. Scalars in between are not parsed; most of a big table's records
-  // are rejected, so this is where the scan spends its time.
+  // The rest of a rejected record, checked for structure only: strings (escapes, control
+  // characters) and nesting, up to the record's closing brace. Scalars in between are not parsed;
+  // most of a big table's records are rejected, so this is where the scan spends its time.
   Status skip_rest_of_record() {
 #if FAULTLINE_X86_SIMD
-    // Anything unusual falls through to the character-level path below, which re-reads the record's rest from
-    // p_ and reports errors precisely.
+    // Anything unusual falls through to the character-level path below, which re-reads the record's
+    // rest from p_ and reports errors precisely.
     if (common::cpu_has_avx2_pclmul()) {
       if (const char* q = skip_rest_blocks_avx2(p_, end_)) {
         p_ = q;
@@ -196,12 +201,14 @@ class Scanner {
   // First '"', '{', '}', '[' or ']' at or after q (end_ if none).
   const char* next_structural(const char* q) const {
 #ifdef __SSE2__
-    const __m128i quote = _mm_set1_epi8('"'), open_obj = _mm_set1_epi8('{'), close_obj = _mm_set1_epi8('}'),
-                  open_arr = _mm_set1_epi8('['), close_arr = _mm_set1_epi8(']');
+    const __m128i quote = _mm_set1_epi8('"'), open_obj = _mm_set1_epi8('{'),
+                  close_obj = _mm_set1_epi8('}'), open_arr = _mm_set1_epi8('['),
+                  close_arr = _mm_set1_epi8(']');
     while (end_ - q >= 16) {
       const __m128i x = _mm_loadu_si128(reinterpret_cast<const __m128i*>(q));
       const __m128i hit = _mm_or_si128(
-          _mm_or_si128(_mm_cmpeq_epi8(x, quote), _mm_or_si128(_mm_cmpeq_epi8(x, open_obj), _mm_cmpeq_epi8(x, close_obj))),
+          _mm_or_si128(_mm_cmpeq_epi8(x, quote),
+                       _mm_or_si128(_mm_cmpeq_epi8(x, open_obj), _mm_cmpeq_epi8(x, close_obj))),
           _mm_or_si128(_mm_cmpeq_epi8(x, open_arr), _mm_cmpeq_epi8(x, close_arr)));
       const int mask = _mm_movemask_epi8(hit);
       if (mask) return q + __builtin_ctz(static_cast<unsigned>(mask));
@@ -217,15 +224,16 @@ class Scanner {
 
   TableField* find_field(std::string_view key) {
     for (std::size_t i = 0; i < wanted_.size(); ++i) {
-      if (wanted_[i].size() == key.size() && std::memcmp(wanted_[i].data(), key.data(), key.size()) == 0) {
+      if (wanted_[i].size() == key.size() &&
+          std::memcmp(wanted_[i].data(), key.data(), key.size()) == 0) {
         return &rec_.fields[i];
       }
     }
     return nullptr;
   }
 
-  // A wanted field: scalars land in str/num/integer/boolean/is_null, lists (nested ones flattened, at most 64
-  // levels deep like skipped values) in nums/strs.
+  // A wanted field: scalars land in str/num/integer/boolean/is_null, lists (nested ones flattened,
+  // at most 64 levels deep like skipped values) in nums/strs.
   Status field_value(TableField& f) {
     const char c = peek();
     if (c == '"') {
@@ -364,15 +372,17 @@ class Scanner {
     return Status::ok();
   }
 
-  // First '"', '\\' or control character at or after q (end_ if none). Tokens are ~32 bytes, so a 16-byte SIMD
-  // step beats a memchr call per string.
+  // First '"', '\\' or control character at or after q (end_ if none). Tokens are ~32 bytes, so a
+  // 16-byte SIMD step beats a memchr call per string.
   const char* next_special(const char* q) const {
 #ifdef __SSE2__
-    const __m128i quote = _mm_set1_epi8('"'), slash = _mm_set1_epi8('\\'), ctrl = _mm_set1_epi8(0x1F);
+    const __m128i quote = _mm_set1_epi8('"'), slash = _mm_set1_epi8('\\'),
+                  ctrl = _mm_set1_epi8(0x1F);
     while (end_ - q >= 16) {
       const __m128i x = _mm_loadu_si128(reinterpret_cast<const __m128i*>(q));
-      const __m128i hit = _mm_or_si128(_mm_or_si128(_mm_cmpeq_epi8(x, quote), _mm_cmpeq_epi8(x, slash)),
-                                       _mm_cmpeq_epi8(_mm_max_epu8(x, ctrl), ctrl));
+      const __m128i hit =
+          _mm_or_si128(_mm_or_si128(_mm_cmpeq_epi8(x, quote), _mm_cmpeq_epi8(x, slash)),
+                       _mm_cmpeq_epi8(_mm_max_epu8(x, ctrl), ctrl));
       const int mask = _mm_movemask_epi8(hit);
       if (mask) return q + __builtin_ctz(static_cast<unsigned>(mask));
       q += 16;
@@ -394,7 +404,8 @@ class Scanner {
     }
     out.clear();
     std::size_t bad_at = 0;
-    if (const char* why = decode_escapes(raw, out, bad_at)) return fail_at(raw.data() + bad_at, why);
+    if (const char* why = decode_escapes(raw, out, bad_at))
+      return fail_at(raw.data() + bad_at, why);
     return Status::ok();
   }
 
@@ -420,7 +431,8 @@ class Scanner {
     return fail("invalid value");
   }
 
-  // True when the bytes from p_ to the end are a strict prefix of a literal: the table was cut inside it.
+  // True when the bytes from p_ to the end are a strict prefix of a literal: the table was cut
+  // inside it.
   bool ends_inside_a_word() const {
     const auto left = static_cast<std::size_t>(end_ - p_);
     for (const std::string_view word : {"true", "false", "null"}) {
@@ -429,9 +441,9 @@ class Scanner {
     return false;
   }
 
-  // JSON number grammar, plus the NaN / Infinity / -Infinity that Python's json module writes. `out` null:
-  // validate only (skipped fields need no conversion, which is most of the cost). Sets integral_ when the
-  // number has no fraction or exponent.
+  // JSON number grammar, plus the NaN / Infinity / -Infinity that Python's json module writes.
+  // `out` null: validate only (skipped fields need no conversion, which is most of the cost). Sets
+  // integral_ when the number has no fraction or exponent.
   Status number(double* out_ptr) {
     double scratch = 0;
     double& out = out_ptr ? *out_ptr : scratch;
@@ -443,7 +455,8 @@ class Scanner {
       return static_cast<std::size_t>(end_ - q) >= n && std::memcmp(q, w, n) == 0;
     };
     if (word("Infinity", 8)) {
-      out = *start == '-' ? -std::numeric_limits<double>::infinity() : std::numeric_limits<double>::infinity();
+      out = *start == '-' ? -std::numeric_limits<double>::infinity()
+                          : std::numeric_limits<double>::infinity();
       p_ = q + 8;
       return Status::ok();
     }
@@ -545,15 +558,17 @@ class Scanner {
   const std::vector<std::string>& wanted_;
   const RecordFn& on_record_;
   TableRecord rec_;
-  std::vector<std::pair<const TableField*, const std::function<bool(const std::string&)>*>> conditions_;
+  std::vector<std::pair<const TableField*, const std::function<bool(const std::string&)>*>>
+      conditions_;
   bool integral_ = false;  // the last number converted had no fraction or exponent
   ScanError error_;
 };
 
 }  // namespace
 
-Status scan_records(std::string_view bytes, bool release_pages, const std::vector<std::string>& wanted,
-                    const RecordFn& on_record, const RecordFilter& filter, ScanError& error) {
+Status scan_records(std::string_view bytes, bool release_pages,
+                    const std::vector<std::string>& wanted, const RecordFn& on_record,
+                    const RecordFilter& filter, ScanError& error) {
   Scanner scanner(bytes, wanted, on_record, filter);
   scanner.release_scanned_pages(release_pages);
   Status s = scanner.run();

@@ -81,7 +81,9 @@ const char* TableWriter::item_separator(std::size_t i) const {
   return i == 0 ? "\n" : ",\n";
 }
 
-const char* TableWriter::list_close() const { return layout_ == TableLayout::kCompact ? "]" : "\n]"; }
+const char* TableWriter::list_close() const {
+  return layout_ == TableLayout::kCompact ? "]" : "\n]";
+}
 
 void TableWriter::field(std::string_view k, std::string_view value) {
   key(k);

@@ -1,6 +1,6 @@
-// THE writer of nuScenes tables: a JSON array of flat records written record by record, so tables of any size
-// are written with constant memory. Both synthetic datasets (dataset/synth.cpp, the benchmark's synthetic val)
-// write through it.
+// THE writer of nuScenes tables: a JSON array of flat records written record by record, so tables
+// of any size are written with constant memory. Both synthetic datasets (dataset/synth.cpp, the
+// benchmark's synthetic val) write through it.
 #pragma once
 
 #include <cstdint>
@@ -15,12 +15,12 @@
 namespace faultline::nuscenes {
 
 // kIndent0: Python's json.dump(indent=0), one value per line, as the devkit's tables are laid out.
-// kCompact: one record per line, `{"key": value, ...}`, lists inline, a final newline (smaller files for
-// benchmark-sized sets).
+// kCompact: one record per line, `{"key": value, ...}`, lists inline, a final newline (smaller
+// files for benchmark-sized sets).
 enum class TableLayout { kIndent0, kCompact };
 
-// One number of a list written with mixed precision: `places` as in TableWriter::field(key, value, places), -1 for
-// the shortest round trip.
+// One number of a list written with mixed precision: `places` as in TableWriter::field(key, value,
+// places), -1 for the shortest round trip.
 struct Number {
   double value = 0;
   int places = -1;
@@ -44,7 +44,8 @@ class TableWriter {
   void field(std::string_view key, std::int64_t value);
   void field(std::string_view key, int value) { field(key, static_cast<std::int64_t>(value)); }
   void field(std::string_view key, double value);  // shortest round trip, see format_double
-  // `places` >= 0: fixed notation with that many decimals (printf's %.<places>f), to bound the table's size.
+  // `places` >= 0: fixed notation with that many decimals (printf's %.<places>f), to bound the
+  // table's size.
   void field(std::string_view key, double value, int places);
   void field(std::string_view key, bool value);
   void field(std::string_view key, const std::vector<double>& values, int places = -1);
@@ -74,8 +75,8 @@ class TableWriter {
   std::int64_t bytes_ = 0;
 };
 
-// Shortest round-trip text for a double, always with a '.' or exponent like Python's repr ("0.0", "1.5",
-// "1e-05"); NaN and +-Infinity as Python's json module writes them.
+// Shortest round-trip text for a double, always with a '.' or exponent like Python's repr ("0.0",
+// "1.5", "1e-05"); NaN and +-Infinity as Python's json module writes them.
 std::string format_double(double v);
 
 }  // namespace faultline::nuscenes

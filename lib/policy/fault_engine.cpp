@@ -15,31 +15,43 @@ namespace {
 
 int rank(Action a) {
   switch (a) {
-    case Action::Drop: return 4;
-    case Action::Black: return 3;
-    case Action::Freeze: return 2;
-    case Action::Delay: return 1;
-    default: return 0;
+    case Action::Drop:
+      return 4;
+    case Action::Black:
+      return 3;
+    case Action::Freeze:
+      return 2;
+    case Action::Delay:
+      return 1;
+    default:
+      return 0;
   }
 }
 
 Action action_of(OutputMode mode) {
   switch (mode) {
-    case OutputMode::Black: return Action::Black;
-    case OutputMode::Drop: return Action::Drop;
-    case OutputMode::Freeze: return Action::Freeze;
-    case OutputMode::Delay: return Action::Delay;
+    case OutputMode::Black:
+      return Action::Black;
+    case OutputMode::Drop:
+      return Action::Drop;
+    case OutputMode::Freeze:
+      return Action::Freeze;
+    case OutputMode::Delay:
+      return Action::Delay;
   }
   return Action::Black;
 }
 
-std::uint32_t numpy_seed(std::uint64_t seed) { return static_cast<std::uint32_t>(seed & 0xFFFFFFFFull); }
+std::uint32_t numpy_seed(std::uint64_t seed) {
+  return static_cast<std::uint32_t>(seed & 0xFFFFFFFFull);
+}
 
 }  // namespace
 
-// One calibration_drift or timestamp_skew hit: adds to the frame's edit and reports the values it used.
-void FaultEngine::add_message_fault(const FaultSpec& spec, std::size_t i, int cam, int severity, MessageEdit& edit,
-                                    AppliedFault& f) const {
+// One calibration_drift or timestamp_skew hit: adds to the frame's edit and reports the values it
+// used.
+void FaultEngine::add_message_fault(const FaultSpec& spec, std::size_t i, int cam, int severity,
+                                    MessageEdit& edit, AppliedFault& f) const {
   constexpr double kDeg = 180.0 / 3.14159265358979323846;
   if (spec.kind == FaultKind::TimestampSkew) {
     const DurationNs offset = timestamp_skew_ns(severity, spec.offset_ms);
@@ -68,12 +80,18 @@ void FaultEngine::add_message_fault(const FaultSpec& spec, std::size_t i, int ca
 
 const char* to_string(Action action) {
   switch (action) {
-    case Action::Pass: return "pass";
-    case Action::Corrupt: return "corrupt";
-    case Action::Drop: return "drop";
-    case Action::Black: return "black";
-    case Action::Freeze: return "freeze";
-    case Action::Delay: return "delay";
+    case Action::Pass:
+      return "pass";
+    case Action::Corrupt:
+      return "corrupt";
+    case Action::Drop:
+      return "drop";
+    case Action::Black:
+      return "black";
+    case Action::Freeze:
+      return "freeze";
+    case Action::Delay:
+      return "delay";
   }
   return "pass";
 }
@@ -89,8 +107,9 @@ FaultEngine::FaultEngine(EngineConfig config) : config_(std::move(config)) {
   lost_counters_.assign(n, {});
   for (std::size_t i = 0; i < n; ++i) {
     const FaultSpec& spec = config_.faults[i];
-    if (spec.kind == FaultKind::Freeze || ((spec.kind == FaultKind::CameraCrash || spec.kind == FaultKind::FrameLost) &&
-                                           spec.mode == OutputMode::Freeze)) {
+    if (spec.kind == FaultKind::Freeze ||
+        ((spec.kind == FaultKind::CameraCrash || spec.kind == FaultKind::FrameLost) &&
+         spec.mode == OutputMode::Freeze)) {
       freezes_ = true;
     }
     if (spec.kind == FaultKind::CameraCrash) {
@@ -132,8 +151,8 @@ double FaultEngine::lost_uniform(std::size_t i, const FaultSpec& spec, int camer
   return u;
 }
 
-// Yaw rate from the previous frame of this camera with a pose (heading difference wrapped to +-pi over the stamp
-// difference); every frame with a pose becomes the next one's reference.
+// Yaw rate from the previous frame of this camera with a pose (heading difference wrapped to +-pi
+// over the stamp difference); every frame with a pose becomes the next one's reference.
 std::optional<double> FaultEngine::yaw_rate(int cam, const FrameInfo& frame) {
   auto& last = last_heading_[static_cast<std::size_t>(cam)];
   std::optional<double> rate;
@@ -165,7 +184,8 @@ FramePlan FaultEngine::decide(const FrameInfo& frame) {
     if (spec.frames == FrameSet::Key && !frame.is_key_frame) continue;
     const char* rng_name = corruption::to_string(spec.rng);
     const auto delay_ns = static_cast<DurationNs>(spec.delay_ms * 1e6);
-    // frame_lost advances its per-camera instant counter on every eligible frame, inside the window or not.
+    // frame_lost advances its per-camera instant counter on every eligible frame, inside the window
+    // or not.
     double u = 0;
     if (spec.kind == FaultKind::FrameLost) {
       if (!spec.applies_to(cam)) continue;
@@ -185,12 +205,13 @@ FramePlan FaultEngine::decide(const FrameInfo& frame) {
         if (spec.rng == corruption::RngMode::Numpy) f.seed = numpy_seed(f.seed);
         if (spec.coherent) f.params["coherent"] = 1;
         if (spec.corruption == corruption::Corruption::RollingShutter && !yaw_rate_rad_s) {
-          // No previous ego pose of this camera: nothing to skew by, so no pixel work (the frame passes unchanged,
-          // not even re-encoded), and the fault says why.
+          // No previous ego pose of this camera: nothing to skew by, so no pixel work (the frame
+          // passes unchanged, not even re-encoded), and the fault says why.
           f.params["no_yaw_rate"] = 1;
           break;
         }
-        plan.corruptions.push_back({i, plan.faults.size(), severity, f.seed, yaw_rate_rad_s, frame.focal_px});
+        plan.corruptions.push_back(
+            {i, plan.faults.size(), severity, f.seed, yaw_rate_rad_s, frame.focal_px});
         if (spec.corruption == corruption::Corruption::RollingShutter && yaw_rate_rad_s) {
           f.params["yaw_rate_deg_s"] = *yaw_rate_rad_s * 180.0 / M_PI;
           f.params["readout_ms"] = corruption::rolling_shutter_readout_ms(severity);
@@ -199,8 +220,9 @@ FramePlan FaultEngine::decide(const FrameInfo& frame) {
       }
       case FaultKind::CameraCrash: {
         const auto& dead = crash_sets_[i][static_cast<std::size_t>(severity)];
-        const bool crashed = spec.cameras.empty() ? std::binary_search(dead.begin(), dead.end(), cam)
-                                                  : spec.applies_to(cam);
+        const bool crashed = spec.cameras.empty()
+                                 ? std::binary_search(dead.begin(), dead.end(), cam)
+                                 : spec.applies_to(cam);
         if (!crashed) continue;
         f.seed = spec.rng == corruption::RngMode::Numpy ? numpy_seed(config_.seed) : config_.seed;
         f.params["draws"] = severity;
@@ -214,7 +236,8 @@ FramePlan FaultEngine::decide(const FrameInfo& frame) {
         f.seed = spec.rng == corruption::RngMode::Numpy ? numpy_seed(config_.seed) : config_.seed;
         f.params["u"] = u;
         f.params["p"] = p;
-        f.params["instant"] = static_cast<double>(lost_counters_[i][static_cast<std::size_t>(cam)] - 1);
+        f.params["instant"] =
+            static_cast<double>(lost_counters_[i][static_cast<std::size_t>(cam)] - 1);
         hit(action_of(spec.mode), delay_ns);
         break;
       }
@@ -238,7 +261,8 @@ FramePlan FaultEngine::decide(const FrameInfo& frame) {
       }
     }
     if (spec.kind == FaultKind::Delay ||
-        ((spec.kind == FaultKind::CameraCrash || spec.kind == FaultKind::FrameLost) && spec.mode == OutputMode::Delay)) {
+        ((spec.kind == FaultKind::CameraCrash || spec.kind == FaultKind::FrameLost) &&
+         spec.mode == OutputMode::Delay)) {
       f.params["delay_ms"] = spec.delay_ms;
     }
     plan.faults.push_back(std::move(f));
@@ -251,8 +275,9 @@ bool FaultEngine::stateful(const FramePlan& plan) const {
   if (plan.camera < 0 || plan.action == Action::Drop) return false;  // render() does nothing
   if (freezes_) return true;
   if (plan.action == Action::Black) return false;  // the corruptions are skipped
-  return std::any_of(plan.corruptions.begin(), plan.corruptions.end(),
-                     [&](const FramePlan::Step& s) { return config_.faults[s.fault_index].coherent; });
+  return std::any_of(
+      plan.corruptions.begin(), plan.corruptions.end(),
+      [&](const FramePlan::Step& s) { return config_.faults[s.fault_index].coherent; });
 }
 
 Status FaultEngine::render(FramePlan& plan, cv::Mat& image) {
@@ -275,19 +300,23 @@ Status FaultEngine::render(FramePlan& plan, cv::Mat& image) {
           c.severity = step.severity;
         }
         out = c.corruptor->apply(image, plan.context);
-        if (spec.corruption == corruption::Corruption::MotionBlur) f.params["angle_deg"] = c.corruptor->angle_deg();
+        if (spec.corruption == corruption::Corruption::MotionBlur)
+          f.params["angle_deg"] = c.corruptor->angle_deg();
       } else {
-        // The motion-blur angle is the corruption's first draw either way; drawing it here lets us report it.
+        // The motion-blur angle is the corruption's first draw either way; drawing it here lets us
+        // report it.
         corruption::CorruptOptions options;
         options.yaw_rate_rad_s = step.yaw_rate_rad_s;
         options.focal_px = step.focal_px;
         if (spec.rng == corruption::RngMode::Numpy) {
           rng::NumpyRandomState r(static_cast<std::uint32_t>(step.seed));
-          if (spec.corruption == corruption::Corruption::MotionBlur) options.angle_deg = r.uniform(-45.0, 45.0);
+          if (spec.corruption == corruption::Corruption::MotionBlur)
+            options.angle_deg = r.uniform(-45.0, 45.0);
           out = corruption::corrupt(image, spec.corruption, step.severity, r, options);
         } else {
           rng::FastRng r(step.seed);
-          if (spec.corruption == corruption::Corruption::MotionBlur) options.angle_deg = r.uniform(-45.0, 45.0);
+          if (spec.corruption == corruption::Corruption::MotionBlur)
+            options.angle_deg = r.uniform(-45.0, 45.0);
           out = corruption::corrupt(image, spec.corruption, step.severity, r, options);
         }
         if (options.angle_deg) f.params["angle_deg"] = *options.angle_deg;

@@ -32,9 +32,15 @@ std::vector<FrameMask> lost_frames(int severity, int frames, Rng& rng) {
 
 }  // namespace
 
-std::vector<int> draw_dead_cameras(int severity, rng::NumpyRandomState& rng) { return dead_cameras(severity, rng); }
-std::vector<int> draw_dead_cameras(int severity, rng::FastRng& rng) { return dead_cameras(severity, rng); }
-FrameMask draw_lost_frame(int severity, rng::NumpyRandomState& rng) { return lost_frame(severity, rng); }
+std::vector<int> draw_dead_cameras(int severity, rng::NumpyRandomState& rng) {
+  return dead_cameras(severity, rng);
+}
+std::vector<int> draw_dead_cameras(int severity, rng::FastRng& rng) {
+  return dead_cameras(severity, rng);
+}
+FrameMask draw_lost_frame(int severity, rng::NumpyRandomState& rng) {
+  return lost_frame(severity, rng);
+}
 FrameMask draw_lost_frame(int severity, rng::FastRng& rng) { return lost_frame(severity, rng); }
 std::vector<FrameMask> draw_lost_frames(int severity, int frames, rng::NumpyRandomState& rng) {
   return lost_frames(severity, frames, rng);

@@ -5,7 +5,8 @@
 namespace faultline::report {
 
 bool LabelBox::overlaps(const LabelBox& other) const {
-  return x < other.x + other.width && other.x < x + width && y - height < other.y && other.y - other.height < y;
+  return x < other.x + other.width && other.x < x + width && y - height < other.y &&
+         other.y - other.height < y;
 }
 
 double estimated_text_width(const std::string& text, double font_px) {
@@ -14,9 +15,9 @@ double estimated_text_width(const std::string& text, double font_px) {
   return 0.6 * font_px * static_cast<double>(glyphs);
 }
 
-std::vector<std::optional<LabelBox>> place_labels(const std::vector<LabelAnchor>& anchors, double font_px,
-                                                  double marker_px, double left, double top, double right,
-                                                  double bottom) {
+std::vector<std::optional<LabelBox>> place_labels(const std::vector<LabelAnchor>& anchors,
+                                                  double font_px, double marker_px, double left,
+                                                  double top, double right, double bottom) {
   // Every marker is an obstacle, as a square box around the point.
   std::vector<LabelBox> taken;
   for (const auto& a : anchors) {
@@ -27,7 +28,8 @@ std::vector<std::optional<LabelBox>> place_labels(const std::vector<LabelAnchor>
   for (const auto& a : anchors) {
     const double w = estimated_text_width(a.text, font_px), h = font_px;
     std::optional<LabelBox> chosen;
-    // Rings of candidate places around the point, nearest first: right, left, above, below and the diagonals.
+    // Rings of candidate places around the point, nearest first: right, left, above, below and the
+    // diagonals.
     for (int ring = 0; ring < 6 && !chosen; ++ring) {
       const double d = gap + ring * (h + 2);
       const LabelBox candidates[] = {
@@ -35,7 +37,7 @@ std::vector<std::optional<LabelBox>> place_labels(const std::vector<LabelAnchor>
           {a.x + gap, a.y + h / 2 + ring * (h + 2), w, h},  // right, stepping down
           {a.x - gap - w, a.y + h / 2 - ring * (h + 2), w, h},
           {a.x - gap - w, a.y + h / 2 + ring * (h + 2), w, h},
-          {a.x - w / 2, a.y - d, w, h},  // above
+          {a.x - w / 2, a.y - d, w, h},      // above
           {a.x - w / 2, a.y + d + h, w, h},  // below
       };
       for (const auto& c : candidates) {

@@ -1,6 +1,7 @@
-// Places text labels beside chart points so that no two overlap: each label tries positions around its point,
-// nearest first, and takes the first that is free and inside the plot; a label with no free place is left out
-// (the point keeps its tooltip, and the report lists every value in a table).
+// Places text labels beside chart points so that no two overlap: each label tries positions around
+// its point, nearest first, and takes the first that is free and inside the plot; a label with no
+// free place is left out (the point keeps its tooltip, and the report lists every value in a
+// table).
 #pragma once
 
 #include <cstddef>
@@ -25,10 +26,10 @@ struct LabelAnchor {
 // Estimated text width of `text` at `font_px` (proportional font, average glyph ~0.6 em).
 double estimated_text_width(const std::string& text, double font_px);
 
-// One entry per anchor, in order; empty where no free place was found. Labels stay within [left, right] x
-// [top, bottom] and off every point's marker (radius `marker_px`).
-std::vector<std::optional<LabelBox>> place_labels(const std::vector<LabelAnchor>& anchors, double font_px,
-                                                  double marker_px, double left, double top, double right,
-                                                  double bottom);
+// One entry per anchor, in order; empty where no free place was found. Labels stay within [left,
+// right] x [top, bottom] and off every point's marker (radius `marker_px`).
+std::vector<std::optional<LabelBox>> place_labels(const std::vector<LabelAnchor>& anchors,
+                                                  double font_px, double marker_px, double left,
+                                                  double top, double right, double bottom);
 
 }  // namespace faultline::report

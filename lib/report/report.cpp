@@ -268,7 +268,8 @@ std::string variant_bars(const std::vector<DetectorVariantRun>& runs,
   return s + "</svg>\n";
 }
 
-// Summary, radar, per-level bars and, for several detectors, the accuracy-vs-robustness scatter plots.
+// Summary, radar, per-level bars and, for several detectors, the accuracy-vs-robustness scatter
+// plots.
 std::string robustness_sections(const ReportData& data) {
   std::string h;
   if (data.detectors.empty()) h += "<p class=\"note\">No robustness results were given.</p>\n";
@@ -316,7 +317,8 @@ VariantAxes variant_axes(const ReportData& data) {
   return axes;
 }
 
-// Detector latency, input scales (fps on the clean condition) and the corruption engine's time against accuracy.
+// Detector latency, input scales (fps on the clean condition) and the corruption engine's time
+// against accuracy.
 std::string speed_section(const ReportData& data, const VariantAxes& axes) {
   const auto& variant_names = axes.variant_names;
   std::string h;

@@ -1,7 +1,7 @@
-// A self-contained HTML robustness report (inline SVG, no scripts, no network) with the RoboBEV views:
-// per-corruption NDS bars by level, an NDS radar by corruption (paper Fig. 1), NDS vs mCE / mRR scatter
-// for several detectors, and speed-vs-accuracy charts (detector latency vs NDS; corruption engine
-// time vs fidelity from bench/results/corrupt.json).
+// A self-contained HTML robustness report (inline SVG, no scripts, no network) with the RoboBEV
+// views: per-corruption NDS bars by level, an NDS radar by corruption (paper Fig. 1), NDS vs mCE /
+// mRR scatter for several detectors, and speed-vs-accuracy charts (detector latency vs NDS;
+// corruption engine time vs fidelity from bench/results/corrupt.json).
 #pragma once
 
 #include <string>
@@ -23,12 +23,13 @@ struct CorruptBenchPoint {
   double max_abs_diff = -1.0;  // -1 = absent
 };
 
-// One live run of a detector configuration (input scale, temporal or single-frame) on one condition.
+// One live run of a detector configuration (input scale, temporal or single-frame) on one
+// condition.
 struct DetectorVariantRun {
   std::string variant;    // "temporal, scale 1", "single-frame, scale 1", ...
   std::string condition;  // "clean", "frame_lost/mid"
   double nds = 0.0;
-  double fps = -1.0;      // samples per second of detector compute; -1 = unknown
+  double fps = -1.0;  // samples per second of detector compute; -1 = unknown
 };
 
 struct ReportData {
@@ -41,7 +42,9 @@ struct ReportData {
 // Renders the whole page. Pure function: no I/O.
 std::string render_html(const ReportData& data);
 
-// Parses the corruption benchmark array [{"type","level","mode","ms",["psnr_db"],["max_abs_diff"]}].
-Result<std::vector<CorruptBenchPoint>> parse_corrupt_bench(const std::string& text, const std::string& name);
+// Parses the corruption benchmark array
+// [{"type","level","mode","ms",["psnr_db"],["max_abs_diff"]}].
+Result<std::vector<CorruptBenchPoint>> parse_corrupt_bench(const std::string& text,
+                                                           const std::string& name);
 
 }  // namespace faultline::report

@@ -1,5 +1,5 @@
-// Fast generator for fast mode: xoshiro256++ seeded by splitmix64, a 128-layer ziggurat normal and exact
-// Poisson samplers. Statistically equivalent to NumPy's streams, not draw-for-draw equal.
+// Fast generator for fast mode: xoshiro256++ seeded by splitmix64, a 128-layer ziggurat normal and
+// exact Poisson samplers. Statistically equivalent to NumPy's streams, not draw-for-draw equal.
 #pragma once
 
 #include <array>
@@ -48,11 +48,14 @@ class FastRng {
   }
   double normal(double loc, double scale) { return loc + scale * standard_normal(); }
 
-  // The ziggurat's layer tables, and its slow path for a 32-bit draw hz with iz = hz & 127 that a vector sampler did
-  // not accept itself (continues exactly as standard_normal() does after failing |hz| < kn[iz]; draws from *this).
+  // The ziggurat's layer tables, and its slow path for a 32-bit draw hz with iz = hz & 127 that a
+  // vector sampler did not accept itself (continues exactly as standard_normal() does after failing
+  // |hz| < kn[iz]; draws from *this).
   const std::array<std::uint32_t, 128>& ziggurat_kn() const { return kn_; }
   const std::array<double, 128>& ziggurat_wn() const { return wn_; }
-  double standard_normal_slow(std::int32_t hz) { return normal_tail(hz, static_cast<std::uint32_t>(hz) & 127u); }
+  double standard_normal_slow(std::int32_t hz) {
+    return normal_tail(hz, static_cast<std::uint32_t>(hz) & 127u);
+  }
 
   // Poisson(lam): inversion for lam < 10, PTRS otherwise; lam <= 0 gives 0.
   std::int64_t poisson(double lam);
@@ -62,7 +65,8 @@ class FastRng {
     std::uint64_t m = static_cast<std::uint64_t>(next_u32()) * n;
     if (static_cast<std::uint32_t>(m) < n) {
       const std::uint32_t threshold = static_cast<std::uint32_t>(-n) % n;
-      while (static_cast<std::uint32_t>(m) < threshold) m = static_cast<std::uint64_t>(next_u32()) * n;
+      while (static_cast<std::uint32_t>(m) < threshold)
+        m = static_cast<std::uint64_t>(next_u32()) * n;
     }
     return static_cast<std::uint32_t>(m >> 32);
   }

@@ -1,4 +1,5 @@
-// Lock-step xoshiro256++ lanes: seeding, the scalar step, and normals (AVX2 ziggurat with a scalar twin).
+// Lock-step xoshiro256++ lanes: seeding, the scalar step, and normals (AVX2 ziggurat with a scalar
+// twin).
 #include "rng/lane_rng.hpp"
 
 #include "common/simd.hpp"
@@ -41,38 +42,43 @@ struct ZigguratF {
   float wn[128];
   explicit ZigguratF(const FastRng& rng) {
     for (int i = 0; i < 128; ++i) {
-      kn[i] = static_cast<std::int32_t>(rng.ziggurat_kn()[static_cast<std::size_t>(i)]);  // all below 2^31
+      kn[i] = static_cast<std::int32_t>(
+          rng.ziggurat_kn()[static_cast<std::size_t>(i)]);  // all below 2^31
       wn[i] = static_cast<float>(rng.ziggurat_wn()[static_cast<std::size_t>(i)]);
     }
   }
 };
 
-inline float normal_value(std::uint32_t bits, const ZigguratF& z, float locf, float scalef, double loc, double scale,
-                          FastRng& slow) {
+inline float normal_value(std::uint32_t bits, const ZigguratF& z, float locf, float scalef,
+                          double loc, double scale, FastRng& slow) {
   const auto hz = static_cast<std::int32_t>(bits);
   const std::uint32_t iz = bits & 127u;
-  const auto mag = static_cast<std::int32_t>(hz < 0 ? 0u - bits : bits);  // wraps at INT32_MIN, like vpabsd
+  const auto mag =
+      static_cast<std::int32_t>(hz < 0 ? 0u - bits : bits);  // wraps at INT32_MIN, like vpabsd
   if (z.kn[iz] > mag) return locf + scalef * (static_cast<float>(hz) * z.wn[iz]);
   return static_cast<float>(loc + scale * slow.standard_normal_slow(hz));
 }
 
-void fill_normals_scalar(float* dst, std::size_t n, double loc, double scale, const ZigguratF& z, LaneRng& lanes,
-                         FastRng& slow) {
+void fill_normals_scalar(float* dst, std::size_t n, double loc, double scale, const ZigguratF& z,
+                         LaneRng& lanes, FastRng& slow) {
   const auto locf = static_cast<float>(loc), scalef = static_cast<float>(scale);
   std::uint32_t r[LaneRng::kValuesPerStep];
   constexpr std::size_t kStep = LaneRng::kValuesPerStep;
   for (std::size_t i = 0; i < n; i += kStep) {
     lanes.next_values(r);
     const std::size_t m = n - i < kStep ? n - i : kStep;
-    for (std::size_t j = 0; j < m; ++j) dst[i + j] = normal_value(r[j], z, locf, scalef, loc, scale, slow);
+    for (std::size_t j = 0; j < m; ++j)
+      dst[i + j] = normal_value(r[j], z, locf, scalef, loc, scale, slow);
   }
 }
 
 #if FAULTLINE_X86_SIMD
 
-// Eight normals from eight draws; rejected lanes (rare) are redone in element order by the scalar definition.
-FAULTLINE_TARGET("avx2") inline void normals8(__m256i hz, const ZigguratF& z, __m256 locv, __m256 scalev,
-                                              float* dst, double loc, double scale, FastRng& slow) {
+// Eight normals from eight draws; rejected lanes (rare) are redone in element order by the scalar
+// definition.
+FAULTLINE_TARGET("avx2")
+inline void normals8(__m256i hz, const ZigguratF& z, __m256 locv, __m256 scalev, float* dst,
+                     double loc, double scale, FastRng& slow) {
   const __m256i iz = _mm256_and_si256(hz, _mm256_set1_epi32(127));
   const __m256i kn = _mm256_i32gather_epi32(z.kn, iz, 4);
   const __m256 wn = _mm256_i32gather_ps(z.wn, iz, 4);
@@ -92,10 +98,12 @@ FAULTLINE_TARGET("avx2") inline void normals8(__m256i hz, const ZigguratF& z, __
 }
 
 // Whole blocks of 16 (one step of both halves); returns how many it wrote.
-FAULTLINE_TARGET("avx2") std::size_t fill_normals_avx2(float* dst, std::size_t n, double loc, double scale,
-                                                       const ZigguratF& z, LaneRng& lanes, FastRng& slow) {
+FAULTLINE_TARGET("avx2")
+std::size_t fill_normals_avx2(float* dst, std::size_t n, double loc, double scale,
+                              const ZigguratF& z, LaneRng& lanes, FastRng& slow) {
   avx2::Xoshiro4 a = avx2::load_half(lanes, 0), b = avx2::load_half(lanes, 1);
-  const __m256 locv = _mm256_set1_ps(static_cast<float>(loc)), scalev = _mm256_set1_ps(static_cast<float>(scale));
+  const __m256 locv = _mm256_set1_ps(static_cast<float>(loc)),
+               scalev = _mm256_set1_ps(static_cast<float>(scale));
   std::size_t i = 0;
   for (; i + 16 <= n; i += 16) {
     normals8(avx2::step(a), z, locv, scalev, dst + i, loc, scale, slow);
@@ -109,8 +117,8 @@ FAULTLINE_TARGET("avx2") std::size_t fill_normals_avx2(float* dst, std::size_t n
 
 }  // namespace
 
-void fill_normals(float* dst, std::size_t n, double loc, double scale, LaneRng& lanes, FastRng& slow,
-                  bool allow_simd) {
+void fill_normals(float* dst, std::size_t n, double loc, double scale, LaneRng& lanes,
+                  FastRng& slow, bool allow_simd) {
   const ZigguratF z(slow);
   std::size_t done = 0;
 #if FAULTLINE_X86_SIMD

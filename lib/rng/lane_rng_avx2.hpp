@@ -1,5 +1,6 @@
-// AVX2 stepping of LaneRng (x86-64 GCC/Clang only): two vectors of four xoshiro256++ lanes. Include only from code
-// that checks the CPU at run time; every function here needs FAULTLINE_TARGET("avx2") on its caller.
+// AVX2 stepping of LaneRng (x86-64 GCC/Clang only): two vectors of four xoshiro256++ lanes. Include
+// only from code that checks the CPU at run time; every function here needs
+// FAULTLINE_TARGET("avx2") on its caller.
 #pragma once
 
 #include "common/simd.hpp"
@@ -32,7 +33,8 @@ FAULTLINE_TARGET("avx2") inline __m256i rotl64(__m256i x, int k) {
   return _mm256_or_si256(_mm256_slli_epi64(x, k), _mm256_srli_epi64(x, 64 - k));
 }
 
-// One step of four lanes: 8 32-bit values (low half of lane 0, high half of lane 0, low half of lane 1, ...).
+// One step of four lanes: 8 32-bit values (low half of lane 0, high half of lane 0, low half of
+// lane 1, ...).
 FAULTLINE_TARGET("avx2") inline __m256i step(Xoshiro4& g) {
   const __m256i result = _mm256_add_epi64(rotl64(_mm256_add_epi64(g.s0, g.s3), 23), g.s0);
   const __m256i t = _mm256_slli_epi64(g.s1, 17);

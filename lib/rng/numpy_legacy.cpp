@@ -1,4 +1,5 @@
-// NumPy legacy transforms: polar normal, Poisson (multiplication and PTRS), loggam. Compiled without FP contraction.
+// NumPy legacy transforms: polar normal, Poisson (multiplication and PTRS), loggam. Compiled
+// without FP contraction.
 #include "rng/numpy_legacy.hpp"
 
 #include <algorithm>
@@ -20,22 +21,24 @@ inline bool polar_accepts(double a, double b) {
 
 #if FAULTLINE_X86_SIMD
 
-// Accepted attempts among four (eight doubles: x1, x2 of each attempt in turn), as a count. r2 is formed as
-// x1^2 + x2^2 with each square rounded, as the scalar test does (the horizontal add only reorders operands of a
-// commutative add).
+// Accepted attempts among four (eight doubles: x1, x2 of each attempt in turn), as a count. r2 is
+// formed as x1^2 + x2^2 with each square rounded, as the scalar test does (the horizontal add only
+// reorders operands of a commutative add).
 FAULTLINE_TARGET("avx2,popcnt") inline int polar_accepts4(const double* d) {
   const __m256d one = _mm256_set1_pd(1.0), two = _mm256_set1_pd(2.0), zero = _mm256_setzero_pd();
   const __m256d x0 = _mm256_sub_pd(_mm256_mul_pd(two, _mm256_loadu_pd(d)), one);
   const __m256d x1 = _mm256_sub_pd(_mm256_mul_pd(two, _mm256_loadu_pd(d + 4)), one);
   const __m256d r = _mm256_hadd_pd(_mm256_mul_pd(x0, x0), _mm256_mul_pd(x1, x1));
-  const __m256d ok = _mm256_and_pd(_mm256_cmp_pd(r, one, _CMP_LT_OQ), _mm256_cmp_pd(r, zero, _CMP_NEQ_UQ));
+  const __m256d ok =
+      _mm256_and_pd(_mm256_cmp_pd(r, one, _CMP_LT_OQ), _mm256_cmp_pd(r, zero, _CMP_NEQ_UQ));
   return __builtin_popcount(static_cast<unsigned>(_mm256_movemask_pd(ok)));
 }
 
-// Skips whole chunks of four attempts from d[j..count) while they hold fewer than `pairs` acceptances; returns the
-// new j and lowers `pairs` by the acceptances skipped.
-FAULTLINE_TARGET("avx2,popcnt") std::size_t skip_chunks_avx2(const double* d, std::size_t j,
-                                                             std::size_t count, std::size_t& pairs) {
+// Skips whole chunks of four attempts from d[j..count) while they hold fewer than `pairs`
+// acceptances; returns the new j and lowers `pairs` by the acceptances skipped.
+FAULTLINE_TARGET("avx2,popcnt")
+std::size_t skip_chunks_avx2(const double* d, std::size_t j, std::size_t count,
+                             std::size_t& pairs) {
   for (; j + 8 <= count; j += 8) {
     const auto accepted = static_cast<std::size_t>(polar_accepts4(d + j));
     if (accepted >= pairs) break;
@@ -55,7 +58,8 @@ void NumpyRandomState::skip_polar_pairs(std::size_t pairs) {
 #if FAULTLINE_X86_SIMD
     if (common::cpu_has_avx2_popcnt()) j = skip_chunks_avx2(d, j, count, pairs);
 #endif
-    for (; pairs > 0 && j + 2 <= count; j += 2) pairs -= polar_accepts(2.0 * d[j] - 1.0, 2.0 * d[j + 1] - 1.0);
+    for (; pairs > 0 && j + 2 <= count; j += 2)
+      pairs -= polar_accepts(2.0 * d[j] - 1.0, 2.0 * d[j + 1] - 1.0);
     mt_.advance_doubles(j);
     if (pairs > 0 && count - j < 2) {
       // An attempt straddling two blocks, or an odd stream position: one attempt the plain way.
@@ -77,7 +81,8 @@ double NumpyRandomState::cached_gauss() {
 
 void NumpyRandomState::polar_pair(double& x1, double& x2, double& r2) {
   for (;;) {
-    // Whole attempts inside the current block: two precomputed doubles each, no per-draw bookkeeping.
+    // Whole attempts inside the current block: two precomputed doubles each, no per-draw
+    // bookkeeping.
     std::size_t count = 0;
     const double* d = mt_.block_doubles(count);
     std::size_t j = 0;
@@ -150,7 +155,8 @@ void NumpyRandomState::polar_pairs(double* x, double* r2, std::size_t pairs) {
     std::size_t count = 0;
     const double* d = mt_.block_doubles(count);
     std::size_t j = 0;
-    // Every attempt is written at slot `got`, which moves on only when it was accepted (no branch on acceptance).
+    // Every attempt is written at slot `got`, which moves on only when it was accepted (no branch
+    // on acceptance).
     for (; j + 2 <= count && got < pairs; j += 2) {
       const double a = 2.0 * d[j] - 1.0;
       const double b = 2.0 * d[j + 1] - 1.0;
@@ -171,15 +177,16 @@ void NumpyRandomState::polar_pairs(double* x, double* r2, std::size_t pairs) {
 void Mt19937::seed(std::uint32_t seed) {
   state_[0] = seed;
   for (int i = 1; i < kN; ++i) {
-    state_[i] = 1812433253u * (state_[i - 1] ^ (state_[i - 1] >> 30)) + static_cast<std::uint32_t>(i);
+    state_[i] =
+        1812433253u * (state_[i - 1] ^ (state_[i - 1] >> 30)) + static_cast<std::uint32_t>(i);
   }
   index_ = kN;
 }
 
 namespace {
 
-// The twist as two straight loops the compiler vectorises (the first reads only words it has not yet rewritten; the
-// second reads words at distance 227, more than a vector apart).
+// The twist as two straight loops the compiler vectorises (the first reads only words it has not
+// yet rewritten; the second reads words at distance 227, more than a vector apart).
 FAULTLINE_CLONES("avx2") void twist(std::uint32_t* __restrict state) {
   constexpr int kN = 624, kM = 397;
   constexpr std::uint32_t kUpper = 0x80000000u, kLower = 0x7fffffffu, kMatrix = 0x9908b0dfu;
@@ -203,26 +210,30 @@ inline std::uint32_t temper_word(std::uint32_t t) {
   return t ^ (t >> 18);
 }
 
-// random_sample() of the tempered pair (a, b): (a >> 5) < 2^27 and (b >> 6) < 2^26 convert exactly, the sum is
-// exact and the division by 2^53 is exact scaling.
+// random_sample() of the tempered pair (a, b): (a >> 5) < 2^27 and (b >> 6) < 2^26 convert exactly,
+// the sum is exact and the division by 2^53 is exact scaling.
 inline double pair_double(std::uint32_t a, std::uint32_t b) {
-  return (static_cast<double>(a >> 5) * 67108864.0 + static_cast<double>(b >> 6)) / 9007199254740992.0;
+  return (static_cast<double>(a >> 5) * 67108864.0 + static_cast<double>(b >> 6)) /
+         9007199254740992.0;
 }
 
 void temper_pairs_scalar(const std::uint32_t* state, double* pairs) {
-  for (int k = 0; k < 312; ++k) pairs[k] = pair_double(temper_word(state[2 * k]), temper_word(state[2 * k + 1]));
+  for (int k = 0; k < 312; ++k)
+    pairs[k] = pair_double(temper_word(state[2 * k]), temper_word(state[2 * k + 1]));
 }
 
 #if FAULTLINE_X86_SIMD
-// Four pairs per step, each pair as one 64-bit lane (a low, b high): a >> 5 and b >> 6 become doubles by OR-ing
-// them into 2^52's mantissa and subtracting 2^52 (exact below 2^52), then the scalar formula.
+// Four pairs per step, each pair as one 64-bit lane (a low, b high): a >> 5 and b >> 6 become
+// doubles by OR-ing them into 2^52's mantissa and subtracting 2^52 (exact below 2^52), then the
+// scalar formula.
 FAULTLINE_TARGET("avx2") void temper_pairs_avx2(const std::uint32_t* state, double* pairs) {
   const __m256i m1 = _mm256_set1_epi32(static_cast<int>(0x9d2c5680u));
   const __m256i m2 = _mm256_set1_epi32(static_cast<int>(0xefc60000u));
   const __m256i low32 = _mm256_set1_epi64x(0xFFFFFFFFll);
   const __m256d two52 = _mm256_set1_pd(4503599627370496.0);
   const __m256i two52_bits = _mm256_castpd_si256(two52);
-  const __m256d two26 = _mm256_set1_pd(67108864.0), inv_two53 = _mm256_set1_pd(1.0 / 9007199254740992.0);
+  const __m256d two26 = _mm256_set1_pd(67108864.0),
+                inv_two53 = _mm256_set1_pd(1.0 / 9007199254740992.0);
   for (int k = 0; k < 624; k += 8) {
     __m256i t = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(state + k));
     t = _mm256_xor_si256(t, _mm256_srli_epi32(t, 11));
@@ -233,7 +244,8 @@ FAULTLINE_TARGET("avx2") void temper_pairs_avx2(const std::uint32_t* state, doub
     const __m256i b = _mm256_srli_epi64(t, 38);
     const __m256d ad = _mm256_sub_pd(_mm256_castsi256_pd(_mm256_or_si256(a, two52_bits)), two52);
     const __m256d bd = _mm256_sub_pd(_mm256_castsi256_pd(_mm256_or_si256(b, two52_bits)), two52);
-    _mm256_storeu_pd(pairs + k / 2, _mm256_mul_pd(_mm256_add_pd(_mm256_mul_pd(ad, two26), bd), inv_two53));
+    _mm256_storeu_pd(pairs + k / 2,
+                     _mm256_mul_pd(_mm256_add_pd(_mm256_mul_pd(ad, two26), bd), inv_two53));
   }
 }
 #endif
@@ -288,7 +300,8 @@ void Mt19937::skip_doubles(std::size_t n) {
   }
   n -= left;
   constexpr std::size_t kPerBlock = kN / 2;
-  for (; n >= kPerBlock; n -= kPerBlock) twist(state_);  // a block consumed whole: its words are never read
+  for (; n >= kPerBlock; n -= kPerBlock)
+    twist(state_);  // a block consumed whole: its words are never read
   index_ = kN;
   if (n > 0) {
     refill();
@@ -308,7 +321,8 @@ PoissonParams prepare_poisson(double lam) {
     p.invalpha = 1.1239 + 1.1328 / (p.b - 3.4);
     p.vr = 0.9277 - 3.6224 / (p.b - 2);
     p.log_invalpha = std::log(p.invalpha);
-  } else if (lam != 0.0) {  // negative or NaN lambdas (invalid in NumPy) keep the old one-uniform behaviour
+  } else if (lam != 0.0) {  // negative or NaN lambdas (invalid in NumPy) keep the old one-uniform
+                            // behaviour
     p.method = PoissonMethod::Multiplication;
     if (lam > 0.0) p.enlam = std::exp(-lam);
   }
@@ -319,9 +333,12 @@ std::int64_t NumpyRandomState::poisson(double lam) { return poisson(prepare_pois
 
 std::int64_t NumpyRandomState::poisson(const PoissonParams& p) {
   switch (p.method) {
-    case PoissonMethod::Ptrs: return poisson_ptrs(p);
-    case PoissonMethod::Multiplication: return poisson_mult(p.enlam);
-    case PoissonMethod::Zero: break;
+    case PoissonMethod::Ptrs:
+      return poisson_ptrs(p);
+    case PoissonMethod::Multiplication:
+      return poisson_mult(p.enlam);
+    case PoissonMethod::Zero:
+      break;
   }
   return 0;
 }
@@ -346,21 +363,25 @@ constexpr std::int64_t kLoggamTable = 1024;
 double loggam_of_count_plus_one(std::int64_t k) {
   static const std::array<double, kLoggamTable> table = [] {
     std::array<double, kLoggamTable> t{};
-    for (std::int64_t j = 0; j < kLoggamTable; ++j) t[static_cast<std::size_t>(j)] = numpy_loggam(static_cast<double>(j + 1));
+    for (std::int64_t j = 0; j < kLoggamTable; ++j)
+      t[static_cast<std::size_t>(j)] = numpy_loggam(static_cast<double>(j + 1));
     return t;
   }();
-  return k < kLoggamTable ? table[static_cast<std::size_t>(k)] : numpy_loggam(static_cast<double>(k + 1));
+  return k < kLoggamTable ? table[static_cast<std::size_t>(k)]
+                          : numpy_loggam(static_cast<double>(k + 1));
 }
 
-// static_cast<int64_t>(std::floor(q)) without a libm call (the baseline ISA has no rounding instruction); values
-// outside +-2^62 (us = 0 gives -inf) take std::floor's path.
+// static_cast<int64_t>(std::floor(q)) without a libm call (the baseline ISA has no rounding
+// instruction); values outside +-2^62 (us = 0 gives -inf) take std::floor's path.
 inline std::int64_t floor_to_int64(double q) {
   if (!(q > -0x1p62 && q < 0x1p62)) return static_cast<std::int64_t>(std::floor(q));
-  const auto k = static_cast<std::int64_t>(q);  // truncation: one above the floor for negative non-integers
+  const auto k =
+      static_cast<std::int64_t>(q);  // truncation: one above the floor for negative non-integers
   return static_cast<double>(k) > q ? k - 1 : k;
 }
 
-// exp(-2): from lambda 2 on, k >= 4 is common enough (P > 0.14) that the multiplication loop looks eight deep.
+// exp(-2): from lambda 2 on, k >= 4 is common enough (P > 0.14) that the multiplication loop looks
+// eight deep.
 constexpr double kLongChainEnlam = 0.1353352832366127;
 
 // One PTRS attempt on (u + 0.5, v) = two uniforms: true with k set when it accepts.
@@ -385,8 +406,9 @@ std::int64_t NumpyRandomState::poisson_ptrs(const PoissonParams& p) {
   }
 }
 
-void NumpyRandomState::poissons(const PoissonParams* params, const std::uint8_t* level, std::size_t n,
-                                std::uint8_t* counts, std::vector<LargeCount>& large) {
+void NumpyRandomState::poissons(const PoissonParams* params, const std::uint8_t* level,
+                                std::size_t n, std::uint8_t* counts,
+                                std::vector<LargeCount>& large) {
   auto store = [&](std::size_t i, std::int64_t k) {
     if (k < 255) {
       counts[i] = static_cast<std::uint8_t>(k);
@@ -395,15 +417,17 @@ void NumpyRandomState::poissons(const PoissonParams* params, const std::uint8_t*
       large.push_back({i, k});
     }
   };
-  // The block's doubles are copied with zeros behind them: a product chain always ends on a zero, so the
-  // multiplication loop needs no bounds test; a chain that ran into the padding is redone the plain way.
+  // The block's doubles are copied with zeros behind them: a product chain always ends on a zero,
+  // so the multiplication loop needs no bounds test; a chain that ran into the padding is redone
+  // the plain way.
   constexpr std::size_t kBlockDoubles = 312, kPad = 12;
   alignas(32) double buf[kBlockDoubles + kPad];
   std::size_t i = 0;
   while (i < n) {
     std::size_t count = 0;
     const double* d = mt_.block_doubles(count);
-    if (d == nullptr) {  // odd stream position: one element the plain way (it realigns on its first uniform)
+    if (d == nullptr) {  // odd stream position: one element the plain way (it realigns on its first
+                         // uniform)
       store(i, poisson(params[level[i]]));
       ++i;
       continue;
@@ -415,8 +439,9 @@ void NumpyRandomState::poissons(const PoissonParams* params, const std::uint8_t*
       const PoissonParams& p = params[level[i]];
       std::int64_t k = 0;
       if (p.method == PoissonMethod::Multiplication) {
-        // The products never grow (each factor is < 1), so the count of the first four above exp(-lam) is k
-        // when the chain ends among them: no branch on k's value unless it is 4 or more.
+        // The products never grow (each factor is < 1), so the count of the first four above
+        // exp(-lam) is k when the chain ends among them: no branch on k's value unless it is 4 or
+        // more.
         const double* b = buf + t;
         const double e = p.enlam;
         const double p1 = b[0], p2 = p1 * b[1], p3 = p2 * b[2], p4 = p3 * b[3];
@@ -424,7 +449,8 @@ void NumpyRandomState::poissons(const PoissonParams* params, const std::uint8_t*
                             static_cast<std::size_t>(p3 > e) + static_cast<std::size_t>(p4 > e);
         double prod = p4;
         std::size_t depth = 4;
-        if (p.enlam < kLongChainEnlam) {  // larger lambdas: four more products before any branch on k
+        if (p.enlam <
+            kLongChainEnlam) {  // larger lambdas: four more products before any branch on k
           const double p5 = p4 * b[4], p6 = p5 * b[5], p7 = p6 * b[6], p8 = p7 * b[7];
           above += static_cast<std::size_t>(p5 > e) + static_cast<std::size_t>(p6 > e) +
                    static_cast<std::size_t>(p7 > e) + static_cast<std::size_t>(p8 > e);
@@ -455,10 +481,10 @@ void NumpyRandomState::poissons(const PoissonParams* params, const std::uint8_t*
 }
 
 double numpy_loggam(double x) {
-  static constexpr double kA[10] = {8.333333333333333e-02, -2.777777777777778e-03, 7.936507936507937e-04,
-                                    -5.952380952380952e-04, 8.417508417508418e-04, -1.917526917526918e-03,
-                                    6.410256410256410e-03, -2.955065359477124e-02, 1.796443723688307e-01,
-                                    -1.39243221690590e+00};
+  static constexpr double kA[10] = {
+      8.333333333333333e-02, -2.777777777777778e-03, 7.936507936507937e-04, -5.952380952380952e-04,
+      8.417508417508418e-04, -1.917526917526918e-03, 6.410256410256410e-03, -2.955065359477124e-02,
+      1.796443723688307e-01, -1.39243221690590e+00};
   if (x == 1.0 || x == 2.0) return 0.0;
   std::int64_t n = 0;
   if (x < 7.0) n = static_cast<std::int64_t>(7 - x);

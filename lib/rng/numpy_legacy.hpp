@@ -1,5 +1,6 @@
 // NumPy's legacy RandomState (np.random.*) on std::mt19937, bit-exact (spec corruptions.md §10).
-// Used by numpy mode so a corruption seeded with np.random.seed(s) reproduces the Python reference draw for draw.
+// Used by numpy mode so a corruption seeded with np.random.seed(s) reproduces the Python reference
+// draw for draw.
 #pragma once
 
 #include <cmath>
@@ -10,10 +11,11 @@
 
 namespace faultline::rng {
 
-// MT19937 with the reference's init_genrand seeding (== std::mt19937(seed) output for output). It twists 624
-// words at a time and tempers them straight into the block's 312 random_sample() doubles (AVX2 where available);
-// the tempered 32-bit words themselves are made only if a single 32-bit draw asks for them. Faster than
-// std::mt19937's per-call tempering on the millions of draws Dark, Fog and Snow make.
+// MT19937 with the reference's init_genrand seeding (== std::mt19937(seed) output for output). It
+// twists 624 words at a time and tempers them straight into the block's 312 random_sample() doubles
+// (AVX2 where available); the tempered 32-bit words themselves are made only if a single 32-bit
+// draw asks for them. Faster than std::mt19937's per-call tempering on the millions of draws Dark,
+// Fog and Snow make.
 class Mt19937 {
  public:
   explicit Mt19937(std::uint32_t seed) { this->seed(seed); }
@@ -24,9 +26,9 @@ class Mt19937 {
     return out_[index_++];
   }
 
-  // random_sample() from the next two outputs: ((a >> 5) * 2^26 + (b >> 6)) / 2^53. When the two outputs are an
-  // aligned pair of the current block (always, unless single 32-bit draws made the position odd) the double was
-  // precomputed with the block (vectorised), which is the same value.
+  // random_sample() from the next two outputs: ((a >> 5) * 2^26 + (b >> 6)) / 2^53. When the two
+  // outputs are an aligned pair of the current block (always, unless single 32-bit draws made the
+  // position odd) the double was precomputed with the block (vectorised), which is the same value.
   double next_double() {
     if (index_ == kN) refill();
     if ((index_ & 1) == 0) {
@@ -39,9 +41,9 @@ class Mt19937 {
     return (a * 67108864.0 + b) / 9007199254740992.0;
   }
 
-  // Bulk access for tight loops: the precomputed next_double() values left in the current block (an exhausted
-  // block is refilled first), or nullptr with count 0 when the position is odd (then only next_double() applies).
-  // advance_doubles(k) consumes the first k of them (k <= count).
+  // Bulk access for tight loops: the precomputed next_double() values left in the current block (an
+  // exhausted block is refilled first), or nullptr with count 0 when the position is odd (then only
+  // next_double() applies). advance_doubles(k) consumes the first k of them (k <= count).
   const double* block_doubles(std::size_t& count) {
     if (index_ == kN) refill();
     if ((index_ & 1) != 0) {
@@ -55,8 +57,8 @@ class Mt19937 {
 
   // n next_double() values in order into out[0..n).
   void fill_doubles(double* out, std::size_t n);
-  // The state after n next_double() calls, without making the values: blocks passed over whole are only twisted
-  // (no tempering, no conversion).
+  // The state after n next_double() calls, without making the values: blocks passed over whole are
+  // only twisted (no tempering, no conversion).
   void skip_doubles(std::size_t n);
 
  private:
@@ -70,8 +72,8 @@ class Mt19937 {
   int index_ = kN;
 };
 
-// Poisson(lam) constants precomputed once per lambda with the reference's arithmetic (Dark has at most 256
-// distinct lambdas per image). Drawing from them is bit-identical to drawing with lam.
+// Poisson(lam) constants precomputed once per lambda with the reference's arithmetic (Dark has at
+// most 256 distinct lambdas per image). Drawing from them is bit-identical to drawing with lam.
 enum class PoissonMethod : std::uint8_t { Zero, Multiplication, Ptrs };
 struct PoissonParams {
   double lam = 0;
@@ -107,7 +109,8 @@ class NumpyRandomState {
 
   // random_sample(): 53-bit double in [0, 1) from two consecutive outputs.
   double random_sample() { return mt_.next_double(); }
-  // n random_sample() draws in order into out[0..n); skip_samples(n) leaves the stream where they would have.
+  // n random_sample() draws in order into out[0..n); skip_samples(n) leaves the stream where they
+  // would have.
   void random_samples(double* out, std::size_t n) { mt_.fill_doubles(out, n); }
   void skip_samples(std::size_t n) { mt_.skip_doubles(n); }
 
@@ -117,9 +120,9 @@ class NumpyRandomState {
   // standard_normal(): legacy polar method with its one-value cache.
   double standard_normal();
 
-  // n standard_normal() draws in order into out[0..n), or, with out == nullptr, the same draws skipped: the state
-  // afterwards (stream position and cache) is the same either way, but skipping computes no logarithm (a value left
-  // in the cache is evaluated only if it is ever read).
+  // n standard_normal() draws in order into out[0..n), or, with out == nullptr, the same draws
+  // skipped: the state afterwards (stream position and cache) is the same either way, but skipping
+  // computes no logarithm (a value left in the cache is evaluated only if it is ever read).
   void standard_normals(double* out, std::size_t n);
 
   // normal(loc, scale) = loc + scale * standard_normal().
@@ -129,15 +132,16 @@ class NumpyRandomState {
   std::int64_t poisson(double lam);
   std::int64_t poisson(const PoissonParams& p);
 
-  // n Poisson draws in order, element i from params[level[i]] (a table indexed by a byte): the same counts and
-  // stream as n poisson() calls, in one loop over the generator's blocks. counts[i] = min(k, 255); counts of 255
-  // and more are also appended to `large` in index order.
-  void poissons(const PoissonParams* params, const std::uint8_t* level, std::size_t n, std::uint8_t* counts,
-                std::vector<LargeCount>& large);
+  // n Poisson draws in order, element i from params[level[i]] (a table indexed by a byte): the same
+  // counts and stream as n poisson() calls, in one loop over the generator's blocks. counts[i] =
+  // min(k, 255); counts of 255 and more are also appended to `large` in index order.
+  void poissons(const PoissonParams* params, const std::uint8_t* level, std::size_t n,
+                std::uint8_t* counts, std::vector<LargeCount>& large);
 
-  // For callers that evaluate the polar method themselves. polar_pairs draws the next `pairs` accepted pairs as
-  // standard_normal() would (ignoring the cache): x[2q] = x2 and x[2q + 1] = x1 of pair q (the order their normals
-  // come out: f * x2, then f * x1) and r2[q], f = polar_factor(r2[q]).
+  // For callers that evaluate the polar method themselves. polar_pairs draws the next `pairs`
+  // accepted pairs as standard_normal() would (ignoring the cache): x[2q] = x2 and x[2q + 1] = x1
+  // of pair q (the order their normals come out: f * x2, then f * x1) and r2[q], f =
+  // polar_factor(r2[q]).
   void polar_pairs(double* x, double* r2, std::size_t pairs);
   // Takes the cached normal into z (and clears the cache) if there is one.
   bool take_cached_normal(double& z) {
@@ -145,7 +149,8 @@ class NumpyRandomState {
     z = cached_gauss();
     return true;
   }
-  // Leaves f(r2) * x1 of a pair whose f * x2 the caller used as the cached normal, evaluated only when read.
+  // Leaves f(r2) * x1 of a pair whose f * x2 the caller used as the cached normal, evaluated only
+  // when read.
   void cache_pair_half(double x1, double r2) {
     has_gauss_ = true;
     gauss_deferred_ = true;
@@ -160,9 +165,9 @@ class NumpyRandomState {
     }
   }
 
-  // randint(low, high) for the default int64 dtype (high exclusive): NumPy's masked rejection sampling, 32-bit
-  // draws while high - low - 1 fits in 32 bits (64-bit draws beyond). A range of one value draws nothing.
-  // Requires low < high.
+  // randint(low, high) for the default int64 dtype (high exclusive): NumPy's masked rejection
+  // sampling, 32-bit draws while high - low - 1 fits in 32 bits (64-bit draws beyond). A range of
+  // one value draws nothing. Requires low < high.
   std::int64_t randint(std::int64_t low, std::int64_t high);
 
   bool gauss_cache_pending() const { return has_gauss_; }

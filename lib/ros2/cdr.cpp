@@ -56,24 +56,30 @@ void CdrWriter::f64_sequence(const double* v, std::size_t n) {
 CdrReader::CdrReader(std::string_view message, std::string type_name)
     : in_(message), type_name_(std::move(type_name)) {
   if (in_.size() < kEncapsulationBytes) {
-    status_ = Status(StatusCode::kTruncated, type_name_ + ": " + std::to_string(in_.size()) +
-                                                 " bytes, shorter than the 4-byte CDR encapsulation header");
+    status_ = Status(StatusCode::kTruncated,
+                     type_name_ + ": " + std::to_string(in_.size()) +
+                         " bytes, shorter than the 4-byte CDR encapsulation header");
     return;
   }
   const auto b0 = static_cast<unsigned char>(in_[0]), b1 = static_cast<unsigned char>(in_[1]);
   if (b0 != 0x00 || b1 != 0x01) {
     char buf[8];
     std::snprintf(buf, sizeof(buf), "%02x %02x", b0, b1);
-    status_ = Status(StatusCode::kUnsupported, type_name_ + ": encapsulation " + buf +
-                                                   ": only CDR_LE (00 01, classic little-endian CDR) is read");
+    status_ = Status(StatusCode::kUnsupported,
+                     type_name_ + ": encapsulation " + buf +
+                         ": only CDR_LE (00 01, classic little-endian CDR) is read");
   }
 }
 
-void CdrReader::fail(StatusCode code, const char* field, const std::string& why) { fail_at(pos_, code, field, why); }
+void CdrReader::fail(StatusCode code, const char* field, const std::string& why) {
+  fail_at(pos_, code, field, why);
+}
 
-void CdrReader::fail_at(std::size_t at, StatusCode code, const char* field, const std::string& why) {
+void CdrReader::fail_at(std::size_t at, StatusCode code, const char* field,
+                        const std::string& why) {
   if (!status_.is_ok()) return;
-  status_ = Status(code, type_name_ + ": field " + field + " at byte " + std::to_string(at) + ": " + why);
+  status_ =
+      Status(code, type_name_ + ": field " + field + " at byte " + std::to_string(at) + ": " + why);
 }
 
 bool CdrReader::need(std::size_t n, const char* field) {
@@ -100,14 +106,18 @@ std::uint64_t CdrReader::get(int n, const char* field) {
   if (!align(size, field) || !need(size, field)) return 0;
   std::uint64_t v = 0;
   for (int i = 0; i < n; ++i) {
-    v |= static_cast<std::uint64_t>(static_cast<unsigned char>(in_[pos_ + static_cast<std::size_t>(i)])) << (8 * i);
+    v |= static_cast<std::uint64_t>(
+             static_cast<unsigned char>(in_[pos_ + static_cast<std::size_t>(i)]))
+         << (8 * i);
   }
   pos_ += size;
   return v;
 }
 
 std::uint8_t CdrReader::u8(const char* field) { return static_cast<std::uint8_t>(get(1, field)); }
-std::uint32_t CdrReader::u32(const char* field) { return static_cast<std::uint32_t>(get(4, field)); }
+std::uint32_t CdrReader::u32(const char* field) {
+  return static_cast<std::uint32_t>(get(4, field));
+}
 std::uint64_t CdrReader::u64(const char* field) { return get(8, field); }
 
 float CdrReader::f32(const char* field) {
@@ -129,7 +139,8 @@ std::string CdrReader::string(const char* field) {
   if (!ok() || length == 0) return {};  // 0: an empty string from a writer that omits the NUL
   if (!need(length, field)) return {};
   if (in_[pos_ + length - 1] != '\0') {
-    fail(StatusCode::kCorruptData, field, "string of length " + std::to_string(length) + " lacks its NUL");
+    fail(StatusCode::kCorruptData, field,
+         "string of length " + std::to_string(length) + " lacks its NUL");
     return {};
   }
   std::string out(in_.substr(pos_, length - 1));
@@ -143,8 +154,8 @@ std::uint32_t CdrReader::sequence_count(const char* field, std::size_t min_eleme
   const std::size_t left = in_.size() - pos_;
   if (min_element_bytes > 0 && count > left / min_element_bytes) {
     fail_at(pos_ - 4, StatusCode::kCorruptData, field,
-         "count " + std::to_string(count) + " x " + std::to_string(min_element_bytes) + " bytes exceeds the " +
-             std::to_string(left) + " bytes left");
+            "count " + std::to_string(count) + " x " + std::to_string(min_element_bytes) +
+                " bytes exceeds the " + std::to_string(left) + " bytes left");
     return 0;
   }
   return count;

@@ -1,7 +1,8 @@
-// Classic CDR (XCDR1, little endian) as ROS 2 puts it on the DDS wire and into rosbag2 files: a 4-byte
-// encapsulation header `00 01 00 00` (CDR_LE), then the body, each primitive aligned to its size counted from
-// the first byte after the header. Strings: uint32 length counting the terminating NUL, the bytes, the NUL.
-// Sequences: uint32 element count, then the elements (aligned to their own size). Fixed arrays: no count.
+// Classic CDR (XCDR1, little endian) as ROS 2 puts it on the DDS wire and into rosbag2 files: a
+// 4-byte encapsulation header `00 01 00 00` (CDR_LE), then the body, each primitive aligned to its
+// size counted from the first byte after the header. Strings: uint32 length counting the
+// terminating NUL, the bytes, the NUL. Sequences: uint32 element count, then the elements (aligned
+// to their own size). Fixed arrays: no count.
 #pragma once
 
 #include <cstddef>
@@ -27,9 +28,9 @@ class CdrWriter {
   void u64(std::uint64_t v) { put(v, 8); }
   void f32(float v);
   void f64(double v);
-  void string(std::string_view s);         // length (with NUL) + bytes + NUL
-  void sequence_count(std::size_t count);  // uint32; the caller writes the elements
-  void octets(std::string_view bytes);     // uint8[]: count + bytes
+  void string(std::string_view s);                 // length (with NUL) + bytes + NUL
+  void sequence_count(std::size_t count);          // uint32; the caller writes the elements
+  void octets(std::string_view bytes);             // uint8[]: count + bytes
   void f64_array(const double* v, std::size_t n);  // fixed array: no count
   void f64_sequence(const double* v, std::size_t n);
 
@@ -43,15 +44,16 @@ class CdrWriter {
   std::string buf_;
 };
 
-// Bounds-checked reader over a CDR_LE message (not owned; keep it alive). Errors are sticky: the first
-// failure (truncation, a length or count that does not fit the bytes left, a string without its NUL) is
-// kept with the field name and byte offset, later reads return zeros, and status() reports it. Nothing is
-// allocated from a length before it is checked against the bytes that are actually there. Byte offsets in
-// errors count from the start of the message (encapsulation header included).
+// Bounds-checked reader over a CDR_LE message (not owned; keep it alive). Errors are sticky: the
+// first failure (truncation, a length or count that does not fit the bytes left, a string without
+// its NUL) is kept with the field name and byte offset, later reads return zeros, and status()
+// reports it. Nothing is allocated from a length before it is checked against the bytes that are
+// actually there. Byte offsets in errors count from the start of the message (encapsulation header
+// included).
 class CdrReader {
  public:
-  // Checks the encapsulation header: kTruncated below 4 bytes, kUnsupported for big-endian or XCDR2.
-  // `type_name` prefixes every error ("sensor_msgs/msg/Image: ...").
+  // Checks the encapsulation header: kTruncated below 4 bytes, kUnsupported for big-endian or
+  // XCDR2. `type_name` prefixes every error ("sensor_msgs/msg/Image: ...").
   CdrReader(std::string_view message, std::string type_name);
 
   std::uint8_t u8(const char* field);
@@ -64,8 +66,8 @@ class CdrReader {
   std::string string(const char* field);
   // uint32 count, rejected unless count * min_element_bytes fits in what is left.
   std::uint32_t sequence_count(const char* field, std::size_t min_element_bytes);
-  std::string octets(const char* field);             // uint8[]
-  std::string_view octets_view(const char* field);   // uint8[] without a copy (valid with the input)
+  std::string octets(const char* field);            // uint8[]
+  std::string_view octets_view(const char* field);  // uint8[] without a copy (valid with the input)
   void f64_array(const char* field, double* out, std::size_t n);
 
   bool ok() const { return status_.is_ok(); }

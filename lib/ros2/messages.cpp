@@ -10,8 +10,8 @@ namespace {
 constexpr std::size_t kMinTransformStamped = 8 + 4 + 4 + 7 * 8;
 constexpr std::size_t kMinKeyValue = 4 + 4;
 constexpr std::size_t kMinDiagnosticStatus = 1 + 4 + 4 + 4 + 4;
-constexpr std::size_t kMinMarker = 12 + 4 + 12 + 56 + 24 + 16 + 8 + 1 + 4 + 4 + 4 + (12 + 4 + 4 + 4) + 4 + 4 + 4 +
-                                   (4 + 4) + 1;
+constexpr std::size_t kMinMarker =
+    12 + 4 + 12 + 56 + 24 + 16 + 8 + 1 + 4 + 4 + 4 + (12 + 4 + 4 + 4) + 4 + 4 + 4 + (4 + 4) + 1;
 
 template <typename T>
 void encode_sequence(CdrWriter& w, const std::vector<T>& v) {
@@ -19,9 +19,11 @@ void encode_sequence(CdrWriter& w, const std::vector<T>& v) {
   for (const T& e : v) encode(w, e);
 }
 
-// Elements are appended as they decode (no reserve from the count), so memory follows the input's size.
+// Elements are appended as they decode (no reserve from the count), so memory follows the input's
+// size.
 template <typename T>
-void decode_sequence(CdrReader& r, const char* field, std::size_t min_element_bytes, std::vector<T>& out) {
+void decode_sequence(CdrReader& r, const char* field, std::size_t min_element_bytes,
+                     std::vector<T>& out) {
   out.clear();
   const std::uint32_t n = r.sequence_count(field, min_element_bytes);
   for (std::uint32_t i = 0; i < n && r.ok(); ++i) {
@@ -228,7 +230,9 @@ void decode(CdrReader& r, TransformStamped& m) {
   m.child_frame_id = r.string("child_frame_id");
   decode(r, m.transform);
 }
-void decode(CdrReader& r, TFMessage& m) { decode_sequence(r, "transforms", kMinTransformStamped, m.transforms); }
+void decode(CdrReader& r, TFMessage& m) {
+  decode_sequence(r, "transforms", kMinTransformStamped, m.transforms);
+}
 void decode(CdrReader& r, KeyValue& m) {
   m.key = r.string("key");
   m.value = r.string("value");
@@ -281,7 +285,8 @@ void decode(CdrReader& r, Marker& m) {
 }
 void decode(CdrReader& r, MarkerArray& m) { decode_sequence(r, "markers", kMinMarker, m.markers); }
 
-std::string compressed_image_prefix(const Header& header, std::string_view format, std::size_t data_bytes) {
+std::string compressed_image_prefix(const Header& header, std::string_view format,
+                                    std::size_t data_bytes) {
   CdrWriter w;
   encode(w, header);
   w.string(format);
@@ -309,7 +314,9 @@ Time time_from_ns(StampNs ns) {
   return Time{static_cast<std::int32_t>(sec), static_cast<std::uint32_t>(rem)};
 }
 
-StampNs to_ns(const Time& t) { return static_cast<StampNs>(t.sec) * kNsPerSec + static_cast<StampNs>(t.nanosec); }
+StampNs to_ns(const Time& t) {
+  return static_cast<StampNs>(t.sec) * kNsPerSec + static_cast<StampNs>(t.nanosec);
+}
 
 CameraInfo camera_info_from_k(const Header& header, std::uint32_t width, std::uint32_t height,
                               const std::array<double, 9>& k) {

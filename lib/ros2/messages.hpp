@@ -1,6 +1,7 @@
-// ROS 2 messages Faultline writes and reads (field order = wire order, ros2/common_interfaces, Humble), with
-// their CDR encoding. serialize(m) gives the bytes a ROS 2 publisher puts on the wire and rosbag2 stores
-// (encapsulation header + body); deserialize<M>(bytes) checks every length and names the field that failed.
+// ROS 2 messages Faultline writes and reads (field order = wire order, ros2/common_interfaces,
+// Humble), with their CDR encoding. serialize(m) gives the bytes a ROS 2 publisher puts on the wire
+// and rosbag2 stores (encapsulation header + body); deserialize<M>(bytes) checks every length and
+// names the field that failed.
 //
 //   auto bytes = ros2::serialize(info);                         // std::string, CDR_LE
 //   auto back = ros2::deserialize<ros2::CameraInfo>(bytes);     // Result<CameraInfo>
@@ -59,7 +60,7 @@ struct CameraInfo {  // sensor_msgs/CameraInfo
   std::uint32_t height = 0, width = 0;
   std::string distortion_model;
   std::vector<double> d;
-  std::array<double, 9> k{};   // row-major 3x3
+  std::array<double, 9> k{};  // row-major 3x3
   std::array<double, 9> r{};
   std::array<double, 12> p{};  // row-major 3x4
   std::uint32_t binning_x = 0, binning_y = 0;
@@ -82,7 +83,7 @@ struct Pose {  // geometry_msgs/Pose
   Quaternion orientation;
 };
 struct TransformStamped {  // geometry_msgs/TransformStamped
-  Header header;            // frame_id = parent frame
+  Header header;           // frame_id = parent frame
   std::string child_frame_id;
   Transform transform;
 };
@@ -114,8 +115,9 @@ struct MeshFile {  // visualization_msgs/MeshFile
   std::string filename;
   std::string data;
 };
-// visualization_msgs/Marker as Humble and Jazzy define it (the texture, uv_coordinates and mesh_file fields came
-// with Humble; Jazzy only adds the ARROW_STRIP constant, so the wire layout is the same).
+// visualization_msgs/Marker as Humble and Jazzy define it (the texture, uv_coordinates and
+// mesh_file fields came with Humble; Jazzy only adds the ARROW_STRIP constant, so the wire layout
+// is the same).
 struct Marker {
   static constexpr std::int32_t kCube = 1, kAdd = 0, kDeleteAll = 3;
   Header header;
@@ -139,12 +141,13 @@ struct MarkerArray {  // visualization_msgs/MarkerArray
   std::vector<Marker> markers;
 };
 
-// The ROS 2 type name of each top-level message ("pkg/msg/Type"): MCAP schema name, rosbag2 topic type.
+// The ROS 2 type name of each top-level message ("pkg/msg/Type"): MCAP schema name, rosbag2 topic
+// type.
 template <typename M>
 struct MessageTraits;
-#define FAULTLINE_ROS2_TYPE(M, NAME) \
-  template <>                        \
-  struct MessageTraits<M> {          \
+#define FAULTLINE_ROS2_TYPE(M, NAME)               \
+  template <>                                      \
+  struct MessageTraits<M> {                        \
     static constexpr const char* kTypeName = NAME; \
   }
 FAULTLINE_ROS2_TYPE(Time, "builtin_interfaces/msg/Time");
@@ -212,7 +215,8 @@ std::string serialize(const M& m) {
   return w.take();
 }
 
-// Errors: kTruncated / kCorruptData naming the type, field and byte; kUnsupported for a non-CDR_LE header.
+// Errors: kTruncated / kCorruptData naming the type, field and byte; kUnsupported for a non-CDR_LE
+// header.
 template <typename M>
 Result<M> deserialize(std::string_view bytes) {
   CdrReader r(bytes, MessageTraits<M>::kTypeName);
@@ -222,17 +226,20 @@ Result<M> deserialize(std::string_view bytes) {
   return m;
 }
 
-// A CompressedImage without its data: the encapsulation header and every byte up to and including the data
-// count, so that `prefix + data` is the whole message (lets a writer hand the JPEG over without a copy).
-std::string compressed_image_prefix(const Header& header, std::string_view format, std::size_t data_bytes);
+// A CompressedImage without its data: the encapsulation header and every byte up to and including
+// the data count, so that `prefix + data` is the whole message (lets a writer hand the JPEG over
+// without a copy).
+std::string compressed_image_prefix(const Header& header, std::string_view format,
+                                    std::size_t data_bytes);
 
-// nuScenes microsecond stamps: sec = us / 1e6, nanosec = (us % 1e6) * 1000 (floored for negative stamps).
+// nuScenes microsecond stamps: sec = us / 1e6, nanosec = (us % 1e6) * 1000 (floored for negative
+// stamps).
 Time time_from_us(std::int64_t us);
 Time time_from_ns(StampNs ns);
 StampNs to_ns(const Time& t);
 
-// A rectified camera's CameraInfo from its 3x3 intrinsics K (row-major): distortion "plumb_bob" with five zero
-// coefficients, R = identity, P = [K | 0], no binning, empty ROI.
+// A rectified camera's CameraInfo from its 3x3 intrinsics K (row-major): distortion "plumb_bob"
+// with five zero coefficients, R = identity, P = [K | 0], no binning, empty ROI.
 CameraInfo camera_info_from_k(const Header& header, std::uint32_t width, std::uint32_t height,
                               const std::array<double, 9>& k);
 

@@ -1,9 +1,8 @@
 #include "ros2dds/bridge_in.hpp"
 
-#include <opencv2/imgcodecs.hpp>
-
 #include <cstdlib>
 #include <cstring>
+#include <opencv2/imgcodecs.hpp>
 #include <optional>
 #include <set>
 
@@ -29,13 +28,15 @@ void InBridgeConfig::validate() const {
   if (topics.empty()) throw ConfigError("topics = []: give at least one ROS 2 image topic");
   std::set<std::string> seen;
   for (const auto& t : topics) {
-    if (auto name = dds_topic_name(t); !name) throw ConfigError("topics: " + name.status().message());
+    if (auto name = dds_topic_name(t); !name)
+      throw ConfigError("topics: " + name.status().message());
     if (!seen.insert(t).second) throw ConfigError("topics: " + t + " is listed twice");
   }
   if (auto q = parse_qos(qos); !q) throw ConfigError("qos = " + qos + ": " + q.status().message());
   for (const auto& [topic, spec] : topic_qos) {
     if (!seen.count(topic)) throw ConfigError("topic_qos." + topic + ": not one of topics");
-    if (auto q = parse_qos(spec); !q) throw ConfigError("topic_qos." + topic + " = " + spec + ": " + q.status().message());
+    if (auto q = parse_qos(spec); !q)
+      throw ConfigError("topic_qos." + topic + " = " + spec + ": " + q.status().message());
   }
   for (const auto& [topic, name] : channels) {
     if (!seen.count(topic)) throw ConfigError("channels." + topic + ": not one of topics");
@@ -44,7 +45,8 @@ void InBridgeConfig::validate() const {
   for (const auto& [topic, info] : camera_info) {
     if (!seen.count(topic)) throw ConfigError("camera_info." + topic + ": not one of topics");
     if (!info.empty()) {
-      if (auto n = dds_topic_name(info); !n) throw ConfigError("camera_info." + topic + ": " + n.status().message());
+      if (auto n = dds_topic_name(info); !n)
+        throw ConfigError("camera_info." + topic + ": " + n.status().message());
     }
   }
   if (jpeg_quality < 1 || jpeg_quality > 100) {
@@ -54,7 +56,8 @@ void InBridgeConfig::validate() const {
   if (output_prefix.empty() || output_prefix.front() != '/' || output_prefix.back() == '/') {
     throw ConfigError("output_prefix = '" + output_prefix + "': expected /name (no trailing '/')");
   }
-  if (max_frames < 0) throw ConfigError("max_frames = " + std::to_string(max_frames) + ": must be >= 0");
+  if (max_frames < 0)
+    throw ConfigError("max_frames = " + std::to_string(max_frames) + ": must be >= 0");
 }
 
 std::vector<std::string> assign_cameras(const InBridgeConfig& config) {
@@ -62,12 +65,14 @@ std::vector<std::string> assign_cameras(const InBridgeConfig& config) {
   std::set<std::string> used;
   auto take = [&](std::size_t i, const std::string& name, const char* how) {
     if (policy::camera_index(name) < 0) {
-      throw ConfigError("channels." + config.topics[i] + " = " + name +
-                        ": unknown camera (the fault engine knows CAM_FRONT, CAM_FRONT_RIGHT, CAM_FRONT_LEFT, "
-                        "CAM_BACK, CAM_BACK_LEFT, CAM_BACK_RIGHT)");
+      throw ConfigError(
+          "channels." + config.topics[i] + " = " + name +
+          ": unknown camera (the fault engine knows CAM_FRONT, CAM_FRONT_RIGHT, CAM_FRONT_LEFT, "
+          "CAM_BACK, CAM_BACK_LEFT, CAM_BACK_RIGHT)");
     }
     if (!used.insert(name).second) {
-      throw ConfigError(std::string("topics: ") + config.topics[i] + " would be camera " + name + " (" + how +
+      throw ConfigError(std::string("topics: ") + config.topics[i] + " would be camera " + name +
+                        " (" + how +
                         "), which another topic already is; name the cameras with channels");
     }
     names[i] = name;
@@ -78,7 +83,8 @@ std::vector<std::string> assign_cameras(const InBridgeConfig& config) {
   }
   for (std::size_t i = 0; i < config.topics.size(); ++i) {  // then topics named like a camera
     const std::string derived = channel_from_topic(config.topics[i]);
-    if (names[i].empty() && policy::camera_index(derived) >= 0 && !used.count(derived)) take(i, derived, "its namespace");
+    if (names[i].empty() && policy::camera_index(derived) >= 0 && !used.count(derived))
+      take(i, derived, "its namespace");
   }
   for (std::size_t i = 0; i < config.topics.size(); ++i) {  // then the rest in camera order
     if (!names[i].empty()) continue;
@@ -86,7 +92,8 @@ std::vector<std::string> assign_cameras(const InBridgeConfig& config) {
       if (!used.count(policy::kCameraNames[c])) take(i, policy::kCameraNames[c], "in order");
     }
     if (names[i].empty()) {
-      throw ConfigError("topics: " + config.topics[i] + ": more than six topics; the fault engine has six cameras "
+      throw ConfigError("topics: " + config.topics[i] +
+                        ": more than six topics; the fault engine has six cameras "
                         "(run a second ros2_in and injector for more)");
     }
   }
@@ -115,7 +122,8 @@ struct Camera {
   bool advertised = false;
   std::set<std::string> reported_types;
   std::uint32_t incompatible_seen = 0;
-  std::uint64_t replaced_seen = 0;  // image samples replaced in the reader's history, as last reported
+  std::uint64_t replaced_seen =
+      0;  // image samples replaced in the reader's history, as last reported
 };
 
 Rigid rigid_of(const geometry_msgs_msg_dds__Transform_& t) {
@@ -177,14 +185,14 @@ struct InBridge::Impl {
       auto q = cfg.topic_qos.find(topic);
       cam.qos = q != cfg.topic_qos.end() ? parse_qos(q->second).value() : default_qos;
       if (!cam.info_topic.empty()) {
-        cam.info = std::make_unique<Reader>(participant, &sensor_msgs_msg_dds__CameraInfo__desc, cam.info_topic,
-                                            cam.qos);
+        cam.info = std::make_unique<Reader>(participant, &sensor_msgs_msg_dds__CameraInfo__desc,
+                                            cam.info_topic, cam.qos);
       }
       cameras.push_back(std::move(cam));
     }
     if (cfg.tf_static) {
-      tf_reader = std::make_unique<Reader>(participant, &tf2_msgs_msg_dds__TFMessage__desc, "/tf_static",
-                                           TopicQos{true, 100, true});
+      tf_reader = std::make_unique<Reader>(participant, &tf2_msgs_msg_dds__TFMessage__desc,
+                                           "/tf_static", TopicQos{true, 100, true});
       waitset.attach(tf_reader->handle());
     }
     for (auto& cam : cameras) {
@@ -203,19 +211,21 @@ struct InBridge::Impl {
           log->error("topic {} has a writer of type {}: {}; its frames are ignored", cam.ros_topic,
                      ros_type_name(w.dds_type),
                      type ? "this topic is already subscribed with the other image type"
-                          : "not an image type (expected sensor_msgs/msg/CompressedImage or sensor_msgs/msg/Image)");
+                          : "not an image type (expected sensor_msgs/msg/CompressedImage or "
+                            "sensor_msgs/msg/Image)");
         }
         continue;
       }
       if (cam.image) continue;
       cam.type = type;
-      cam.image = std::make_unique<Reader>(
-          participant,
-          *type == ImageType::kCompressed ? &sensor_msgs_msg_dds__CompressedImage__desc : &sensor_msgs_msg_dds__Image__desc,
-          cam.ros_topic, cam.qos);
+      cam.image = std::make_unique<Reader>(participant,
+                                           *type == ImageType::kCompressed
+                                               ? &sensor_msgs_msg_dds__CompressedImage__desc
+                                               : &sensor_msgs_msg_dds__Image__desc,
+                                           cam.ros_topic, cam.qos);
       waitset.attach(cam.image->handle());
-      log->info("subscribed {} ({}, qos {}) -> {} camera {}", cam.ros_topic, ros_type_name(w.dds_type),
-                to_string(cam.qos), cam.out_topic, cam.channel);
+      log->info("subscribed {} ({}, qos {}) -> {} camera {}", cam.ros_topic,
+                ros_type_name(w.dds_type), to_string(cam.qos), cam.out_topic, cam.channel);
     }
   }
 
@@ -227,9 +237,11 @@ struct InBridge::Impl {
       if (cam.info) n += cam.info->status().incompatible_qos;
       if (n > cam.incompatible_seen) {
         if (cam.incompatible_seen == 0) {
-          log->warn("QoS of {} never matched a writer: this node requests {}; a camera driver's sensor-data "
-                    "writer (best effort) needs qos: sensor_data (further mismatches are only counted)",
-                    cam.ros_topic, to_string(cam.qos));
+          log->warn(
+              "QoS of {} never matched a writer: this node requests {}; a camera driver's "
+              "sensor-data "
+              "writer (best effort) needs qos: sensor_data (further mismatches are only counted)",
+              cam.ros_topic, to_string(cam.qos));
         }
         cam.incompatible_seen = n;
       }
@@ -238,16 +250,19 @@ struct InBridge::Impl {
     counts.incompatible_qos = total;
   }
 
-  // Image samples DDS lost before they were taken: counted per topic, the first loss of each topic logged.
+  // Image samples DDS lost before they were taken: counted per topic, the first loss of each topic
+  // logged.
   void check_losses() {
     std::uint64_t replaced = 0, lost = 0;
     for (auto& cam : cameras) {
       if (!cam.image) continue;
       const EndpointStatus st = cam.image->status();
       if (st.replaced_in_history > cam.replaced_seen && cam.replaced_seen == 0) {
-        log->warn("{}: this node fell behind by more than the history depth ({}): samples replaced before they "
-                  "were taken are counted (history_replaced in the closing line)",
-                  cam.ros_topic, cam.qos.depth);
+        log->warn(
+            "{}: this node fell behind by more than the history depth ({}): samples replaced "
+            "before they "
+            "were taken are counted (history_replaced in the closing line)",
+            cam.ros_topic, cam.qos.depth);
       }
       cam.replaced_seen = st.replaced_in_history;
       replaced += st.replaced_in_history;
@@ -260,19 +275,21 @@ struct InBridge::Impl {
   void bad_image(const Camera& cam, const std::string& why) {
     ++counts.bad_images;
     if (bad_limiter.allow()) {
-      log->warn("{}: {}; frame dropped ({} bad so far)", cam.ros_topic, why, counts.bad_images.load());
+      log->warn("{}: {}; frame dropped ({} bad so far)", cam.ros_topic, why,
+                counts.bad_images.load());
     }
   }
 
-  void publish(Camera& cam, const std_msgs_msg_dds__Header_& ros_header, std::vector<std::uint8_t> jpeg,
-               std::uint32_t width, std::uint32_t height) {
+  void publish(Camera& cam, const std_msgs_msg_dds__Header_& ros_header,
+               std::vector<std::uint8_t> jpeg, std::uint32_t width, std::uint32_t height) {
     if (!cam.advertised) {
       (void)registry.advertise(cam.out_topic, "faultline.msgs.CameraFrame", pub.endpoint());
       cam.advertised = true;
     }
     msgs::CameraFrame h;
     h.mutable_header()->set_seq(++cam.seq);
-    h.mutable_header()->set_capture_stamp_ns(ns_from_time({ros_header.stamp.sec, ros_header.stamp.nanosec}));
+    h.mutable_header()->set_capture_stamp_ns(
+        ns_from_time({ros_header.stamp.sec, ros_header.stamp.nanosec}));
     h.mutable_header()->set_publish_stamp_ns(realtime_now_ns());
     h.mutable_header()->set_publish_mono_ns(monotonic_now_ns());
     const std::string frame_id = ros_header.frame_id ? ros_header.frame_id : "";
@@ -297,7 +314,9 @@ struct InBridge::Impl {
     ext->mutable_rotation()->set_z(extrinsics.q[3]);
     h.mutable_ego_pose()->mutable_rotation()->set_w(1.0);
     auto bytes = std::make_shared<const std::vector<std::uint8_t>>(std::move(jpeg));
-    if (Status s = transport::send_camera_frame(pub, cam.out_topic, h, transport::Payload::of(bytes)); !s) {
+    if (Status s =
+            transport::send_camera_frame(pub, cam.out_topic, h, transport::Payload::of(bytes));
+        !s) {
       log->warn("send {} seq={} failed: {}", cam.out_topic, cam.seq, s.message());
       return;
     }
@@ -343,14 +362,16 @@ struct InBridge::Impl {
     if (!bgr) return bad_image(cam, bgr.status().message());
     auto e = encoder.encode(*bgr, cfg.jpeg_quality);
     if (!e) return bad_image(cam, e.status().message());
-    publish(cam, m.header, std::vector<std::uint8_t>(e->data, e->data + e->size), m.width, m.height);
+    publish(cam, m.header, std::vector<std::uint8_t>(e->data, e->data + e->size), m.width,
+            m.height);
   }
 
   void on_camera_info(Camera& cam, const sensor_msgs_msg_dds__CameraInfo_& m) {
     ++counts.camera_infos;
     const bool first = cam.k.empty();
     cam.k.assign(m.k, m.k + 9);
-    if (first) log->info("{}: intrinsics from {} ({}x{})", cam.ros_topic, cam.info_topic, m.width, m.height);
+    if (first)
+      log->info("{}: intrinsics from {} ({}x{})", cam.ros_topic, cam.info_topic, m.width, m.height);
   }
 
   void on_tf_static(const tf2_msgs_msg_dds__TFMessage_& m) {
@@ -382,7 +403,9 @@ struct InBridge::Impl {
       }
     }
     if (tf_reader) {
-      auto r = tf_reader->take([&](const void* s) { on_tf_static(*static_cast<const tf2_msgs_msg_dds__TFMessage_*>(s)); });
+      auto r = tf_reader->take([&](const void* s) {
+        on_tf_static(*static_cast<const tf2_msgs_msg_dds__TFMessage_*>(s));
+      });
       if (!r) return r.status();
     }
     return Status::ok();
@@ -404,14 +427,15 @@ int InBridge::run(const std::atomic<bool>& stop) {
   const auto& c = m.counts;
   if (m.cfg.wait_subscribers > 0) {
     const std::string first = m.cameras.front().out_topic;
-    if (Status s = m.pub.wait_for_subscribers(first, m.cfg.wait_subscribers,
-                                              static_cast<DurationNs>(m.cfg.wait_timeout_ms) * kNsPerMs, &stop);
+    if (Status s = m.pub.wait_for_subscribers(
+            first, m.cfg.wait_subscribers,
+            static_cast<DurationNs>(m.cfg.wait_timeout_ms) * kNsPerMs, &stop);
         !s) {
       m.log->warn("starting without {} subscriber(s): {}", m.cfg.wait_subscribers, s.message());
     }
   }
-  m.log->info("{} on DDS domain {}: {} topic(s) -> {}", m.node, m.participant.domain_id(), m.cameras.size(),
-              m.pub.endpoint());
+  m.log->info("{} on DDS domain {}: {} topic(s) -> {}", m.node, m.participant.domain_id(),
+              m.cameras.size(), m.pub.endpoint());
   for (const auto& cam : m.cameras) {
     m.log->info("{} is camera {} on {} (CameraInfo: {})", cam.ros_topic, cam.channel, cam.out_topic,
                 cam.info_topic.empty() ? "none" : cam.info_topic);
@@ -430,10 +454,13 @@ int InBridge::run(const std::atomic<bool>& stop) {
     m.check_qos();
     m.check_losses();
     if (period > 0 && monotonic_now_ns() >= next_log) {
-      m.log->info("frames_in={} frames_out={} bad_images={} camera_infos={} type_mismatch={} incompatible_qos={} "
-                  "history_replaced={} dds_lost={}",
-                  c.frames_in.load(), c.frames_out.load(), c.bad_images.load(), c.camera_infos.load(),
-                  c.type_mismatch.load(), c.incompatible_qos.load(), c.history_replaced.load(), c.dds_lost.load());
+      m.log->info(
+          "frames_in={} frames_out={} bad_images={} camera_infos={} type_mismatch={} "
+          "incompatible_qos={} "
+          "history_replaced={} dds_lost={}",
+          c.frames_in.load(), c.frames_out.load(), c.bad_images.load(), c.camera_infos.load(),
+          c.type_mismatch.load(), c.incompatible_qos.load(), c.history_replaced.load(),
+          c.dds_lost.load());
       next_log = monotonic_now_ns() + period;
     }
     if (m.cfg.max_frames > 0 && c.frames_out >= static_cast<std::uint64_t>(m.cfg.max_frames)) break;
@@ -441,11 +468,13 @@ int InBridge::run(const std::atomic<bool>& stop) {
   m.check_qos();
   m.check_losses();
   if (!stop.load()) m.pub.set_linger(1000);  // a finite run delivers what is queued
-  m.log->info("stopped: frames_in={} frames_out={} bad_images={} camera_infos={} tf_static={} type_mismatch={} "
-              "incompatible_qos={} history_replaced={} dds_lost={} auth_refused={}",
-              c.frames_in.load(), c.frames_out.load(), c.bad_images.load(), c.camera_infos.load(), c.tf_static.load(),
-              c.type_mismatch.load(), c.incompatible_qos.load(), c.history_replaced.load(), c.dds_lost.load(),
-              m.pub.auth_refused());
+  m.log->info(
+      "stopped: frames_in={} frames_out={} bad_images={} camera_infos={} tf_static={} "
+      "type_mismatch={} "
+      "incompatible_qos={} history_replaced={} dds_lost={} auth_refused={}",
+      c.frames_in.load(), c.frames_out.load(), c.bad_images.load(), c.camera_infos.load(),
+      c.tf_static.load(), c.type_mismatch.load(), c.incompatible_qos.load(),
+      c.history_replaced.load(), c.dds_lost.load(), m.pub.auth_refused());
   return rc;
 }
 

@@ -1,11 +1,11 @@
 #include "ros2dds/bridge_out.hpp"
 
+#include <fmt/ranges.h>
+
 #include <algorithm>
 #include <cstdlib>
 #include <cstring>
 #include <set>
-
-#include <fmt/ranges.h>
 
 #include "camera_frame.pb.h"
 #include "codec/jpeg.hpp"
@@ -28,9 +28,12 @@ namespace faultline::ros2dds {
 
 void OutBridgeConfig::validate() const {
   (void)resolve_domain_id(domain_id, std::getenv("ROS_DOMAIN_ID"));
-  if (input_endpoints.empty()) throw ConfigError("input_endpoints = []: give the injector's output endpoint");
-  if (input_topics.empty()) throw ConfigError("input_topics = []: give at least one camera topic prefix");
-  if (input_hwm < 1) throw ConfigError("input_hwm = " + std::to_string(input_hwm) + ": must be >= 1");
+  if (input_endpoints.empty())
+    throw ConfigError("input_endpoints = []: give the injector's output endpoint");
+  if (input_topics.empty())
+    throw ConfigError("input_topics = []: give at least one camera topic prefix");
+  if (input_hwm < 1)
+    throw ConfigError("input_hwm = " + std::to_string(input_hwm) + ": must be >= 1");
   if (output != "compressed" && output != "raw") {
     throw ConfigError("output = " + output + ": expected compressed or raw");
   }
@@ -39,33 +42,42 @@ void OutBridgeConfig::validate() const {
   }
   if (auto q = parse_qos(qos); !q) throw ConfigError("qos = " + qos + ": " + q.status().message());
   for (const auto& [topic, spec] : topic_qos) {
-    if (auto q = parse_qos(spec); !q) throw ConfigError("topic_qos." + topic + " = " + spec + ": " + q.status().message());
+    if (auto q = parse_qos(spec); !q)
+      throw ConfigError("topic_qos." + topic + " = " + spec + ": " + q.status().message());
   }
   if (!topic_suffix.empty() && (topic_suffix.front() != '/' || topic_suffix.back() == '/')) {
     throw ConfigError("topic_suffix = '" + topic_suffix + "': expected /name");
   }
   if (!strip_prefix.empty() && (strip_prefix.front() != '/' || strip_prefix.back() == '/')) {
-    throw ConfigError("strip_prefix = '" + strip_prefix + "': expected /name (no trailing '/') or empty");
+    throw ConfigError("strip_prefix = '" + strip_prefix +
+                      "': expected /name (no trailing '/') or empty");
   }
-  if (auto n = dds_topic_name(diagnostics_topic); !n) throw ConfigError("diagnostics_topic: " + n.status().message());
+  if (auto n = dds_topic_name(diagnostics_topic); !n)
+    throw ConfigError("diagnostics_topic: " + n.status().message());
   for (const auto& [from, to] : remap) {
-    if (auto n = dds_topic_name(to); !n) throw ConfigError("remap." + from + ": " + n.status().message());
+    if (auto n = dds_topic_name(to); !n)
+      throw ConfigError("remap." + from + ": " + n.status().message());
   }
-  if (names != "as_is" && names != "nuscenes") throw ConfigError("names = '" + names + "': expected as_is or nuscenes");
-  if (max_frames < 0) throw ConfigError("max_frames = " + std::to_string(max_frames) + ": must be >= 0");
-  if (wait_readers < 0) throw ConfigError("wait_readers = " + std::to_string(wait_readers) + ": must be >= 0");
+  if (names != "as_is" && names != "nuscenes")
+    throw ConfigError("names = '" + names + "': expected as_is or nuscenes");
+  if (max_frames < 0)
+    throw ConfigError("max_frames = " + std::to_string(max_frames) + ": must be >= 0");
+  if (wait_readers < 0)
+    throw ConfigError("wait_readers = " + std::to_string(wait_readers) + ": must be >= 0");
 }
 
 namespace {
 
-// The Faultline topic without strip_prefix, its camera segment renamed under names = nuscenes; "" if not prefixed.
+// The Faultline topic without strip_prefix, its camera segment renamed under names = nuscenes; ""
+// if not prefixed.
 std::string unsuffixed(const OutBridgeConfig& config, const std::string& faultline_topic) {
   const std::string prefix = config.strip_prefix + "/";
   if (faultline_topic.compare(0, prefix.size(), prefix) != 0) return "";
   std::string base = faultline_topic.substr(config.strip_prefix.size());
   if (config.names != "nuscenes") return base;
   const std::size_t end = std::min(base.find('/', 1), base.size());
-  const std::string channel = ros2::channel_of_lower(std::string_view(base).substr(1, end - 1), policy::kCameraNames);
+  const std::string channel =
+      ros2::channel_of_lower(std::string_view(base).substr(1, end - 1), policy::kCameraNames);
   return channel.empty() ? base : "/" + channel + base.substr(end);
 }
 
@@ -90,7 +102,8 @@ std::string ros_topic_for(const OutBridgeConfig& config, const std::string& faul
   return base.empty() ? base : remapped(config, base + config.topic_suffix);
 }
 
-std::string ros_camera_info_topic_for(const OutBridgeConfig& config, const std::string& faultline_topic) {
+std::string ros_camera_info_topic_for(const OutBridgeConfig& config,
+                                      const std::string& faultline_topic) {
   const std::string base = unsuffixed(config, faultline_topic);
   return base.empty() ? base : remapped(config, camera_info_topic(base) + config.topic_suffix);
 }
@@ -155,16 +168,20 @@ struct OutBridge::Impl {
         participant(resolve_domain_id(cfg.domain_id, std::getenv("ROS_DOMAIN_ID")), cfg.dds_config),
         sub(subscriber_config(cfg)) {
     if (!cfg.faults_topic.empty()) {
-      diagnostics = std::make_unique<Writer>(participant, &diagnostic_msgs_msg_dds__DiagnosticArray__desc,
-                                             cfg.diagnostics_topic, qos_for(cfg.diagnostics_topic));
+      diagnostics =
+          std::make_unique<Writer>(participant, &diagnostic_msgs_msg_dds__DiagnosticArray__desc,
+                                   cfg.diagnostics_topic, qos_for(cfg.diagnostics_topic));
     }
     for (const auto& topic : cfg.advertise) {
-      if (!camera(topic)) throw ConfigError("advertise: " + topic + " does not start with strip_prefix " + cfg.strip_prefix + "/");
+      if (!camera(topic))
+        throw ConfigError("advertise: " + topic + " does not start with strip_prefix " +
+                          cfg.strip_prefix + "/");
     }
     if (cfg.publish_tf) {
-      tf_static = std::make_unique<Writer>(participant, &tf2_msgs_msg_dds__TFMessage__desc, "/tf_static",
-                                           TopicQos{true, 1, true});
-      tf = std::make_unique<Writer>(participant, &tf2_msgs_msg_dds__TFMessage__desc, "/tf", TopicQos{true, 100, false});
+      tf_static = std::make_unique<Writer>(participant, &tf2_msgs_msg_dds__TFMessage__desc,
+                                           "/tf_static", TopicQos{true, 1, true});
+      tf = std::make_unique<Writer>(participant, &tf2_msgs_msg_dds__TFMessage__desc, "/tf",
+                                    TopicQos{true, 100, false});
     }
   }
 
@@ -178,22 +195,27 @@ struct OutBridge::Impl {
     if (it != cameras.end()) return &it->second;
     const std::string ros = ros_topic_for(cfg, topic);
     if (ros.empty()) {
-      if (bad_limiter.allow()) log->warn("{} does not start with strip_prefix {}/: not published", topic, cfg.strip_prefix);
+      if (bad_limiter.allow())
+        log->warn("{} does not start with strip_prefix {}/: not published", topic,
+                  cfg.strip_prefix);
       return nullptr;
     }
     OutCamera cam;
     cam.ros_topic = ros;
     const TopicQos q = qos_for(ros);
-    cam.image = std::make_unique<Writer>(participant,
-                                         cfg.output == "raw" ? &sensor_msgs_msg_dds__Image__desc
-                                                             : &sensor_msgs_msg_dds__CompressedImage__desc,
-                                         ros, q);
+    cam.image =
+        std::make_unique<Writer>(participant,
+                                 cfg.output == "raw" ? &sensor_msgs_msg_dds__Image__desc
+                                                     : &sensor_msgs_msg_dds__CompressedImage__desc,
+                                 ros, q);
     if (cfg.camera_info) {
       const std::string info = ros_camera_info_topic_for(cfg, topic);
-      cam.info = std::make_unique<Writer>(participant, &sensor_msgs_msg_dds__CameraInfo__desc, info, qos_for(info));
+      cam.info = std::make_unique<Writer>(participant, &sensor_msgs_msg_dds__CameraInfo__desc, info,
+                                          qos_for(info));
     }
     log->info("{} -> {} ({}, qos {})", topic, ros,
-              cfg.output == "raw" ? "sensor_msgs/msg/Image" : "sensor_msgs/msg/CompressedImage", to_string(q));
+              cfg.output == "raw" ? "sensor_msgs/msg/Image" : "sensor_msgs/msg/CompressedImage",
+              to_string(q));
     return &cameras.emplace(topic, std::move(cam)).first->second;
   }
 
@@ -202,20 +224,23 @@ struct OutBridge::Impl {
 
   void write(Writer& w, const void* sample) {
     if (cfg.wait_readers > 0 && waited.insert(&w).second) {
-      if (Status s = w.wait_for_readers(cfg.wait_readers, static_cast<DurationNs>(cfg.wait_timeout_ms) * kNsPerMs, stop);
+      if (Status s = w.wait_for_readers(
+              cfg.wait_readers, static_cast<DurationNs>(cfg.wait_timeout_ms) * kNsPerMs, stop);
           !s) {
         log->warn("writing anyway: {}", s.message());
       }
     }
     if (Status s = w.write(sample); !s) {
       ++counts.write_failures;
-      if (write_limiter.allow()) log->warn("{} ({} failures so far)", s.message(), counts.write_failures.load());
+      if (write_limiter.allow())
+        log->warn("{} ({} failures so far)", s.message(), counts.write_failures.load());
     }
   }
 
   void malformed(const std::string& topic, const std::string& why) {
     ++counts.malformed;
-    if (bad_limiter.allow()) log->warn("{}: {}; dropped ({} so far)", topic, why, counts.malformed.load());
+    if (bad_limiter.allow())
+      log->warn("{}: {}; dropped ({} so far)", topic, why, counts.malformed.load());
   }
 
   void on_frame(const std::string& topic, const transport::CameraFrameView& view) {
@@ -235,7 +260,8 @@ struct OutBridge::Impl {
         m.data._buffer = const_cast<std::uint8_t*>(view.payload);
         m.data._length = static_cast<std::uint32_t>(view.payload_size);
       } else {
-        auto bgr = raw_to_bgr({f.encoding(), f.width(), f.height(), f.step(), false, view.payload, view.payload_size});
+        auto bgr = raw_to_bgr({f.encoding(), f.width(), f.height(), f.step(), false, view.payload,
+                               view.payload_size});
         if (!bgr) return malformed(topic, bgr.status().message());
         auto e = encoder.encode(*bgr, cfg.jpeg_quality);
         if (!e) return malformed(topic, e.status().message());
@@ -250,9 +276,11 @@ struct OutBridge::Impl {
       static const std::string kBgr8 = "bgr8";
       m.encoding = mutable_str(kBgr8);
       if (jpeg) {
-        if (Status s = decoder.decode(view.payload, view.payload_size, decoded); !s) return malformed(topic, s.message());
+        if (Status s = decoder.decode(view.payload, view.payload_size, decoded); !s)
+          return malformed(topic, s.message());
       } else {
-        auto bgr = raw_to_bgr({f.encoding(), f.width(), f.height(), f.step(), false, view.payload, view.payload_size});
+        auto bgr = raw_to_bgr({f.encoding(), f.width(), f.height(), f.step(), false, view.payload,
+                               view.payload_size});
         if (!bgr) return malformed(topic, bgr.status().message());
         decoded = std::move(bgr).value();
       }
@@ -373,10 +401,11 @@ struct OutBridge::Impl {
       if (cam.info) n += cam.info->status().incompatible_qos;
       if (n > cam.incompatible_seen) {
         if (cam.incompatible_seen == 0) {
-          log->warn("QoS of {} never matched a reader: this node offers {}; a reader that requests more "
-                    "(e.g. transient_local, or reliable from a best_effort writer) gets nothing "
-                    "(further mismatches are only counted)",
-                    cam.ros_topic, to_string(qos_for(cam.ros_topic)));
+          log->warn(
+              "QoS of {} never matched a reader: this node offers {}; a reader that requests more "
+              "(e.g. transient_local, or reliable from a best_effort writer) gets nothing "
+              "(further mismatches are only counted)",
+              cam.ros_topic, to_string(qos_for(cam.ros_topic)));
         }
         cam.incompatible_seen = n;
       }
@@ -412,10 +441,11 @@ int OutBridge::run(const std::atomic<bool>& stop) {
     auto r = m.sub.receive(100 * kNsPerMs);
     if (period > 0 && monotonic_now_ns() >= next_log) {
       m.check_qos();
-      m.log->info("frames_in={} frames_out={} events={} malformed={} transport_drops={} write_failures={} "
-                  "incompatible_qos={}",
-                  c.frames_in.load(), c.frames_out.load(), c.events.load(), c.malformed.load(), c.transport_drops.load(), c.write_failures.load(),
-                  c.incompatible_qos.load());
+      m.log->info(
+          "frames_in={} frames_out={} events={} malformed={} transport_drops={} write_failures={} "
+          "incompatible_qos={}",
+          c.frames_in.load(), c.frames_out.load(), c.events.load(), c.malformed.load(),
+          c.transport_drops.load(), c.write_failures.load(), c.incompatible_qos.load());
       next_log = monotonic_now_ns() + period;
     }
     if (!r) {
@@ -451,14 +481,18 @@ int OutBridge::run(const std::atomic<bool>& stop) {
     (void)m.drops.observe(h.publisher(), topic, h.seq());
     m.counts.transport_drops += m.drops.counts(h.publisher(), topic).transport_drops - before;
     m.on_frame(topic, *view);
-    if (m.cfg.max_frames > 0 && c.frames_out >= static_cast<std::uint64_t>(m.cfg.max_frames)) finished = true;
+    if (m.cfg.max_frames > 0 && c.frames_out >= static_cast<std::uint64_t>(m.cfg.max_frames))
+      finished = true;
   }
   m.check_qos();
   if (finished) m.flush();
-  m.log->info("stopped: frames_in={} frames_out={} events={} malformed={} transport_drops={} write_failures={} "
-              "incompatible_qos={} handshake_failures={}",
-              c.frames_in.load(), c.frames_out.load(), c.events.load(), c.malformed.load(), c.transport_drops.load(), c.write_failures.load(),
-              c.incompatible_qos.load(), m.sub.handshake_failures());
+  m.log->info(
+      "stopped: frames_in={} frames_out={} events={} malformed={} transport_drops={} "
+      "write_failures={} "
+      "incompatible_qos={} handshake_failures={}",
+      c.frames_in.load(), c.frames_out.load(), c.events.load(), c.malformed.load(),
+      c.transport_drops.load(), c.write_failures.load(), c.incompatible_qos.load(),
+      m.sub.handshake_failures());
   return rc;
 }
 

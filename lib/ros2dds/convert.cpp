@@ -1,9 +1,8 @@
 #include "ros2dds/convert.hpp"
 
-#include <opencv2/imgproc.hpp>
-
 #include <algorithm>
 #include <cctype>
+#include <opencv2/imgproc.hpp>
 
 namespace faultline::ros2dds {
 namespace {
@@ -44,9 +43,11 @@ StampNs ns_from_time(const RosTime& time) {
 
 Result<std::string> dds_topic_name(const std::string& ros_topic) {
   auto bad = [&](const char* why) {
-    return Result<std::string>(StatusCode::kInvalidArgument, "ROS topic '" + ros_topic + "': " + why);
+    return Result<std::string>(StatusCode::kInvalidArgument,
+                               "ROS topic '" + ros_topic + "': " + why);
   };
-  if (ros_topic.size() < 2 || ros_topic.front() != '/') return bad("expected an absolute name such as /camera/image_raw");
+  if (ros_topic.size() < 2 || ros_topic.front() != '/')
+    return bad("expected an absolute name such as /camera/image_raw");
   if (ros_topic.back() == '/') return bad("ends with '/'");
   if (ros_topic.find("//") != std::string::npos) return bad("contains '//'");
   for (char c : ros_topic) {
@@ -116,28 +117,32 @@ bool is_supported_encoding(std::string_view encoding) { return find_encoding(enc
 Result<cv::Mat> raw_to_bgr(const RawImageView& image) {
   const EncodingInfo* enc = find_encoding(image.encoding);
   if (!enc) {
-    return Result<cv::Mat>(StatusCode::kUnsupported,
-                           "encoding '" + std::string(image.encoding) +
-                               "': expected bgr8, rgb8, mono8, yuv422, yuv422_yuy2, bgra8 or rgba8");
+    return Result<cv::Mat>(
+        StatusCode::kUnsupported,
+        "encoding '" + std::string(image.encoding) +
+            "': expected bgr8, rgb8, mono8, yuv422, yuv422_yuy2, bgra8 or rgba8");
   }
   if (image.width == 0 || image.height == 0) {
-    return Result<cv::Mat>(StatusCode::kCorruptData, "image size " + std::to_string(image.width) + "x" +
-                                                         std::to_string(image.height) + ": must be > 0");
+    return Result<cv::Mat>(StatusCode::kCorruptData, "image size " + std::to_string(image.width) +
+                                                         "x" + std::to_string(image.height) +
+                                                         ": must be > 0");
   }
   if (enc->bytes_per_pixel == 2 && image.width % 2 != 0) {
     return Result<cv::Mat>(StatusCode::kCorruptData,
                            "width " + std::to_string(image.width) + ": 4:2:2 needs an even width");
   }
-  const std::uint64_t row = static_cast<std::uint64_t>(image.width) * static_cast<std::uint64_t>(enc->bytes_per_pixel);
+  const std::uint64_t row =
+      static_cast<std::uint64_t>(image.width) * static_cast<std::uint64_t>(enc->bytes_per_pixel);
   if (image.step < row) {
-    return Result<cv::Mat>(StatusCode::kCorruptData, "step " + std::to_string(image.step) + " < width x " +
-                                                         std::to_string(enc->bytes_per_pixel) + " = " +
-                                                         std::to_string(row));
+    return Result<cv::Mat>(StatusCode::kCorruptData,
+                           "step " + std::to_string(image.step) + " < width x " +
+                               std::to_string(enc->bytes_per_pixel) + " = " + std::to_string(row));
   }
   const std::uint64_t need = static_cast<std::uint64_t>(image.step) * image.height;
   if (image.size_bytes < need || image.data == nullptr) {
-    return Result<cv::Mat>(StatusCode::kCorruptData, "data " + std::to_string(image.size_bytes) +
-                                                         " bytes < step x height = " + std::to_string(need));
+    return Result<cv::Mat>(StatusCode::kCorruptData,
+                           "data " + std::to_string(image.size_bytes) +
+                               " bytes < step x height = " + std::to_string(need));
   }
   const cv::Mat in(static_cast<int>(image.height), static_cast<int>(image.width), enc->cv_type,
                    const_cast<std::uint8_t*>(image.data), image.step);
@@ -160,13 +165,16 @@ CameraInfoValues camera_info_from_intrinsics(const std::vector<double>& k, std::
   if (k.size() == 9) {
     std::copy(k.begin(), k.end(), c.k.begin());
     for (int row = 0; row < 3; ++row) {
-      for (int col = 0; col < 3; ++col) c.p[static_cast<std::size_t>(row * 4 + col)] = k[static_cast<std::size_t>(row * 3 + col)];
+      for (int col = 0; col < 3; ++col)
+        c.p[static_cast<std::size_t>(row * 4 + col)] = k[static_cast<std::size_t>(row * 3 + col)];
     }
   }
   return c;
 }
 
-std::string camera_info_topic(const std::string& image_topic) { return image_namespace(image_topic) + "/camera_info"; }
+std::string camera_info_topic(const std::string& image_topic) {
+  return image_namespace(image_topic) + "/camera_info";
+}
 
 std::string channel_from_topic(const std::string& image_topic) {
   std::string ns = image_namespace(image_topic);

@@ -15,18 +15,22 @@ std::string dds_error(dds_return_t rc) { return dds_strretcode(rc); }
 
 dds_qos_t* make_qos(const TopicQos& q) {
   dds_qos_t* qos = dds_create_qos();
-  dds_qset_reliability(qos, q.reliable ? DDS_RELIABILITY_RELIABLE : DDS_RELIABILITY_BEST_EFFORT, DDS_SECS(1));
+  dds_qset_reliability(qos, q.reliable ? DDS_RELIABILITY_RELIABLE : DDS_RELIABILITY_BEST_EFFORT,
+                       DDS_SECS(1));
   dds_qset_history(qos, DDS_HISTORY_KEEP_LAST, q.depth);
-  dds_qset_durability(qos, q.transient_local ? DDS_DURABILITY_TRANSIENT_LOCAL : DDS_DURABILITY_VOLATILE);
+  dds_qset_durability(qos,
+                      q.transient_local ? DDS_DURABILITY_TRANSIENT_LOCAL : DDS_DURABILITY_VOLATILE);
   return qos;
 }
 
-dds_entity_t create_topic(const Participant& p, const dds_topic_descriptor_t* type, const std::string& ros_topic) {
+dds_entity_t create_topic(const Participant& p, const dds_topic_descriptor_t* type,
+                          const std::string& ros_topic) {
   auto name = dds_topic_name(ros_topic);
   if (!name) throw ConfigError(name.status().message());
   const dds_entity_t topic = dds_create_topic(p.handle(), type, name->c_str(), nullptr, nullptr);
   if (topic < 0) {
-    throw ConfigError("DDS topic " + *name + " (" + ros_type_name(type->m_typename) + "): " + dds_error(topic));
+    throw ConfigError("DDS topic " + *name + " (" + ros_type_name(type->m_typename) +
+                      "): " + dds_error(topic));
   }
   return topic;
 }
@@ -52,14 +56,16 @@ Result<TopicQos> parse_qos(const std::string& spec) {
       q.transient_local = false;
     } else if (word == "transient_local") {
       q.transient_local = true;
-    } else if (!word.empty() && std::all_of(word.begin(), word.end(), [](char c) { return c >= '0' && c <= '9'; }) &&
+    } else if (!word.empty() &&
+               std::all_of(word.begin(), word.end(), [](char c) { return c >= '0' && c <= '9'; }) &&
                word.size() <= 5 && std::stoi(word) >= 1 && std::stoi(word) <= 10000) {
       q.depth = std::stoi(word);
     } else {
-      return Result<TopicQos>(StatusCode::kInvalidArgument,
-                              "QoS '" + spec + "': '" + word +
-                                  "' is not reliable, best_effort, volatile, transient_local or a depth 1..10000 "
-                                  "(or use default / sensor_data)");
+      return Result<TopicQos>(
+          StatusCode::kInvalidArgument,
+          "QoS '" + spec + "': '" + word +
+              "' is not reliable, best_effort, volatile, transient_local or a depth 1..10000 "
+              "(or use default / sensor_data)");
     }
   }
   if (!any) return Result<TopicQos>(StatusCode::kInvalidArgument, "QoS '': empty");
@@ -67,23 +73,26 @@ Result<TopicQos> parse_qos(const std::string& spec) {
 }
 
 std::string to_string(const TopicQos& qos) {
-  return std::string(qos.reliable ? "reliable" : "best_effort") + "," + std::to_string(qos.depth) + "," +
-         (qos.transient_local ? "transient_local" : "volatile");
+  return std::string(qos.reliable ? "reliable" : "best_effort") + "," + std::to_string(qos.depth) +
+         "," + (qos.transient_local ? "transient_local" : "volatile");
 }
 
 int resolve_domain_id(int configured, const char* env_value) {
   if (configured >= 0) {
-    if (configured > 232) throw ConfigError("domain_id = " + std::to_string(configured) + ": expected 0..232");
+    if (configured > 232)
+      throw ConfigError("domain_id = " + std::to_string(configured) + ": expected 0..232");
     return configured;
   }
   if (configured != -1) {
-    throw ConfigError("domain_id = " + std::to_string(configured) + ": expected 0..232, or -1 for $ROS_DOMAIN_ID");
+    throw ConfigError("domain_id = " + std::to_string(configured) +
+                      ": expected 0..232, or -1 for $ROS_DOMAIN_ID");
   }
   if (env_value == nullptr || *env_value == '\0') return 0;
   char* end = nullptr;
   const long v = std::strtol(env_value, &end, 10);
   if (*end != '\0' || v < 0 || v > 232) {
-    throw ConfigError(std::string("ROS_DOMAIN_ID = '") + env_value + "': expected an integer 0..232");
+    throw ConfigError(std::string("ROS_DOMAIN_ID = '") + env_value +
+                      "': expected an integer 0..232");
   }
   return static_cast<int>(v);
 }
@@ -92,10 +101,11 @@ Participant::Participant(int domain_id, const std::string& config_xml) : domain_
   const auto id = static_cast<dds_domainid_t>(domain_id);
   if (!config_xml.empty()) {
     domain_ = dds_create_domain(id, config_xml.c_str());
-    // Another participant of this process may have created the domain already: its configuration stands.
+    // Another participant of this process may have created the domain already: its configuration
+    // stands.
     if (domain_ < 0 && domain_ != DDS_RETCODE_PRECONDITION_NOT_MET) {
-      throw ConfigError("DDS domain " + std::to_string(domain_id) + " with the given XML configuration: " +
-                        dds_error(domain_));
+      throw ConfigError("DDS domain " + std::to_string(domain_id) +
+                        " with the given XML configuration: " + dds_error(domain_));
     }
     if (domain_ < 0) domain_ = 0;
   }
@@ -117,8 +127,8 @@ Participant::~Participant() {
   if (domain_ > 0) dds_delete(domain_);
 }
 
-Writer::Writer(const Participant& participant, const dds_topic_descriptor_t* type, const std::string& ros_topic,
-               const TopicQos& qos)
+Writer::Writer(const Participant& participant, const dds_topic_descriptor_t* type,
+               const std::string& ros_topic, const TopicQos& qos)
     : ros_topic_(ros_topic) {
   topic_ = create_topic(participant, type, ros_topic);
   dds_qos_t* q = make_qos(qos);
@@ -157,11 +167,13 @@ Status Writer::wait_for_readers(int count, DurationNs timeout_ns, const std::ato
     }
     const StampNs now = monotonic_now_ns();
     if (now >= deadline) {
-      result = Status(StatusCode::kWouldBlock, std::to_string(status().matched) + " of " + std::to_string(count) +
-                                                   " reader(s) of " + ros_topic_ + " matched in time");
+      result = Status(StatusCode::kWouldBlock, std::to_string(status().matched) + " of " +
+                                                   std::to_string(count) + " reader(s) of " +
+                                                   ros_topic_ + " matched in time");
       break;
     }
-    (void)dds_waitset_wait(waitset, nullptr, 0, std::min<DurationNs>(deadline - now, 100 * kNsPerMs));
+    (void)dds_waitset_wait(waitset, nullptr, 0,
+                           std::min<DurationNs>(deadline - now, 100 * kNsPerMs));
   }
   dds_delete(waitset);
   return result;
@@ -177,20 +189,22 @@ Status Writer::wait_for_acks(DurationNs timeout_ns) {
 EndpointStatus Writer::status() const {
   EndpointStatus s;
   dds_publication_matched_status_t m{};
-  if (dds_get_publication_matched_status(writer_, &m) == DDS_RETCODE_OK) s.matched = m.current_count;
+  if (dds_get_publication_matched_status(writer_, &m) == DDS_RETCODE_OK)
+    s.matched = m.current_count;
   dds_offered_incompatible_qos_status_t q{};
-  if (dds_get_offered_incompatible_qos_status(writer_, &q) == DDS_RETCODE_OK) s.incompatible_qos = q.total_count;
+  if (dds_get_offered_incompatible_qos_status(writer_, &q) == DDS_RETCODE_OK)
+    s.incompatible_qos = q.total_count;
   return s;
 }
 
-Reader::Reader(const Participant& participant, const dds_topic_descriptor_t* type, const std::string& ros_topic,
-               const TopicQos& qos)
+Reader::Reader(const Participant& participant, const dds_topic_descriptor_t* type,
+               const std::string& ros_topic, const TopicQos& qos)
     : ros_topic_(ros_topic) {
   topic_ = create_topic(participant, type, ros_topic);
   dds_qos_t* q = make_qos(qos);
-  // Cyclone calls the data-available listener once per sample it stores in the history: counting those
-  // calls against the samples taken shows the ones keep-last replaced before they were taken, which no
-  // DDS status reports (SAMPLE_LOST is for samples never received).
+  // Cyclone calls the data-available listener once per sample it stores in the history: counting
+  // those calls against the samples taken shows the ones keep-last replaced before they were taken,
+  // which no DDS status reports (SAMPLE_LOST is for samples never received).
   dds_listener_t* listener = dds_create_listener(this);
   dds_lset_data_available(listener, &Reader::on_data_available);
   reader_ = dds_create_reader(participant.handle(), topic_, q, listener);
@@ -213,11 +227,13 @@ Result<int> Reader::take(const std::function<void(const void* sample)>& fn, int 
   void* samples[kBatch] = {};
   dds_sample_info_t infos[kBatch];
   const int n_max = std::min(max_samples, kBatch);
-  // Read before the take: a sample stored during the take may be taken without being in `arrived`, so
-  // arrived - taken never overcounts.
+  // Read before the take: a sample stored during the take may be taken without being in `arrived`,
+  // so arrived - taken never overcounts.
   const std::uint64_t arrived = arrived_.load();
-  const dds_return_t n = dds_take(reader_, samples, infos, static_cast<size_t>(n_max), static_cast<uint32_t>(n_max));
-  if (n < 0) return Result<int>(StatusCode::kIoError, "DDS take on " + ros_topic_ + ": " + dds_error(n));
+  const dds_return_t n =
+      dds_take(reader_, samples, infos, static_cast<size_t>(n_max), static_cast<uint32_t>(n_max));
+  if (n < 0)
+    return Result<int>(StatusCode::kIoError, "DDS take on " + ros_topic_ + ": " + dds_error(n));
   taken_ += static_cast<std::uint64_t>(n);
   // A take that got fewer than asked drained the history: what arrived before it and was not taken
   // was replaced.
@@ -235,14 +251,17 @@ Result<int> Reader::take(const std::function<void(const void* sample)>& fn, int 
 EndpointStatus Reader::status() const {
   EndpointStatus s;
   dds_subscription_matched_status_t m{};
-  if (dds_get_subscription_matched_status(reader_, &m) == DDS_RETCODE_OK) s.matched = m.current_count;
+  if (dds_get_subscription_matched_status(reader_, &m) == DDS_RETCODE_OK)
+    s.matched = m.current_count;
   dds_requested_incompatible_qos_status_t q{};
-  if (dds_get_requested_incompatible_qos_status(reader_, &q) == DDS_RETCODE_OK) s.incompatible_qos = q.total_count;
+  if (dds_get_requested_incompatible_qos_status(reader_, &q) == DDS_RETCODE_OK)
+    s.incompatible_qos = q.total_count;
   s.replaced_in_history = replaced_;
   dds_sample_lost_status_t lost{};
   if (dds_get_sample_lost_status(reader_, &lost) == DDS_RETCODE_OK) s.lost = lost.total_count;
   dds_sample_rejected_status_t rejected{};
-  if (dds_get_sample_rejected_status(reader_, &rejected) == DDS_RETCODE_OK) s.rejected = rejected.total_count;
+  if (dds_get_sample_rejected_status(reader_, &rejected) == DDS_RETCODE_OK)
+    s.rejected = rejected.total_count;
   return s;
 }
 
@@ -251,7 +270,8 @@ void Reader::on_data_available(dds_entity_t /*reader*/, void* self) {
 }
 
 WriterDiscovery::WriterDiscovery(const Participant& participant) {
-  reader_ = dds_create_reader(participant.handle(), DDS_BUILTIN_TOPIC_DCPSPUBLICATION, nullptr, nullptr);
+  reader_ =
+      dds_create_reader(participant.handle(), DDS_BUILTIN_TOPIC_DCPSPUBLICATION, nullptr, nullptr);
   if (reader_ < 0) throw ConfigError("DDS discovery reader: " + dds_error(reader_));
 }
 
@@ -274,7 +294,8 @@ std::vector<DiscoveredWriter> WriterDiscovery::poll() {
       w.dds_type = e->type_name ? e->type_name : "";
       dds_reliability_kind_t kind = DDS_RELIABILITY_BEST_EFFORT;
       dds_duration_t blocking = 0;
-      w.reliable = e->qos && dds_qget_reliability(e->qos, &kind, &blocking) && kind == DDS_RELIABILITY_RELIABLE;
+      w.reliable = e->qos && dds_qget_reliability(e->qos, &kind, &blocking) &&
+                   kind == DDS_RELIABILITY_RELIABLE;
       out.push_back(std::move(w));
     }
     (void)dds_return_loan(reader_, samples, n);

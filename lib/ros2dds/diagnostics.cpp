@@ -1,20 +1,27 @@
 #include "ros2dds/diagnostics.hpp"
 
-#include <map>
-
 #include <fmt/format.h>
+
+#include <map>
 
 namespace faultline::ros2dds {
 
 const char* action_name(msgs::FaultAction action) {
   switch (action) {
-    case msgs::FAULT_ACTION_PASS: return "pass";
-    case msgs::FAULT_ACTION_CORRUPT: return "corrupt";
-    case msgs::FAULT_ACTION_DROP: return "drop";
-    case msgs::FAULT_ACTION_BLACK: return "black";
-    case msgs::FAULT_ACTION_FREEZE: return "freeze";
-    case msgs::FAULT_ACTION_DELAY: return "delay";
-    default: return "unknown";
+    case msgs::FAULT_ACTION_PASS:
+      return "pass";
+    case msgs::FAULT_ACTION_CORRUPT:
+      return "corrupt";
+    case msgs::FAULT_ACTION_DROP:
+      return "drop";
+    case msgs::FAULT_ACTION_BLACK:
+      return "black";
+    case msgs::FAULT_ACTION_FREEZE:
+      return "freeze";
+    case msgs::FAULT_ACTION_DELAY:
+      return "delay";
+    default:
+      return "unknown";
   }
 }
 
@@ -24,9 +31,15 @@ DiagnosticValues diagnostic_from_event(const msgs::FaultEvent& event) {
   d.frame_id = event.header().frame_id();
   const msgs::FaultAction action = event.state().action();
   switch (action) {
-    case msgs::FAULT_ACTION_PASS: d.level = DiagnosticLevel::kOk; break;
-    case msgs::FAULT_ACTION_DROP: d.level = DiagnosticLevel::kError; break;
-    default: d.level = DiagnosticLevel::kWarn; break;
+    case msgs::FAULT_ACTION_PASS:
+      d.level = DiagnosticLevel::kOk;
+      break;
+    case msgs::FAULT_ACTION_DROP:
+      d.level = DiagnosticLevel::kError;
+      break;
+    default:
+      d.level = DiagnosticLevel::kWarn;
+      break;
   }
   d.name = "faultline/" + event.camera();
   d.hardware_id = event.camera();
@@ -47,7 +60,8 @@ DiagnosticValues diagnostic_from_event(const msgs::FaultEvent& event) {
     d.values.emplace_back(p + "seed", std::to_string(f.seed()));
     if (!f.rng().empty()) d.values.emplace_back(p + "rng", f.rng());
     const std::map<std::string, double> sorted(f.params().begin(), f.params().end());
-    for (const auto& [key, value] : sorted) d.values.emplace_back(p + key, fmt::format("{}", value));
+    for (const auto& [key, value] : sorted)
+      d.values.emplace_back(p + key, fmt::format("{}", value));
   }
   return d;
 }

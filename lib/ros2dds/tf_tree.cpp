@@ -29,11 +29,13 @@ Rigid compose(const Rigid& a, const Rigid& b) {
   return out;
 }
 
-void StaticTransforms::set(const std::string& parent, const std::string& child, const Rigid& transform) {
+void StaticTransforms::set(const std::string& parent, const std::string& child,
+                           const Rigid& transform) {
   parent_[child] = {parent, transform};
 }
 
-std::optional<Rigid> StaticTransforms::lookup(const std::string& base, const std::string& frame) const {
+std::optional<Rigid> StaticTransforms::lookup(const std::string& base,
+                                              const std::string& frame) const {
   Rigid acc;  // frame -> current
   std::string current = frame;
   for (int hop = 0; hop <= 64; ++hop) {

@@ -4,41 +4,44 @@
 #include <sstream>
 
 #include "common/config.hpp"
+#include "deterministic_serialize.hpp"
 #include "fault.pb.h"
 #include "nuscenes/schema.hpp"
 #include "nuscenes/table_reader.hpp"
 #include "runtime/bag_layout.hpp"
 #include "runtime/player_loop.hpp"
 #include "runtime/remap.hpp"
-#include "deterministic_serialize.hpp"
 
 namespace faultline::runtime {
 
 void ConvertConfig::validate() const {
   if (output.empty()) throw ConfigError("bag convert: output = \"\": expected a file path");
   if (!bag::compression_from_string(compression)) {
-    throw ConfigError("bag convert: compression = \"" + compression + "\": expected none, zstd or lz4");
+    throw ConfigError("bag convert: compression = \"" + compression +
+                      "\": expected none, zstd or lz4");
   }
   if (output_prefix.empty() || output_prefix.front() != '/') {
-    throw ConfigError("bag convert: output_prefix = \"" + output_prefix + "\": expected a /namespace");
+    throw ConfigError("bag convert: output_prefix = \"" + output_prefix +
+                      "\": expected a /namespace");
   }
 }
 
-Result<std::map<std::string, std::vector<bag::GtBox>>> load_gt_boxes(const std::string& dataroot,
-                                                                     const std::string& version,
-                                                                     const std::set<std::string>& sample_tokens) {
+Result<std::map<std::string, std::vector<bag::GtBox>>> load_gt_boxes(
+    const std::string& dataroot, const std::string& version,
+    const std::set<std::string>& sample_tokens) {
   namespace schema = nuscenes::schema;
   using Fields = std::vector<nuscenes::TableField>;
   std::map<std::string, std::string> category_name;  // category token -> name
-  Status s = nuscenes::stream_table(
-      schema::table_path(dataroot, version, schema::kCategory), schema::TokenName::fields(),
-      [&](const nuscenes::TableRecord& r, std::size_t) {
-        std::string token, name;
-        if (r.fields[schema::TokenName::kToken].get(&token) && r.fields[schema::TokenName::kName].get(&name)) {
-          category_name[token] = name;
-        }
-        return Status::ok();
-      });
+  Status s = nuscenes::stream_table(schema::table_path(dataroot, version, schema::kCategory),
+                                    schema::TokenName::fields(),
+                                    [&](const nuscenes::TableRecord& r, std::size_t) {
+                                      std::string token, name;
+                                      if (r.fields[schema::TokenName::kToken].get(&token) &&
+                                          r.fields[schema::TokenName::kName].get(&name)) {
+                                        category_name[token] = name;
+                                      }
+                                      return Status::ok();
+                                    });
   if (!s) return s;
   std::map<std::string, std::string> instance_category;  // instance token -> category name
   s = nuscenes::stream_table(
@@ -46,7 +49,8 @@ Result<std::map<std::string, std::vector<bag::GtBox>>> load_gt_boxes(const std::
       [&](const nuscenes::TableRecord& r, std::size_t) {
         using V = schema::InstanceCategory;
         std::string token, category;
-        if (!r.fields[V::kToken].get(&token) || !r.fields[V::kCategoryToken].get(&category)) return Status::ok();
+        if (!r.fields[V::kToken].get(&token) || !r.fields[V::kCategoryToken].get(&category))
+          return Status::ok();
         const auto it = category_name.find(category);
         instance_category[token] = it == category_name.end() ? "unknown" : it->second;
         return Status::ok();
@@ -56,11 +60,13 @@ Result<std::map<std::string, std::vector<bag::GtBox>>> load_gt_boxes(const std::
   const std::string ann_path = schema::table_path(dataroot, version, schema::kSampleAnnotation);
   std::vector<double> t, sz, rot;
   using V = schema::BoxAnnotation;
-  // Annotations of other samples are skipped undecoded (those without a string sample_token are ignored).
+  // Annotations of other samples are skipped undecoded (those without a string sample_token are
+  // ignored).
   nuscenes::RecordFilter other_samples;
   if (!sample_tokens.empty()) {
     other_samples.all_of.push_back(
-        {static_cast<int>(V::kSampleToken), [&](const std::string& sample) { return sample_tokens.count(sample) != 0; }});
+        {static_cast<int>(V::kSampleToken),
+         [&](const std::string& sample) { return sample_tokens.count(sample) != 0; }});
   }
   s = nuscenes::stream_table(
       ann_path, V::fields(),
@@ -127,7 +133,8 @@ struct BagConverter::Impl {
     }
   }
 
-  std::uint16_t replay_proto_channel(const std::string& topic, const google::protobuf::Descriptor* d) {
+  std::uint16_t replay_proto_channel(const std::string& topic,
+                                     const google::protobuf::Descriptor* d) {
     bag::KeyValueMap meta{{kMetaTopic, topic}, {kMetaFrames, "2"}, {kMetaType, d->full_name()}};
     auto ch = writer->proto_channel(topic, d, meta);
     return ch ? *ch : 0;
@@ -138,20 +145,23 @@ struct BagConverter::Impl {
     if (it != image_channels.end()) return it->second;
     ImageChannels c;
     const auto* d = msgs::CameraFrame::descriptor();
-    const std::uint16_t schema = writer->add_schema(d->full_name(), "protobuf", bag::build_file_descriptor_set(d));
+    const std::uint16_t schema =
+        writer->add_schema(d->full_name(), "protobuf", bag::build_file_descriptor_set(d));
     bag::KeyValueMap meta{{kMetaTopic, topic}, {kMetaFrames, "3"}, {kMetaType, d->full_name()}};
     auto ch = writer->add_channel(kRawTopicPrefix + topic, schema, meta, kMultipartEncoding);
     c.replay = ch ? *ch : 0;
     if (cfg.foxglove_view) {
       c.view = writer->channel_for<foxglove::CompressedImage>(topic).value();
-      c.info = writer->channel_for<foxglove::CameraCalibration>(sibling_camera_info_topic(topic)).value();
+      c.info = writer->channel_for<foxglove::CameraCalibration>(sibling_camera_info_topic(topic))
+                   .value();
     }
     return image_channels.emplace(topic, c).first->second;
   }
 
-  // One camera frame on `topic`: the replay message and, with the view, image + calibration (+ /tf).
-  void write_frame(const std::string& topic, const msgs::CameraFrame& h, std::string_view jpeg, StampNs log_ns,
-                   bool with_tf) {
+  // One camera frame on `topic`: the replay message and, with the view, image + calibration (+
+  // /tf).
+  void write_frame(const std::string& topic, const msgs::CameraFrame& h, std::string_view jpeg,
+                   StampNs log_ns, bool with_tf) {
     ImageChannels& ch = channels_for(topic);
     const std::uint64_t s = h.header().seq();
     msgs::serialize_deterministic(h, &body);
@@ -170,7 +180,8 @@ struct BagConverter::Impl {
   std::uint64_t next_seq(const std::string& topic) { return ++seq[topic]; }
 
   // The injector's treatment of one source frame (same FramePolicy code, JPEG passthrough).
-  void inject(const msgs::CameraFrame& in, const ImageBytes& image, const std::string& in_topic, StampNs log_ns) {
+  void inject(const msgs::CameraFrame& in, const ImageBytes& image, const std::string& in_topic,
+              StampNs log_ns) {
     transport::CameraFrameView view;
     view.header = in;
     view.payload = image->data();
@@ -200,7 +211,8 @@ struct BagConverter::Impl {
     }
     const std::string out_topic = cfg.output_prefix + in_topic;
     msgs::CameraFrame out = in;
-    apply_message_edit(d.edit, out);  // the faulted topic's calibration and TF carry the drift, stamps the skew
+    apply_message_edit(
+        d.edit, out);  // the faulted topic's calibration and TF carry the drift, stamps the skew
     *out.mutable_fault() = state;
     const StampNs out_log = log_ns + (d.action == msgs::FAULT_ACTION_DELAY ? d.delay_ns : 0);
     out.mutable_header()->set_seq(next_seq(out_topic));
@@ -208,7 +220,8 @@ struct BagConverter::Impl {
     out.mutable_header()->set_publish_stamp_ns(out_log);
     std::string_view jpeg(reinterpret_cast<const char*>(image->data()), image->size());
     if (d.replacement_jpeg) {
-      jpeg = std::string_view(reinterpret_cast<const char*>(d.replacement_jpeg->data()), d.replacement_jpeg->size());
+      jpeg = std::string_view(reinterpret_cast<const char*>(d.replacement_jpeg->data()),
+                              d.replacement_jpeg->size());
       ++counts.changed_frames;
     }
     out.set_payload_bytes(static_cast<std::uint32_t>(jpeg.size()));
@@ -218,8 +231,8 @@ struct BagConverter::Impl {
 };
 
 BagConverter::BagConverter(ConvertConfig config, std::unique_ptr<FrameSource> source,
-                           std::map<std::string, std::vector<bag::GtBox>> gt, std::unique_ptr<FramePolicy> policy,
-                           std::shared_ptr<spdlog::logger> log)
+                           std::map<std::string, std::vector<bag::GtBox>> gt,
+                           std::unique_ptr<FramePolicy> policy, std::shared_ptr<spdlog::logger> log)
     : impl_(std::make_unique<Impl>()) {
   config.validate();
   impl_->cfg = std::move(config);
@@ -231,7 +244,8 @@ BagConverter::BagConverter(ConvertConfig config, std::unique_ptr<FrameSource> so
 
 BagConverter::~BagConverter() = default;
 
-Result<ConvertCounts> BagConverter::run(const std::atomic<bool>& stop, const ConvertProgressFn& progress) {
+Result<ConvertCounts> BagConverter::run(const std::atomic<bool>& stop,
+                                        const ConvertProgressFn& progress) {
   Impl& m = *impl_;
   const auto& frames = m.source->frames();
   bag::WriterOptions wo;
@@ -247,10 +261,12 @@ Result<ConvertCounts> BagConverter::run(const std::atomic<bool>& stop, const Con
   if (Status s = m.writer->write_metadata("faultline.run", run_meta); !s) return s;
 
   m.sync_channel = m.replay_proto_channel(m.cfg.sync_topic, msgs::SampleBoundary::descriptor());
-  if (m.policy) m.faults_channel = m.replay_proto_channel(m.cfg.faults_topic, msgs::FaultEvent::descriptor());
+  if (m.policy)
+    m.faults_channel = m.replay_proto_channel(m.cfg.faults_topic, msgs::FaultEvent::descriptor());
   if (m.cfg.foxglove_view) {
     m.tf_channel = m.writer->channel_for<foxglove::FrameTransform>(bag::kTfTopic).value();
-    m.markers_channel = m.writer->channel_for<foxglove::SceneUpdate>(bag::kAnnotationsTopic).value();
+    m.markers_channel =
+        m.writer->channel_for<foxglove::SceneUpdate>(bag::kAnnotationsTopic).value();
   }
 
   // Boundaries follow the last key frame of each sample (as the player sends them).
@@ -276,13 +292,16 @@ Result<ConvertCounts> BagConverter::run(const std::atomic<bool>& stop, const Con
     if (!image) {
       ++m.counts.missing_images;
       if (m.counts.missing_images <= 5) {
-        m.log->warn("skipping frame {} ({}): {}", f.sample_data_token, f.channel, image.status().message());
+        m.log->warn("skipping frame {} ({}): {}", f.sample_data_token, f.channel,
+                    image.status().message());
       }
     } else {
       const std::string topic = camera_topic(f.channel);
       const StampNs log_ns = f.timestamp_us * 1000;
-      const msgs::CameraFrame h = convert_frame_header(f, m.next_seq(topic), m.cfg.publisher, (*image)->size());
-      const std::string_view jpeg(reinterpret_cast<const char*>((*image)->data()), (*image)->size());
+      const msgs::CameraFrame h =
+          convert_frame_header(f, m.next_seq(topic), m.cfg.publisher, (*image)->size());
+      const std::string_view jpeg(reinterpret_cast<const char*>((*image)->data()),
+                                  (*image)->size());
       m.counts.image_bytes += jpeg.size();
       if (m.cfg.clean_frames || !m.policy) m.write_frame(topic, h, jpeg, log_ns, /*with_tf=*/true);
       if (m.policy) m.inject(h, *image, topic, log_ns);
@@ -299,7 +318,8 @@ Result<ConvertCounts> BagConverter::run(const std::atomic<bool>& stop, const Con
       b.set_timestamp_us(t_us);
       b.set_frames_sent(keys_sent[f.sample_token]);
       b.set_last_in_run(i == last_boundary);
-      b.set_stream_end_follows(b.last_in_run());  // `bag play` sends the StreamEnd after the bag's last frame
+      b.set_stream_end_follows(
+          b.last_in_run());  // `bag play` sends the StreamEnd after the bag's last frame
       auto* hdr = b.mutable_header();
       hdr->set_capture_stamp_ns(t_ns);
       hdr->set_capture_clock(msgs::CAPTURE_CLOCK_DATASET);

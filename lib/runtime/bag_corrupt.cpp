@@ -22,13 +22,14 @@
 #include <thread>
 
 #include "bag/format.hpp"
-#include "common/bounded_read.hpp"
 #include "bag/reader.hpp"
 #include "bag/rosbag2.hpp"
 #include "bag/writer.hpp"
 #include "camera_frame.pb.h"
 #include "codec/jpeg.hpp"
+#include "common/bounded_read.hpp"
 #include "common/config.hpp"
+#include "deterministic_serialize.hpp"
 #include "fault.pb.h"
 #include "policy/fault_engine.hpp"
 #include "policy/temporal_draws.hpp"
@@ -36,7 +37,6 @@
 #include "ros2/schema.hpp"
 #include "runtime/bag_layout.hpp"
 #include "runtime/frame_geometry.hpp"
-#include "deterministic_serialize.hpp"
 
 namespace faultline::runtime {
 namespace {
@@ -539,9 +539,9 @@ void process(Job& job, const FaultedTopic& topic, bool keep_good, int quality, W
   if (action != policy::Action::Black) job.good = std::move(m);
 }
 
-// Runs fn over 0..n-1 on one thread per worker, also for a single worker: on the calling thread about
-// half the runs cost 4x the CPU per frame (bench/results/bag_corrupt.txt; likely its malloc arena
-// returning freed frame buffers to the system, not profiled).
+// Runs fn over 0..n-1 on one thread per worker, also for a single worker: on the calling thread
+// about half the runs cost 4x the CPU per frame (bench/results/bag_corrupt.txt; likely its malloc
+// arena returning freed frame buffers to the system, not profiled).
 void run_parallel(std::size_t n, std::vector<Worker>& workers,
                   const std::function<void(std::size_t, Worker&)>& fn) {
   if (n == 0) return;
@@ -677,12 +677,15 @@ Status Corrupter::plan_topics() {
   }
   std::vector<std::string> order;
   for (const auto& f : config_.faults) {
-    // Message faults rewrite a frame's calibration or stamps; this tool rewrites pixels only (ROS 2 bags carry
-    // calibration on CameraInfo topics), so it refuses them rather than pass them silently.
-    if (f.spec.kind == policy::FaultKind::CalibrationDrift || f.spec.kind == policy::FaultKind::TimestampSkew) {
+    // Message faults rewrite a frame's calibration or stamps; this tool rewrites pixels only (ROS 2
+    // bags carry calibration on CameraInfo topics), so it refuses them rather than pass them
+    // silently.
+    if (f.spec.kind == policy::FaultKind::CalibrationDrift ||
+        f.spec.kind == policy::FaultKind::TimestampSkew) {
       return Status(StatusCode::kInvalidArgument,
                     "fault " + f.spec.name() + " on " + f.topic +
-                        ": bag corrupt rewrites pixels only; calibration_drift and timestamp_skew apply in the "
+                        ": bag corrupt rewrites pixels only; calibration_drift and timestamp_skew "
+                        "apply in the "
                         "injector and in bag convert --corrupt");
     }
     if (std::find(order.begin(), order.end(), f.topic) == order.end()) order.push_back(f.topic);

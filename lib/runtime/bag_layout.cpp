@@ -10,7 +10,8 @@ namespace faultline::runtime {
 std::string multipart_prefix(std::size_t header_bytes) {
   std::string out(4, '\0');
   const auto n = static_cast<std::uint32_t>(header_bytes);
-  for (int i = 0; i < 4; ++i) out[static_cast<std::size_t>(i)] = static_cast<char>((n >> (8 * i)) & 0xff);
+  for (int i = 0; i < 4; ++i)
+    out[static_cast<std::size_t>(i)] = static_cast<char>((n >> (8 * i)) & 0xff);
   return out;
 }
 
@@ -24,12 +25,14 @@ std::string encode_multipart(std::string_view header, std::string_view payload) 
 }
 
 Result<MultipartView> decode_multipart(std::string_view data) {
-  if (data.size() < 4) return {StatusCode::kCorruptData, "multipart: shorter than its length prefix"};
+  if (data.size() < 4)
+    return {StatusCode::kCorruptData, "multipart: shorter than its length prefix"};
   std::uint32_t n = 0;
-  for (int i = 0; i < 4; ++i) n |= static_cast<std::uint32_t>(static_cast<unsigned char>(data[i])) << (8 * i);
+  for (int i = 0; i < 4; ++i)
+    n |= static_cast<std::uint32_t>(static_cast<unsigned char>(data[i])) << (8 * i);
   if (n > data.size() - 4) {
-    return {StatusCode::kCorruptData, "multipart: header length " + std::to_string(n) + " exceeds " +
-                                          std::to_string(data.size() - 4) + " bytes"};
+    return {StatusCode::kCorruptData, "multipart: header length " + std::to_string(n) +
+                                          " exceeds " + std::to_string(data.size() - 4) + " bytes"};
   }
   return MultipartView{data.substr(4, n), data.substr(4 + n)};
 }

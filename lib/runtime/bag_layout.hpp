@@ -2,17 +2,21 @@
 // while Foxglove still sees viewable channels (specs/interfaces.md §3, §4.2, §4.3).
 //
 // Replay channels (the source of truth for `bag play`) carry channel metadata
-//   faultline.topic  = the transport topic,  faultline.frames = "2" or "3",  faultline.type = proto type.
-// - Image messages [topic][CameraFrame][payload] go to the private channel "/faultline/raw" + topic,
-//   message_encoding "faultline-multipart", schema faultline.msgs.CameraFrame (describes the header).
-//   Message data = u32 little-endian header length, the CameraFrame bytes, then the payload bytes.
+//   faultline.topic  = the transport topic,  faultline.frames = "2" or "3",  faultline.type = proto
+//   type.
+// - Image messages [topic][CameraFrame][payload] go to the private channel "/faultline/raw" +
+// topic,
+//   message_encoding "faultline-multipart", schema faultline.msgs.CameraFrame (describes the
+//   header). Message data = u32 little-endian header length, the CameraFrame bytes, then the
+//   payload bytes.
 // - Two-part messages [topic][body] go to a channel named by the topic itself: message_encoding
 //   "protobuf" with the type's schema when the type is known, else schemaless "faultline-body".
 //   The data is the body, byte for byte.
-// MCAP sequence = header.seq (low 32 bits), log_time = receive time (CLOCK_REALTIME), publish_time =
-// header.publish_stamp_ns. View channels (CompressedImage/RawImage on the topic, CameraCalibration,
-// /tf, /detections/markers) have no faultline.frames key and are never replayed. Faults arrive as the
-// injector's own /faultline/faults topic (FaultEvent) and are recorded like any two-part topic.
+// MCAP sequence = header.seq (low 32 bits), log_time = receive time (CLOCK_REALTIME), publish_time
+// = header.publish_stamp_ns. View channels (CompressedImage/RawImage on the topic,
+// CameraCalibration, /tf, /detections/markers) have no faultline.frames key and are never replayed.
+// Faults arrive as the injector's own /faultline/faults topic (FaultEvent) and are recorded like
+// any two-part topic.
 #pragma once
 
 #include <cstdint>

@@ -21,14 +21,19 @@ namespace faultline::runtime {
 void BagPlayerConfig::validate() const {
   if (files.empty()) throw ConfigError("player.files: expected at least one bag");
   if (rate < 0) throw ConfigError("player.rate = " + std::to_string(rate) + ": expected >= 0");
-  if (start_offset_s < 0) throw ConfigError("player.start_offset_s = " + std::to_string(start_offset_s) + ": expected >= 0");
-  if (duration_s < 0) throw ConfigError("player.duration_s = " + std::to_string(duration_s) + ": expected >= 0");
-  if (max_gap_s < 0) throw ConfigError("player.max_gap_s = " + std::to_string(max_gap_s) + ": expected >= 0");
+  if (start_offset_s < 0)
+    throw ConfigError("player.start_offset_s = " + std::to_string(start_offset_s) +
+                      ": expected >= 0");
+  if (duration_s < 0)
+    throw ConfigError("player.duration_s = " + std::to_string(duration_s) + ": expected >= 0");
+  if (max_gap_s < 0)
+    throw ConfigError("player.max_gap_s = " + std::to_string(max_gap_s) + ": expected >= 0");
   try {
     for (const auto& e : include) std::regex re(e);
     for (const auto& e : exclude) std::regex re(e);
   } catch (const std::regex_error& e) {
-    throw ConfigError("player.include/exclude: invalid regular expression: " + std::string(e.what()));
+    throw ConfigError("player.include/exclude: invalid regular expression: " +
+                      std::string(e.what()));
   }
 }
 
@@ -41,15 +46,17 @@ struct BagPlayer::Impl {
   std::vector<std::regex> include_re, exclude_re;
   std::map<std::uint16_t, int> channel_frames;  // per file: channel id -> 2/3, or 0 = not replayed
   bool waited = false;
-  StampNs first_log_ns = -1;                    // first replayable message of the bag
-  StampNs base_log_ns = -1, base_wall_ns = 0;   // pacing anchor of the current pass
+  StampNs first_log_ns = -1;                   // first replayable message of the bag
+  StampNs base_log_ns = -1, base_wall_ns = 0;  // pacing anchor of the current pass
   StampNs last_progress_ns = 0;
-  StampNs prev_log_ns = -1;                     // last message sent (gap detection)
-  double total_s = 0.0;                         // bag duration from the summaries (progress line)
+  StampNs prev_log_ns = -1;  // last message sent (gap detection)
+  double total_s = 0.0;      // bag duration from the summaries (progress line)
 
   // Applies one text command; false for an unknown one.
-  static bool apply_command(std::string_view text, std::atomic<bool>& paused, std::atomic<int>& steps) {
-    while (!text.empty() && std::isspace(static_cast<unsigned char>(text.back()))) text.remove_suffix(1);
+  static bool apply_command(std::string_view text, std::atomic<bool>& paused,
+                            std::atomic<int>& steps) {
+    while (!text.empty() && std::isspace(static_cast<unsigned char>(text.back())))
+      text.remove_suffix(1);
     if (text == "pause") {
       paused.store(true);
     } else if (text == "resume" || text == "play") {
@@ -86,14 +93,16 @@ struct BagPlayer::Impl {
         ++counts.control_commands;
         log->info("control: {}", std::string(r->header()));
       } else {
-        log->warn("control: unknown command '{}' (pause, resume, toggle, step [N])", std::string(r->header()));
+        log->warn("control: unknown command '{}' (pause, resume, toggle, step [N])",
+                  std::string(r->header()));
       }
     }
   }
 
   void print_progress(const BagPlayerCounts& counts, bool paused) const {
-    std::fprintf(stderr, "\r[play] bag time %8.2f / %.2f s  messages %llu%s  ", counts.bag_seconds, total_s,
-                 static_cast<unsigned long long>(counts.messages_sent), paused ? "  [paused]" : "          ");
+    std::fprintf(stderr, "\r[play] bag time %8.2f / %.2f s  messages %llu%s  ", counts.bag_seconds,
+                 total_s, static_cast<unsigned long long>(counts.messages_sent),
+                 paused ? "  [paused]" : "          ");
   }
 
   bool wanted(const std::string& topic) const {
@@ -110,17 +119,20 @@ struct BagPlayer::Impl {
     while (!stop.load()) {
       const StampNs now = monotonic_now_ns();
       if (now >= deadline) return true;
-      std::this_thread::sleep_for(std::chrono::nanoseconds(std::min<StampNs>(deadline - now, 50 * kNsPerMs)));
+      std::this_thread::sleep_for(
+          std::chrono::nanoseconds(std::min<StampNs>(deadline - now, 50 * kNsPerMs)));
     }
     return false;
   }
 
   bool wait_ack(const std::string& token, const std::atomic<bool>& stop, BagPlayerCounts& counts) {
-    const StampNs deadline = monotonic_now_ns() + static_cast<DurationNs>(cfg.ack_timeout_ms) * kNsPerMs;
+    const StampNs deadline =
+        monotonic_now_ns() + static_cast<DurationNs>(cfg.ack_timeout_ms) * kNsPerMs;
     while (!stop.load()) {
       if (cfg.ack_timeout_ms > 0 && monotonic_now_ns() >= deadline) {
         ++counts.ack_timeouts;
-        log->warn("lockstep: no SampleAck for sample {} within {} ms, continuing", token, cfg.ack_timeout_ms);
+        log->warn("lockstep: no SampleAck for sample {} within {} ms, continuing", token,
+                  cfg.ack_timeout_ms);
         return true;
       }
       auto r = acks->receive(50 * kNsPerMs);
@@ -176,20 +188,24 @@ BagPlayer::BagPlayer(BagPlayerConfig config, std::shared_ptr<spdlog::logger> log
 BagPlayer::~BagPlayer() = default;
 
 std::string BagPlayer::endpoint() const { return impl_->pub->endpoint(); }
-std::string BagPlayer::ack_endpoint() const { return impl_->acks ? impl_->acks->endpoints().front() : ""; }
+std::string BagPlayer::ack_endpoint() const {
+  return impl_->acks ? impl_->acks->endpoints().front() : "";
+}
 std::string BagPlayer::control_endpoint() const {
   return impl_->control ? impl_->control->endpoints().front() : "";
 }
 std::uint64_t BagPlayer::auth_refused() const {
   const Impl& m = *impl_;
-  return m.pub->auth_refused() + (m.acks ? m.acks->auth_refused() : 0) + (m.control ? m.control->auth_refused() : 0);
+  return m.pub->auth_refused() + (m.acks ? m.acks->auth_refused() : 0) +
+         (m.control ? m.control->auth_refused() : 0);
 }
 
 int BagPlayer::run(const std::atomic<bool>& stop) {
   Impl& m = *impl_;
   const StampNs offset_ns = static_cast<StampNs>(m.cfg.start_offset_s * kNsPerSec);
-  const StampNs span_ns = m.cfg.duration_s > 0 ? static_cast<StampNs>(m.cfg.duration_s * kNsPerSec) : -1;
-  bool ended = false;  // the duration limit was reached
+  const StampNs span_ns =
+      m.cfg.duration_s > 0 ? static_cast<StampNs>(m.cfg.duration_s * kNsPerSec) : -1;
+  bool ended = false;                     // the duration limit was reached
   for (const auto& file : m.cfg.files) {  // duration for the progress line (indexed files only)
     auto reader = bag::Reader::open(file);
     if (reader && (*reader)->load_summary().is_ok() && (*reader)->summary().statistics) {
@@ -198,7 +214,8 @@ int BagPlayer::run(const std::atomic<bool>& stop) {
     }
   }
   if (m.cfg.start_paused) m.log->info("paused: waiting for resume or step");
-  bool end_owed = false;  // a played last_in_run boundary announced a StreamEnd that has not been played
+  bool end_owed =
+      false;  // a played last_in_run boundary announced a StreamEnd that has not been played
   do {
     m.base_log_ns = -1;
     for (const auto& file : m.cfg.files) {
@@ -216,7 +233,8 @@ int BagPlayer::run(const std::atomic<bool>& stop) {
           int frames = 0;
           const auto f = v.channel->metadata.find(kMetaFrames);
           const auto t = v.channel->metadata.find(kMetaTopic);
-          if (f != v.channel->metadata.end() && t != v.channel->metadata.end() && m.wanted(t->second)) {
+          if (f != v.channel->metadata.end() && t != v.channel->metadata.end() &&
+              m.wanted(t->second)) {
             frames = f->second == "3" ? 3 : f->second == "2" ? 2 : 0;
           }
           it = m.channel_frames.emplace(v.channel->id, frames).first;
@@ -233,9 +251,12 @@ int BagPlayer::run(const std::atomic<bool>& stop) {
         if (const auto r = m.cfg.remap.find(topic); r != m.cfg.remap.end()) topic = r->second;
         if (!m.waited && m.cfg.wait_subscribers > 0) {
           m.waited = true;
-          const Status w = m.pub->wait_for_subscribers(topic, m.cfg.wait_subscribers,
-                                                       static_cast<DurationNs>(m.cfg.wait_timeout_ms) * kNsPerMs, &stop);
-          if (!w.is_ok()) m.log->warn("starting without {} subscriber(s) on {}: {}", m.cfg.wait_subscribers, topic, w.to_string());
+          const Status w = m.pub->wait_for_subscribers(
+              topic, m.cfg.wait_subscribers,
+              static_cast<DurationNs>(m.cfg.wait_timeout_ms) * kNsPerMs, &stop);
+          if (!w.is_ok())
+            m.log->warn("starting without {} subscriber(s) on {}: {}", m.cfg.wait_subscribers,
+                        topic, w.to_string());
         }
         // Pause / step: nothing is sent while paused; one message per step.
         m.poll_control(0, paused_, steps_, counts_);
@@ -260,8 +281,9 @@ int BagPlayer::run(const std::atomic<bool>& stop) {
             m.base_log_ns = v.log_time_ns;
             m.base_wall_ns = monotonic_now_ns();
           }
-          const auto due = m.base_wall_ns +
-                           static_cast<StampNs>(static_cast<double>(v.log_time_ns - m.base_log_ns) / m.cfg.rate);
+          const auto due =
+              m.base_wall_ns +
+              static_cast<StampNs>(static_cast<double>(v.log_time_ns - m.base_log_ns) / m.cfg.rate);
           if (!Impl::sleep_until(due, stop)) return false;
         }
         Status s;
@@ -284,10 +306,12 @@ int BagPlayer::run(const std::atomic<bool>& stop) {
         }
         ++counts_.messages_sent;
         sent_.store(counts_.messages_sent);
-        // A boundary is parsed once: for the stream end it may announce and for the lockstep ack below.
+        // A boundary is parsed once: for the stream end it may announce and for the lockstep ack
+        // below.
         msgs::SampleBoundary boundary;
-        const bool is_boundary = topic == m.cfg.sync_topic &&
-                                 boundary.ParseFromArray(v.data.data(), static_cast<int>(v.data.size()));
+        const bool is_boundary =
+            topic == m.cfg.sync_topic &&
+            boundary.ParseFromArray(v.data.data(), static_cast<int>(v.data.size()));
         if (topic == m.cfg.end_topic) end_owed = false;
         if (is_boundary && boundary.last_in_run() && boundary.stream_end_follows()) end_owed = true;
         counts_.bytes_sent += v.data.size();
@@ -314,18 +338,20 @@ int BagPlayer::run(const std::atomic<bool>& stop) {
     }
   } while (m.cfg.loop && !stop.load() && !ended);
   if (!stop.load() && end_owed) {
-    // Converted bags (and recordings without /sync/end, or played without it) announce a stream end on their
-    // last boundary; this is it.
+    // Converted bags (and recordings without /sync/end, or played without it) announce a stream end
+    // on their last boundary; this is it.
     msgs::StreamEnd end;
     end.mutable_header()->set_publisher("bag_player");
     end.mutable_header()->set_publish_stamp_ns(realtime_now_ns());
     end.mutable_header()->set_publish_mono_ns(monotonic_now_ns());
-    if (transport::send_message(*m.pub, m.cfg.end_topic, end).is_ok()) m.log->debug("stream end sent");
+    if (transport::send_message(*m.pub, m.cfg.end_topic, end).is_ok())
+      m.log->debug("stream end sent");
   }
   if (m.cfg.progress) std::fprintf(stderr, "\n");
-  m.log->info("played {} messages ({} bytes, {:.2f} s of bag time), {} send failures, {} ack timeouts",
-              counts_.messages_sent, counts_.bytes_sent, counts_.bag_seconds, counts_.send_failures,
-              counts_.ack_timeouts);
+  m.log->info(
+      "played {} messages ({} bytes, {:.2f} s of bag time), {} send failures, {} ack timeouts",
+      counts_.messages_sent, counts_.bytes_sent, counts_.bag_seconds, counts_.send_failures,
+      counts_.ack_timeouts);
   return 0;
 }
 

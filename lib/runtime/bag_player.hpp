@@ -1,8 +1,8 @@
 // The bag player (R10): republishes the replay channels of bags written by BagRecorder (or `bag
 // convert`) exactly as recorded: same bytes, same order (file order = receive order), same seq.
 // Pacing follows log time scaled by `rate` (0 = unlimited); a log-time gap longer than `max_gap_s`
-// (e.g. between scenes of a converted bag, recorded days apart) is skipped, not slept. In lockstep it
-// waits after each message on `sync_topic` for the sink's SampleAck of that sample, like
+// (e.g. between scenes of a converted bag, recorded days apart) is skipped, not slept. In lockstep
+// it waits after each message on `sync_topic` for the sink's SampleAck of that sample, like
 // runtime/player_loop.
 //
 // Pause control: pause()/resume()/toggle_pause()/step() from any thread, or text commands
@@ -25,32 +25,33 @@
 namespace faultline::runtime {
 
 struct BagPlayerConfig {
-  std::vector<std::string> files;           // played one after another (split parts in order)
-  double rate = 1.0;                        // speed factor; 0 = as fast as possible
-  bool loop = false;                        // start over at the end
-  double start_offset_s = 0.0;              // skip this much from the first message
-  double duration_s = 0.0;                  // play this much bag time; 0 = to the end
-  std::vector<std::string> include;         // regexes on the transport topic; empty = all
-  std::vector<std::string> exclude;         // regexes of topics never played
-  std::map<std::string, std::string> remap; // topic -> new topic
+  std::vector<std::string> files;                 // played one after another (split parts in order)
+  double rate = 1.0;                              // speed factor; 0 = as fast as possible
+  bool loop = false;                              // start over at the end
+  double start_offset_s = 0.0;                    // skip this much from the first message
+  double duration_s = 0.0;                        // play this much bag time; 0 = to the end
+  std::vector<std::string> include;               // regexes on the transport topic; empty = all
+  std::vector<std::string> exclude;               // regexes of topics never played
+  std::map<std::string, std::string> remap;       // topic -> new topic
   std::string endpoint = "tcp://127.0.0.1:5600";  // PUB bind address
   int hwm = 64;
-  int wait_subscribers = 0;                 // wait for this many subscribers of the first topic
+  int wait_subscribers = 0;  // wait for this many subscribers of the first topic
   int wait_timeout_ms = 10000;
   bool lockstep = false;
   std::string sync_topic = "/sync/sample";
-  std::string end_topic = "/sync/end";      // when playback ends, a StreamEnd goes here if a played last_in_run
-                                            // boundary announced one that was not played, so an injector behind
-                                            // the player finishes
+  std::string end_topic = "/sync/end";  // when playback ends, a StreamEnd goes here if a played
+                                        // last_in_run boundary announced one that was not played,
+                                        // so an injector behind the player finishes
   std::string ack_endpoint = "tcp://127.0.0.1:5603";  // PULL bind address for SampleAck
   int ack_timeout_ms = 30000;
   int linger_ms = 1000;
-  bool progress = false;                    // a progress line on stderr
-  double max_gap_s = 10.0;                  // longer log-time gaps are skipped when pacing; 0 = never
-  bool start_paused = false;                // wait for resume/step before the first message
-  std::string control_endpoint;             // PULL bind address for pause/resume/step; "" = none
-  transport::AccessConfig access;           // allow_remote and CURVE keys of every socket (transport/access.hpp)
-  void validate() const;                    // throws ConfigError
+  bool progress = false;         // a progress line on stderr
+  double max_gap_s = 10.0;       // longer log-time gaps are skipped when pacing; 0 = never
+  bool start_paused = false;     // wait for resume/step before the first message
+  std::string control_endpoint;  // PULL bind address for pause/resume/step; "" = none
+  transport::AccessConfig
+      access;             // allow_remote and CURVE keys of every socket (transport/access.hpp)
+  void validate() const;  // throws ConfigError
 };
 
 struct BagPlayerCounts {
@@ -60,8 +61,8 @@ struct BagPlayerCounts {
   std::uint64_t malformed = 0;
   std::uint64_t ack_timeouts = 0;
   std::uint64_t bag_problems = 0;
-  std::uint64_t control_commands = 0;       // accepted pause/resume/step commands
-  double bag_seconds = 0.0;                 // bag time covered by what was sent
+  std::uint64_t control_commands = 0;  // accepted pause/resume/step commands
+  double bag_seconds = 0.0;            // bag time covered by what was sent
 };
 
 class BagPlayer {

@@ -20,16 +20,20 @@ void RecorderConfig::validate() const {
   if (output.empty()) throw ConfigError("recorder.output = \"\": expected a file path");
   const int modes = (topics.empty() ? 0 : 1) + (regex.empty() ? 0 : 1) + (all ? 1 : 0);
   if (modes != 1) {
-    throw ConfigError("recorder: give exactly one of topics, regex or all (got " + std::to_string(modes) + ")");
+    throw ConfigError("recorder: give exactly one of topics, regex or all (got " +
+                      std::to_string(modes) + ")");
   }
   try {
     if (!regex.empty()) std::regex re(regex);
     for (const auto& e : exclude) std::regex re(e);
   } catch (const std::regex_error& e) {
-    throw ConfigError("recorder.regex/exclude: invalid regular expression: " + std::string(e.what()));
+    throw ConfigError("recorder.regex/exclude: invalid regular expression: " +
+                      std::string(e.what()));
   }
-  if (duration_s < 0) throw ConfigError("recorder.duration_s = " + std::to_string(duration_s) + ": expected >= 0");
-  if (split_s < 0) throw ConfigError("recorder.split_s = " + std::to_string(split_s) + ": expected >= 0");
+  if (duration_s < 0)
+    throw ConfigError("recorder.duration_s = " + std::to_string(duration_s) + ": expected >= 0");
+  if (split_s < 0)
+    throw ConfigError("recorder.split_s = " + std::to_string(split_s) + ": expected >= 0");
   if (hwm < 1) throw ConfigError("recorder.hwm = " + std::to_string(hwm) + ": expected >= 1");
   if (!bag::compression_from_string(compression)) {
     throw ConfigError("recorder.compression = \"" + compression + "\": expected none, zstd or lz4");
@@ -41,8 +45,10 @@ namespace {
 // Types of the well-known topics, for explicit --endpoint recording without the registry.
 std::string known_topic_type(const std::string& topic) {
   static const std::map<std::string, std::string> kTypes{
-      {"/sync/sample", "faultline.msgs.SampleBoundary"}, {"/sync/ack", "faultline.msgs.SampleAck"},
-      {"/statistics", "faultline.msgs.TopicStats"},       {"/detections", "faultline.msgs.DetectionArray"},
+      {"/sync/sample", "faultline.msgs.SampleBoundary"},
+      {"/sync/ack", "faultline.msgs.SampleAck"},
+      {"/statistics", "faultline.msgs.TopicStats"},
+      {"/detections", "faultline.msgs.DetectionArray"},
       {"/faultline/faults", "faultline.msgs.FaultEvent"}};
   const auto it = kTypes.find(topic);
   return it == kTypes.end() ? "" : it->second;
@@ -51,8 +57,8 @@ std::string known_topic_type(const std::string& topic) {
 struct TopicState {
   bool known = false;
   std::uint16_t replay_channel = 0;
-  std::uint16_t view_channel = 0;         // CompressedImage/RawImage, or markers for detections
-  std::uint16_t info_channel = 0;         // CameraCalibration
+  std::uint16_t view_channel = 0;  // CompressedImage/RawImage, or markers for detections
+  std::uint16_t info_channel = 0;  // CameraCalibration
 };
 
 }  // namespace
@@ -112,13 +118,15 @@ struct BagRecorder::Impl {
     st.known = true;
     bag::KeyValueMap meta{{kMetaTopic, topic}, {kMetaFrames, image ? "3" : "2"}};
     const auto t = types.find(topic);
-    std::string type = t != types.end() ? t->second : (image ? "faultline.msgs.CameraFrame" : known_topic_type(topic));
+    std::string type = t != types.end()
+                           ? t->second
+                           : (image ? "faultline.msgs.CameraFrame" : known_topic_type(topic));
     if (!type.empty()) meta[kMetaType] = type;
     const auto* pool = google::protobuf::DescriptorPool::generated_pool();
     if (image) {
       const auto* d = msgs::CameraFrame::descriptor();
-      const std::uint16_t schema = writer->add_schema(d->full_name(), "protobuf",
-                                                      bag::build_file_descriptor_set(d));
+      const std::uint16_t schema =
+          writer->add_schema(d->full_name(), "protobuf", bag::build_file_descriptor_set(d));
       auto ch = writer->add_channel(kRawTopicPrefix + topic, schema, meta, kMultipartEncoding);
       st.replay_channel = ch ? *ch : 0;
     } else if (const auto* d = type.empty() ? nullptr : pool->FindMessageTypeByName(type)) {
@@ -134,8 +142,9 @@ struct BagRecorder::Impl {
     return st;
   }
 
-  void write_image_view(const std::string& topic, TopicState& st, const transport::CameraFrameView& f,
-                        StampNs log_ns, StampNs pub_ns, RecorderCounts& counts) {
+  void write_image_view(const std::string& topic, TopicState& st,
+                        const transport::CameraFrameView& f, StampNs log_ns, StampNs pub_ns,
+                        RecorderCounts& counts) {
     const std::string_view payload(reinterpret_cast<const char*>(f.payload), f.payload_size);
     const auto& h = f.header;
     auto check = [&](const Status& s) {
@@ -143,8 +152,9 @@ struct BagRecorder::Impl {
     };
     const std::uint64_t seq = h.header().seq();
     if (st.view_channel == 0) {
-      st.view_channel = h.encoding() == "jpeg" ? writer->channel_for<foxglove::CompressedImage>(topic).value()
-                                               : writer->channel_for<foxglove::RawImage>(topic).value();
+      st.view_channel = h.encoding() == "jpeg"
+                            ? writer->channel_for<foxglove::CompressedImage>(topic).value()
+                            : writer->channel_for<foxglove::RawImage>(topic).value();
     }
     // The image bytes go from the received message straight into the chunk (no proto copy).
     if (h.encoding() == "jpeg") {
@@ -156,13 +166,17 @@ struct BagRecorder::Impl {
     if (h.intrinsics_size() == 9) {
       if (st.info_channel == 0) {
         st.info_channel =
-            writer->channel_for<foxglove::CameraCalibration>(sibling_camera_info_topic(topic)).value();
+            writer->channel_for<foxglove::CameraCalibration>(sibling_camera_info_topic(topic))
+                .value();
       }
-      check(writer->write_proto(st.info_channel, seq, log_ns, pub_ns, bag::to_camera_calibration(h)));
+      check(
+          writer->write_proto(st.info_channel, seq, log_ns, pub_ns, bag::to_camera_calibration(h)));
     }
     if (h.has_ego_pose() || h.has_sensor_to_ego()) {
-      if (tf_channel == 0) tf_channel = writer->channel_for<foxglove::FrameTransform>(bag::kTfTopic).value();
-      if (h.has_ego_pose()) check(writer->write_proto(tf_channel, seq, log_ns, pub_ns, bag::ego_transform(h)));
+      if (tf_channel == 0)
+        tf_channel = writer->channel_for<foxglove::FrameTransform>(bag::kTfTopic).value();
+      if (h.has_ego_pose())
+        check(writer->write_proto(tf_channel, seq, log_ns, pub_ns, bag::ego_transform(h)));
       if (h.has_sensor_to_ego()) {
         check(writer->write_proto(tf_channel, seq, log_ns, pub_ns, bag::sensor_transform(h)));
       }
@@ -170,7 +184,8 @@ struct BagRecorder::Impl {
   }
 
   // Records whatever is queued on every socket without waiting (at most 256 per socket).
-  void drain(RecorderCounts& counts, transport::DropCounter& drops, std::atomic<std::uint64_t>& recorded) {
+  void drain(RecorderCounts& counts, transport::DropCounter& drops,
+             std::atomic<std::uint64_t>& recorded) {
     for (auto& sock : subs) {
       for (int i = 0; i < 256; ++i) {
         auto r = sock->receive(0);
@@ -181,7 +196,8 @@ struct BagRecorder::Impl {
     }
   }
 
-  void record(const transport::ReceivedMessage& m, RecorderCounts& counts, transport::DropCounter& drops) {
+  void record(const transport::ReceivedMessage& m, RecorderCounts& counts,
+              transport::DropCounter& drops) {
     const std::string topic(m.topic());
     if (!selected(topic)) return;  // prefix subscriptions can over-match
     HeaderFields hf;
@@ -195,9 +211,11 @@ struct BagRecorder::Impl {
     TopicState& st = state_for(topic, m.has_payload());
     Status s;
     if (m.has_payload()) {
-      const std::string_view payload(reinterpret_cast<const char*>(m.payload_data()), m.payload_size());
+      const std::string_view payload(reinterpret_cast<const char*>(m.payload_data()),
+                                     m.payload_size());
       const std::string prefix = multipart_prefix(m.header().size());
-      s = writer->write_parts(st.replay_channel, hf.seq, log_ns, pub_ns, {prefix, m.header(), payload});
+      s = writer->write_parts(st.replay_channel, hf.seq, log_ns, pub_ns,
+                              {prefix, m.header(), payload});
       if (cfg.foxglove_view) {
         auto f = transport::parse_camera_frame(m);
         if (f) write_image_view(topic, st, *f, log_ns, pub_ns, counts);
@@ -207,8 +225,9 @@ struct BagRecorder::Impl {
       if (st.view_channel != 0) {
         msgs::DetectionArray d;
         if (d.ParseFromArray(m.header().data(), static_cast<int>(m.header().size()))) {
-          const Status v = writer->write_proto(st.view_channel, hf.seq, log_ns, pub_ns,
-                                               bag::detection_scene_update(d, d.header().capture_stamp_ns()));
+          const Status v =
+              writer->write_proto(st.view_channel, hf.seq, log_ns, pub_ns,
+                                  bag::detection_scene_update(d, d.header().capture_stamp_ns()));
           if (!v.is_ok()) ++counts.write_failures;
         }
       }
@@ -272,7 +291,8 @@ int BagRecorder::run(const std::atomic<bool>& stop) {
   if (!s.is_ok()) m.log->warn("faultline.run metadata: {}", s.to_string());
 
   const StampNs start = monotonic_now_ns();
-  const StampNs end = config_.duration_s > 0 ? start + static_cast<StampNs>(config_.duration_s * kNsPerSec) : -1;
+  const StampNs end =
+      config_.duration_s > 0 ? start + static_cast<StampNs>(config_.duration_s * kNsPerSec) : -1;
   StampNs next_discover = start + static_cast<StampNs>(config_.discover_period_s * kNsPerSec);
   while (!stop.load()) {
     const StampNs now = monotonic_now_ns();
@@ -291,12 +311,13 @@ int BagRecorder::run(const std::atomic<bool>& stop) {
     m.drain(counts_, drops_, recorded_);
   }
   if (stop.load()) {
-    // SIGINT/SIGTERM: keep what already arrived (in flight from publishers that just finished) until
-    // the sockets stay quiet for 20 ms, at most 300 ms, then finalise.
+    // SIGINT/SIGTERM: keep what already arrived (in flight from publishers that just finished)
+    // until the sockets stay quiet for 20 ms, at most 300 ms, then finalise.
     std::vector<transport::RawSubscriber*> socks;
     for (auto& sp : m.subs) socks.push_back(sp.get());
     const StampNs drain_end = monotonic_now_ns() + 300 * kNsPerMs;
-    while (!socks.empty() && monotonic_now_ns() < drain_end && transport::wait_readable(socks, 20 * kNsPerMs) >= 0) {
+    while (!socks.empty() && monotonic_now_ns() < drain_end &&
+           transport::wait_readable(socks, 20 * kNsPerMs) >= 0) {
       m.drain(counts_, drops_, recorded_);
     }
   }
@@ -304,11 +325,12 @@ int BagRecorder::run(const std::atomic<bool>& stop) {
   // faultline.drops: per (publisher, topic) received / transport_drops / restarts.
   bag::KeyValueMap drop_meta;
   for (const auto& [key, c] : drops_.all()) {
-    drop_meta[key.second + "@" + key.first] = "received=" + std::to_string(c.received) +
-                                              " transport_drops=" + std::to_string(c.transport_drops) +
-                                              " restarts=" + std::to_string(c.restarts);
-    m.log->info("drops {} from {}: received {}, transport drops {}, restarts {}", key.second, key.first,
-                c.received, c.transport_drops, c.restarts);
+    drop_meta[key.second + "@" + key.first] =
+        "received=" + std::to_string(c.received) +
+        " transport_drops=" + std::to_string(c.transport_drops) +
+        " restarts=" + std::to_string(c.restarts);
+    m.log->info("drops {} from {}: received {}, transport drops {}, restarts {}", key.second,
+                key.first, c.received, c.transport_drops, c.restarts);
   }
   std::uint64_t malformed = counts_.malformed;
   for (auto& sp : m.subs) malformed += sp->malformed();
@@ -320,8 +342,9 @@ int BagRecorder::run(const std::atomic<bool>& stop) {
   const Status closed = m.writer->close();
   writer_stats_ = m.writer->stats();
   paths_ = m.writer->paths();
-  m.log->info("recorded {} messages ({} transport drops, {} malformed) into {} file(s), {} bytes", counts_.messages,
-              drops_.total().transport_drops, malformed, paths_.size(), writer_stats_.file_bytes);
+  m.log->info("recorded {} messages ({} transport drops, {} malformed) into {} file(s), {} bytes",
+              counts_.messages, drops_.total().transport_drops, malformed, paths_.size(),
+              writer_stats_.file_bytes);
   if (!closed.is_ok()) {
     m.log->error("closing bag: {}", closed.to_string());
     return 1;

@@ -22,20 +22,21 @@ namespace faultline::runtime {
 
 struct RecorderConfig {
   std::string output = "bags/run.mcap";
-  std::vector<std::string> topics;      // exact topics to record
-  std::string regex;                    // ... or topics matching this ECMAScript regex
-  std::vector<std::string> exclude;     // regexes of topics never recorded
-  bool all = false;                     // ... or every topic
-  std::vector<std::string> endpoints;   // explicit publishers; empty = discover via the registry
-  double duration_s = 0.0;              // stop after this long; 0 = until stopped
-  std::uint64_t split_bytes = 0;        // new file past this size; 0 = never
-  double split_s = 0.0;                 // new file after this log-time span; 0 = never
-  std::string compression = "lz4";      // none | zstd | lz4; lz4 is cheap, JPEG chunks are stored raw anyway
-  bool foxglove_view = true;            // also write CompressedImage/RawImage, calibration, /tf, markers
-  int hwm = 64;                         // receive queue per socket (messages)
-  double discover_period_s = 0.5;       // registry re-scan period for late publishers
+  std::vector<std::string> topics;     // exact topics to record
+  std::string regex;                   // ... or topics matching this ECMAScript regex
+  std::vector<std::string> exclude;    // regexes of topics never recorded
+  bool all = false;                    // ... or every topic
+  std::vector<std::string> endpoints;  // explicit publishers; empty = discover via the registry
+  double duration_s = 0.0;             // stop after this long; 0 = until stopped
+  std::uint64_t split_bytes = 0;       // new file past this size; 0 = never
+  double split_s = 0.0;                // new file after this log-time span; 0 = never
+  std::string compression =
+      "lz4";                  // none | zstd | lz4; lz4 is cheap, JPEG chunks are stored raw anyway
+  bool foxglove_view = true;  // also write CompressedImage/RawImage, calibration, /tf, markers
+  int hwm = 64;               // receive queue per socket (messages)
+  double discover_period_s = 0.5;                   // registry re-scan period for late publishers
   std::map<std::string, std::string> run_metadata;  // extra faultline.run entries (seeds, config)
-  transport::AccessConfig access;       // CURVE keys of the subscribing sockets (transport/access.hpp)
+  transport::AccessConfig access;  // CURVE keys of the subscribing sockets (transport/access.hpp)
 
   template <class V>
   void visit(V& v) {
@@ -59,8 +60,8 @@ struct RecorderConfig {
 };
 
 struct RecorderCounts {
-  std::uint64_t messages = 0;        // transport messages recorded
-  std::uint64_t malformed = 0;       // skipped: header unreadable
+  std::uint64_t messages = 0;   // transport messages recorded
+  std::uint64_t malformed = 0;  // skipped: header unreadable
   std::uint64_t write_failures = 0;
 };
 
@@ -78,6 +79,7 @@ class BagRecorder {
   const std::vector<std::string>& paths() const { return paths_; }
   // Endpoints connected so far (after or during run()).
   std::vector<std::string> connected_endpoints() const;
+
  private:
   struct Impl;
   std::unique_ptr<Impl> impl_;

@@ -1,5 +1,6 @@
-// Frames held back by a delay fault until they are due. Time is whatever clock the caller reads (the injector's
-// injected Clock), passed in per call, so the queue itself is deterministic and testable without sleeps.
+// Frames held back by a delay fault until they are due. Time is whatever clock the caller reads
+// (the injector's injected Clock), passed in per call, so the queue itself is deterministic and
+// testable without sleeps.
 #pragma once
 
 #include <map>

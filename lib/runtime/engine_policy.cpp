@@ -20,12 +20,18 @@ using policy::FramePlan;
 
 msgs::FaultAction to_msg(Action a) {
   switch (a) {
-    case Action::Pass: return msgs::FAULT_ACTION_PASS;
-    case Action::Corrupt: return msgs::FAULT_ACTION_CORRUPT;
-    case Action::Drop: return msgs::FAULT_ACTION_DROP;
-    case Action::Black: return msgs::FAULT_ACTION_BLACK;
-    case Action::Freeze: return msgs::FAULT_ACTION_FREEZE;
-    case Action::Delay: return msgs::FAULT_ACTION_DELAY;
+    case Action::Pass:
+      return msgs::FAULT_ACTION_PASS;
+    case Action::Corrupt:
+      return msgs::FAULT_ACTION_CORRUPT;
+    case Action::Drop:
+      return msgs::FAULT_ACTION_DROP;
+    case Action::Black:
+      return msgs::FAULT_ACTION_BLACK;
+    case Action::Freeze:
+      return msgs::FAULT_ACTION_FREEZE;
+    case Action::Delay:
+      return msgs::FAULT_ACTION_DELAY;
   }
   return msgs::FAULT_ACTION_PASS;
 }
@@ -40,7 +46,8 @@ FrameInfo info_of(const transport::CameraFrameView& frame) {
   if (h.has_ego_pose()) {
     // Heading about the global z axis from the ego -> global quaternion (w, x, y, z).
     const auto& q = h.ego_pose().rotation();
-    info.ego_yaw_rad = std::atan2(2.0 * (q.w() * q.z() + q.x() * q.y()), 1.0 - 2.0 * (q.y() * q.y() + q.z() * q.z()));
+    info.ego_yaw_rad = std::atan2(2.0 * (q.w() * q.z() + q.x() * q.y()),
+                                  1.0 - 2.0 * (q.y() * q.y() + q.z() * q.z()));
   }
   if (h.intrinsics_size() == 9) info.focal_px = h.intrinsics(0);
   info.geometry = frame_geometry(h);
@@ -96,10 +103,13 @@ PlannedFrame EnginePolicy::plan(const transport::CameraFrameView& frame) {
   PlannedFrame p;
   p.plan = engine_.decide(info_of(frame));
   for (const auto& f : p.plan.faults) {
-    if (f.params.count("no_yaw_rate") && !frame.header.has_ego_pose() && !warned_no_pose_.exchange(true)) {
-      spdlog::warn("rolling_shutter: {} frames carry no ego pose, so there is no yaw rate to skew by: they pass "
-                   "unchanged (said once)",
-                   frame.header.camera());
+    if (f.params.count("no_yaw_rate") && !frame.header.has_ego_pose() &&
+        !warned_no_pose_.exchange(true)) {
+      spdlog::warn(
+          "rolling_shutter: {} frames carry no ego pose, so there is no yaw rate to skew by: they "
+          "pass "
+          "unchanged (said once)",
+          frame.header.camera());
     }
   }
   p.drop = p.plan.action == Action::Drop;
@@ -107,7 +117,8 @@ PlannedFrame EnginePolicy::plan(const transport::CameraFrameView& frame) {
   return p;
 }
 
-FaultDecision EnginePolicy::render(PlannedFrame& planned, const transport::CameraFrameView& frame, cv::Mat* image) {
+FaultDecision EnginePolicy::render(PlannedFrame& planned, const transport::CameraFrameView& frame,
+                                   cv::Mat* image) {
   FramePlan& plan = planned.plan;
   if (plan.action == Action::Drop || plan.camera < 0) return finish(plan, Status::ok());
   if (image) return finish(plan, engine_.render(plan, *image));
@@ -131,8 +142,8 @@ FaultDecision EnginePolicy::render_jpeg(FramePlan& plan, const transport::Camera
   }
   if (plan.corruptions.empty()) {
     if (engine_.freezes()) {
-      last_good_jpeg_[cam] =
-          std::make_shared<const std::vector<std::uint8_t>>(frame.payload, frame.payload + frame.payload_size);
+      last_good_jpeg_[cam] = std::make_shared<const std::vector<std::uint8_t>>(
+          frame.payload, frame.payload + frame.payload_size);
     }
     return finish(plan, Status::ok());
   }
@@ -144,19 +155,23 @@ FaultDecision EnginePolicy::render_jpeg(FramePlan& plan, const transport::Camera
   auto encoded = codec::encode_jpeg(pixels, jpeg_quality_);
   if (!encoded) return finish(plan, encoded.status());
   auto d = finish(plan, Status::ok());
-  d.replacement_jpeg = std::make_shared<const std::vector<std::uint8_t>>(std::move(encoded).value());
+  d.replacement_jpeg =
+      std::make_shared<const std::vector<std::uint8_t>>(std::move(encoded).value());
   if (engine_.freezes()) last_good_jpeg_[cam] = d.replacement_jpeg;
   return d;
 }
 
-std::unique_ptr<FramePolicy> make_frame_policy(const YAML::Node& faults, const std::string& corruption,
-                                               std::uint64_t seed, const std::string& origin, int jpeg_quality) {
+std::unique_ptr<FramePolicy> make_frame_policy(const YAML::Node& faults,
+                                               const std::string& corruption, std::uint64_t seed,
+                                               const std::string& origin, int jpeg_quality) {
   if (jpeg_quality < 1 || jpeg_quality > 100) {
-    throw ConfigError(origin + ": jpeg_quality = " + std::to_string(jpeg_quality) + ": expected 1..100");
+    throw ConfigError(origin + ": jpeg_quality = " + std::to_string(jpeg_quality) +
+                      ": expected 1..100");
   }
   EngineConfig config;
   config.faults = policy::parse_faults(faults, origin);
-  if (auto shorthand = policy::parse_corruption_shorthand(corruption, origin)) config.faults.push_back(*shorthand);
+  if (auto shorthand = policy::parse_corruption_shorthand(corruption, origin))
+    config.faults.push_back(*shorthand);
   config.seed = seed;
   if (config.faults.empty()) return std::make_unique<PassThroughPolicy>();
   return std::make_unique<EnginePolicy>(std::move(config), jpeg_quality);

@@ -11,9 +11,9 @@ std::optional<cv::Matx33d> rotation(const msgs::Quaternion& q) {
   const double n = std::sqrt(q.w() * q.w() + q.x() * q.x() + q.y() * q.y() + q.z() * q.z());
   if (!(n > 1e-9) || !std::isfinite(n)) return std::nullopt;
   const double w = q.w() / n, x = q.x() / n, y = q.y() / n, z = q.z() / n;
-  return cv::Matx33d(1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y), 2 * (x * y + w * z),
-                     1 - 2 * (x * x + z * z), 2 * (y * z - w * x), 2 * (x * z - w * y), 2 * (y * z + w * x),
-                     1 - 2 * (x * x + y * y));
+  return cv::Matx33d(1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y),
+                     2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x),
+                     2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y));
 }
 
 }  // namespace
@@ -28,7 +28,8 @@ std::optional<corruption::CameraGeometry> frame_geometry(const msgs::CameraFrame
   if (frame.intrinsics_size() == 9) {
     cv::Matx33d k;
     for (int i = 0; i < 9; ++i) k.val[i] = frame.intrinsics(i);
-    if (k(0, 0) > 0 && k(1, 1) > 0 && std::isfinite(k(0, 2)) && std::isfinite(k(1, 2))) g.intrinsics = k;
+    if (k(0, 0) > 0 && k(1, 1) > 0 && std::isfinite(k(0, 2)) && std::isfinite(k(1, 2)))
+      g.intrinsics = k;
   }
   return g;
 }

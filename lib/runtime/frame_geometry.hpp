@@ -1,4 +1,5 @@
-// The camera geometry a CameraFrame carries (ego pose, calibrated sensor, intrinsics) as the sensor faults take it.
+// The camera geometry a CameraFrame carries (ego pose, calibrated sensor, intrinsics) as the sensor
+// faults take it.
 #pragma once
 
 #include <optional>
@@ -8,8 +9,9 @@
 
 namespace faultline::runtime {
 
-// camera -> world rotation = ego_pose x sensor_to_ego (nuScenes conventions), and K when the frame has all nine
-// values. None when the frame has no ego pose or calibration, or a zero quaternion (not set by the source).
+// camera -> world rotation = ego_pose x sensor_to_ego (nuScenes conventions), and K when the frame
+// has all nine values. None when the frame has no ego pose or calibration, or a zero quaternion
+// (not set by the source).
 std::optional<corruption::CameraGeometry> frame_geometry(const msgs::CameraFrame& frame);
 
 }  // namespace faultline::runtime

@@ -4,7 +4,8 @@ namespace faultline::runtime {
 
 void apply_message_edit(const policy::MessageEdit& edit, msgs::CameraFrame& frame) {
   if (edit.stamp_offset_ns != 0) {
-    frame.mutable_header()->set_capture_stamp_ns(frame.header().capture_stamp_ns() + edit.stamp_offset_ns);
+    frame.mutable_header()->set_capture_stamp_ns(frame.header().capture_stamp_ns() +
+                                                 edit.stamp_offset_ns);
   }
   if (!edit.calibration) return;
   policy::Calibration c;
@@ -38,7 +39,8 @@ void apply_message_edit(const policy::MessageEdit& edit, msgs::CameraFrame& fram
 
 PlannedFrame PassThroughPolicy::plan(const transport::CameraFrameView& /*frame*/) { return {}; }
 
-FaultDecision PassThroughPolicy::render(PlannedFrame& /*planned*/, const transport::CameraFrameView& /*frame*/,
+FaultDecision PassThroughPolicy::render(PlannedFrame& /*planned*/,
+                                        const transport::CameraFrameView& /*frame*/,
                                         cv::Mat* /*image*/) {
   return {};
 }

@@ -1,10 +1,10 @@
 #include "runtime/injector_loop.hpp"
 
 #include <algorithm>
+#include <ctime>
 #include <limits>
 #include <map>
 #include <mutex>
-#include <ctime>
 
 #include "common/config.hpp"
 #include "runtime/injector_pipeline.hpp"
@@ -44,9 +44,12 @@ void InjectorConfig::validate() const {
   if (input_hwm < 1) fail("input_hwm", std::to_string(input_hwm), "expected >= 1");
   if (output_hwm < 1) fail("output_hwm", std::to_string(output_hwm), "expected >= 1");
   if (stats_window_s <= 0) fail("stats_window_s", std::to_string(stats_window_s), "expected > 0");
-  if (workers < 0) fail("workers", std::to_string(workers), "expected >= 0 (0 = the cores available minus one)");
-  if (queue_frames < 0) fail("queue_frames", std::to_string(queue_frames), "expected >= 0 (0 = 4 x workers)");
-  if (shm_slots < 2 || shm_slots > 65536) fail("shm_slots", std::to_string(shm_slots), "expected 2..65536");
+  if (workers < 0)
+    fail("workers", std::to_string(workers), "expected >= 0 (0 = the cores available minus one)");
+  if (queue_frames < 0)
+    fail("queue_frames", std::to_string(queue_frames), "expected >= 0 (0 = 4 x workers)");
+  if (shm_slots < 2 || shm_slots > 65536)
+    fail("shm_slots", std::to_string(shm_slots), "expected 2..65536");
   if (shm_slot_bytes < 1 || shm_slot_bytes > (std::int64_t{1} << 32)) {
     fail("shm_slot_bytes", std::to_string(shm_slot_bytes), "expected 1..4294967296");
   }
@@ -56,15 +59,16 @@ void InjectorConfig::validate() const {
 std::string faulted_topic(const InjectorConfig& config, const std::string& input_topic) {
   std::string topic = config.output_prefix + input_topic;
   if (config.decode && topic.size() >= kCompressedSuffix.size() &&
-      topic.compare(topic.size() - kCompressedSuffix.size(), kCompressedSuffix.size(), kCompressedSuffix) == 0) {
+      topic.compare(topic.size() - kCompressedSuffix.size(), kCompressedSuffix.size(),
+                    kCompressedSuffix) == 0) {
     topic.replace(topic.size() - kCompressedSuffix.size(), kCompressedSuffix.size(), "image_raw");
   }
   return remap_topic(config.remap, topic);
 }
 
-// The loop's I/O holder: the sockets, the statistics and the registry, shared by the handlers below and by the
-// pipeline's output thread through Sink (statistics under stats_mutex; the publisher only on that thread while
-// the pipeline runs).
+// The loop's I/O holder: the sockets, the statistics and the registry, shared by the handlers below
+// and by the pipeline's output thread through Sink (statistics under stats_mutex; the publisher
+// only on that thread while the pipeline runs).
 struct InjectorLoop::Impl {
   InjectorConfig cfg;
   std::string node;
@@ -72,14 +76,16 @@ struct InjectorLoop::Impl {
   std::shared_ptr<spdlog::logger> log;
   Clock& clock;
   transport::Publisher pub;
-  std::unique_ptr<transport::ShmRingWriter> ring;  // output_shm: the camera frames' pixels (output thread only)
+  std::unique_ptr<transport::ShmRingWriter>
+      ring;  // output_shm: the camera frames' pixels (output thread only)
   std::unique_ptr<transport::RawSubscriber> sub;
   StatsReporter stats;
   std::mutex stats_mutex;
   transport::TopicRegistry registry;
   transport::DropCounter drops;
-  std::map<std::string, std::uint64_t> frames_from;  // camera frames received per upstream publisher
-  std::map<std::string, std::string> out_topics;     // input topic -> output topic
+  std::map<std::string, std::uint64_t>
+      frames_from;                                // camera frames received per upstream publisher
+  std::map<std::string, std::string> out_topics;  // input topic -> output topic
   transport::LogLimiter bad_limiter;
   std::string sync_out;
   std::string end_out;
@@ -89,14 +95,17 @@ struct InjectorLoop::Impl {
 
   struct Sink final : PipelineSink {
     explicit Sink(Impl& impl) : m(impl) {}
-    Status send_frame(const std::string& topic, msgs::CameraFrame& h, const transport::Payload& p) override {
+    Status send_frame(const std::string& topic, msgs::CameraFrame& h,
+                      const transport::Payload& p) override {
       if (m.ring) return transport::send_camera_frame_shm(m.pub, *m.ring, topic, h, p);
       return transport::send_camera_frame(m.pub, topic, h, p);
     }
-    Status send_message(const std::string& topic, const google::protobuf::MessageLite& message) override {
+    Status send_message(const std::string& topic,
+                        const google::protobuf::MessageLite& message) override {
       return transport::send_message(m.pub, topic, message);
     }
-    void frame_sent(const std::string& /*input_topic*/, const std::string& topic, const stats::Sample& s) override {
+    void frame_sent(const std::string& /*input_topic*/, const std::string& topic,
+                    const stats::Sample& s) override {
       std::lock_guard<std::mutex> lock(m.stats_mutex);
       m.stats.collector().record(topic, m.node, s);
     }
@@ -117,8 +126,8 @@ struct InjectorLoop::Impl {
   Sink sink{*this};
   std::unique_ptr<InjectorPipeline> pipeline;
 
-  Impl(InjectorConfig c, std::string n, std::unique_ptr<FramePolicy> p, std::shared_ptr<spdlog::logger> l,
-       Clock& clk, InjectorCounts& out_counts)
+  Impl(InjectorConfig c, std::string n, std::unique_ptr<FramePolicy> p,
+       std::shared_ptr<spdlog::logger> l, Clock& clk, InjectorCounts& out_counts)
       : cfg(std::move(c)),
         node(std::move(n)),
         policy(std::move(p)),
@@ -145,8 +154,8 @@ struct InjectorLoop::Impl {
       rc.slot_count = static_cast<std::uint32_t>(cfg.shm_slots);
       rc.slot_bytes = static_cast<std::uint64_t>(cfg.shm_slot_bytes);
       ring = std::make_unique<transport::ShmRingWriter>(rc);
-      log->info("camera frames through shared memory: {} ({} slots of {} bytes)", rc.path, rc.slot_count,
-                rc.slot_bytes);
+      log->info("camera frames through shared memory: {} ({} slots of {} bytes)", rc.path,
+                rc.slot_count, rc.slot_bytes);
     }
   }
 
@@ -173,26 +182,30 @@ struct InjectorLoop::Impl {
   void finish(bool finished);
 };
 
-// Advertises, waits for downstream subscribers, then subscribes upstream. kCancelled when stopped while waiting.
+// Advertises, waits for downstream subscribers, then subscribes upstream. kCancelled when stopped
+// while waiting.
 Status InjectorLoop::Impl::start(const std::atomic<bool>& stop) {
   (void)registry.advertise(sync_out, "faultline.msgs.SampleBoundary", pub.endpoint());
   (void)registry.advertise(end_out, "faultline.msgs.StreamEnd", pub.endpoint());
   (void)registry.advertise(faults_topic, "faultline.msgs.FaultEvent", pub.endpoint());
   (void)registry.advertise(stats.stats_topic(), "faultline.msgs.TopicStats", pub.endpoint());
   if (cfg.wait_subscribers > 0) {
-    const Status s = pub.wait_for_subscribers(sync_out, cfg.wait_subscribers,
-                                              static_cast<DurationNs>(cfg.wait_timeout_ms) * kNsPerMs, &stop);
+    const Status s =
+        pub.wait_for_subscribers(sync_out, cfg.wait_subscribers,
+                                 static_cast<DurationNs>(cfg.wait_timeout_ms) * kNsPerMs, &stop);
     if (s.code() == StatusCode::kCancelled) return s;
     if (!s.is_ok()) log->warn("{}; subscribing upstream anyway", s.message());
   }
-  // Subscribing only now chains readiness: the upstream publisher sees us once our consumers are here.
+  // Subscribing only now chains readiness: the upstream publisher sees us once our consumers are
+  // here.
   transport::SubscriberConfig sc;
   sc.endpoints = cfg.input_endpoints;
   sc.access = cfg.access;
   sc.topics = cfg.input_topics;
-  const bool end_covered = std::any_of(sc.topics.begin(), sc.topics.end(), [&](const std::string& prefix) {
-    return cfg.end_topic.compare(0, prefix.size(), prefix) == 0;
-  });
+  const bool end_covered =
+      std::any_of(sc.topics.begin(), sc.topics.end(), [&](const std::string& prefix) {
+        return cfg.end_topic.compare(0, prefix.size(), prefix) == 0;
+      });
   if (!end_covered) sc.topics.push_back(cfg.end_topic);
   sc.rcv_hwm = cfg.input_hwm;
   sc.latest_only = cfg.latest_only;
@@ -205,8 +218,8 @@ Status InjectorLoop::Impl::start(const std::atomic<bool>& stop) {
   pc.workers = cfg.workers > 0 ? cfg.workers : default_worker_count();
   pc.queue_frames = cfg.queue_frames > 0 ? cfg.queue_frames : 4 * pc.workers;
   counts.workers = pc.workers;
-  log->info("subscribed to {} on {}; {} worker(s), {} frames in flight at most", join(cfg.input_topics),
-            join(cfg.input_endpoints), pc.workers, pc.queue_frames);
+  log->info("subscribed to {} on {}; {} worker(s), {} frames in flight at most",
+            join(cfg.input_topics), join(cfg.input_endpoints), pc.workers, pc.queue_frames);
   pipeline = std::make_unique<InjectorPipeline>(pc, *policy, sink, clock, log);
   return Status::ok();
 }
@@ -220,14 +233,16 @@ void InjectorLoop::Impl::count_superseded(const std::string& in_topic) {
 }
 
 // Control messages (boundary, stream end): a malformed one is counted and skipped.
-bool InjectorLoop::Impl::parse_control(const transport::ReceivedMessage& msg, google::protobuf::MessageLite* out) {
+bool InjectorLoop::Impl::parse_control(const transport::ReceivedMessage& msg,
+                                       google::protobuf::MessageLite* out) {
   if (transport::parse_message(msg, out).is_ok()) return true;
   ++counts.malformed;
   with_stats([&](stats::TopicStatsCollector& c) { c.add_malformed(std::string(msg.topic()), 1); });
   return false;
 }
 
-Next InjectorLoop::Impl::on_boundary(const transport::ReceivedMessage& msg, const std::atomic<bool>& stop) {
+Next InjectorLoop::Impl::on_boundary(const transport::ReceivedMessage& msg,
+                                     const std::atomic<bool>& stop) {
   msgs::SampleBoundary b;
   if (!parse_control(msg, &b)) return Next::Continue;
   const bool last = b.last_in_run() && cfg.exit_on_last;
@@ -244,22 +259,29 @@ Next InjectorLoop::Impl::on_boundary(const transport::ReceivedMessage& msg, cons
   return Next::Finished;
 }
 
-Next InjectorLoop::Impl::on_stream_end(const transport::ReceivedMessage& msg, const std::atomic<bool>& stop) {
+Next InjectorLoop::Impl::on_stream_end(const transport::ReceivedMessage& msg,
+                                       const std::atomic<bool>& stop) {
   msgs::StreamEnd e;
   if (!parse_control(msg, &e)) return Next::Continue;
   // Frames lost after the last one on their topic leave no seq gap; the source's count shows them.
   const std::string& source = e.header().publisher();
   std::uint64_t gaps = 0;
   for (const auto& [key, c] : drops.all()) gaps += key.first == source ? c.transport_drops : 0;
-  // Malformed frames name no publisher; with one source they are its frames, already counted as malformed.
-  const std::uint64_t accounted = frames_from[source] + gaps + (frames_from.size() <= 1 ? counts.malformed : 0);
+  // Malformed frames name no publisher; with one source they are its frames, already counted as
+  // malformed.
+  const std::uint64_t accounted =
+      frames_from[source] + gaps + (frames_from.size() <= 1 ? counts.malformed : 0);
   if (e.frames_sent() > accounted) {
     const std::uint64_t lost = e.frames_sent() - accounted;
     counts.transport_drops += lost;
-    with_stats([&](stats::TopicStatsCollector& c) { c.add_transport_drops(std::string(msg.topic()), lost); });
-    log->warn("stream end: {} of the {} frames {} sent never arrived and left no seq gap (lost at the end "
-              "of their topics); counted as transport drops",
-              lost, e.frames_sent(), source);
+    with_stats([&](stats::TopicStatsCollector& c) {
+      c.add_transport_drops(std::string(msg.topic()), lost);
+    });
+    log->warn(
+        "stream end: {} of the {} frames {} sent never arrived and left no seq gap (lost at the "
+        "end "
+        "of their topics); counted as transport drops",
+        lost, e.frames_sent(), source);
   }
   const std::uint64_t sent = e.frames_sent();
   // Frames held back by a delay fault go out first: the end marker stays last.
@@ -270,8 +292,10 @@ Next InjectorLoop::Impl::on_stream_end(const transport::ReceivedMessage& msg, co
   return Next::Finished;
 }
 
-// A camera frame: validated and counted here (seq gaps, statistics), then planned and queued by the pipeline.
-Next InjectorLoop::Impl::on_frame(std::shared_ptr<transport::ReceivedMessage> msg, const std::atomic<bool>& stop) {
+// A camera frame: validated and counted here (seq gaps, statistics), then planned and queued by the
+// pipeline.
+Next InjectorLoop::Impl::on_frame(std::shared_ptr<transport::ReceivedMessage> msg,
+                                  const std::atomic<bool>& stop) {
   const std::string in_topic(msg->topic());
   auto view = transport::parse_camera_frame(*msg);
   if (!view) {
@@ -279,7 +303,8 @@ Next InjectorLoop::Impl::on_frame(std::shared_ptr<transport::ReceivedMessage> ms
     sub->count_malformed();
     with_stats([&](stats::TopicStatsCollector& c) { c.add_malformed(in_topic, 1); });
     if (counts.malformed <= 20 || bad_limiter.allow()) {
-      log->warn("malformed message on {} dropped: {} ({} so far)", in_topic, view.status().message(), counts.malformed);
+      log->warn("malformed message on {} dropped: {} ({} so far)", in_topic,
+                view.status().message(), counts.malformed);
     }
     return Next::Continue;
   }
@@ -329,35 +354,43 @@ void InjectorLoop::Impl::finish(bool finished) {
   if (!finished) pub.set_linger(0);  // shutdown: exit promptly
   counts.oversize_refused = pub.oversize_refused() + (ring ? ring->oversize_refused() : 0);
   const std::uint64_t handled = std::max<std::uint64_t>(1, counts.frames_in);
-  log->info("injector done: in {} out {} boundaries {} injected_drops {} corrupt_jpeg {} malformed {} "
-            "transport_drops {} superseded {} oversize_refused {} input_disconnects {} input_reconnects {} "
-            "window_full_waits {} "
-            "discarded_at_stop {}; {} worker(s), CPU per frame in: receive {:.2f} ms workers {:.2f} ms send {:.2f} ms",
-            counts.frames_in, counts.frames_out, counts.boundaries, counts.injected_drops, counts.corrupt_jpeg,
-            counts.malformed, counts.transport_drops, counts.superseded, counts.oversize_refused,
-            sub ? sub->disconnects() : 0, sub ? sub->reconnects() : 0, counts.window_full_waits, counts.discarded_at_stop, counts.workers,
-            static_cast<double>(counts.dispatch_cpu_ns) / 1e6 / static_cast<double>(handled),
-            static_cast<double>(counts.worker_cpu_ns) / 1e6 / static_cast<double>(handled),
-            static_cast<double>(counts.output_cpu_ns) / 1e6 / static_cast<double>(handled));
+  log->info(
+      "injector done: in {} out {} boundaries {} injected_drops {} corrupt_jpeg {} malformed {} "
+      "transport_drops {} superseded {} oversize_refused {} input_disconnects {} input_reconnects "
+      "{} "
+      "window_full_waits {} "
+      "discarded_at_stop {}; {} worker(s), CPU per frame in: receive {:.2f} ms workers {:.2f} ms "
+      "send {:.2f} ms",
+      counts.frames_in, counts.frames_out, counts.boundaries, counts.injected_drops,
+      counts.corrupt_jpeg, counts.malformed, counts.transport_drops, counts.superseded,
+      counts.oversize_refused, sub ? sub->disconnects() : 0, sub ? sub->reconnects() : 0,
+      counts.window_full_waits, counts.discarded_at_stop, counts.workers,
+      static_cast<double>(counts.dispatch_cpu_ns) / 1e6 / static_cast<double>(handled),
+      static_cast<double>(counts.worker_cpu_ns) / 1e6 / static_cast<double>(handled),
+      static_cast<double>(counts.output_cpu_ns) / 1e6 / static_cast<double>(handled));
 }
 
-InjectorLoop::InjectorLoop(InjectorConfig config, std::string node, std::unique_ptr<FramePolicy> policy,
-                           std::shared_ptr<spdlog::logger> log)
-    : InjectorLoop(std::move(config), std::move(node), std::move(policy), std::move(log), []() -> Clock& {
-        static SystemClock clock;
-        return clock;
-      }()) {}
+InjectorLoop::InjectorLoop(InjectorConfig config, std::string node,
+                           std::unique_ptr<FramePolicy> policy, std::shared_ptr<spdlog::logger> log)
+    : InjectorLoop(std::move(config), std::move(node), std::move(policy), std::move(log),
+                   []() -> Clock& {
+                     static SystemClock clock;
+                     return clock;
+                   }()) {}
 
-InjectorLoop::InjectorLoop(InjectorConfig config, std::string node, std::unique_ptr<FramePolicy> policy,
-                           std::shared_ptr<spdlog::logger> log, Clock& clock)
-    : impl_(std::make_unique<Impl>(std::move(config), std::move(node), std::move(policy), std::move(log), clock,
-                                   counts_)) {}
+InjectorLoop::InjectorLoop(InjectorConfig config, std::string node,
+                           std::unique_ptr<FramePolicy> policy, std::shared_ptr<spdlog::logger> log,
+                           Clock& clock)
+    : impl_(std::make_unique<Impl>(std::move(config), std::move(node), std::move(policy),
+                                   std::move(log), clock, counts_)) {}
 
 InjectorLoop::~InjectorLoop() = default;
 
 std::string InjectorLoop::output_endpoint() const { return impl_->pub.endpoint(); }
 
-std::string InjectorLoop::output_shm_path() const { return impl_->ring ? impl_->ring->path() : std::string(); }
+std::string InjectorLoop::output_shm_path() const {
+  return impl_->ring ? impl_->ring->path() : std::string();
+}
 
 int InjectorLoop::run(const std::atomic<bool>& stop) {
   Impl& m = *impl_;
@@ -394,7 +427,8 @@ int InjectorLoop::run(const std::atomic<bool>& stop) {
   }
   counts_.dispatch_cpu_ns = thread_cpu_ns() - cpu0;
   m.finish(finished);
-  if (const Status f = m.pipeline->failure(); !f.is_ok() && f.code() != StatusCode::kCancelled) rc = 1;
+  if (const Status f = m.pipeline->failure(); !f.is_ok() && f.code() != StatusCode::kCancelled)
+    rc = 1;
   return rc;
 }
 

@@ -1,12 +1,13 @@
-// The fault injector: subscribes to camera topics, asks a FramePolicy what to do with each frame and
-// republishes on the faulted namespace (/faulty/cam_front/image_rect_compressed for JPEG passthrough,
-// /faulty/cam_front/image_raw when decoding to bgr8). /sync/sample boundaries and the /sync/end stream end
-// are forwarded in order on the same socket; every source frame also yields a FaultEvent on /faultline/faults, including
-// frames dropped on purpose or because their JPEG did not decode. Output is numbered with the
-// injector's own seq per topic; source_seq is kept. Cost: decoding a 1600x900 JPEG is ~10 ms of CPU.
-// Decode, faults and re-encode run on `workers` threads (InjectorPipeline): the output keeps the input's order and is
-// byte-identical for any worker count; `queue_frames` bounds what is in flight, and when it is full the receive
-// waits, so the input queue (input_hwm) fills and upstream losses show up as transport_drops (seq gaps).
+// The fault injector: subscribes to camera topics, asks a FramePolicy what to do with each frame
+// and republishes on the faulted namespace (/faulty/cam_front/image_rect_compressed for JPEG
+// passthrough, /faulty/cam_front/image_raw when decoding to bgr8). /sync/sample boundaries and the
+// /sync/end stream end are forwarded in order on the same socket; every source frame also yields a
+// FaultEvent on /faultline/faults, including frames dropped on purpose or because their JPEG did
+// not decode. Output is numbered with the injector's own seq per topic; source_seq is kept. Cost:
+// decoding a 1600x900 JPEG is ~10 ms of CPU. Decode, faults and re-encode run on `workers` threads
+// (InjectorPipeline): the output keeps the input's order and is byte-identical for any worker
+// count; `queue_frames` bounds what is in flight, and when it is full the receive waits, so the
+// input queue (input_hwm) fills and upstream losses show up as transport_drops (seq gaps).
 #pragma once
 
 #include <spdlog/logger.h>
@@ -22,47 +23,50 @@
 #include "runtime/frame_policy.hpp"
 #include "runtime/remap.hpp"
 #include "stats/topic_stats.hpp"
+#include "transport/access.hpp"
 #include "transport/publisher.hpp"
 #include "transport/shm_ring.hpp"
-
-#include "transport/access.hpp"
 
 namespace faultline::runtime {
 
 struct InjectorConfig {
   std::vector<std::string> input_endpoints{"tcp://127.0.0.1:5600"};  // publishers to subscribe to
-  std::vector<std::string> input_topics{"/cam_", "/sync/sample"};    // topic prefixes to subscribe to
-  int input_hwm = 8;                                 // receive queue (messages); ~64 in lockstep
-  bool latest_only = false;                          // keep only the newest queued frame per camera
+  std::vector<std::string> input_topics{"/cam_", "/sync/sample"};  // topic prefixes to subscribe to
+  int input_hwm = 8;         // receive queue (messages); ~64 in lockstep
+  bool latest_only = false;  // keep only the newest queued frame per camera
   std::string output_endpoint = "tcp://127.0.0.1:5601";  // PUB bind address
-  int output_hwm = 8;                                // send queue per subscriber (messages)
-  std::string output_prefix = "/faulty";             // faulted topic = prefix + input topic
-  bool decode = false;                               // true: publish decoded bgr8 (image_raw)
-  std::string sync_topic = "/sync/sample";           // forwarded unchanged in name
-  std::string end_topic = "/sync/end";               // StreamEnd: forwarded; always subscribed
-  std::string faults_topic = "/faultline/faults";    // FaultEvent per source frame
-  int wait_subscribers = 0;                          // wait for this many subscribers of sync_topic
-  int wait_timeout_ms = 10000;                       // ... at most this long before subscribing upstream
-  bool exit_on_last = true;                          // stop at the end of the run (see run())
-  int linger_ms = 1000;                              // end of run: time to deliver queued messages
-  std::int64_t max_msg_bytes = transport::kDefaultMaxMessageBytes;  // ZMQ_MAXMSGSIZE on the input; -1 = none
-  double stats_window_s = 1.0;                       // statistics window (s)
-  double stats_log_period_s = 5.0;                   // info log of statistics every this many s
-  std::map<std::string, std::string> remap;          // topic remaps (from -> to), applied to outputs
-  YAML::Node faults;                                 // fault schedule (policy/fault_spec.hpp); null = none
-  std::string corruption;                            // shorthand "fog/mid": one more fault on all cameras
-  std::uint64_t seed = 0;                            // run seed of every fault draw
-  int jpeg_quality = 95;                             // re-encoded faulted JPEG frames (nuScenes-C: 95)
-  int workers = 0;                                   // decode/fault/encode threads; 0 = cores available - 1, >= 1
-  int queue_frames = 0;                              // frames in flight receive -> send; 0 = 4 x workers
-  // Shared-memory output (docs/protocol.md §16): camera frames go into a ring file under output_shm_dir and only a
-  // descriptor travels on the socket, so local subscribers map the pixels without a copy. Off by default.
+  int output_hwm = 8;                                    // send queue per subscriber (messages)
+  std::string output_prefix = "/faulty";                 // faulted topic = prefix + input topic
+  bool decode = false;                                   // true: publish decoded bgr8 (image_raw)
+  std::string sync_topic = "/sync/sample";               // forwarded unchanged in name
+  std::string end_topic = "/sync/end";                   // StreamEnd: forwarded; always subscribed
+  std::string faults_topic = "/faultline/faults";        // FaultEvent per source frame
+  int wait_subscribers = 0;     // wait for this many subscribers of sync_topic
+  int wait_timeout_ms = 10000;  // ... at most this long before subscribing upstream
+  bool exit_on_last = true;     // stop at the end of the run (see run())
+  int linger_ms = 1000;         // end of run: time to deliver queued messages
+  std::int64_t max_msg_bytes =
+      transport::kDefaultMaxMessageBytes;    // ZMQ_MAXMSGSIZE on the input; -1 = none
+  double stats_window_s = 1.0;               // statistics window (s)
+  double stats_log_period_s = 5.0;           // info log of statistics every this many s
+  std::map<std::string, std::string> remap;  // topic remaps (from -> to), applied to outputs
+  YAML::Node faults;                         // fault schedule (policy/fault_spec.hpp); null = none
+  std::string corruption;                    // shorthand "fog/mid": one more fault on all cameras
+  std::uint64_t seed = 0;                    // run seed of every fault draw
+  int jpeg_quality = 95;                     // re-encoded faulted JPEG frames (nuScenes-C: 95)
+  int workers = 0;       // decode/fault/encode threads; 0 = cores available - 1, >= 1
+  int queue_frames = 0;  // frames in flight receive -> send; 0 = 4 x workers
+  // Shared-memory output (docs/protocol.md §16): camera frames go into a ring file under
+  // output_shm_dir and only a descriptor travels on the socket, so local subscribers map the pixels
+  // without a copy. Off by default.
   bool output_shm = false;
-  std::string output_shm_dir = "/dev/shm";           // where the ring file is created (removed at exit)
-  int shm_slots = 32;                                // ring slots: a frame is readable until this many more are sent
-  std::int64_t shm_slot_bytes = static_cast<std::int64_t>(transport::kShmDefaultSlotBytes);  // largest frame
+  std::string output_shm_dir = "/dev/shm";  // where the ring file is created (removed at exit)
+  int shm_slots = 32;  // ring slots: a frame is readable until this many more are sent
+  std::int64_t shm_slot_bytes =
+      static_cast<std::int64_t>(transport::kShmDefaultSlotBytes);  // largest frame
 
-  transport::AccessConfig access;  // allow_remote and CURVE keys of every socket (transport/access.hpp)
+  transport::AccessConfig
+      access;  // allow_remote and CURVE keys of every socket (transport/access.hpp)
 
   template <class V>
   void visit(V& v) {
@@ -79,29 +83,38 @@ struct InjectorConfig {
     v("faults_topic", faults_topic, "FaultEvent topic");
     v("wait_subscribers", wait_subscribers, "subscribers of sync_topic to wait for");
     v("wait_timeout_ms", wait_timeout_ms, "how long to wait for them (ms)");
-    v("exit_on_last", exit_on_last, "stop at the end of the run (StreamEnd, or last_in_run from sources without one)");
+    v("exit_on_last", exit_on_last,
+      "stop at the end of the run (StreamEnd, or last_in_run from sources without one)");
     v("linger_ms", linger_ms, "end of run: time to deliver queued messages (ms)");
     v("max_msg_bytes", max_msg_bytes, "largest accepted input frame (bytes)");
     v("stats_window_s", stats_window_s, "statistics window (s)");
     v("stats_log_period_s", stats_log_period_s, "info log period of statistics (s)");
     v("remap", remap, "topic remaps from -> to");
-    v("faults", faults, "fault schedule: list of {type, level|severity, cameras, rng, coherent, mode, ...}");
+    v("faults", faults,
+      "fault schedule: list of {type, level|severity, cameras, rng, coherent, mode, ...}");
     v("corruption", corruption, "shorthand for one fault on all cameras, e.g. fog/mid");
     v("seed", seed, "run seed of the fault draws");
-    v("jpeg_quality", jpeg_quality, "JPEG quality of faulted frames re-encoded in JPEG mode, 1..100 (nuScenes-C: 95)");
+    v("jpeg_quality", jpeg_quality,
+      "JPEG quality of faulted frames re-encoded in JPEG mode, 1..100 (nuScenes-C: 95)");
     v("workers", workers,
-      "threads that decode, corrupt and re-encode frames; 0 = the cores available minus one (at least 1). The "
+      "threads that decode, corrupt and re-encode frames; 0 = the cores available minus one (at "
+      "least 1). The "
       "output is byte-identical for any count");
     v("queue_frames", queue_frames,
-      "frames in flight between receive and send (0 = 4 x workers); when full, receiving waits and the input "
+      "frames in flight between receive and send (0 = 4 x workers); when full, receiving waits and "
+      "the input "
       "queue (input_hwm) absorbs");
     v("output_shm", output_shm,
-      "send camera frames through a shared-memory ring (local subscribers only; docs/protocol.md §16): the pixels "
+      "send camera frames through a shared-memory ring (local subscribers only; docs/protocol.md "
+      "§16): the pixels "
       "are written once into the ring and a small descriptor goes on the socket");
-    v("output_shm_dir", output_shm_dir, "directory of the ring file (tmpfs; the file is removed at exit)");
+    v("output_shm_dir", output_shm_dir,
+      "directory of the ring file (tmpfs; the file is removed at exit)");
     v("shm_slots", shm_slots,
-      "ring slots (>= 2): a frame stays readable until this many more frames were sent; the publisher never waits");
-    v("shm_slot_bytes", shm_slot_bytes, "largest frame a slot holds (bytes); larger frames are refused and counted");
+      "ring slots (>= 2): a frame stays readable until this many more frames were sent; the "
+      "publisher never waits");
+    v("shm_slot_bytes", shm_slot_bytes,
+      "largest frame a slot holds (bytes); larger frames are refused and counted");
     access.visit(v);
   }
   void validate() const;  // throws ConfigError
@@ -117,13 +130,15 @@ struct InjectorCounts {
   std::uint64_t malformed = 0;
   std::uint64_t transport_drops = 0;
   std::uint64_t superseded = 0;
-  std::uint64_t oversize_refused = 0;  // output frames over max_msg_bytes (or a shm slot): refused, not sent
-  std::uint64_t window_full_waits = 0;   // receives that waited for room in queue_frames (backpressure, no loss)
-  std::uint64_t discarded_at_stop = 0;   // in flight or delayed when the run was stopped: not sent
-  int workers = 0;                       // worker threads used
-  std::int64_t dispatch_cpu_ns = 0;      // CPU time of the receiving thread (the one calling run())
-  std::int64_t worker_cpu_ns = 0;        // ... of the worker threads
-  std::int64_t output_cpu_ns = 0;        // ... of the sending thread
+  std::uint64_t oversize_refused =
+      0;  // output frames over max_msg_bytes (or a shm slot): refused, not sent
+  std::uint64_t window_full_waits =
+      0;  // receives that waited for room in queue_frames (backpressure, no loss)
+  std::uint64_t discarded_at_stop = 0;  // in flight or delayed when the run was stopped: not sent
+  int workers = 0;                      // worker threads used
+  std::int64_t dispatch_cpu_ns = 0;     // CPU time of the receiving thread (the one calling run())
+  std::int64_t worker_cpu_ns = 0;       // ... of the worker threads
+  std::int64_t output_cpu_ns = 0;       // ... of the sending thread
 };
 
 // The output topic for an input camera topic: prefix + topic, with image_rect_compressed ->
@@ -132,9 +147,9 @@ std::string faulted_topic(const InjectorConfig& config, const std::string& input
 
 class InjectorLoop {
  public:
-  // Binds the output now; the input is subscribed in run() once downstream subscribers joined. `clock` (the
-  // monotonic time of stamps, latencies, delays and statistics) must outlive the loop; the first form uses the
-  // system clock.
+  // Binds the output now; the input is subscribed in run() once downstream subscribers joined.
+  // `clock` (the monotonic time of stamps, latencies, delays and statistics) must outlive the loop;
+  // the first form uses the system clock.
   InjectorLoop(InjectorConfig config, std::string node, std::unique_ptr<FramePolicy> policy,
                std::shared_ptr<spdlog::logger> log);
   InjectorLoop(InjectorConfig config, std::string node, std::unique_ptr<FramePolicy> policy,
@@ -143,9 +158,10 @@ class InjectorLoop {
   std::string output_endpoint() const;
   // The shared-memory ring file of the output ("" without output_shm).
   std::string output_shm_path() const;
-  // Runs until `stop` (0), the end of the run with exit_on_last (0), or a fatal socket error (1). The end of
-  // the run is a forwarded StreamEnd when the last_in_run boundary announced one (stream_end_follows: the
-  // sweeps after the last sample are still corrupted and forwarded), else that boundary itself.
+  // Runs until `stop` (0), the end of the run with exit_on_last (0), or a fatal socket error (1).
+  // The end of the run is a forwarded StreamEnd when the last_in_run boundary announced one
+  // (stream_end_follows: the sweeps after the last sample are still corrupted and forwarded), else
+  // that boundary itself.
   int run(const std::atomic<bool>& stop);
   const InjectorCounts& counts() const { return counts_; }
   // Whole-run statistics per topic (inputs: hop latency; injector outputs: receive -> publish).

@@ -24,16 +24,19 @@ std::int64_t thread_cpu_ns() {
 
 constexpr DurationNs kIdlePeriodNs = 50 * kNsPerMs;
 
-// Decoded and corrupted frames are 4-6 MB buffers allocated on one thread and freed on another. glibc serves them
-// with mmap/munmap by default, and with two workers each munmap's TLB shootdown and each fresh page's fault hit the
-// other busy core: measured +12-15 ms of process CPU per 1600x900 frame (bench injector, 2 workers, bgr8). Keeping
-// buffers up to 32 MB (glibc's limit for this setting) in the heap, and trimming only above 128 MB, removes that.
-// Process-wide, once; a failure only costs speed.
+// Decoded and corrupted frames are 4-6 MB buffers allocated on one thread and freed on another.
+// glibc serves them with mmap/munmap by default, and with two workers each munmap's TLB shootdown
+// and each fresh page's fault hit the other busy core: measured +12-15 ms of process CPU per
+// 1600x900 frame (bench injector, 2 workers, bgr8). Keeping buffers up to 32 MB (glibc's limit for
+// this setting) in the heap, and trimming only above 128 MB, removes that. Process-wide, once; a
+// failure only costs speed.
 void keep_frame_buffers_in_the_heap(spdlog::logger& log) {
   static std::once_flag once;
   std::call_once(once, [&] {
-    const bool ok = mallopt(M_MMAP_THRESHOLD, 32 << 20) == 1 && mallopt(M_TRIM_THRESHOLD, 128 << 20) == 1;
-    log.debug("allocator: frame buffers up to 32 MB from the heap, trim above 128 MB ({})", ok ? "set" : "refused");
+    const bool ok =
+        mallopt(M_MMAP_THRESHOLD, 32 << 20) == 1 && mallopt(M_TRIM_THRESHOLD, 128 << 20) == 1;
+    log.debug("allocator: frame buffers up to 32 MB from the heap, trim above 128 MB ({})",
+              ok ? "set" : "refused");
   });
 }
 
@@ -48,7 +51,8 @@ int default_worker_count() {
   return std::max(1, cores - 1);
 }
 
-// One item of the window: a camera frame (planned on dispatch, rendered by a worker) or a control message.
+// One item of the window: a camera frame (planned on dispatch, rendered by a worker) or a control
+// message.
 struct InjectorPipeline::Slot {
   bool is_frame = true;
   // Frame: input and plan (dispatch), result (worker).
@@ -56,7 +60,7 @@ struct InjectorPipeline::Slot {
   PlannedFrame planned;
   std::uint64_t ticket = 0;  // turn within planned.lane
   FaultDecision decision;
-  msgs::CameraFrame out;     // output header (seq and stamps are set when sent)
+  msgs::CameraFrame out;  // output header (seq and stamps are set when sent)
   transport::Payload payload;
   Status undecodable = Status::ok();
   // Control message.
@@ -76,7 +80,11 @@ struct InjectorPipeline::Delayed {
 
 InjectorPipeline::InjectorPipeline(PipelineConfig config, FramePolicy& policy, PipelineSink& sink,
                                    const Clock& clock, std::shared_ptr<spdlog::logger> log)
-    : config_(std::move(config)), policy_(policy), sink_(sink), clock_(clock), log_(std::move(log)) {
+    : config_(std::move(config)),
+      policy_(policy),
+      sink_(sink),
+      clock_(clock),
+      log_(std::move(log)) {
   if (log_) keep_frame_buffers_in_the_heap(*log_);
   config_.workers = std::max(1, config_.workers);
   config_.queue_frames = std::max(1, config_.queue_frames);
@@ -90,8 +98,10 @@ bool InjectorPipeline::enqueue(std::shared_ptr<Slot> slot, const std::atomic<boo
   std::unique_lock<std::mutex> lock(mu_);
   if (window_.size() >= static_cast<std::size_t>(config_.queue_frames)) {
     ++counts_.window_full_waits;
-    // Bounded wait steps so that `stop` (set from another thread without notifying us) is seen promptly.
-    while (window_.size() >= static_cast<std::size_t>(config_.queue_frames) && !aborting_ && !stop.load()) {
+    // Bounded wait steps so that `stop` (set from another thread without notifying us) is seen
+    // promptly.
+    while (window_.size() >= static_cast<std::size_t>(config_.queue_frames) && !aborting_ &&
+           !stop.load()) {
       room_cv_.wait_for(lock, std::chrono::milliseconds(50));
     }
   }
@@ -205,28 +215,32 @@ void InjectorPipeline::end_turn(int lane) {
   lane_cv_.notify_all();
 }
 
-// A worker's part: decode (decode mode), render in the lane's turn, and the output header and payload.
+// A worker's part: decode (decode mode), render in the lane's turn, and the output header and
+// payload.
 void InjectorPipeline::render(Slot& slot) {
   const transport::CameraFrameView& view = slot.in.view;
   const msgs::CameraFrame& in = view.header;
   cv::Mat image;
   if (config_.decode && !slot.planned.drop) {
-    // JPEG from the player and most cameras; raw layouts from a V4L2 camera in raw mode or a ROS 2 Image.
+    // JPEG from the player and most cameras; raw layouts from a V4L2 camera in raw mode or a ROS 2
+    // Image.
     const bool jpeg = in.encoding().empty() || in.encoding() == "jpeg";
     auto decoded = jpeg ? codec::decode_jpeg(view.payload, view.payload_size)
-                        : codec::raw_to_bgr(in.encoding(), in.width(), in.height(), in.step(), view.payload,
-                                            view.payload_size);
+                        : codec::raw_to_bgr(in.encoding(), in.width(), in.height(), in.step(),
+                                            view.payload, view.payload_size);
     if (decoded) {
       image = std::move(decoded).value();
     } else {
       slot.undecodable = decoded.status();
     }
   }
-  // A stateful lane renders in plan order: wait for this frame's turn (an abort ends the wait without it).
+  // A stateful lane renders in plan order: wait for this frame's turn (an abort ends the wait
+  // without it).
   const int lane = slot.planned.lane;
   if (lane >= 0 && !wait_turn(lane, slot.ticket)) return;
   if (slot.undecodable.is_ok()) {
-    slot.decision = policy_.render(slot.planned, view, config_.decode && !slot.planned.drop ? &image : nullptr);
+    slot.decision =
+        policy_.render(slot.planned, view, config_.decode && !slot.planned.drop ? &image : nullptr);
   }
   if (lane >= 0) end_turn(lane);
   if (!slot.undecodable.is_ok() || slot.decision.action == msgs::FAULT_ACTION_DROP) return;
@@ -266,9 +280,11 @@ void InjectorPipeline::output_main() {
     {
       std::unique_lock<std::mutex> lock(mu_);
       DurationNs wait_ns = kIdlePeriodNs;
-      if (auto due = delayed_.next_due_ns()) wait_ns = std::clamp<DurationNs>(*due - clock_.now_ns(), 0, wait_ns);
+      if (auto due = delayed_.next_due_ns())
+        wait_ns = std::clamp<DurationNs>(*due - clock_.now_ns(), 0, wait_ns);
       auto ready = [&] {
-        return aborting_ || (!window_.empty() && window_.front()->done) || (draining_ && window_.empty());
+        return aborting_ || (!window_.empty() && window_.front()->done) ||
+               (draining_ && window_.empty());
       };
       done_cv_.wait_for(lock, std::chrono::nanoseconds(wait_ns), ready);
       if (aborting_) break;
@@ -319,13 +335,14 @@ void InjectorPipeline::emit_frame(Slot& slot) {
   const msgs::CameraFrame& in = slot.in.view.header;
   const StampNs receive = slot.in.receive_mono_ns;
   if (!slot.undecodable.is_ok()) {
-    // Bad input, not an injected fault: counted as malformed on its topic, and named in the log (every one of the
-    // first 20, then at most one line a second with the count).
+    // Bad input, not an injected fault: counted as malformed on its topic, and named in the log
+    // (every one of the first 20, then at most one line a second with the count).
     ++out_counts_.corrupt_jpeg;
     sink_.undecodable(slot.in.topic);
     if (out_counts_.corrupt_jpeg <= 20 || limiter_.allow()) {
-      log_->warn("{} seq={} ({}): {}; frame dropped ({} undecodable so far)", slot.in.topic, in.header().seq(),
-                 in.encoding().empty() ? "jpeg" : in.encoding(), slot.undecodable.message(), out_counts_.corrupt_jpeg);
+      log_->warn("{} seq={} ({}): {}; frame dropped ({} undecodable so far)", slot.in.topic,
+                 in.header().seq(), in.encoding().empty() ? "jpeg" : in.encoding(),
+                 slot.undecodable.message(), out_counts_.corrupt_jpeg);
     }
     msgs::FaultState state;
     state.set_action(msgs::FAULT_ACTION_DROP);
@@ -349,26 +366,31 @@ void InjectorPipeline::emit_frame(Slot& slot) {
     slot.out.mutable_fault()->set_injector_latency_ns(clock_.now_ns() - receive);
     send_event(in, slot.out.fault());
     delayed_.push(receive + slot.decision.delay_ns,
-                  Delayed{slot.in.out_topic, slot.in.topic, std::move(slot.out), std::move(slot.payload), receive});
+                  Delayed{slot.in.out_topic, slot.in.topic, std::move(slot.out),
+                          std::move(slot.payload), receive});
     return;
   }
   if (!send_frame(slot.in.out_topic, slot.in.topic, slot.out, slot.payload, receive)) return;
   send_event(in, slot.out.fault());
-  log_->trace("forwarded {} seq={} source_seq={}", slot.in.out_topic, slot.out.header().seq(), slot.out.source_seq());
+  log_->trace("forwarded {} seq={} source_seq={}", slot.in.out_topic, slot.out.header().seq(),
+              slot.out.source_seq());
 }
 
-bool InjectorPipeline::send_frame(const std::string& out_topic, const std::string& in_topic, msgs::CameraFrame& h,
-                                  const transport::Payload& payload, StampNs receive_mono_ns) {
+bool InjectorPipeline::send_frame(const std::string& out_topic, const std::string& in_topic,
+                                  msgs::CameraFrame& h, const transport::Payload& payload,
+                                  StampNs receive_mono_ns) {
   stamp(h.mutable_header(), out_topic);
   h.mutable_fault()->set_injector_latency_ns(h.header().publish_mono_ns() - receive_mono_ns);
   const Status s = sink_.send_frame(out_topic, h, payload);
-  if (s.code() == StatusCode::kInvalidArgument) {  // over max_msg_bytes: refused and counted, run goes on
+  if (s.code() ==
+      StatusCode::kInvalidArgument) {  // over max_msg_bytes: refused and counted, run goes on
     ++out_counts_.refused;
     if (limiter_.allow()) log_->warn("{}", s.message());
     return false;
   }
   if (!s.is_ok()) {
-    if (s.code() != StatusCode::kCancelled) log_->error("send on {} failed: {}", out_topic, s.message());
+    if (s.code() != StatusCode::kCancelled)
+      log_->error("send on {} failed: {}", out_topic, s.message());
     fail(s);
     return false;
   }

@@ -1,13 +1,14 @@
-// The shared shape of every node's main(): parse the command line and YAML into the node's config (exit 2 on a
-// config error, 1 on any other fatal error), make the node's logger, run the body until it returns or a signal
-// asks it to stop, then shut ZeroMQ down so that queued messages are still delivered (linger).
+// The shared shape of every node's main(): parse the command line and YAML into the node's config
+// (exit 2 on a config error, 1 on any other fatal error), make the node's logger, run the body
+// until it returns or a signal asks it to stop, then shut ZeroMQ down so that queued messages are
+// still delivered (linger).
 #pragma once
+
+#include <spdlog/spdlog.h>
 
 #include <atomic>
 #include <exception>
 #include <memory>
-
-#include <spdlog/spdlog.h>
 
 #include "common/config.hpp"
 #include "common/logging.hpp"
@@ -16,8 +17,9 @@
 
 namespace faultline::runtime {
 
-// body(const Config&, const config::NodeOptions&, std::shared_ptr<spdlog::logger>, const std::atomic<bool>& stop)
-// returns the exit code. Everything it owns is destroyed before the ZeroMQ context terminates.
+// body(const Config&, const config::NodeOptions&, std::shared_ptr<spdlog::logger>, const
+// std::atomic<bool>& stop) returns the exit code. Everything it owns is destroyed before the ZeroMQ
+// context terminates.
 template <class Config, class Body>
 int run_node(int argc, char** argv, const char* node, const char* description, Body body) {
   try {

@@ -26,7 +26,8 @@ void PlayerConfig::validate() const {
 
 std::string camera_topic(const std::string& channel) {
   std::string lower = channel;
-  std::transform(lower.begin(), lower.end(), lower.begin(), [](unsigned char c) { return std::tolower(c); });
+  std::transform(lower.begin(), lower.end(), lower.begin(),
+                 [](unsigned char c) { return std::tolower(c); });
   return "/" + lower + "/image_rect_compressed";
 }
 
@@ -45,7 +46,8 @@ struct PlayerLoop::Impl {
   std::string sync_topic;
   std::string end_topic;
 
-  Impl(PlayerConfig c, std::string n, std::unique_ptr<FrameSource> s, Clock& cl, std::shared_ptr<spdlog::logger> l)
+  Impl(PlayerConfig c, std::string n, std::unique_ptr<FrameSource> s, Clock& cl,
+       std::shared_ptr<spdlog::logger> l)
       : cfg(std::move(c)),
         node(std::move(n)),
         source(std::move(s)),
@@ -95,40 +97,46 @@ struct PlayerLoop::Impl {
   }
 
   void advertise(const std::set<std::string>& camera_topics) {
-    for (const auto& t : camera_topics) (void)registry.advertise(t, "faultline.msgs.CameraFrame", pub.endpoint());
+    for (const auto& t : camera_topics)
+      (void)registry.advertise(t, "faultline.msgs.CameraFrame", pub.endpoint());
     (void)registry.advertise(sync_topic, "faultline.msgs.SampleBoundary", pub.endpoint());
     (void)registry.advertise(end_topic, "faultline.msgs.StreamEnd", pub.endpoint());
     (void)registry.advertise(stats.stats_topic(), "faultline.msgs.TopicStats", pub.endpoint());
   }
 
-  // End of run: the stream end (a run that was neither looped nor stopped), the last statistics and the summary.
+  // End of run: the stream end (a run that was neither looped nor stopped), the last statistics and
+  // the summary.
   int finish(bool stopped, const std::atomic<bool>& stop, const PlayerCounts& counts) {
     if (!cfg.loop && !stopped && !stop.load()) {
-      // Consumers that want every frame (the injector) wait for this, not for last_in_run: sweeps after the last
-      // sample's key frames come between the two.
+      // Consumers that want every frame (the injector) wait for this, not for last_in_run: sweeps
+      // after the last sample's key frames come between the two.
       msgs::StreamEnd end;
       end.set_frames_sent(counts.frames_sent);
       end.set_boundaries_sent(static_cast<std::uint32_t>(counts.boundaries_sent));
       stamp(end.mutable_header(), end_topic);
       if (transport::send_message(pub, end_topic, end).code() == StatusCode::kCancelled) return 0;
     }
-    // Statistics run on the wire's monotonic stamps (those of the samples), not on the pacing clock.
+    // Statistics run on the wire's monotonic stamps (those of the samples), not on the pacing
+    // clock.
     stats.tick(monotonic_now_ns() + static_cast<DurationNs>(cfg.stats_window_s * 1e9), &pub);
     stats.log_totals(monotonic_now_ns());
     if (stopped || stop.load()) pub.set_linger(0);  // shutdown: exit promptly, do not flush
-    log->info("player done: {} frames, {} boundaries, {} missing images, {} ack timeouts{}", counts.frames_sent,
-              counts.boundaries_sent, counts.missing_images, counts.ack_timeouts, stopped ? " (stopped)" : "");
+    log->info("player done: {} frames, {} boundaries, {} missing images, {} ack timeouts{}",
+              counts.frames_sent, counts.boundaries_sent, counts.missing_images,
+              counts.ack_timeouts, stopped ? " (stopped)" : "");
     return 0;
   }
 
   // Lockstep: waits for the SampleAck of `token`; false on shutdown.
   bool wait_ack(const std::string& token, const std::atomic<bool>& stop, PlayerCounts& counts) {
-    const StampNs deadline = clock.now_ns() + static_cast<DurationNs>(cfg.ack_timeout_ms) * kNsPerMs;
+    const StampNs deadline =
+        clock.now_ns() + static_cast<DurationNs>(cfg.ack_timeout_ms) * kNsPerMs;
     for (;;) {
       if (stop.load()) return false;
       if (cfg.ack_timeout_ms > 0 && clock.now_ns() >= deadline) {
         ++counts.ack_timeouts;
-        log->warn("lockstep: no SampleAck for sample {} within {} ms, continuing", token, cfg.ack_timeout_ms);
+        log->warn("lockstep: no SampleAck for sample {} within {} ms, continuing", token,
+                  cfg.ack_timeout_ms);
         return true;
       }
       auto r = acks->receive(50 * kNsPerMs);
@@ -146,24 +154,30 @@ struct PlayerLoop::Impl {
 
 PlayerLoop::PlayerLoop(PlayerConfig config, std::string node, std::unique_ptr<FrameSource> source,
                        Clock& clock, std::shared_ptr<spdlog::logger> log)
-    : impl_(std::make_unique<Impl>(std::move(config), std::move(node), std::move(source), clock, std::move(log))) {}
+    : impl_(std::make_unique<Impl>(std::move(config), std::move(node), std::move(source), clock,
+                                   std::move(log))) {}
 
 PlayerLoop::~PlayerLoop() = default;
 
 std::string PlayerLoop::endpoint() const { return impl_->pub.endpoint(); }
-std::string PlayerLoop::ack_endpoint() const { return impl_->acks ? impl_->acks->endpoints().front() : ""; }
+std::string PlayerLoop::ack_endpoint() const {
+  return impl_->acks ? impl_->acks->endpoints().front() : "";
+}
 
 namespace {
 
-// Where the run's boundaries go: after the last key frame of each sample, stamped with the sample's time.
+// Where the run's boundaries go: after the last key frame of each sample, stamped with the sample's
+// time.
 struct RunPlan {
   std::vector<bool> boundary_after;
-  std::size_t last_boundary = 0;  // index of the run's last boundary (frames.size() when there is none)
+  std::size_t last_boundary =
+      0;  // index of the run's last boundary (frames.size() when there is none)
   std::map<std::string, std::int64_t> sample_time;
   std::set<std::string> topics;
 };
 
-RunPlan plan_run(const std::vector<dataset::CameraFrameRecord>& frames, std::map<std::string, std::int64_t> sample_time,
+RunPlan plan_run(const std::vector<dataset::CameraFrameRecord>& frames,
+                 std::map<std::string, std::int64_t> sample_time,
                  const std::map<std::string, std::string>& remap) {
   RunPlan plan;
   plan.boundary_after.assign(frames.size(), false);
@@ -173,18 +187,20 @@ RunPlan plan_run(const std::vector<dataset::CameraFrameRecord>& frames, std::map
     plan.topics.insert(remap_topic(remap, camera_topic(frames[i].channel)));
     if (!frames[i].is_key_frame) continue;
     last_key_index[frames[i].sample_token] = i;
-    plan.sample_time.emplace(frames[i].sample_token, frames[i].timestamp_us);  // earliest key frame if unknown
+    plan.sample_time.emplace(frames[i].sample_token,
+                             frames[i].timestamp_us);  // earliest key frame if unknown
   }
   plan.last_boundary = frames.size();
   for (const auto& [token, index] : last_key_index) {
     plan.boundary_after[index] = true;
-    if (plan.last_boundary == frames.size() || index > plan.last_boundary) plan.last_boundary = index;
+    if (plan.last_boundary == frames.size() || index > plan.last_boundary)
+      plan.last_boundary = index;
   }
   return plan;
 }
 
-// How a step of the run ended: go on; stopped (stop flag, a wait cut short: the run still finishes); cancelled
-// (a send refused by shutdown: return at once); a fatal socket error.
+// How a step of the run ended: go on; stopped (stop flag, a wait cut short: the run still
+// finishes); cancelled (a send refused by shutdown: return at once); a fatal socket error.
 enum class Step { kOk, kStopped, kCancelled, kFatal };
 
 }  // namespace
@@ -197,14 +213,14 @@ struct PlayerLoop::Pass {
   const RunPlan& plan;
   const std::atomic<bool>& stop;
   std::map<std::string, std::uint32_t> keys_sent;
-  // Real-time pacing, restarted at each scene change (scenes are recorded hours or days apart) and after a
-  // lockstep wait.
+  // Real-time pacing, restarted at each scene change (scenes are recorded hours or days apart) and
+  // after a lockstep wait.
   bool anchored = false;
   StampNs anchor_ns = 0;
   std::int64_t anchor_us = 0;
 
-  Pass(Impl& impl, PlayerCounts& c, const std::vector<dataset::CameraFrameRecord>& f, const RunPlan& p,
-       const std::atomic<bool>& s)
+  Pass(Impl& impl, PlayerCounts& c, const std::vector<dataset::CameraFrameRecord>& f,
+       const RunPlan& p, const std::atomic<bool>& s)
       : m(impl), counts(c), frames(f), plan(p), stop(s) {}
 
   Step pace(std::size_t i) {
@@ -216,7 +232,8 @@ struct PlayerLoop::Pass {
       anchor_ns = m.clock.now_ns();
       anchor_us = f.timestamp_us;
     }
-    const auto offset_ns = static_cast<StampNs>(static_cast<double>(f.timestamp_us - anchor_us) * 1e3 / m.cfg.rate);
+    const auto offset_ns =
+        static_cast<StampNs>(static_cast<double>(f.timestamp_us - anchor_us) * 1e3 / m.cfg.rate);
     return m.sleep_until(anchor_ns + offset_ns, stop) ? Step::kOk : Step::kStopped;
   }
 
@@ -225,8 +242,8 @@ struct PlayerLoop::Pass {
     if (!image) {
       ++counts.missing_images;
       if (m.missing_limiter.allow()) {
-        m.log->warn("skipping frame {} ({}): {} ({} missing so far)", f.sample_data_token, f.channel,
-                    image.status().message(), counts.missing_images);
+        m.log->warn("skipping frame {} ({}): {} ({} missing so far)", f.sample_data_token,
+                    f.channel, image.status().message(), counts.missing_images);
       }
       return Step::kOk;
     }
@@ -237,9 +254,11 @@ struct PlayerLoop::Pass {
     const Status s = transport::send_camera_frame(m.pub, topic, h, transport::Payload::of(*image));
     if (s.code() == StatusCode::kCancelled) return Step::kCancelled;
     if (s.code() == StatusCode::kInvalidArgument) {
-      // Over max_msg_bytes: refused and counted; the run goes on, and the unused seq is a gap downstream.
+      // Over max_msg_bytes: refused and counted; the run goes on, and the unused seq is a gap
+      // downstream.
       ++counts.send_failures;
-      if (m.missing_limiter.allow()) m.log->warn("{} ({} send failures so far)", s.message(), counts.send_failures);
+      if (m.missing_limiter.allow())
+        m.log->warn("{} ({} send failures so far)", s.message(), counts.send_failures);
       return Step::kOk;
     }
     if (!s.is_ok()) {
@@ -274,9 +293,11 @@ struct PlayerLoop::Pass {
     b.mutable_header()->set_capture_clock(msgs::CAPTURE_CLOCK_DATASET);
     b.mutable_header()->set_frame_id("base_link");
     m.stamp(b.mutable_header(), m.sync_topic);
-    if (transport::send_message(m.pub, m.sync_topic, b).code() == StatusCode::kCancelled) return Step::kCancelled;
+    if (transport::send_message(m.pub, m.sync_topic, b).code() == StatusCode::kCancelled)
+      return Step::kCancelled;
     ++counts.boundaries_sent;
-    m.log->debug("boundary sample={} frames_sent={} last={}", b.sample_token(), b.frames_sent(), b.last_in_run());
+    m.log->debug("boundary sample={} frames_sent={} last={}", b.sample_token(), b.frames_sent(),
+                 b.last_in_run());
     if (!m.cfg.lockstep) return Step::kOk;
     if (!m.wait_ack(f.sample_token, stop, counts)) return Step::kStopped;
     anchored = false;  // re-anchor pacing after waiting
@@ -310,13 +331,15 @@ int PlayerLoop::run(const std::atomic<bool>& stop) {
   m.advertise(plan.topics);
   if (m.cfg.wait_subscribers > 0) {
     // Every consumer that matters (injector, sink, detectors) subscribes to the boundaries.
-    const Status s = m.pub.wait_for_subscribers(m.sync_topic, m.cfg.wait_subscribers,
-                                                static_cast<DurationNs>(m.cfg.wait_timeout_ms) * kNsPerMs, &stop);
+    const Status s = m.pub.wait_for_subscribers(
+        m.sync_topic, m.cfg.wait_subscribers,
+        static_cast<DurationNs>(m.cfg.wait_timeout_ms) * kNsPerMs, &stop);
     if (s.code() == StatusCode::kCancelled) return 0;
     if (!s.is_ok()) m.log->warn("{}; starting anyway", s.message());
   }
 
-  const std::int64_t start_us = frames.front().timestamp_us + static_cast<std::int64_t>(m.cfg.start_offset_s * 1e6);
+  const std::int64_t start_us =
+      frames.front().timestamp_us + static_cast<std::int64_t>(m.cfg.start_offset_s * 1e6);
   Pass pass(m, counts_, frames, plan, stop);
   Step ended = Step::kOk;
   do {

@@ -1,7 +1,8 @@
 // The nuScenes camera player: publishes every camera frame (sweeps and key frames) of the chosen
 // scenes in timestamp order as [topic][CameraFrame][JPEG bytes as stored], plus a SampleBoundary on
 // /sync/sample right after the last key frame of each sample. At the end of a run (not looping, not
-// stopped) the sweeps after the last sample follow its last_in_run boundary, then a StreamEnd on /sync/end.
+// stopped) the sweeps after the last sample follow its last_in_run boundary, then a StreamEnd on
+// /sync/end.
 //
 // Pacing: real time scaled by `rate` (2 = twice as fast), or unpaced with rate 0. In lockstep the
 // player waits after each boundary for the sink's SampleAck of that sample (PULL socket bound at
@@ -27,27 +28,28 @@
 namespace faultline::runtime {
 
 struct PlayerConfig {
-  std::string dataroot = "data/nuscenes";           // nuScenes root (holds <version>/, samples/, sweeps/)
-  std::string version = "v1.0-mini";                // table folder
-  std::vector<std::string> scenes;                  // scene names; empty = all
-  double rate = 1.0;                                // replay speed factor; 0 = as fast as possible
-  bool loop = false;                                // start over at the end (last_in_run never sent)
-  double start_offset_s = 0.0;                      // skip this much of the run's start (s)
-  std::string endpoint = "tcp://127.0.0.1:5600";    // PUB bind address
-  int hwm = 8;                                      // send queue per subscriber (messages); ~64 in lockstep
-  std::string sync_topic = "/sync/sample";          // SampleBoundary topic
-  std::string end_topic = "/sync/end";              // StreamEnd topic, after the run's last frame
-  bool lockstep = false;                            // wait for a SampleAck per sample
+  std::string dataroot = "data/nuscenes";  // nuScenes root (holds <version>/, samples/, sweeps/)
+  std::string version = "v1.0-mini";       // table folder
+  std::vector<std::string> scenes;         // scene names; empty = all
+  double rate = 1.0;                       // replay speed factor; 0 = as fast as possible
+  bool loop = false;                       // start over at the end (last_in_run never sent)
+  double start_offset_s = 0.0;             // skip this much of the run's start (s)
+  std::string endpoint = "tcp://127.0.0.1:5600";  // PUB bind address
+  int hwm = 8;                              // send queue per subscriber (messages); ~64 in lockstep
+  std::string sync_topic = "/sync/sample";  // SampleBoundary topic
+  std::string end_topic = "/sync/end";      // StreamEnd topic, after the run's last frame
+  bool lockstep = false;                    // wait for a SampleAck per sample
   std::string ack_endpoint = "tcp://127.0.0.1:5603";  // PULL bind address for SampleAck (lockstep)
-  int ack_timeout_ms = 30000;                       // lockstep: give up waiting (warn) after this; 0 = never
-  int wait_subscribers = 0;                         // before the first frame, wait for this many subscribers of sync_topic
-  int wait_timeout_ms = 10000;                      // ... at most this long (then start anyway, warn)
-  int linger_ms = 1000;                             // end of run: deliver queued messages for up to this (ms)
-  double stats_window_s = 1.0;                      // statistics window (s)
-  double stats_log_period_s = 5.0;                  // info log of statistics every this many s
-  std::map<std::string, std::string> remap;         // topic remaps (from -> to)
+  int ack_timeout_ms = 30000;  // lockstep: give up waiting (warn) after this; 0 = never
+  int wait_subscribers = 0;  // before the first frame, wait for this many subscribers of sync_topic
+  int wait_timeout_ms = 10000;      // ... at most this long (then start anyway, warn)
+  int linger_ms = 1000;             // end of run: deliver queued messages for up to this (ms)
+  double stats_window_s = 1.0;      // statistics window (s)
+  double stats_log_period_s = 5.0;  // info log of statistics every this many s
+  std::map<std::string, std::string> remap;  // topic remaps (from -> to)
 
-  transport::AccessConfig access;  // allow_remote and CURVE keys of every socket (transport/access.hpp)
+  transport::AccessConfig
+      access;  // allow_remote and CURVE keys of every socket (transport/access.hpp)
 
   template <class V>
   void visit(V& v) {
@@ -88,8 +90,8 @@ struct PlayerCounts {
 
 class PlayerLoop {
  public:
-  PlayerLoop(PlayerConfig config, std::string node, std::unique_ptr<FrameSource> source, Clock& clock,
-             std::shared_ptr<spdlog::logger> log);
+  PlayerLoop(PlayerConfig config, std::string node, std::unique_ptr<FrameSource> source,
+             Clock& clock, std::shared_ptr<spdlog::logger> log);
   ~PlayerLoop();
   // Endpoints actually bound (for tcp://127.0.0.1:* in tests) once the sockets exist, i.e. after
   // construction.

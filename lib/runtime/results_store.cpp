@@ -323,7 +323,8 @@ Status ResultsStore::append(const std::string& line) {
   if (journal_fd_ < 0) {
     journal_fd_ = ::open(journal_path_.c_str(), O_WRONLY | O_CREAT | O_APPEND | O_CLOEXEC, 0644);
     if (journal_fd_ < 0) {
-      return {StatusCode::kIoError, journal_path_ + ": cannot open journal: " + std::strerror(errno)};
+      return {StatusCode::kIoError,
+              journal_path_ + ": cannot open journal: " + std::strerror(errno)};
     }
   }
   if (!identity_written_) {  // a new journal starts with the run's identity
@@ -378,9 +379,11 @@ std::size_t ResultsStore::sample_count() const {
 }
 
 Status ResultsStore::finalize(const std::string& meta_extra_json) const {
-  std::string text = R"({"meta":{"use_camera":true,"use_lidar":false,"use_radar":false,"use_map":false,)"
-                     R"("use_external":false)";
-  if (meta_extra_json.size() > 2) text += "," + meta_extra_json.substr(1, meta_extra_json.size() - 2);
+  std::string text =
+      R"({"meta":{"use_camera":true,"use_lidar":false,"use_radar":false,"use_map":false,)"
+      R"("use_external":false)";
+  if (meta_extra_json.size() > 2)
+    text += "," + meta_extra_json.substr(1, meta_extra_json.size() - 2);
   text += R"(},"results":{)";
   bool first = true;
   auto add = [&](const std::string& token, const std::string& boxes) {
@@ -400,7 +403,8 @@ Status ResultsStore::finalize(const std::string& meta_extra_json) const {
   ::close(fd);
   if (!s.is_ok()) return s;
   if (std::rename(tmp.c_str(), output_path_.c_str()) != 0) {
-    return {StatusCode::kIoError, "cannot rename " + tmp + " to " + output_path_ + ": " + std::strerror(errno)};
+    return {StatusCode::kIoError,
+            "cannot rename " + tmp + " to " + output_path_ + ": " + std::strerror(errno)};
   }
   return Status::ok();
 }

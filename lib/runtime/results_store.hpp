@@ -78,7 +78,9 @@ class ResultsStore {
   // does not resume (so nothing of an earlier run can mix into it).
   Status remove_journal();
 
-  bool has_detections(const std::string& sample_token) const { return boxes_.count(sample_token) > 0; }
+  bool has_detections(const std::string& sample_token) const {
+    return boxes_.count(sample_token) > 0;
+  }
   // The sample has detections, or an array for it was refused whole (the detector did answer).
   bool answered(const std::string& sample_token) const {
     return has_detections(sample_token) || refused_.count(sample_token) > 0;

@@ -1,4 +1,5 @@
-// nuScenes -> rosbag2 (MCAP storage) with CDR messages, faults baked in by the injector's FramePolicy.
+// nuScenes -> rosbag2 (MCAP storage) with CDR messages, faults baked in by the injector's
+// FramePolicy.
 #include "runtime/ros2_convert.hpp"
 
 #include <algorithm>
@@ -14,18 +15,22 @@ namespace faultline::runtime {
 void Ros2ConvertConfig::validate() const {
   if (output.empty()) throw ConfigError("bag convert: output = \"\": expected a bag directory");
   if (output.size() > 5 && output.compare(output.size() - 5, 5, ".mcap") == 0) {
-    throw ConfigError("bag convert: output = \"" + output +
-                      "\": --format ros2 writes a rosbag2 directory (metadata.yaml + <name>_0.mcap); give a "
-                      "directory name");
+    throw ConfigError(
+        "bag convert: output = \"" + output +
+        "\": --format ros2 writes a rosbag2 directory (metadata.yaml + <name>_0.mcap); give a "
+        "directory name");
   }
   if (!bag::compression_from_string(compression)) {
-    throw ConfigError("bag convert: compression = \"" + compression + "\": expected none, zstd or lz4");
+    throw ConfigError("bag convert: compression = \"" + compression +
+                      "\": expected none, zstd or lz4");
   }
   if (image_qos != "reliable" && image_qos != "best_effort") {
-    throw ConfigError("bag convert: image_qos = \"" + image_qos + "\": expected reliable or best_effort");
+    throw ConfigError("bag convert: image_qos = \"" + image_qos +
+                      "\": expected reliable or best_effort");
   }
   if (output_prefix.empty() || output_prefix.front() != '/') {
-    throw ConfigError("bag convert: output_prefix = \"" + output_prefix + "\": expected a /namespace");
+    throw ConfigError("bag convert: output_prefix = \"" + output_prefix +
+                      "\": expected a /namespace");
   }
 }
 
@@ -34,7 +39,8 @@ namespace {
 ros2::Transform to_transform(const dataset::Pose& p) {
   ros2::Transform t;
   t.translation = {p.translation[0], p.translation[1], p.translation[2]};
-  t.rotation = {p.rotation[1], p.rotation[2], p.rotation[3], p.rotation[0]};  // (w,x,y,z) -> (x,y,z,w)
+  t.rotation = {p.rotation[1], p.rotation[2], p.rotation[3],
+                p.rotation[0]};  // (w,x,y,z) -> (x,y,z,w)
   return t;
 }
 
@@ -53,10 +59,13 @@ std::string action_name(msgs::FaultAction action) {
 
 std::uint8_t action_level(msgs::FaultAction action) {
   switch (action) {
-    case msgs::FAULT_ACTION_PASS: return ros2::DiagnosticStatus::kOk;
+    case msgs::FAULT_ACTION_PASS:
+      return ros2::DiagnosticStatus::kOk;
     case msgs::FAULT_ACTION_CORRUPT:
-    case msgs::FAULT_ACTION_DELAY: return ros2::DiagnosticStatus::kWarn;
-    default: return ros2::DiagnosticStatus::kError;  // drop, black, freeze: the frame's content is lost
+    case msgs::FAULT_ACTION_DELAY:
+      return ros2::DiagnosticStatus::kWarn;
+    default:
+      return ros2::DiagnosticStatus::kError;  // drop, black, freeze: the frame's content is lost
   }
 }
 
@@ -67,8 +76,9 @@ std::string number(double v) {
   return s;
 }
 
-// The injector's decision for one frame as a DiagnosticArray: level OK (pass), WARN (corrupt, delay) or
-// ERROR (drop, black, freeze); values name the action, the frame and every fault's parameters.
+// The injector's decision for one frame as a DiagnosticArray: level OK (pass), WARN (corrupt,
+// delay) or ERROR (drop, black, freeze); values name the action, the frame and every fault's
+// parameters.
 ros2::DiagnosticArray fault_report(const dataset::CameraFrameRecord& f, std::uint64_t source_seq,
                                    const FaultDecision& d) {
   ros2::DiagnosticArray a;
@@ -86,20 +96,23 @@ ros2::DiagnosticArray fault_report(const dataset::CameraFrameRecord& f, std::uin
   s.values.push_back({"source_seq", std::to_string(source_seq)});
   s.values.push_back({"sample_data_token", f.sample_data_token});
   s.values.push_back({"sample_token", f.sample_token});
-  if (d.action == msgs::FAULT_ACTION_DELAY) s.values.push_back({"delay_ns", std::to_string(d.delay_ns)});
+  if (d.action == msgs::FAULT_ACTION_DELAY)
+    s.values.push_back({"delay_ns", std::to_string(d.delay_ns)});
   for (const auto& fault : d.faults) {
     s.values.push_back({fault.name() + ".severity", std::to_string(fault.severity())});
     s.values.push_back({fault.name() + ".seed", std::to_string(fault.seed())});
     s.values.push_back({fault.name() + ".rng", fault.rng()});
-    const std::map<std::string, double> params(fault.params().begin(), fault.params().end());  // sorted
-    for (const auto& [key, value] : params) s.values.push_back({fault.name() + "." + key, number(value)});
+    const std::map<std::string, double> params(fault.params().begin(),
+                                               fault.params().end());  // sorted
+    for (const auto& [key, value] : params)
+      s.values.push_back({fault.name() + "." + key, number(value)});
   }
   a.status.push_back(std::move(s));
   return a;
 }
 
-// Ground-truth boxes of one sample: a DELETEALL marker, then one cube per box in `map` (ns = category,
-// id = index from 1, text = instance token), nuScenes size (w, l, h) as scale (l, w, h).
+// Ground-truth boxes of one sample: a DELETEALL marker, then one cube per box in `map` (ns =
+// category, id = index from 1, text = instance token), nuScenes size (w, l, h) as scale (l, w, h).
 ros2::MarkerArray gt_markers(const std::vector<bag::GtBox>& boxes, const ros2::Time& stamp) {
   ros2::MarkerArray out;
   ros2::Marker clear;
@@ -141,9 +154,10 @@ struct Ros2BagConverter::Impl {
   };
   std::map<std::string, CameraChannels> camera_channels;  // by image topic
   std::uint16_t tf_channel = 0, tf_static_channel = 0, markers_channel = 0, faults_channel = 0;
-  std::map<std::string, dataset::Pose> calibration;  // channel -> base_link -> camera, as last published
-  std::map<std::string, std::uint64_t> seq;          // per camera: the source seq the policy sees
-  std::string prefix;                                // reused buffer
+  std::map<std::string, dataset::Pose>
+      calibration;                           // channel -> base_link -> camera, as last published
+  std::map<std::string, std::uint64_t> seq;  // per camera: the source seq the policy sees
+  std::string prefix;                        // reused buffer
 
   void check(const Status& s) {
     if (s.is_ok()) {
@@ -170,15 +184,17 @@ struct Ros2BagConverter::Impl {
     auto it = camera_channels.find(image_topic);
     if (it != camera_channels.end()) return it->second;
     CameraChannels c;
-    c.image = topic(image_topic, ros2::MessageTraits<ros2::CompressedImage>::kTypeName, image_qos());
+    c.image =
+        topic(image_topic, ros2::MessageTraits<ros2::CompressedImage>::kTypeName, image_qos());
     c.info = topic(info_topic, ros2::MessageTraits<ros2::CameraInfo>::kTypeName, image_qos());
     return camera_channels.emplace(image_topic, c).first->second;
   }
 
   // Image + CameraInfo of one frame under `ns` ("" or the faulted prefix), logged at log_ns.
-  void write_camera(const std::string& ns, const dataset::CameraFrameRecord& f, std::string_view jpeg,
-                    StampNs log_ns) {
-    CameraChannels& ch = channels_for(ns + ros2::nuscenes_image_topic(f.channel), ns + ros2::nuscenes_camera_info_topic(f.channel));
+  void write_camera(const std::string& ns, const dataset::CameraFrameRecord& f,
+                    std::string_view jpeg, StampNs log_ns) {
+    CameraChannels& ch = channels_for(ns + ros2::nuscenes_image_topic(f.channel),
+                                      ns + ros2::nuscenes_camera_info_topic(f.channel));
     const ros2::Header header{ros2::time_from_us(f.timestamp_us), f.channel};
     prefix = ros2::compressed_image_prefix(header, "jpeg", jpeg.size());
     check(writer->write_parts(ch.image, log_ns, {prefix, jpeg}));
@@ -190,7 +206,8 @@ struct Ros2BagConverter::Impl {
   void write_tf_static(StampNs log_ns) {
     ros2::TFMessage tf;
     for (const auto& [channel, pose] : calibration) {
-      tf.transforms.push_back({{ros2::time_from_ns(log_ns), "base_link"}, channel, to_transform(pose)});
+      tf.transforms.push_back(
+          {{ros2::time_from_ns(log_ns), "base_link"}, channel, to_transform(pose)});
     }
     check(writer->write(tf_static_channel, log_ns, ros2::serialize(tf)));
     ++counts.tf_static;
@@ -198,11 +215,13 @@ struct Ros2BagConverter::Impl {
 
   void write_ego(const dataset::CameraFrameRecord& f, StampNs log_ns) {
     ros2::TFMessage tf;
-    tf.transforms.push_back({{ros2::time_from_us(f.timestamp_us), "map"}, "base_link", to_transform(f.ego_pose)});
+    tf.transforms.push_back(
+        {{ros2::time_from_us(f.timestamp_us), "map"}, "base_link", to_transform(f.ego_pose)});
     check(writer->write(tf_channel, log_ns, ros2::serialize(tf)));
   }
 
-  // The injector's treatment of one source frame: the same FramePolicy call as the Foxglove convert.
+  // The injector's treatment of one source frame: the same FramePolicy call as the Foxglove
+  // convert.
   void inject(const dataset::CameraFrameRecord& f, const ImageBytes& image, StampNs log_ns) {
     const std::uint64_t s = ++seq[f.channel];
     transport::CameraFrameView view;
@@ -218,7 +237,8 @@ struct Ros2BagConverter::Impl {
     }
     std::string_view jpeg(reinterpret_cast<const char*>(image->data()), image->size());
     if (d.replacement_jpeg) {
-      jpeg = std::string_view(reinterpret_cast<const char*>(d.replacement_jpeg->data()), d.replacement_jpeg->size());
+      jpeg = std::string_view(reinterpret_cast<const char*>(d.replacement_jpeg->data()),
+                              d.replacement_jpeg->size());
       ++counts.changed_frames;
     }
     const StampNs out_log = log_ns + (d.action == msgs::FAULT_ACTION_DELAY ? d.delay_ns : 0);
@@ -229,7 +249,8 @@ struct Ros2BagConverter::Impl {
 
 Ros2BagConverter::Ros2BagConverter(Ros2ConvertConfig config, std::unique_ptr<FrameSource> source,
                                    std::map<std::string, std::vector<bag::GtBox>> gt,
-                                   std::unique_ptr<FramePolicy> policy, std::shared_ptr<spdlog::logger> log)
+                                   std::unique_ptr<FramePolicy> policy,
+                                   std::shared_ptr<spdlog::logger> log)
     : impl_(std::make_unique<Impl>()) {
   config.validate();
   impl_->cfg = std::move(config);
@@ -241,7 +262,8 @@ Ros2BagConverter::Ros2BagConverter(Ros2ConvertConfig config, std::unique_ptr<Fra
 
 Ros2BagConverter::~Ros2BagConverter() = default;
 
-Result<Ros2ConvertCounts> Ros2BagConverter::run(const std::atomic<bool>& stop, const ConvertProgressFn& progress) {
+Result<Ros2ConvertCounts> Ros2BagConverter::run(const std::atomic<bool>& stop,
+                                                const ConvertProgressFn& progress) {
   Impl& m = *impl_;
   const auto& frames = m.source->frames();
   bag::WriterOptions wo;
@@ -256,22 +278,30 @@ Result<Ros2ConvertCounts> Ros2BagConverter::run(const std::atomic<bool>& stop, c
   run_meta["frames"] = std::to_string(frames.size());
   if (Status s = m.writer->write_metadata("faultline.run", run_meta); !s) return s;
 
-  // Topics in a fixed order (channel ids, and so the file, are deterministic): cameras in replay order.
-  m.tf_static_channel = m.topic("/tf_static", ros2::MessageTraits<ros2::TFMessage>::kTypeName, bag::Qos::tf_static());
-  m.tf_channel = m.topic("/tf", ros2::MessageTraits<ros2::TFMessage>::kTypeName, bag::Qos::reliable());
+  // Topics in a fixed order (channel ids, and so the file, are deterministic): cameras in replay
+  // order.
+  m.tf_static_channel =
+      m.topic("/tf_static", ros2::MessageTraits<ros2::TFMessage>::kTypeName, bag::Qos::tf_static());
+  m.tf_channel =
+      m.topic("/tf", ros2::MessageTraits<ros2::TFMessage>::kTypeName, bag::Qos::reliable());
   if (!m.gt.empty()) {
     m.markers_channel =
-        m.topic(m.cfg.annotations_topic, ros2::MessageTraits<ros2::MarkerArray>::kTypeName, bag::Qos::reliable());
+        m.topic(m.cfg.annotations_topic, ros2::MessageTraits<ros2::MarkerArray>::kTypeName,
+                bag::Qos::reliable());
   }
   if (m.policy) {
     m.faults_channel =
-        m.topic(m.cfg.faults_topic, ros2::MessageTraits<ros2::DiagnosticArray>::kTypeName, bag::Qos::reliable());
+        m.topic(m.cfg.faults_topic, ros2::MessageTraits<ros2::DiagnosticArray>::kTypeName,
+                bag::Qos::reliable());
   }
   for (const auto& f : frames) {
-    if (!m.policy || m.cfg.clean_frames) m.channels_for(ros2::nuscenes_image_topic(f.channel), ros2::nuscenes_camera_info_topic(f.channel));
+    if (!m.policy || m.cfg.clean_frames)
+      m.channels_for(ros2::nuscenes_image_topic(f.channel),
+                     ros2::nuscenes_camera_info_topic(f.channel));
     if (m.policy) {
       const std::string ns = m.cfg.clean_frames ? m.cfg.output_prefix : "";
-      m.channels_for(ns + ros2::nuscenes_image_topic(f.channel), ns + ros2::nuscenes_camera_info_topic(f.channel));
+      m.channels_for(ns + ros2::nuscenes_image_topic(f.channel),
+                     ns + ros2::nuscenes_camera_info_topic(f.channel));
     }
     m.calibration.emplace(f.channel, f.sensor_to_ego);  // each camera's first calibration
   }
@@ -293,7 +323,8 @@ Result<Ros2ConvertCounts> Ros2BagConverter::run(const std::atomic<bool>& stop, c
   for (std::size_t i = 0; i < frames.size() && !stop.load(); ++i) {
     const auto& f = frames[i];
     const StampNs log_ns = f.timestamp_us * 1000;
-    if (!same_pose(m.calibration[f.channel], f.sensor_to_ego)) {  // a later scene, another calibration
+    if (!same_pose(m.calibration[f.channel],
+                   f.sensor_to_ego)) {  // a later scene, another calibration
       m.calibration[f.channel] = f.sensor_to_ego;
       m.write_tf_static(log_ns);
     }
@@ -301,10 +332,12 @@ Result<Ros2ConvertCounts> Ros2BagConverter::run(const std::atomic<bool>& stop, c
     if (!image) {
       ++m.counts.missing_images;
       if (m.counts.missing_images <= 5) {
-        m.log->warn("skipping frame {} ({}): {}", f.sample_data_token, f.channel, image.status().message());
+        m.log->warn("skipping frame {} ({}): {}", f.sample_data_token, f.channel,
+                    image.status().message());
       }
     } else {
-      const std::string_view jpeg(reinterpret_cast<const char*>((*image)->data()), (*image)->size());
+      const std::string_view jpeg(reinterpret_cast<const char*>((*image)->data()),
+                                  (*image)->size());
       m.counts.image_bytes += jpeg.size();
       m.write_ego(f, log_ns);
       if (!m.policy || m.cfg.clean_frames) m.write_camera("", f, jpeg, log_ns);
@@ -324,7 +357,8 @@ Result<Ros2ConvertCounts> Ros2BagConverter::run(const std::atomic<bool>& stop, c
     if (!m.write_error.is_ok()) break;
     if (progress && (i % 32 == 31 || i + 1 == frames.size())) progress(i + 1, total);
   }
-  if (!m.write_error.is_ok()) return m.write_error;  // the writer's destructor removes the partial bag
+  if (!m.write_error.is_ok())
+    return m.write_error;  // the writer's destructor removes the partial bag
   const Status closed = m.writer->close();
   writer_stats_ = m.writer->stats();
   if (!closed.is_ok()) return closed;

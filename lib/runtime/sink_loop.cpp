@@ -110,7 +110,8 @@ struct SinkLoop::Impl {
   std::uint64_t processing_n = 0;
   SinkCounts* counts = nullptr;  // the loop's counts (meta and log lines report them)
 
-  // Malformed messages: those that did not parse here, and those the sockets refused for a wrong frame count.
+  // Malformed messages: those that did not parse here, and those the sockets refused for a wrong
+  // frame count.
   std::uint64_t malformed_total() const {
     return counts->malformed + detections.malformed() + (sync ? sync->malformed() : 0);
   }
@@ -148,13 +149,16 @@ struct SinkLoop::Impl {
     w.Uint64(counts->rejected_boundaries);
     w.Key("faultline_sink_bad_journal_lines");
     w.Uint64(counts->bad_journal_lines);
-    w.Key("faultline_sink_duplicate_arrays");  // replaced: a restarted player or detector sent it again
+    w.Key("faultline_sink_duplicate_arrays");  // replaced: a restarted player or detector sent it
+                                               // again
     w.Uint64(counts->duplicate_arrays);
-    w.Key("faultline_sink_unanswered_samples");  // announced samples that got no detections (empty lists)
+    w.Key("faultline_sink_unanswered_samples");  // announced samples that got no detections (empty
+                                                 // lists)
     w.Uint64(unanswered().size());
     w.Key("faultline_sink_malformed_messages");
     w.Uint64(malformed_total());
-    w.Key("faultline_sink_disconnects");  // connections closed under the sink's sockets (peer exit, oversize)
+    w.Key("faultline_sink_disconnects");  // connections closed under the sink's sockets (peer exit,
+                                          // oversize)
     w.Uint64(detections.disconnects() + (sync ? sync->disconnects() : 0));
     w.EndObject();
     return buf.GetString();
@@ -180,11 +184,15 @@ struct SinkLoop::Impl {
       ++processing_n;
     }
     if (store.has_detections(d.sample_token())) {
-      // A restarted player or detector sent this sample again: the last array is kept, each is counted.
+      // A restarted player or detector sent this sample again: the last array is kept, each is
+      // counted.
       ++counts->duplicate_arrays;
       if (counts->duplicate_arrays == 1) {
-        log->info("second DetectionArray for sample {}: it replaces the first (further ones at debug level, "
-                  "counted in the closing line and the results meta)", d.sample_token());
+        log->info(
+            "second DetectionArray for sample {}: it replaces the first (further ones at debug "
+            "level, "
+            "counted in the closing line and the results meta)",
+            d.sample_token());
       } else {
         log->debug("second DetectionArray for sample {}: replacing the first", d.sample_token());
       }
@@ -225,9 +233,10 @@ struct SinkLoop::Impl {
     counts->unanswered_samples = missing.size();
     if (!missing.empty()) {
       std::string names;
-      for (std::size_t i = 0; i < missing.size() && i < 20; ++i) names += (i ? " " : "") + missing[i];
-      log->warn("{} announced samples got no detections and are written as empty: {}{}", missing.size(), names,
-                missing.size() > 20 ? " ..." : "");
+      for (std::size_t i = 0; i < missing.size() && i < 20; ++i)
+        names += (i ? " " : "") + missing[i];
+      log->warn("{} announced samples got no detections and are written as empty: {}{}",
+                missing.size(), names, missing.size() > 20 ? " ..." : "");
     }
     const Status s = store.finalize(meta_json());
     if (s.is_ok()) {

@@ -1,9 +1,9 @@
-// The detection sink: collects DetectionArrays on a PULL socket (lossless), journals each sample as it
-// arrives and writes the nuScenes results JSON atomically on last_in_run (after the detections of
-// every announced sample arrived, or a grace period) and on exit. It also subscribes to /sync/sample
-// so samples without detections still get an empty list. In lockstep it acks each collected sample
-// to the player (PUSH to ack_endpoint). Nothing collected is lost on SIGINT/SIGTERM or when another
-// node crashes; a restarted sink recovers from the journal.
+// The detection sink: collects DetectionArrays on a PULL socket (lossless), journals each sample as
+// it arrives and writes the nuScenes results JSON atomically on last_in_run (after the detections
+// of every announced sample arrived, or a grace period) and on exit. It also subscribes to
+// /sync/sample so samples without detections still get an empty list. In lockstep it acks each
+// collected sample to the player (PUSH to ack_endpoint). Nothing collected is lost on
+// SIGINT/SIGTERM or when another node crashes; a restarted sink recovers from the journal.
 #pragma once
 
 #include <spdlog/logger.h>
@@ -22,19 +22,20 @@ namespace faultline::runtime {
 
 struct SinkConfig {
   std::string detections_endpoint = "tcp://127.0.0.1:5602";  // PULL bind address for detectors
-  std::string detections_topic = "/detections";               // DetectionArray topic
+  std::string detections_topic = "/detections";              // DetectionArray topic
   int detections_hwm = 1000;                                 // receive queue (messages)
-  std::vector<std::string> sync_endpoints{"tcp://127.0.0.1:5601"};  // SampleBoundary publishers; [] = none
-  std::string sync_topic = "/sync/sample";                  // SampleBoundary topic
-  std::string output = "results.json";                      // nuScenes results JSON
-  std::string journal;                                       // JSON-lines journal; "" = <output>.journal
+  std::vector<std::string> sync_endpoints{
+      "tcp://127.0.0.1:5601"};              // SampleBoundary publishers; [] = none
+  std::string sync_topic = "/sync/sample";  // SampleBoundary topic
+  std::string output = "results.json";      // nuScenes results JSON
+  std::string journal;                      // JSON-lines journal; "" = <output>.journal
   bool resume =
       true;  // continue the journal of the same run (see `run`); false = discard any journal
-  bool lockstep = false;                                     // ack each collected sample to the player
-  std::string ack_endpoint = "tcp://127.0.0.1:5603";        // player's ack PULL address (lockstep)
-  bool exit_on_last = true;                                  // exit after finalizing on last_in_run
-  int finalize_grace_ms = 5000;                              // after last_in_run, wait this long for detections
-  std::map<std::string, std::string> meta;                   // extra keys for the results' "meta"
+  bool lockstep = false;                              // ack each collected sample to the player
+  std::string ack_endpoint = "tcp://127.0.0.1:5603";  // player's ack PULL address (lockstep)
+  bool exit_on_last = true;                           // exit after finalizing on last_in_run
+  int finalize_grace_ms = 5000;             // after last_in_run, wait this long for detections
+  std::map<std::string, std::string> meta;  // extra keys for the results' "meta"
   // The scorer's token rule: with a dataroot, only the samples of `eval_set` (as `faultline score
   // --eval_set`) are accepted; other tokens are refused and counted. "" = any token is accepted.
   std::string dataroot;                   // nuScenes root for the split; "" = off
@@ -44,11 +45,12 @@ struct SinkConfig {
   // results meta "faultline_run". resume continues only a journal of the same identity and refuses
   // (exit 2, naming both) any other, a journal without identity included when this one is set.
   std::map<std::string, std::string> run;
-  double stats_window_s = 1.0;                               // statistics window (s)
-  double stats_log_period_s = 5.0;                           // info log of statistics every this many s
-  std::map<std::string, std::string> remap;                  // topic remaps (from -> to)
+  double stats_window_s = 1.0;               // statistics window (s)
+  double stats_log_period_s = 5.0;           // info log of statistics every this many s
+  std::map<std::string, std::string> remap;  // topic remaps (from -> to)
 
-  transport::AccessConfig access;  // allow_remote and CURVE keys of every socket (transport/access.hpp)
+  transport::AccessConfig
+      access;  // allow_remote and CURVE keys of every socket (transport/access.hpp)
 
   template <class V>
   void visit(V& v) {
@@ -89,8 +91,10 @@ struct SinkCounts {
   std::uint64_t rejected_arrays = 0;  // refused whole: no sample_token, or over 500 boxes
   std::uint64_t rejected_boundaries = 0;  // boundaries naming a sample outside the split (dataroot)
   std::uint64_t bad_journal_lines = 0;    // journal lines that could not be read back on resume
-  std::uint64_t duplicate_arrays = 0;     // a second array for a sample (a restarted source): the last kept
-  std::uint64_t unanswered_samples = 0;   // at finalize: announced samples without detections (empty lists)
+  std::uint64_t duplicate_arrays =
+      0;  // a second array for a sample (a restarted source): the last kept
+  std::uint64_t unanswered_samples =
+      0;  // at finalize: announced samples without detections (empty lists)
 };
 
 class SinkLoop {

@@ -30,8 +30,9 @@ msgs::TopicStats to_proto(const stats::TopicWindow& w) {
   return m;
 }
 
-StatsReporter::StatsReporter(std::string node, std::shared_ptr<spdlog::logger> log, DurationNs window_ns,
-                             DurationNs log_period_ns, std::string stats_topic)
+StatsReporter::StatsReporter(std::string node, std::shared_ptr<spdlog::logger> log,
+                             DurationNs window_ns, DurationNs log_period_ns,
+                             std::string stats_topic)
     : node_(std::move(node)),
       log_(std::move(log)),
       collector_(window_ns),
@@ -61,7 +62,8 @@ void StatsReporter::tick(StampNs now_mono_ns, transport::Publisher* publisher) {
 }
 
 void StatsReporter::log_totals(StampNs now_mono_ns) {
-  for (const auto& w : collector_.totals(now_mono_ns)) log_->info("end of run: {}", stats::format(w));
+  for (const auto& w : collector_.totals(now_mono_ns))
+    log_->info("end of run: {}", stats::format(w));
 }
 
 }  // namespace faultline::runtime

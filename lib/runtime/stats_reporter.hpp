@@ -8,8 +8,8 @@
 #include <memory>
 #include <string>
 
-#include "stats/topic_stats.hpp"
 #include "stats.pb.h"
+#include "stats/topic_stats.hpp"
 #include "transport/publisher.hpp"
 
 namespace faultline::runtime {
@@ -23,8 +23,8 @@ class StatsReporter {
 
   stats::TopicStatsCollector& collector() { return collector_; }
   const stats::TopicStatsCollector& collector() const { return collector_; }
-  // When a window is due: publishes one TopicStats per active topic on `publisher` (may be null) and
-  // logs them (info when the log period passed, else debug).
+  // When a window is due: publishes one TopicStats per active topic on `publisher` (may be null)
+  // and logs them (info when the log period passed, else debug).
   void tick(StampNs now_mono_ns, transport::Publisher* publisher);
   // End-of-run lines (info), one per topic, from the whole-run totals.
   void log_totals(StampNs now_mono_ns);

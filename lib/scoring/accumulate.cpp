@@ -1,8 +1,8 @@
 // The devkit's accumulate(): score-ordered greedy matching, cumulative curves, numpy resampling.
-#include <array>
 #include "scoring/accumulate.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <numeric>
@@ -64,16 +64,19 @@ double np_sum(const double* v, std::size_t n) {
 
 double np_mean(const double* v, std::size_t n) { return np_sum(v, n) / static_cast<double>(n); }
 
-double recall_grid(int i) { return i == kCurvePoints - 1 ? 1.0 : static_cast<double>(i) * (1.0 / 100); }
+double recall_grid(int i) {
+  return i == kCurvePoints - 1 ? 1.0 : static_cast<double>(i) * (1.0 / 100);
+}
 
-double np_interp(double x, const std::vector<double>& xs, const std::vector<double>& ys, double left,
-                 double right) {
+double np_interp(double x, const std::vector<double>& xs, const std::vector<double>& ys,
+                 double left, double right) {
   const std::size_t n = xs.size();
   if (std::isnan(x)) return x;
   if (x > xs[n - 1]) return right;
   if (x < xs[0]) return left;
   // last index with xs[j] <= x
-  const auto j = static_cast<std::size_t>(std::upper_bound(xs.begin(), xs.end(), x) - xs.begin()) - 1;
+  const auto j =
+      static_cast<std::size_t>(std::upper_bound(xs.begin(), xs.end(), x) - xs.begin()) - 1;
   if (j == n - 1 || xs[j] == x) return ys[j];
   const double slope = (ys[j + 1] - ys[j]) / (xs[j + 1] - xs[j]);
   double r = slope * (x - xs[j]) + ys[j];
@@ -104,12 +107,13 @@ namespace {
 struct ClassInputs {
   std::vector<std::vector<int>> gt_of_class;  // per GT sample, list order
   std::size_t npos = 0;
-  std::vector<const EvalBox*> preds;  // results key order, in-sample file order
-  std::vector<std::size_t> order;     // processing order
-  std::vector<double> pred_yaw;       // per pred, computed once for the four thresholds
+  std::vector<const EvalBox*> preds;        // results key order, in-sample file order
+  std::vector<std::size_t> order;           // processing order
+  std::vector<double> pred_yaw;             // per pred, computed once for the four thresholds
   std::vector<std::vector<double>> gt_yaw;  // parallel to gt_of_class
-  // The matching loop's working set, compact: a box is ~150 bytes and the score order visits them at random, so the
-  // centres are copied once. pred_xy is in processing order; gt_xy[gt_start[s] + ci] is candidate ci of sample s.
+  // The matching loop's working set, compact: a box is ~150 bytes and the score order visits them
+  // at random, so the centres are copied once. pred_xy is in processing order; gt_xy[gt_start[s] +
+  // ci] is candidate ci of sample s.
   std::vector<std::array<double, 2>> pred_xy;
   std::vector<std::array<double, 2>> gt_xy;
   std::vector<std::size_t> gt_start;
@@ -146,7 +150,8 @@ ClassInputs prepare(const EvalBoxes& gt, const EvalBoxes& pred, int cls) {
     return sa > sb || (sa == sb && a > b);
   });
   in.pred_xy.reserve(in.order.size());
-  for (std::size_t oi : in.order) in.pred_xy.push_back({preds[oi]->translation[0], preds[oi]->translation[1]});
+  for (std::size_t oi : in.order)
+    in.pred_xy.push_back({preds[oi]->translation[0], preds[oi]->translation[1]});
   in.gt_start.resize(gt.boxes.size() + 1);
   in.gt_xy.reserve(in.npos);
   for (std::size_t s = 0; s < gt.boxes.size(); ++s) {
@@ -160,7 +165,8 @@ ClassInputs prepare(const EvalBoxes& gt, const EvalBoxes& pred, int cls) {
   return in;
 }
 
-Result<MetricData> match_and_curves(const EvalBoxes& gt, const ClassInputs& in, int cls, double dist_th) {
+Result<MetricData> match_and_curves(const EvalBoxes& gt, const ClassInputs& in, int cls,
+                                    double dist_th) {
   if (in.npos == 0) return MetricData::no_predictions();
   const auto& gt_of_class = in.gt_of_class;
   const auto& preds = in.preds;
@@ -247,7 +253,8 @@ Result<MetricData> match_and_curves(const EvalBoxes& gt, const ClassInputs& in, 
     const std::vector<double> cm = cummean(errs[static_cast<std::size_t>(m)]);
     std::vector<double> ys(cm.rbegin(), cm.rend());
     for (std::size_t i = 0; i < kCurvePoints; ++i) {
-      md.tp[static_cast<std::size_t>(m)][i] = np_interp(md.confidence[i], xs, ys, ys.front(), ys.back());
+      md.tp[static_cast<std::size_t>(m)][i] =
+          np_interp(md.confidence[i], xs, ys, ys.front(), ys.back());
     }
   }
   return md;
@@ -259,7 +266,8 @@ Result<MetricData> accumulate(const EvalBoxes& gt, const EvalBoxes& pred, int cl
   return match_and_curves(gt, prepare(gt, pred, cls), cls, dist_th);
 }
 
-Result<std::array<MetricData, kNumDistThs>> accumulate_class(const EvalBoxes& gt, const EvalBoxes& pred, int cls) {
+Result<std::array<MetricData, kNumDistThs>> accumulate_class(const EvalBoxes& gt,
+                                                             const EvalBoxes& pred, int cls) {
   const ClassInputs in = prepare(gt, pred, cls);
   std::array<MetricData, kNumDistThs> out;
   for (std::size_t t = 0; t < kNumDistThs; ++t) {

@@ -1,4 +1,5 @@
-// The nuScenes `detection_cvpr_2019` config, class/attribute names and the category mapping (spec §2, §3).
+// The nuScenes `detection_cvpr_2019` config, class/attribute names and the category mapping (spec
+// §2, §3).
 #pragma once
 
 #include <array>
@@ -16,9 +17,10 @@ inline constexpr int kCurvePoints = 101;
 
 // Config order; used everywhere, including the JSON outputs.
 inline constexpr std::array<const char*, kNumClasses> kClassNames = {
-    "car", "truck", "bus", "trailer", "construction_vehicle",
+    "car",        "truck",      "bus",     "trailer",      "construction_vehicle",
     "pedestrian", "motorcycle", "bicycle", "traffic_cone", "barrier"};
-inline constexpr std::array<int, kNumClasses> kClassRangeM = {50, 50, 50, 50, 50, 40, 40, 40, 30, 30};
+inline constexpr std::array<int, kNumClasses> kClassRangeM = {50, 50, 50, 50, 50,
+                                                              40, 40, 40, 30, 30};
 inline constexpr std::array<double, kNumDistThs> kDistThs = {0.5, 1.0, 2.0, 4.0};
 inline constexpr std::array<const char*, kNumDistThs> kDistThNames = {"0.5", "1.0", "2.0", "4.0"};
 inline constexpr int kDistThTpIndex = 2;  // dist_th_tp = 2.0
@@ -36,8 +38,10 @@ inline constexpr std::array<const char*, kNumTpMetrics> kTpMetricShort = {"mATE"
 enum TpMetric { kTrans = 0, kScale = 1, kOrient = 2, kVel = 3, kAttr = 4 };
 
 inline constexpr std::array<const char*, kNumAttributes> kAttributeNames = {
-    "pedestrian.moving", "pedestrian.sitting_lying_down", "pedestrian.standing", "cycle.with_rider",
-    "cycle.without_rider", "vehicle.moving", "vehicle.parked", "vehicle.stopped"};
+    "pedestrian.moving",   "pedestrian.sitting_lying_down",
+    "pedestrian.standing", "cycle.with_rider",
+    "cycle.without_rider", "vehicle.moving",
+    "vehicle.parked",      "vehicle.stopped"};
 
 inline constexpr int kClassBarrier = 9;
 inline constexpr int kClassTrafficCone = 8;

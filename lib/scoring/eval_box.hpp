@@ -1,4 +1,5 @@
-// One detection or ground-truth box as the evaluation holds it (devkit DetectionBox), plus per-sample sets.
+// One detection or ground-truth box as the evaluation holds it (devkit DetectionBox), plus
+// per-sample sets.
 #pragma once
 
 #include <array>
@@ -16,12 +17,13 @@ struct EvalBox {
   double score = -1.0;                  // GT: -1 (unused)
   double ego_dist = 0.0;                // xy distance to the LIDAR_TOP key-frame ego pose, m
   std::int32_t num_pts = -1;            // lidar + radar points; predictions -1 unless given
-  std::int32_t match_sample = -1;       // predictions: GT sample index of the box's sample_token field
-  std::int8_t cls = 0;                  // index into kClassNames
-  std::int8_t attr = -1;                // index into kAttributeNames, -1 = ""
+  std::int32_t match_sample = -1;  // predictions: GT sample index of the box's sample_token field
+  std::int8_t cls = 0;             // index into kClassNames
+  std::int8_t attr = -1;           // index into kAttributeNames, -1 = ""
 };
 
-// Boxes per evaluated sample; `boxes[i]` belongs to `sample_tokens[i]`, in the devkit's iteration order.
+// Boxes per evaluated sample; `boxes[i]` belongs to `sample_tokens[i]`, in the devkit's iteration
+// order.
 struct EvalBoxes {
   std::vector<std::string> sample_tokens;
   std::vector<std::vector<EvalBox>> boxes;

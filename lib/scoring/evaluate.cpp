@@ -40,10 +40,11 @@ double seconds_since(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
-// The submission's samples must be the split's (predefined; custom splits are equal by construction); then every
-// box learns the index of the GT sample it is matched in (by its sample_token field). Returns each submission
-// sample's GT index.
-Result<std::vector<int>> match_samples(Submission& sub, const GroundTruth& gt, const EvalOptions& opts) {
+// The submission's samples must be the split's (predefined; custom splits are equal by
+// construction); then every box learns the index of the GT sample it is matched in (by its
+// sample_token field). Returns each submission sample's GT index.
+Result<std::vector<int>> match_samples(Submission& sub, const GroundTruth& gt,
+                                       const EvalOptions& opts) {
   std::vector<int> pred_to_gt(sub.boxes.sample_tokens.size(), -1);
   std::size_t missing = 0, extra = 0;
   std::string first_extra, first_missing;
@@ -85,8 +86,8 @@ Result<std::vector<int>> match_samples(Submission& sub, const GroundTruth& gt, c
   return pred_to_gt;
 }
 
-// Classes are independent (read-only shared inputs) but very unequal (cars are ~40 % of the boxes): two threads
-// take them largest first from a shared counter.
+// Classes are independent (read-only shared inputs) but very unequal (cars are ~40 % of the boxes):
+// two threads take them largest first from a shared counter.
 Status accumulate_classes(const GroundTruth& gt, const Submission& sub, const EvalOptions& opts,
                           EvalOutcome& out) {
   std::array<Status, kNumClasses> class_status;
@@ -216,7 +217,8 @@ Result<EvalOutcome> evaluate_detection(const EvalOptions& opts, std::FILE* log) 
   timings.filter_s = seconds_since(filter_start);
   const auto accumulate_start = std::chrono::steady_clock::now();
   logf(log, "Accumulating metric data...");
-  if (Status accumulated = accumulate_classes(*gt, *sub, opts, out); !accumulated) return accumulated;
+  if (Status accumulated = accumulate_classes(*gt, *sub, opts, out); !accumulated)
+    return accumulated;
   timings.accumulate_s = seconds_since(accumulate_start);
   out.timings = timings;
   logf(log, "Calculating metrics...");

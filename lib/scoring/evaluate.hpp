@@ -2,7 +2,8 @@
 // validation, GT loading, filtering, 40 accumulations, metrics and the two output files.
 //
 // Where the devkit crashes, Faultline defines the outcome:
-//  * a submission with no box at all is scored (every class with GT gets AP 0 and TP errors 1, NDS 0)
+//  * a submission with no box at all is scored (every class with GT gets AP 0 and TP errors 1, NDS
+//  0)
 //    and a warning is logged; the devkit raises "Error: Invalid box type: None";
 //  * a negative or missing detection_score is rejected with an error naming the sample and box; the
 //    devkit may abort on an internal assertion.
@@ -24,14 +25,16 @@ struct EvalOptions {
   std::string results_path;  // submission JSON
   std::string dataroot;      // folder holding <version>/*.json
   std::string version = "v1.0-trainval";
-  std::string eval_set = "val";  // predefined split name or a key of <dataroot>/<version>/splits.json
-  std::string output_dir;        // metrics_summary.json / metrics_details.json; empty = do not write
+  std::string eval_set =
+      "val";               // predefined split name or a key of <dataroot>/<version>/splits.json
+  std::string output_dir;  // metrics_summary.json / metrics_details.json; empty = do not write
   std::uint64_t max_results_bytes = kDefaultMaxResultsBytes;  // larger results files are refused
 };
 
 // Wall seconds per phase; GT loading overlaps submission parsing on a second thread.
 struct EvalTimings {
-  double submission_s = 0, ground_truth_s = 0, ground_truth_wait_s = 0, filter_s = 0, accumulate_s = 0;
+  double submission_s = 0, ground_truth_s = 0, ground_truth_wait_s = 0, filter_s = 0,
+         accumulate_s = 0;
 };
 
 struct EvalOutcome {

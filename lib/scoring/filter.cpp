@@ -8,7 +8,8 @@
 
 namespace faultline::scoring {
 
-FilterCounts filter_boxes(EvalBoxes& boxes, const std::vector<int>& gt_sample, const GroundTruth& gt) {
+FilterCounts filter_boxes(EvalBoxes& boxes, const std::vector<int>& gt_sample,
+                          const GroundTruth& gt) {
   FilterCounts c;
   for (std::size_t s = 0; s < boxes.boxes.size(); ++s) {
     const auto g = static_cast<std::size_t>(gt_sample[s]);

@@ -18,6 +18,7 @@ struct FilterCounts {
 
 // Sets ego_dist from the sample's LIDAR_TOP ego pose and filters in place. `gt_sample[i]` is the GT
 // sample index of boxes.sample_tokens[i] (racks and ego pose come from there).
-FilterCounts filter_boxes(EvalBoxes& boxes, const std::vector<int>& gt_sample, const GroundTruth& gt);
+FilterCounts filter_boxes(EvalBoxes& boxes, const std::vector<int>& gt_sample,
+                          const GroundTruth& gt);
 
 }  // namespace faultline::scoring

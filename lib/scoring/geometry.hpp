@@ -1,5 +1,5 @@
-// Box geometry as the devkit computes it: pyquaternion rotation matrix and yaw, bike-rack point test,
-// scale IoU, angle difference. Kept bit-compatible where the devkit's decisions are discrete.
+// Box geometry as the devkit computes it: pyquaternion rotation matrix and yaw, bike-rack point
+// test, scale IoU, angle difference. Kept bit-compatible where the devkit's decisions are discrete.
 #pragma once
 
 #include <array>

@@ -103,18 +103,22 @@ Status load_names(const std::string& dataroot, const std::string& version, Names
   names.inst_path = schema::table_path(dataroot, version, schema::kInstance);
   using Instance = schema::InstanceCategory;
   s = stream_table(names.inst_path, Instance::fields(), [&](const TableRecord& r, std::size_t) {
-    names.instance_category[r.fields[Instance::kToken].str] = r.fields[Instance::kCategoryToken].str;
+    names.instance_category[r.fields[Instance::kToken].str] =
+        r.fields[Instance::kCategoryToken].str;
     return Status::ok();
   });
   if (!s) return s;
   return Status::ok();
 }
 
-// The annotations of the split's samples (`sample_index`), in file order, indexed by token. Records of other
-// samples are skipped undecoded.
-Status scan_annotations(const std::string& ann_path, const TokenMap<int>& sample_index, const TokenSet& split_set,
-                        std::vector<AnnRec>& anns, TokenMap<int>& ann_index) {
-  const auto in_split = [&split_set](const std::string& token) { return split_set.contains(token); };
+// The annotations of the split's samples (`sample_index`), in file order, indexed by token. Records
+// of other samples are skipped undecoded.
+Status scan_annotations(const std::string& ann_path, const TokenMap<int>& sample_index,
+                        const TokenSet& split_set, std::vector<AnnRec>& anns,
+                        TokenMap<int>& ann_index) {
+  const auto in_split = [&split_set](const std::string& token) {
+    return split_set.contains(token);
+  };
   {
     // ~480 bytes per record in nuScenes tables; reserving avoids rehashing 1M-entry maps.
     std::error_code ec;
@@ -136,13 +140,14 @@ Status scan_annotations(const std::string& ann_path, const TokenMap<int>& sample
         a.sample = it->second;
         a.instance = r.fields[Ann::kInstanceToken].str;
         a.attrs = r.fields[Ann::kAttributeTokens].strs;
-        const std::string where =
-            ann_path + " record " + std::to_string(i) + " (" + a.token + ")";
-        if (Status e = copy_vec(r.fields[Ann::kTranslation], a.translation, where + " translation"); !e) {
+        const std::string where = ann_path + " record " + std::to_string(i) + " (" + a.token + ")";
+        if (Status e = copy_vec(r.fields[Ann::kTranslation], a.translation, where + " translation");
+            !e) {
           return e;
         }
         if (Status e = copy_vec(r.fields[Ann::kSize], a.size, where + " size"); !e) return e;
-        if (Status e = copy_vec(r.fields[Ann::kRotation], a.rotation, where + " rotation"); !e) return e;
+        if (Status e = copy_vec(r.fields[Ann::kRotation], a.rotation, where + " rotation"); !e)
+          return e;
         a.num_pts = r.fields[Ann::kNumLidarPts].num + r.fields[Ann::kNumRadarPts].num;
         a.prev = r.fields[Ann::kPrev].str;
         a.next = r.fields[Ann::kNext].str;
@@ -154,24 +159,30 @@ Status scan_annotations(const std::string& ann_path, const TokenMap<int>& sample
   return scan;
 }
 
-// LIDAR_TOP calibrations -> key-frame sample_data -> ego pose of every split sample, into `ego_translation`.
-Status load_ego_translations(const std::string& dataroot, const std::string& version, const GroundTruth& gt,
-                             const std::vector<SampleRec>& samples, const TokenSet& split_set,
+// LIDAR_TOP calibrations -> key-frame sample_data -> ego pose of every split sample, into
+// `ego_translation`.
+Status load_ego_translations(const std::string& dataroot, const std::string& version,
+                             const GroundTruth& gt, const std::vector<SampleRec>& samples,
+                             const TokenSet& split_set,
                              std::vector<std::array<double, 3>>& ego_translation) {
   const std::size_t n = samples.size();
-  const auto in_split = [&split_set](const std::string& token) { return split_set.contains(token); };
+  const auto in_split = [&split_set](const std::string& token) {
+    return split_set.contains(token);
+  };
   std::unordered_set<std::string> lidar_sensors, lidar_calibs;
   const std::string sensor_path = schema::table_path(dataroot, version, schema::kSensor);
   using Sensor = schema::SensorChannel;
   Status s = stream_table(sensor_path, Sensor::fields(), [&](const TableRecord& r, std::size_t) {
-    if (r.fields[Sensor::kChannel].str == "LIDAR_TOP") lidar_sensors.insert(r.fields[Sensor::kToken].str);
+    if (r.fields[Sensor::kChannel].str == "LIDAR_TOP")
+      lidar_sensors.insert(r.fields[Sensor::kToken].str);
     return Status::ok();
   });
   if (!s) return s;
   const std::string calib_path = schema::table_path(dataroot, version, schema::kCalibratedSensor);
   using Calib = schema::CalibrationSensor;
   s = stream_table(calib_path, Calib::fields(), [&](const TableRecord& r, std::size_t) {
-    if (lidar_sensors.count(r.fields[Calib::kSensorToken].str)) lidar_calibs.insert(r.fields[Calib::kToken].str);
+    if (lidar_sensors.count(r.fields[Calib::kSensorToken].str))
+      lidar_calibs.insert(r.fields[Calib::kToken].str);
     return Status::ok();
   });
   if (!s) return s;
@@ -184,22 +195,25 @@ Status load_ego_translations(const std::string& dataroot, const std::string& ver
       [&](const TableRecord& r, std::size_t) {
         if (!r.fields[Sd::kIsKeyFrame].boolean) return Status::ok();
         auto it = gt.sample_index.find(r.fields[Sd::kSampleToken].str);
-        if (it == gt.sample_index.end() || !lidar_calibs.count(r.fields[Sd::kCalibratedSensorToken].str)) {
+        if (it == gt.sample_index.end() ||
+            !lidar_calibs.count(r.fields[Sd::kCalibratedSensorToken].str)) {
           return Status::ok();
         }
-        pose_token[static_cast<std::size_t>(it->second)] = r.fields[Sd::kEgoPoseToken].str;  // last wins
+        pose_token[static_cast<std::size_t>(it->second)] =
+            r.fields[Sd::kEgoPoseToken].str;  // last wins
         return Status::ok();
       },
       RecordFilter{{{static_cast<int>(Sd::kSampleToken), in_split},
-                    {static_cast<int>(Sd::kCalibratedSensorToken), [&lidar_calib_set](const std::string& calib) {
+                    {static_cast<int>(Sd::kCalibratedSensorToken),
+                     [&lidar_calib_set](const std::string& calib) {
                        return lidar_calib_set.contains(calib);
                      }}}});
   if (!s) return s;
   TokenMap<std::vector<int>> pose_users;
   for (std::size_t i = 0; i < n; ++i) {
     if (pose_token[i].empty()) {
-      return Status(StatusCode::kNotFound,
-                    sd_path + ": sample " + samples[i].token + " has no LIDAR_TOP key-frame sample_data record");
+      return Status(StatusCode::kNotFound, sd_path + ": sample " + samples[i].token +
+                                               " has no LIDAR_TOP key-frame sample_data record");
     }
     pose_users[pose_token[i]].push_back(static_cast<int>(i));
   }
@@ -223,19 +237,22 @@ Status load_ego_translations(const std::string& dataroot, const std::string& ver
         pose_users.erase(it);  // a duplicated pose token counts once
         return Status::ok();
       },
-      RecordFilter{{{static_cast<int>(Pose::kToken),
-                     [&wanted_poses](const std::string& token) { return wanted_poses.contains(token); }}}});
+      RecordFilter{{{static_cast<int>(Pose::kToken), [&wanted_poses](const std::string& token) {
+                       return wanted_poses.contains(token);
+                     }}}});
   if (!s) return s;
   if (poses_found < n) {
-    return Status(StatusCode::kNotFound, pose_path + ": " + std::to_string(n - poses_found) +
-                                             " LIDAR_TOP ego poses of the split's samples are missing");
+    return Status(StatusCode::kNotFound,
+                  pose_path + ": " + std::to_string(n - poses_found) +
+                      " LIDAR_TOP ego poses of the split's samples are missing");
   }
   return Status::ok();
 }
 
 // The evaluation boxes of the annotations (bicycle racks apart), with the devkit's box velocity.
-Status build_boxes(const std::vector<AnnRec>& anns, const TokenMap<int>& ann_index, const std::string& ann_path,
-                   const Names& names, const std::vector<SampleRec>& samples, GroundTruth& gt) {
+Status build_boxes(const std::vector<AnnRec>& anns, const TokenMap<int>& ann_index,
+                   const std::string& ann_path, const Names& names,
+                   const std::vector<SampleRec>& samples, GroundTruth& gt) {
   const double nan = std::numeric_limits<double>::quiet_NaN();
   auto find_ann = [&](const std::string& token, const AnnRec& from) -> Result<const AnnRec*> {
     auto it = ann_index.find(token);
@@ -254,7 +271,8 @@ Status build_boxes(const std::vector<AnnRec>& anns, const TokenMap<int>& ann_ind
     }
     auto cat = names.category_name.find(inst->second);
     if (cat == names.category_name.end()) {
-      return Status(StatusCode::kNotFound, names.cat_path + ": category " + inst->second + " not found");
+      return Status(StatusCode::kNotFound,
+                    names.cat_path + ": category " + inst->second + " not found");
     }
     const auto si = static_cast<std::size_t>(a.sample);
     if (cat->second == kBicycleRackCategory) {
@@ -352,8 +370,9 @@ Result<GroundTruth> load_ground_truth(const std::string& dataroot, const std::st
 
   // Records of other samples are skipped undecoded.
   const TokenSet split_set(gt.boxes.sample_tokens);
-  // Annotations of the split's samples, in file order: the biggest scan after sample_data, so it runs on a second
-  // thread while sample_data and ego_pose are read (it needs only the sample index).
+  // Annotations of the split's samples, in file order: the biggest scan after sample_data, so it
+  // runs on a second thread while sample_data and ego_pose are read (it needs only the sample
+  // index).
   std::vector<AnnRec> anns;
   TokenMap<int> ann_index;
   const std::string ann_path = schema::table_path(dataroot, version, schema::kSampleAnnotation);
@@ -361,7 +380,8 @@ Result<GroundTruth> load_ground_truth(const std::string& dataroot, const std::st
     return scan_annotations(ann_path, gt.sample_index, split_set, anns, ann_index);
   });
   // The annotation thread references this frame: wait for it before any return.
-  Status poses = load_ego_translations(dataroot, version, gt, samples, split_set, gt.ego_translation);
+  Status poses =
+      load_ego_translations(dataroot, version, gt, samples, split_set, gt.ego_translation);
   Status ann_status = ann_future.get();
   if (!poses) return poses;
   if (!ann_status) return ann_status;

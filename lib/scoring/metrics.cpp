@@ -167,10 +167,10 @@ std::string details_json(const MetricDataList& curves) {
       w.begin_object();
       // Serialised order of the devkit's MetricData.
       const std::pair<const char*, const Curve*> arrays[] = {
-          {"recall", &md.recall},           {"precision", &md.precision},
-          {"confidence", &md.confidence},   {"trans_err", &md.tp[kTrans]},
-          {"vel_err", &md.tp[kVel]},        {"scale_err", &md.tp[kScale]},
-          {"orient_err", &md.tp[kOrient]},  {"attr_err", &md.tp[kAttr]}};
+          {"recall", &md.recall},          {"precision", &md.precision},
+          {"confidence", &md.confidence},  {"trans_err", &md.tp[kTrans]},
+          {"vel_err", &md.tp[kVel]},       {"scale_err", &md.tp[kScale]},
+          {"orient_err", &md.tp[kOrient]}, {"attr_err", &md.tp[kAttr]}};
       for (const auto& [name, arr] : arrays) {
         w.key(name);
         w.begin_array();

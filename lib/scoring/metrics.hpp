@@ -25,8 +25,9 @@ struct DetectionMetrics {
   double eval_time_s = 0;
 };
 
-double calc_ap(const MetricData& md);                 // min_recall / min_precision 0.1
-double calc_tp(const MetricData& md, TpMetric metric);  // mean from index 11 to the last non-zero confidence
+double calc_ap(const MetricData& md);  // min_recall / min_precision 0.1
+double calc_tp(const MetricData& md,
+               TpMetric metric);  // mean from index 11 to the last non-zero confidence
 DetectionMetrics compute_metrics(const MetricDataList& curves);
 
 // metrics_summary.json text; `meta_json` is the submission meta re-serialised (PyJsonWriter).

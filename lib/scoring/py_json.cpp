@@ -55,14 +55,29 @@ std::string py_escape(const std::string& s) {
   for (std::size_t i = 0; i < s.size(); ++i) {
     const auto c = static_cast<unsigned char>(s[i]);
     switch (c) {
-      case '"': out += "\\\""; continue;
-      case '\\': out += "\\\\"; continue;
-      case '\n': out += "\\n"; continue;
-      case '\r': out += "\\r"; continue;
-      case '\t': out += "\\t"; continue;
-      case '\b': out += "\\b"; continue;
-      case '\f': out += "\\f"; continue;
-      default: break;
+      case '"':
+        out += "\\\"";
+        continue;
+      case '\\':
+        out += "\\\\";
+        continue;
+      case '\n':
+        out += "\\n";
+        continue;
+      case '\r':
+        out += "\\r";
+        continue;
+      case '\t':
+        out += "\\t";
+        continue;
+      case '\b':
+        out += "\\b";
+        continue;
+      case '\f':
+        out += "\\f";
+        continue;
+      default:
+        break;
     }
     if (c < 0x20) {
       emit_u(c);
@@ -72,9 +87,16 @@ std::string py_escape(const std::string& s) {
       // Decode UTF-8 (RapidJSON validated it) and escape like ensure_ascii=True.
       unsigned cp = 0;
       int extra = 0;
-      if ((c & 0xE0) == 0xC0) { cp = c & 0x1F; extra = 1; }
-      else if ((c & 0xF0) == 0xE0) { cp = c & 0x0F; extra = 2; }
-      else { cp = c & 0x07; extra = 3; }
+      if ((c & 0xE0) == 0xC0) {
+        cp = c & 0x1F;
+        extra = 1;
+      } else if ((c & 0xF0) == 0xE0) {
+        cp = c & 0x0F;
+        extra = 2;
+      } else {
+        cp = c & 0x07;
+        extra = 3;
+      }
       for (int k = 0; k < extra && i + 1 < s.size(); ++k) {
         cp = (cp << 6) | (static_cast<unsigned char>(s[++i]) & 0x3F);
       }

@@ -1,5 +1,6 @@
-// JSON output in the layout of Python's json.dump(obj, indent=2): shortest round-trip floats printed as
-// Python repr (std::to_chars), bare NaN/Infinity tokens, ASCII-only strings. Used for metrics files.
+// JSON output in the layout of Python's json.dump(obj, indent=2): shortest round-trip floats
+// printed as Python repr (std::to_chars), bare NaN/Infinity tokens, ASCII-only strings. Used for
+// metrics files.
 #pragma once
 
 #include <rapidjson/document.h>

@@ -245,9 +245,11 @@ Result<RobustnessSummary> parse_robustness_json(const std::string& text, const s
                       {"latency_ms", &s.latency_ms}}) {
     if (Status st = num(d, k, *p); !st) return st;
   }
-  if (d.HasMember("levels") && d["levels"].IsArray()) {  // names of nds_by_level's entries ("mid" for a mid-only run)
+  if (d.HasMember("levels") &&
+      d["levels"].IsArray()) {  // names of nds_by_level's entries ("mid" for a mid-only run)
     for (const auto& v : d["levels"].GetArray()) {
-      if (!v.IsString()) return Status(StatusCode::kCorruptData, name + ": 'levels' must list names");
+      if (!v.IsString())
+        return Status(StatusCode::kCorruptData, name + ": 'levels' must list names");
       s.level_names.push_back(v.GetString());
     }
   }

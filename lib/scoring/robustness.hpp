@@ -1,6 +1,6 @@
 // RoboBEV robustness metrics (arXiv 2304.06719, spec §10): per-corruption severity-averaged NDS,
-// corruption error CE (against a baseline detector) and resilience rate RR, and their means mCE / mRR.
-// Plain numbers in, plain numbers out, so benchmarks can call it without any files.
+// corruption error CE (against a baseline detector) and resilience rate RR, and their means mCE /
+// mRR. Plain numbers in, plain numbers out, so benchmarks can call it without any files.
 #pragma once
 
 #include <array>
@@ -13,7 +13,8 @@ namespace faultline::scoring {
 
 // RoboBEV's 8 corruptions in the paper's table order, and the 3 severities.
 inline constexpr std::array<const char*, 8> kRoboBevCorruptions = {
-    "camera_crash", "frame_lost", "color_quant", "motion_blur", "brightness", "low_light", "fog", "snow"};
+    "camera_crash", "frame_lost", "color_quant", "motion_blur",
+    "brightness",   "low_light",  "fog",         "snow"};
 inline constexpr std::array<const char*, 3> kSeverityLevels = {"easy", "mid", "hard"};
 
 struct CorruptionScores {
@@ -47,9 +48,10 @@ struct RobustnessSummary {
 };
 
 struct RobustnessOptions {
-  // The RoboBEV notebook works from severity-averaged NDS rounded to 4 decimals (docs/results/*.md);
-  // on by default so results compare with the paper's tables (its per-corruption RRs need it).
-  // Off: the exact sum form. Both give the paper's DETR3D mCE/mRR to 2 decimals of a percent.
+  // The RoboBEV notebook works from severity-averaged NDS rounded to 4 decimals
+  // (docs/results/*.md); on by default so results compare with the paper's tables (its
+  // per-corruption RRs need it). Off: the exact sum form. Both give the paper's DETR3D mCE/mRR to 2
+  // decimals of a percent.
   bool round_mean_nds_4dp = true;
 };
 
@@ -63,8 +65,10 @@ int severity_index(const std::string& level);
 // The paper's DETR3D (ResNet, no CBGS) table: clean 0.4224 and the 8 x 3 NDS values.
 DetectorScores detr3d_baseline();
 
-// Fails on a non-positive clean NDS or a level-count mismatch with the baseline (names the corruption).
-Result<RobustnessSummary> compute_robustness(const DetectorScores& model, const DetectorScores& baseline,
+// Fails on a non-positive clean NDS or a level-count mismatch with the baseline (names the
+// corruption).
+Result<RobustnessSummary> compute_robustness(const DetectorScores& model,
+                                             const DetectorScores& baseline,
                                              const RobustnessOptions& opts = {});
 
 std::string robustness_markdown(const RobustnessSummary& s);

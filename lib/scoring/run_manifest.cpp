@@ -16,7 +16,9 @@ Result<std::vector<ConditionRun>> read_run_manifest(const std::string& path, std
   } catch (const YAML::Exception& e) {
     return Status(StatusCode::kCorruptData, path + ": " + e.what());
   }
-  if (!root.IsMap()) return Status(StatusCode::kCorruptData, path + ": expected a mapping of condition -> run folder");
+  if (!root.IsMap())
+    return Status(StatusCode::kCorruptData,
+                  path + ": expected a mapping of condition -> run folder");
   const std::filesystem::path base = std::filesystem::path(path).parent_path();
   YAML::Node runs = root["runs"] ? root["runs"] : root;
   std::vector<ConditionRun> out;
@@ -54,7 +56,8 @@ std::string condition_from_path(const std::string& dir) {
   return leaf;
 }
 
-Result<DetectorScores> collect_detector_scores(const std::string& name, const std::vector<ConditionRun>& runs) {
+Result<DetectorScores> collect_detector_scores(const std::string& name,
+                                               const std::vector<ConditionRun>& runs) {
   DetectorScores d;
   d.name = name;
   bool have_clean = false;
@@ -62,7 +65,8 @@ Result<DetectorScores> collect_detector_scores(const std::string& name, const st
   std::map<std::string, std::map<int, double>> levels;
   for (const auto& [condition, dir] : runs) {
     auto nds = read_nd_score(dir);
-    if (!nds) return Status(nds.status().code(), "condition " + condition + ": " + nds.status().message());
+    if (!nds)
+      return Status(nds.status().code(), "condition " + condition + ": " + nds.status().message());
     if (condition == "clean") {
       d.clean_nds = *nds;
       have_clean = true;
@@ -71,12 +75,14 @@ Result<DetectorScores> collect_detector_scores(const std::string& name, const st
     const auto slash = condition.find('/');
     if (slash == std::string::npos) {
       return Status(StatusCode::kInvalidArgument,
-                    "condition '" + condition + "' (" + dir + "): expected 'clean' or '<corruption>/<easy|mid|hard>'");
+                    "condition '" + condition + "' (" + dir +
+                        "): expected 'clean' or '<corruption>/<easy|mid|hard>'");
     }
     const int level = severity_index(condition.substr(slash + 1));
     if (level < 0) {
       return Status(StatusCode::kInvalidArgument, "condition '" + condition + "': unknown level '" +
-                                                      condition.substr(slash + 1) + "' (easy, mid, hard)");
+                                                      condition.substr(slash + 1) +
+                                                      "' (easy, mid, hard)");
     }
     const std::string corruption = canonical_corruption(condition.substr(0, slash));
     if (!levels.count(corruption)) order.push_back(corruption);
@@ -91,7 +97,8 @@ Result<DetectorScores> collect_detector_scores(const std::string& name, const st
     for (const auto& [lvl, nds] : levels[c]) {
       if (lvl != expect++) {
         return Status(StatusCode::kInvalidArgument,
-                      name + ": corruption " + c + " lacks level " + kSeverityLevels[static_cast<std::size_t>(expect - 1)]);
+                      name + ": corruption " + c + " lacks level " +
+                          kSeverityLevels[static_cast<std::size_t>(expect - 1)]);
       }
       cs.nds_by_level.push_back(nds);
     }

@@ -20,9 +20,12 @@ using ConditionRun = std::pair<std::string, std::string>;
 
 Result<std::vector<ConditionRun>> read_run_manifest(const std::string& path, std::string* detector,
                                                     double* latency_ms);
-// Condition from a folder name: ".../fog/easy" -> fog/easy, ".../fog_easy" -> fog/easy, ".../clean".
+// Condition from a folder name: ".../fog/easy" -> fog/easy, ".../fog_easy" -> fog/easy,
+// ".../clean".
 std::string condition_from_path(const std::string& dir);
-// Reads every run's nd_score and groups by corruption (levels in easy/mid/hard order). Needs "clean".
-Result<DetectorScores> collect_detector_scores(const std::string& name, const std::vector<ConditionRun>& runs);
+// Reads every run's nd_score and groups by corruption (levels in easy/mid/hard order). Needs
+// "clean".
+Result<DetectorScores> collect_detector_scores(const std::string& name,
+                                               const std::vector<ConditionRun>& runs);
 
 }  // namespace faultline::scoring

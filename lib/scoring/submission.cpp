@@ -28,9 +28,11 @@
 namespace faultline::scoring {
 namespace {
 
-constexpr unsigned kParseFlags = rapidjson::kParseNanAndInfFlag | rapidjson::kParseFullPrecisionFlag;
+constexpr unsigned kParseFlags =
+    rapidjson::kParseNanAndInfFlag | rapidjson::kParseFullPrecisionFlag;
 // The results reader takes numbers as text and converts them itself (SubmissionHandler::RawNumber).
-constexpr unsigned kResultsParseFlags = rapidjson::kParseNanAndInfFlag | rapidjson::kParseNumbersAsStringsFlag;
+constexpr unsigned kResultsParseFlags =
+    rapidjson::kParseNanAndInfFlag | rapidjson::kParseNumbersAsStringsFlag;
 
 // Containers open at once; results files nest 4 deep ({results: {token: [{translation: [..]}]}}).
 constexpr int kMaxNesting = 128;
@@ -49,10 +51,22 @@ struct FieldVal {
   int arr_bad = -1;  // index of the first non-number element
 };
 
-enum Field { kSampleToken, kTranslation, kSize, kRotation, kVelocity, kEgo, kNumPts, kName, kScore, kAttrName, kNumFields };
-constexpr const char* kFieldNames[kNumFields] = {"sample_token", "translation", "size", "rotation", "velocity",
-                                                 "ego_translation", "num_pts", "detection_name",
-                                                 "detection_score", "attribute_name"};
+enum Field {
+  kSampleToken,
+  kTranslation,
+  kSize,
+  kRotation,
+  kVelocity,
+  kEgo,
+  kNumPts,
+  kName,
+  kScore,
+  kAttrName,
+  kNumFields
+};
+constexpr const char* kFieldNames[kNumFields] = {
+    "sample_token",    "translation", "size",           "rotation",        "velocity",
+    "ego_translation", "num_pts",     "detection_name", "detection_score", "attribute_name"};
 
 // A JSON list field that must hold only numbers; its length and values are box_rules' business.
 Status read_numbers(const FieldVal& f, const char* field, const std::string& where,
@@ -70,9 +84,11 @@ Status read_numbers(const FieldVal& f, const char* field, const std::string& whe
 
 // The devkit's DetectionBox.deserialize + constructor asserts: JSON types here, values in
 // box_rules.
-Status check_box(const std::array<FieldVal, kNumFields>& f, const std::string& where, EvalBox& box) {
+Status check_box(const std::array<FieldVal, kNumFields>& f, const std::string& where,
+                 EvalBox& box) {
   if (f[kSampleToken].kind == FieldVal::kAbsent) return bad(where, "missing field 'sample_token'");
-  if (f[kSampleToken].kind != FieldVal::kString) return bad(where, "'sample_token' must be a string");
+  if (f[kSampleToken].kind != FieldVal::kString)
+    return bad(where, "'sample_token' must be a string");
   BoxFields fields;
   if (Status s = read_numbers(f[kTranslation], "translation", where, fields.translation); !s)
     return s;
@@ -101,7 +117,8 @@ Status check_box(const std::array<FieldVal, kNumFields>& f, const std::string& w
     fields.detection_score = f[kScore].num;
   }
   if (f[kAttrName].kind == FieldVal::kAbsent) return bad(where, "missing field 'attribute_name'");
-  if (f[kAttrName].kind != FieldVal::kString) return bad(where, "'attribute_name' must be a string");
+  if (f[kAttrName].kind != FieldVal::kString)
+    return bad(where, "'attribute_name' must be a string");
   fields.attribute_name = f[kAttrName].str;
   return check_box_fields(fields, where, box);
 }
@@ -193,8 +210,10 @@ Status too_large(const std::string& path, std::uint64_t max_bytes, const std::st
 using MetaWriter = rapidjson::Writer<rapidjson::StringBuffer, rapidjson::UTF8<>, rapidjson::UTF8<>,
                                      rapidjson::CrtAllocator, rapidjson::kWriteNanAndInfFlag>;
 
-// SAX handler: top object -> "results" {token: [box...]} and "meta" (re-serialised), others skipped.
-class SubmissionHandler : public rapidjson::BaseReaderHandler<rapidjson::UTF8<>, SubmissionHandler> {
+// SAX handler: top object -> "results" {token: [box...]} and "meta" (re-serialised), others
+// skipped.
+class SubmissionHandler
+    : public rapidjson::BaseReaderHandler<rapidjson::UTF8<>, SubmissionHandler> {
  public:
   SubmissionHandler(const std::string& name, const SubmissionScope& scope)
       : name_(name), scope_(scope), meta_writer_(meta_buf_) {
@@ -234,8 +253,8 @@ class SubmissionHandler : public rapidjson::BaseReaderHandler<rapidjson::UTF8<>,
     return scalar_other();
   }
   // Numbers arrive as text (kResultsParseFlags) and are dispatched as RapidJSON would: its own
-  // full-precision conversion turns some zeros with large exponents into garbage ("0.00e100" read as
-  // 4e295, clz(0) in DiyFp::Normalize; found by fuzz_results). from_chars rounds correctly, like
+  // full-precision conversion turns some zeros with large exponents into garbage ("0.00e100" read
+  // as 4e295, clz(0) in DiyFp::Normalize; found by fuzz_results). from_chars rounds correctly, like
   // Python's float(); out of range goes to +-inf or 0, as Python does.
   bool RawNumber(const char* s, rapidjson::SizeType len, bool) {
     const char* end = s + len;
@@ -252,7 +271,8 @@ class SubmissionHandler : public rapidjson::BaseReaderHandler<rapidjson::UTF8<>,
       } else {
         std::uint64_t v = 0;
         if (auto r = std::from_chars(s, end, v); r.ec == std::errc() && r.ptr == end) {
-          return v <= std::numeric_limits<unsigned>::max() ? Uint(static_cast<unsigned>(v)) : Uint64(v);
+          return v <= std::numeric_limits<unsigned>::max() ? Uint(static_cast<unsigned>(v))
+                                                           : Uint64(v);
         }
       }
     }
@@ -265,9 +285,15 @@ class SubmissionHandler : public rapidjson::BaseReaderHandler<rapidjson::UTF8<>,
     }
     return Double(d);
   }
-  bool Double(double v) { return number(v, false, [&](MetaWriter& w) { return w.Double(v); }); }
-  bool Int(int v) { return number(v, true, [&](MetaWriter& w) { return w.Int(v); }); }
-  bool Uint(unsigned v) { return number(v, true, [&](MetaWriter& w) { return w.Uint(v); }); }
+  bool Double(double v) {
+    return number(v, false, [&](MetaWriter& w) { return w.Double(v); });
+  }
+  bool Int(int v) {
+    return number(v, true, [&](MetaWriter& w) { return w.Int(v); });
+  }
+  bool Uint(unsigned v) {
+    return number(v, true, [&](MetaWriter& w) { return w.Uint(v); });
+  }
   bool Int64(std::int64_t v) {
     return number(static_cast<double>(v), true, [&](MetaWriter& w) { return w.Int64(v); });
   }
@@ -401,7 +427,8 @@ class SubmissionHandler : public rapidjson::BaseReaderHandler<rapidjson::UTF8<>,
           return true;
         }
         skip_ = 1;
-        if (in_box_ && field_ >= 0) fields_[static_cast<std::size_t>(field_)].kind = FieldVal::kOther;
+        if (in_box_ && field_ >= 0)
+          fields_[static_cast<std::size_t>(field_)].kind = FieldVal::kOther;
         return true;
       default:  // nested container inside an array field
         if (in_box_ && field_ >= 0) array_bad(fields_[static_cast<std::size_t>(field_)]);
@@ -524,7 +551,8 @@ class SubmissionHandler : public rapidjson::BaseReaderHandler<rapidjson::UTF8<>,
     SampleEntry& entry = entries_[current_].second;
     if (!entry.status.is_ok()) return true;
     EvalBox box;
-    Status s = check_box(fields_, name_ + ": results['" + sample_ + "'][" + std::to_string(index) + "]", box);
+    Status s = check_box(
+        fields_, name_ + ": results['" + sample_ + "'][" + std::to_string(index) + "]", box);
     if (!s) {
       entry.status = std::move(s);
       return true;
@@ -586,8 +614,8 @@ void keep_last_duplicates(rapidjson::Value& v, rapidjson::Document::AllocatorTyp
 }
 
 template <typename Stream>
-Result<Submission> parse_stream(Stream& stream, const std::string& name, const SubmissionScope& scope,
-                                const std::string* text) {
+Result<Submission> parse_stream(Stream& stream, const std::string& name,
+                                const SubmissionScope& scope, const std::string* text) {
   using Handler = SubmissionHandler;
   Submission sub;
   Handler handler(name, scope);
@@ -595,9 +623,10 @@ Result<Submission> parse_stream(Stream& stream, const std::string& name, const S
   auto res = reader.Parse<kResultsParseFlags>(stream, handler);
   if (!handler.status().is_ok()) return handler.status();
   if (res.IsError()) {
-    const std::string where = text ? describe_offset(*text, res.Offset()) : "offset " + std::to_string(res.Offset());
-    return Status(StatusCode::kCorruptData,
-                  name + ": malformed JSON at " + where + ": " + rapidjson::GetParseError_En(res.Code()));
+    const std::string where =
+        text ? describe_offset(*text, res.Offset()) : "offset " + std::to_string(res.Offset());
+    return Status(StatusCode::kCorruptData, name + ": malformed JSON at " + where + ": " +
+                                                rapidjson::GetParseError_En(res.Code()));
   }
   if (!handler.saw_results()) return bad(name, "Error: No field `results` in result file");
   if (!handler.results_status().is_ok()) return handler.results_status();

@@ -1,6 +1,6 @@
 // Reads and validates a detection submission {"meta": {...}, "results": {sample_token: [box, ...]}}
-// exactly as the devkit's load_prediction + DetectionBox do (spec §1). Every rejection names the file,
-// the sample and the box index.
+// exactly as the devkit's load_prediction + DetectionBox do (spec §1). Every rejection names the
+// file, the sample and the box index.
 #pragma once
 
 #include <rapidjson/document.h>

@@ -1,6 +1,7 @@
-// A set of table tokens for the record filters of the big table scans. Millions of records are tested against a
-// split's few thousand tokens and most tests miss: a miss here touches one 8-byte fingerprint in a flat array (a few
-// tens of KB) instead of the nodes and heap strings of a std::unordered_set.
+// A set of table tokens for the record filters of the big table scans. Millions of records are
+// tested against a split's few thousand tokens and most tests miss: a miss here touches one 8-byte
+// fingerprint in a flat array (a few tens of KB) instead of the nodes and heap strings of a
+// std::unordered_set.
 #pragma once
 
 #include <cstdint>
@@ -40,7 +41,8 @@ class TokenSet {
   std::size_t size() const { return keys_.size(); }
 
  private:
-  // 64-bit mix of the 8-byte words (tokens are 32 hex characters); never 0, which marks an empty slot.
+  // 64-bit mix of the 8-byte words (tokens are 32 hex characters); never 0, which marks an empty
+  // slot.
   static std::uint64_t fingerprint(std::string_view s) {
     std::uint64_t h = 0x9E3779B97F4A7C15ULL ^ s.size();
     std::size_t i = 0;
@@ -57,7 +59,9 @@ class TokenSet {
     return h | 1;
   }
 
-  std::size_t slot(std::uint64_t f) const { return static_cast<std::size_t>(f >> 8) & mask_; }  // bit 0 is forced
+  std::size_t slot(std::uint64_t f) const {
+    return static_cast<std::size_t>(f >> 8) & mask_;
+  }  // bit 0 is forced
 
   void insert(std::string_view token) {
     const std::uint64_t f = fingerprint(token);

@@ -30,7 +30,9 @@ Summary RunningSummary::summary() const {
 }
 
 LogHistogram::LogHistogram(double min_value, double growth, int buckets)
-    : min_value_(min_value), log_growth_(std::log(growth)), counts_(static_cast<std::size_t>(buckets), 0) {}
+    : min_value_(min_value),
+      log_growth_(std::log(growth)),
+      counts_(static_cast<std::size_t>(buckets), 0) {}
 
 void LogHistogram::add(double value) {
   std::size_t index = 0;
@@ -46,15 +48,16 @@ void LogHistogram::add(double value) {
 
 double LogHistogram::percentile(double q) const {
   if (count_ == 0) return 0;
-  const auto rank = static_cast<std::uint64_t>(std::ceil(std::clamp(q, 0.0, 1.0) * static_cast<double>(count_)));
+  const auto rank =
+      static_cast<std::uint64_t>(std::ceil(std::clamp(q, 0.0, 1.0) * static_cast<double>(count_)));
   if (rank >= count_) return seen_max_;  // the largest sample is known exactly
   std::uint64_t seen = 0;
   for (std::size_t i = 0; i < counts_.size(); ++i) {
     seen += counts_[i];
     if (seen >= std::max<std::uint64_t>(rank, 1)) {
       // Bucket i > 0 covers [min*g^(i-1), min*g^i); report its geometric middle.
-      const double mid = i == 0 ? seen_min_
-                                : min_value_ * std::exp((static_cast<double>(i) - 0.5) * log_growth_);
+      const double mid =
+          i == 0 ? seen_min_ : min_value_ * std::exp((static_cast<double>(i) - 0.5) * log_growth_);
       return std::clamp(mid, seen_min_, seen_max_);
     }
   }

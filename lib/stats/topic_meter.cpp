@@ -31,7 +31,8 @@ double nearest_rank(std::vector<double>& values, double q) {
   const auto n = values.size();
   auto rank = static_cast<std::size_t>(std::ceil(std::clamp(q, 0.0, 1.0) * static_cast<double>(n)));
   if (rank == 0) rank = 1;
-  std::nth_element(values.begin(), values.begin() + static_cast<std::ptrdiff_t>(rank - 1), values.end());
+  std::nth_element(values.begin(), values.begin() + static_cast<std::ptrdiff_t>(rank - 1),
+                   values.end());
   return values[rank - 1];
 }
 
@@ -102,15 +103,20 @@ MeterStats TopicMeter::total() const {
 
 const char* to_string(ProbeEnd end) {
   switch (end) {
-    case ProbeEnd::Stopped: return "stopped";
-    case ProbeEnd::Duration: return "duration reached";
-    case ProbeEnd::MessageCount: return "message count reached";
-    case ProbeEnd::ReceiveError: return "receive error";
+    case ProbeEnd::Stopped:
+      return "stopped";
+    case ProbeEnd::Duration:
+      return "duration reached";
+    case ProbeEnd::MessageCount:
+      return "message count reached";
+    case ProbeEnd::ReceiveError:
+      return "receive error";
   }
   return "?";
 }
 
-ProbeResult run_probe(const ProbeReceive& receive, const ProbeOptions& options, const std::atomic<bool>& stop,
+ProbeResult run_probe(const ProbeReceive& receive, const ProbeOptions& options,
+                      const std::atomic<bool>& stop,
                       const std::function<void(const MeterStats&)>& on_report,
                       const std::function<StampNs()>& now) {
   TopicMeter meter(options.window_ns);
@@ -123,12 +129,14 @@ ProbeResult run_probe(const ProbeReceive& receive, const ProbeOptions& options, 
       break;
     }
     DurationNs timeout = options.poll_ns;
-    if (options.report_every_ns > 0) timeout = std::min(timeout, std::max<DurationNs>(0, next_report - now()));
+    if (options.report_every_ns > 0)
+      timeout = std::min(timeout, std::max<DurationNs>(0, next_report - now()));
     auto r = receive(timeout);
     if (r.is_ok()) {
       meter.add(r->receive_ns, r->size_bytes, r->delay_ns);
     } else if (r.status().code() != StatusCode::kWouldBlock) {
-      result.end = r.status().code() == StatusCode::kCancelled ? ProbeEnd::Stopped : ProbeEnd::ReceiveError;
+      result.end =
+          r.status().code() == StatusCode::kCancelled ? ProbeEnd::Stopped : ProbeEnd::ReceiveError;
       result.error = r.status().to_string();
       break;
     }
@@ -153,34 +161,34 @@ ProbeResult run_probe(const ProbeReceive& receive, const ProbeOptions& options, 
 
 std::string format_hz(const MeterStats& s) {
   if (s.count < 2) return "no new messages";
-  return fmt("average rate: %.3f Hz  min: %.3f ms  max: %.3f ms  std dev: %.3f ms", s.rate_hz, s.period_ms.min,
-             s.period_ms.max, s.period_ms.stddev) +
+  return fmt("average rate: %.3f Hz  min: %.3f ms  max: %.3f ms  std dev: %.3f ms", s.rate_hz,
+             s.period_ms.min, s.period_ms.max, s.period_ms.stddev) +
          "  window: " + std::to_string(s.count);
 }
 
 std::string format_bw(const MeterStats& s) {
   if (s.count < 2) return "no new messages";
-  return fmt("%.3f MB/s  mean: %.3f MB  min: %.3f MB  max: %.3f MB", s.bytes_per_s / 1e6, s.size_bytes.mean / 1e6,
-             s.size_bytes.min / 1e6, s.size_bytes.max / 1e6) +
+  return fmt("%.3f MB/s  mean: %.3f MB  min: %.3f MB  max: %.3f MB", s.bytes_per_s / 1e6,
+             s.size_bytes.mean / 1e6, s.size_bytes.min / 1e6, s.size_bytes.max / 1e6) +
          "  window: " + std::to_string(s.count);
 }
 
 std::string format_delay(const MeterStats& s) {
   if (s.delay_ms.count == 0) return "no messages with a capture stamp";
-  return fmt("delay p50: %.3f ms  p99: %.3f ms  min: %.3f ms  max: %.3f ms", s.delay_p50_ms, s.delay_p99_ms,
-             s.delay_ms.min, s.delay_ms.max) +
+  return fmt("delay p50: %.3f ms  p99: %.3f ms  min: %.3f ms  max: %.3f ms", s.delay_p50_ms,
+             s.delay_p99_ms, s.delay_ms.min, s.delay_ms.max) +
          "  window: " + std::to_string(s.delay_ms.count);
 }
 
 std::string format_summary(const std::string& topic, const MeterStats& s) {
   std::string out = "summary topic=" + topic + " count=" + std::to_string(s.count);
-  out += fmt(" span_s=%.3f rate_hz=%.3f period_ms_mean=%.3f period_ms_min=%.3f", static_cast<double>(s.span_ns) / 1e9,
-             s.rate_hz, s.period_ms.mean, s.period_ms.min);
-  out += fmt(" period_ms_max=%.3f period_ms_std=%.3f bw_mb_s=%.3f size_bytes_mean=%.0f", s.period_ms.max,
-             s.period_ms.stddev, s.bytes_per_s / 1e6, s.size_bytes.mean);
+  out += fmt(" span_s=%.3f rate_hz=%.3f period_ms_mean=%.3f period_ms_min=%.3f",
+             static_cast<double>(s.span_ns) / 1e9, s.rate_hz, s.period_ms.mean, s.period_ms.min);
+  out += fmt(" period_ms_max=%.3f period_ms_std=%.3f bw_mb_s=%.3f size_bytes_mean=%.0f",
+             s.period_ms.max, s.period_ms.stddev, s.bytes_per_s / 1e6, s.size_bytes.mean);
   if (s.delay_ms.count > 0) {
-    out += fmt(" delay_ms_p50=%.3f delay_ms_p99=%.3f delay_ms_max=%.3f", s.delay_p50_ms, s.delay_p99_ms,
-               s.delay_ms.max);
+    out += fmt(" delay_ms_p50=%.3f delay_ms_p99=%.3f delay_ms_max=%.3f", s.delay_p50_ms,
+               s.delay_p99_ms, s.delay_ms.max);
   }
   return out;
 }

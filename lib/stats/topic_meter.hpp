@@ -1,7 +1,8 @@
-// Sliding-window meters behind `faultline topic hz|bw|delay`, plus the transport-free probe loop that
-// feeds them. Rate and bandwidth come from receive times only (like `ros2 topic hz`, but the loop does
-// nothing per message except store a timestamp, a size and optionally a delay, so large frames are
-// counted correctly). Statistics are computed when a report is asked for, not per message.
+// Sliding-window meters behind `faultline topic hz|bw|delay`, plus the transport-free probe loop
+// that feeds them. Rate and bandwidth come from receive times only (like `ros2 topic hz`, but the
+// loop does nothing per message except store a timestamp, a size and optionally a delay, so large
+// frames are counted correctly). Statistics are computed when a report is asked for, not per
+// message.
 #pragma once
 
 #include <atomic>
@@ -21,13 +22,13 @@ namespace faultline::stats {
 constexpr DurationNs kNoDelay = std::numeric_limits<DurationNs>::min();  // sample carries no delay
 
 struct MeterStats {
-  std::uint64_t count = 0;    // messages considered (in the window, or in the whole run)
-  DurationNs span_ns = 0;     // last - first receive time of those messages
-  double rate_hz = 0;         // (count - 1) / span; 0 with fewer than 2 messages
-  Summary period_ms;          // differences between consecutive receive times
-  double bytes_per_s = 0;     // bytes of all but the first message / span (= mean size x rate)
+  std::uint64_t count = 0;  // messages considered (in the window, or in the whole run)
+  DurationNs span_ns = 0;   // last - first receive time of those messages
+  double rate_hz = 0;       // (count - 1) / span; 0 with fewer than 2 messages
+  Summary period_ms;        // differences between consecutive receive times
+  double bytes_per_s = 0;   // bytes of all but the first message / span (= mean size x rate)
   Summary size_bytes;
-  Summary delay_ms;           // over messages that carried a delay
+  Summary delay_ms;                           // over messages that carried a delay
   double delay_p50_ms = 0, delay_p99_ms = 0;  // nearest-rank percentiles, exact
 };
 
@@ -36,7 +37,8 @@ class TopicMeter {
  public:
   explicit TopicMeter(DurationNs window_ns = kNsPerSec);
 
-  // receive_ns: a monotonic receive time, non-decreasing. delay_ns: now - capture stamp, or kNoDelay.
+  // receive_ns: a monotonic receive time, non-decreasing. delay_ns: now - capture stamp, or
+  // kNoDelay.
   void add(StampNs receive_ns, std::uint64_t size_bytes, DurationNs delay_ns = kNoDelay);
   // Messages received in (now - window, now]; older ones are forgotten.
   MeterStats window(StampNs now_ns);
@@ -86,13 +88,14 @@ const char* to_string(ProbeEnd end);
 struct ProbeResult {
   MeterStats total;
   ProbeEnd end = ProbeEnd::Stopped;
-  std::string error;      // when end == ReceiveError
+  std::string error;  // when end == ReceiveError
   DurationNs elapsed_ns = 0;
 };
 
 // Receives until stop, duration or count; calls on_report(window stats) every report_every_ns.
 // `now` is the clock used for reports and the duration (monotonic, same base as receive_ns).
-ProbeResult run_probe(const ProbeReceive& receive, const ProbeOptions& options, const std::atomic<bool>& stop,
+ProbeResult run_probe(const ProbeReceive& receive, const ProbeOptions& options,
+                      const std::atomic<bool>& stop,
                       const std::function<void(const MeterStats&)>& on_report,
                       const std::function<StampNs()>& now = monotonic_now_ns);
 

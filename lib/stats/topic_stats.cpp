@@ -16,16 +16,17 @@ double TopicWindow::bandwidth_mb_s() const {
 
 std::string format(const TopicWindow& w) {
   char line[512];
-  std::snprintf(line, sizeof(line),
-                "%s from %s: %llu msgs %.1f Hz %.2f MB/s size %.0f B, latency ms p50 %.2f p95 %.2f p99 "
-                "%.2f max %.2f, age ms p50 %.1f, drops %llu superseded %llu injected %llu malformed %llu",
-                w.topic.c_str(), w.publisher.empty() ? "?" : w.publisher.c_str(),
-                static_cast<unsigned long long>(w.received), w.rate_hz(), w.bandwidth_mb_s(),
-                w.size_bytes.mean, w.latency_pct_ms.p50, w.latency_pct_ms.p95, w.latency_pct_ms.p99,
-                w.latency_ms.max, w.age_pct_ms.p50, static_cast<unsigned long long>(w.transport_drops),
-                static_cast<unsigned long long>(w.superseded),
-                static_cast<unsigned long long>(w.injected_drops),
-                static_cast<unsigned long long>(w.malformed));
+  std::snprintf(
+      line, sizeof(line),
+      "%s from %s: %llu msgs %.1f Hz %.2f MB/s size %.0f B, latency ms p50 %.2f p95 %.2f p99 "
+      "%.2f max %.2f, age ms p50 %.1f, drops %llu superseded %llu injected %llu malformed %llu",
+      w.topic.c_str(), w.publisher.empty() ? "?" : w.publisher.c_str(),
+      static_cast<unsigned long long>(w.received), w.rate_hz(), w.bandwidth_mb_s(),
+      w.size_bytes.mean, w.latency_pct_ms.p50, w.latency_pct_ms.p95, w.latency_pct_ms.p99,
+      w.latency_ms.max, w.age_pct_ms.p50, static_cast<unsigned long long>(w.transport_drops),
+      static_cast<unsigned long long>(w.superseded),
+      static_cast<unsigned long long>(w.injected_drops),
+      static_cast<unsigned long long>(w.malformed));
   return line;
 }
 
@@ -40,12 +41,14 @@ void TopicStatsCollector::record(const std::string& topic, const std::string& pu
     ++a->received;
     a->size_bytes.add(static_cast<double>(sample.size_bytes));
     if (sample.capture_stamp_ns != 0) {
-      const double age = static_cast<double>(sample.receive_realtime_ns - sample.capture_stamp_ns) / 1e6;
+      const double age =
+          static_cast<double>(sample.receive_realtime_ns - sample.capture_stamp_ns) / 1e6;
       a->age_ms.add(age);
       a->age_hist.add(age);
     }
     if (sample.publish_mono_ns != 0) {
-      const double latency = static_cast<double>(sample.receive_mono_ns - sample.publish_mono_ns) / 1e6;
+      const double latency =
+          static_cast<double>(sample.receive_mono_ns - sample.publish_mono_ns) / 1e6;
       a->latency_ms.add(latency);
       a->latency_hist.add(latency);
     }
@@ -76,7 +79,8 @@ void TopicStatsCollector::add_malformed(const std::string& topic, std::uint64_t 
   state(topic).run.malformed += n;
 }
 
-TopicWindow TopicStatsCollector::Accumulator::finish(const std::string& topic, DurationNs window_ns) const {
+TopicWindow TopicStatsCollector::Accumulator::finish(const std::string& topic,
+                                                     DurationNs window_ns) const {
   TopicWindow w;
   w.topic = topic;
   w.publisher = publisher;
@@ -110,7 +114,8 @@ std::vector<TopicWindow> TopicStatsCollector::take_window(StampNs now_mono_ns) {
   const DurationNs length = now_mono_ns - window_start_ns_;
   for (auto& [topic, s] : topics_) {
     const Accumulator& a = s.window;
-    if (a.received + a.transport_drops + a.superseded + a.injected_drops + a.malformed == 0) continue;
+    if (a.received + a.transport_drops + a.superseded + a.injected_drops + a.malformed == 0)
+      continue;
     out.push_back(a.finish(topic, length));
     s.window.reset_window();
   }
@@ -120,7 +125,8 @@ std::vector<TopicWindow> TopicStatsCollector::take_window(StampNs now_mono_ns) {
 
 std::vector<TopicWindow> TopicStatsCollector::totals(StampNs now_mono_ns) const {
   std::vector<TopicWindow> out;
-  for (const auto& [topic, s] : topics_) out.push_back(s.run.finish(topic, now_mono_ns - run_start_ns_));
+  for (const auto& [topic, s] : topics_)
+    out.push_back(s.run.finish(topic, now_mono_ns - run_start_ns_));
   return out;
 }
 

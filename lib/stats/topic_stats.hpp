@@ -15,7 +15,7 @@
 namespace faultline::stats {
 
 struct Sample {
-  StampNs receive_mono_ns = 0;      // CLOCK_MONOTONIC at receive (or send, for a publisher's own view)
+  StampNs receive_mono_ns = 0;  // CLOCK_MONOTONIC at receive (or send, for a publisher's own view)
   StampNs receive_realtime_ns = 0;  // CLOCK_REALTIME at receive
   StampNs capture_stamp_ns = 0;     // header.capture_stamp_ns; 0 = unknown (no age)
   StampNs publish_mono_ns = 0;      // header.publish_mono_ns; 0 = unknown (no latency)
@@ -42,7 +42,8 @@ std::string format(const TopicWindow& w);
 
 class TopicStatsCollector {
  public:
-  explicit TopicStatsCollector(DurationNs window_ns = kNsPerSec, StampNs start_mono_ns = monotonic_now_ns());
+  explicit TopicStatsCollector(DurationNs window_ns = kNsPerSec,
+                               StampNs start_mono_ns = monotonic_now_ns());
 
   void record(const std::string& topic, const std::string& publisher, const Sample& sample);
   void add_transport_drops(const std::string& topic, std::uint64_t n);
@@ -50,7 +51,9 @@ class TopicStatsCollector {
   void add_injected_drops(const std::string& topic, std::uint64_t n);
   void add_malformed(const std::string& topic, std::uint64_t n);
 
-  bool window_elapsed(StampNs now_mono_ns) const { return now_mono_ns - window_start_ns_ >= window_ns_; }
+  bool window_elapsed(StampNs now_mono_ns) const {
+    return now_mono_ns - window_start_ns_ >= window_ns_;
+  }
   // The current window per topic (topics with any activity), then starts a new window.
   std::vector<TopicWindow> take_window(StampNs now_mono_ns);
   // Totals over the whole run (since construction).
@@ -59,7 +62,8 @@ class TopicStatsCollector {
  private:
   struct Accumulator {
     std::string publisher;
-    std::uint64_t received = 0, transport_drops = 0, superseded = 0, injected_drops = 0, malformed = 0;
+    std::uint64_t received = 0, transport_drops = 0, superseded = 0, injected_drops = 0,
+                  malformed = 0;
     RunningSummary period_ms, age_ms, size_bytes, latency_ms;
     LogHistogram latency_hist, age_hist;
     StampNs last_receive_ns = 0;

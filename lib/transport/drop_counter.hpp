@@ -1,4 +1,5 @@
-// Transport drops from sequence gaps, per (publisher, topic), in the eCAL MessageDropCalculator model.
+// Transport drops from sequence gaps, per (publisher, topic), in the eCAL MessageDropCalculator
+// model.
 #pragma once
 
 #include <cstdint>

@@ -1,4 +1,5 @@
-// Endpoint strings: loopback checks (a bind beyond loopback needs allow_remote, transport/access.hpp) and schemes.
+// Endpoint strings: loopback checks (a bind beyond loopback needs allow_remote,
+// transport/access.hpp) and schemes.
 #pragma once
 
 #include <string>

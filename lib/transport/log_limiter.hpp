@@ -1,4 +1,5 @@
-// Rate limiting for hot-path warnings: at most one line per interval, reporting how many were held back.
+// Rate limiting for hot-path warnings: at most one line per interval, reporting how many were held
+// back.
 #pragma once
 
 #include <cstdint>

@@ -15,7 +15,9 @@ namespace faultline::transport {
 namespace {
 
 // libzmq calls this from its I/O thread once the frame is sent; the hint is a heap shared_ptr.
-void release_owner(void* /*data*/, void* hint) { delete static_cast<std::shared_ptr<const void>*>(hint); }
+void release_owner(void* /*data*/, void* hint) {
+  delete static_cast<std::shared_ptr<const void>*>(hint);
+}
 
 Status from_error(const zmq::error_t& e, std::string_view what) {
   if (e.num() == ETERM) return {StatusCode::kCancelled, "context terminated"};
@@ -26,8 +28,8 @@ Status from_error(const zmq::error_t& e, std::string_view what) {
 
 Publisher::Publisher(const PublisherConfig& config)
     : config_(config),
-      socket_(shared_context(), config.pattern == Pattern::PubSub ? zmq::socket_type::xpub
-                                                                   : zmq::socket_type::push) {
+      socket_(shared_context(),
+              config.pattern == Pattern::PubSub ? zmq::socket_type::xpub : zmq::socket_type::push) {
   socket_.set(zmq::sockopt::linger, config.linger_ms);
   socket_.set(zmq::sockopt::sndhwm, config.snd_hwm);
   if (config.pattern == Pattern::PubSub) {
@@ -57,13 +59,14 @@ Publisher::Publisher(const PublisherConfig& config)
 
 Status Publisher::send_parts(std::string_view topic, const std::string_view* middle,
                              const Payload* payload) {
-  const std::size_t largest = std::max({topic.size(), middle->size(), payload ? payload->size_bytes : 0});
+  const std::size_t largest =
+      std::max({topic.size(), middle->size(), payload ? payload->size_bytes : 0});
   if (config_.max_msg_bytes >= 0 && largest > static_cast<std::uint64_t>(config_.max_msg_bytes)) {
     ++oversize_refused_;
     return {StatusCode::kInvalidArgument,
-            std::string(topic) + ": message part of " + std::to_string(largest) + " bytes exceeds max_msg_bytes (" +
-                std::to_string(config_.max_msg_bytes) + "); refused, not sent (" +
-                std::to_string(oversize_refused_) + " so far)"};
+            std::string(topic) + ": message part of " + std::to_string(largest) +
+                " bytes exceeds max_msg_bytes (" + std::to_string(config_.max_msg_bytes) +
+                "); refused, not sent (" + std::to_string(oversize_refused_) + " so far)"};
   }
   try {
     zmq::message_t topic_frame(topic.data(), topic.size());
@@ -96,7 +99,9 @@ Status Publisher::send(std::string_view topic, std::string_view header, const Pa
   return send_parts(topic, &header, &payload);
 }
 
-std::uint64_t Publisher::auth_refused() const { return zap_domain_.empty() ? 0 : zap_refused(zap_domain_); }
+std::uint64_t Publisher::auth_refused() const {
+  return zap_domain_.empty() ? 0 : zap_refused(zap_domain_);
+}
 
 void Publisher::set_linger(int linger_ms) {
   try {

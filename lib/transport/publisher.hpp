@@ -1,22 +1,22 @@
 // Sending side of the byte transport: one ZeroMQ socket that carries one or more topics.
 //
-// Pattern::PubSub (default) is an XPUB socket: fan-out to every subscriber; when a subscriber's queue
-// is full (HWM) libzmq drops for that subscriber only, visible downstream as seq gaps. The XPUB side
-// sees subscriptions, so wait_for_subscribers() replaces sleeps against the slow-joiner problem.
-// Pattern::PushPull is a PUSH socket: send() blocks while the peer's queue is full, nothing is lost;
-// several PULL peers are load balanced, not fanned out. ZMQ_IMMEDIATE is set when connecting.
+// Pattern::PubSub (default) is an XPUB socket: fan-out to every subscriber; when a subscriber's
+// queue is full (HWM) libzmq drops for that subscriber only, visible downstream as seq gaps. The
+// XPUB side sees subscriptions, so wait_for_subscribers() replaces sleeps against the slow-joiner
+// problem. Pattern::PushPull is a PUSH socket: send() blocks while the peer's queue is full,
+// nothing is lost; several PULL peers are load balanced, not fanned out. ZMQ_IMMEDIATE is set when
+// connecting.
 //
 // Framing: image topics [topic][header][payload], other topics [topic][body]. LINGER is 0.
 // A Publisher belongs to one thread.
 #pragma once
-
-#include <zmq.hpp>
 
 #include <atomic>
 #include <cstdint>
 #include <map>
 #include <string>
 #include <string_view>
+#include <zmq.hpp>
 
 #include "common/clock.hpp"
 #include "common/status.hpp"
@@ -25,9 +25,10 @@
 
 namespace faultline::transport {
 
-// Largest message part (frame) any Faultline socket sends or accepts by default: a raw 8-megapixel bgr8
-// frame (3840x2160x3 = 24.9 MB) fits with room to spare. Publishers refuse larger parts (counted, with a
-// clear error) because libzmq answers an over-limit part by cutting the subscriber's connection.
+// Largest message part (frame) any Faultline socket sends or accepts by default: a raw 8-megapixel
+// bgr8 frame (3840x2160x3 = 24.9 MB) fits with room to spare. Publishers refuse larger parts
+// (counted, with a clear error) because libzmq answers an over-limit part by cutting the
+// subscriber's connection.
 inline constexpr std::int64_t kDefaultMaxMessageBytes = std::int64_t{64} << 20;
 
 enum class Pattern {
@@ -36,15 +37,17 @@ enum class Pattern {
 };
 
 struct PublisherConfig {
-  std::string endpoint = "tcp://127.0.0.1:*";  // tcp/ipc/inproc; "*" port = OS-chosen (see endpoint())
+  std::string endpoint =
+      "tcp://127.0.0.1:*";  // tcp/ipc/inproc; "*" port = OS-chosen (see endpoint())
   Pattern pattern = Pattern::PubSub;
-  bool bind = true;          // false: connect to a binding receiver (e.g. detector PUSH -> sink PULL)
-  int snd_hwm = 4;           // messages per peer; 1-8 for image topics, ~64 for lockstep replay
-  bool zero_copy = true;     // payload frames by reference (zmq_msg_init_data); false copies them
+  bool bind = true;       // false: connect to a binding receiver (e.g. detector PUSH -> sink PULL)
+  int snd_hwm = 4;        // messages per peer; 1-8 for image topics, ~64 for lockstep replay
+  bool zero_copy = true;  // payload frames by reference (zmq_msg_init_data); false copies them
   DurationNs send_timeout_ns = -1;  // PushPull only: -1 blocks forever, else kWouldBlock after this
-  int linger_ms = 0;         // ZMQ_LINGER: 0 discards unsent messages at close; a lossless edge
-                             // whose sender may exit right after its last send wants ~200
-  // A message part larger than this is refused (kInvalidArgument, counted in oversize_refused()); keep it
+  int linger_ms = 0;  // ZMQ_LINGER: 0 discards unsent messages at close; a lossless edge
+                      // whose sender may exit right after its last send wants ~200
+  // A message part larger than this is refused (kInvalidArgument, counted in oversize_refused());
+  // keep it
   // <= the receivers' max_msg_bytes. -1 = no limit.
   std::int64_t max_msg_bytes = kDefaultMaxMessageBytes;
   AccessConfig access;  // loopback-only binds unless allow_remote; CURVE (transport/access.hpp)
@@ -52,8 +55,8 @@ struct PublisherConfig {
 
 class Publisher {
  public:
-  // Throws ConfigError naming the endpoint when the socket cannot bind/connect, or binds beyond loopback
-  // without access.allow_remote; naming the file when a CURVE key cannot be read.
+  // Throws ConfigError naming the endpoint when the socket cannot bind/connect, or binds beyond
+  // loopback without access.allow_remote; naming the file when a CURVE key cannot be read.
   explicit Publisher(const PublisherConfig& config);
   Publisher(Publisher&&) noexcept = default;
   Publisher& operator=(Publisher&&) noexcept = default;
@@ -69,9 +72,9 @@ class Publisher {
   // [topic][body].
   Status send(std::string_view topic, std::string_view body);
 
-  // PubSub only: blocks until at least `count` live subscriptions match `topic` (a SUB socket counts
-  // once per subscribed prefix that is a prefix of `topic`), `timeout_ns` passed (kWouldBlock; -1 =
-  // no limit), or `stop` turned true (kCancelled).
+  // PubSub only: blocks until at least `count` live subscriptions match `topic` (a SUB socket
+  // counts once per subscribed prefix that is a prefix of `topic`), `timeout_ns` passed
+  // (kWouldBlock; -1 = no limit), or `stop` turned true (kCancelled).
   Status wait_for_subscribers(std::string_view topic, int count, DurationNs timeout_ns,
                               const std::atomic<bool>* stop = nullptr);
   // Subscriptions currently matching `topic` (drains pending subscription messages first).
@@ -80,7 +83,8 @@ class Publisher {
   std::uint64_t would_block_count() const { return would_block_; }
   // Messages refused because one part exceeded max_msg_bytes (never sent).
   std::uint64_t oversize_refused() const { return oversize_refused_; }
-  // CURVE clients refused because their key is not in access.curve_allowed_clients_file (each logged).
+  // CURVE clients refused because their key is not in access.curve_allowed_clients_file (each
+  // logged).
   std::uint64_t auth_refused() const;
   // Changes ZMQ_LINGER, e.g. to 0 before closing on shutdown so exit stays prompt.
   void set_linger(int linger_ms);

@@ -115,8 +115,9 @@ std::vector<TopicInfo> list_topics() {
     if (!pid_alive(doc["pid"].GetInt())) continue;
     for (const auto& t : doc["topics"].GetArray()) {
       auto str = [&](const char* key) {
-        return t.IsObject() && t.HasMember(key) && t[key].IsString() ? std::string(t[key].GetString())
-                                                                     : std::string();
+        return t.IsObject() && t.HasMember(key) && t[key].IsString()
+                   ? std::string(t[key].GetString())
+                   : std::string();
       };
       TopicInfo info{str("topic"), str("type"), str("endpoint"), str("node"), doc["pid"].GetInt()};
       if (!info.topic.empty()) out.push_back(std::move(info));

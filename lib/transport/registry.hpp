@@ -3,8 +3,9 @@
 // or /tmp/faultline-<uid>/graph.
 #pragma once
 
-#include <string>
 #include <sys/types.h>
+
+#include <string>
 #include <vector>
 
 #include "common/status.hpp"
@@ -21,8 +22,9 @@ struct TopicInfo {
 
 std::string run_dir();
 
-// Owns this node's registry file: advertise() rewrites it atomically (temp + rename); the destructor
-// removes it. Failures to write are logged once and otherwise ignored (introspection is optional).
+// Owns this node's registry file: advertise() rewrites it atomically (temp + rename); the
+// destructor removes it. Failures to write are logged once and otherwise ignored (introspection is
+// optional).
 class TopicRegistry {
  public:
   explicit TopicRegistry(std::string node);
@@ -40,7 +42,8 @@ class TopicRegistry {
   std::vector<TopicInfo> topics_;
 };
 
-// Every advertised topic of live processes, sorted by topic then node. Unreadable files are skipped.
+// Every advertised topic of live processes, sorted by topic then node. Unreadable files are
+// skipped.
 std::vector<TopicInfo> list_topics();
 
 }  // namespace faultline::transport

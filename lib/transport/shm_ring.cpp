@@ -1,5 +1,5 @@
-// The shared-memory frame ring (shm_ring.hpp): file creation with stale-file recovery, the seqlock write, and the
-// reader's checks. Offsets below are the file format of docs/protocol.md §16.
+// The shared-memory frame ring (shm_ring.hpp): file creation with stale-file recovery, the seqlock
+// write, and the reader's checks. Offsets below are the file format of docs/protocol.md §16.
 #include "transport/shm_ring.hpp"
 
 #include <fcntl.h>
@@ -28,9 +28,9 @@ namespace {
 // "FLSHMRNG" read as a little-endian u64.
 constexpr std::uint64_t kMagic = 0x474e524d4853464cULL;
 // Header fields (byte offsets, little-endian).
-constexpr std::size_t kOffMagic = 0, kOffVersion = 8, kOffSlotCount = 12, kOffSlotBytes = 16, kOffStride = 24,
-                      kOffDataOffset = 32, kOffRingId = 40, kOffWriterPid = 48, kOffFramesWritten = 56,
-                      kOffSlotHeaderBytes = 64, kOffWriterStart = 72;
+constexpr std::size_t kOffMagic = 0, kOffVersion = 8, kOffSlotCount = 12, kOffSlotBytes = 16,
+                      kOffStride = 24, kOffDataOffset = 32, kOffRingId = 40, kOffWriterPid = 48,
+                      kOffFramesWritten = 56, kOffSlotHeaderBytes = 64, kOffWriterStart = 72;
 // Slot header fields, relative to the slot's start.
 constexpr std::size_t kOffSlotSequence = 0, kOffSlotSize = 8;
 constexpr std::uint64_t kPage = 4096;
@@ -48,7 +48,8 @@ std::uint32_t load_u32(const std::uint8_t* p) {
 void store_u64(std::uint8_t* p, std::uint64_t v) { std::memcpy(p, &v, sizeof v); }
 void store_u32(std::uint8_t* p, std::uint32_t v) { std::memcpy(p, &v, sizeof v); }
 
-// Sequence words and the magic are 8-byte aligned words shared between processes: atomic builtins, not memcpy.
+// Sequence words and the magic are 8-byte aligned words shared between processes: atomic builtins,
+// not memcpy.
 std::uint64_t atomic_load(const std::uint8_t* p, int order) {
   return __atomic_load_n(reinterpret_cast<const std::uint64_t*>(p), order);
 }
@@ -58,8 +59,9 @@ void atomic_store(std::uint8_t* p, std::uint64_t v, int order) {
 
 std::string errno_text() { return std::strerror(errno); }
 
-// Field 22 of /proc/<pid>/stat (start time in clock ticks since boot), 0 when unknown: with the pid it identifies a
-// process, so a pid reused by an unrelated process does not pass for a ring's live writer.
+// Field 22 of /proc/<pid>/stat (start time in clock ticks since boot), 0 when unknown: with the pid
+// it identifies a process, so a pid reused by an unrelated process does not pass for a ring's live
+// writer.
 std::uint64_t process_start_ticks(long pid) {
   std::ifstream in("/proc/" + std::to_string(pid) + "/stat");
   std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
@@ -80,7 +82,8 @@ bool writer_alive(const std::string& path, long* pid_out) {
   std::uint8_t header[kOffWriterStart + 8] = {};
   const ssize_t got = ::pread(fd, header, sizeof header, 0);
   ::close(fd);
-  if (got != static_cast<ssize_t>(sizeof header) || load_u64(header + kOffMagic) != kMagic) return false;
+  if (got != static_cast<ssize_t>(sizeof header) || load_u64(header + kOffMagic) != kMagic)
+    return false;
   const auto pid = static_cast<long>(load_u64(header + kOffWriterPid));
   *pid_out = pid;
   if (pid <= 0 || pid == static_cast<long>(::getpid())) return false;
@@ -99,11 +102,13 @@ std::uint64_t round_up(std::uint64_t v, std::uint64_t to) { return (v + to - 1) 
 
 }  // namespace
 
-std::string shm_ring_path(const std::string& dir, const std::string& node, const std::string& endpoint) {
+std::string shm_ring_path(const std::string& dir, const std::string& node,
+                          const std::string& endpoint) {
   char hex[17];
   std::snprintf(hex, sizeof hex, "%016llx", static_cast<unsigned long long>(fnv1a(endpoint)));
   std::string safe_node;
-  for (const char c : node) safe_node += std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '-' ? c : '_';
+  for (const char c : node)
+    safe_node += std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '-' ? c : '_';
   return dir + "/faultline-" + safe_node + "-" + hex + ".ring";
 }
 
@@ -122,11 +127,13 @@ ShmRingWriter::ShmRingWriter(const ShmRingConfig& config)
   long pid = 0;
   if (writer_alive(path_, &pid)) {
     fail("in use by the running process " + std::to_string(pid) +
-         " (another publisher with the same node name and endpoint); stop it or choose another endpoint");
+         " (another publisher with the same node name and endpoint); stop it or choose another "
+         "endpoint");
   }
-  // Whatever is left (a ring of a killed process, a half-created file) is replaced: readers that still map the old
-  // file keep their pages and see another ring_id in new descriptors.
-  if (::unlink(path_.c_str()) != 0 && errno != ENOENT) fail("cannot remove the stale file: " + errno_text());
+  // Whatever is left (a ring of a killed process, a half-created file) is replaced: readers that
+  // still map the old file keep their pages and see another ring_id in new descriptors.
+  if (::unlink(path_.c_str()) != 0 && errno != ENOENT)
+    fail("cannot remove the stale file: " + errno_text());
   const int fd = ::open(path_.c_str(), O_RDWR | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
   if (fd < 0) fail("cannot create: " + errno_text());
   struct stat st {};
@@ -147,8 +154,9 @@ ShmRingWriter::ShmRingWriter(const ShmRingConfig& config)
   mapped_bytes_ = total;
   inode_ = static_cast<std::uint64_t>(st.st_ino);
   std::random_device rd;
-  ring_id_ = (static_cast<std::uint64_t>(rd()) << 32) ^ rd() ^
-             static_cast<std::uint64_t>(std::chrono::steady_clock::now().time_since_epoch().count());
+  ring_id_ =
+      (static_cast<std::uint64_t>(rd()) << 32) ^ rd() ^
+      static_cast<std::uint64_t>(std::chrono::steady_clock::now().time_since_epoch().count());
   if (ring_id_ == 0) ring_id_ = 1;
   store_u32(base_ + kOffVersion, kShmRingVersion);
   store_u32(base_ + kOffSlotCount, slot_count_);
@@ -159,23 +167,26 @@ ShmRingWriter::ShmRingWriter(const ShmRingConfig& config)
   store_u64(base_ + kOffWriterPid, static_cast<std::uint64_t>(::getpid()));
   store_u64(base_ + kOffSlotHeaderBytes, kShmSlotHeaderBytes);
   store_u64(base_ + kOffWriterStart, process_start_ticks(static_cast<long>(::getpid())));
-  atomic_store(base_ + kOffMagic, kMagic, __ATOMIC_RELEASE);  // last: a reader seeing it sees the whole header
+  atomic_store(base_ + kOffMagic, kMagic,
+               __ATOMIC_RELEASE);  // last: a reader seeing it sees the whole header
 }
 
 ShmRingWriter::~ShmRingWriter() {
   if (base_) ::munmap(base_, mapped_bytes_);
   struct stat st {};
   // Only our own file: a successor may already have replaced it.
-  if (::stat(path_.c_str(), &st) == 0 && static_cast<std::uint64_t>(st.st_ino) == inode_) ::unlink(path_.c_str());
+  if (::stat(path_.c_str(), &st) == 0 && static_cast<std::uint64_t>(st.st_ino) == inode_)
+    ::unlink(path_.c_str());
 }
 
 Result<ShmSlotRef> ShmRingWriter::write(const std::uint8_t* data, std::size_t size) {
   if (size > slot_bytes_) {
     ++oversize_refused_;
     return Status{StatusCode::kInvalidArgument,
-                  "frame of " + std::to_string(size) + " bytes refused by shm ring " + path_ + ": slots hold " +
-                      std::to_string(slot_bytes_) + " bytes (raise shm_slot_bytes); " +
-                      std::to_string(oversize_refused_) + " refused so far"};
+                  "frame of " + std::to_string(size) + " bytes refused by shm ring " + path_ +
+                      ": slots hold " + std::to_string(slot_bytes_) +
+                      " bytes (raise shm_slot_bytes); " + std::to_string(oversize_refused_) +
+                      " refused so far"};
   }
   ShmSlotRef ref;
   ref.ring_id = ring_id_;
@@ -184,7 +195,8 @@ Result<ShmSlotRef> ShmRingWriter::write(const std::uint8_t* data, std::size_t si
   ref.offset = kShmHeaderBytes + stride_ * ref.slot + kShmSlotHeaderBytes;
   ref.size_bytes = size;
   std::uint8_t* slot = base_ + kShmHeaderBytes + stride_ * ref.slot;
-  // Seqlock: odd while the bytes change, so a reader that sees the same even value before and after read whole bytes.
+  // Seqlock: odd while the bytes change, so a reader that sees the same even value before and after
+  // read whole bytes.
   atomic_store(slot + kOffSlotSequence, ref.sequence - 1, __ATOMIC_RELAXED);
   std::atomic_thread_fence(std::memory_order_release);
   if (size > 0) std::memcpy(base_ + ref.offset, data, size);
@@ -203,7 +215,8 @@ Result<ShmRingReader> ShmRingReader::open(const std::string& path) {
   }
   struct stat st {};
   std::uint8_t header[kOffWriterStart + 8] = {};
-  const bool read_ok = ::fstat(fd, &st) == 0 && ::pread(fd, header, sizeof header, 0) == static_cast<ssize_t>(sizeof header);
+  const bool read_ok = ::fstat(fd, &st) == 0 &&
+                       ::pread(fd, header, sizeof header, 0) == static_cast<ssize_t>(sizeof header);
   auto bad = [&](const std::string& why) {
     ::close(fd);
     return Status{StatusCode::kCorruptData, "shm ring " + path + ": " + why};
@@ -214,19 +227,24 @@ Result<ShmRingReader> ShmRingReader::open(const std::string& path) {
     return bad("version " + std::to_string(load_u32(header + kOffVersion)) + ", expected " +
                std::to_string(kShmRingVersion));
   }
-  const std::uint64_t slots = load_u32(header + kOffSlotCount), stride = load_u64(header + kOffStride);
+  const std::uint64_t slots = load_u32(header + kOffSlotCount),
+                      stride = load_u64(header + kOffStride);
   const std::uint64_t slot_bytes = load_u64(header + kOffSlotBytes);
   if (slots < 2 || load_u64(header + kOffDataOffset) != kShmHeaderBytes ||
-      load_u64(header + kOffSlotHeaderBytes) != kShmSlotHeaderBytes || stride < kShmSlotHeaderBytes + slot_bytes) {
-    return bad("inconsistent header (slots " + std::to_string(slots) + ", stride " + std::to_string(stride) + ")");
+      load_u64(header + kOffSlotHeaderBytes) != kShmSlotHeaderBytes ||
+      stride < kShmSlotHeaderBytes + slot_bytes) {
+    return bad("inconsistent header (slots " + std::to_string(slots) + ", stride " +
+               std::to_string(stride) + ")");
   }
   const std::uint64_t total = kShmHeaderBytes + stride * slots;
   if (static_cast<std::uint64_t>(st.st_size) < total) {
-    return bad("file is " + std::to_string(st.st_size) + " bytes, its header says " + std::to_string(total));
+    return bad("file is " + std::to_string(st.st_size) + " bytes, its header says " +
+               std::to_string(total));
   }
   void* base = ::mmap(nullptr, total, PROT_READ, MAP_SHARED, fd, 0);
   ::close(fd);
-  if (base == MAP_FAILED) return Status{StatusCode::kIoError, "shm ring " + path + ": cannot map: " + errno_text()};
+  if (base == MAP_FAILED)
+    return Status{StatusCode::kIoError, "shm ring " + path + ": cannot map: " + errno_text()};
   ShmRingReader r;
   r.path_ = path;
   r.base_ = static_cast<const std::uint8_t*>(base);
@@ -259,28 +277,33 @@ std::uint32_t ShmRingReader::slot_count() const { return load_u32(base_ + kOffSl
 std::uint64_t ShmRingReader::slot_bytes() const { return load_u64(base_ + kOffSlotBytes); }
 
 std::uint64_t ShmRingReader::sequence_of(std::uint32_t slot) const {
-  return atomic_load(base_ + kShmHeaderBytes + load_u64(base_ + kOffStride) * slot + kOffSlotSequence,
-                     __ATOMIC_ACQUIRE);
+  return atomic_load(
+      base_ + kShmHeaderBytes + load_u64(base_ + kOffStride) * slot + kOffSlotSequence,
+      __ATOMIC_ACQUIRE);
 }
 
 Result<ShmFrameView> ShmRingReader::acquire(const ShmSlotRef& ref) {
   if (ref.ring_id != ring_id()) {
-    return Status{StatusCode::kNotFound, "shm ring " + path_ + " was recreated (ring_id " + std::to_string(ring_id()) +
-                                             ", descriptor " + std::to_string(ref.ring_id) + "): reopen it"};
+    return Status{StatusCode::kNotFound, "shm ring " + path_ + " was recreated (ring_id " +
+                                             std::to_string(ring_id()) + ", descriptor " +
+                                             std::to_string(ref.ring_id) + "): reopen it"};
   }
   const std::uint64_t stride = load_u64(base_ + kOffStride);
-  if (ref.slot >= slot_count() || ref.offset != kShmHeaderBytes + stride * ref.slot + kShmSlotHeaderBytes ||
+  if (ref.slot >= slot_count() ||
+      ref.offset != kShmHeaderBytes + stride * ref.slot + kShmSlotHeaderBytes ||
       ref.size_bytes > slot_bytes() || ref.sequence == 0 || ref.sequence % 2 != 0) {
-    return Status{StatusCode::kCorruptData, "shm descriptor does not fit ring " + path_ + ": slot " +
-                                                std::to_string(ref.slot) + " offset " + std::to_string(ref.offset) +
-                                                " size " + std::to_string(ref.size_bytes) + " sequence " +
+    return Status{StatusCode::kCorruptData, "shm descriptor does not fit ring " + path_ +
+                                                ": slot " + std::to_string(ref.slot) + " offset " +
+                                                std::to_string(ref.offset) + " size " +
+                                                std::to_string(ref.size_bytes) + " sequence " +
                                                 std::to_string(ref.sequence)};
   }
   const std::uint64_t now = sequence_of(ref.slot);
   if (now != ref.sequence) {
     ++overwritten_before_read_;
-    return Status{StatusCode::kNotFound, "shm ring " + path_ + " slot " + std::to_string(ref.slot) + " holds sequence " +
-                                             std::to_string(now) + ", descriptor " + std::to_string(ref.sequence) +
+    return Status{StatusCode::kNotFound, "shm ring " + path_ + " slot " + std::to_string(ref.slot) +
+                                             " holds sequence " + std::to_string(now) +
+                                             ", descriptor " + std::to_string(ref.sequence) +
                                              ": overwritten before it was read (reader more than " +
                                              std::to_string(slot_count()) + " frames behind)"};
   }
@@ -292,10 +315,12 @@ Result<ShmFrameView> ShmRingReader::acquire(const ShmSlotRef& ref) {
 }
 
 bool ShmRingReader::intact(const ShmFrameView& view) {
-  // Orders the caller's reads of the pixels before the re-read of the sequence word (seqlock reader side).
+  // Orders the caller's reads of the pixels before the re-read of the sequence word (seqlock reader
+  // side).
   std::atomic_thread_fence(std::memory_order_acquire);
   const std::uint64_t now = atomic_load(
-      base_ + kShmHeaderBytes + load_u64(base_ + kOffStride) * view.ref.slot + kOffSlotSequence, __ATOMIC_RELAXED);
+      base_ + kShmHeaderBytes + load_u64(base_ + kOffStride) * view.ref.slot + kOffSlotSequence,
+      __ATOMIC_RELAXED);
   if (now == view.ref.sequence) return true;
   ++overwritten_during_use_;
   return false;

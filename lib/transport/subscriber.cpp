@@ -41,8 +41,9 @@ RawSubscriber::~RawSubscriber() {
 RawSubscriber::RawSubscriber(const SubscriberConfig& config) : config_(config) { open_socket(); }
 
 void RawSubscriber::open_socket() {
-  socket_ = zmq::socket_t(shared_context(), config_.pattern == Pattern::PubSub ? zmq::socket_type::sub
-                                                                              : zmq::socket_type::pull);
+  socket_ =
+      zmq::socket_t(shared_context(), config_.pattern == Pattern::PubSub ? zmq::socket_type::sub
+                                                                         : zmq::socket_type::pull);
   socket_.set(zmq::sockopt::linger, 0);
   socket_.set(zmq::sockopt::rcvhwm, config_.rcv_hwm);
   socket_.set(zmq::sockopt::maxmsgsize, config_.max_msg_bytes);
@@ -56,12 +57,14 @@ void RawSubscriber::open_socket() {
   if (!domain.empty()) zap_domain_ = domain;
   // Monitor before connecting, so that no closed connection goes unseen.
   static std::atomic<std::uint64_t> monitor_ids{0};
-  const std::string monitor_address = "inproc://faultline-subscriber-monitor-" + std::to_string(++monitor_ids);
+  const std::string monitor_address =
+      "inproc://faultline-subscriber-monitor-" + std::to_string(++monitor_ids);
   constexpr int kEvents = ZMQ_EVENT_DISCONNECTED | ZMQ_EVENT_CONNECT_RETRIED | ZMQ_EVENT_CONNECTED |
-                          ZMQ_EVENT_HANDSHAKE_FAILED_NO_DETAIL | ZMQ_EVENT_HANDSHAKE_FAILED_PROTOCOL |
-                          ZMQ_EVENT_HANDSHAKE_FAILED_AUTH;
+                          ZMQ_EVENT_HANDSHAKE_FAILED_NO_DETAIL |
+                          ZMQ_EVENT_HANDSHAKE_FAILED_PROTOCOL | ZMQ_EVENT_HANDSHAKE_FAILED_AUTH;
   if (zmq_socket_monitor(socket_.handle(), monitor_address.c_str(), kEvents) != 0) {
-    throw ConfigError("cannot monitor the subscriber socket: " + std::string(zmq_strerror(zmq_errno())));
+    throw ConfigError("cannot monitor the subscriber socket: " +
+                      std::string(zmq_strerror(zmq_errno())));
   }
   monitor_ = zmq::socket_t(shared_context(), zmq::socket_type::pair);
   monitor_.set(zmq::sockopt::linger, 0);
@@ -94,17 +97,19 @@ void RawSubscriber::handle_monitor_events() {
     }
     std::uint16_t id = 0;
     if (event.size() >= sizeof id) std::memcpy(&id, event.data(), sizeof id);
-    // A connecting session names its endpoint the same way in every event (the connecter's address).
+    // A connecting session names its endpoint the same way in every event (the connecter's
+    // address).
     std::string where(static_cast<const char*>(address.data()), address.size());
     if (id == ZMQ_EVENT_HANDSHAKE_FAILED_NO_DETAIL || id == ZMQ_EVENT_HANDSHAKE_FAILED_PROTOCOL ||
         id == ZMQ_EVENT_HANDSHAKE_FAILED_AUTH) {
       ++handshake_failures_;
       thread_local LogLimiter limiter;
       if (limiter.allow()) {
-        spdlog::error("handshake with {} failed ({}; {} so far): wrong CURVE keys on either side, or a peer "
-                      "with{} CURVE; not retried",
-                      where, id == ZMQ_EVENT_HANDSHAKE_FAILED_AUTH ? "refused by the server" : "protocol",
-                      handshake_failures_, config_.access.curve() ? "out" : "");
+        spdlog::error(
+            "handshake with {} failed ({}; {} so far): wrong CURVE keys on either side, or a peer "
+            "with{} CURVE; not retried",
+            where, id == ZMQ_EVENT_HANDSHAKE_FAILED_AUTH ? "refused by the server" : "protocol",
+            handshake_failures_, config_.access.curve() ? "out" : "");
       }
       refused_endpoints_.insert(where);
       awaiting_reconnect_.erase(where);
@@ -115,10 +120,12 @@ void RawSubscriber::handle_monitor_events() {
       continue;
     }
     ++disconnects_;
-    spdlog::info("connection {} closed ({} so far): the peer exited, or sent a part over max_msg_bytes ({} bytes)",
-                 where, disconnects_, config_.max_msg_bytes);
-    // A bound socket's peers reconnect themselves; a connecting one waits to see whether libzmq does. A refused
-    // handshake is not retried: the keys will not change by themselves.
+    spdlog::info(
+        "connection {} closed ({} so far): the peer exited, or sent a part over max_msg_bytes ({} "
+        "bytes)",
+        where, disconnects_, config_.max_msg_bytes);
+    // A bound socket's peers reconnect themselves; a connecting one waits to see whether libzmq
+    // does. A refused handshake is not retried: the keys will not change by themselves.
     if (!config_.bind && refused_endpoints_.count(where) == 0) {
       awaiting_reconnect_[std::move(where)] = monotonic_now_ns() + kReconnectGraceNs;
     }
@@ -133,19 +140,21 @@ void RawSubscriber::reconnect_if_abandoned() {
     if (deadline <= now) cut = ep;
   }
   if (cut.empty()) return;
-  // Between messages: keep every whole message already queued, then close the socket. zmq_close, unlike
-  // zmq_disconnect, is safe whatever its pipes hold.
+  // Between messages: keep every whole message already queued, then close the socket. zmq_close,
+  // unlike zmq_disconnect, is safe whatever its pipes hold.
   if (config_.latest_only) {
     drain_latest();
   } else {
-    for (auto r = read_one(false); r.status().code() != StatusCode::kWouldBlock; r = read_one(false)) {
+    for (auto r = read_one(false); r.status().code() != StatusCode::kWouldBlock;
+         r = read_one(false)) {
       if (!r.is_ok() && r.status().code() != StatusCode::kCorruptData) break;  // e.g. terminated
       if (r.is_ok()) pending_.push_back(std::move(r).value());
     }
   }
   handle_monitor_events();  // count what the old socket saw last
   awaiting_reconnect_.clear();
-  (void)zmq_socket_monitor(socket_.handle(), nullptr, 0);  // stop events before the reading end closes
+  (void)zmq_socket_monitor(socket_.handle(), nullptr,
+                           0);  // stop events before the reading end closes
   socket_.close();
   monitor_.close();
   try {
@@ -155,13 +164,16 @@ void RawSubscriber::reconnect_if_abandoned() {
     return;
   }
   ++reconnects_;
-  spdlog::warn("connection {} was cut and libzmq did not reconnect it (a protocol error, e.g. a part over "
-               "max_msg_bytes = {} bytes): socket recreated and reconnected ({} so far); messages in flight "
-               "show as seq gaps",
-               cut, config_.max_msg_bytes, reconnects_);
+  spdlog::warn(
+      "connection {} was cut and libzmq did not reconnect it (a protocol error, e.g. a part over "
+      "max_msg_bytes = {} bytes): socket recreated and reconnected ({} so far); messages in flight "
+      "show as seq gaps",
+      cut, config_.max_msg_bytes, reconnects_);
 }
 
-std::uint64_t RawSubscriber::auth_refused() const { return zap_domain_.empty() ? 0 : zap_refused(zap_domain_); }
+std::uint64_t RawSubscriber::auth_refused() const {
+  return zap_domain_.empty() ? 0 : zap_refused(zap_domain_);
+}
 
 long RawSubscriber::cap_wait_ms(long wait_ms) const {
   if (awaiting_reconnect_.empty()) return wait_ms;
@@ -199,7 +211,8 @@ Result<ReceivedMessage> RawSubscriber::read_one(bool wait) {
       spdlog::warn("malformed message: {} frames (expected 2 or 3), dropped; {} malformed so far",
                    msg.parts_.size(), malformed_);
     }
-    return Status{StatusCode::kCorruptData, "wrong frame count " + std::to_string(msg.parts_.size())};
+    return Status{StatusCode::kCorruptData,
+                  "wrong frame count " + std::to_string(msg.parts_.size())};
   }
   return msg;
 }
@@ -236,7 +249,8 @@ Result<ReceivedMessage> RawSubscriber::receive(DurationNs timeout_ns) {
       const DurationNs left = deadline - monotonic_now_ns();
       wait_ms = left <= 0 ? 0 : static_cast<long>((left + kNsPerMs - 1) / kNsPerMs);
     }
-    zmq::pollitem_t items[2] = {{socket_.handle(), 0, ZMQ_POLLIN, 0}, {monitor_.handle(), 0, ZMQ_POLLIN, 0}};
+    zmq::pollitem_t items[2] = {{socket_.handle(), 0, ZMQ_POLLIN, 0},
+                                {monitor_.handle(), 0, ZMQ_POLLIN, 0}};
     try {
       (void)zmq::poll(items, 2, std::chrono::milliseconds(cap_wait_ms(wait_ms)));
     } catch (const zmq::error_t& e) {
@@ -273,7 +287,8 @@ int wait_readable(const std::vector<RawSubscriber*>& subscribers, DurationNs tim
       if (!subscribers[i]->pending_.empty()) return static_cast<int>(i);
       items.push_back({subscribers[i]->socket_.handle(), 0, ZMQ_POLLIN, 0});
     }
-    for (std::size_t i = 0; i < n; ++i) items.push_back({subscribers[i]->monitor_.handle(), 0, ZMQ_POLLIN, 0});
+    for (std::size_t i = 0; i < n; ++i)
+      items.push_back({subscribers[i]->monitor_.handle(), 0, ZMQ_POLLIN, 0});
     long wait_ms = -1;
     if (timeout_ns >= 0) {
       const DurationNs left = deadline - monotonic_now_ns();

@@ -7,19 +7,18 @@
 // `superseded` (they arrived and were discarded by policy, so they are not seq-gap drops).
 // Two-part messages ([topic][body], e.g. /sync/sample) are never superseded.
 //
-// ZMQ_MAXMSGSIZE is set (kDefaultMaxMessageBytes): libzmq answers a larger part by closing the connection
-// and, for that protocol error, never reconnects (session_base.cpp: only a connection or timeout error on a
-// connecting session reconnects; ZMQ_RECONNECT_IVL does not apply). Faultline's publishers refuse such parts.
-// A socket monitor sees every closed connection, which is counted (disconnects()) and logged. On a connecting
-// socket, libzmq announces its own reconnect (ZMQ_EVENT_CONNECT_RETRIED) right after the close; when that does
-// not come within kReconnectGraceNs, the whole socket is recreated between messages (whole messages already
-// queued are kept; a zmq_disconnect on a pipe that may hold a message aborted libzmq 4.3.4 in fq.cpp) and
-// counted in reconnects(). Messages in flight at that moment are lost and show as seq gaps downstream.
-// Messages with a wrong frame count are counted as malformed and skipped (receive() returns the
-// next good one). A RawSubscriber belongs to one thread.
+// ZMQ_MAXMSGSIZE is set (kDefaultMaxMessageBytes): libzmq answers a larger part by closing the
+// connection and, for that protocol error, never reconnects (session_base.cpp: only a connection or
+// timeout error on a connecting session reconnects; ZMQ_RECONNECT_IVL does not apply). Faultline's
+// publishers refuse such parts. A socket monitor sees every closed connection, which is counted
+// (disconnects()) and logged. On a connecting socket, libzmq announces its own reconnect
+// (ZMQ_EVENT_CONNECT_RETRIED) right after the close; when that does not come within
+// kReconnectGraceNs, the whole socket is recreated between messages (whole messages already queued
+// are kept; a zmq_disconnect on a pipe that may hold a message aborted libzmq 4.3.4 in fq.cpp) and
+// counted in reconnects(). Messages in flight at that moment are lost and show as seq gaps
+// downstream. Messages with a wrong frame count are counted as malformed and skipped (receive()
+// returns the next good one). A RawSubscriber belongs to one thread.
 #pragma once
-
-#include <zmq.hpp>
 
 #include <cstdint>
 #include <deque>
@@ -28,6 +27,7 @@
 #include <string>
 #include <string_view>
 #include <vector>
+#include <zmq.hpp>
 
 #include "common/clock.hpp"
 #include "common/status.hpp"
@@ -37,11 +37,12 @@ namespace faultline::transport {
 
 struct SubscriberConfig {
   std::vector<std::string> endpoints{"tcp://127.0.0.1:5600"};  // publishers to connect to (or bind)
-  std::vector<std::string> topics{""};  // prefixes (PubSub only); end a prefix with '/' or give the full topic
-  Pattern pattern = Pattern::PubSub;    // PushPull: a PULL socket (lossless edge)
-  bool bind = false;                    // true: bind endpoints[0..] (e.g. the sink's PULL)
-  int rcv_hwm = 4;                      // messages; 1-8 for image topics, ~64 for lockstep
-  bool latest_only = false;             // see above
+  std::vector<std::string> topics{
+      ""};  // prefixes (PubSub only); end a prefix with '/' or give the full topic
+  Pattern pattern = Pattern::PubSub;  // PushPull: a PULL socket (lossless edge)
+  bool bind = false;                  // true: bind endpoints[0..] (e.g. the sink's PULL)
+  int rcv_hwm = 4;                    // messages; 1-8 for image topics, ~64 for lockstep
+  bool latest_only = false;           // see above
   std::int64_t max_msg_bytes = kDefaultMaxMessageBytes;  // ZMQ_MAXMSGSIZE per part; -1 = unlimited
   AccessConfig access;  // loopback-only binds unless allow_remote; CURVE (transport/access.hpp)
 };
@@ -62,7 +63,7 @@ class ReceivedMessage {
     return has_payload() ? static_cast<const std::uint8_t*>(parts_[2].data()) : nullptr;
   }
   std::size_t payload_size() const { return has_payload() ? parts_[2].size() : 0; }
-  std::size_t size_bytes() const;          // all frames
+  std::size_t size_bytes() const;  // all frames
   StampNs receive_mono_ns() const { return receive_mono_ns_; }
   StampNs receive_realtime_ns() const { return receive_realtime_ns_; }
 
@@ -95,14 +96,16 @@ class RawSubscriber {
   const std::vector<std::string>& endpoints() const { return endpoints_; }
   std::uint64_t superseded() const { return superseded_; }
   std::uint64_t malformed() const { return malformed_; }
-  // Counts a message the caller found malformed (e.g. header did not parse), for one place of truth.
+  // Counts a message the caller found malformed (e.g. header did not parse), for one place of
+  // truth.
   void count_malformed() { ++malformed_; }
   // Connections closed under this socket (a peer's exit, or a part over max_msg_bytes).
   std::uint64_t disconnects() const { return disconnects_; }
-  // Times this (connecting) socket was recreated because libzmq did not reconnect a closed connection.
+  // Times this (connecting) socket was recreated because libzmq did not reconnect a closed
+  // connection.
   std::uint64_t reconnects() const { return reconnects_; }
-  // Handshakes that failed (CURVE: a wrong key on either side, a peer without CURVE; each logged). libzmq does
-  // not retry a refused connection, and neither does this socket.
+  // Handshakes that failed (CURVE: a wrong key on either side, a peer without CURVE; each logged).
+  // libzmq does not retry a refused connection, and neither does this socket.
   std::uint64_t handshake_failures() const { return handshake_failures_; }
   // A binding CURVE socket: clients refused by its allowed-clients list.
   std::uint64_t auth_refused() const;
@@ -111,15 +114,16 @@ class RawSubscriber {
   friend int wait_readable(const std::vector<RawSubscriber*>& subscribers, DurationNs timeout_ns);
   Result<ReceivedMessage> read_one(bool wait);  // kWouldBlock when nothing is queued
   void drain_latest();
-  void open_socket();            // creates socket_ and monitor_, connects or binds every endpoint
-  void handle_monitor_events();  // counts and logs closed connections, notes libzmq's reconnects
+  void open_socket();             // creates socket_ and monitor_, connects or binds every endpoint
+  void handle_monitor_events();   // counts and logs closed connections, notes libzmq's reconnects
   void reconnect_if_abandoned();  // recreates the socket once a cut connection's grace has passed
   long cap_wait_ms(long wait_ms) const;  // shortens a poll so the grace deadline is not overslept
 
   SubscriberConfig config_;
   std::vector<std::string> endpoints_;
-  // Declared before socket_, so it closes after it. libzmq's I/O thread sends monitor events with a blocking send:
-  // an event for a PAIR whose reader is gone would stall every socket of the context.
+  // Declared before socket_, so it closes after it. libzmq's I/O thread sends monitor events with a
+  // blocking send: an event for a PAIR whose reader is gone would stall every socket of the
+  // context.
   zmq::socket_t monitor_;  // PAIR end of zmq_socket_monitor(socket_, ZMQ_EVENT_DISCONNECTED)
   zmq::socket_t socket_;
   std::deque<ReceivedMessage> pending_;  // latest-only: drained, newest per image topic
@@ -130,7 +134,8 @@ class RawSubscriber {
   std::uint64_t handshake_failures_ = 0;
   std::string zap_domain_;
   std::set<std::string> refused_endpoints_;  // handshake failed: not reconnected when closed
-  // Connecting endpoints closed without a reconnect announced yet, with the deadline of their grace.
+  // Connecting endpoints closed without a reconnect announced yet, with the deadline of their
+  // grace.
   std::map<std::string, StampNs> awaiting_reconnect_;
 };
 

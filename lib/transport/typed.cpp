@@ -1,4 +1,5 @@
 #include "transport/typed.hpp"
+
 #include "deterministic_serialize.hpp"
 
 namespace faultline::transport {
@@ -53,10 +54,12 @@ Result<CameraFrameView> parse_camera_frame(const ReceivedMessage& message) {
   const std::string_view h = message.header();
   if (!message.has_payload()) {
     if (view.header.ParseFromArray(h.data(), static_cast<int>(h.size())) && view.header.has_shm()) {
-      return Status{StatusCode::kUnsupported, "frame pixels are in shared memory (" + view.header.shm().path() +
-                                                  "): read it with transport::ShmCameraReader (docs/protocol.md §16)"};
+      return Status{StatusCode::kUnsupported,
+                    "frame pixels are in shared memory (" + view.header.shm().path() +
+                        "): read it with transport::ShmCameraReader (docs/protocol.md §16)"};
     }
-    return Status{StatusCode::kCorruptData, "image message needs 3 frames [topic][header][payload]"};
+    return Status{StatusCode::kCorruptData,
+                  "image message needs 3 frames [topic][header][payload]"};
   }
   if (!view.header.ParseFromArray(h.data(), static_cast<int>(h.size()))) {
     return Status{StatusCode::kCorruptData, "CameraFrame header does not parse"};
@@ -89,7 +92,8 @@ Result<ShmRingReader*> ShmCameraReader::ring_for(const msgs::ShmSlot& shm) {
   auto opened = ShmRingReader::open(shm.path());
   if (!opened) return opened.status();
   if (it != rings_.end()) {  // the publisher restarted: a new file at the same path
-    lost_in_closed_rings_ += it->second.overwritten_before_read() + it->second.overwritten_during_use();
+    lost_in_closed_rings_ +=
+        it->second.overwritten_before_read() + it->second.overwritten_during_use();
     it->second = std::move(opened).value();
     return &it->second;
   }
@@ -99,11 +103,13 @@ Result<ShmRingReader*> ShmCameraReader::ring_for(const msgs::ShmSlot& shm) {
 Result<CameraFrameView> ShmCameraReader::read(const ReceivedMessage& message) {
   CameraFrameView view;
   const std::string_view h = message.header();
-  if (message.has_payload()) return Status{StatusCode::kCorruptData, "shm frame needs 2 frames [topic][header]"};
+  if (message.has_payload())
+    return Status{StatusCode::kCorruptData, "shm frame needs 2 frames [topic][header]"};
   if (!view.header.ParseFromArray(h.data(), static_cast<int>(h.size()))) {
     return Status{StatusCode::kCorruptData, "CameraFrame header does not parse"};
   }
-  if (!view.header.has_shm()) return Status{StatusCode::kCorruptData, "2-frame image message without shm slot"};
+  if (!view.header.has_shm())
+    return Status{StatusCode::kCorruptData, "2-frame image message without shm slot"};
   auto ring = ring_for(view.header.shm());
   if (!ring) return ring.status();
   auto slot = (*ring)->acquire(slot_ref(view.header));
@@ -126,7 +132,8 @@ bool ShmCameraReader::intact(const CameraFrameView& view) {
 
 std::uint64_t ShmCameraReader::overwritten() const {
   std::uint64_t n = lost_in_closed_rings_;
-  for (const auto& [path, ring] : rings_) n += ring.overwritten_before_read() + ring.overwritten_during_use();
+  for (const auto& [path, ring] : rings_)
+    n += ring.overwritten_before_read() + ring.overwritten_during_use();
   return n;
 }
 

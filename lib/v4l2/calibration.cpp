@@ -11,7 +11,8 @@ namespace faultline::v4l2 {
 namespace {
 
 template <std::size_t N>
-std::array<double, N> read_array(const YAML::Node& node, const std::string& path, const std::string& key) {
+std::array<double, N> read_array(const YAML::Node& node, const std::string& path,
+                                 const std::string& key) {
   if (!node.IsSequence() || node.size() != N) {
     throw ConfigError(path + ": " + key + " = " + config::yaml_to_string(node) + ": expected " +
                       std::to_string(N) + " numbers");
@@ -21,8 +22,8 @@ std::array<double, N> read_array(const YAML::Node& node, const std::string& path
     try {
       out[i] = node[i].as<double>();
     } catch (const YAML::Exception&) {
-      throw ConfigError(path + ": " + key + "[" + std::to_string(i) + "] = " + config::yaml_to_string(node[i]) +
-                        ": expected a number");
+      throw ConfigError(path + ": " + key + "[" + std::to_string(i) +
+                        "] = " + config::yaml_to_string(node[i]) + ": expected a number");
     }
   }
   return out;
@@ -51,15 +52,21 @@ Calibration load_calibration(const std::string& path) {
   } else if (doc["camera_matrix"] && doc["camera_matrix"]["data"]) {
     c.intrinsics = read_array<9>(doc["camera_matrix"]["data"], path, "camera_matrix.data");
   } else {
-    throw ConfigError(path + ": intrinsics: missing (give `intrinsics: [9 numbers]` or ROS `camera_matrix.data`)");
+    throw ConfigError(
+        path +
+        ": intrinsics: missing (give `intrinsics: [9 numbers]` or ROS `camera_matrix.data`)");
   }
   if (c.intrinsics[0] <= 0 || c.intrinsics[4] <= 0 || c.intrinsics[8] != 1.0) {
-    throw ConfigError(path + ": intrinsics = " + config::yaml_to_string(doc["intrinsics"] ? doc["intrinsics"] : doc["camera_matrix"]["data"]) +
+    throw ConfigError(path + ": intrinsics = " +
+                      config::yaml_to_string(doc["intrinsics"] ? doc["intrinsics"]
+                                                               : doc["camera_matrix"]["data"]) +
                       ": expected positive focal lengths and K[2][2] = 1");
   }
   if (const YAML::Node ext = doc["sensor_to_ego"]) {
-    if (ext["translation"]) c.translation = read_array<3>(ext["translation"], path, "sensor_to_ego.translation");
-    if (ext["rotation"]) c.rotation = read_array<4>(ext["rotation"], path, "sensor_to_ego.rotation");
+    if (ext["translation"])
+      c.translation = read_array<3>(ext["translation"], path, "sensor_to_ego.translation");
+    if (ext["rotation"])
+      c.rotation = read_array<4>(ext["rotation"], path, "sensor_to_ego.rotation");
     const double n = std::sqrt(c.rotation[0] * c.rotation[0] + c.rotation[1] * c.rotation[1] +
                                c.rotation[2] * c.rotation[2] + c.rotation[3] * c.rotation[3]);
     if (n < 1e-9) throw ConfigError(path + ": sensor_to_ego.rotation: zero quaternion");

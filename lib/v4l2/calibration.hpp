@@ -10,9 +10,9 @@ namespace faultline::v4l2 {
 
 struct Calibration {
   std::string channel = "CAM_FRONT";
-  std::uint32_t width = 0, height = 0;  // 0 = not stated
-  std::array<double, 9> intrinsics{};   // K, row-major
-  std::array<double, 3> translation{};  // sensor origin in the ego frame (m)
+  std::uint32_t width = 0, height = 0;         // 0 = not stated
+  std::array<double, 9> intrinsics{};          // K, row-major
+  std::array<double, 3> translation{};         // sensor origin in the ego frame (m)
   std::array<double, 4> rotation{1, 0, 0, 0};  // sensor -> ego, w x y z
 };
 

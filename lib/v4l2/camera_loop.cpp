@@ -13,16 +13,21 @@ namespace faultline::v4l2 {
 
 void CameraNodeConfig::validate() const {
   if (width <= 0 || height <= 0) {
-    throw ConfigError("width/height = " + std::to_string(width) + "x" + std::to_string(height) + ": must be > 0");
+    throw ConfigError("width/height = " + std::to_string(width) + "x" + std::to_string(height) +
+                      ": must be > 0");
   }
-  if (buffers < 2 || buffers > 32) throw ConfigError("buffers = " + std::to_string(buffers) + ": expected 2..32");
-  if (output != "auto" && output != "raw") throw ConfigError("output = " + output + ": expected auto or raw");
+  if (buffers < 2 || buffers > 32)
+    throw ConfigError("buffers = " + std::to_string(buffers) + ": expected 2..32");
+  if (output != "auto" && output != "raw")
+    throw ConfigError("output = " + output + ": expected auto or raw");
   if (format != "auto") {
-    if (auto code = fourcc_from_string(format); !code) throw ConfigError("format = " + format + ": " + code.status().message());
+    if (auto code = fourcc_from_string(format); !code)
+      throw ConfigError("format = " + format + ": " + code.status().message());
   }
   if (hwm < 1) throw ConfigError("hwm = " + std::to_string(hwm) + ": must be >= 1");
   if (poll_timeout_ms < 1 || poll_timeout_ms > 1000) {
-    throw ConfigError("poll_timeout_ms = " + std::to_string(poll_timeout_ms) + ": expected 1..1000");
+    throw ConfigError("poll_timeout_ms = " + std::to_string(poll_timeout_ms) +
+                      ": expected 1..1000");
   }
 }
 
@@ -41,12 +46,14 @@ CaptureConfig CameraNodeConfig::capture() const {
 
 std::string camera_output_topic(const std::string& channel, const std::string& encoding) {
   std::string lower = channel;
-  std::transform(lower.begin(), lower.end(), lower.begin(), [](unsigned char ch) { return std::tolower(ch); });
+  std::transform(lower.begin(), lower.end(), lower.begin(),
+                 [](unsigned char ch) { return std::tolower(ch); });
   return "/" + lower + (encoding == "jpeg" ? "/image_rect_compressed" : "/image_raw");
 }
 
-int run_camera_node(const CameraNodeConfig& cfg, const std::string& node, Capture::DeviceFactory factory,
-                    Clock& clock, std::shared_ptr<spdlog::logger> log, const std::atomic<bool>& stop,
+int run_camera_node(const CameraNodeConfig& cfg, const std::string& node,
+                    Capture::DeviceFactory factory, Clock& clock,
+                    std::shared_ptr<spdlog::logger> log, const std::atomic<bool>& stop,
                     const std::function<void(const std::string&)>& on_bound) {
   Calibration cal;
   cal.channel = cfg.channel;
@@ -61,10 +68,13 @@ int run_camera_node(const CameraNodeConfig& cfg, const std::string& node, Captur
   transport::TopicRegistry registry(node);
 
   if (cfg.wait_subscribers > 0) {
-    // Subscribers match a prefix of the topic, e.g. "/cam_front/": no frame is lost to slow joiners.
-    const std::string prefix = camera_output_topic(cal.channel, "jpeg").substr(0, cal.channel.size() + 2);
+    // Subscribers match a prefix of the topic, e.g. "/cam_front/": no frame is lost to slow
+    // joiners.
+    const std::string prefix =
+        camera_output_topic(cal.channel, "jpeg").substr(0, cal.channel.size() + 2);
     if (Status s = pub.wait_for_subscribers(prefix + "image", cfg.wait_subscribers,
-                                            static_cast<DurationNs>(cfg.wait_timeout_ms) * kNsPerMs, &stop);
+                                            static_cast<DurationNs>(cfg.wait_timeout_ms) * kNsPerMs,
+                                            &stop);
         !s) {
       log->warn("starting without {} subscriber(s): {}", cfg.wait_subscribers, s.message());
     }
@@ -83,8 +93,8 @@ int run_camera_node(const CameraNodeConfig& cfg, const std::string& node, Captur
     auto frame = capture.next(cfg.poll_timeout_ms);
     if (clock.now_ns() >= next_log) {
       const auto& st = capture.stats();
-      log->info("frames={} corrupt={} driver_drops={} reconnects={} timeouts={}", st.frames, st.corrupt_buffers,
-                st.driver_drops, st.reconnects, st.timeouts);
+      log->info("frames={} corrupt={} driver_drops={} reconnects={} timeouts={}", st.frames,
+                st.corrupt_buffers, st.driver_drops, st.reconnects, st.timeouts);
       next_log = clock.now_ns() + static_cast<StampNs>(cfg.stats_log_period_s * kNsPerSec);
     }
     if (!frame) {
@@ -106,7 +116,8 @@ int run_camera_node(const CameraNodeConfig& cfg, const std::string& node, Captur
     h.mutable_header()->set_publish_stamp_ns(realtime_now_ns());
     h.mutable_header()->set_publish_mono_ns(monotonic_now_ns());
     std::string frame_id = cal.channel;
-    std::transform(frame_id.begin(), frame_id.end(), frame_id.begin(), [](unsigned char ch) { return std::tolower(ch); });
+    std::transform(frame_id.begin(), frame_id.end(), frame_id.begin(),
+                   [](unsigned char ch) { return std::tolower(ch); });
     h.mutable_header()->set_frame_id(frame_id);
     h.mutable_header()->set_publisher(node);
     h.set_camera(cal.channel);
@@ -135,8 +146,8 @@ int run_camera_node(const CameraNodeConfig& cfg, const std::string& node, Captur
   // A finite run (max_frames) delivers what is still queued; on SIGINT the queue is discarded.
   if (!stop.load()) pub.set_linger(1000);
   const auto& st = capture.stats();
-  log->info("stopped: frames={} corrupt={} driver_drops={} reconnects={}", st.frames, st.corrupt_buffers,
-            st.driver_drops, st.reconnects);
+  log->info("stopped: frames={} corrupt={} driver_drops={} reconnects={}", st.frames,
+            st.corrupt_buffers, st.driver_drops, st.reconnects);
   return 0;
 }
 

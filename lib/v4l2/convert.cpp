@@ -5,15 +5,16 @@
 namespace faultline::v4l2 {
 namespace {
 
-Status check_size(std::size_t size, std::uint32_t height, std::uint32_t stride, std::uint32_t row_bytes) {
+Status check_size(std::size_t size, std::uint32_t height, std::uint32_t stride,
+                  std::uint32_t row_bytes) {
   if (stride < row_bytes) {
     return Status(StatusCode::kInvalidArgument,
                   "stride " + std::to_string(stride) + " < row size " + std::to_string(row_bytes));
   }
   const std::size_t need = static_cast<std::size_t>(stride) * (height ? height - 1 : 0) + row_bytes;
   if (height == 0 || size < need) {
-    return Status(StatusCode::kTruncated,
-                  "buffer has " + std::to_string(size) + " bytes, frame needs " + std::to_string(need));
+    return Status(StatusCode::kTruncated, "buffer has " + std::to_string(size) +
+                                              " bytes, frame needs " + std::to_string(need));
   }
   return Status::ok();
 }
@@ -22,8 +23,8 @@ inline std::uint8_t clamp_u8(int v) { return static_cast<std::uint8_t>(std::clam
 
 }  // namespace
 
-Status yuyv_to_bgr(const std::uint8_t* src, std::size_t size, std::uint32_t width, std::uint32_t height,
-                   std::uint32_t stride, std::vector<std::uint8_t>& out) {
+Status yuyv_to_bgr(const std::uint8_t* src, std::size_t size, std::uint32_t width,
+                   std::uint32_t height, std::uint32_t stride, std::vector<std::uint8_t>& out) {
   if (width % 2) return Status(StatusCode::kInvalidArgument, "YUYV width must be even");
   if (Status s = check_size(size, height, stride, width * 2); !s) return s;
   out.resize(static_cast<std::size_t>(width) * height * 3);
@@ -49,8 +50,8 @@ Status yuyv_to_bgr(const std::uint8_t* src, std::size_t size, std::uint32_t widt
   return Status::ok();
 }
 
-Status rgb24_to_bgr(const std::uint8_t* src, std::size_t size, std::uint32_t width, std::uint32_t height,
-                    std::uint32_t stride, std::vector<std::uint8_t>& out) {
+Status rgb24_to_bgr(const std::uint8_t* src, std::size_t size, std::uint32_t width,
+                    std::uint32_t height, std::uint32_t stride, std::vector<std::uint8_t>& out) {
   if (Status s = check_size(size, height, stride, width * 3); !s) return s;
   out.resize(static_cast<std::size_t>(width) * height * 3);
   std::uint8_t* dst = out.data();
@@ -65,13 +66,15 @@ Status rgb24_to_bgr(const std::uint8_t* src, std::size_t size, std::uint32_t wid
   return Status::ok();
 }
 
-Status pack_rows(const std::uint8_t* src, std::size_t size, std::uint32_t width, std::uint32_t height,
-                 std::uint32_t stride, std::uint32_t bytes_per_pixel, std::vector<std::uint8_t>& out) {
+Status pack_rows(const std::uint8_t* src, std::size_t size, std::uint32_t width,
+                 std::uint32_t height, std::uint32_t stride, std::uint32_t bytes_per_pixel,
+                 std::vector<std::uint8_t>& out) {
   const std::uint32_t row_bytes = width * bytes_per_pixel;
   if (Status s = check_size(size, height, stride, row_bytes); !s) return s;
   out.resize(static_cast<std::size_t>(row_bytes) * height);
   for (std::uint32_t y = 0; y < height; ++y) {
-    std::copy_n(src + static_cast<std::size_t>(y) * stride, row_bytes, out.data() + static_cast<std::size_t>(y) * row_bytes);
+    std::copy_n(src + static_cast<std::size_t>(y) * stride, row_bytes,
+                out.data() + static_cast<std::size_t>(y) * row_bytes);
   }
   return Status::ok();
 }
@@ -93,7 +96,8 @@ Result<std::size_t> check_mjpeg(const std::uint8_t* data, std::size_t size) {
       break;
     }
   }
-  if (!has_sos) return Status(StatusCode::kCorruptData, "MJPEG buffer has no start-of-scan (FF DA)");
+  if (!has_sos)
+    return Status(StatusCode::kCorruptData, "MJPEG buffer has no start-of-scan (FF DA)");
   return end;
 }
 

@@ -52,10 +52,10 @@ struct Buffer {
   std::uint32_t index = 0;
   const std::uint8_t* data = nullptr;
   std::size_t bytes_used = 0;
-  std::uint32_t sequence = 0;          // driver's frame counter
-  std::int64_t timestamp_ns = 0;       // driver stamp
-  bool timestamp_monotonic = true;     // V4L2_BUF_FLAG_TIMESTAMP_MONOTONIC (else unknown/copy)
-  bool error_flag = false;             // V4L2_BUF_FLAG_ERROR: the driver says the data may be corrupt
+  std::uint32_t sequence = 0;       // driver's frame counter
+  std::int64_t timestamp_ns = 0;    // driver stamp
+  bool timestamp_monotonic = true;  // V4L2_BUF_FLAG_TIMESTAMP_MONOTONIC (else unknown/copy)
+  bool error_flag = false;          // V4L2_BUF_FLAG_ERROR: the driver says the data may be corrupt
 };
 
 // Device I/O. Errors carry the device path and the failing step. kWouldBlock = poll timeout (no
@@ -66,7 +66,8 @@ class Device {
   virtual Status open(const std::string& path) = 0;
   virtual std::string card_name() const = 0;
   virtual Result<std::vector<FormatOption>> formats() = 0;
-  virtual Result<NegotiatedFormat> set_format(std::uint32_t pixel_format, FrameSize size, double rate_hz) = 0;
+  virtual Result<NegotiatedFormat> set_format(std::uint32_t pixel_format, FrameSize size,
+                                              double rate_hz) = 0;
   virtual Status start(std::uint32_t buffer_count) = 0;
   virtual Result<Buffer> dequeue(int timeout_ms) = 0;
   virtual Status requeue(std::uint32_t index) = 0;

@@ -44,10 +44,12 @@ class KernelDevice final : public Device {
     if (fd_ < 0) return errno_status(path, "open", errno);
     v4l2_capability cap{};
     if (xioctl(fd_, VIDIOC_QUERYCAP, &cap) < 0) return fail("VIDIOC_QUERYCAP");
-    const std::uint32_t caps = (cap.capabilities & V4L2_CAP_DEVICE_CAPS) ? cap.device_caps : cap.capabilities;
+    const std::uint32_t caps =
+        (cap.capabilities & V4L2_CAP_DEVICE_CAPS) ? cap.device_caps : cap.capabilities;
     card_ = reinterpret_cast<const char*>(cap.card);
     if (!(caps & V4L2_CAP_VIDEO_CAPTURE)) {
-      return Status(StatusCode::kUnsupported, path + ": not a video capture device (" + card_ + ")");
+      return Status(StatusCode::kUnsupported,
+                    path + ": not a video capture device (" + card_ + ")");
     }
     if (!(caps & V4L2_CAP_STREAMING)) {
       return Status(StatusCode::kUnsupported, path + ": device does not support streaming I/O");
@@ -87,7 +89,8 @@ class KernelDevice final : public Device {
     return out;
   }
 
-  Result<NegotiatedFormat> set_format(std::uint32_t pixel_format, FrameSize size, double rate_hz) override {
+  Result<NegotiatedFormat> set_format(std::uint32_t pixel_format, FrameSize size,
+                                      double rate_hz) override {
     v4l2_format fmt{};
     fmt.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
     fmt.fmt.pix.width = size.width;
@@ -104,7 +107,8 @@ class KernelDevice final : public Device {
       v4l2_streamparm parm{};
       parm.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
       parm.parm.capture.timeperframe.numerator = 1000;
-      parm.parm.capture.timeperframe.denominator = static_cast<std::uint32_t>(rate_hz * 1000.0 + 0.5);
+      parm.parm.capture.timeperframe.denominator =
+          static_cast<std::uint32_t>(rate_hz * 1000.0 + 0.5);
       if (xioctl(fd_, VIDIOC_S_PARM, &parm) == 0 && parm.parm.capture.timeperframe.numerator > 0) {
         n.rate_hz = static_cast<double>(parm.parm.capture.timeperframe.denominator) /
                     parm.parm.capture.timeperframe.numerator;
@@ -119,7 +123,8 @@ class KernelDevice final : public Device {
     req.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
     req.memory = V4L2_MEMORY_MMAP;
     if (xioctl(fd_, VIDIOC_REQBUFS, &req) < 0) return fail("VIDIOC_REQBUFS");
-    if (req.count < 2) return Status(StatusCode::kIoError, path_ + ": driver granted fewer than 2 buffers");
+    if (req.count < 2)
+      return Status(StatusCode::kIoError, path_ + ": driver granted fewer than 2 buffers");
     for (std::uint32_t i = 0; i < req.count; ++i) {
       v4l2_buffer buf{};
       buf.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
@@ -144,7 +149,9 @@ class KernelDevice final : public Device {
       if (errno == EINTR) return Status(StatusCode::kWouldBlock, path_ + ": poll interrupted");
       return fail("poll");
     }
-    if (r == 0) return Status(StatusCode::kWouldBlock, path_ + ": no frame within " + std::to_string(timeout_ms) + " ms");
+    if (r == 0)
+      return Status(StatusCode::kWouldBlock,
+                    path_ + ": no frame within " + std::to_string(timeout_ms) + " ms");
     if (pfd.revents & (POLLERR | POLLHUP | POLLNVAL)) {
       return Status(StatusCode::kNotFound, path_ + ": device reported an error (unplugged?)");
     }
@@ -162,7 +169,8 @@ class KernelDevice final : public Device {
     out.sequence = buf.sequence;
     out.timestamp_ns = static_cast<std::int64_t>(buf.timestamp.tv_sec) * 1'000'000'000 +
                        static_cast<std::int64_t>(buf.timestamp.tv_usec) * 1000;
-    out.timestamp_monotonic = (buf.flags & V4L2_BUF_FLAG_TIMESTAMP_MASK) == V4L2_BUF_FLAG_TIMESTAMP_MONOTONIC;
+    out.timestamp_monotonic =
+        (buf.flags & V4L2_BUF_FLAG_TIMESTAMP_MASK) == V4L2_BUF_FLAG_TIMESTAMP_MONOTONIC;
     out.error_flag = (buf.flags & V4L2_BUF_FLAG_ERROR) != 0;
     return out;
   }

@@ -6,7 +6,8 @@ Status RecordedDevice::open(const std::string& path) {
   path_ = path;
   ++script_->opens;
   if (script_->opens <= script_->busy_opens) {
-    return Status(StatusCode::kIoError, path + ": open: device busy (another process is streaming from it)");
+    return Status(StatusCode::kIoError,
+                  path + ": open: device busy (another process is streaming from it)");
   }
   if (script_->pending_missing > 0) {
     --script_->pending_missing;
@@ -16,13 +17,14 @@ Status RecordedDevice::open(const std::string& path) {
   return Status::ok();
 }
 
-Result<NegotiatedFormat> RecordedDevice::set_format(std::uint32_t pixel_format, FrameSize size, double rate_hz) {
+Result<NegotiatedFormat> RecordedDevice::set_format(std::uint32_t pixel_format, FrameSize size,
+                                                    double rate_hz) {
   for (const auto& f : script_->formats) {
     if (f.pixel_format == pixel_format) {
       format_.pixel_format = pixel_format;
       format_.size = f.size.width ? f.size : size;
       const std::uint32_t bpp = pixel_format == kYuyv ? 2 : pixel_format == kGrey ? 1 : 3;
-      format_.bytes_per_line = pixel_format == kMjpeg ? 0
+      format_.bytes_per_line = pixel_format == kMjpeg    ? 0
                                : script_->bytes_per_line ? script_->bytes_per_line
                                                          : format_.size.width * bpp;
       format_.image_bytes = format_.bytes_per_line * format_.size.height;
@@ -43,7 +45,8 @@ Result<Buffer> RecordedDevice::dequeue(int timeout_ms) {
   if (!streaming_) return Status(StatusCode::kIoError, path_ + ": not streaming");
   const std::size_t i = script_->next_buffer;
   if (i >= script_->buffers.size()) {
-    return Status(StatusCode::kWouldBlock, path_ + ": no frame within " + std::to_string(timeout_ms) + " ms");
+    return Status(StatusCode::kWouldBlock,
+                  path_ + ": no frame within " + std::to_string(timeout_ms) + " ms");
   }
   if (script_->unplug_before.count(i) && !script_->unplugged.count(i)) {
     script_->unplugged.insert(i);

@@ -26,8 +26,9 @@ struct RecordedScript {
   std::vector<RecordedBuffer> buffers;
   std::uint32_t bytes_per_line = 0;  // 0 = tightly packed
   int busy_opens = 0;                // the first N open() calls fail with EBUSY
-  std::set<std::size_t> unplug_before;  // the device disappears before delivering buffer i (once each)
-  int missing_opens_after_unplug = 0;   // open() fails with ENODEV this many times after an unplug
+  std::set<std::size_t>
+      unplug_before;  // the device disappears before delivering buffer i (once each)
+  int missing_opens_after_unplug = 0;  // open() fails with ENODEV this many times after an unplug
 
   // Live state, advanced by the devices.
   std::size_t next_buffer = 0;
@@ -42,7 +43,8 @@ class RecordedDevice final : public Device {
   Status open(const std::string& path) override;
   std::string card_name() const override { return script_->card; }
   Result<std::vector<FormatOption>> formats() override { return script_->formats; }
-  Result<NegotiatedFormat> set_format(std::uint32_t pixel_format, FrameSize size, double rate_hz) override;
+  Result<NegotiatedFormat> set_format(std::uint32_t pixel_format, FrameSize size,
+                                      double rate_hz) override;
   Status start(std::uint32_t buffer_count) override;
   Result<Buffer> dequeue(int timeout_ms) override;
   Status requeue(std::uint32_t index) override;

@@ -8,7 +8,8 @@ int main(int argc, char** argv) {
       argc, argv, "detection_sink", "writes detector output as nuScenes results JSON",
       [](const auto& cfg, const auto& opts, auto log, const auto& stop) {
         rt::SinkLoop loop(cfg, opts.name, log);
-        log->info("starting on {}: {}", loop.detections_endpoint(), faultline::config::describe(cfg));
+        log->info("starting on {}: {}", loop.detections_endpoint(),
+                  faultline::config::describe(cfg));
         return loop.run(stop);
       });
 }

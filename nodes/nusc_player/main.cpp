@@ -8,12 +8,14 @@ int main(int argc, char** argv) {
       argc, argv, "nusc_player", "publishes nuScenes camera frames and sample boundaries",
       [](const auto& cfg, const auto& opts, auto log, const auto& stop) {
         auto source = rt::NuScenesFrameSource::open(cfg.dataroot, cfg.version, cfg.scenes);
-        if (!source) throw faultline::ConfigError("dataroot = " + cfg.dataroot + ": " + source.status().message());
+        if (!source)
+          throw faultline::ConfigError("dataroot = " + cfg.dataroot + ": " +
+                                       source.status().message());
         faultline::SystemClock clock;
         const std::size_t frames = (*source)->frames().size();
         rt::PlayerLoop loop(cfg, opts.name, std::move(source).value(), clock, log);
-        log->info("starting {} frames on {} (ack {}): {}", frames, loop.endpoint(), loop.ack_endpoint(),
-                  faultline::config::describe(cfg));
+        log->info("starting {} frames on {} (ack {}): {}", frames, loop.endpoint(),
+                  loop.ack_endpoint(), faultline::config::describe(cfg));
         return loop.run(stop);
       });
 }

@@ -64,7 +64,8 @@ TEST_F(BadInputTest, FlippedByteInChunkIsACrcProblemAndOtherChunksSurvive) {
     ASSERT_TRUE(r.status.is_ok());
     ASSERT_EQ(r.problems.size(), 1u);
     EXPECT_EQ(r.problems[0].offset, victim.chunk_start_offset);
-    EXPECT_NE(r.problems[0].message.find("CRC mismatch"), std::string::npos) << r.problems[0].message;
+    EXPECT_NE(r.problems[0].message.find("CRC mismatch"), std::string::npos)
+        << r.problems[0].message;
     EXPECT_GT(r.messages.size(), 0u);
     EXPECT_LT(r.messages.size(), 60u);
   }
@@ -114,7 +115,8 @@ TEST_F(BadInputTest, HugeDeclaredChunkSizeIsRejectedBeforeAllocating) {
   write_test_bag(bag, 10, opts);
   auto reader = Reader::open(std::make_unique<BufferSource>(bag));
   ASSERT_TRUE(reader->load_summary().is_ok());
-  const std::size_t at = static_cast<std::size_t>(reader->summary().chunk_indexes[0].chunk_start_offset);
+  const std::size_t at =
+      static_cast<std::size_t>(reader->summary().chunk_indexes[0].chunk_start_offset);
   bag[at + 9 + 16 + 7] = '\x7f';  // uncompressed_size high byte
   const auto r = read_linear_all(bag);
   ASSERT_FALSE(r.problems.empty());

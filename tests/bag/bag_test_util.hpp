@@ -39,7 +39,8 @@ inline std::string make_payload(int i, bool compressible) {
 
 // Writes `n` messages round-robin over topics /a /b /c (schemaless + one schema), log time
 // 1000 + 10 * i ns, into `out` through a BufferSink.
-inline void write_test_bag(std::string& out, int n, WriterOptions options, bool compressible = true) {
+inline void write_test_bag(std::string& out, int n, WriterOptions options,
+                           bool compressible = true) {
   auto w = Writer::open(std::make_unique<BufferSink>(out), options);
   ASSERT_TRUE(w.is_ok()) << w.status().to_string();
   const std::uint16_t schema = (*w)->add_schema("test.Blob", "protobuf", "descriptor-bytes");
@@ -50,8 +51,9 @@ inline void write_test_bag(std::string& out, int n, WriterOptions options, bool 
     channels.push_back(*ch);
   }
   for (int i = 0; i < n; ++i) {
-    ASSERT_TRUE((*w)->write(channels[static_cast<std::size_t>(i % 3)], static_cast<std::uint64_t>(i + 1),
-                            1000 + 10 * i, 1000 + 10 * i + 1, make_payload(i, compressible))
+    ASSERT_TRUE((*w)->write(channels[static_cast<std::size_t>(i % 3)],
+                            static_cast<std::uint64_t>(i + 1), 1000 + 10 * i, 1000 + 10 * i + 1,
+                            make_payload(i, compressible))
                     .is_ok());
   }
   ASSERT_TRUE((*w)->write_metadata("faultline.run", {{"seed", "42"}, {"git_sha", "abc"}}).is_ok());
@@ -74,7 +76,11 @@ inline LinearResult read_linear_all(std::string_view bytes, ReadOptions options 
   LinearResult r;
   auto reader = Reader::open(std::make_unique<BufferSource>(bytes));
   auto scan = reader->read_linear(
-      options, [&](const MessageView& m) { collect(m, r.messages); return true; },
+      options,
+      [&](const MessageView& m) {
+        collect(m, r.messages);
+        return true;
+      },
       [&](const Problem& p) { r.problems.push_back(p); });
   if (scan) {
     r.scan = *scan;
@@ -88,14 +94,19 @@ inline LinearResult read_indexed_all(std::string_view bytes, ReadOptions options
   LinearResult r;
   auto reader = Reader::open(std::make_unique<BufferSource>(bytes));
   r.status = reader->read_indexed(
-      options, [&](const MessageView& m) { collect(m, r.messages); return true; },
+      options,
+      [&](const MessageView& m) {
+        collect(m, r.messages);
+        return true;
+      },
       [&](const Problem& p) { r.problems.push_back(p); });
   return r;
 }
 
 inline std::uint64_t le64(std::string_view b, std::size_t at) {
   std::uint64_t v = 0;
-  for (int i = 7; i >= 0; --i) v = (v << 8) | static_cast<unsigned char>(b[at + static_cast<std::size_t>(i)]);
+  for (int i = 7; i >= 0; --i)
+    v = (v << 8) | static_cast<unsigned char>(b[at + static_cast<std::size_t>(i)]);
   return v;
 }
 

@@ -1,4 +1,5 @@
-// Replays the fuzzer corpus (tests/bag/corpus/) through every reader entry point: no crash, no hang.
+// Replays the fuzzer corpus (tests/bag/corpus/) through every reader entry point: no crash, no
+// hang.
 #include <gtest/gtest.h>
 
 #include <filesystem>
@@ -12,7 +13,8 @@ namespace faultline::bag {
 namespace {
 
 TEST(CorpusReplayTest, EveryCorpusFileIsReadWithoutCrashing) {
-  const std::filesystem::path dir = std::filesystem::path(FAULTLINE_SOURCE_DIR) / "tests/bag/corpus";
+  const std::filesystem::path dir =
+      std::filesystem::path(FAULTLINE_SOURCE_DIR) / "tests/bag/corpus";
   ASSERT_TRUE(std::filesystem::is_directory(dir)) << dir;
   std::size_t files = 0, valid = 0;
   for (const auto& entry : std::filesystem::directory_iterator(dir)) {

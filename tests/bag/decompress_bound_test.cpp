@@ -1,5 +1,6 @@
-// A chunk's declared uncompressed size is a claim: decompression allocates no more than the compressed
-// bytes can hold (found by fuzz_bag_recover: a damaged size field made recover allocate 3.5 GB).
+// A chunk's declared uncompressed size is a claim: decompression allocates no more than the
+// compressed bytes can hold (found by fuzz_bag_recover: a damaged size field made recover
+// allocate 3.5 GB).
 #include <gtest/gtest.h>
 
 #include <string>
@@ -32,7 +33,8 @@ TEST_P(DecompressBoundTest, TheTrueSizeStillDecompresses) {
   EXPECT_EQ(out, original);
 }
 
-INSTANTIATE_TEST_SUITE_P(Codecs, DecompressBoundTest, ::testing::Values(Compression::kZstd, Compression::kLz4));
+INSTANTIATE_TEST_SUITE_P(Codecs, DecompressBoundTest,
+                         ::testing::Values(Compression::kZstd, Compression::kLz4));
 
 }  // namespace
 }  // namespace faultline::bag

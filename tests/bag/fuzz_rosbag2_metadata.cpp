@@ -1,6 +1,7 @@
-// libFuzzer target: rosbag2's metadata.yaml (bag/rosbag2.hpp, read by `bag info`, `bag play` and `bag
-// corrupt` for ROS 2 bag directories). Bad input may only be refused with a Status naming the file; what
-// is accepted is written back as Faultline writes metadata.yaml and must read back the same.
+// libFuzzer target: rosbag2's metadata.yaml (bag/rosbag2.hpp, read by `bag info`, `bag play` and
+// `bag corrupt` for ROS 2 bag directories). Bad input may only be refused with a Status naming the
+// file; what is accepted is written back as Faultline writes metadata.yaml and must read back the
+// same.
 #include <cstddef>
 #include <cstdint>
 #include <string>
@@ -28,8 +29,8 @@ bool same(const faultline::bag::Rosbag2Metadata& a, const faultline::bag::Rosbag
   for (std::size_t i = 0; i < a.files.size(); ++i) {
     const auto& x = a.files[i];
     const auto& y = b.files[i];
-    if (x.path != y.path || x.starting_time_ns != y.starting_time_ns || x.duration_ns != y.duration_ns ||
-        x.message_count != y.message_count) {
+    if (x.path != y.path || x.starting_time_ns != y.starting_time_ns ||
+        x.duration_ns != y.duration_ns || x.message_count != y.message_count) {
       return false;
     }
   }
@@ -44,7 +45,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   fuzz::run_with_small_stack([&] {
     auto m = bag::parse_rosbag2_metadata(text, "bag/metadata.yaml");
     if (!m.is_ok()) {
-      if (m.status().message().rfind("bag/metadata.yaml: ", 0) != 0) fuzz::fail("error does not name the file");
+      if (m.status().message().rfind("bag/metadata.yaml: ", 0) != 0)
+        fuzz::fail("error does not name the file");
       return;
     }
     const std::string written = bag::rosbag2_metadata_yaml(m.value());

@@ -1,5 +1,7 @@
 // Recovery of bags cut short (SIGKILL leaves no footer): the output is indexed and intact, and
 // holds exactly the messages of the complete chunks.
+#include "bag/recover.hpp"
+
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -8,7 +10,6 @@
 #include <iterator>
 
 #include "bag/inspect.hpp"
-#include "bag/recover.hpp"
 #include "bag_test_util.hpp"
 
 namespace faultline::bag {
@@ -77,8 +78,9 @@ TEST_F(RecoverTest, TruncationAtManyOffsetsRecoversEveryCompleteChunk) {
     }
     auto info = inspect_bag(out.string());
     ASSERT_TRUE(info.is_ok());
-    EXPECT_TRUE(info->intact()) << cut << ": " << (info->problems.empty() ? info->summary_status
-                                                                           : info->problems[0].to_string());
+    EXPECT_TRUE(info->intact()) << cut << ": "
+                                << (info->problems.empty() ? info->summary_status
+                                                           : info->problems[0].to_string());
   }
 }
 
@@ -137,9 +139,9 @@ TEST_F(RecoverTest, InspectNamesTheOffsetOfABrokenChunk) {
   EXPECT_GT(report->messages, 0u);
 }
 
-// #22 item 2: the first chunk holds the only in-data Schema and Channel records. With it damaged, the
-// summary's copies keep every message of the other chunks: recover, info and a linear read lose exactly
-// the damaged chunk's messages.
+// #22 item 2: the first chunk holds the only in-data Schema and Channel records. With it damaged,
+// the summary's copies keep every message of the other chunks: recover, info and a linear read lose
+// exactly the damaged chunk's messages.
 TEST_F(RecoverTest, DamagedFirstChunkLosesOnlyItsOwnMessagesThanksToTheSummary) {
   WriterOptions opts;
   opts.compression = Compression::kNone;
@@ -152,10 +154,11 @@ TEST_F(RecoverTest, DamagedFirstChunkLosesOnlyItsOwnMessagesThanksToTheSummary) 
   const ChunkIndex first = reader->summary().chunk_indexes.at(0);
   std::uint64_t in_first = 0;
   ASSERT_TRUE(reader
-                  ->read_indexed({}, [&](const MessageView& m) {
-                    in_first += m.chunk_offset == first.chunk_start_offset;
-                    return true;
-                  })
+                  ->read_indexed({},
+                                 [&](const MessageView& m) {
+                                   in_first += m.chunk_offset == first.chunk_start_offset;
+                                   return true;
+                                 })
                   .is_ok());
   ASSERT_GT(in_first, 0u);
   ASSERT_LT(in_first, 60u);
@@ -182,12 +185,14 @@ TEST_F(RecoverTest, DamagedFirstChunkLosesOnlyItsOwnMessagesThanksToTheSummary) 
     EXPECT_EQ(m.schema, m.topic == "/c" ? "" : "test.Blob") << m.topic;
   }
 
-  // Without the summary's tables (the behaviour before), the other chunks' messages are on unknown channels.
+  // Without the summary's tables (the behaviour before), the other chunks' messages are on unknown
+  // channels.
   ReadOptions no_summary;
   no_summary.use_summary_tables = false;
   std::uint64_t without = 0;
   auto plain = Reader::open(std::make_unique<BufferSource>(bag));
-  ASSERT_TRUE(plain->read_linear(no_summary, [&](const MessageView&) { return ++without, true; }).is_ok());
+  ASSERT_TRUE(
+      plain->read_linear(no_summary, [&](const MessageView&) { return ++without, true; }).is_ok());
   EXPECT_LT(without, 60u - in_first);
 }
 

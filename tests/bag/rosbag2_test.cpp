@@ -1,5 +1,7 @@
-// rosbag2 directories: metadata.yaml as Humble writes it (version 5, integer QoS), the MCAP file's ros2
-// profile, channels and schemas, the partial-directory rename, and metadata.yaml read back.
+// rosbag2 directories: metadata.yaml as Humble writes it (version 5, integer QoS), the MCAP file's
+// ros2 profile, channels and schemas, the partial-directory rename, and metadata.yaml read back.
+#include "bag/rosbag2.hpp"
+
 #include <gtest/gtest.h>
 #include <unistd.h>
 #include <yaml-cpp/yaml.h>
@@ -10,7 +12,6 @@
 
 #include "bag/inspect.hpp"
 #include "bag/reader.hpp"
-#include "bag/rosbag2.hpp"
 #include "ros2/messages.hpp"
 #include "ros2/schema.hpp"
 
@@ -22,8 +23,9 @@ namespace fs = std::filesystem;
 class Rosbag2Test : public ::testing::Test {
  protected:
   void SetUp() override {
-    root_ = fs::temp_directory_path() / ("faultline_rosbag2_" + std::to_string(::getpid()) + "_" +
-                                         ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    root_ = fs::temp_directory_path() /
+            ("faultline_rosbag2_" + std::to_string(::getpid()) + "_" +
+             ::testing::UnitTest::GetInstance()->current_test_info()->name());
     fs::remove_all(root_);
     fs::create_directories(root_);
   }
@@ -33,10 +35,12 @@ class Rosbag2Test : public ::testing::Test {
   void WriteSmallBag(const fs::path& dir) {
     auto w = Rosbag2Writer::open(dir.string());
     ASSERT_TRUE(w.is_ok()) << w.status().to_string();
-    auto img = (*w)->add_topic("/CAM_FRONT/image_rect_compressed", "sensor_msgs/msg/CompressedImage", Qos::reliable());
+    auto img = (*w)->add_topic("/CAM_FRONT/image_rect_compressed",
+                               "sensor_msgs/msg/CompressedImage", Qos::reliable());
     auto tf = (*w)->add_topic("/tf_static", "tf2_msgs/msg/TFMessage", Qos::tf_static());
     ASSERT_TRUE(img.is_ok() && tf.is_ok());
-    ros2::TFMessage msg;  // fields assigned one by one: GCC 12 warns falsely on nested brace-init strings
+    ros2::TFMessage
+        msg;  // fields assigned one by one: GCC 12 warns falsely on nested brace-init strings
     msg.transforms.resize(1);
     msg.transforms[0].header.stamp.sec = 1;
     msg.transforms[0].header.frame_id = "base_link";
@@ -51,7 +55,8 @@ class Rosbag2Test : public ::testing::Test {
       const std::string prefix = ros2::compressed_image_prefix(header, "jpeg", 4);
       ASSERT_TRUE((*w)->write_parts(*img, t, {prefix, jpeg}).is_ok());
     }
-    EXPECT_TRUE(fs::exists(root_ / ("." + dir.filename().string() + ".partial-" + std::to_string(::getpid()))));
+    EXPECT_TRUE(fs::exists(
+        root_ / ("." + dir.filename().string() + ".partial-" + std::to_string(::getpid()))));
     EXPECT_FALSE(fs::exists(dir));
     ASSERT_TRUE((*w)->close().is_ok());
   }
@@ -85,7 +90,8 @@ TEST_F(Rosbag2Test, DirectoryWithMetadataAndMcap) {
   }
   EXPECT_EQ(entries, 1u);  // no partial directory left
 
-  const YAML::Node y = YAML::LoadFile((dir / "metadata.yaml").string())["rosbag2_bagfile_information"];
+  const YAML::Node y =
+      YAML::LoadFile((dir / "metadata.yaml").string())["rosbag2_bagfile_information"];
   EXPECT_EQ(y["version"].as<int>(), 5);
   EXPECT_EQ(y["storage_identifier"].as<std::string>(), "mcap");
   EXPECT_EQ(y["message_count"].as<std::uint64_t>(), 4u);
@@ -97,16 +103,20 @@ TEST_F(Rosbag2Test, DirectoryWithMetadataAndMcap) {
   EXPECT_EQ(y["files"][0]["message_count"].as<std::uint64_t>(), 4u);
   const YAML::Node topics = y["topics_with_message_count"];
   ASSERT_EQ(topics.size(), 2u);
-  EXPECT_EQ(topics[0]["topic_metadata"]["name"].as<std::string>(), "/CAM_FRONT/image_rect_compressed");
-  EXPECT_EQ(topics[0]["topic_metadata"]["type"].as<std::string>(), "sensor_msgs/msg/CompressedImage");
+  EXPECT_EQ(topics[0]["topic_metadata"]["name"].as<std::string>(),
+            "/CAM_FRONT/image_rect_compressed");
+  EXPECT_EQ(topics[0]["topic_metadata"]["type"].as<std::string>(),
+            "sensor_msgs/msg/CompressedImage");
   EXPECT_EQ(topics[0]["topic_metadata"]["serialization_format"].as<std::string>(), "cdr");
   EXPECT_EQ(topics[0]["message_count"].as<std::uint64_t>(), 3u);
   EXPECT_EQ(topics[1]["topic_metadata"]["offered_qos_profiles"].as<std::string>(),
             offered_qos_profiles_yaml(Qos::tf_static()));
   // The QoS string is itself YAML with rmw integers (transient local = 1).
-  EXPECT_EQ(YAML::Load(topics[1]["topic_metadata"]["offered_qos_profiles"].as<std::string>())[0]["durability"]
-                .as<int>(),
-            1);
+  EXPECT_EQ(
+      YAML::Load(
+          topics[1]["topic_metadata"]["offered_qos_profiles"].as<std::string>())[0]["durability"]
+          .as<int>(),
+      1);
 
   auto back = read_rosbag2_metadata(dir.string());
   ASSERT_TRUE(back.is_ok()) << back.status().to_string();
@@ -153,7 +163,8 @@ TEST_F(Rosbag2Test, McapHasRos2ProfileCdrChannelsAndRos2msgSchemas) {
   ASSERT_TRUE(scan.is_ok());
   EXPECT_EQ(images, 3u);
 
-  // The "rosbag2" Metadata record: the metadata map (no top-level key) at version 5, as Jazzy reads it.
+  // The "rosbag2" Metadata record: the metadata map (no top-level key) at version 5, as Jazzy reads
+  // it.
   auto records = (*reader)->read_metadata();
   ASSERT_TRUE(records.is_ok());
   ASSERT_EQ(records->size(), 1u);
@@ -190,7 +201,8 @@ TEST_F(Rosbag2Test, InspectAgreesWithAnIntactBagAndNamesEachDisagreement) {
   ASSERT_TRUE(lied.is_ok());
   EXPECT_FALSE(lied->intact());
   ASSERT_EQ(lied->disagreements.size(), 3u);
-  EXPECT_EQ(lied->disagreements[0], "/CAM_FRONT/image_rect_compressed message_count: metadata.yaml 5, files 3");
+  EXPECT_EQ(lied->disagreements[0],
+            "/CAM_FRONT/image_rect_compressed message_count: metadata.yaml 5, files 3");
   EXPECT_NE(lied->disagreements[1].find("tf2_msgs/msg/Other"), std::string::npos);
   EXPECT_EQ(lied->disagreements[2], "/ghost: in metadata.yaml, in no file");
 
@@ -243,14 +255,15 @@ TEST_F(Rosbag2Test, MetadataReaderNamesMissingKeys) {
   ASSERT_FALSE(m.is_ok());
   EXPECT_EQ(m.status().code(), StatusCode::kCorruptData);
   EXPECT_NE(m.status().message().find("duration"), std::string::npos) << m.status().message();
-  EXPECT_EQ(read_rosbag2_metadata((root_ / "nothing").string()).status().code(), StatusCode::kNotFound);
+  EXPECT_EQ(read_rosbag2_metadata((root_ / "nothing").string()).status().code(),
+            StatusCode::kNotFound);
 }
 
 // The size limit of metadata.yaml: tests/bag/limits_test.cpp (BagLimitsTest).
 
 TEST_F(Rosbag2Test, MetadataTextThatIsNotAMappingNamesTheFile) {
-  for (const char* text :
-       {"", "[1, 2]", "rosbag2_bagfile_information: 3", "rosbag2_bagfile_information: {version: [1]}"}) {
+  for (const char* text : {"", "[1, 2]", "rosbag2_bagfile_information: 3",
+                           "rosbag2_bagfile_information: {version: [1]}"}) {
     const auto m = parse_rosbag2_metadata(text, "b/metadata.yaml");
     ASSERT_FALSE(m.is_ok()) << text;
     EXPECT_EQ(m.status().message().rfind("b/metadata.yaml: ", 0), 0u) << m.status().message();
@@ -259,7 +272,8 @@ TEST_F(Rosbag2Test, MetadataTextThatIsNotAMappingNamesTheFile) {
 
 // Found by fuzz_rosbag2_metadata: bytes that are not UTF-8 did not survive a write and read back.
 TEST_F(Rosbag2Test, MetadataThatIsNotUtf8IsRefusedNamingTheByte) {
-  const std::string text = "rosbag2_bagfile_information:\n  version: 5\n  storage_identifier: \"mc\xEE\xFF\"\n";
+  const std::string text =
+      "rosbag2_bagfile_information:\n  version: 5\n  storage_identifier: \"mc\xEE\xFF\"\n";
   const auto m = parse_rosbag2_metadata(text, "b/metadata.yaml");
   ASSERT_FALSE(m.is_ok());
   EXPECT_EQ(m.status().message(), "b/metadata.yaml: byte 67 is not UTF-8 text");

@@ -17,9 +17,10 @@ namespace {
 
 using namespace faultline;
 constexpr int kSteps = 10;
-constexpr int kMessagesPerStep = 23;  // 6 x (image, info, tf) + ego tf + 2 markers + raw image + frame
+constexpr int kMessagesPerStep =
+    23;  // 6 x (image, info, tf) + ego tf + 2 markers + raw image + frame
 const char* const kCameras[] = {"CAM_FRONT", "CAM_FRONT_LEFT", "CAM_FRONT_RIGHT",
-                                "CAM_BACK", "CAM_BACK_LEFT", "CAM_BACK_RIGHT"};
+                                "CAM_BACK",  "CAM_BACK_LEFT",  "CAM_BACK_RIGHT"};
 
 msgs::CameraFrame make_frame(const char* camera, int step) {
   msgs::CameraFrame f;
@@ -55,17 +56,20 @@ int write_bag(const std::string& path, bag::Compression compression) {
   std::map<std::string, std::uint16_t> ch;
   for (const char* cam : kCameras) {
     ch[bag::image_topic(cam)] = *w.channel_for<foxglove::CompressedImage>(bag::image_topic(cam));
-    ch[bag::camera_info_topic(cam)] = *w.channel_for<foxglove::CameraCalibration>(bag::camera_info_topic(cam));
+    ch[bag::camera_info_topic(cam)] =
+        *w.channel_for<foxglove::CameraCalibration>(bag::camera_info_topic(cam));
   }
   ch["/tf"] = *w.channel_for<foxglove::FrameTransform>(bag::kTfTopic);
   ch["gt"] = *w.channel_for<foxglove::SceneUpdate>(bag::kAnnotationsTopic);
   ch["det"] = *w.channel_for<foxglove::SceneUpdate>(bag::kDetectionsTopic);
-  ch["raw"] = *w.channel_for<foxglove::RawImage>("/cam_front/image_raw", {{"frame_id", "cam_front"}});
+  ch["raw"] =
+      *w.channel_for<foxglove::RawImage>("/cam_front/image_raw", {{"frame_id", "cam_front"}});
   ch["frame"] = *w.channel_for<msgs::CameraFrame>("/faultline/frames");
   if (!w.write_metadata("faultline.run", {{"seed", "7"}, {"schema_version", "1"}})) return 1;
 
   std::uint64_t written = 0;
-  auto put = [&](std::uint16_t channel, std::uint64_t seq, StampNs t, const google::protobuf::Message& m) {
+  auto put = [&](std::uint16_t channel, std::uint64_t seq, StampNs t,
+                 const google::protobuf::Message& m) {
     if (w.write_proto(channel, seq, t, t, m)) ++written;
   };
   for (int step = 0; step < kSteps; ++step) {
@@ -82,7 +86,8 @@ int write_bag(const std::string& path, bag::Compression compression) {
     const msgs::CameraFrame front = make_frame("CAM_FRONT", step);
     const StampNs t = front.header().capture_stamp_ns();
     put(ch["/tf"], seq, t, bag::ego_transform(front));
-    bag::GtBox box{"e3f1a9b0c", "vehicle.car", {610.0 + step, 1.0, 0.5}, {1.9, 4.5, 1.6}, {0.92, 0, 0, 0.38}};
+    bag::GtBox box{
+        "e3f1a9b0c", "vehicle.car", {610.0 + step, 1.0, 0.5}, {1.9, 4.5, 1.6}, {0.92, 0, 0, 0.38}};
     put(ch["gt"], seq, t, bag::gt_scene_update({box}, t));
     msgs::DetectionArray dets;
     auto* d = dets.add_detections();
@@ -98,7 +103,8 @@ int write_bag(const std::string& path, bag::Compression compression) {
     raw_frame.set_height(48);
     raw_frame.set_step(64 * 3);
     std::string pixels(64 * 48 * 3, '\0');
-    for (std::size_t i = 0; i < pixels.size(); ++i) pixels[i] = static_cast<char>((i / 3 + static_cast<std::size_t>(step)) % 256);
+    for (std::size_t i = 0; i < pixels.size(); ++i)
+      pixels[i] = static_cast<char>((i / 3 + static_cast<std::size_t>(step)) % 256);
     put(ch["raw"], seq, t, bag::to_raw_image(raw_frame, pixels));
     put(ch["frame"], seq, t, front);
   }
@@ -123,7 +129,8 @@ int write_corrupt(const std::string& in, const std::string& out) {
   if (chunks.size() < 2) return 1;
   std::ifstream src(in, std::ios::binary);
   std::string bytes{std::istreambuf_iterator<char>(src), std::istreambuf_iterator<char>()};
-  bytes[static_cast<std::size_t>(chunks[1].chunk_start_offset + chunks[1].chunk_length / 2)] ^= 0x01;
+  bytes[static_cast<std::size_t>(chunks[1].chunk_start_offset + chunks[1].chunk_length / 2)] ^=
+      0x01;
   std::ofstream dst(out, std::ios::binary);
   dst.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
   std::printf("%s: flipped one byte in the chunk at offset %llu\n", out.c_str(),
@@ -141,11 +148,13 @@ int write_seeds(const std::string& dir) {
     opts.chunk_size_bytes = 256;
     auto w = bag::Writer::open(path, opts);
     if (!w) return 1;
-    const auto a = *(*w)->add_channel("/a", (*w)->add_schema("t.A", "protobuf", "xy"), {{"k", "v"}});
+    const auto a =
+        *(*w)->add_channel("/a", (*w)->add_schema("t.A", "protobuf", "xy"), {{"k", "v"}});
     const auto b = *(*w)->add_channel("/b", 0, {}, "raw");
     for (int i = 0; i < 6; ++i) {
       const std::string payload(static_cast<std::size_t>(40 + 30 * i), static_cast<char>('a' + i));
-      rc |= (*w)->write(i % 2 ? a : b, static_cast<std::uint64_t>(i), 100 - 10 * i, 5, payload) ? 0 : 1;
+      rc |= (*w)->write(i % 2 ? a : b, static_cast<std::uint64_t>(i), 100 - 10 * i, 5, payload) ? 0
+                                                                                                : 1;
     }
     rc |= (*w)->write_metadata("m", {{"x", "1"}}) ? 0 : 1;
     rc |= (*w)->close() ? 0 : 1;

@@ -1,6 +1,7 @@
 // The recorder's cheap write path: gather writes (write_parts, FileSink::write_parts), the data CRC
 // of raw chunks via crc32_combine, skipping compression of incompressible streams, and the
 // Foxglove image messages serialized without copying the image.
+#include <google/protobuf/util/message_differencer.h>
 #include <gtest/gtest.h>
 #include <unistd.h>
 #include <zlib.h>
@@ -8,8 +9,6 @@
 #include <filesystem>
 #include <fstream>
 #include <sstream>
-
-#include <google/protobuf/util/message_differencer.h>
 
 #include "bag/foxglove.hpp"
 #include "bag_test_util.hpp"
@@ -24,7 +23,8 @@ std::uint32_t stored_data_crc(const std::string& bag) {
   const std::size_t footer = bag.size() - 8 - 29;
   std::uint64_t summary_start = 0;
   for (int i = 0; i < 8; ++i) {
-    summary_start |= static_cast<std::uint64_t>(static_cast<unsigned char>(bag[footer + 9 + i])) << (8 * i);
+    summary_start |= static_cast<std::uint64_t>(static_cast<unsigned char>(bag[footer + 9 + i]))
+                     << (8 * i);
   }
   const std::size_t data_end = static_cast<std::size_t>(summary_start) - 13;
   EXPECT_EQ(static_cast<unsigned char>(bag[data_end]), 0x0F);
@@ -47,9 +47,10 @@ std::string write_bag(bool parts, WriterOptions options, int n, bool compressibl
   for (int i = 0; i < n; ++i) {
     const std::string p = make_payload(i, compressible);
     const std::string_view v(p);
-    const Status s = parts ? (*w)->write_parts(*ch, static_cast<std::uint64_t>(i + 1), 1000 + i, 1000 + i,
-                                               {v.substr(0, 3), v.substr(3, 50), v.substr(53)})
-                           : (*w)->write(*ch, static_cast<std::uint64_t>(i + 1), 1000 + i, 1000 + i, p);
+    const Status s =
+        parts ? (*w)->write_parts(*ch, static_cast<std::uint64_t>(i + 1), 1000 + i, 1000 + i,
+                                  {v.substr(0, 3), v.substr(3, 50), v.substr(53)})
+              : (*w)->write(*ch, static_cast<std::uint64_t>(i + 1), 1000 + i, 1000 + i, p);
     EXPECT_TRUE(s.is_ok()) << s.to_string();
   }
   EXPECT_TRUE((*w)->close().is_ok());
@@ -92,7 +93,8 @@ TEST(WritePathTest, IncompressibleStreamSkipsCompressionThenProbesAgain) {
   auto put = [&](bool compressible, int n) {
     for (int k = 0; k < n; ++k, ++i) {
       ASSERT_TRUE((*w)->write(*ch, static_cast<std::uint64_t>(i + 1), 1000 + i, 1000 + i,
-                              make_payload(i, compressible)).is_ok());
+                              make_payload(i, compressible))
+                      .is_ok());
     }
   };
   put(false, 80);  // ~ 40 chunks of random bytes
@@ -108,14 +110,16 @@ TEST(WritePathTest, IncompressibleStreamSkipsCompressionThenProbesAgain) {
   const auto& idx = reader->summary().chunk_indexes;
   ASSERT_GT(idx.size(), chunks_random + 8);
   std::size_t compressed_tail = 0;
-  for (std::size_t k = chunks_random + 4; k < idx.size(); ++k) compressed_tail += idx[k].compression == "zstd";
+  for (std::size_t k = chunks_random + 4; k < idx.size(); ++k)
+    compressed_tail += idx[k].compression == "zstd";
   EXPECT_EQ(compressed_tail, idx.size() - chunks_random - 4);
   EXPECT_EQ(read_linear_all(out).messages.size(), static_cast<std::size_t>(i));
   stored_data_crc(out);
 }
 
 TEST(WritePathTest, FileSinkGatherWriteKeepsChunksWholeAndCrcsRight) {
-  const auto path = std::filesystem::temp_directory_path() / ("faultline_writev_" + std::to_string(::getpid()) + ".mcap");
+  const auto path = std::filesystem::temp_directory_path() /
+                    ("faultline_writev_" + std::to_string(::getpid()) + ".mcap");
   WriterOptions o;
   o.compression = Compression::kZstd;
   o.chunk_size_bytes = 16 * 1024;
@@ -125,8 +129,10 @@ TEST(WritePathTest, FileSinkGatherWriteKeepsChunksWholeAndCrcsRight) {
     const auto ch = (*w)->add_channel("/a", 0, {});
     for (int i = 0; i < 200; ++i) {
       const std::string p = make_payload(i, i % 3 == 0);
-      ASSERT_TRUE((*w)->write_parts(*ch, static_cast<std::uint64_t>(i + 1), 1000 + i, 1000 + i,
-                                    {std::string_view(p).substr(0, 10), std::string_view(p).substr(10)}).is_ok());
+      ASSERT_TRUE(
+          (*w)->write_parts(*ch, static_cast<std::uint64_t>(i + 1), 1000 + i, 1000 + i,
+                            {std::string_view(p).substr(0, 10), std::string_view(p).substr(10)})
+              .is_ok());
     }
     ASSERT_TRUE((*w)->close().is_ok());
   }
@@ -141,7 +147,8 @@ TEST(WritePathTest, FileSinkGatherWriteKeepsChunksWholeAndCrcsRight) {
   const auto r = read_linear_all(bag, ro);
   EXPECT_TRUE(r.problems.empty());
   ASSERT_EQ(r.messages.size(), 200u);
-  for (int i = 0; i < 200; ++i) EXPECT_EQ(r.messages[static_cast<std::size_t>(i)].data, make_payload(i, i % 3 == 0));
+  for (int i = 0; i < 200; ++i)
+    EXPECT_EQ(r.messages[static_cast<std::size_t>(i)].data, make_payload(i, i % 3 == 0));
 }
 
 TEST(WritePathTest, ImageHeadPlusBytesParsesAsTheFullMessage) {
@@ -159,7 +166,8 @@ TEST(WritePathTest, ImageHeadPlusBytesParsesAsTheFullMessage) {
   EXPECT_EQ(img.frame_id(), "cam_back_left");
   EXPECT_EQ(img.timestamp().seconds(), 1'532'402'927);
   EXPECT_EQ(img.timestamp().nanos(), 612'460'000);
-  EXPECT_TRUE(google::protobuf::util::MessageDifferencer::Equals(img, to_compressed_image(f, jpeg)));
+  EXPECT_TRUE(
+      google::protobuf::util::MessageDifferencer::Equals(img, to_compressed_image(f, jpeg)));
 
   f.set_encoding("bgr8");
   f.set_width(4);

@@ -83,8 +83,11 @@ TEST_P(CompressionRoundTrip, IncompressibleChunksAreStoredUncompressed) {
 }
 
 INSTANTIATE_TEST_SUITE_P(AllCompressions, CompressionRoundTrip,
-                         ::testing::Values(Compression::kNone, Compression::kZstd, Compression::kLz4),
-                         [](const auto& param_info) { return std::string(display_name(param_info.param)); });
+                         ::testing::Values(Compression::kNone, Compression::kZstd,
+                                           Compression::kLz4),
+                         [](const auto& param_info) {
+                           return std::string(display_name(param_info.param));
+                         });
 
 TEST(BagFormatTest, DataSectionAndSummaryCrcsMatchZlib) {
   std::string bag;
@@ -99,10 +102,12 @@ TEST(BagFormatTest, DataSectionAndSummaryCrcsMatchZlib) {
   ASSERT_EQ(static_cast<unsigned char>(bag[data_end]), 0x0F);
   const std::uint32_t stored_data_crc = le32(bag, data_end + 9);
   const auto* bytes = reinterpret_cast<const Bytef*>(bag.data());
-  EXPECT_EQ(stored_data_crc, static_cast<std::uint32_t>(crc32(0, bytes, static_cast<uInt>(data_end))));
+  EXPECT_EQ(stored_data_crc,
+            static_cast<std::uint32_t>(crc32(0, bytes, static_cast<uInt>(data_end))));
   EXPECT_NE(stored_data_crc, 0u);
-  EXPECT_EQ(summary_crc, static_cast<std::uint32_t>(crc32(0, bytes + summary_start,
-                                                          static_cast<uInt>(footer + 25 - summary_start))));
+  EXPECT_EQ(summary_crc,
+            static_cast<std::uint32_t>(
+                crc32(0, bytes + summary_start, static_cast<uInt>(footer + 25 - summary_start))));
   // The linear reader's own check agrees.
   ReadOptions opts;
   opts.verify_data_crc = true;
@@ -186,7 +191,8 @@ TEST(IndexedReadTest, MergesOverlappingChunksByLogTimeThenFileOrder) {
     std::uint64_t seq = 0;
     for (const auto& [ch, t] : writes) {
       ++seq;
-      ASSERT_TRUE((*w)->write(ch, seq, t, t, std::string(700, static_cast<char>('0' + seq))).is_ok());
+      ASSERT_TRUE(
+          (*w)->write(ch, seq, t, t, std::string(700, static_cast<char>('0' + seq))).is_ok());
     }
     ASSERT_TRUE((*w)->close().is_ok());
   }
@@ -272,7 +278,8 @@ TEST_F(FileBagTest, SplitBySizeWritesNumberedIndexedFiles) {
     ASSERT_TRUE(w.is_ok()) << w.status().to_string();
     const auto ch = *(*w)->add_channel("/x", (*w)->add_schema("t.X", "protobuf", "d"));
     for (int i = 0; i < 400; ++i) {
-      ASSERT_TRUE((*w)->write(ch, static_cast<std::uint64_t>(i), i, i, make_payload(i, false)).is_ok());
+      ASSERT_TRUE(
+          (*w)->write(ch, static_cast<std::uint64_t>(i), i, i, make_payload(i, false)).is_ok());
     }
     ASSERT_TRUE((*w)->close().is_ok());
     paths = (*w)->paths();
@@ -305,7 +312,9 @@ TEST_F(FileBagTest, SplitByDurationStartsANewFilePerSpan) {
   ASSERT_TRUE(w.is_ok());
   const auto ch = *(*w)->add_channel("/x", 0, {}, "raw");
   for (int i = 0; i < 50; ++i) {  // 10 Hz for 5 s
-    ASSERT_TRUE((*w)->write(ch, static_cast<std::uint64_t>(i), i * 100'000'000LL, i * 100'000'000LL, "p").is_ok());
+    ASSERT_TRUE(
+        (*w)->write(ch, static_cast<std::uint64_t>(i), i * 100'000'000LL, i * 100'000'000LL, "p")
+            .is_ok());
   }
   ASSERT_TRUE((*w)->close().is_ok());
   ASSERT_EQ((*w)->paths().size(), 5u);
@@ -324,7 +333,8 @@ TEST_F(FileBagTest, CompletedChunksAreOnDiskBeforeClose) {
   ASSERT_TRUE(w.is_ok());
   const auto ch = *(*w)->add_channel("/x", 0, {}, "raw");
   for (int i = 0; i < 100; ++i) {
-    ASSERT_TRUE((*w)->write(ch, static_cast<std::uint64_t>(i), i, i, make_payload(i, false)).is_ok());
+    ASSERT_TRUE(
+        (*w)->write(ch, static_cast<std::uint64_t>(i), i, i, make_payload(i, false)).is_ok());
   }
   // What a SIGKILL would leave behind: every completed chunk, no footer.
   const std::string on_disk = slurp(path);

@@ -1,6 +1,7 @@
-// The benchmarks' frames: the noisy road scene deterministic per spec, varied by seed, noise bounded by
-// FrameSpec::noise, and the default spec still the frame the published worst-case `bench corrupt` figures were
-// measured on; the realistic frames (every bench command's default) weighing what nuScenes' JPEGs weigh.
+// The benchmarks' frames: the noisy road scene deterministic per spec, varied by seed, noise
+// bounded by FrameSpec::noise, and the default spec still the frame the published worst-case `bench
+// corrupt` figures were measured on; the realistic frames (every bench command's default) weighing
+// what nuScenes' JPEGs weigh.
 #include "bench/frames.hpp"
 
 #include <gtest/gtest.h>
@@ -63,8 +64,8 @@ TEST(SyntheticFrameTest, DefaultSpecIsTheCorruptBenchmarksFrame) {
   EXPECT_EQ(fingerprint(f), 0xbcda08f18d537f74ull);
 }
 
-// Every speed figure is measured on these: each of the six camera mounts at 1600x900 gives a JPEG in nuScenes'
-// 130-165 KB (the noisy scene is 2.5-4x heavier, the flat render half as heavy).
+// Every speed figure is measured on these: each of the six camera mounts at 1600x900 gives a JPEG
+// in nuScenes' 130-165 KB (the noisy scene is 2.5-4x heavier, the flat render half as heavy).
 TEST(RealisticFrameTest, FullSizeJpegsOfEveryMountWeighWhatNuScenesImagesWeigh) {
   for (std::uint64_t seed = 0; seed < 12; ++seed) {
     BenchFrame f;
@@ -117,7 +118,8 @@ TEST(BenchFrameTest, RejectsTinyFramesAndBadQuality) {
 }
 
 TEST(BenchFrameTest, KindNamesRoundTrip) {
-  for (FrameKind k : {FrameKind::kRealistic, FrameKind::kNoisy}) EXPECT_EQ(frame_kind_from_string(to_string(k)), k);
+  for (FrameKind k : {FrameKind::kRealistic, FrameKind::kNoisy})
+    EXPECT_EQ(frame_kind_from_string(to_string(k)), k);
   EXPECT_FALSE(frame_kind_from_string("Realistic").has_value());
   EXPECT_FALSE(frame_kind_from_string("").has_value());
 }

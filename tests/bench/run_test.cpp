@@ -1,5 +1,6 @@
-// `faultline bench injector`, `bench corrupt` and `bench export` run for real through the tool: their JSON
-// is complete and consistent, and a missing input or an unknown frame kind is an error that names it.
+// `faultline bench injector`, `bench corrupt` and `bench export` run for real through the tool:
+// their JSON is complete and consistent, and a missing input or an unknown frame kind is an error
+// that names it.
 #include <gtest/gtest.h>
 #include <rapidjson/document.h>
 #include <unistd.h>
@@ -30,8 +31,8 @@ fs::path scratch_dir(const std::string& name) {
 }
 
 // `bench injector --images` streams the given JPEGs (their own size, here a 1600x900 dataset frame)
-// through the real injector and reports every frame received; --coherent adds a coherent run of each
-// corruption (not of "none") after its non-coherent one; a missing file is an error naming it.
+// through the real injector and reports every frame received; --coherent adds a coherent run of
+// each corruption (not of "none") after its non-coherent one; a missing file is an error naming it.
 TEST(BenchRunTest, InjectorStreamsGivenImagesAndNamesAMissingOne) {
   const fs::path root = scratch_dir("injector");
   dataset::SynthOptions so;
@@ -57,7 +58,8 @@ TEST(BenchRunTest, InjectorStreamsGivenImagesAndNamesAMissingOne) {
   d.Parse(log.c_str() + json_at);
   ASSERT_FALSE(d.HasParseError()) << log;
   ASSERT_EQ(d.Size(), 3u);
-  const std::vector<std::pair<std::string, bool>> runs = {{"none", false}, {"fog", false}, {"fog", true}};
+  const std::vector<std::pair<std::string, bool>> runs = {
+      {"none", false}, {"fog", false}, {"fog", true}};
   for (rapidjson::SizeType i = 0; i < d.Size(); ++i) {
     EXPECT_EQ(d[i]["corruption"].GetString(), runs[i].first) << i;
     EXPECT_EQ(d[i]["coherent"].GetBool(), runs[i].second) << i;
@@ -75,8 +77,9 @@ TEST(BenchRunTest, InjectorStreamsGivenImagesAndNamesAMissingOne) {
   fs::remove_all(root);
 }
 
-// `bench corrupt` measures the realistic frame by default (a q90 JPEG in nuScenes' 130-165 KB) and the noisy road
-// scene on request (q95, several times heavier); its JSON says which, and an unknown --frames value is refused.
+// `bench corrupt` measures the realistic frame by default (a q90 JPEG in nuScenes' 130-165 KB) and
+// the noisy road scene on request (q95, several times heavier); its JSON says which, and an unknown
+// --frames value is refused.
 TEST(BenchRunTest, CorruptRunsOnRealisticFramesByDefaultAndNoisyOnRequest) {
   const fs::path root = scratch_dir("corrupt");
   for (const std::string kind : {"", "noisy"}) {

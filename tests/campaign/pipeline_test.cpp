@@ -1,5 +1,5 @@
-// One benchmark run's processes built from the pipeline launch file: the run's variables substituted, its
-// overrides applied, each node's parameters written where the run keeps them.
+// One benchmark run's processes built from the pipeline launch file: the run's variables
+// substituted, its overrides applied, each node's parameters written where the run keeps them.
 #include "campaign/pipeline.hpp"
 
 #include <gtest/gtest.h>
@@ -63,7 +63,8 @@ TEST_F(PipelineTest, BuiltInPipelineIsLaunchBenchmarkYaml) {
 TEST_F(PipelineTest, RunVariablesAndOverridesReachEachNodesParameters) {
   const RunPipeline p = run_pipeline(opts_, run_, "/tmp/flbench-X", (dir_ / "run").string());
   ASSERT_EQ(p.children.size(), 4u);
-  const std::vector<std::string> names{"detection_sink", "fault_injector", "detector", "nusc_player"};
+  const std::vector<std::string> names{"detection_sink", "fault_injector", "detector",
+                                       "nusc_player"};
   for (std::size_t i = 0; i < names.size(); ++i) {
     const auto& c = p.children[i];
     EXPECT_EQ(c.name, names[i]);
@@ -80,7 +81,8 @@ TEST_F(PipelineTest, RunVariablesAndOverridesReachEachNodesParameters) {
   EXPECT_EQ(sink["run"]["dataset"].as<std::string>(), "/data/nu scenes/v1.0-mini");
   EXPECT_EQ(sink["run"]["corruption"].as<std::string>(), "fog/mid");
   EXPECT_EQ(sink["run"]["seed"].as<std::string>(), "2");
-  EXPECT_EQ(sink["run"]["detector"].as<std::string>(), "detector scale:=0.5 temporal:=true scale:=0.25");
+  EXPECT_EQ(sink["run"]["detector"].as<std::string>(),
+            "detector scale:=0.5 temporal:=true scale:=0.25");
 
   const YAML::Node injector = params_of("fault_injector");
   EXPECT_EQ(injector["corruption"].as<std::string>(), "fog/mid");
@@ -88,7 +90,8 @@ TEST_F(PipelineTest, RunVariablesAndOverridesReachEachNodesParameters) {
   EXPECT_EQ(injector["input_endpoints"][0].as<std::string>(), "ipc:///tmp/flbench-X/player");
 
   const YAML::Node detector = params_of("detector");
-  EXPECT_EQ(detector["scale"].as<double>(), 0.25);  // the variant's value wins over the detector's own
+  EXPECT_EQ(detector["scale"].as<double>(),
+            0.25);  // the variant's value wins over the detector's own
   EXPECT_TRUE(detector["temporal"].as<bool>());
 
   const YAML::Node player = params_of("nusc_player");
@@ -115,9 +118,11 @@ TEST_F(PipelineTest, ExternalDetectorCommandReplacesTheDetectorNode) {
   const RunPipeline p = run_pipeline(opts_, run_, "/tmp/s", (dir_ / "run").string());
   ASSERT_EQ(p.children.size(), 4u);
   EXPECT_EQ(p.children[2].name, "detector");
-  EXPECT_EQ(p.children[2].argv, (std::vector<std::string>{"/bin/sh", "-c", "python3 my_detector.py --fast"}));
+  EXPECT_EQ(p.children[2].argv,
+            (std::vector<std::string>{"/bin/sh", "-c", "python3 my_detector.py --fast"}));
   EXPECT_FALSE(fs::exists(dir_ / "run" / "params" / "detector.yaml"));
-  EXPECT_EQ(params_of("detection_sink")["run"]["detector"].as<std::string>(), "python3 my_detector.py --fast");
+  EXPECT_EQ(params_of("detection_sink")["run"]["detector"].as<std::string>(),
+            "python3 my_detector.py --fast");
 }
 
 TEST_F(PipelineTest, UserPipelineKeepsItsEnvAndNamesWhatIsMissing) {

@@ -1,5 +1,5 @@
-// `faultline soak` and `faultline benchmark --detector-cmd` run for real: node executables as processes, on a tiny
-// generated dataset, checked through the files they write.
+// `faultline soak` and `faultline benchmark --detector-cmd` run for real: node executables as
+// processes, on a tiny generated dataset, checked through the files they write.
 #include <gtest/gtest.h>
 #include <rapidjson/document.h>
 #include <unistd.h>
@@ -29,7 +29,9 @@ class RunTest : public ::testing::Test {
   }
   static void TearDownTestSuite() { fs::remove_all(root_); }
 
-  static int run(const std::string& args, const fs::path& log) { return test_tool::run_faultline(args, log); }
+  static int run(const std::string& args, const fs::path& log) {
+    return test_tool::run_faultline(args, log);
+  }
   static fs::path root_;
 };
 fs::path RunTest::root_;
@@ -116,14 +118,16 @@ TEST_F(RunTest, BenchmarkScoresAnExternalPythonDetector) {
   EXPECT_EQ(fog["meta"]["faultline_sink_rejected_boxes"].GetUint64(), 0u);
 }
 
-// #22 item 5: a benchmark that cannot compute mCE/mRR (here clean NDS 0: the detector subscribes to no camera)
-// says why in summary.json and on stderr and exits non-zero, instead of exiting 0 without a report.
+// #22 item 5: a benchmark that cannot compute mCE/mRR (here clean NDS 0: the detector subscribes to
+// no camera) says why in summary.json and on stderr and exits non-zero, instead of exiting 0
+// without a report.
 TEST_F(RunTest, BenchmarkWithoutRobustnessSaysWhyAndFails) {
   const fs::path out = root_ / "blind";
-  const int rc = run("benchmark --out " + out.string() + " --dataroot " + (root_ / "data").string() +
-                         " --version v1.0-mini --corruptions fog --levels mid"
-                         " --detector-param input_prefix:=/no_such_camera/",
-                     root_ / "blind.log");
+  const int rc =
+      run("benchmark --out " + out.string() + " --dataroot " + (root_ / "data").string() +
+              " --version v1.0-mini --corruptions fog --levels mid"
+              " --detector-param input_prefix:=/no_such_camera/",
+          root_ / "blind.log");
   const std::string log = read_text(root_ / "blind.log");
   EXPECT_EQ(rc, 1) << log;
   EXPECT_NE(log.find("robustness not computed"), std::string::npos) << log;
@@ -136,14 +140,15 @@ TEST_F(RunTest, BenchmarkWithoutRobustnessSaysWhyAndFails) {
   EXPECT_FALSE(fs::exists(out / "report.html"));
 }
 
-// #22 item 5: a detector that dies is noticed at once: the run ends as failed with the real cause in summary.json
-// (it used to wait for --run-timeout and report "timed out").
+// #22 item 5: a detector that dies is noticed at once: the run ends as failed with the real cause
+// in summary.json (it used to wait for --run-timeout and report "timed out").
 TEST_F(RunTest, ADetectorThatDiesFailsItsRunWithTheRealCause) {
   const fs::path out = root_ / "dead";
-  const int rc = run("benchmark --out " + out.string() + " --dataroot " + (root_ / "data").string() +
-                         " --version v1.0-mini --corruptions fog --levels mid --run-timeout 300"
-                         " --detector-cmd 'exit 3'",
-                     root_ / "dead.log");
+  const int rc =
+      run("benchmark --out " + out.string() + " --dataroot " + (root_ / "data").string() +
+              " --version v1.0-mini --corruptions fog --levels mid --run-timeout 300"
+              " --detector-cmd 'exit 3'",
+          root_ / "dead.log");
   EXPECT_EQ(rc, 1) << read_text(root_ / "dead.log");
   rapidjson::Document d;
   d.Parse(read_text(out / "summary.json").c_str());

@@ -1,7 +1,7 @@
-// Limits and access (#22) of the `faultline` commands that open sockets, in process through cli::dispatch: the
-// AccessConfig options (--curve-secret-key-file, ... from its visit()), a topic tool that passes every message with
-// the right key and gets nothing with a wrong one (refused and counted by the publisher), and `bag play` refusing a
-// bind beyond loopback without --allow-remote.
+// Limits and access (#22) of the `faultline` commands that open sockets, in process through
+// cli::dispatch: the AccessConfig options (--curve-secret-key-file, ... from its visit()), a topic
+// tool that passes every message with the right key and gets nothing with a wrong one (refused and
+// counted by the publisher), and `bag play` refusing a bind beyond loopback without --allow-remote.
 #include <gtest/gtest.h>
 
 #include <fstream>
@@ -43,8 +43,8 @@ bool Eventually(const std::function<bool()>& done) {
 class CliAccessTest : public ::testing::Test {
  protected:
   std::vector<std::string> Keys(const std::string& name) const {
-    return {"--curve-secret-key-file", keys_.dir() + "/" + name + ".secret", "--curve-server-public-key-file",
-            keys_.dir() + "/server.public"};
+    return {"--curve-secret-key-file", keys_.dir() + "/" + name + ".secret",
+            "--curve-server-public-key-file", keys_.dir() + "/server.public"};
   }
   transport::Publisher CurvePublisher() const {
     transport::PublisherConfig pc;
@@ -77,8 +77,8 @@ TEST_F(CliAccessTest, OptionsComeFromAccessConfigWithItsHelpText) {
   const std::string play = GetCapturedStdout();
   EXPECT_NE(play.find("--allow-remote"), std::string::npos) << play;
   EXPECT_NE(play.find("--curve-allowed-clients-file"), std::string::npos) << play;
-  for (const char* command : {"topic hz", "topic bw", "topic delay", "topic info", "topic list", "bag record",
-                              "bag control"}) {
+  for (const char* command : {"topic hz", "topic bw", "topic delay", "topic info", "topic list",
+                              "bag record", "bag control"}) {
     std::vector<std::string> args;
     std::istringstream words(command);
     for (std::string w; words >> w;) args.push_back(w);
@@ -91,8 +91,17 @@ TEST_F(CliAccessTest, OptionsComeFromAccessConfigWithItsHelpText) {
 
 TEST_F(CliAccessTest, TopicEchoWithTheRightKeyPrintsEveryMessage) {
   transport::Publisher pub = CurvePublisher();
-  std::vector<std::string> args{"topic", "echo", "/t", "--endpoint", pub.endpoint(), "--type",
-                                "faultline.msgs.SampleAck", "-n", "5", "--duration", "120"};
+  std::vector<std::string> args{"topic",
+                                "echo",
+                                "/t",
+                                "--endpoint",
+                                pub.endpoint(),
+                                "--type",
+                                "faultline.msgs.SampleAck",
+                                "-n",
+                                "5",
+                                "--duration",
+                                "120"};
   for (auto& k : Keys("good")) args.push_back(k);
   CaptureStdout();
   int rc = -1;
@@ -111,13 +120,14 @@ TEST_F(CliAccessTest, TopicEchoWithTheRightKeyPrintsEveryMessage) {
 
 TEST_F(CliAccessTest, TopicHzWithAWrongKeyIsRefusedAndGetsNothing) {
   transport::Publisher pub = CurvePublisher();
-  std::vector<std::string> args{"topic", "hz", "/t", "--endpoint", pub.endpoint(), "--duration", "10",
-                                "--every", "0"};
+  std::vector<std::string> args{"topic",      "hz", "/t",      "--endpoint", pub.endpoint(),
+                                "--duration", "10", "--every", "0"};
   for (auto& k : Keys("bad")) args.push_back(k);
   CaptureStdout();
   int rc = -1;
   std::thread hz([&] { rc = Faultline(args); });
-  EXPECT_TRUE(Eventually([&] { return pub.auth_refused() >= 1; }));  // counted and logged by the publisher
+  EXPECT_TRUE(
+      Eventually([&] { return pub.auth_refused() >= 1; }));  // counted and logged by the publisher
   Send(pub, 5);
   hz.join();
   const std::string out = GetCapturedStdout();
@@ -132,7 +142,8 @@ TEST_F(CliAccessTest, BagPlayBindsBeyondLoopbackOnlyWithAllowRemote) {
   const std::string bag = keys_.dir() + "/empty.mcap";
   std::ofstream(bag) << "";
   const std::string out = keys_.dir() + "/out.txt";
-  const std::string common = "bag play " + bag + " --endpoint 'tcp://0.0.0.0:*' --no-keys --no-progress";
+  const std::string common =
+      "bag play " + bag + " --endpoint 'tcp://0.0.0.0:*' --no-keys --no-progress";
   EXPECT_EQ(test_tool::run_faultline(common, out), 2);
   const std::string refused = test_tool::read_text(out);
   EXPECT_NE(refused.find("endpoint = tcp://0.0.0.0:*"), std::string::npos) << refused;

@@ -1,7 +1,5 @@
-// Exit codes of the `faultline` tool, for every registered command: 2 for any usage error (CLI11's own codes,
-// 104-109, used to leak out), 0 for --help. In process, through cli::dispatch.
-#include "cli/command.hpp"
-
+// Exit codes of the `faultline` tool, for every registered command: 2 for any usage error (CLI11's
+// own codes, 104-109, used to leak out), 0 for --help. In process, through cli::dispatch.
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -10,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "cli/command.hpp"
 #include "transport/access.hpp"
 
 namespace faultline::cli {
@@ -53,7 +52,8 @@ TEST(DispatchTest, UnknownCommandAndBareGroupExitTwo) {
   EXPECT_EQ(run({"bag", "no-such-subcommand"}), 2);
 }
 
-// `keys generate` writes a pair the transport reads back, and refuses to replace it without --force.
+// `keys generate` writes a pair the transport reads back, and refuses to replace it without
+// --force.
 TEST(DispatchTest, KeysGenerateWritesAPairAndKeepsAnExistingOne) {
   const std::string prefix = ::testing::TempDir() + "/faultline_keys_" + std::to_string(::getpid());
   EXPECT_EQ(run({"keys generate", prefix}), 0);

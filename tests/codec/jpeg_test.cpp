@@ -1,18 +1,19 @@
-// TurboJPEG wrapper: round trips in BGR order, quality/subsampling options, and corrupt or truncated input
-// handled as Status errors.
+// TurboJPEG wrapper: round trips in BGR order, quality/subsampling options, and corrupt or
+// truncated input handled as Status errors.
+#include "codec/jpeg.hpp"
+
 #include <gtest/gtest.h>
 
 #include <opencv2/imgproc.hpp>
-
-#include "codec/jpeg.hpp"
 
 namespace faultline::codec {
 namespace {
 
 cv::Mat test_image() {
   cv::Mat img(90, 160, CV_8UC3, cv::Scalar(30, 60, 90));
-  cv::rectangle(img, cv::Rect(20, 20, 60, 40), cv::Scalar(255, 0, 0), cv::FILLED);  // pure blue in BGR
-  cv::circle(img, cv::Point(120, 45), 25, cv::Scalar(0, 0, 255), cv::FILLED);       // pure red
+  cv::rectangle(img, cv::Rect(20, 20, 60, 40), cv::Scalar(255, 0, 0),
+                cv::FILLED);                                                   // pure blue in BGR
+  cv::circle(img, cv::Point(120, 45), 25, cv::Scalar(0, 0, 255), cv::FILLED);  // pure red
   return img;
 }
 
@@ -71,7 +72,8 @@ TEST(JpegTest, FlippedBytesInsideTheScanNeverCrash) {
   for (std::size_t pos = 2; pos < bytes->size(); pos += 97) {
     auto copy = *bytes;
     copy[pos] ^= 0xA5;
-    auto r = decode_jpeg(copy.data(), copy.size());  // may succeed (damaged pixels) or fail; must not crash
+    auto r = decode_jpeg(copy.data(),
+                         copy.size());  // may succeed (damaged pixels) or fail; must not crash
     if (r.is_ok()) {
       EXPECT_EQ(r->type(), CV_8UC3);
     }

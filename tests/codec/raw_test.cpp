@@ -1,9 +1,10 @@
-// Raw frames into BGR: every layout gives the exact pixels, padding rows are skipped, bad sizes are refused.
+// Raw frames into BGR: every layout gives the exact pixels, padding rows are skipped, bad sizes are
+// refused.
+#include "codec/raw.hpp"
+
 #include <gtest/gtest.h>
 
 #include <vector>
-
-#include "codec/raw.hpp"
 
 namespace faultline::codec {
 namespace {
@@ -36,7 +37,8 @@ TEST(RawToBgrTest, Rgb8IsSwappedAndMono8IsSpread) {
 
 // Grey in YUV (U = V = 128) stays grey; the two byte orders of yuv422 give the same picture.
 TEST(RawToBgrTest, Yuv422InBothByteOrders) {
-  const std::vector<std::uint8_t> uyvy = {128, 16, 128, 235};  // 2x1: black (Y 16) and white (Y 235)
+  const std::vector<std::uint8_t> uyvy = {128, 16, 128,
+                                          235};  // 2x1: black (Y 16) and white (Y 235)
   const std::vector<std::uint8_t> yuyv = {16, 128, 235, 128};
   auto a = raw_to_bgr("yuv422", 2, 1, 4, uyvy.data(), uyvy.size());
   auto b = raw_to_bgr("yuv422_yuy2", 2, 1, 4, yuyv.data(), yuyv.size());
@@ -48,12 +50,18 @@ TEST(RawToBgrTest, Yuv422InBothByteOrders) {
 
 TEST(RawToBgrTest, WrongSizesAndEncodingsAreRefused) {
   const std::vector<std::uint8_t> bytes(12, 0);
-  EXPECT_EQ(raw_to_bgr("bgr8", 2, 2, 6, bytes.data(), 11).status().code(), StatusCode::kCorruptData);
-  EXPECT_EQ(raw_to_bgr("bgr8", 3, 2, 6, bytes.data(), 12).status().code(), StatusCode::kCorruptData);
-  EXPECT_EQ(raw_to_bgr("bgr8", 0, 2, 6, bytes.data(), 12).status().code(), StatusCode::kCorruptData);
-  EXPECT_EQ(raw_to_bgr("yuv420", 2, 2, 6, bytes.data(), 12).status().code(), StatusCode::kInvalidArgument);
-  EXPECT_EQ(raw_to_bgr("yuv422", 3, 2, 6, bytes.data(), 12).status().code(), StatusCode::kCorruptData);
-  EXPECT_EQ(raw_to_bgr("jpeg", 2, 2, 6, bytes.data(), 12).status().code(), StatusCode::kInvalidArgument);
+  EXPECT_EQ(raw_to_bgr("bgr8", 2, 2, 6, bytes.data(), 11).status().code(),
+            StatusCode::kCorruptData);
+  EXPECT_EQ(raw_to_bgr("bgr8", 3, 2, 6, bytes.data(), 12).status().code(),
+            StatusCode::kCorruptData);
+  EXPECT_EQ(raw_to_bgr("bgr8", 0, 2, 6, bytes.data(), 12).status().code(),
+            StatusCode::kCorruptData);
+  EXPECT_EQ(raw_to_bgr("yuv420", 2, 2, 6, bytes.data(), 12).status().code(),
+            StatusCode::kInvalidArgument);
+  EXPECT_EQ(raw_to_bgr("yuv422", 3, 2, 6, bytes.data(), 12).status().code(),
+            StatusCode::kCorruptData);
+  EXPECT_EQ(raw_to_bgr("jpeg", 2, 2, 6, bytes.data(), 12).status().code(),
+            StatusCode::kInvalidArgument);
 }
 
 }  // namespace

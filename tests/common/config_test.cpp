@@ -115,8 +115,8 @@ TEST(ConfigTest, MissingParamsFileNamesTheFile) {
   }
 }
 
-// The launch-file reader's fix of session 10 (a key that is a list or mapping: `? [a, b] : v`), here
-// for params files: yaml-cpp's bad-conversion error named neither the file nor the mapping.
+// The launch-file reader's fix of session 10 (a key that is a list or mapping: `? [a, b] : v`),
+// here for params files: yaml-cpp's bad-conversion error named neither the file nor the mapping.
 TEST(ConfigTest, AListAsAParameterKeyNamesTheSourceAndTheKey) {
   ParamSource s;
   try {
@@ -124,8 +124,8 @@ TEST(ConfigTest, AListAsAParameterKeyNamesTheSourceAndTheKey) {
     FAIL() << "expected ConfigError";
   } catch (const ConfigError& e) {
     const std::string what = e.what();
-    EXPECT_EQ(what.rfind("params.yaml: player: (key) = [a, b]: a parameter name must be a string", 0),
-              0u)
+    EXPECT_EQ(
+        what.rfind("params.yaml: player: (key) = [a, b]: a parameter name must be a string", 0), 0u)
         << what;
   }
 }

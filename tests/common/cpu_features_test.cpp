@@ -1,4 +1,5 @@
-// Runs twice under CTest: as is, and as scalar.* with FAULTLINE_SCALAR=1 (see faultline_add_test's SCALAR_TOO).
+// Runs twice under CTest: as is, and as scalar.* with FAULTLINE_SCALAR=1 (see faultline_add_test's
+// SCALAR_TOO).
 #include "common/cpu_features.hpp"
 
 #include <gtest/gtest.h>
@@ -16,7 +17,9 @@ bool scalar_requested() {
   return v != nullptr && std::string(v) != "" && std::string(v) != "0";
 }
 
-TEST(CpuFeatures, ScalarSwitchFollowsTheEnvironment) { EXPECT_EQ(scalar_forced(), scalar_requested()); }
+TEST(CpuFeatures, ScalarSwitchFollowsTheEnvironment) {
+  EXPECT_EQ(scalar_forced(), scalar_requested());
+}
 
 // With the switch every vector path is off; without it AVX2 is the CPU's own answer.
 TEST(CpuFeatures, VectorPathsFollowTheSwitch) {

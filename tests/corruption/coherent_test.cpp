@@ -1,10 +1,11 @@
-// CoherentCorruptor: deterministic per seed, the fault persists between consecutive frames (far more similar than
-// independent draws), and stays within the corruption's bounds.
+// CoherentCorruptor: deterministic per seed, the fault persists between consecutive frames (far
+// more similar than independent draws), and stays within the corruption's bounds.
+#include "corruption/coherent.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
 
-#include "corruption/coherent.hpp"
 #include "corruption/corrupt.hpp"
 #include "corruption/fog.hpp"
 #include "corruption/test_images.hpp"
@@ -38,8 +39,8 @@ TEST_P(CoherentTest, SameSeedGivesSameSequence) {
 
 INSTANTIATE_TEST_SUITE_P(AllTypes, CoherentTest, ::testing::ValuesIn(kAllCorruptions));
 
-// A seed reproduces a long sequence exactly (the state carried between frames included), and another seed gives
-// another sequence.
+// A seed reproduces a long sequence exactly (the state carried between frames included), and
+// another seed gives another sequence.
 TEST_P(CoherentTest, SeedReproducesALongSequenceAndAnotherSeedDiffers) {
   const cv::Mat frame = faultline::testing::scene(90, 160, 3);
   CoherentConfig cfg;
@@ -56,13 +57,15 @@ TEST_P(CoherentTest, SeedReproducesALongSequenceAndAnotherSeedDiffers) {
     differs = differs || cv::norm(x, z, cv::NORM_INF) > 0.0;
   }
   // Deterministic corruptions and a constant tone curve cannot differ by seed.
-  const bool seeded = cfg.type == Corruption::Fog || cfg.type == Corruption::Snow || cfg.type == Corruption::MotionBlur;
+  const bool seeded = cfg.type == Corruption::Fog || cfg.type == Corruption::Snow ||
+                      cfg.type == Corruption::MotionBlur;
   if (seeded) {
     EXPECT_TRUE(differs);
   }
 }
 
-// Consecutive frames of a persistent fault agree far better than two independent fast-mode draws do.
+// Consecutive frames of a persistent fault agree far better than two independent fast-mode draws
+// do.
 class PersistenceTest : public ::testing::TestWithParam<Corruption> {};
 
 TEST_P(PersistenceTest, ConsecutiveFramesAgreeMoreThanIndependentDraws) {
@@ -81,10 +84,11 @@ TEST_P(PersistenceTest, ConsecutiveFramesAgreeMoreThanIndependentDraws) {
   EXPECT_GT(cv::norm(f0, f1, cv::NORM_INF), 0.0) << "the fault must still move";
 }
 
-INSTANTIATE_TEST_SUITE_P(MovingFaults, PersistenceTest, ::testing::Values(Corruption::Fog, Corruption::MotionBlur));
+INSTANTIATE_TEST_SUITE_P(MovingFaults, PersistenceTest,
+                         ::testing::Values(Corruption::Fog, Corruption::MotionBlur));
 
-// On a uniform frame the snow output is base + layer + rotated layer, so frame t+1 is frame t moved along the
-// streak by the fall step, with wrap: the same flakes, fallen.
+// On a uniform frame the snow output is base + layer + rotated layer, so frame t+1 is frame t moved
+// along the streak by the fall step, with wrap: the same flakes, fallen.
 TEST(CoherentSnowTest, NextFrameIsTheSameSnowMovedAlongItsStreak) {
   const cv::Mat grey(60, 90, CV_8UC3, cv::Scalar::all(60));
   CoherentConfig cfg;
@@ -102,8 +106,8 @@ TEST(CoherentSnowTest, NextFrameIsTheSameSnowMovedAlongItsStreak) {
   cv::Mat moved(f0.size(), f0.type());
   for (int y = 0; y < f0.rows; ++y) {
     for (int x = 0; x < f0.cols; ++x) {
-      moved.at<cv::Vec3b>(((y + dy) % f0.rows + f0.rows) % f0.rows, ((x + dx) % f0.cols + f0.cols) % f0.cols) =
-          f0.at<cv::Vec3b>(y, x);
+      moved.at<cv::Vec3b>(((y + dy) % f0.rows + f0.rows) % f0.rows,
+                          ((x + dx) % f0.cols + f0.cols) % f0.cols) = f0.at<cv::Vec3b>(y, x);
     }
   }
   EXPECT_EQ(cv::norm(moved, f1, cv::NORM_INF), 0.0);
@@ -141,12 +145,13 @@ TEST(CoherentFogTest, FieldDriftsAcrossFramesButKeepsItsLevel) {
   cv::Mat last;
   for (int i = 0; i < 30; ++i) last = *c.apply(frame);
   const double m0 = cv::mean(first.reshape(1))[0], m1 = cv::mean(last.reshape(1))[0];
-  EXPECT_NEAR(m0, m1, 25.0);                       // the same fog bank, moved
+  EXPECT_NEAR(m0, m1, 25.0);  // the same fog bank, moved
   EXPECT_LT(psnr(first, last), psnr(first, *CoherentCorruptor(cfg).apply(frame)));  // it did move
 }
 
-// The largest difference between 4-neighbours of the torus (wrapping): a bound on the field's change per low-res
-// pixel, so the bilinear field changes by at most that / factor per upsampled pixel along either axis.
+// The largest difference between 4-neighbours of the torus (wrapping): a bound on the field's
+// change per low-res pixel, so the bilinear field changes by at most that / factor per upsampled
+// pixel along either axis.
 double MaxNeighbourStep(const cv::Mat& torus) {
   double d = 0;
   for (int y = 0; y < torus.rows; ++y) {
@@ -165,9 +170,9 @@ int TorusStep(int a, int b, int side) {
   return d > side / 2 ? d - side : d;
 }
 
-// Each frame is the window of the drifting field at the frame's offset: fog_blend_fast over upsample_torus_window (the
-// float32 field, cv::remap) within one level, at every offset phase and across the torus's wrap. Tiny frames
-// (factor 1) as well.
+// Each frame is the window of the drifting field at the frame's offset: fog_blend_fast over
+// upsample_torus_window (the float32 field, cv::remap) within one level, at every offset phase and
+// across the torus's wrap. Tiny frames (factor 1) as well.
 TEST(CoherentFogTest, FrameIsTheFieldWindowAtItsOffsetWithinOneLevel) {
   for (const cv::Size size : {cv::Size(160, 90), cv::Size(30, 20)}) {
     const cv::Mat frame = faultline::testing::scene(size.height, size.width, 7);
@@ -175,13 +180,15 @@ TEST(CoherentFogTest, FrameIsTheFieldWindowAtItsOffsetWithinOneLevel) {
     cfg.type = Corruption::Fog;
     cfg.severity = 3;
     cfg.seed = 12;
-    cfg.fog_drift_px = 37.3;  // large steps: every phase of the quarter-resolution grid, and the wrap
+    cfg.fog_drift_px =
+        37.3;  // large steps: every phase of the quarter-resolution grid, and the wrap
     CoherentCorruptor c(cfg);
     double total = 0;
     for (int i = 0; i < 24; ++i) {
       const cv::Mat out = *c.apply(frame);
       const cv::Point o = c.fog_offset();
-      const cv::Mat field = upsample_torus_window(c.fog_torus(), c.fog_factor(), o.y, o.x, frame.rows, frame.cols);
+      const cv::Mat field =
+          upsample_torus_window(c.fog_torus(), c.fog_factor(), o.y, o.x, frame.rows, frame.cols);
       const cv::Mat ref = fog_blend_fast(frame, field, fog_params(cfg.severity).strength);
       ASSERT_LE(cv::norm(out, ref, cv::NORM_INF), 1.0) << size << " frame " << i << " offset " << o;
       total += cv::norm(out, ref, cv::NORM_L1) / static_cast<double>(out.total() * 3);
@@ -191,8 +198,9 @@ TEST(CoherentFogTest, FrameIsTheFieldWindowAtItsOffsetWithinOneLevel) {
   }
 }
 
-// The offset advances by the drift per frame (rounded to whole pixels, so never more than one pixel off the exact
-// path), and the output changes between consecutive frames by no more than the field can change over that step.
+// The offset advances by the drift per frame (rounded to whole pixels, so never more than one pixel
+// off the exact path), and the output changes between consecutive frames by no more than the field
+// can change over that step.
 TEST(CoherentFogTest, ConsecutiveFramesDifferByABoundedAmount) {
   const cv::Mat grey(90, 160, CV_8UC3, cv::Scalar::all(60));
   CoherentConfig cfg;
@@ -223,7 +231,8 @@ TEST(CoherentFogTest, ConsecutiveFramesDifferByABoundedAmount) {
     prev = next;
     at = o;
   }
-  EXPECT_NEAR(std::hypot(path_y, path_x), 60 * cfg.fog_drift_px, 1.0);  // the rounding does not accumulate
+  EXPECT_NEAR(std::hypot(path_y, path_x), 60 * cfg.fog_drift_px,
+              1.0);  // the rounding does not accumulate
   EXPECT_TRUE(moved);
 }
 

@@ -1,4 +1,5 @@
-// `faultline corrupt` end to end: golden reproduction through files, --level and --angle, and clear errors.
+// `faultline corrupt` end to end: golden reproduction through files, --level and --angle, and clear
+// errors.
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -47,8 +48,8 @@ const GoldenCase& find_case(const std::vector<GoldenCase>& cases, const std::str
 
 TEST(CorruptCliTest, NumpyModeReproducesGoldenFilesBitExactly) {
   const auto cases = load_golden_cases();
-  for (const std::string name : {"snow_chart_333x197_sev2", "dark_chart_333x197_sev3", "fog_chart_333x197_sev4",
-                                 "brightness_chart_333x197_sev5"}) {
+  for (const std::string name : {"snow_chart_333x197_sev2", "dark_chart_333x197_sev3",
+                                 "fog_chart_333x197_sev4", "brightness_chart_333x197_sev5"}) {
     const GoldenCase& c = find_case(cases, name);
     const std::string out = temp_png(name);
     const auto r =
@@ -97,7 +98,8 @@ TEST(CorruptCliTest, BadTypeSeverityAndFilesAreNamedErrors) {
   EXPECT_NE(r.output.find("mersenne"), std::string::npos) << r.output;
 }
 
-// The imagecorruptions types by name through files, in numpy mode the reference's output (ext/<type>.json);
+// The imagecorruptions types by name through files, in numpy mode the reference's output
+// (ext/<type>.json);
 // --frost-dir swaps frost's textures; a directory without textures is a named error.
 TEST(CorruptCliTest, ImagecorruptionsTypesAndFrostTextures) {
   const std::string in = test_data::fixture(golden_dir() + "/inputs/chart_333x197.png");
@@ -105,16 +107,17 @@ TEST(CorruptCliTest, ImagecorruptionsTypesAndFrostTextures) {
   const auto frost = load_golden_json("ext/frost.json");
   const auto& rec = frost["outputs"][0];  // chart_333x197, severity 1
   ASSERT_STREQ(rec["input"].GetString(), "chart_333x197");
-  auto r = run_faultline("corrupt --type frost --severity " + std::to_string(rec["severity"].GetInt()) +
-                         " --seed " + std::to_string(rec["seed"].GetUint()) + " --rng numpy --in " + in +
-                         " --out " + out);
+  auto r = run_faultline(
+      "corrupt --type frost --severity " + std::to_string(rec["severity"].GetInt()) + " --seed " +
+      std::to_string(rec["seed"].GetUint()) + " --rng numpy --in " + in + " --out " + out);
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_EQ(pixel_sha256(cv::imread(out, cv::IMREAD_COLOR)), rec["sha256_bgr_pixels"].GetString());
   // One flat grey texture: the output is clip(a * image + b * 128) everywhere.
   const std::string dir = ::testing::TempDir() + "/faultline_frost_" + std::to_string(::getpid());
   std::filesystem::create_directories(dir);
   cv::imwrite(dir + "/grey.png", cv::Mat(400, 500, CV_8UC3, cv::Scalar::all(128)));
-  r = run_faultline("corrupt --type frost --severity 1 --frost-dir " + dir + " --in " + in + " --out " + out);
+  r = run_faultline("corrupt --type frost --severity 1 --frost-dir " + dir + " --in " + in +
+                    " --out " + out);
   ASSERT_EQ(r.exit_code, 0) << r.output;
   const cv::Mat image = cv::imread(in, cv::IMREAD_COLOR), got = cv::imread(out, cv::IMREAD_COLOR);
   cv::Mat expected;
@@ -123,12 +126,15 @@ TEST(CorruptCliTest, ImagecorruptionsTypesAndFrostTextures) {
   expected.convertTo(expected, CV_8UC3, 1.0, -0.4999);  // truncation
   EXPECT_LE(cv::norm(got, expected, cv::NORM_INF), 0.0);
   std::filesystem::remove(dir + "/grey.png");
-  r = run_faultline("corrupt --type frost --severity 1 --frost-dir " + dir + " --in " + in + " --out " + out);
+  r = run_faultline("corrupt --type frost --severity 1 --frost-dir " + dir + " --in " + in +
+                    " --out " + out);
   EXPECT_NE(r.exit_code, 0);
   EXPECT_NE(r.output.find("--frost-dir"), std::string::npos) << r.output;
   std::filesystem::remove_all(dir);
-  for (const char* type : {"defocus_blur", "glass_blur", "zoom_blur", "elastic_transform", "spatter"}) {
-    r = run_faultline(std::string("corrupt --type ") + type + " --level mid --in " + in + " --out " + out);
+  for (const char* type :
+       {"defocus_blur", "glass_blur", "zoom_blur", "elastic_transform", "spatter"}) {
+    r = run_faultline(std::string("corrupt --type ") + type + " --level mid --in " + in +
+                      " --out " + out);
     EXPECT_EQ(r.exit_code, 0) << type << ": " << r.output;
   }
   r = run_faultline("corrupt --type rain --severity 2 --in " + in + " --out " + out);
@@ -136,15 +142,15 @@ TEST(CorruptCliTest, ImagecorruptionsTypesAndFrostTextures) {
   std::remove(out.c_str());
 }
 
-// Faultline's sensor faults by name: the CLI's frame is the library's fast-mode frame for the seed (one model at
-// time 0); the help lists them.
+// Faultline's sensor faults by name: the CLI's frame is the library's fast-mode frame for the seed
+// (one model at time 0); the help lists them.
 TEST(CorruptCliTest, SensorFaultsByName) {
   const std::string in = test_data::fixture(golden_dir() + "/inputs/chart_333x197.png");
   const std::string out = temp_png("sensor");
   const cv::Mat image = cv::imread(in, cv::IMREAD_COLOR);
   for (const char* type : {"soiling", "water_drops", "glare", "exposure_flicker"}) {
-    auto r =
-        run_faultline(std::string("corrupt --type ") + type + " --severity 4 --seed 9 --in " + in + " --out " + out);
+    auto r = run_faultline(std::string("corrupt --type ") + type + " --severity 4 --seed 9 --in " +
+                           in + " --out " + out);
     ASSERT_EQ(r.exit_code, 0) << type << ": " << r.output;
     rng::FastRng rng(9);
     auto expected = corruption::corrupt(image, *corruption::corruption_from_string(type), 4, rng);
@@ -158,16 +164,20 @@ TEST(CorruptCliTest, SensorFaultsByName) {
   std::remove(out.c_str());
 }
 
-// #22: the input is read with a limit (kMaxImageFileBytes, 1 GiB); one byte over is refused unread (a sparse
-// file), and /dev/zero stops at the limit.
+// #22: the input is read with a limit (kMaxImageFileBytes, 1 GiB); one byte over is refused unread
+// (a sparse file), and /dev/zero stops at the limit.
 TEST(CorruptCliTest, AnInputOneByteOverTheImageLimitIsRefusedNamingIt) {
-  const std::string in = ::testing::TempDir() + "/faultline_big_" + std::to_string(::getpid()) + ".png";
+  const std::string in =
+      ::testing::TempDir() + "/faultline_big_" + std::to_string(::getpid()) + ".png";
   std::ofstream(in).close();
   std::filesystem::resize_file(in, (std::uint64_t{1} << 30) + 1);  // sparse: no disk used
-  auto r = run_faultline("corrupt --type fog --severity 2 --in " + in + " --out " + temp_png("big"));
+  auto r =
+      run_faultline("corrupt --type fog --severity 2 --in " + in + " --out " + temp_png("big"));
   std::filesystem::remove(in);
   EXPECT_NE(r.exit_code, 0);
-  EXPECT_NE(r.output.find("input image " + in + ": larger than the limit of 1 GiB"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("input image " + in + ": larger than the limit of 1 GiB"),
+            std::string::npos)
+      << r.output;
 }
 
 TEST(CorruptCliTest, NonFiniteAngleIsAnErrorNamingTheOption) {

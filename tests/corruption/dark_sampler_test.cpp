@@ -1,11 +1,12 @@
-// Dark fast-mode sampling loop: the AVX2 and scalar bodies agree byte for byte, and the sampled frequencies follow
-// the alias tables.
+// Dark fast-mode sampling loop: the AVX2 and scalar bodies agree byte for byte, and the sampled
+// frequencies follow the alias tables.
+#include "corruption/dark_sampler.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cstdint>
 #include <vector>
 
-#include "corruption/dark_sampler.hpp"
 #include "rng/fast_rng.hpp"
 #include "rng/lane_rng.hpp"
 
@@ -28,7 +29,8 @@ TEST(DarkSamplerTest, SimdAndScalarBodiesGiveTheSameBytesAndState) {
   const auto tables = random_tables(hi - lo + 1, setup);
   for (std::size_t n : {0, 1, 15, 16, 17, 31, 32, 33, 64, 1000, 4099}) {
     std::vector<std::uint8_t> src(n), a(n), b(n);
-    for (auto& v : src) v = static_cast<std::uint8_t>(lo + static_cast<int>(setup.next_u32() % (hi - lo + 1)));
+    for (auto& v : src)
+      v = static_cast<std::uint8_t>(lo + static_cast<int>(setup.next_u32() % (hi - lo + 1)));
     rng::FastRng seed_a(11), seed_b(11);
     rng::LaneRng ra(seed_a), rb(seed_b);
     dark_sample(tables.data(), lo, src.data(), a.data(), n, ra, /*allow_simd=*/true);
@@ -37,15 +39,17 @@ TEST(DarkSamplerTest, SimdAndScalarBodiesGiveTheSameBytesAndState) {
     std::uint32_t va[16], vb[16];
     ra.next_values(va);
     rb.next_values(vb);
-    EXPECT_EQ(std::vector<std::uint32_t>(va, va + 16), std::vector<std::uint32_t>(vb, vb + 16)) << n;
+    EXPECT_EQ(std::vector<std::uint32_t>(va, va + 16), std::vector<std::uint32_t>(vb, vb + 16))
+        << n;
   }
 }
 
 TEST(DarkSamplerTest, FrequenciesFollowTheAliasTable) {
-  // One level: bucket j keeps j with probability 1/2 and otherwise gives (j + 1) % 256, so every outcome has
-  // probability 1/256 overall and odd buckets are never special.
+  // One level: bucket j keeps j with probability 1/2 and otherwise gives (j + 1) % 256, so every
+  // outcome has probability 1/256 overall and odd buckets are never special.
   std::vector<std::uint32_t> table(256);
-  for (std::uint32_t j = 0; j < 256; ++j) table[j] = ((1u << (kDarkAliasThresholdBits - 1)) << 8) | ((j + 1) & 0xFFu);
+  for (std::uint32_t j = 0; j < 256; ++j)
+    table[j] = ((1u << (kDarkAliasThresholdBits - 1)) << 8) | ((j + 1) & 0xFFu);
   const std::size_t n = 256 * 4000;
   std::vector<std::uint8_t> src(n, 9), out(n);
   rng::FastRng seed(5);

@@ -1,15 +1,14 @@
-// fast mode of the imagecorruptions / ISONoise pointwise corruptions against numpy mode on 1600x900 frames: the
-// noise corruptions within statistical tolerances (docs/faults.md), the deterministic ones exactly, Gaussian blur
-// within one level on a bounded share of values.
+// fast mode of the imagecorruptions / ISONoise pointwise corruptions against numpy mode on 1600x900
+// frames: the noise corruptions within statistical tolerances (docs/faults.md), the deterministic
+// ones exactly, Gaussian blur within one level on a bounded share of values.
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <cstdio>
+#include <opencv2/core.hpp>
 #include <string>
 #include <tuple>
 #include <vector>
-
-#include <opencv2/core.hpp>
 
 #include "corruption/corrupt.hpp"
 #include "corruption/test_images.hpp"
@@ -52,8 +51,9 @@ double hist_l1(const cv::Mat& a, const cv::Mat& b) {
 using NoiseParam = std::tuple<Corruption, int>;
 class FastNoiseTest : public ::testing::TestWithParam<NoiseParam> {};
 
-// Tolerances: mean and std within 0.3 levels, histogram L1 < 0.02, PSNR against the input within 0.3 dB, and per
-// input level the mean output within 5 standard errors (the conditional-mean curve of each corruption).
+// Tolerances: mean and std within 0.3 levels, histogram L1 < 0.02, PSNR against the input within
+// 0.3 dB, and per input level the mean output within 5 standard errors (the conditional-mean curve
+// of each corruption).
 TEST_P(FastNoiseTest, MatchesNumpyModeStatisticsOn1600x900) {
   const auto [type, sev] = GetParam();
   const cv::Mat& in = frame_1600x900();
@@ -84,24 +84,25 @@ TEST_P(FastNoiseTest, MatchesNumpyModeStatisticsOn1600x900) {
   EXPECT_GT(levels, 100);
 }
 
-INSTANTIATE_TEST_SUITE_P(Noises, FastNoiseTest,
-                         ::testing::Combine(::testing::Values(Corruption::GaussianNoise, Corruption::ShotNoise,
-                                                              Corruption::ImpulseNoise, Corruption::SpeckleNoise,
-                                                              Corruption::IsoNoise),
-                                            ::testing::Values(1, 3, 5)),
-                         [](const ::testing::TestParamInfo<NoiseParam>& p) {
-                           std::string name;
-                           bool up = true;
-                           for (char ch : std::string(to_string(std::get<0>(p.param)))) {
-                             if (ch == '_') {
-                               up = true;
-                               continue;
-                             }
-                             name += up ? static_cast<char>(std::toupper(static_cast<unsigned char>(ch))) : ch;
-                             up = false;
-                           }
-                           return name + "Sev" + std::to_string(std::get<1>(p.param));
-                         });
+INSTANTIATE_TEST_SUITE_P(
+    Noises, FastNoiseTest,
+    ::testing::Combine(::testing::Values(Corruption::GaussianNoise, Corruption::ShotNoise,
+                                         Corruption::ImpulseNoise, Corruption::SpeckleNoise,
+                                         Corruption::IsoNoise),
+                       ::testing::Values(1, 3, 5)),
+    [](const ::testing::TestParamInfo<NoiseParam>& p) {
+      std::string name;
+      bool up = true;
+      for (char ch : std::string(to_string(std::get<0>(p.param)))) {
+        if (ch == '_') {
+          up = true;
+          continue;
+        }
+        name += up ? static_cast<char>(std::toupper(static_cast<unsigned char>(ch))) : ch;
+        up = false;
+      }
+      return name + "Sev" + std::to_string(std::get<1>(p.param));
+    });
 
 TEST(FastDeterministicTest, SharedImplementationsEqualNumpyModeOn1600x900) {
   const cv::Mat& in = frame_1600x900();
@@ -113,9 +114,10 @@ TEST(FastDeterministicTest, SharedImplementationsEqualNumpyModeOn1600x900) {
   }
 }
 
-// Fixed-point or closed-form paths against the float64 reference path: the truncation moves a value by one where
-// the two straddle an integer. Bounds: max diff 1, on under 1 % (gaussian_blur) or 10 % (saturate, whose severity
-// 3, S x 2, makes every result an integer the reference's float path often lands just under) of the values.
+// Fixed-point or closed-form paths against the float64 reference path: the truncation moves a value
+// by one where the two straddle an integer. Bounds: max diff 1, on under 1 % (gaussian_blur) or 10
+// % (saturate, whose severity 3, S x 2, makes every result an integer the reference's float path
+// often lands just under) of the values.
 TEST(FastDeterministicTest, SaturateAndGaussianBlurWithinOneLevelOn1600x900) {
   const cv::Mat& in = frame_1600x900();
   for (Corruption c : {Corruption::Saturate, Corruption::GaussianBlur}) {

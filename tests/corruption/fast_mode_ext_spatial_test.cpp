@@ -1,14 +1,14 @@
-// fast mode of defocus_blur, zoom_blur, glass_blur, frost, elastic_transform and spatter against numpy mode (the
-// reference's arithmetic, held to the goldens by golden_ext_spatial_test) on 1600x900 frames. Deterministic ones:
-// close to numpy mode value for value. Random ones: as close to a numpy-mode output as another numpy-mode seed is
-// (PSNR within a margin of the seed-to-seed PSNR, histogram and mean), measured here on the same frame.
+// fast mode of defocus_blur, zoom_blur, glass_blur, frost, elastic_transform and spatter against
+// numpy mode (the reference's arithmetic, held to the goldens by golden_ext_spatial_test) on
+// 1600x900 frames. Deterministic ones: close to numpy mode value for value. Random ones: as close
+// to a numpy-mode output as another numpy-mode seed is (PSNR within a margin of the seed-to-seed
+// PSNR, histogram and mean), measured here on the same frame.
 #include <gtest/gtest.h>
 
 #include <cmath>
-#include <vector>
-
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
+#include <vector>
 
 #include "corruption/corrupt.hpp"
 #include "corruption/frost.hpp"
@@ -72,8 +72,9 @@ using Case = std::tuple<Corruption, int>;
 
 class FastDeterministicTest : public ::testing::TestWithParam<Case> {};
 
-// Defocus: the same kernel in float32 (a value differs where the float64 sum truncates the other way).
-// Zoom: 8-bit layers at 1/32-pixel positions instead of float32 layers; each output is a mean of 13-17 of them.
+// Defocus: the same kernel in float32 (a value differs where the float64 sum truncates the other
+// way). Zoom: 8-bit layers at 1/32-pixel positions instead of float32 layers; each output is a mean
+// of 13-17 of them.
 TEST_P(FastDeterministicTest, CloseToNumpyModeValueForValue) {
   const auto [c, sev] = GetParam();
   const cv::Mat ref = numpy_out(c, sev, 0), out = fast_out(c, sev, 0);
@@ -90,7 +91,8 @@ TEST_P(FastDeterministicTest, CloseToNumpyModeValueForValue) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Blurs, FastDeterministicTest,
-                         ::testing::Combine(::testing::Values(Corruption::DefocusBlur, Corruption::ZoomBlur),
+                         ::testing::Combine(::testing::Values(Corruption::DefocusBlur,
+                                                              Corruption::ZoomBlur),
                                             ::testing::Values(1, 3, 5)));
 
 class FastRandomTest : public ::testing::TestWithParam<Case> {};
@@ -105,7 +107,8 @@ TEST_P(FastRandomTest, AsCloseToNumpyModeAsAnotherSeedIs) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Random, FastRandomTest,
-                         ::testing::Combine(::testing::Values(Corruption::GlassBlur, Corruption::ElasticTransform,
+                         ::testing::Combine(::testing::Values(Corruption::GlassBlur,
+                                                              Corruption::ElasticTransform,
                                                               Corruption::Spatter),
                                             ::testing::Values(2, 5)));
 
@@ -117,13 +120,16 @@ TEST(FastFrostTest, IsTheReferenceBlendOfItsOwnDraws) {
     const cv::Mat out = *corrupt(in, Corruption::Frost, sev, rng);
     const auto index = copy.bounded(5);
     const cv::Mat rescaled = frost_rescale(builtin_frost_textures()[index], in.rows, in.cols);
-    const int y0 = static_cast<int>(copy.bounded(static_cast<std::uint32_t>(rescaled.rows - in.rows)));
-    const int x0 = static_cast<int>(copy.bounded(static_cast<std::uint32_t>(rescaled.cols - in.cols)));
+    const int y0 =
+        static_cast<int>(copy.bounded(static_cast<std::uint32_t>(rescaled.rows - in.rows)));
+    const int x0 =
+        static_cast<int>(copy.bounded(static_cast<std::uint32_t>(rescaled.cols - in.cols)));
     EXPECT_EQ(cv::norm(out, frost_blend(in, rescaled, y0, x0, sev), cv::NORM_INF), 0.0) << sev;
   }
 }
 
-// The texture choice is uniform over the five (chi-square, 4 degrees of freedom, alpha 0.001: 18.47).
+// The texture choice is uniform over the five (chi-square, 4 degrees of freedom, alpha
+// 0.001: 18.47).
 TEST(FastFrostTest, TextureChoiceIsUniform) {
   rng::FastRng rng(3);
   std::vector<double> counts(5, 0.0);

@@ -4,11 +4,10 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
-#include <string>
-#include <vector>
-
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
+#include <string>
+#include <vector>
 
 #include "corruption/corrupt.hpp"
 #include "corruption/fog.hpp"
@@ -35,14 +34,17 @@ double hist_l1(const cv::Mat& a, const cv::Mat& b) {
         hb[b.at<cv::Vec3b>(y, x)[c]] += 1;
       }
     }
-    for (int v = 0; v < 256; ++v) total += std::fabs(ha[static_cast<std::size_t>(v)] - hb[static_cast<std::size_t>(v)]);
+    for (int v = 0; v < 256; ++v)
+      total += std::fabs(ha[static_cast<std::size_t>(v)] - hb[static_cast<std::size_t>(v)]);
   }
   return total / 3.0 / static_cast<double>(a.total());
 }
 
 class FastGoldenTest : public ::testing::TestWithParam<GoldenCase> {
  protected:
-  static void SetUpTestSuite() { stats_ = new rapidjson::Document(load_golden_json("seed_to_seed_stats.json")); }
+  static void SetUpTestSuite() {
+    stats_ = new rapidjson::Document(load_golden_json("seed_to_seed_stats.json"));
+  }
   static void TearDownTestSuite() {
     delete stats_;
     stats_ = nullptr;
@@ -60,9 +62,12 @@ TEST_P(FastGoldenTest, MatchesGoldenExactlyOrWithinSeedToSeedRange) {
   ASSERT_TRUE(out.is_ok());
   switch (c.type) {
     case Corruption::Brightness:
-    case Corruption::ColorQuant: EXPECT_EQ(max_abs_diff(*out, ref), 0.0); return;
+    case Corruption::ColorQuant:
+      EXPECT_EQ(max_abs_diff(*out, ref), 0.0);
+      return;
     case Corruption::MotionBlur: {
-      // Angle injected: within fast mode's allowance (at most 1 off on at most 0.2 % of the values).
+      // Angle injected: within fast mode's allowance (at most 1 off on at most 0.2 % of the
+      // values).
       rng::FastRng r2(1);
       corruption::CorruptOptions opt;
       opt.angle_deg = c.angle_deg;
@@ -72,10 +77,12 @@ TEST_P(FastGoldenTest, MatchesGoldenExactlyOrWithinSeedToSeedRange) {
       return;
     }
     case Corruption::Fog: {
-      // Exact blend stage: numpy's fractal injected into the fast blend (float32: at most 1 level off, rarely).
+      // Exact blend stage: numpy's fractal injected into the fast blend (float32: at most 1 level
+      // off, rarely).
       rng::NumpyRandomState np(*c.seed);
       const auto p = corruption::fog_params(c.severity);
-      const cv::Mat fractal = corruption::plasma_fractal(corruption::fog_map_size(in.rows, in.cols), p.decay, np);
+      const cv::Mat fractal =
+          corruption::plasma_fractal(corruption::fog_map_size(in.rows, in.cols), p.decay, np);
       cv::Mat field;
       fractal(cv::Rect(0, 0, in.cols, in.rows)).convertTo(field, CV_32F);
       const cv::Mat blended = corruption::fog_blend_fast(in, field, p.strength);
@@ -114,7 +121,9 @@ TEST_P(FastGoldenTest, MatchesGoldenExactlyOrWithinSeedToSeedRange) {
       }
       return;
     }
-    default: FAIL() << "not one of the nuScenes-C goldens (the others: fast_ext_test.cpp, fast_mode_ext_spatial_test.cpp)";
+    default:
+      FAIL() << "not one of the nuScenes-C goldens (the others: fast_ext_test.cpp, "
+                "fast_mode_ext_spatial_test.cpp)";
   }
 }
 
@@ -123,7 +132,8 @@ INSTANTIATE_TEST_SUITE_P(Manifest, FastGoldenTest, ::testing::ValuesIn(golden_ca
                            return pascal_case(param_info.param.name);
                          });
 
-// Fog without injection: per-frame crop statistics of the fast field over 120 draws against numpy's fractal.
+// Fog without injection: per-frame crop statistics of the fast field over 120 draws against numpy's
+// fractal.
 TEST(FastFogFieldTest, FrameStatisticsMatchReferenceFractalOverManyDraws) {
   const int rows = 90, cols = 160, draws = 120;
   for (int sev : {2, 5}) {
@@ -158,7 +168,8 @@ TEST(FastFogFieldTest, FrameStatisticsMatchReferenceFractalOverManyDraws) {
   }
 }
 
-// Free-running Motion Blur angle: uniform on [-45, 45] (Kolmogorov-Smirnov, 2000 draws, alpha ~ 0.001).
+// Free-running Motion Blur angle: uniform on [-45, 45] (Kolmogorov-Smirnov, 2000 draws, alpha ~
+// 0.001).
 TEST(FastMotionBlurTest, AngleIsUniformOnReferenceRange) {
   rng::FastRng rng(8);
   std::vector<double> a;
@@ -167,7 +178,8 @@ TEST(FastMotionBlurTest, AngleIsUniformOnReferenceRange) {
   double d = 0;
   for (std::size_t i = 0; i < a.size(); ++i) {
     const double f = (a[i] + 45.0) / 90.0;
-    d = std::max({d, std::fabs(f - static_cast<double>(i) / a.size()), std::fabs(f - (i + 1.0) / a.size())});
+    d = std::max(
+        {d, std::fabs(f - static_cast<double>(i) / a.size()), std::fabs(f - (i + 1.0) / a.size())});
   }
   EXPECT_LT(d, 1.95 / std::sqrt(2000.0));
 }

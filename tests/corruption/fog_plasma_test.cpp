@@ -1,47 +1,53 @@
-// Fog's crop-aware plasma fractal and division-free exact blend against spec-verbatim implementations (§4): the
-// in-place N x N map with wrapped indices and the reference's blend expression, value for value.
+// Fog's crop-aware plasma fractal and division-free exact blend against spec-verbatim
+// implementations (§4): the in-place N x N map with wrapped indices and the reference's blend
+// expression, value for value.
+#include "corruption/fog_plasma.hpp"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
-#include <vector>
-
 #include <opencv2/core.hpp>
+#include <vector>
 
 #include "corruption/fog.hpp"
 #include "corruption/fog_kernels.hpp"
-#include "corruption/fog_plasma.hpp"
-#include "rng/lane_rng.hpp"
 #include "rng/fast_rng.hpp"
+#include "rng/lane_rng.hpp"
 #include "rng/numpy_legacy.hpp"
 
 namespace faultline::corruption {
 namespace {
 
-// Spec §4 verbatim: M[0,0] = 0, three passes of n x n draws per level, the reference's bracketing, then
-// M - min(M) and M / max(M) over the full map.
+// Spec §4 verbatim: M[0,0] = 0, three passes of n x n draws per level, the reference's bracketing,
+// then M - min(M) and M / max(M) over the full map.
 cv::Mat ReferencePlasma(int size, double decay, rng::NumpyRandomState& rng) {
   cv::Mat m(size, size, CV_64F, cv::Scalar(0.0));
-  auto at = [&](int r, int c) -> double& { return m.at<double>((r + size) % size, (c + size) % size); };
+  auto at = [&](int r, int c) -> double& {
+    return m.at<double>((r + size) % size, (c + size) % size);
+  };
   double w = 100.0;
   for (int s = size; s >= 2; s /= 2) {
     const int h = s / 2, n = size / s;
     for (int i = 0; i < n; ++i) {
       for (int j = 0; j < n; ++j) {
-        const double sum = (at(i * s, j * s) + at(i * s + s, j * s)) + (at(i * s, j * s + s) + at(i * s + s, j * s + s));
+        const double sum = (at(i * s, j * s) + at(i * s + s, j * s)) +
+                           (at(i * s, j * s + s) + at(i * s + s, j * s + s));
         at(i * s + h, j * s + h) = sum / 4 + w * rng.uniform(-w, w);
       }
     }
     for (int i = 0; i < n; ++i) {
       for (int j = 0; j < n; ++j) {
-        const double sum = (at(i * s + h, j * s + h) + at(i * s - h, j * s + h)) + (at(i * s, j * s) + at(i * s, j * s + s));
+        const double sum = (at(i * s + h, j * s + h) + at(i * s - h, j * s + h)) +
+                           (at(i * s, j * s) + at(i * s, j * s + s));
         at(i * s, j * s + h) = sum / 4 + w * rng.uniform(-w, w);
       }
     }
     for (int i = 0; i < n; ++i) {
       for (int j = 0; j < n; ++j) {
-        const double sum = (at(i * s + h, j * s + h) + at(i * s + h, j * s - h)) + (at(i * s, j * s) + at(i * s + s, j * s));
+        const double sum = (at(i * s + h, j * s + h) + at(i * s + h, j * s - h)) +
+                           (at(i * s, j * s) + at(i * s + s, j * s));
         at(i * s + h, j * s) = sum / 4 + w * rng.uniform(-w, w);
       }
     }
@@ -51,7 +57,8 @@ cv::Mat ReferencePlasma(int size, double decay, rng::NumpyRandomState& rng) {
   cv::minMaxLoc(m, &lo, nullptr);
   m -= lo;
   cv::minMaxLoc(m, nullptr, &hi);
-  // A true division per value (cv::Mat / double multiplies by the reciprocal, 1 ulp off NumPy's divide).
+  // A true division per value (cv::Mat / double multiplies by the reciprocal, 1 ulp off NumPy's
+  // divide).
   m.forEach<double>([hi](double& v, const int*) { v /= hi; });
   return m;
 }
@@ -67,7 +74,8 @@ cv::Mat ReferenceBlend(const cv::Mat& bgr, const cv::Mat& fractal, double streng
       for (int c = 0; c < 3; ++c) {
         const double v = bgr.at<cv::Vec3b>(y, x)[c] / 255.0 + strength * fractal.at<double>(y, x);
         const double r = (v * m) / (m + strength);
-        out.at<cv::Vec3b>(y, x)[c] = static_cast<std::uint8_t>(std::min(std::max(r, 0.0), 1.0) * 255.0);
+        out.at<cv::Vec3b>(y, x)[c] =
+            static_cast<std::uint8_t>(std::min(std::max(r, 0.0), 1.0) * 255.0);
       }
     }
   }
@@ -102,13 +110,15 @@ TEST_P(PlasmaCropTest, CropEqualsSpecMapCropAndConsumesTheSameDraws) {
 
 INSTANTIATE_TEST_SUITE_P(
     Sizes, PlasmaCropTest,
-    ::testing::Values(CropCase{2, 1, 2, 2.0, 1}, CropCase{4, 3, 3, 2.0, 2}, CropCase{32, 32, 32, 1.7, 3},
-                      CropCase{64, 33, 17, 1.4, 4}, CropCase{128, 1, 128, 1.5, 5}, CropCase{128, 128, 1, 2.0, 6},
+    ::testing::Values(CropCase{2, 1, 2, 2.0, 1}, CropCase{4, 3, 3, 2.0, 2},
+                      CropCase{32, 32, 32, 1.7, 3}, CropCase{64, 33, 17, 1.4, 4},
+                      CropCase{128, 1, 128, 1.5, 5}, CropCase{128, 128, 1, 2.0, 6},
                       CropCase{256, 197, 129, 1.4, 7}, CropCase{512, 270, 480, 1.5, 8},
                       CropCase{512, 197, 333, 2.0, 9}, CropCase{1024, 360, 640, 1.7, 10},
                       CropCase{2048, 900, 1600, 1.4, 11}));
 
-// The crop's extremes come from the full map even where they lie outside the crop (the skipped tiles).
+// The crop's extremes come from the full map even where they lie outside the crop (the skipped
+// tiles).
 TEST(PlasmaCropTest, NormalisesWithTheFullMapsExtremesWhenTheyLieOutsideTheCrop) {
   int outside = 0;
   for (std::uint32_t seed = 20; seed < 30; ++seed) {
@@ -124,15 +134,18 @@ TEST(PlasmaCropTest, NormalisesWithTheFullMapsExtremesWhenTheyLieOutsideTheCrop)
 }
 
 TEST(FogExactTest, FusedEqualsCropThenBlendAndTheSpecBlend) {
-  for (const cv::Size size : {cv::Size(333, 197), cv::Size(640, 360), cv::Size(7, 5), cv::Size(64, 1)}) {
-    const cv::Mat img = RandomImage(size.height, size.width, static_cast<std::uint64_t>(size.area()));
+  for (const cv::Size size :
+       {cv::Size(333, 197), cv::Size(640, 360), cv::Size(7, 5), cv::Size(64, 1)}) {
+    const cv::Mat img =
+        RandomImage(size.height, size.width, static_cast<std::uint64_t>(size.area()));
     for (int sev = 1; sev <= 5; ++sev) {
       const FogParams p = fog_params(sev);
       const int n = fog_map_size(img.rows, img.cols);
       rng::NumpyRandomState a(static_cast<std::uint32_t>(sev)), b(static_cast<std::uint32_t>(sev)),
           c(static_cast<std::uint32_t>(sev));
       const cv::Mat ref = ReferenceBlend(img, ReferencePlasma(n, p.decay, a), p.strength);
-      const cv::Mat two_step = fog_blend_exact(img, plasma_fractal_crop(n, p.decay, b, img.rows, img.cols), p.strength);
+      const cv::Mat two_step =
+          fog_blend_exact(img, plasma_fractal_crop(n, p.decay, b, img.rows, img.cols), p.strength);
       const cv::Mat fused = fog_exact(img, sev, c);
       EXPECT_EQ(MaxAbsDiff(two_step, ref), 0.0) << size << " sev " << sev;
       EXPECT_EQ(MaxAbsDiff(fused, ref), 0.0) << size << " sev " << sev;
@@ -153,8 +166,8 @@ TEST(FogExactTest, BlackAndWhiteFramesMatchTheSpecBlend) {
   }
 }
 
-// Fractal values placed on (and a hair beside) the blend's truncation boundaries, where a division-free candidate
-// must defer to the reference expression.
+// Fractal values placed on (and a hair beside) the blend's truncation boundaries, where a
+// division-free candidate must defer to the reference expression.
 TEST(FogBlendExactTest, MatchesTheSpecBlendOnTruncationBoundaries) {
   const cv::Mat img = RandomImage(64, 96, 5);
   double max_u8 = 0;
@@ -175,21 +188,24 @@ TEST(FogBlendExactTest, MatchesTheSpecBlendOnTruncationBoundaries) {
     }
     f.at<double>(0, 0) = 0.0;
     f.at<double>(0, 1) = 1.0;
-    EXPECT_EQ(MaxAbsDiff(fog_blend_exact(img, f, strength), ReferenceBlend(img, f, strength)), 0.0) << strength;
+    EXPECT_EQ(MaxAbsDiff(fog_blend_exact(img, f, strength), ReferenceBlend(img, f, strength)), 0.0)
+        << strength;
   }
 }
 
-// fog_fast blends in 16-bit fixed point (fog_blend_fixed_row): against the float32 blend of the float field
-// (fog_blend_fast(fog_field_fast)) every value is within 1, few values differ at all (measured ~0.1-0.3 % at
-// 1600 x 900, up to ~0.5 % on the small sizes) and the differences carry no visible bias.
+// fog_fast blends in 16-bit fixed point (fog_blend_fixed_row): against the float32 blend of the
+// float field (fog_blend_fast(fog_field_fast)) every value is within 1, few values differ at all
+// (measured ~0.1-0.3 % at 1600 x 900, up to ~0.5 % on the small sizes) and the differences carry no
+// visible bias.
 TEST(FogFastTest, FusedIsWithinOneOfFieldThenBlendOnFewValues) {
-  for (const cv::Size size :
-       {cv::Size(1600, 900), cv::Size(333, 197), cv::Size(40, 33), cv::Size(63, 64), cv::Size(7, 70)}) {
+  for (const cv::Size size : {cv::Size(1600, 900), cv::Size(333, 197), cv::Size(40, 33),
+                              cv::Size(63, 64), cv::Size(7, 70)}) {
     const cv::Mat img = RandomImage(size.height, size.width, 9);
     for (int sev = 1; sev <= 5; ++sev) {
       const FogParams p = fog_params(sev);
       rng::FastRng a(static_cast<std::uint64_t>(sev)), b(static_cast<std::uint64_t>(sev));
-      const cv::Mat two_step = fog_blend_fast(img, fog_field_fast(img.rows, img.cols, p.decay, a), p.strength);
+      const cv::Mat two_step =
+          fog_blend_fast(img, fog_field_fast(img.rows, img.cols, p.decay, a), p.strength);
       const cv::Mat fused = fog_fast(img, sev, b);
       cv::Mat diff;
       cv::subtract(fused, two_step, diff, cv::noArray(), CV_32S);
@@ -203,7 +219,8 @@ TEST(FogFastTest, FusedIsWithinOneOfFieldThenBlendOnFewValues) {
   }
 }
 
-// The fixed-point kernels against their documented expressions, for every lerp weight and row tails.
+// The fixed-point kernels against their documented expressions, for every lerp weight and row
+// tails.
 TEST(FogFastTest, FixedPointKernelsMatchTheirExpressions) {
   cv::RNG rng(12);
   for (int cols : {1, 5, 8, 10, 11, 16, 33, 1600}) {
@@ -215,8 +232,9 @@ TEST(FogFastTest, FixedPointKernelsMatchTheirExpressions) {
       std::vector<std::uint16_t> g(static_cast<std::size_t>(n));
       fog_fixed_field_row(f.data(), g.data(), cols, add_scale);
       for (int i = 0; i < n; ++i) {
-        const int want = std::min(static_cast<int>(f[static_cast<std::size_t>(i / 3)] * (add_scale * 256.0f) + 0.5f),
-                                  65535);
+        const int want = std::min(
+            static_cast<int>(f[static_cast<std::size_t>(i / 3)] * (add_scale * 256.0f) + 0.5f),
+            65535);
         ASSERT_EQ(g[static_cast<std::size_t>(i)], want) << cols << " " << i;
       }
     }
@@ -233,7 +251,10 @@ TEST(FogFastTest, FixedPointKernelsMatchTheirExpressions) {
         fog_blend_fixed_row(src.data(), ga.data(), gb.data(), k, dst.data(), cols, scale16);
         for (std::size_t i = 0; i < src.size(); ++i) {
           const unsigned a = ga[i], b = gb[i];
-          const unsigned g = k == 0 ? a : k == 1 ? avg(avg(a, b), a) : k == 2 ? avg(a, b) : avg(avg(a, b), b);
+          const unsigned g = k == 0   ? a
+                             : k == 1 ? avg(avg(a, b), a)
+                             : k == 2 ? avg(a, b)
+                                      : avg(avg(a, b), b);
           const unsigned p = ((static_cast<unsigned>(src[i]) << 8) * scale16) >> 16;
           ASSERT_EQ(dst[i], std::min(p + g, 65535u) >> 8) << cols << " k " << k << " i " << i;
         }
@@ -242,13 +263,15 @@ TEST(FogFastTest, FixedPointKernelsMatchTheirExpressions) {
   }
 }
 
-// The float32 blend against its scalar expression, trunc(clamp(src * scale + add_scale * f, 0, 255)) with
-// scale = m / (m + a) and m the image maximum / 255 (the vector body drops the clamps and lets the packs saturate).
-// The images' maxima stay below 255, and one sits in the last row, so the max scan cannot stop early.
+// The float32 blend against its scalar expression, trunc(clamp(src * scale + add_scale * f, 0,
+// 255)) with scale = m / (m + a) and m the image maximum / 255 (the vector body drops the clamps
+// and lets the packs saturate). The images' maxima stay below 255, and one sits in the last row, so
+// the max scan cannot stop early.
 TEST(FogFastTest, BlendMatchesItsScalarExpression) {
   for (const cv::Size size : {cv::Size(1600, 900), cv::Size(333, 197), cv::Size(7, 5)}) {
     for (int top : {0, 1, 200, 254}) {
-      cv::Mat img = RandomImage(size.height, size.width, static_cast<std::uint64_t>(top + size.width));
+      cv::Mat img =
+          RandomImage(size.height, size.width, static_cast<std::uint64_t>(top + size.width));
       img = img * (top / 255.0);  // saturate_cast rounds: values in 0 .. top
       img.at<cv::Vec3b>(size.height - 1, size.width - 1)[2] = static_cast<std::uint8_t>(top);
       cv::Mat field(size, CV_32F);
@@ -264,18 +287,20 @@ TEST(FogFastTest, BlendMatchesItsScalarExpression) {
             const float a = add_scale * field.at<float>(y, x);
             for (int c = 0; c < 3; ++c) {
               const float v = static_cast<float>(img.at<cv::Vec3b>(y, x)[c]) * scale + a;
-              want.at<cv::Vec3b>(y, x)[c] = static_cast<std::uint8_t>(std::min(std::max(v, 0.0f), 255.0f));
+              want.at<cv::Vec3b>(y, x)[c] =
+                  static_cast<std::uint8_t>(std::min(std::max(v, 0.0f), 255.0f));
             }
           }
         }
-        EXPECT_EQ(MaxAbsDiff(fog_blend_fast(img, field, strength), want), 0.0) << size << " top " << top;
+        EXPECT_EQ(MaxAbsDiff(fog_blend_fast(img, field, strength), want), 0.0)
+            << size << " top " << top;
       }
     }
   }
 }
 
-// Fast fog's uniforms against their definition: lane i % 8 of step i / 8, (bits >> 12) * 2^-52, for every count
-// around the 8-value steps; a partial step drops its other lanes' values.
+// Fast fog's uniforms against their definition: lane i % 8 of step i / 8, (bits >> 12) * 2^-52, for
+// every count around the 8-value steps; a partial step drops its other lanes' values.
 TEST(FogFastTest, LaneUniformsMatchTheirDefinition) {
   for (int count : {0, 1, 7, 8, 9, 31, 32, 1000}) {
     rng::FastRng a(6), b(6);
@@ -287,7 +312,8 @@ TEST(FogFastTest, LaneUniformsMatchTheirDefinition) {
       for (int i = 0; i < count; ++i) {
         const int l = i % rng::LaneRng::kLanes;
         if (l == 0) ref.next_values(r);
-        const std::uint64_t bits = static_cast<std::uint64_t>(r[2 * l]) | static_cast<std::uint64_t>(r[2 * l + 1]) << 32;
+        const std::uint64_t bits =
+            static_cast<std::uint64_t>(r[2 * l]) | static_cast<std::uint64_t>(r[2 * l + 1]) << 32;
         const double want = static_cast<double>(bits >> 12) * 0x1.0p-52;
         ASSERT_EQ(u[static_cast<std::size_t>(i)], want) << count << " call " << call << " i " << i;
       }
@@ -296,8 +322,9 @@ TEST(FogFastTest, LaneUniformsMatchTheirDefinition) {
   }
 }
 
-// The image maximum scan: every length and alignment around the 128-byte steps and 4 KB blocks, with and without
-// a 255 (which may end the scan), against std::max_element; and a non-continuous view gives its own maximum.
+// The image maximum scan: every length and alignment around the 128-byte steps and 4 KB blocks,
+// with and without a 255 (which may end the scan), against std::max_element; and a non-continuous
+// view gives its own maximum.
 TEST(FogFastTest, ByteMaximumMatchesMaxElement) {
   std::vector<std::uint8_t> buf(9008);
   cv::RNG rng(3);
@@ -306,7 +333,8 @@ TEST(FogFastTest, ByteMaximumMatchesMaxElement) {
       for (auto& v : buf) v = static_cast<std::uint8_t>(rng.uniform(0, 200));
       const auto* p = buf.data() + off;
       if (len > 0) buf[static_cast<std::size_t>(off + rng.uniform(0, len))] = 231;
-      EXPECT_EQ(fog_max_u8(p, static_cast<std::size_t>(len), 0), len ? 231 : 0) << len << " " << off;
+      EXPECT_EQ(fog_max_u8(p, static_cast<std::size_t>(len), 0), len ? 231 : 0)
+          << len << " " << off;
       EXPECT_EQ(fog_max_u8(p, static_cast<std::size_t>(len), 240), 240) << len << " " << off;
       if (len > 0) {
         buf[static_cast<std::size_t>(off + len - 1)] = 255;
@@ -325,9 +353,10 @@ TEST(FogFastTest, ByteMaximumMatchesMaxElement) {
   }
 }
 
-// The field is the quarter-resolution map, bilinear and corner-aligned: every fourth row and column are the map's
-// points. (509 x 510 needs the whole 128 x 128 map, so the fast stream draws every point, as the full map does.)
-// The field's draws come from lanes seeded by one draw of its rng, which advances by exactly that one draw.
+// The field is the quarter-resolution map, bilinear and corner-aligned: every fourth row and column
+// are the map's points. (509 x 510 needs the whole 128 x 128 map, so the fast stream draws every
+// point, as the full map does.) The field's draws come from lanes seeded by one draw of its rng,
+// which advances by exactly that one draw.
 TEST(FogFastTest, FieldPassesThroughTheLowResolutionMapsPoints) {
   const int rows = 509, cols = 510, n = fog_map_size(rows, cols);
   rng::FastRng a(4), b(4);

@@ -4,18 +4,17 @@
 // rebuilt by numpy mode and held to that hash.
 #pragma once
 
+#include <opencv2/core.hpp>
 #include <optional>
 #include <string>
 #include <vector>
-
-#include <opencv2/core.hpp>
 
 #include "corruption/types.hpp"
 
 namespace faultline::testing {
 
 struct GoldenCase {
-  std::string name;        // "motion_blur_night_street_sev1", usable as a test name
+  std::string name;  // "motion_blur_night_street_sev1", usable as a test name
   std::string
       file;  // reference PNG relative to the golden dir ("motion_blur/night_street_sev1.png")
   std::string input_file;  // input PNG relative to the golden dir

@@ -1,14 +1,13 @@
-// numpy mode against the reference outputs of imagecorruptions 1.1.2's defocus_blur, glass_blur, zoom_blur, frost,
-// elastic_transform and spatter (tests/data/corruptions/ext/<name>.json: seed and SHA-256 of each output), and the
-// NumPy/SciPy numerics they rest on.
+// numpy mode against the reference outputs of imagecorruptions 1.1.2's defocus_blur, glass_blur,
+// zoom_blur, frost, elastic_transform and spatter (tests/data/corruptions/ext/<name>.json: seed and
+// SHA-256 of each output), and the NumPy/SciPy numerics they rest on.
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <opencv2/core.hpp>
 #include <set>
 #include <string>
 #include <vector>
-
-#include <opencv2/core.hpp>
 
 #include "corruption/corrupt.hpp"
 #include "corruption/golden_cases.hpp"
@@ -26,12 +25,12 @@ struct ExtCase {
   int severity;
 };
 
-constexpr Corruption kExtCorruptions[] = {Corruption::DefocusBlur, Corruption::GlassBlur,
-                                          Corruption::ZoomBlur,    Corruption::Frost,
+constexpr Corruption kExtCorruptions[] = {Corruption::DefocusBlur,      Corruption::GlassBlur,
+                                          Corruption::ZoomBlur,         Corruption::Frost,
                                           Corruption::ElasticTransform, Corruption::Spatter};
 
-// The reference ran every corruption on the three inputs at severities 1..5, except glass_blur (minutes per image
-// in Python): the chart only.
+// The reference ran every corruption on the three inputs at severities 1..5, except glass_blur
+// (minutes per image in Python): the chart only.
 std::vector<ExtCase> ext_case_ids() {
   std::vector<ExtCase> cases;
   for (const auto type : kExtCorruptions) {
@@ -43,7 +42,9 @@ std::vector<ExtCase> ext_case_ids() {
   return cases;
 }
 
-std::string ext_file(Corruption type) { return std::string("ext/") + corruption::to_string(type) + ".json"; }
+std::string ext_file(Corruption type) {
+  return std::string("ext/") + corruption::to_string(type) + ".json";
+}
 
 struct ExtRecord {
   unsigned seed = 0;
@@ -57,8 +58,8 @@ ExtRecord find_record(const ExtCase& c) {
       return {o["seed"].GetUint(), o["sha256_bgr_pixels"].GetString()};
     }
   }
-  throw std::runtime_error("no record of " + c.input + " severity " + std::to_string(c.severity) + " in " +
-                           ext_file(c.type));
+  throw std::runtime_error("no record of " + c.input + " severity " + std::to_string(c.severity) +
+                           " in " + ext_file(c.type));
 }
 
 class GoldenExtSpatialTest : public ::testing::TestWithParam<ExtCase> {};
@@ -70,21 +71,24 @@ TEST_P(GoldenExtSpatialTest, NumpyModeHashesToTheReferenceOutput) {
   rng::NumpyRandomState rng(r.seed);
   auto out = corruption::corrupt(in, c.type, c.severity, rng);
   ASSERT_TRUE(out.is_ok()) << out.status().to_string();
-  EXPECT_EQ(pixel_sha256(*out), r.sha256) << corruption::to_string(c.type) << " " << c.input << " severity "
-                                          << c.severity;
+  EXPECT_EQ(pixel_sha256(*out), r.sha256)
+      << corruption::to_string(c.type) << " " << c.input << " severity " << c.severity;
 }
 
 INSTANTIATE_TEST_SUITE_P(Reference, GoldenExtSpatialTest, ::testing::ValuesIn(ext_case_ids()),
                          [](const ::testing::TestParamInfo<ExtCase>& param_info) {
-                           return pascal_case(std::string(corruption::to_string(param_info.param.type)) + "_" +
-                                              param_info.param.input + "_sev" + std::to_string(param_info.param.severity));
+                           return pascal_case(
+                               std::string(corruption::to_string(param_info.param.type)) + "_" +
+                               param_info.param.input + "_sev" +
+                               std::to_string(param_info.param.severity));
                          });
 
 // Every output the reference files list is enumerated above (80 in all), so none goes untested.
 TEST(GoldenExtSpatialManifestTest, EnumeratedCasesAreExactlyTheListedOutputs) {
   std::set<std::string> enumerated, listed;
   for (const auto& c : ext_case_ids()) {
-    enumerated.insert(std::string(corruption::to_string(c.type)) + "/" + c.input + "/" + std::to_string(c.severity));
+    enumerated.insert(std::string(corruption::to_string(c.type)) + "/" + c.input + "/" +
+                      std::to_string(c.severity));
   }
   for (const auto type : kExtCorruptions) {
     const auto doc = load_golden_json(ext_file(type));
@@ -98,8 +102,8 @@ TEST(GoldenExtSpatialManifestTest, EnumeratedCasesAreExactlyTheListedOutputs) {
   EXPECT_EQ(enumerated, listed);
 }
 
-// NumPy's exp on the reference machine (SVML) reproduces the motion-blur kernels NumPy computed there
-// (kernels.json), where glibc's exp differs in about 40 % of the entries.
+// NumPy's exp on the reference machine (SVML) reproduces the motion-blur kernels NumPy computed
+// there (kernels.json), where glibc's exp differs in about 40 % of the entries.
 TEST(NumpyExpTest, ReproducesTheReferenceMotionBlurKernels) {
   const auto doc = load_golden_json("kernels.json");
   int entries = 0, libm_differs = 0;
@@ -109,7 +113,8 @@ TEST(NumpyExpTest, ReproducesTheReferenceMotionBlurKernels) {
     const auto n = static_cast<std::size_t>(hex.Size());
     std::vector<double> g(n), g_libm(n);
     for (std::size_t i = 0; i < n; ++i) {
-      const double a = static_cast<double>(-static_cast<int>(i * i)) / static_cast<double>(2 * sigma * sigma);
+      const double a =
+          static_cast<double>(-static_cast<int>(i * i)) / static_cast<double>(2 * sigma * sigma);
       g[i] = corruption::nd::numpy_exp(a) / (std::sqrt(2 * M_PI) * sigma);
       g_libm[i] = std::exp(a) / (std::sqrt(2 * M_PI) * sigma);
     }

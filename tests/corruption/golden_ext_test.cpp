@@ -1,18 +1,17 @@
-// numpy mode of the imagecorruptions / ISONoise pointwise corruptions against the reference's outputs
-// (tests/data/corruptions/ext_manifest.json: SHA-256 of each output array; impulse_noise, which the reference
-// cannot seed, by its statistics).
+// numpy mode of the imagecorruptions / ISONoise pointwise corruptions against the reference's
+// outputs (tests/data/corruptions/ext_manifest.json: SHA-256 of each output array; impulse_noise,
+// which the reference cannot seed, by its statistics).
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
-#include <utility>
-#include <set>
-#include <string>
-#include <vector>
-
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
+#include <set>
+#include <string>
+#include <utility>
+#include <vector>
 
 #include "corruption/corrupt.hpp"
 #include "corruption/golden_cases.hpp"
@@ -25,10 +24,11 @@ namespace {
 
 using corruption::Corruption;
 
-constexpr Corruption kExtCorruptions[] = {
-    Corruption::GaussianNoise, Corruption::ShotNoise, Corruption::ImpulseNoise, Corruption::SpeckleNoise,
-    Corruption::IsoNoise,      Corruption::Contrast,  Corruption::Saturate,     Corruption::Pixelate,
-    Corruption::JpegCompression, Corruption::GaussianBlur};
+constexpr Corruption kExtCorruptions[] = {Corruption::GaussianNoise,   Corruption::ShotNoise,
+                                          Corruption::ImpulseNoise,    Corruption::SpeckleNoise,
+                                          Corruption::IsoNoise,        Corruption::Contrast,
+                                          Corruption::Saturate,        Corruption::Pixelate,
+                                          Corruption::JpegCompression, Corruption::GaussianBlur};
 constexpr const char* kInputs[] = {"chart_333x197", "night_street", "snowy_highway"};
 
 struct ExtCase {
@@ -45,8 +45,9 @@ std::vector<ExtCase> ext_case_ids() {
       // ISONoise indexes its list with [severity]: 5 raises IndexError in the reference.
       const int max_severity = c == Corruption::IsoNoise ? 4 : 5;
       for (int s = 1; s <= max_severity; ++s) {
-        cases.push_back({std::string(corruption::to_string(c)) + "_" + input + "_sev" + std::to_string(s), c,
-                         input, s});
+        cases.push_back(
+            {std::string(corruption::to_string(c)) + "_" + input + "_sev" + std::to_string(s), c,
+             input, s});
       }
     }
   }
@@ -88,8 +89,9 @@ TEST_P(GoldenExtTest, NumpyModeMatchesReference) {
     EXPECT_EQ(pixel_sha256(*out), o["sha256"].GetString()) << c.name;
     return;
   }
-  // Statistics of the reference's (unseeded) draw against ours: each share is a mean of N Bernoulli-like
-  // values, so two independent draws differ by about sqrt(2 s (1 - s) / N); 5 of those is the allowance.
+  // Statistics of the reference's (unseeded) draw against ours: each share is a mean of N
+  // Bernoulli-like values, so two independent draws differ by about sqrt(2 s (1 - s) / N); 5 of
+  // those is the allowance.
   const auto& s = o["stats"];
   EXPECT_DOUBLE_EQ(corruption::impulse_noise_amount(c.severity), s["amount"].GetDouble());
   const double n = static_cast<double>(in.total() * 3);
@@ -106,24 +108,29 @@ TEST_P(GoldenExtTest, NumpyModeMatchesReference) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Manifest, GoldenExtTest, ::testing::ValuesIn(ext_case_ids()),
-                         [](const ::testing::TestParamInfo<ExtCase>& p) { return pascal_case(p.param.name); });
+                         [](const ::testing::TestParamInfo<ExtCase>& p) {
+                           return pascal_case(p.param.name);
+                         });
 
-// `faultline corrupt` reaches the same code by name: numpy mode through files gives the reference's arrays, and
+// `faultline corrupt` reaches the same code by name: numpy mode through files gives the reference's
+// arrays, and
 // --level maps to the documented severities (iso_noise mid = 3, jpeg_compression hard = 5).
 TEST(GoldenExtCliTest, CorruptCommandReproducesReferenceByName) {
-  for (const auto& [name, level] : {std::pair<std::string, std::string>{"iso_noise_chart_333x197_sev3", "mid"},
-                                   {"jpeg_compression_chart_333x197_sev5", "hard"},
-                                   {"saturate_chart_333x197_sev3", "mid"}}) {
+  for (const auto& [name, level] :
+       {std::pair<std::string, std::string>{"iso_noise_chart_333x197_sev3", "mid"},
+        {"jpeg_compression_chart_333x197_sev5", "hard"},
+        {"saturate_chart_333x197_sev3", "mid"}}) {
     ExtCase c;
     for (const auto& k : ext_case_ids()) {
       if (k.name == name) c = k;
     }
     const rapidjson::Value& o = record_of(c);
     const std::string out = ::testing::TempDir() + "/faultline_ext_" + name + ".png";
-    const std::string cmd = std::string(FAULTLINE_BIN_DIR) + "/faultline corrupt --type " +
-                            corruption::to_string(c.type) + " --level " + level + " --rng numpy --seed " +
-                            std::to_string(o["seed"].GetUint()) + " --in " +
-                            test_data::fixture(golden_dir() + "/inputs/" + c.input + ".png") + " --out " + out;
+    const std::string cmd =
+        std::string(FAULTLINE_BIN_DIR) + "/faultline corrupt --type " +
+        corruption::to_string(c.type) + " --level " + level + " --rng numpy --seed " +
+        std::to_string(o["seed"].GetUint()) + " --in " +
+        test_data::fixture(golden_dir() + "/inputs/" + c.input + ".png") + " --out " + out;
     ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
     EXPECT_EQ(pixel_sha256(cv::imread(out, cv::IMREAD_COLOR)), o["sha256"].GetString()) << name;
     std::remove(out.c_str());

@@ -73,9 +73,11 @@ GoldenCase load_golden_case(const GoldenCase& id) {
       c.gauss_cache_pending = o["rng_after_call"]["gauss_cache_pending"].GetBool();
       const auto& d = o["rng_derived"];
       if (d.HasMember("angle_deg")) c.angle_deg = exact_double(d["angle_deg"]["hex"]);
-      if (d.HasMember("blur_angle_deg")) c.snow_angle_deg = exact_double(d["blur_angle_deg"]["hex"]);
+      if (d.HasMember("blur_angle_deg"))
+        c.snow_angle_deg = exact_double(d["blur_angle_deg"]["hex"]);
       if (d.HasMember("snow_layer_u8_sum")) c.snow_layer_sum = d["snow_layer_u8_sum"].GetInt64();
-      if (d.HasMember("snow_layer_u8_nonzero")) c.snow_layer_nonzero = d["snow_layer_u8_nonzero"].GetInt64();
+      if (d.HasMember("snow_layer_u8_nonzero"))
+        c.snow_layer_nonzero = d["snow_layer_u8_nonzero"].GetInt64();
       if (d.HasMember("poisson_k_sum")) c.poisson_k_sum = d["poisson_k_sum"].GetInt64();
     }
     return c;

@@ -1,4 +1,5 @@
-// Motion blur with the manifest's exact angle injected: exact in numpy mode, float32 within the spec's bound.
+// Motion blur with the manifest's exact angle injected: exact in numpy mode, float32 within the
+// spec's bound.
 #include "corruption/motion_blur.hpp"
 
 #include <gtest/gtest.h>
@@ -62,16 +63,19 @@ TEST(MotionBlurAngleTest, FastModeWithInjectedAngleIsWithinFloat32Bound) {
 }
 
 TEST(MotionBlurPathsTest, NumpyEqualsFloat64AndFastIsWithinToleranceOnNoiseFlatAndGradientContent) {
-  // Noise (sums far from integers), flat bands (sums on an integer, decided by the kernel's last ulps) and a smooth
-  // gradient, with a width that is not a multiple of the 64-value block, at every severity and many angles.
+  // Noise (sums far from integers), flat bands (sums on an integer, decided by the kernel's last
+  // ulps) and a smooth gradient, with a width that is not a multiple of the 64-value block, at
+  // every severity and many angles.
   cv::Mat img(96, 203, CV_8UC3);
   std::uint32_t s = 7;
   for (int y = 0; y < img.rows; ++y) {
     for (int x = 0; x < img.cols; ++x) {
       s = s * 1664525u + 1013904223u;
-      cv::Vec3b px(static_cast<uchar>(s >> 24), static_cast<uchar>(s >> 16), static_cast<uchar>(s >> 8));
+      cv::Vec3b px(static_cast<uchar>(s >> 24), static_cast<uchar>(s >> 16),
+                   static_cast<uchar>(s >> 8));
       if (y < 32) px = cv::Vec3b(static_cast<uchar>(y < 16 ? 255 : 37), 0, 128);
-      if (y >= 64) px = cv::Vec3b(static_cast<uchar>(x), static_cast<uchar>(y * 2), static_cast<uchar>(x + y));
+      if (y >= 64)
+        px = cv::Vec3b(static_cast<uchar>(x), static_cast<uchar>(y * 2), static_cast<uchar>(x + y));
       img.at<cv::Vec3b>(y, x) = px;
     }
   }
@@ -80,23 +84,26 @@ TEST(MotionBlurPathsTest, NumpyEqualsFloat64AndFastIsWithinToleranceOnNoiseFlatA
       const cv::Mat fast = corruption::motion_blur_fast(img, sev, angle);
       const cv::Mat numpy = corruption::motion_blur_numpy(img, sev, angle);
       const cv::Mat exact = corruption::motion_blur_exact(img, sev, angle);
-      ExpectWithinFastTolerance(fast, exact, "severity " + std::to_string(sev) + " angle " + std::to_string(angle));
+      ExpectWithinFastTolerance(
+          fast, exact, "severity " + std::to_string(sev) + " angle " + std::to_string(angle));
       EXPECT_EQ(max_abs_diff(numpy, exact), 0.0) << "severity " << sev << " angle " << angle;
     }
   }
 }
 
 TEST(MotionBlurPathsTest, NumpyEqualsFloat64AndFastIsWithinToleranceOnNearFlatContent) {
-  // Flat regions with sparse speckles of +-1..3 (JPEG-like residue on synthetic or overexposed frames): most sums sit
-  // on an integer, many with every tap equal (resolved from the flat table) and many with one tap different where
-  // the half-Gaussian weight is ~1e-8 (resolved with the vector float64 sum). Plain float32 sums get several % of
-  // these wrong; numpy mode must equal the float64 path, fast mode stay within its tolerance.
+  // Flat regions with sparse speckles of +-1..3 (JPEG-like residue on synthetic or overexposed
+  // frames): most sums sit on an integer, many with every tap equal (resolved from the flat table)
+  // and many with one tap different where the half-Gaussian weight is ~1e-8 (resolved with the
+  // vector float64 sum). Plain float32 sums get several % of these wrong; numpy mode must equal the
+  // float64 path, fast mode stay within its tolerance.
   cv::Mat img(120, 333, CV_8UC3);
   std::uint32_t s = 11;
   for (int y = 0; y < img.rows; ++y) {
     for (int x = 0; x < img.cols; ++x) {
       const int base = x < 111 ? 0 : (x < 222 ? 128 : 255);
-      cv::Vec3b px(static_cast<uchar>(base), static_cast<uchar>(y < 60 ? 37 : 200), static_cast<uchar>(base / 2));
+      cv::Vec3b px(static_cast<uchar>(base), static_cast<uchar>(y < 60 ? 37 : 200),
+                   static_cast<uchar>(base / 2));
       s = s * 1664525u + 1013904223u;
       if ((s >> 24) < 3) {  // ~1 % of pixels
         const int d = static_cast<int>((s >> 8) % 7) - 3;
@@ -108,8 +115,9 @@ TEST(MotionBlurPathsTest, NumpyEqualsFloat64AndFastIsWithinToleranceOnNearFlatCo
   for (int sev = 1; sev <= 5; ++sev) {
     for (double angle : {-45.0, -12.5, 0.0, 30.0}) {
       const cv::Mat exact = corruption::motion_blur_exact(img, sev, angle);
-      ExpectWithinFastTolerance(corruption::motion_blur_fast(img, sev, angle), exact,
-                                "severity " + std::to_string(sev) + " angle " + std::to_string(angle));
+      ExpectWithinFastTolerance(
+          corruption::motion_blur_fast(img, sev, angle), exact,
+          "severity " + std::to_string(sev) + " angle " + std::to_string(angle));
       EXPECT_EQ(max_abs_diff(corruption::motion_blur_numpy(img, sev, angle), exact), 0.0)
           << "severity " << sev << " angle " << angle;
     }
@@ -117,22 +125,25 @@ TEST(MotionBlurPathsTest, NumpyEqualsFloat64AndFastIsWithinToleranceOnNearFlatCo
 }
 
 TEST(MotionBlurPathsTest, FlatStretchesEqualFloat64InNumpyModeAndWithinToleranceInFastMode) {
-  // Rows are cut into stretches where every tap reads one colour (filled from the flat table without sums) and the
-  // rest. Colours that differ in one channel by 1, horizontal bands that change every few rows (flat along a row,
-  // not along the streak), 1-pixel stripes, saturated regions and edge columns that differ from their neighbours,
-  // at widths that are not a multiple of the block, a narrow image and one channel.
+  // Rows are cut into stretches where every tap reads one colour (filled from the flat table
+  // without sums) and the rest. Colours that differ in one channel by 1, horizontal bands that
+  // change every few rows (flat along a row, not along the streak), 1-pixel stripes, saturated
+  // regions and edge columns that differ from their neighbours, at widths that are not a multiple
+  // of the block, a narrow image and one channel.
   auto scene = [](int rows, int cols, int channels) {
     cv::Mat img(rows, cols, CV_8UC(channels));
     for (int y = 0; y < rows; ++y) {
       for (int x = 0; x < cols; ++x) {
         int v[3] = {10, 20, 30};
-        if (x >= cols / 3) v[2] = 31;                                  // one channel one step apart
+        if (x >= cols / 3) v[2] = 31;  // one channel one step apart
         if (y >= rows / 4 && y < rows / 2) v[0] = (y / 3) % 2 ? 200 : 199;  // bands along the rows
-        if (y >= rows / 2 && x < cols / 2) v[1] = 255, v[0] = 0;         // saturated block
-        if (y >= rows / 2 && x >= cols / 2 && x < cols / 2 + 24) v[2] = x % 2 ? 90 : 91;  // 1-pixel stripes
-        if (x == 0 || x == cols - 1) v[0] = 77;                         // edge columns
-        if (y == rows - 1 && x % 50 < 25) v[1] = 254;                    // bottom edge row
-        for (int c = 0; c < channels; ++c) img.ptr<uchar>(y)[x * channels + c] = static_cast<uchar>(v[c]);
+        if (y >= rows / 2 && x < cols / 2) v[1] = 255, v[0] = 0;            // saturated block
+        if (y >= rows / 2 && x >= cols / 2 && x < cols / 2 + 24)
+          v[2] = x % 2 ? 90 : 91;                      // 1-pixel stripes
+        if (x == 0 || x == cols - 1) v[0] = 77;        // edge columns
+        if (y == rows - 1 && x % 50 < 25) v[1] = 254;  // bottom edge row
+        for (int c = 0; c < channels; ++c)
+          img.ptr<uchar>(y)[x * channels + c] = static_cast<uchar>(v[c]);
       }
     }
     return img;
@@ -142,11 +153,12 @@ TEST(MotionBlurPathsTest, FlatStretchesEqualFloat64InNumpyModeAndWithinTolerance
       for (double angle : {-45.0, -30.0, -3.0, 0.0, 10.0, 44.99}) {
         const cv::Mat exact = corruption::motion_blur_exact(img, sev, angle);
         EXPECT_EQ(max_abs_diff(corruption::motion_blur_numpy(img, sev, angle), exact), 0.0)
-            << img.cols << "x" << img.rows << "x" << img.channels() << " severity " << sev << " angle " << angle;
+            << img.cols << "x" << img.rows << "x" << img.channels() << " severity " << sev
+            << " angle " << angle;
         ExpectWithinFastTolerance(corruption::motion_blur_fast(img, sev, angle), exact,
                                   std::to_string(img.cols) + "x" + std::to_string(img.rows) + "x" +
-                                      std::to_string(img.channels()) + " severity " + std::to_string(sev) +
-                                      " angle " + std::to_string(angle));
+                                      std::to_string(img.channels()) + " severity " +
+                                      std::to_string(sev) + " angle " + std::to_string(angle));
       }
     }
   }
@@ -188,7 +200,8 @@ TEST(MotionBlurAngleTest, NonFiniteInjectedAngleIsInvalidInBothModes) {
 }
 
 TEST(MotionBlurKernelTest, TablesExistForEveryUsedPairAndSumToOne) {
-  const int pairs[][2] = {{10, 3}, {15, 5}, {15, 8}, {15, 12}, {20, 15}, {10, 4}, {12, 4}, {12, 8}, {12, 12}};
+  const int pairs[][2] = {{10, 3}, {15, 5}, {15, 8}, {15, 12}, {20, 15},
+                          {10, 4}, {12, 4}, {12, 8}, {12, 12}};
   for (const auto& p : pairs) {
     const auto* k = corruption::find_tabulated_kernel(p[0], p[1]);
     ASSERT_NE(k, nullptr);
@@ -223,10 +236,11 @@ TEST(MotionBlurKernelTest, TablesEqualTheReferenceKernelsExactly) {
 }
 
 TEST(FastBlurKernelTest, TruncatesFloat64SumsAndTakesFlatLanesFromTheTable) {
-  // Rows of random bytes with some lanes flat across all taps, a float32 tail of 3 left-out taps, 211 values (vector
-  // blocks of 96/64/32 plus a scalar tail). The flat table here deliberately differs from the sums (v -> v / 2):
-  // flat lanes whose sum lies on an integer must come from it, every other value must be floor of the float64 sum
-  // over all taps (random sums are far from integers), clamped to 0..255.
+  // Rows of random bytes with some lanes flat across all taps, a float32 tail of 3 left-out taps,
+  // 211 values (vector blocks of 96/64/32 plus a scalar tail). The flat table here deliberately
+  // differs from the sums (v -> v / 2): flat lanes whose sum lies on an integer must come from it,
+  // every other value must be floor of the float64 sum over all taps (random sums are far from
+  // integers), clamped to 0..255.
   constexpr int kTaps = 9, kTaps32 = 6;
   constexpr std::size_t kN = 211;
   const double w64[kTaps] = {0.31, 0.22, 0.16, 0.11, 0.08, 0.06, 1e-7, 5e-8, 2e-8};
@@ -236,7 +250,8 @@ TEST(FastBlurKernelTest, TruncatesFloat64SumsAndTakesFlatLanesFromTheTable) {
     const bool flat_lane = j % 17 == 5;
     for (int i = 0; i < kTaps; ++i) {
       s = s * 1664525u + 1013904223u;
-      rows[static_cast<std::size_t>(i)][j] = flat_lane ? static_cast<float>(j % 256) : static_cast<float>(s >> 24);
+      rows[static_cast<std::size_t>(i)][j] =
+          flat_lane ? static_cast<float>(j % 256) : static_cast<float>(s >> 24);
     }
   }
   std::int32_t flat[256];
@@ -252,12 +267,13 @@ TEST(FastBlurKernelTest, TruncatesFloat64SumsAndTakesFlatLanesFromTheTable) {
     // The band covers the float32 error of 6 taps and the left-out tail (<= 255 * 1.7e-7).
     const float band = static_cast<float>(14 * 256 * 0x1p-24 + 255 * 1.7e-7 * scale);
     std::vector<std::uint8_t> dst(kN);
-    corruption::simd::weighted_rows_truncate_fast(ptrs.data(), ws32, kTaps32, ws64, kTaps, band, flat, dst.data(),
-                                                  kN);
+    corruption::simd::weighted_rows_truncate_fast(ptrs.data(), ws32, kTaps32, ws64, kTaps, band,
+                                                  flat, dst.data(), kN);
     for (std::size_t j = 0; j < kN; ++j) {
       double sum = 0;
       for (int i = 0; i < kTaps; ++i) sum += ws64[i] * rows[static_cast<std::size_t>(i)][j];
-      // Flat lanes consult the table where their sum lands on an integer (scaled weights summing to 1).
+      // Flat lanes consult the table where their sum lands on an integer (scaled weights summing to
+      // 1).
       const bool from_table = j % 17 == 5 && scale != 1.0;
       const int expected = from_table ? flat[j % 256] : static_cast<int>(std::min(sum, 255.0));
       EXPECT_EQ(dst[j], expected) << "value " << j << " scale " << scale;

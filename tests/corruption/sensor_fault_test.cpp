@@ -1,6 +1,7 @@
-// The sensor faults (soiling, ...): per-fault bounds and physical behaviour, defined results on degenerate frames,
-// and temporal coherence: the per-camera state renders the model drawn once from the seed on every frame.
-// (Shape, type, determinism per seed and the severity-0 identity run in property_test.cpp for every type.)
+// The sensor faults (soiling, ...): per-fault bounds and physical behaviour, defined results on
+// degenerate frames, and temporal coherence: the per-camera state renders the model drawn once from
+// the seed on every frame. (Shape, type, determinism per seed and the severity-0 identity run in
+// property_test.cpp for every type.)
 #include "corruption/sensor_fault.hpp"
 
 #include <gtest/gtest.h>
@@ -79,10 +80,12 @@ TEST(SoilingTest, MoreSevereSoilingCoversMoreAndDarkensMore) {
 }
 
 TEST(SoilingTest, DegenerateFramesBehaveAsDirtOnALens) {
-  const cv::Mat black(20, 30, CV_8UC3, cv::Scalar::all(0)), white(20, 30, CV_8UC3, cv::Scalar::all(255));
+  const cv::Mat black(20, 30, CV_8UC3, cv::Scalar::all(0)),
+      white(20, 30, CV_8UC3, cv::Scalar::all(255));
   const cv::Mat flat(9, 11, CV_8UC3, cv::Scalar(80, 120, 160));
   for (int sev = 1; sev <= 5; ++sev) {
-    EXPECT_EQ(cv::norm(fast(black, Corruption::Soiling, sev, 3), black, cv::NORM_INF), 0.0) << "no light, no change";
+    EXPECT_EQ(cv::norm(fast(black, Corruption::Soiling, sev, 3), black, cv::NORM_INF), 0.0)
+        << "no light, no change";
     // Dirt only absorbs: a constant frame never gets brighter, and white gets darker somewhere.
     for (const cv::Mat* in : {&white, &flat}) {
       const cv::Mat out = fast(*in, Corruption::Soiling, sev, 3);
@@ -140,10 +143,12 @@ TEST(ExposureFlickerTest, ExposureErrorStaysWithinTheSeveritysStopsAndGrowsWithI
       EXPECT_LE(std::abs(band - 1.0), p.band_depth + 1e-12);
     }
     EXPECT_GT(peak, prev_peak) << "sev " << sev;
-    EXPECT_GT(peak, 0.5 * (p.flicker_ev + p.hunting_ev)) << "sev " << sev << ": the swings are reached";
+    EXPECT_GT(peak, 0.5 * (p.flicker_ev + p.hunting_ev))
+        << "sev " << sev << ": the swings are reached";
     prev_peak = peak;
   }
-  // Capture stamps since the epoch keep the same curve shape (phases reduced before sin): finite, bounded.
+  // Capture stamps since the epoch keep the same curve shape (phases reduced before sin): finite,
+  // bounded.
   const ExposureFlickerModel model(5, 8);
   EXPECT_TRUE(std::isfinite(model.exposure_ev(1.7e9)));
 }
@@ -153,7 +158,8 @@ TEST(ExposureFlickerTest, AFlatFrameTakesTheGainOfItsExposureError) {
   for (int sev = 1; sev <= 2; ++sev) {  // no bands: one gain for the frame
     const ExposureFlickerModel model(sev, 4);
     for (const double t : {0.0, 0.4, 1.3, 7.9}) {
-      const double expected = std::min(255.0, std::round(100 * std::pow(2.0, model.exposure_ev(t) / 2.2)));
+      const double expected =
+          std::min(255.0, std::round(100 * std::pow(2.0, model.exposure_ev(t) / 2.2)));
       const cv::Mat out = model.apply(grey, t);
       double lo, hi;
       cv::minMaxLoc(out.reshape(1), &lo, &hi);
@@ -177,10 +183,12 @@ TEST(ExposureFlickerTest, BandsVaryByRowAtHighSeverity) {
 }
 
 TEST(ExposureFlickerTest, DegenerateFrames) {
-  const cv::Mat black(20, 30, CV_8UC3, cv::Scalar::all(0)), white(20, 30, CV_8UC3, cv::Scalar::all(255));
+  const cv::Mat black(20, 30, CV_8UC3, cv::Scalar::all(0)),
+      white(20, 30, CV_8UC3, cv::Scalar::all(255));
   for (int sev = 1; sev <= 5; ++sev) {
     for (std::uint64_t seed = 1; seed <= 4; ++seed) {
-      EXPECT_EQ(cv::norm(fast(black, Corruption::ExposureFlicker, sev, seed), black, cv::NORM_INF), 0.0);
+      EXPECT_EQ(cv::norm(fast(black, Corruption::ExposureFlicker, sev, seed), black, cv::NORM_INF),
+                0.0);
       // White saturates when over-exposed and only ever darkens.
       const cv::Mat w = fast(white, Corruption::ExposureFlicker, sev, seed);
       EXPECT_EQ(w.size(), white.size());
@@ -200,10 +208,13 @@ TEST(ExposureFlickerTest, OneCameraFollowsOneExposureCurveOverTime) {
   const cv::Mat frame = faultline::testing::scene(40, 64);
   for (int i = 0; i < 6; ++i) {
     // Without a time the frame index at 12 Hz is the time; with one, the frame's own time counts.
-    EXPECT_EQ(cv::norm(*by_index.apply(frame), model.apply(frame, i / kDefaultRateHz), cv::NORM_INF), 0.0);
+    EXPECT_EQ(
+        cv::norm(*by_index.apply(frame), model.apply(frame, i / kDefaultRateHz), cv::NORM_INF),
+        0.0);
     FrameContext ctx;
     ctx.time_s = 0.1 * i * i;
-    EXPECT_EQ(cv::norm(*by_time.apply(frame, ctx), model.apply(frame, *ctx.time_s), cv::NORM_INF), 0.0);
+    EXPECT_EQ(cv::norm(*by_time.apply(frame, ctx), model.apply(frame, *ctx.time_s), cv::NORM_INF),
+              0.0);
   }
   // The hunting part is slow: over 1/12 s its share of the error moves by far less than its peak.
   const ExposureFlickerModel slow(4, 31);
@@ -225,9 +236,9 @@ int count_darker(const cv::Mat& out, const cv::Mat& in) {
 }
 
 double patch_mean(const cv::Mat& m, cv::Point2d at, int half) {
-  const cv::Rect r =
-      cv::Rect(static_cast<int>(at.x) - half, static_cast<int>(at.y) - half, 2 * half + 1, 2 * half + 1) &
-      cv::Rect(0, 0, m.cols, m.rows);
+  const cv::Rect r = cv::Rect(static_cast<int>(at.x) - half, static_cast<int>(at.y) - half,
+                              2 * half + 1, 2 * half + 1) &
+                     cv::Rect(0, 0, m.cols, m.rows);
   return r.area() > 0 ? cv::mean(m(r).reshape(1))[0] : -1;
 }
 
@@ -242,7 +253,8 @@ TEST(GlareTest, AddsLightOnlyBrightestAtTheSourceAndMoreWithSeverity) {
     EXPECT_EQ(count_darker(model.apply(in, std::nullopt), in), 0) << "sev " << sev;
     const cv::Point2d src = model.source_px();
     ASSERT_TRUE(src.x >= 0 && src.x < 160 && src.y >= 0 && src.y < 90) << "drawn in the frame";
-    EXPECT_GT(patch_mean(out, src, 3), patch_mean(out, {160 - src.x, 90 - src.y}, 3) + 10) << "sev " << sev;
+    EXPECT_GT(patch_mean(out, src, 3), patch_mean(out, {160 - src.x, 90 - src.y}, 3) + 10)
+        << "sev " << sev;
     const double mean = cv::mean(out.reshape(1))[0];
     EXPECT_GT(mean, prev) << "sev " << sev;
     prev = mean;
@@ -250,10 +262,13 @@ TEST(GlareTest, AddsLightOnlyBrightestAtTheSourceAndMoreWithSeverity) {
 }
 
 TEST(GlareTest, DegenerateFrames) {
-  const cv::Mat black(20, 30, CV_8UC3, cv::Scalar::all(0)), white(20, 30, CV_8UC3, cv::Scalar::all(255));
+  const cv::Mat black(20, 30, CV_8UC3, cv::Scalar::all(0)),
+      white(20, 30, CV_8UC3, cv::Scalar::all(255));
   for (int sev = 1; sev <= 5; ++sev) {
-    EXPECT_EQ(cv::norm(fast(white, Corruption::Glare, sev, 2), white, cv::NORM_INF), 0.0) << "white stays white";
-    EXPECT_GT(cv::mean(fast(black, Corruption::Glare, sev, 2).reshape(1))[0], 1.0) << "light on black shows";
+    EXPECT_EQ(cv::norm(fast(white, Corruption::Glare, sev, 2), white, cv::NORM_INF), 0.0)
+        << "white stays white";
+    EXPECT_GT(cv::mean(fast(black, Corruption::Glare, sev, 2).reshape(1))[0], 1.0)
+        << "light on black shows";
     for (const int n : {1, 2, 5}) {
       const cv::Mat tiny = faultline::testing::scene(n, n);
       const cv::Mat out = fast(tiny, Corruption::Glare, sev, 2);
@@ -263,11 +278,13 @@ TEST(GlareTest, DegenerateFrames) {
   }
 }
 
-// A camera turning about its down axis (yaw) by `deg`, in a world whose axes are the first frame's camera axes.
+// A camera turning about its down axis (yaw) by `deg`, in a world whose axes are the first frame's
+// camera axes.
 CameraGeometry yawed(double deg) {
   const double a = deg * M_PI / 180;
   CameraGeometry g;
-  g.camera_to_world = cv::Matx33d(std::cos(a), 0, std::sin(a), 0, 1, 0, -std::sin(a), 0, std::cos(a));
+  g.camera_to_world =
+      cv::Matx33d(std::cos(a), 0, std::sin(a), 0, 1, 0, -std::sin(a), 0, std::cos(a));
   g.intrinsics = cv::Matx33d(100, 0, 80, 0, 100, 45, 0, 0, 1);
   return g;
 }
@@ -277,7 +294,8 @@ TEST(GlareTest, TheSourceFollowsTheEgoHeadingAndStaysPutWithoutAPose) {
   GlareModel fixed(4, 3, grey.size()), posed(4, 3, grey.size());
   const cv::Mat first = fixed.apply(grey, std::nullopt);
   const cv::Point2d drawn = fixed.source_px();
-  EXPECT_EQ(cv::norm(fixed.apply(grey, std::nullopt), first, cv::NORM_INF), 0.0) << "no pose: the same glare";
+  EXPECT_EQ(cv::norm(fixed.apply(grey, std::nullopt), first, cv::NORM_INF), 0.0)
+      << "no pose: the same glare";
   EXPECT_EQ(fixed.source_px(), drawn);
   // The first posed frame anchors the source where it was drawn.
   (void)posed.apply(grey, yawed(0));
@@ -289,7 +307,8 @@ TEST(GlareTest, TheSourceFollowsTheEgoHeadingAndStaysPutWithoutAPose) {
     const cv::Mat out = posed.apply(grey, yawed(deg));
     const double a = deg * M_PI / 180;
     // R^T of the yaw applied to the first frame's ray.
-    const double zc = std::sin(a) * ray[0] + std::cos(a) * ray[2], xc = std::cos(a) * ray[0] - std::sin(a) * ray[2];
+    const double zc = std::sin(a) * ray[0] + std::cos(a) * ray[2],
+                 xc = std::cos(a) * ray[0] - std::sin(a) * ray[2];
     EXPECT_NEAR(posed.source_px().x, 80 + 100 * xc / zc, 1e-6) << deg;
     EXPECT_NEAR(posed.source_px().y, 45 + 100 * ray[1] / zc, 1e-6) << deg;
     EXPECT_LT(posed.source_px().x, drawn.x) << deg;
@@ -364,7 +383,9 @@ TEST(WaterDropsTest, TouchingDropsMergeKeepingTheirArea) {
 const Drop& nearest(const std::vector<Drop>& drops, double x, double y) {
   std::size_t best = 0;
   for (std::size_t k = 1; k < drops.size(); ++k) {
-    if (std::hypot(drops[k].x - x, drops[k].y - y) < std::hypot(drops[best].x - x, drops[best].y - y)) best = k;
+    if (std::hypot(drops[k].x - x, drops[k].y - y) <
+        std::hypot(drops[best].x - x, drops[best].y - y))
+      best = k;
   }
   return drops[best];
 }
@@ -372,7 +393,8 @@ const Drop& nearest(const std::vector<Drop>& drops, double x, double y) {
 TEST(WaterDropsTest, DropsPersistSlideSlowlyAndAReplayReproducesThem) {
   const cv::Size size(160, 90);
   WaterDropsModel a(5, 21, size), b(5, 21, size);
-  // A heavy drop (above the sticking radius) slides down; a small one stays put (unless a new drop lands on it).
+  // A heavy drop (above the sticking radius) slides down; a small one stays put (unless a new drop
+  // lands on it).
   const double stick = 90 * water_drops_params(5).max_radius;
   a.set_drops({{40, 20, 2 * stick, 0.1}, {120, 60, 0.5 * stick, 0}});
   b.set_drops(a.drops());
@@ -419,20 +441,25 @@ TEST(WaterDropsTest, ThePerCameraStateMovesTheDropsByTheFrameTimes) {
     if (i > 0) model.step(0.25);
     const cv::Mat out = *camera.apply(frame, ctx);
     EXPECT_EQ(cv::norm(out, model.apply(frame), cv::NORM_INF), 0.0) << "frame " << i;
-    EXPECT_EQ(cv::norm(out, *again.apply(frame, ctx), cv::NORM_INF), 0.0) << "a seed reproduces the sequence";
+    EXPECT_EQ(cv::norm(out, *again.apply(frame, ctx), cv::NORM_INF), 0.0)
+        << "a seed reproduces the sequence";
     if (!prev.empty()) {
       // Consecutive frames share most drops: far closer to each other than to the clean frame.
-      EXPECT_LT(cv::norm(out, prev, cv::NORM_L1), 0.5 * cv::norm(out, frame, cv::NORM_L1)) << "frame " << i;
+      EXPECT_LT(cv::norm(out, prev, cv::NORM_L1), 0.5 * cv::norm(out, frame, cv::NORM_L1))
+          << "frame " << i;
     }
     prev = out;
   }
 }
 
 TEST(WaterDropsTest, DegenerateFrames) {
-  const cv::Mat black(20, 30, CV_8UC3, cv::Scalar::all(0)), white(20, 30, CV_8UC3, cv::Scalar::all(255));
+  const cv::Mat black(20, 30, CV_8UC3, cv::Scalar::all(0)),
+      white(20, 30, CV_8UC3, cv::Scalar::all(255));
   for (int sev = 1; sev <= 5; ++sev) {
-    EXPECT_EQ(cv::norm(fast(black, Corruption::WaterDrops, sev, 4), black, cv::NORM_INF), 0.0) << "nothing to refract";
-    // On white the drops' rims darken (at severity 5 the drops are big enough to cover pixel centres).
+    EXPECT_EQ(cv::norm(fast(black, Corruption::WaterDrops, sev, 4), black, cv::NORM_INF), 0.0)
+        << "nothing to refract";
+    // On white the drops' rims darken (at severity 5 the drops are big enough to cover pixel
+    // centres).
     const cv::Mat w = fast(white, Corruption::WaterDrops, sev, 4);
     if (sev == 5) {
       EXPECT_LT(cv::mean(w.reshape(1))[0], 255.0);
@@ -452,7 +479,8 @@ TEST(SensorFaultTest, ReachesTheSameModelThroughEveryEntryPoint) {
   EXPECT_EQ(cv::norm(via_corrupt, via_seed, cv::NORM_INF), 0.0);
   // numpy mode is Faultline's own too: seeded from the numpy stream, reproducible.
   rng::NumpyRandomState n1(5), n2(5);
-  EXPECT_EQ(cv::norm(*corrupt(in, Corruption::Soiling, 3, n1), *corrupt(in, Corruption::Soiling, 3, n2), cv::NORM_INF),
+  EXPECT_EQ(cv::norm(*corrupt(in, Corruption::Soiling, 3, n1),
+                     *corrupt(in, Corruption::Soiling, 3, n2), cv::NORM_INF),
             0.0);
 }
 

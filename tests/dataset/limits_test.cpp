@@ -1,6 +1,6 @@
-// Size limits of the dataset readers (#22): a nuScenes table one byte over kMaxNuScenesTableBytes (read with the
-// table reader, tests/nuscenes), and an image over its limit (or /dev/zero), are refused naming the file and the
-// limit.
+// Size limits of the dataset readers (#22): a nuScenes table one byte over kMaxNuScenesTableBytes
+// (read with the table reader, tests/nuscenes), and an image over its limit (or /dev/zero), are
+// refused naming the file and the limit.
 #include <gtest/gtest.h>
 #include <sys/stat.h>
 #include <unistd.h>
@@ -28,14 +28,16 @@ TEST(DatasetLimitsTest, ATableOneByteOverTheLimitIsRefusedAtOpen) {
   const std::string root = ::mkdtemp(tmpl);
   const std::string dir = root + "/v1.0-mini";
   ASSERT_EQ(::mkdir(dir.c_str(), 0755), 0);
-  for (const char* table : {"sample_data", "ego_pose"}) std::ofstream(dir + "/" + table + ".json") << "[]";
+  for (const char* table : {"sample_data", "ego_pose"})
+    std::ofstream(dir + "/" + table + ".json") << "[]";
   const std::string path = dir + "/scene.json";
   std::ofstream(path).close();
   ASSERT_EQ(::truncate(path.c_str(), static_cast<off_t>(kMaxNuScenesTableBytes + 1)), 0);
   auto reader = NuScenesReader::open(root, "v1.0-mini");
   EXPECT_EQ(reader.status().code(), StatusCode::kInvalidArgument);
   EXPECT_NE(reader.status().message().find(path), std::string::npos) << reader.status().message();
-  EXPECT_NE(reader.status().message().find("16 GiB"), std::string::npos) << reader.status().message();
+  EXPECT_NE(reader.status().message().find("16 GiB"), std::string::npos)
+      << reader.status().message();
   (void)std::system(("rm -rf " + root).c_str());
 }
 

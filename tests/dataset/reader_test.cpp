@@ -1,4 +1,5 @@
-// NuScenesReader against the golden v1.0-mini tables (shuffled, 3 scenes) and against broken copies of them.
+// NuScenesReader against the golden v1.0-mini tables (shuffled, 3 scenes) and against broken copies
+// of them.
 #include <gtest/gtest.h>
 #include <rapidjson/stringbuffer.h>
 #include <rapidjson/writer.h>
@@ -15,7 +16,8 @@ namespace {
 using namespace testing_util;  // NOLINT(google-build-using-namespace)
 constexpr const char* kMini = "v1.0-mini";
 
-// Camera sample_data counts per scene name, computed with a plain DOM walk (independent of the streaming path).
+// Camera sample_data counts per scene name, computed with a plain DOM walk (independent of the
+// streaming path).
 std::map<std::string, int> dom_camera_counts(const fs::path& root) {
   auto sensors = load_table(root, kMini, "sensor");
   auto cals = load_table(root, kMini, "calibrated_sensor");
@@ -24,19 +26,23 @@ std::map<std::string, int> dom_camera_counts(const fs::path& root) {
   auto sd = load_table(root, kMini, "sample_data");
   std::set<std::string> camera_sensors, camera_cals;
   for (const auto& s : sensors.GetArray()) {
-    if (std::string(s["modality"].GetString()) == "camera") camera_sensors.insert(s["token"].GetString());
+    if (std::string(s["modality"].GetString()) == "camera")
+      camera_sensors.insert(s["token"].GetString());
   }
   for (const auto& c : cals.GetArray()) {
-    if (camera_sensors.count(c["sensor_token"].GetString())) camera_cals.insert(c["token"].GetString());
+    if (camera_sensors.count(c["sensor_token"].GetString()))
+      camera_cals.insert(c["token"].GetString());
   }
   std::map<std::string, std::string> scene_name, scene_of_sample;
-  for (const auto& s : scenes.GetArray()) scene_name[s["token"].GetString()] = s["name"].GetString();
+  for (const auto& s : scenes.GetArray())
+    scene_name[s["token"].GetString()] = s["name"].GetString();
   for (const auto& s : samples.GetArray()) {
     scene_of_sample[s["token"].GetString()] = scene_name[s["scene_token"].GetString()];
   }
   std::map<std::string, int> counts;
   for (const auto& r : sd.GetArray()) {
-    if (camera_cals.count(r["calibrated_sensor_token"].GetString())) ++counts[scene_of_sample[r["sample_token"].GetString()]];
+    if (camera_cals.count(r["calibrated_sensor_token"].GetString()))
+      ++counts[scene_of_sample[r["sample_token"].GetString()]];
   }
   return counts;
 }
@@ -64,7 +70,9 @@ TEST_F(GoldenReaderTest, ReadsAllScenesAndCountsCameraFrames) {
     EXPECT_EQ(f.width, 1600);
     EXPECT_EQ(f.height, 900);
     EXPECT_GT(f.intrinsics[0], 500.0);
-    EXPECT_EQ(f.filename.rfind(f.is_key_frame ? "samples/" + f.channel + "/" : "sweeps/" + f.channel + "/", 0), 0u)
+    EXPECT_EQ(f.filename.rfind(
+                  f.is_key_frame ? "samples/" + f.channel + "/" : "sweeps/" + f.channel + "/", 0),
+              0u)
         << f.filename;
   }
   EXPECT_EQ(got, expected);
@@ -86,7 +94,9 @@ TEST_F(GoldenReaderTest, LoadsOnlyTheNamedScene) {
   }
   EXPECT_EQ(keys, 8 * 6);  // 8 samples x 6 cameras
   const std::string path = reader.path_of(frames->front());
-  EXPECT_EQ(path, (fs::absolute(golden_dataroot()).lexically_normal() / frames->front().filename).string());
+  EXPECT_EQ(
+      path,
+      (fs::absolute(golden_dataroot()).lexically_normal() / frames->front().filename).string());
 }
 
 TEST_F(GoldenReaderTest, SamplesOfSceneAreChainedInTimeOrder) {
@@ -154,21 +164,24 @@ TEST_F(BrokenTablesTest, MalformedJsonNamesFileAndOffset) {
   ASSERT_FALSE(r.is_ok());
   EXPECT_EQ(r.status().code(), StatusCode::kCorruptData);
   EXPECT_NE(r.status().message().find("sample.json"), std::string::npos);
-  EXPECT_NE(r.status().message().find("malformed JSON at offset " + std::to_string(pos)), std::string::npos)
+  EXPECT_NE(r.status().message().find("malformed JSON at offset " + std::to_string(pos)),
+            std::string::npos)
       << r.status().message();
 }
 
 TEST_F(BrokenTablesTest, MalformedStreamedTableNamesFileAndOffset) {
   std::string text = file_text(table("ego_pose"));
-  const std::size_t pos = text.find("\n{\n", text.size() / 2) + 3;  // start of a record's first line
-  text.insert(pos, "}}}");  // closes the record early, then a stray brace
+  const std::size_t pos =
+      text.find("\n{\n", text.size() / 2) + 3;  // start of a record's first line
+  text.insert(pos, "}}}");                      // closes the record early, then a stray brace
   write_text(table("ego_pose"), text);
   auto reader = NuScenesReader::open(root_.string(), kMini);
   ASSERT_TRUE(reader.is_ok());
   auto frames = reader->load_camera_frames({});
   ASSERT_FALSE(frames.is_ok());
   EXPECT_NE(frames.status().message().find("ego_pose.json"), std::string::npos);
-  EXPECT_NE(frames.status().message().find("malformed JSON at offset " + std::to_string(pos + 1)), std::string::npos)
+  EXPECT_NE(frames.status().message().find("malformed JSON at offset " + std::to_string(pos + 1)),
+            std::string::npos)
       << frames.status().message();
 }
 
@@ -218,7 +231,8 @@ TEST_F(BrokenTablesTest, UnknownCalibratedSensorIsReportedAndTheRestLoads) {
 }
 
 TEST(ReadFileTest, MissingFileIsNotFoundNamingThePath) {
-  const std::string path = (fs::temp_directory_path() / "faultline_no_such_dir" / "CAM_FRONT" / "x.jpg").string();
+  const std::string path =
+      (fs::temp_directory_path() / "faultline_no_such_dir" / "CAM_FRONT" / "x.jpg").string();
   auto r = read_file(path);
   ASSERT_FALSE(r.is_ok());
   EXPECT_EQ(r.status().code(), StatusCode::kNotFound);
@@ -227,7 +241,9 @@ TEST(ReadFileTest, MissingFileIsNotFoundNamingThePath) {
 
 TEST(ReadFileTest, ReadsWholeFile) {
   const fs::path dir = scratch_dir("read_file");
-  write_text(dir / "blob.bin", std::string("\x00\x01\xff" "abc", 6));
+  write_text(dir / "blob.bin", std::string("\x00\x01\xff"
+                                           "abc",
+                                           6));
   auto r = read_file((dir / "blob.bin").string());
   ASSERT_TRUE(r.is_ok());
   EXPECT_EQ(r->size(), 6u);

@@ -1,16 +1,16 @@
 // The synthetic nuScenes-format generator, read back through NuScenesReader and plain DOM walks.
-#include <gtest/gtest.h>
+#include "dataset/synth.hpp"
 
-#include <opencv2/imgcodecs.hpp>
+#include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <opencv2/imgcodecs.hpp>
 #include <set>
 
 #include "dataset/geometry.hpp"
 #include "dataset/nuscenes.hpp"
-#include "dataset/synth.hpp"
 #include "dataset/synth_palette.hpp"
 #include "test_util.hpp"
 
@@ -19,7 +19,8 @@ namespace {
 
 using namespace testing_util;  // NOLINT(google-build-using-namespace)
 constexpr const char* kMini = "v1.0-mini";
-constexpr int kWidth = 480, kHeight = 270;  // small images keep the suite fast; intrinsics scale with them
+constexpr int kWidth = 480,
+              kHeight = 270;  // small images keep the suite fast; intrinsics scale with them
 
 SynthOptions TinyOptions(const fs::path& out, std::uint64_t seed) {
   SynthOptions o;
@@ -89,7 +90,8 @@ TEST_F(SynthTest, SixCamerasAtTwelveHertz) {
     const auto frames = Channel(ch);
     ASSERT_GE(frames.size(), 20u) << ch;
     std::vector<std::int64_t> dt;
-    for (std::size_t i = 1; i < frames.size(); ++i) dt.push_back(frames[i]->timestamp_us - frames[i - 1]->timestamp_us);
+    for (std::size_t i = 1; i < frames.size(); ++i)
+      dt.push_back(frames[i]->timestamp_us - frames[i - 1]->timestamp_us);
     std::sort(dt.begin(), dt.end());
     const double median_hz = 1e6 / static_cast<double>(dt[dt.size() / 2]);
     EXPECT_NEAR(median_hz, 12.0, 0.3) << ch;
@@ -164,11 +166,14 @@ TEST_F(SynthTest, CountFramesAgreesWithLoadedFrames) {
 
 TEST_F(SynthTest, FramesAreSortedByTimeThenChannel) {
   const auto& ch = camera_channels();
-  const auto rank = [&](const std::string& c) { return std::find(ch.begin(), ch.end(), c) - ch.begin(); };
+  const auto rank = [&](const std::string& c) {
+    return std::find(ch.begin(), ch.end(), c) - ch.begin();
+  };
   for (std::size_t i = 1; i < frames_->size(); ++i) {
     const auto& a = (*frames_)[i - 1];
     const auto& b = (*frames_)[i];
-    EXPECT_TRUE(a.timestamp_us < b.timestamp_us || (a.timestamp_us == b.timestamp_us && rank(a.channel) <= rank(b.channel)));
+    EXPECT_TRUE(a.timestamp_us < b.timestamp_us ||
+                (a.timestamp_us == b.timestamp_us && rank(a.channel) <= rank(b.channel)));
   }
 }
 
@@ -181,8 +186,9 @@ double OpticalAxisYawDeg(const CameraFrameRecord& f) {
 
 TEST_F(SynthTest, CalibrationRoundTripsNuScenesLikeRig) {
   const double scale = kWidth / 1600.0;
-  const std::map<std::string, double> yaw = {{"CAM_FRONT", 0},   {"CAM_FRONT_LEFT", 55},  {"CAM_FRONT_RIGHT", -55},
-                                             {"CAM_BACK", 180},  {"CAM_BACK_LEFT", 110}, {"CAM_BACK_RIGHT", -110}};
+  const std::map<std::string, double> yaw = {{"CAM_FRONT", 0},         {"CAM_FRONT_LEFT", 55},
+                                             {"CAM_FRONT_RIGHT", -55}, {"CAM_BACK", 180},
+                                             {"CAM_BACK_LEFT", 110},   {"CAM_BACK_RIGHT", -110}};
   for (const auto& [channel, yaw_deg] : yaw) {
     const auto frames = Channel(channel);
     ASSERT_FALSE(frames.empty());
@@ -199,7 +205,8 @@ TEST_F(SynthTest, CalibrationRoundTripsNuScenesLikeRig) {
     // Camera y (down in the image) points down in the ego frame: no roll.
     const Vec3 down = mat_vec(quat_to_matrix(f.sensor_to_ego.rotation), {0, 1, 0});
     EXPECT_NEAR(down[2], -1.0, 1e-9);
-    for (const auto* g : frames) EXPECT_EQ(g->intrinsics, f.intrinsics);  // one calibration per scene
+    for (const auto* g : frames)
+      EXPECT_EQ(g->intrinsics, f.intrinsics);  // one calibration per scene
   }
 }
 
@@ -207,7 +214,8 @@ TEST_F(SynthTest, EgoPoseMovesAlongItsHeading) {
   const auto front = Channel("CAM_FRONT");
   const Pose& a = front.front()->ego_pose;
   const Pose& b = front.back()->ego_pose;
-  const double dt = static_cast<double>(front.back()->timestamp_us - front.front()->timestamp_us) * 1e-6;
+  const double dt =
+      static_cast<double>(front.back()->timestamp_us - front.front()->timestamp_us) * 1e-6;
   const double dx = b.translation[0] - a.translation[0], dy = b.translation[1] - a.translation[1];
   const double speed = std::hypot(dx, dy) / dt;
   EXPECT_GT(speed, 4.0);
@@ -219,8 +227,9 @@ TEST_F(SynthTest, EgoPoseMovesAlongItsHeading) {
 
 // Key sets of every synthetic record must equal those of the real-format golden tables.
 TEST_F(SynthTest, TablesHaveEveryFieldTheDevkitReads) {
-  for (const char* t : {"scene", "sample", "sample_data", "ego_pose", "calibrated_sensor", "sensor", "log", "map",
-                        "instance", "sample_annotation", "category", "attribute", "visibility"}) {
+  for (const char* t :
+       {"scene", "sample", "sample_data", "ego_pose", "calibrated_sensor", "sensor", "log", "map",
+        "instance", "sample_annotation", "category", "attribute", "visibility"}) {
     auto golden = load_table(golden_dataroot(), kMini, t);
     auto ours = load_table(*root_, kMini, t);
     ASSERT_GT(golden.Size(), 0u) << t;
@@ -249,7 +258,8 @@ TEST_F(SynthTest, AnnotationTracksAreChainedWithPointsAndClassAttributes) {
   std::map<std::string, std::string> cat_name, attr_name, inst_cat;
   for (const auto& c : cat.GetArray()) cat_name[c["token"].GetString()] = c["name"].GetString();
   for (const auto& c : attr.GetArray()) attr_name[c["token"].GetString()] = c["name"].GetString();
-  for (const auto& i : inst.GetArray()) inst_cat[i["token"].GetString()] = cat_name[i["category_token"].GetString()];
+  for (const auto& i : inst.GetArray())
+    inst_cat[i["token"].GetString()] = cat_name[i["category_token"].GetString()];
   std::map<std::string, const rapidjson::Value*> by_token;
   for (const auto& a : ann.GetArray()) by_token[a["token"].GetString()] = &a;
   std::set<std::string> classes;
@@ -259,7 +269,8 @@ TEST_F(SynthTest, AnnotationTracksAreChainedWithPointsAndClassAttributes) {
     if (!next.empty()) {
       ASSERT_TRUE(by_token.count(next));
       EXPECT_EQ(std::string((*by_token[next])["prev"].GetString()), a["token"].GetString());
-      EXPECT_EQ(std::string((*by_token[next])["instance_token"].GetString()), a["instance_token"].GetString());
+      EXPECT_EQ(std::string((*by_token[next])["instance_token"].GetString()),
+                a["instance_token"].GetString());
     }
     const std::string category = inst_cat[a["instance_token"].GetString()];
     classes.insert(category);
@@ -270,17 +281,20 @@ TEST_F(SynthTest, AnnotationTracksAreChainedWithPointsAndClassAttributes) {
     } else if (category.rfind("vehicle.", 0) == 0) {
       EXPECT_TRUE(attribute == "vehicle.moving" || attribute == "vehicle.parked") << attribute;
     } else if (category.rfind("human.pedestrian", 0) == 0) {
-      EXPECT_TRUE(attribute == "pedestrian.moving" || attribute == "pedestrian.standing") << attribute;
+      EXPECT_TRUE(attribute == "pedestrian.moving" || attribute == "pedestrian.standing")
+          << attribute;
     } else {
       EXPECT_EQ(tokens.Size(), 0u) << category;
     }
-    EXPECT_NEAR(a["translation"][2].GetDouble(), a["size"][2].GetDouble() / 2, 1e-9);  // standing on the ground
+    EXPECT_NEAR(a["translation"][2].GetDouble(), a["size"][2].GetDouble() / 2,
+                1e-9);  // standing on the ground
   }
-  for (const char* c : {"vehicle.car", "human.pedestrian.adult"}) EXPECT_TRUE(classes.count(c)) << c;
+  for (const char* c : {"vehicle.car", "human.pedestrian.adult"})
+    EXPECT_TRUE(classes.count(c)) << c;
 }
 
-// Fraction of pixels in `roi` whose colour is a shaded version of `body`: p ~ k * body, i.e. the colour direction is
-// within ~6 degrees of the body colour's (shading scales brightness only).
+// Fraction of pixels in `roi` whose colour is a shaded version of `body`: p ~ k * body, i.e. the
+// colour direction is within ~6 degrees of the body colour's (shading scales brightness only).
 double ColourFraction(const cv::Mat& img, const cv::Rect& roi, const Bgr& body) {
   int match = 0;
   const double bb = body[0] * body[0] + body[1] * body[1] + body[2] * body[2];
@@ -303,7 +317,8 @@ TEST_F(SynthTest, AnnotatedBoxInFrontProjectsIntoCamFrontWithItsColour) {
   auto cat = load_table(*root_, kMini, "category");
   std::map<std::string, std::string> cat_name, inst_cat;
   for (const auto& c : cat.GetArray()) cat_name[c["token"].GetString()] = c["name"].GetString();
-  for (const auto& i : inst.GetArray()) inst_cat[i["token"].GetString()] = cat_name[i["category_token"].GetString()];
+  for (const auto& i : inst.GetArray())
+    inst_cat[i["token"].GetString()] = cat_name[i["category_token"].GetString()];
   int checked = 0;
   for (const auto* f : Channel("CAM_FRONT")) {
     if (!f->is_key_frame) continue;
@@ -314,7 +329,8 @@ TEST_F(SynthTest, AnnotatedBoxInFrontProjectsIntoCamFrontWithItsColour) {
     double best_z = 1e9;
     for (const auto& a : ann.GetArray()) {
       if (f->sample_token != a["sample_token"].GetString()) continue;
-      const Vec3 c{a["translation"][0].GetDouble(), a["translation"][1].GetDouble(), a["translation"][2].GetDouble()};
+      const Vec3 c{a["translation"][0].GetDouble(), a["translation"][1].GetDouble(),
+                   a["translation"][2].GetDouble()};
       const Vec3 p = cam.apply_inverse(ego.apply_inverse(c));
       const double u = f->intrinsics[0] * p[0] / p[2] + f->intrinsics[2];
       if (p[2] > 4 && p[2] < best_z && u > 0 && u < f->width) {
@@ -324,7 +340,8 @@ TEST_F(SynthTest, AnnotatedBoxInFrontProjectsIntoCamFrontWithItsColour) {
     }
     ASSERT_NE(best, nullptr);
     const auto& a = *best;
-    const Vec3 c{a["translation"][0].GetDouble(), a["translation"][1].GetDouble(), a["translation"][2].GetDouble()};
+    const Vec3 c{a["translation"][0].GetDouble(), a["translation"][1].GetDouble(),
+                 a["translation"][2].GetDouble()};
     const Vec3 p = cam.apply_inverse(ego.apply_inverse(c));
     const double u = f->intrinsics[0] * p[0] / p[2] + f->intrinsics[2];
     const double v = f->intrinsics[4] * p[1] / p[2] + f->intrinsics[5];
@@ -341,9 +358,11 @@ TEST_F(SynthTest, AnnotatedBoxInFrontProjectsIntoCamFrontWithItsColour) {
     const cv::Mat img = cv::imdecode(*bytes, cv::IMREAD_COLOR);
     ASSERT_EQ(img.cols, f->width);
     // A window of about half the box's projected height around the projected centre.
-    const int half = std::max(2, static_cast<int>(f->intrinsics[4] * a["size"][2].GetDouble() / p[2] / 4));
-    const cv::Rect roi = cv::Rect(static_cast<int>(u) - half, static_cast<int>(v) - half, 2 * half, 2 * half) &
-                         cv::Rect(0, 0, img.cols, img.rows);
+    const int half =
+        std::max(2, static_cast<int>(f->intrinsics[4] * a["size"][2].GetDouble() / p[2] / 4));
+    const cv::Rect roi =
+        cv::Rect(static_cast<int>(u) - half, static_cast<int>(v) - half, 2 * half, 2 * half) &
+        cv::Rect(0, 0, img.cols, img.rows);
     const double own = ColourFraction(img, roi, style->body_bgr);
     EXPECT_GT(own, 0.5) << category << " at u=" << u << " v=" << v;
     for (const auto& other : kSynthPalette) {  // every other class colour matches the window less
@@ -382,7 +401,8 @@ TEST_F(SynthTest, SameSeedIsByteIdenticalAndOtherSeedDiffers) {
   EXPECT_EQ(static_cast<std::int64_t>(images), summary_->images_written);
   const std::string table = std::string(kMini) + "/sample_data.json";
   EXPECT_NE(a.at(table), c.at(table));
-  EXPECT_NE(a.at(std::string(kMini) + "/sample_annotation.json"), c.at(std::string(kMini) + "/sample_annotation.json"));
+  EXPECT_NE(a.at(std::string(kMini) + "/sample_annotation.json"),
+            c.at(std::string(kMini) + "/sample_annotation.json"));
   fs::remove_all(again);
   fs::remove_all(other);
 }
@@ -403,7 +423,8 @@ TEST_F(SynthTest, MetadataOnlyWritesNoImages) {
 
 TEST(SynthOptionsTest, RejectsBadOptions) {
   SynthOptions o;
-  EXPECT_EQ(write_synthetic_dataset(o).status().code(), StatusCode::kInvalidArgument);  // no out_dir
+  EXPECT_EQ(write_synthetic_dataset(o).status().code(),
+            StatusCode::kInvalidArgument);  // no out_dir
   o.out_dir = "/tmp/unused";
   o.scenes = 0;
   EXPECT_EQ(write_synthetic_dataset(o).status().code(), StatusCode::kInvalidArgument);
@@ -427,8 +448,8 @@ double MeanJpegKb(const fs::path& root) {
   return n ? bytes / n / 1024.0 : 0;
 }
 
-// Benchmarks decode and corrupt these frames: at the default noise, 1600x900 JPEGs weigh what nuScenes' camera
-// images weigh (130-165 KB), where the flat render gives a third of that.
+// Benchmarks decode and corrupt these frames: at the default noise, 1600x900 JPEGs weigh what
+// nuScenes' camera images weigh (130-165 KB), where the flat render gives a third of that.
 TEST(SynthOptionsTest, DefaultFullSizeJpegsWeighWhatNuScenesImagesWeigh) {
   const fs::path noisy = scratch_dir("synth_full");
   const fs::path flat = scratch_dir("synth_flat");

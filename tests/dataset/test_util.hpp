@@ -23,14 +23,16 @@ inline fs::path golden_dataroot() {
 
 // A fresh folder under the system temp dir, unique per process and name.
 inline fs::path scratch_dir(const std::string& name) {
-  const fs::path dir = fs::temp_directory_path() / ("faultline_dataset_" + std::to_string(::getpid()) + "_" + name);
+  const fs::path dir =
+      fs::temp_directory_path() / ("faultline_dataset_" + std::to_string(::getpid()) + "_" + name);
   fs::remove_all(dir);
   fs::create_directories(dir);
   return dir;
 }
 
 // Copies a dataroot's table folder (not blobs) and makes the copies writable.
-inline void copy_tables(const fs::path& from_root, const fs::path& to_root, const std::string& version) {
+inline void copy_tables(const fs::path& from_root, const fs::path& to_root,
+                        const std::string& version) {
   fs::create_directories(to_root / version);
   for (const auto& e : fs::directory_iterator(from_root / version)) {
     const fs::path dst = to_root / version / e.path().filename();
@@ -39,8 +41,10 @@ inline void copy_tables(const fs::path& from_root, const fs::path& to_root, cons
   }
 }
 
-// A whole table as a DOM: an independent reading (RapidJSON) to check the reader and the generator against.
-inline rapidjson::Document load_table(const fs::path& root, const std::string& version, const std::string& table) {
+// A whole table as a DOM: an independent reading (RapidJSON) to check the reader and the generator
+// against.
+inline rapidjson::Document load_table(const fs::path& root, const std::string& version,
+                                      const std::string& table) {
   const fs::path path = root / version / (table + ".json");
   std::ifstream in(path, std::ios::binary);
   std::stringstream text;

@@ -1,12 +1,11 @@
-// find_blobs (one labelling pass over all classes) against find_blobs_per_class (one OpenCV connected-components
-// pass per class): the same blobs, field by field, in the same order.
+// find_blobs (one labelling pass over all classes) against find_blobs_per_class (one OpenCV
+// connected-components pass per class): the same blobs, field by field, in the same order.
 #include "detector/blobs.hpp"
 
 #include <gtest/gtest.h>
 
-#include <opencv2/imgproc.hpp>
-
 #include <cstdint>
+#include <opencv2/imgproc.hpp>
 #include <random>
 #include <string>
 #include <vector>
@@ -24,8 +23,8 @@ namespace {
 
 using test_support::camera;
 
-
-void expect_same_blobs(const cv::Mat& labels, double scale, const std::string& what, const BlobConfig& config = {}) {
+void expect_same_blobs(const cv::Mat& labels, double scale, const std::string& what,
+                       const BlobConfig& config = {}) {
   const auto want = find_blobs_per_class(labels, scale, config);
   const auto got = find_blobs(labels, scale, config);
   ASSERT_EQ(got.size(), want.size()) << what;
@@ -62,7 +61,8 @@ cv::Mat random_labels(int rows, int cols, int classes, double background, std::u
   cv::Mat labels(rows, cols, CV_8UC1);
   for (int y = 0; y < rows; ++y)
     for (int x = 0; x < cols; ++x)
-      labels.at<std::uint8_t>(y, x) = u(gen) < background ? kNoClass : static_cast<std::uint8_t>(cls(gen));
+      labels.at<std::uint8_t>(y, x) =
+          u(gen) < background ? kNoClass : static_cast<std::uint8_t>(cls(gen));
   return labels;
 }
 
@@ -75,9 +75,9 @@ TEST(BlobsTest, SynthFramesCleanAndCorruptedMatchPerClassReference) {
     corruption::Corruption type;
     int severity;
     double gain;  // the detector's low-light stretch, roughly
-  } cases[] = {{corruption::Corruption::Dark, 0, 1.0},  {corruption::Corruption::Dark, 3, 1.0},
-               {corruption::Corruption::Dark, 3, 3.0},  {corruption::Corruption::Dark, 5, 4.0},
-               {corruption::Corruption::Snow, 3, 1.0},  {corruption::Corruption::Fog, 3, 1.0}};
+  } cases[] = {{corruption::Corruption::Dark, 0, 1.0}, {corruption::Corruption::Dark, 3, 1.0},
+               {corruption::Corruption::Dark, 3, 3.0}, {corruption::Corruption::Dark, 5, 4.0},
+               {corruption::Corruption::Snow, 3, 1.0}, {corruption::Corruption::Fog, 3, 1.0}};
   for (const double yaw : {0.0, 110.0}) {
     const cv::Mat frame = dataset::render_camera(world, 1.0, camera(yaw));
     for (const auto& k : cases) {
@@ -89,8 +89,9 @@ TEST(BlobsTest, SynthFramesCleanAndCorruptedMatchPerClassReference) {
         cv::Mat in = img;
         if (scale != 1.0) cv::resize(img, in, cv::Size(), scale, scale, cv::INTER_AREA);
         const cv::Mat labels = lut.label_image(in);
-        const std::string what = "yaw " + std::to_string(yaw) + " type " + std::to_string(static_cast<int>(k.type)) +
-                                 " sev " + std::to_string(k.severity) + " gain " + std::to_string(k.gain) +
+        const std::string what = "yaw " + std::to_string(yaw) + " type " +
+                                 std::to_string(static_cast<int>(k.type)) + " sev " +
+                                 std::to_string(k.severity) + " gain " + std::to_string(k.gain) +
                                  " scale " + std::to_string(scale);
         expect_same_blobs(labels, scale, what);
         if (scale != 1.0) expect_same_blobs(labels, scale, what + " keep all", keep_all());
@@ -103,11 +104,12 @@ TEST(BlobsTest, RandomLabelNoiseMatchesPerClassReference) {
   std::uint64_t seed = 1;
   for (const double background : {0.0, 0.3, 0.7, 0.95}) {
     for (const int classes : {1, 2, 3, dataset::kSynthClassCount}) {
-      for (const auto& size : {cv::Size(1, 1), cv::Size(1, 37), cv::Size(41, 1), cv::Size(2, 2), cv::Size(7, 5),
-                               cv::Size(64, 48), cv::Size(161, 91)}) {
+      for (const auto& size : {cv::Size(1, 1), cv::Size(1, 37), cv::Size(41, 1), cv::Size(2, 2),
+                               cv::Size(7, 5), cv::Size(64, 48), cv::Size(161, 91)}) {
         const cv::Mat labels = random_labels(size.height, size.width, classes, background, seed++);
-        const std::string what = "bg " + std::to_string(background) + " classes " + std::to_string(classes) +
-                                 " size " + std::to_string(size.width) + "x" + std::to_string(size.height);
+        const std::string what = "bg " + std::to_string(background) + " classes " +
+                                 std::to_string(classes) + " size " + std::to_string(size.width) +
+                                 "x" + std::to_string(size.height);
         expect_same_blobs(labels, 1.0, what, keep_all());
         expect_same_blobs(labels, 0.5, what + " scale 0.5", keep_all());
         expect_same_blobs(labels, 0.25, what + " scale 0.25");
@@ -130,10 +132,12 @@ TEST(BlobsTest, SinglePixelAndBorderComponents) {
       labels.at<std::uint8_t>(0, cols - 1) = 2;
       labels.at<std::uint8_t>(rows - 1, 0) = 2;
       if (rows > 2 && cols > 2) labels.at<std::uint8_t>(rows / 2, cols / 2) = 3;
-      expect_same_blobs(labels, 1.0, "corners " + std::to_string(cols) + "x" + std::to_string(rows), keep_all());
+      expect_same_blobs(labels, 1.0, "corners " + std::to_string(cols) + "x" + std::to_string(rows),
+                        keep_all());
     }
   }
-  // Second row's left pixel comes before the first row's right pixel in OpenCV's numbering (same 2x2 block row).
+  // Second row's left pixel comes before the first row's right pixel in OpenCV's numbering (same
+  // 2x2 block row).
   cv::Mat labels(4, 8, CV_8UC1, cv::Scalar(kNoClass));
   labels.at<std::uint8_t>(0, 5) = 4;
   labels.at<std::uint8_t>(1, 0) = 4;
@@ -155,7 +159,8 @@ TEST(BlobsTest, SinglePixelAndBorderComponents) {
 cv::Mat label_row(const std::vector<int>& values) {
   cv::Mat m(1, static_cast<int>(values.size()), CV_8UC1);
   for (std::size_t i = 0; i < values.size(); ++i)
-    m.at<std::uint8_t>(0, static_cast<int>(i)) = values[i] < 0 ? kNoClass : static_cast<std::uint8_t>(values[i]);
+    m.at<std::uint8_t>(0, static_cast<int>(i)) =
+        values[i] < 0 ? kNoClass : static_cast<std::uint8_t>(values[i]);
   return m;
 }
 

@@ -15,18 +15,22 @@ TEST(ColorLutTest, EveryClassColourMapsToItsClassUnderShading) {
     const auto& body = dataset::kSynthPalette[static_cast<std::size_t>(c)].body_bgr;
     for (int k = 0; k <= 11; ++k) {
       const double f = 0.40 + 0.05 * k;  // 0.40 .. 0.95, the renderer's shading range
-      const auto ch = [&](int i) { return static_cast<std::uint8_t>(std::lround(body[static_cast<std::size_t>(i)] * f)); };
+      const auto ch = [&](int i) {
+        return static_cast<std::uint8_t>(std::lround(body[static_cast<std::size_t>(i)] * f));
+      };
       EXPECT_EQ(lut.classify(ch(0), ch(1), ch(2)), c)
-          << dataset::kSynthPalette[static_cast<std::size_t>(c)].detection_name << " at shade " << f;
+          << dataset::kSynthPalette[static_cast<std::size_t>(c)].detection_name << " at shade "
+          << f;
     }
   }
 }
 
 TEST(ColorLutTest, SceneryColoursAreNoClass) {
   const ColorLut lut;
-  for (const auto& s : {dataset::kSkyBgr, dataset::kGroundBgr, dataset::kAsphaltBgr, dataset::kSidewalkBgr,
-                        dataset::kLaneMarkBgr}) {
-    EXPECT_EQ(lut.classify(s[0], s[1], s[2]), kNoClass) << int(s[0]) << "," << int(s[1]) << "," << int(s[2]);
+  for (const auto& s : {dataset::kSkyBgr, dataset::kGroundBgr, dataset::kAsphaltBgr,
+                        dataset::kSidewalkBgr, dataset::kLaneMarkBgr}) {
+    EXPECT_EQ(lut.classify(s[0], s[1], s[2]), kNoClass)
+        << int(s[0]) << "," << int(s[1]) << "," << int(s[2]);
   }
   EXPECT_EQ(lut.classify(0, 0, 0), kNoClass);
   EXPECT_EQ(lut.classify(255, 255, 255), kNoClass);

@@ -1,4 +1,7 @@
-// The detector node's loop: a sample boundary lost in transport (#22 item 6) is counted, never skipped silently.
+// The detector node's loop: a sample boundary lost in transport (#22 item 6) is counted, never
+// skipped silently.
+#include "detector/detector_loop.hpp"
+
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -6,7 +9,6 @@
 
 #include "common/logging.hpp"
 #include "detection.pb.h"
-#include "detector/detector_loop.hpp"
 #include "transport/publisher.hpp"
 #include "transport/subscriber.hpp"
 #include "transport/typed.hpp"
@@ -34,7 +36,8 @@ TEST(DetectorLoopTest, BoundariesLostInTransportAreCountedFromTheSeqGap) {
   std::atomic<bool> stop{false};
   auto rc = std::async(std::launch::async, [&] { return loop.run(stop); });
   ASSERT_TRUE(injector.wait_for_subscribers("/sync/sample", 1, 20 * kNsPerSec).is_ok());
-  // Boundaries 3 and 4 never arrive (as when a full queue dropped them with the frames around them).
+  // Boundaries 3 and 4 never arrive (as when a full queue dropped them with the frames around
+  // them).
   for (std::uint64_t seq : {1, 2, 5}) {
     msgs::SampleBoundary b;
     b.mutable_header()->set_seq(seq);
@@ -57,10 +60,12 @@ TEST(DetectorLoopTest, BoundariesLostInTransportAreCountedFromTheSeqGap) {
   EXPECT_EQ(tokens, (std::vector<std::string>{"sample-1", "sample-2", "sample-5"}));
   EXPECT_EQ(loop.counts().boundaries, 3u);
   EXPECT_EQ(loop.counts().boundaries_lost, 2u);
-  EXPECT_EQ(loop.counts().stream_breaks, 1u);  // sample-5 follows the gap: named, motion history reset
+  EXPECT_EQ(loop.counts().stream_breaks,
+            1u);  // sample-5 follows the gap: named, motion history reset
 }
 
-// A detector that joins mid-sample (a respawn) or loses key frames counts them from the boundary's frames_sent.
+// A detector that joins mid-sample (a respawn) or loses key frames counts them from the boundary's
+// frames_sent.
 TEST(DetectorLoopTest, KeyFramesMissingFromASampleAreCountedFromItsBoundary) {
   const std::string dir = ::testing::TempDir() + "detector_keys_" + std::to_string(::getpid());
   transport::PublisherConfig pc;
@@ -90,8 +95,11 @@ TEST(DetectorLoopTest, KeyFramesMissingFromASampleAreCountedFromItsBoundary) {
     h.set_encoding("jpeg");
     h.mutable_header()->set_seq(++seq);
     h.mutable_header()->set_publisher("fault_injector");
-    auto bytes = std::make_shared<const std::vector<std::uint8_t>>(std::vector<std::uint8_t>{0xFF, 0xD8, 0xFF, 0xD9});
-    ASSERT_TRUE(transport::send_camera_frame(injector, "/faulty/" + camera, h, transport::Payload::of(bytes)).is_ok());
+    auto bytes = std::make_shared<const std::vector<std::uint8_t>>(
+        std::vector<std::uint8_t>{0xFF, 0xD8, 0xFF, 0xD9});
+    ASSERT_TRUE(transport::send_camera_frame(injector, "/faulty/" + camera, h,
+                                             transport::Payload::of(bytes))
+                    .is_ok());
   };
   auto boundary = [&](const std::string& token, std::uint32_t frames_sent, bool last) {
     msgs::SampleBoundary b;
@@ -109,15 +117,16 @@ TEST(DetectorLoopTest, KeyFramesMissingFromASampleAreCountedFromItsBoundary) {
   boundary("s2", 3, true);  // two of its three key frames never came
   int arrays = 0;
   const StampNs deadline = monotonic_now_ns() + 30 * kNsPerSec;  // watchdog, not synchronisation
-  while (arrays < 2 && monotonic_now_ns() < deadline) arrays += sink.receive(50 * kNsPerMs).is_ok() ? 1 : 0;
+  while (arrays < 2 && monotonic_now_ns() < deadline)
+    arrays += sink.receive(50 * kNsPerMs).is_ok() ? 1 : 0;
   EXPECT_EQ(rc.get(), 0);
   EXPECT_EQ(arrays, 2);
   EXPECT_EQ(loop.counts().incomplete_samples, 1u);
   EXPECT_EQ(loop.counts().key_frames_missing, 2u);
 }
 
-// Frames from an injector with output_shm are read from its ring; one whose slot was reused before the detector read
-// it is counted (shm_overwritten), neither malformed nor silently skipped.
+// Frames from an injector with output_shm are read from its ring; one whose slot was reused before
+// the detector read it is counted (shm_overwritten), neither malformed nor silently skipped.
 TEST(DetectorLoopTest, SharedMemoryFramesAreReadAndOverwrittenOnesCounted) {
   const std::string dir = ::testing::TempDir() + "detector_shm_" + std::to_string(::getpid());
   transport::PublisherConfig pc;
@@ -168,8 +177,9 @@ TEST(DetectorLoopTest, SharedMemoryFramesAreReadAndOverwrittenOnesCounted) {
   h.mutable_shm()->set_offset(stale->offset);
   ASSERT_TRUE(injector.send("/faulty/CAM_FRONT", h.SerializeAsString()).is_ok());
   msgs::CameraFrame good = header("CAM_BACK", 1);
-  ASSERT_TRUE(transport::send_camera_frame_shm(injector, ring, "/faulty/CAM_BACK", good,
-                                               transport::Payload::of(std::make_shared<const std::vector<std::uint8_t>>(jpeg)))
+  ASSERT_TRUE(transport::send_camera_frame_shm(
+                  injector, ring, "/faulty/CAM_BACK", good,
+                  transport::Payload::of(std::make_shared<const std::vector<std::uint8_t>>(jpeg)))
                   .is_ok());
   msgs::SampleBoundary b;
   b.mutable_header()->set_seq(1);
@@ -180,7 +190,8 @@ TEST(DetectorLoopTest, SharedMemoryFramesAreReadAndOverwrittenOnesCounted) {
   ASSERT_TRUE(transport::send_message(injector, "/sync/sample", b).is_ok());
   int arrays = 0;
   const StampNs deadline = monotonic_now_ns() + 30 * kNsPerSec;  // watchdog, not synchronisation
-  while (arrays < 1 && monotonic_now_ns() < deadline) arrays += sink.receive(50 * kNsPerMs).is_ok() ? 1 : 0;
+  while (arrays < 1 && monotonic_now_ns() < deadline)
+    arrays += sink.receive(50 * kNsPerMs).is_ok() ? 1 : 0;
   EXPECT_EQ(rc.get(), 0);
   EXPECT_EQ(arrays, 1);
   EXPECT_EQ(loop.counts().frames, 1u);

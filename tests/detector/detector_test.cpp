@@ -23,7 +23,8 @@ using test_support::camera;
 
 using dataset::SynthClass;
 
-// A straight road along world +x through the origin; the ego stands still at the origin (lane d = 0).
+// A straight road along world +x through the origin; the ego stands still at the origin (lane d =
+// 0).
 dataset::SynthWorld empty_world() {
   dataset::SynthWorld w;
   w.road.x0 = 0;
@@ -47,8 +48,8 @@ dataset::Actor car_at(double s, double d, double speed = 0) {
   return a;
 }
 
-CameraInput input_of(const dataset::SynthWorld& w, const dataset::CameraModel& cam, const std::string& name,
-                     double t_s, const cv::Mat* override_image = nullptr) {
+CameraInput input_of(const dataset::SynthWorld& w, const dataset::CameraModel& cam,
+                     const std::string& name, double t_s, const cv::Mat* override_image = nullptr) {
   CameraInput in;
   in.camera = name;
   in.bgr = override_image ? *override_image : dataset::render_camera(w, t_s, cam);
@@ -82,9 +83,10 @@ TEST(DetectorTest, CarInFrontOfCamFrontIsDetectedWithinOneMetre) {
 }
 
 TEST(DetectorTest, EveryClassInFrontIsClassifiedAndPlaced) {
-  // This world has road, ground and sky only: no dark pixel at all, the one case where the dark channel prior of
-  // the exposure normalisation takes the road for haze (docs/detector.md). Classification and placement are
-  // checked without it; the scenes of make_world (FindsFewerObjects... below) run with it.
+  // This world has road, ground and sky only: no dark pixel at all, the one case where the dark
+  // channel prior of the exposure normalisation takes the road for haze (docs/detector.md).
+  // Classification and placement are checked without it; the scenes of make_world
+  // (FindsFewerObjects... below) run with it.
   DetectorConfig config = single_frame();
   config.photometric.enabled = false;
   for (int c = 0; c < dataset::kSynthClassCount; ++c) {
@@ -99,9 +101,11 @@ TEST(DetectorTest, EveryClassInFrontIsClassifiedAndPlaced) {
     Detector det(config);
     det.add_frame(input_of(w, camera(0), "CAM_FRONT", 0));
     const auto boxes = det.finish_sample(0);
-    ASSERT_EQ(boxes.size(), 1u) << dataset::kSynthPalette[static_cast<std::size_t>(c)].detection_name;
+    ASSERT_EQ(boxes.size(), 1u)
+        << dataset::kSynthPalette[static_cast<std::size_t>(c)].detection_name;
     EXPECT_EQ(boxes[0].cls, c);
-    EXPECT_LT(std::hypot(boxes[0].center[0] - truth[0], boxes[0].center[1] - truth[1]), 1.0) << boxes[0].name();
+    EXPECT_LT(std::hypot(boxes[0].center[0] - truth[0], boxes[0].center[1] - truth[1]), 1.0)
+        << boxes[0].name();
   }
 }
 
@@ -196,8 +200,8 @@ TEST(DetectorTest, Deterministic) {
   }
 }
 
-// How many actors of a random scene the single-frame detector finds (right class, centre within 2 m) over four
-// cameras at two instants, after `corrupt` (identity when type is nullopt).
+// How many actors of a random scene the single-frame detector finds (right class, centre within 2
+// m) over four cameras at two instants, after `corrupt` (identity when type is nullopt).
 int actors_found(const dataset::SynthWorld& w, const DetectorConfig& config,
                  const std::function<cv::Mat(const cv::Mat&, int)>& corrupt) {
   std::set<std::size_t> found;
@@ -221,8 +225,9 @@ int actors_found(const dataset::SynthWorld& w, const DetectorConfig& config,
   return static_cast<int>(found.size());
 }
 
-// The degradation the benchmark shows, on one random scene: every photometric corruption at mid leaves some
-// objects found, and a stronger level never finds more than a weaker one (seeded corruptions, so exact).
+// The degradation the benchmark shows, on one random scene: every photometric corruption at mid
+// leaves some objects found, and a stronger level never finds more than a weaker one (seeded
+// corruptions, so exact).
 TEST(DetectorTest, FindsFewerObjectsAsEachCorruptionGetsStronger) {
   std::mt19937_64 gen(2024);
   const auto w = dataset::make_world(gen, 4.0);
@@ -230,8 +235,8 @@ TEST(DetectorTest, FindsFewerObjectsAsEachCorruptionGetsStronger) {
   ASSERT_GE(clean, 10);
   using corruption::Corruption;
   using corruption::Level;
-  for (const Corruption type : {Corruption::Brightness, Corruption::Dark, Corruption::Fog, Corruption::Snow,
-                                Corruption::MotionBlur, Corruption::ColorQuant}) {
+  for (const Corruption type : {Corruption::Brightness, Corruption::Dark, Corruption::Fog,
+                                Corruption::Snow, Corruption::MotionBlur, Corruption::ColorQuant}) {
     std::vector<int> found;
     for (const Level level : {Level::Easy, Level::Mid, Level::Hard}) {
       found.push_back(actors_found(w, single_frame(), [&](const cv::Mat& m, int view) {
@@ -241,17 +246,18 @@ TEST(DetectorTest, FindsFewerObjectsAsEachCorruptionGetsStronger) {
         return out.is_ok() ? *out : m;
       }));
     }
-    const std::string what = std::string(corruption::to_string(type)) + ": clean " + std::to_string(clean) +
-                             ", easy/mid/hard " + std::to_string(found[0]) + "/" + std::to_string(found[1]) + "/" +
-                             std::to_string(found[2]);
+    const std::string what = std::string(corruption::to_string(type)) + ": clean " +
+                             std::to_string(clean) + ", easy/mid/hard " + std::to_string(found[0]) +
+                             "/" + std::to_string(found[1]) + "/" + std::to_string(found[2]);
     EXPECT_GT(found[1], 0) << what;
     EXPECT_GE(found[0], found[1]) << what;
     EXPECT_GE(found[1], found[2]) << what;
   }
 }
 
-// Why the normalisation is there: uniform haze (half the light replaced by a bright airlight) moves every object
-// colour out of its class cone; subtracting the dark channel and stretching brings them back.
+// Why the normalisation is there: uniform haze (half the light replaced by a bright airlight) moves
+// every object colour out of its class cone; subtracting the dark channel and stretching brings
+// them back.
 TEST(DetectorTest, PhotometricNormalisationRecoversObjectsUnderHaze) {
   std::mt19937_64 gen(2024);
   const auto w = dataset::make_world(gen, 4.0);
@@ -283,7 +289,8 @@ TEST(DetectorTest, KeepsAtMostFiveHundredBoxesPerSample) {
   Detector det(config);
   std::vector<Box3d> all;  // the same grid seen by six cameras: six fans of boxes that cannot merge
   for (const double yaw : {0.0, 55.0, -55.0, 110.0, -110.0, 180.0}) {
-    const auto in = input_of(w, camera(yaw), "CAM_" + std::to_string(static_cast<int>(yaw)), 0, &image);
+    const auto in =
+        input_of(w, camera(yaw), "CAM_" + std::to_string(static_cast<int>(yaw)), 0, &image);
     const auto boxes = det.detect_camera(in);
     all.insert(all.end(), boxes.begin(), boxes.end());
     det.add_frame(in);

@@ -1,12 +1,12 @@
-// normalise_photometric on frames whose answer is known: an affine haze is undone, over-exposed pixels are blacked
-// out and counted, noise is measured and triggers the 2x2 average, and a clean frame keeps its colours.
+// normalise_photometric on frames whose answer is known: an affine haze is undone, over-exposed
+// pixels are blacked out and counted, noise is measured and triggers the 2x2 average, and a clean
+// frame keeps its colours.
 #include "detector/photometric.hpp"
 
 #include <gtest/gtest.h>
 
-#include <opencv2/imgproc.hpp>
-
 #include <cmath>
+#include <opencv2/imgproc.hpp>
 #include <random>
 
 #include "dataset/synth_render.hpp"
@@ -69,7 +69,7 @@ TEST(PhotometricTest, DisabledIsIdentity) {
 
 TEST(PhotometricTest, OverExposedPixelsAreBlackedOutAndCounted) {
   cv::Mat frame(100, 200, CV_8UC3, cv::Scalar(60, 80, 100));
-  frame(cv::Rect(0, 0, 50, 40)).setTo(cv::Scalar(30, 30, 255));   // red channel clipped: 2000 pixels
+  frame(cv::Rect(0, 0, 50, 40)).setTo(cv::Scalar(30, 30, 255));  // red channel clipped: 2000 pixels
   frame(cv::Rect(100, 50, 10, 10)).setTo(cv::Scalar(253, 0, 0));  // at the clip level: 100 pixels
   frame(cv::Rect(150, 50, 10, 10)).setTo(cv::Scalar(0, 252, 0));  // just below: kept
   PhotometricStats stats;
@@ -93,7 +93,8 @@ TEST(PhotometricTest, NoiseIsMeasuredAndANoisyDarkFrameIsAveraged) {
   noisy.convertTo(noisy, CV_8UC3);
   EXPECT_NEAR(estimate_noise_sigma(noisy), 4.0, 0.6);
   PhotometricStats stats;
-  const cv::Mat out = normalise_photometric(noisy, {}, &stats);  // the stretch (> 3x) lifts sigma past the limit
+  const cv::Mat out =
+      normalise_photometric(noisy, {}, &stats);  // the stretch (> 3x) lifts sigma past the limit
   EXPECT_GT(stats.gain, 3.0);
   EXPECT_EQ(stats.bin, 2);
   EXPECT_EQ(out.size(), cv::Size(300, 200));

@@ -1,12 +1,13 @@
-// A nuScenes-like test camera for the detector tests: the dataset renderer draws a known world through it.
+// A nuScenes-like test camera for the detector tests: the dataset renderer draws a known world
+// through it.
 #pragma once
 
 #include "dataset/synth_world.hpp"
 
 namespace faultline::detector::test_support {
 
-// Mounted at `yaw_deg` (0 = forward, + = left), 1.5 m up and ahead of the ego origin; camera axes x right, y down,
-// z forward.
+// Mounted at `yaw_deg` (0 = forward, + = left), 1.5 m up and ahead of the ego origin; camera axes x
+// right, y down, z forward.
 inline dataset::CameraModel camera(double yaw_deg) {
   constexpr double kPi = 3.14159265358979323846;
   dataset::CameraModel cam;

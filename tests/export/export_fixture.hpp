@@ -1,5 +1,5 @@
-// Shared fixture for the export tests: one tiny synthetic nuScenes dataset (2 scenes x 1 s, 320x180) per process,
-// plus helpers to run exports into scratch folders and read their results.
+// Shared fixture for the export tests: one tiny synthetic nuScenes dataset (2 scenes x 1 s,
+// 320x180) per process, plus helpers to run exports into scratch folders and read their results.
 #pragma once
 
 #include <gtest/gtest.h>
@@ -22,7 +22,8 @@ namespace faultline::exporter::testing_util {
 namespace fs = std::filesystem;
 
 inline fs::path scratch_dir(const std::string& name) {
-  const fs::path dir = fs::temp_directory_path() / ("faultline_export_" + std::to_string(::getpid()) + "_" + name);
+  const fs::path dir =
+      fs::temp_directory_path() / ("faultline_export_" + std::to_string(::getpid()) + "_" + name);
   fs::remove_all(dir);
   fs::create_directories(dir);
   return dir;
@@ -105,8 +106,8 @@ class ExportTest : public ::testing::Test {
   }
 
   // Every <Condition>/<level> folder's files map, for comparing two runs.
-  static std::map<std::string, std::map<std::string, FileEntry>> all_files(const fs::path& out,
-                                                                          const std::string& name = "manifest.json") {
+  static std::map<std::string, std::map<std::string, FileEntry>> all_files(
+      const fs::path& out, const std::string& name = "manifest.json") {
     std::map<std::string, std::map<std::string, FileEntry>> all;
     for (const auto& cond : fs::directory_iterator(out)) {
       for (const auto& lvl : fs::directory_iterator(cond.path())) {

@@ -1,13 +1,12 @@
-// --split selection, progress and --stats output, resume after a crash (partial and temporary files left behind),
-// and the per-worker codec buffers.
+// --split selection, progress and --stats output, resume after a crash (partial and temporary files
+// left behind), and the per-worker codec buffers.
 #include <gtest/gtest.h>
+#include <sys/wait.h>
 
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
 #include <memory>
-
-#include <sys/wait.h>
 
 #include "export/export_fixture.hpp"  // tests/export/
 #include "export/progress.hpp"
@@ -22,13 +21,14 @@ namespace fs = std::filesystem;
 
 // Runs `faultline <args>` with stdout to a file; returns the exit code.
 int run_cli(const std::string& args, const fs::path& stdout_file) {
-  const std::string cmd =
-      std::string(FAULTLINE_BIN_DIR) + "/faultline " + args + " > " + stdout_file.string() + " 2>/dev/null";
+  const std::string cmd = std::string(FAULTLINE_BIN_DIR) + "/faultline " + args + " > " +
+                          stdout_file.string() + " 2>/dev/null";
   const int rc = std::system(cmd.c_str());
   return WIFEXITED(rc) ? WEXITSTATUS(rc) : -1;
 }
 
-// A v1.0-trainval-named synthetic dataset: scene-0103 and scene-0916 (val in the devkit) and scene-0061 (train).
+// A v1.0-trainval-named synthetic dataset: scene-0103 and scene-0916 (val in the devkit) and
+// scene-0061 (train).
 class SplitTest : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
@@ -110,7 +110,8 @@ TEST_F(SplitTest, CommandLineSplitValMatchesTheLibrary) {
   const auto lib_out = testing_util::scratch_dir("split_cli_lib");
   const auto cli_out = testing_util::scratch_dir("split_cli");
   ASSERT_TRUE(run_export(config("val", lib_out)));
-  EXPECT_EQ(run_cli("export --dataroot " + root_->string() + " --version v1.0-trainval --out " + cli_out.string() +
+  EXPECT_EQ(run_cli("export --dataroot " + root_->string() + " --version v1.0-trainval --out " +
+                        cli_out.string() +
                         " --split val --corruptions ColorQuant --levels easy --no-progress",
                     cli_out / "stdout.txt"),
             0);
@@ -121,7 +122,8 @@ TEST_F(SplitTest, CommandLineSplitValMatchesTheLibrary) {
   EXPECT_EQ(a->files, b->files);
 }
 
-// --- progress ---------------------------------------------------------------------------------------------------
+// --- progress
+// ---------------------------------------------------------------------------------------------------
 
 std::string captured(const std::function<void(std::FILE*)>& body) {
   std::unique_ptr<std::FILE, int (*)(std::FILE*)> f(std::tmpfile(), &std::fclose);
@@ -144,15 +146,16 @@ std::size_t count_of(const std::string& text, const std::string& what) {
 TEST(ExportProgressTest, LogLinesAreThrottledWhenNotATerminal) {
   const std::string text = captured([](std::FILE* f) {
     auto p = make_progress_printer(false, f, 10.0);
-    p(0, 100, 0.0);    // first call: a line
-    p(10, 100, 4.0);   // < 10 s later: nothing
-    p(30, 100, 12.0);  // a line
-    p(40, 100, 15.0);  // nothing
-    p(100, 100, 20.0); // the end always prints
+    p(0, 100, 0.0);     // first call: a line
+    p(10, 100, 4.0);    // < 10 s later: nothing
+    p(30, 100, 12.0);   // a line
+    p(40, 100, 15.0);   // nothing
+    p(100, 100, 20.0);  // the end always prints
   });
   EXPECT_EQ(count_of(text, "\n"), 3u) << text;
   EXPECT_EQ(count_of(text, "\r"), 0u) << text;
-  EXPECT_NE(text.find("export: 30/100 outputs (30.0%), 2.5 img/s, elapsed 12s, ETA 28s\n"), std::string::npos)
+  EXPECT_NE(text.find("export: 30/100 outputs (30.0%), 2.5 img/s, elapsed 12s, ETA 28s\n"),
+            std::string::npos)
       << text;
   EXPECT_NE(text.find("100/100"), std::string::npos) << text;
 }
@@ -164,7 +167,8 @@ TEST(ExportProgressTest, TerminalGetsARedrawnBarWithRateAndEta) {
     p(100, 100, 20.0);
   });
   EXPECT_EQ(count_of(text, "\r"), 2u) << text;
-  EXPECT_NE(text.find("[#######.......................] 25/100  25.0% 5.0 img/s ETA 15s"), std::string::npos)
+  EXPECT_NE(text.find("[#######.......................] 25/100  25.0% 5.0 img/s ETA 15s"),
+            std::string::npos)
       << text;
   EXPECT_EQ(text.back(), '\n');  // the finished bar ends its line
   EXPECT_EQ(count_of(text, "\n"), 1u) << text;
@@ -176,7 +180,8 @@ TEST_F(ExportTest, ProgressReportsEveryOutputAndEndsAtTheTotal) {
   c.levels = {corruption::Level::Easy};
   std::vector<std::pair<std::int64_t, std::int64_t>> calls;
   auto s = run_export(
-      c, [&](std::int64_t done, std::int64_t total, double) { calls.emplace_back(done, total); }, 0.001);
+      c, [&](std::int64_t done, std::int64_t total, double) { calls.emplace_back(done, total); },
+      0.001);
   ASSERT_TRUE(s);
   ASSERT_FALSE(calls.empty());
   for (std::size_t i = 1; i < calls.size(); ++i) EXPECT_GE(calls[i].first, calls[i - 1].first);
@@ -212,7 +217,8 @@ TEST(ExportReferenceTest, EndToEndReferenceAddsTheCallOverheadAndHoursScaleWithC
   EXPECT_NEAR(full_val_hours(10.0, 16), full_val_hours(10.0, 2) / 8, 1e-9);
 }
 
-// --- resume after a crash -----------------------------------------------------------------------------------------
+// --- resume after a crash
+// -----------------------------------------------------------------------------------------
 
 TEST_F(ExportTest, ResumeAfterACrashRedoesPartialAndUnrecordedFiles) {
   const auto ref = testing_util::scratch_dir("crash_ref");
@@ -225,9 +231,10 @@ TEST_F(ExportTest, ResumeAfterACrashRedoesPartialAndUnrecordedFiles) {
   const auto first = run_ok(c);
   const auto frames = key_frames();
   ASSERT_GE(frames.size(), 4u);
-  // Simulate a crash between a periodic manifest flush and the end: the last manifest does not list frames 0-2,
-  // frame 0's output is half-written under a temporary name (the real name absent), frame 1's real file holds
-  // stale bytes of the right size, frame 2's file is complete but unrecorded.
+  // Simulate a crash between a periodic manifest flush and the end: the last manifest does not list
+  // frames 0-2, frame 0's output is half-written under a temporary name (the real name absent),
+  // frame 1's real file holds stale bytes of the right size, frame 2's file is complete but
+  // unrecorded.
   const fs::path dir = out / "Snow" / "easy";
   auto m = manifest_at(dir / "manifest.json");
   for (int i = 0; i < 3; ++i) m.files.erase(rel_of(frames[static_cast<std::size_t>(i)]));
@@ -238,7 +245,8 @@ TEST_F(ExportTest, ResumeAfterACrashRedoesPartialAndUnrecordedFiles) {
   const fs::path tmp = f0.parent_path() / ("." + f0.filename().string() + ".tmp-99999-0");
   {
     std::ofstream t(tmp, std::ios::binary);
-    t.write(reinterpret_cast<const char*>(bytes0.data()), static_cast<std::streamsize>(bytes0.size() / 2));
+    t.write(reinterpret_cast<const char*>(bytes0.data()),
+            static_cast<std::streamsize>(bytes0.size() / 2));
   }
   const fs::path f1 = dir / rel_of(frames[1]);
   std::vector<std::uint8_t> stale(bytes_of(f1).size(), 0xAB);
@@ -249,7 +257,8 @@ TEST_F(ExportTest, ResumeAfterACrashRedoesPartialAndUnrecordedFiles) {
   EXPECT_EQ(second.skipped, first.written - 3);
   EXPECT_EQ(second.failed, 0);
   expect_same_files(all_files(ref), all_files(out));
-  for (const auto& f : frames) EXPECT_EQ(bytes_of(dir / rel_of(f)), bytes_of(ref / "Snow" / "easy" / rel_of(f)));
+  for (const auto& f : frames)
+    EXPECT_EQ(bytes_of(dir / rel_of(f)), bytes_of(ref / "Snow" / "easy" / rel_of(f)));
 }
 
 TEST_F(ExportTest, TruncatedInputJpegIsListedNotWritten) {
@@ -273,7 +282,8 @@ TEST_F(ExportTest, TruncatedInputJpegIsListedNotWritten) {
   EXPECT_FALSE(fs::exists(fs::path(c.out_dir) / "MotionBlur" / "hard" / rel_of(frames[1])));
 }
 
-// --- per-worker codec buffers -------------------------------------------------------------------------------------
+// --- per-worker codec buffers
+// -------------------------------------------------------------------------------------
 
 TEST(ExportCodecReuseTest, ReusedEncoderAndDecoderMatchTheOneShotFunctions) {
   codec::JpegEncoder enc;
@@ -286,8 +296,10 @@ TEST(ExportCodecReuseTest, ReusedEncoderAndDecoderMatchTheOneShotFunctions) {
     ASSERT_TRUE(one_shot);
     auto reused = enc.encode(img, 95, codec::Subsampling::k420);
     ASSERT_TRUE(reused);
-    EXPECT_EQ(std::vector<std::uint8_t>(reused->data, reused->data + reused->size), *one_shot) << size;
-    const cv::Mat held = shared;  // a second holder of the previous frame's pixels must not see them change
+    EXPECT_EQ(std::vector<std::uint8_t>(reused->data, reused->data + reused->size), *one_shot)
+        << size;
+    const cv::Mat held =
+        shared;  // a second holder of the previous frame's pixels must not see them change
     const cv::Mat held_copy = held.clone();
     ASSERT_TRUE(dec.decode(one_shot->data(), one_shot->size(), shared));
     auto want = codec::decode_jpeg(one_shot->data(), one_shot->size());

@@ -1,10 +1,10 @@
-// Resume after deleted/truncated outputs, and bad inputs listed in the manifest without stopping the run.
+// Resume after deleted/truncated outputs, and bad inputs listed in the manifest without stopping
+// the run.
 #include <gtest/gtest.h>
+#include <sys/wait.h>
 
 #include <cstdio>
 #include <cstdlib>
-
-#include <sys/wait.h>
 #include <fstream>
 
 #include "export/export_fixture.hpp"
@@ -16,7 +16,8 @@ using testing_util::ExportTest;
 namespace fs = std::filesystem;
 
 int run_cli(const std::string& args) {
-  const std::string cmd = std::string(FAULTLINE_BIN_DIR) + "/faultline " + args + " > /dev/null 2>&1";
+  const std::string cmd =
+      std::string(FAULTLINE_BIN_DIR) + "/faultline " + args + " > /dev/null 2>&1";
   const int rc = std::system(cmd.c_str());
   return WIFEXITED(rc) ? WEXITSTATUS(rc) : -1;
 }
@@ -90,15 +91,17 @@ TEST_F(ExportTest, CorruptAndMissingInputsAreListedAndTheRunCompletes) {
     EXPECT_EQ(m.files.size(), frames.size() - 2);
     EXPECT_FALSE(fs::exists(out / cond / "mid" / rel_of(frames[0])));
   }
-  // The command line reports "completed with errors" as exit code 3 and still writes everything else.
+  // The command line reports "completed with errors" as exit code 3 and still writes everything
+  // else.
   const auto cli_out = testing_util::scratch_dir("bad_inputs_cli");
-  EXPECT_EQ(run_cli("export --dataroot " + data.string() + " --version " + testing_util::kVersion + " --out " +
-                    cli_out.string() + " --corruptions Snow --levels mid --seed 7 --no-progress"),
+  EXPECT_EQ(run_cli("export --dataroot " + data.string() + " --version " + testing_util::kVersion +
+                    " --out " + cli_out.string() +
+                    " --corruptions Snow --levels mid --seed 7 --no-progress"),
             3);
   EXPECT_EQ(manifest_at(cli_out / "Snow" / "mid" / "manifest.json").files,
             manifest_at(out / "Snow" / "mid" / "manifest.json").files);
-  EXPECT_EQ(run_cli("export --dataroot " + dataroot() + " --version " + testing_util::kVersion + " --out " +
-                    cli_out.string() + " --corruptions Rain"),
+  EXPECT_EQ(run_cli("export --dataroot " + dataroot() + " --version " + testing_util::kVersion +
+                    " --out " + cli_out.string() + " --corruptions Rain"),
             2);
 }
 

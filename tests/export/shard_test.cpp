@@ -78,7 +78,8 @@ TEST_F(ExportTest, MergeRefusesShardsWithDifferentSeeds) {
   c.shard_index = 2;
   c.seed = 99;
   run_ok(c);
-  auto m = merge_exports({s1.string(), s2.string()}, testing_util::scratch_dir("mismatch_out").string(), "test");
+  auto m = merge_exports({s1.string(), s2.string()},
+                         testing_util::scratch_dir("mismatch_out").string(), "test");
   ASSERT_FALSE(m);
   EXPECT_NE(m.status().message().find("seed"), std::string::npos) << m.status().message();
 }

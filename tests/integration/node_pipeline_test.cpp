@@ -1,8 +1,8 @@
 // The real node executables (FAULTLINE_BIN_DIR) as child processes on a small synthetic nuScenes
 // dataset: bad parameters, a complete lockstep run with exact counts, and SIGINT mid-run.
+#include <fcntl.h>
 #include <gtest/gtest.h>
 #include <rapidjson/document.h>
-#include <fcntl.h>
 #include <signal.h>
 #include <spawn.h>
 #include <sys/wait.h>
@@ -35,7 +35,8 @@ Child Spawn(const std::vector<std::string>& args, const std::string& log) {
   posix_spawn_file_actions_t fa;
   posix_spawn_file_actions_init(&fa);
   posix_spawn_file_actions_addopen(&fa, 2, log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-  posix_spawn_file_actions_adddup2(&fa, 2, 1);  // spdlog's default logger (used before the node logger exists) writes stdout
+  posix_spawn_file_actions_adddup2(
+      &fa, 2, 1);  // spdlog's default logger (used before the node logger exists) writes stdout
   Child c;
   c.log = log;
   if (posix_spawn(&c.pid, argv[0], &fa, nullptr, argv.data(), environ) != 0) c.pid = -1;
@@ -98,19 +99,51 @@ class NodePipelineTest : public ::testing::Test {
   }
   std::string Ipc(const std::string& name) const { return "ipc://" + run_ + "/" + name; }
   std::vector<std::string> PlayerArgs(double rate) const {
-    return {Bin("nusc_player"), "-p", "dataroot:=" + *data_dir_ + "/nuscenes", "-p", "version:=v1.0-mini",
-            "-p", "rate:=" + std::to_string(rate), "-p", "endpoint:=" + Ipc("player"), "-p", "lockstep:=true",
-            "-p", "ack_endpoint:=" + Ipc("ack"), "-p", "hwm:=64", "-p", "wait_subscribers:=1"};
+    return {Bin("nusc_player"),
+            "-p",
+            "dataroot:=" + *data_dir_ + "/nuscenes",
+            "-p",
+            "version:=v1.0-mini",
+            "-p",
+            "rate:=" + std::to_string(rate),
+            "-p",
+            "endpoint:=" + Ipc("player"),
+            "-p",
+            "lockstep:=true",
+            "-p",
+            "ack_endpoint:=" + Ipc("ack"),
+            "-p",
+            "hwm:=64",
+            "-p",
+            "wait_subscribers:=1"};
   }
   std::vector<std::string> InjectorArgs() const {
-    return {Bin("fault_injector"), "-p", "input_endpoints:=[" + Ipc("player") + "]", "-p",
-            "output_endpoint:=" + Ipc("injector"), "-p", "decode:=true", "-p", "input_hwm:=64", "-p",
-            "output_hwm:=64", "-p", "wait_subscribers:=2"};
+    return {Bin("fault_injector"),
+            "-p",
+            "input_endpoints:=[" + Ipc("player") + "]",
+            "-p",
+            "output_endpoint:=" + Ipc("injector"),
+            "-p",
+            "decode:=true",
+            "-p",
+            "input_hwm:=64",
+            "-p",
+            "output_hwm:=64",
+            "-p",
+            "wait_subscribers:=2"};
   }
   std::vector<std::string> SinkArgs() const {
-    return {Bin("detection_sink"), "-p", "detections_endpoint:=" + Ipc("sink"), "-p",
-            "sync_endpoints:=[" + Ipc("injector") + "]", "-p", "output:=" + run_ + "/results.json", "-p",
-            "lockstep:=true", "-p", "ack_endpoint:=" + Ipc("ack")};
+    return {Bin("detection_sink"),
+            "-p",
+            "detections_endpoint:=" + Ipc("sink"),
+            "-p",
+            "sync_endpoints:=[" + Ipc("injector") + "]",
+            "-p",
+            "output:=" + run_ + "/results.json",
+            "-p",
+            "lockstep:=true",
+            "-p",
+            "ack_endpoint:=" + Ipc("ack")};
   }
   std::size_t KeySamples() const {
     auto reader = dataset::NuScenesReader::open(*data_dir_ + "/nuscenes", "v1.0-mini");
@@ -168,7 +201,8 @@ TEST_F(NodePipelineTest, LockstepRunOfRealNodesWritesEverySample) {
   const auto doc = Results();
   ASSERT_TRUE(doc.IsObject()) << ReadText(run_ + "/results.json");
   EXPECT_EQ(doc["results"].MemberCount(), samples);
-  for (const auto& m : doc["results"].GetObject()) EXPECT_EQ(m.value.Size(), 1u) << m.name.GetString();
+  for (const auto& m : doc["results"].GetObject())
+    EXPECT_EQ(m.value.Size(), 1u) << m.name.GetString();
   EXPECT_NE(ReadText(player.log).find("missing images"), std::string::npos);
 }
 
@@ -193,7 +227,8 @@ TEST_F(NodePipelineTest, SigintMidRunLeavesValidResultsAndExitsPromptly) {
   EXPECT_EQ(WaitExit(injector, std::chrono::seconds(5)), 0) << ReadText(injector.log);
   EXPECT_EQ(WaitExit(sink, std::chrono::seconds(5)), 0) << ReadText(sink.log);
   const auto exit_ms =
-      std::chrono::duration_cast<std::chrono::milliseconds>(std::chrono::steady_clock::now() - t0).count();
+      std::chrono::duration_cast<std::chrono::milliseconds>(std::chrono::steady_clock::now() - t0)
+          .count();
   EXPECT_LT(exit_ms, 1500) << "all three nodes should stop within about one second";
   stop = true;
   (void)det.get();

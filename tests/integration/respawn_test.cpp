@@ -1,13 +1,13 @@
-// Faults on Faultline itself (#22): the default pipeline (player -> injector -> detector -> sink) through
-// `faultline launch` with `respawn: true`, on a small synthetic dataset, in lockstep. Each node in turn is
-// killed with SIGKILL mid-run; the run must complete (exit 0, the respawn noted and counted in the closing
-// line), and the sink's results must equal a clean run's except for samples that a count names: the
-// player's lockstep ack timeouts, the detector's incomplete samples and samples after a break in its stream
-// (detected without the motion history before them), the sink's unanswered samples.
-// Synchronisation is on observable events only (journal lines, launch notes), with generous bounds; no
-// wall-clock rate is asserted.
-#include <gtest/gtest.h>
+// Faults on Faultline itself (#22): the default pipeline (player -> injector -> detector -> sink)
+// through `faultline launch` with `respawn: true`, on a small synthetic dataset, in lockstep. Each
+// node in turn is killed with SIGKILL mid-run; the run must complete (exit 0, the respawn noted and
+// counted in the closing line), and the sink's results must equal a clean run's except for samples
+// that a count names: the player's lockstep ack timeouts, the detector's incomplete samples and
+// samples after a break in its stream (detected without the motion history before them), the sink's
+// unanswered samples. Synchronisation is on observable events only (journal lines, launch notes),
+// with generous bounds; no wall-clock rate is asserted.
 #include <fcntl.h>
+#include <gtest/gtest.h>
 #include <rapidjson/document.h>
 #include <rapidjson/stringbuffer.h>
 #include <rapidjson/writer.h>
@@ -46,17 +46,18 @@ std::string ReadText(const std::string& path) {
 
 std::size_t CountOf(const std::string& text, const std::string& what) {
   std::size_t n = 0;
-  for (auto at = text.find(what); at != std::string::npos; at = text.find(what, at + what.size())) ++n;
+  for (auto at = text.find(what); at != std::string::npos; at = text.find(what, at + what.size()))
+    ++n;
   return n;
 }
 
 // What one launch left behind.
 struct LaunchRun {
-  int exit_code = -1;                        // -1: did not exit within the bound (then killed)
-  std::string log;                           // the launcher's output, every node's lines prefixed
+  int exit_code = -1;                          // -1: did not exit within the bound (then killed)
+  std::string log;                             // the launcher's output, every node's lines prefixed
   std::map<std::string, std::string> results;  // sample token -> its boxes as JSON text
-  std::set<std::string> named;               // samples a count names (see the file comment)
-  std::string meta;                          // results.json meta as JSON text
+  std::set<std::string> named;                 // samples a count names (see the file comment)
+  std::string meta;                            // results.json meta as JSON text
 };
 
 class RespawnTest : public ::testing::Test {
@@ -83,34 +84,45 @@ class RespawnTest : public ::testing::Test {
   // The default pipeline of launch/default.yaml in lockstep on ipc endpoints, every node respawned.
   static std::string LaunchYaml(const std::string& run) {
     const std::string ipc = "ipc://" + run + "/";
-    const std::string respawn = "    respawn: true\n    respawn_delay: 0.2\n    respawn_max_retries: 2\n";
-    return "env: {FAULTLINE_RUN_DIR: " + run + "/graph}\n"
+    const std::string respawn =
+        "    respawn: true\n    respawn_delay: 0.2\n    respawn_max_retries: 2\n";
+    return "env: {FAULTLINE_RUN_DIR: " + run +
+           "/graph}\n"
            "nodes:\n"
-           "  - name: nusc_player\n    exec: nusc_player\n" + respawn +
-           "    params: {dataroot: " + *data_dir_ + "/nuscenes, version: v1.0-mini, rate: 2.0, endpoint: " + ipc +
-           "player, hwm: 64, lockstep: true, ack_endpoint: " + ipc + "ack, ack_timeout_ms: 8000, "
+           "  - name: nusc_player\n    exec: nusc_player\n" +
+           respawn + "    params: {dataroot: " + *data_dir_ +
+           "/nuscenes, version: v1.0-mini, rate: 2.0, endpoint: " + ipc +
+           "player, hwm: 64, lockstep: true, ack_endpoint: " + ipc +
+           "ack, ack_timeout_ms: 8000, "
            "wait_subscribers: 1, wait_timeout_ms: 30000}\n"
-           "  - name: fault_injector\n    exec: fault_injector\n    required: false\n" + respawn +
-           "    params: {input_endpoints: [" + ipc + "player], input_topics: [/cam_, /sync/sample], "
-           "output_endpoint: " + ipc + "injector, input_hwm: 64, output_hwm: 64, decode: false, "
+           "  - name: fault_injector\n    exec: fault_injector\n    required: false\n" +
+           respawn + "    params: {input_endpoints: [" + ipc +
+           "player], input_topics: [/cam_, /sync/sample], "
+           "output_endpoint: " +
+           ipc +
+           "injector, input_hwm: 64, output_hwm: 64, decode: false, "
            "wait_subscribers: 2, wait_timeout_ms: 30000}\n"
-           "  - name: detector\n    exec: detector\n    required: false\n" + respawn +
-           "    params: {input_endpoints: [" + ipc + "injector], input_prefix: /faulty/, input_hwm: 64, "
-           "sink_endpoint: " + ipc + "sink, scale: 0.5, temporal: false}\n"
-           "  - name: detection_sink\n    exec: detection_sink\n    required: false\n" + respawn +
-           "    params: {detections_endpoint: " + ipc + "sink, sync_endpoints: [" + ipc + "injector], output: " +
-           run + "/results.json, lockstep: true, ack_endpoint: " + ipc + "ack, finalize_grace_ms: 10000}\n";
+           "  - name: detector\n    exec: detector\n    required: false\n" +
+           respawn + "    params: {input_endpoints: [" + ipc +
+           "injector], input_prefix: /faulty/, input_hwm: 64, "
+           "sink_endpoint: " +
+           ipc +
+           "sink, scale: 0.5, temporal: false}\n"
+           "  - name: detection_sink\n    exec: detection_sink\n    required: false\n" +
+           respawn + "    params: {detections_endpoint: " + ipc + "sink, sync_endpoints: [" + ipc +
+           "injector], output: " + run + "/results.json, lockstep: true, ack_endpoint: " + ipc +
+           "ack, finalize_grace_ms: 10000}\n";
   }
 
-  // Runs the launch; with `victim`, SIGKILLs that node once the sink has journaled three samples' detections
-  // and waits for its respawn.
+  // Runs the launch; with `victim`, SIGKILLs that node once the sink has journaled three samples'
+  // detections and waits for its respawn.
   static LaunchRun Launch(const std::string& name, const std::string& victim) {
     const std::string run = *data_dir_ + "/" + name;
     std::filesystem::create_directories(run);
     std::ofstream(run + "/launch.yaml") << LaunchYaml(run);
     const std::string log = run + "/launch.log";
-    std::vector<std::string> args{std::string(FAULTLINE_BIN_DIR) + "/faultline", "launch", run + "/launch.yaml",
-                                  "--color", "never"};
+    std::vector<std::string> args{std::string(FAULTLINE_BIN_DIR) + "/faultline", "launch",
+                                  run + "/launch.yaml", "--color", "never"};
     std::vector<char*> argv;
     for (auto& a : args) argv.push_back(a.data());
     argv.push_back(nullptr);
@@ -131,10 +143,12 @@ class RespawnTest : public ::testing::Test {
     return out;
   }
 
-  static void KillMidRun(const std::string& run, const std::string& log, const std::string& victim) {
+  static void KillMidRun(const std::string& run, const std::string& log,
+                         const std::string& victim) {
     const auto deadline = SteadyClock::now() + seconds(120);  // a bound, not a rate
     const std::string journal = run + "/results.json.journal";
-    while (CountOf(ReadText(journal), "\"kind\":\"detections\"") < 3 && SteadyClock::now() < deadline) {
+    while (CountOf(ReadText(journal), "\"kind\":\"detections\"") < 3 &&
+           SteadyClock::now() < deadline) {
       std::this_thread::sleep_for(std::chrono::milliseconds(5));
     }
     std::smatch m;
@@ -173,7 +187,8 @@ class RespawnTest : public ::testing::Test {
     rapidjson::Document doc;
     doc.Parse<rapidjson::kParseNanAndInfFlag>(ReadText(path).c_str());
     if (!doc.IsObject() || !doc.HasMember("results") || !doc.HasMember("meta")) return;
-    for (const auto& m : doc["results"].GetObject()) out.results[m.name.GetString()] = JsonText(m.value);
+    for (const auto& m : doc["results"].GetObject())
+      out.results[m.name.GetString()] = JsonText(m.value);
     out.meta = JsonText(doc["meta"]);
   }
 
@@ -183,7 +198,8 @@ class RespawnTest : public ::testing::Test {
     for (const std::regex& re : {std::regex("no SampleAck for sample (\\S+) within"),
                                  std::regex("sample (\\S+) incomplete: "),
                                  std::regex("sample (\\S+) follows a break in the stream")}) {
-      for (auto it = out.log.cbegin(); std::regex_search(it, out.log.cend(), m, re); it = m.suffix().first) {
+      for (auto it = out.log.cbegin(); std::regex_search(it, out.log.cend(), m, re);
+           it = m.suffix().first) {
         out.named.insert(m[1]);
       }
     }
@@ -215,10 +231,11 @@ class RespawnTest : public ::testing::Test {
           << r.log;
     }
     for (const auto& [token, boxes] : r.results) {
-      EXPECT_EQ(clean_->results.count(token), 1u) << "sample " << token << " is not in the clean run";
+      EXPECT_EQ(clean_->results.count(token), 1u)
+          << "sample " << token << " is not in the clean run";
     }
-    std::printf("killed %s: %zu of %zu samples differ from the clean run; %zu named by a count\n", victim.c_str(),
-                differing, clean_->results.size(), r.named.size());
+    std::printf("killed %s: %zu of %zu samples differ from the clean run; %zu named by a count\n",
+                victim.c_str(), differing, clean_->results.size(), r.named.size());
   }
 
   static std::string* data_dir_;
@@ -227,11 +244,13 @@ class RespawnTest : public ::testing::Test {
 std::string* RespawnTest::data_dir_ = nullptr;
 LaunchRun* RespawnTest::clean_ = nullptr;
 
-// One test, so that CTest (one process per test) runs the clean run once: each node in turn after it.
+// One test, so that CTest (one process per test) runs the clean run once: each node in turn after
+// it.
 TEST_F(RespawnTest, EachNodeKilledInTurnIsRespawnedAndEveryLossIsCounted) {
   ASSERT_EQ(clean_->exit_code, 0) << clean_->log;
   EXPECT_NE(clean_->log.find("respawns 0"), std::string::npos) << clean_->log;
-  EXPECT_NE(clean_->meta.find("\"faultline_sink_unanswered_samples\":0"), std::string::npos) << clean_->meta;
+  EXPECT_NE(clean_->meta.find("\"faultline_sink_unanswered_samples\":0"), std::string::npos)
+      << clean_->meta;
   EXPECT_TRUE(clean_->named.empty()) << clean_->log;
   for (const char* victim : {"nusc_player", "fault_injector", "detector", "detection_sink"}) {
     SCOPED_TRACE(victim);

@@ -22,7 +22,9 @@ class LaunchFileTest : public ::testing::Test {
       return it == env_.end() ? std::nullopt : std::optional<std::string>(it->second);
     };
   }
-  LaunchFile Parse(const std::string& text) { return parse_launch(text, "launch/t.yaml", options_); }
+  LaunchFile Parse(const std::string& text) {
+    return parse_launch(text, "launch/t.yaml", options_);
+  }
   std::string ErrorOf(const std::string& text) {
     try {
       Parse(text);
@@ -108,7 +110,8 @@ TEST_F(LaunchFileTest, CommandPassesNameParamsAndArgs) {
 
 TEST_F(LaunchFileTest, ParamsDocumentAddsRemapOnlyWhenGiven) {
   const auto lf = Parse(
-      "nodes:\n  - {name: a, exec: sh, params: {k: 1}, remap: {/x: /y}}\n  - {name: b, exec: sh, params: {k: 2}}\n");
+      "nodes:\n  - {name: a, exec: sh, params: {k: 1}, remap: {/x: /y}}\n  - {name: b, exec: sh, "
+      "params: {k: 2}}\n");
   const YAML::Node a = node_params_document(lf.nodes[0]);
   EXPECT_EQ(a["k"].as<int>(), 1);
   EXPECT_EQ(a["remap"]["/x"].as<std::string>(), "/y");
@@ -168,7 +171,8 @@ TEST_F(LaunchFileTest, MissingExecNamesKeyAndValue) {
 }
 
 TEST_F(LaunchFileTest, MissingExecKeyIsAnError) {
-  EXPECT_NE(ErrorOf("nodes:\n  - {name: a}\n").find("nodes[0] (a).exec: missing"), std::string::npos);
+  EXPECT_NE(ErrorOf("nodes:\n  - {name: a}\n").find("nodes[0] (a).exec: missing"),
+            std::string::npos);
 }
 
 TEST_F(LaunchFileTest, DuplicateNameNamesIt) {
@@ -200,8 +204,9 @@ TEST_F(LaunchFileTest, BadRespawnValuesNameNodeKeyAndValue) {
             "launch/t.yaml: nodes[0] (a).respawn_delay = -1: expected seconds in 0..3600");
   EXPECT_EQ(ErrorOf("nodes:\n  - {name: a, exec: sh, respawn_delay: .nan}\n"),
             "launch/t.yaml: nodes[0] (a).respawn_delay = .nan: expected seconds in 0..3600");
-  EXPECT_EQ(ErrorOf("nodes:\n  - {name: a, exec: sh, respawn_max_retries: [1]}\n"),
-            "launch/t.yaml: nodes[0] (a).respawn_max_retries = [1]: expected an integer in 0..1000");
+  EXPECT_EQ(
+      ErrorOf("nodes:\n  - {name: a, exec: sh, respawn_max_retries: [1]}\n"),
+      "launch/t.yaml: nodes[0] (a).respawn_max_retries = [1]: expected an integer in 0..1000");
 }
 
 TEST_F(LaunchFileTest, EmptyNodesListIsAnError) {
@@ -213,7 +218,8 @@ TEST_F(LaunchFileTest, SubstitutesEnvironmentInScalars) {
   env_["DATA"] = "/data/nusc";
   const auto lf = Parse(
       "nodes:\n  - name: a\n    exec: sh\n"
-      "    params: {dataroot: '${DATA}/v1.0', endpoint: '${EP:-tcp://127.0.0.1:5600}', cost: '$$5'}\n");
+      "    params: {dataroot: '${DATA}/v1.0', endpoint: '${EP:-tcp://127.0.0.1:5600}', cost: "
+      "'$$5'}\n");
   EXPECT_EQ(lf.nodes[0].params["dataroot"].as<std::string>(), "/data/nusc/v1.0");
   EXPECT_EQ(lf.nodes[0].params["endpoint"].as<std::string>(), "tcp://127.0.0.1:5600");
   EXPECT_EQ(lf.nodes[0].params["cost"].as<std::string>(), "$5");
@@ -222,7 +228,8 @@ TEST_F(LaunchFileTest, SubstitutesEnvironmentInScalars) {
 TEST_F(LaunchFileTest, LaunchEnvMapFeedsSubstitutionAndWinsOverProcessEnv) {
   env_["RUN"] = "from-process";
   env_["BASE"] = "/srv";
-  const auto lf = Parse("env: {RUN: '${BASE}/run1'}\nnodes:\n  - {name: a, exec: sh, params: {dir: '${RUN}'}}\n");
+  const auto lf = Parse(
+      "env: {RUN: '${BASE}/run1'}\nnodes:\n  - {name: a, exec: sh, params: {dir: '${RUN}'}}\n");
   EXPECT_EQ(lf.env.at("RUN"), "/srv/run1");
   EXPECT_EQ(lf.nodes[0].params["dir"].as<std::string>(), "/srv/run1");
 }
@@ -253,7 +260,8 @@ TEST(SubstituteEnvTest, HandlesEdgeCases) {
 }
 
 TEST_F(LaunchFileTest, OverrideSetsNestedParamOfNamedNode) {
-  auto lf = Parse("nodes:\n  - {name: a, exec: sh, params: {rate: 1.0}}\n  - {name: b, exec: sh}\n");
+  auto lf =
+      Parse("nodes:\n  - {name: a, exec: sh, params: {rate: 1.0}}\n  - {name: b, exec: sh}\n");
   apply_override(lf, "a.rate:=3.5");
   apply_override(lf, "b.sub.depth:=4");
   EXPECT_DOUBLE_EQ(lf.nodes[0].params["rate"].as<double>(), 3.5);

@@ -23,7 +23,8 @@ std::string error_of(const std::string& text) {
 }
 
 TEST(LaunchKeysTest, ListAsAParamsKeyNamesFileAndMapping) {
-  const std::string e = error_of("nodes:\n  - name: a\n    exec: nusc_player\n    params: {? [x, y] : 1}\n");
+  const std::string e =
+      error_of("nodes:\n  - name: a\n    exec: nusc_player\n    params: {? [x, y] : 1}\n");
   EXPECT_EQ(e.rfind("launch/t.yaml: nodes[0].params.(key) = ", 0), 0u) << e;
   EXPECT_NE(e.find("a key must be a string"), std::string::npos) << e;
 }

@@ -3,7 +3,6 @@
 #include "launch/supervisor.hpp"
 
 #include <gtest/gtest.h>
-
 #include <unistd.h>
 
 #include <csignal>
@@ -44,7 +43,8 @@ class SupervisorTest : public ::testing::Test {
     }
     throw std::runtime_error("no child " + name);
   }
-  std::vector<std::string> LinesOf(const std::string& node, OutputStream stream = OutputStream::Stdout) const {
+  std::vector<std::string> LinesOf(const std::string& node,
+                                   OutputStream stream = OutputStream::Stdout) const {
     std::vector<std::string> out;
     for (const auto& l : lines_) {
       if (l.node == node && l.stream == stream) out.push_back(l.text);
@@ -102,11 +102,13 @@ TEST_F(SupervisorTest, NonRequiredNodeExitDoesNotStopTheLaunch) {
     if (o.name == "helper") stop_.store(true);
   };
   const auto r = Run();
-  EXPECT_EQ(r.cause, StopCause::StopRequested);  // not RequiredExited: the helper's exit was ignored
+  EXPECT_EQ(r.cause,
+            StopCause::StopRequested);  // not RequiredExited: the helper's exit was ignored
   EXPECT_TRUE(Of(r, "helper").failed());
   EXPECT_EQ(Of(r, "helper").exit_code, 5);
   EXPECT_EQ(Of(r, "server").term_signal, SIGTERM);
-  EXPECT_EQ(r.exit_code, 1);  // it did not stop the launch, but its failure is not reported as success
+  EXPECT_EQ(r.exit_code,
+            1);  // it did not stop the launch, but its failure is not reported as success
 }
 
 // #22 item 7: a non-required sink killed from outside (so no results) made `launch` exit 0.
@@ -204,8 +206,8 @@ class SupervisorRespawnTest : public SupervisorTest {
     dir_ = ::mkdtemp(tmpl);
   }
   void TearDown() override { std::system(("rm -rf " + dir_).c_str()); }
-  void AddRespawning(const std::string& name, const std::string& script, bool required, int max_respawns,
-                     DurationNs delay_ns = 0) {
+  void AddRespawning(const std::string& name, const std::string& script, bool required,
+                     int max_respawns, DurationNs delay_ns = 0) {
     Add(name, script, required);
     children_.back().respawn = true;
     children_.back().max_respawns = max_respawns;
@@ -221,9 +223,11 @@ class SupervisorRespawnTest : public SupervisorTest {
 };
 
 TEST_F(SupervisorRespawnTest, AKilledRequiredNodeIsStartedAgainInsteadOfEndingTheLaunch) {
-  // First start: SIGKILLs itself; second start: finishes its work and exits 0, which ends the launch.
-  AddRespawning("flaky", "if [ -e " + dir_ + "/once ]; then echo second; exit 0; fi; touch " + dir_ +
-                             "/once; kill -KILL $$",
+  // First start: SIGKILLs itself; second start: finishes its work and exits 0, which ends the
+  // launch.
+  AddRespawning("flaky",
+                "if [ -e " + dir_ + "/once ]; then echo second; exit 0; fi; touch " + dir_ +
+                    "/once; kill -KILL $$",
                 /*required=*/true, /*max_respawns=*/3, 50 * kNsPerMs);
   Add("server", "echo ready; exec sleep 30", false);
   std::vector<ChildOutcome> ends;
@@ -267,13 +271,15 @@ TEST_F(SupervisorRespawnTest, ANodeThatExitsCleanlyIsNotRespawned) {
 }
 
 TEST_F(SupervisorRespawnTest, StoppingTheLaunchCancelsAPendingRespawn) {
-  // flaky dies at once and would come back after 60 s; main ends the launch as soon as flaky is reaped.
+  // flaky dies at once and would come back after 60 s; main ends the launch as soon as flaky is
+  // reaped.
   const std::string pid_file = dir_ + "/flaky.pid";
-  AddRespawning("flaky", "echo $$ > " + pid_file + ".tmp; mv " + pid_file + ".tmp " + pid_file +
-                             "; kill -KILL $$",
-                /*required=*/false, 3, 60 * kNsPerSec);
-  Add("main", "while [ ! -e " + pid_file + " ]; do sleep 0.01; done; while kill -0 $(cat " + pid_file +
-                  ") 2>/dev/null; do sleep 0.01; done; exit 0");
+  AddRespawning(
+      "flaky",
+      "echo $$ > " + pid_file + ".tmp; mv " + pid_file + ".tmp " + pid_file + "; kill -KILL $$",
+      /*required=*/false, 3, 60 * kNsPerSec);
+  Add("main", "while [ ! -e " + pid_file + " ]; do sleep 0.01; done; while kill -0 $(cat " +
+                  pid_file + ") 2>/dev/null; do sleep 0.01; done; exit 0");
   const auto r = Run();
   EXPECT_EQ(r.cause_node, "main");
   EXPECT_EQ(Of(r, "flaky").respawns, 0);

@@ -1,9 +1,10 @@
-// libFuzzer target: THE nuScenes table reader (nuscenes/table_reader.hpp) over arbitrary bytes, once decoding
-// every wanted field (and reading each through the typed accessors dataset and bag convert use) and once with a
-// record filter (the path where rejected records are only checked for structure, by the AVX2 block skipper
-// when the CPU has it). A scan that accepts the table unfiltered must accept it filtered too, passing no more
-// records; record indices grow; a refused table names the file and an offset inside the bytes. Runs on a
-// 256 KiB stack (fuzz::run_with_small_stack).
+// libFuzzer target: THE nuScenes table reader (nuscenes/table_reader.hpp) over arbitrary bytes,
+// once decoding every wanted field (and reading each through the typed accessors dataset and bag
+// convert use) and once with a record filter (the path where rejected records are only checked for
+// structure, by the AVX2 block skipper when the CPU has it). A scan that accepts the table
+// unfiltered must accept it filtered too, passing no more records; record indices grow; a refused
+// table names the file and an offset inside the bytes. Runs on a 256 KiB stack
+// (fuzz::run_with_small_stack).
 #include <cstddef>
 #include <cstdint>
 #include <string>
@@ -38,8 +39,9 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   using namespace faultline;
   using namespace faultline::nuscenes;
   const std::string_view bytes(reinterpret_cast<const char*>(data), size);
-  static const std::vector<std::string> wanted{"token",        "timestamp", "translation", "rotation",
-                                               "camera_intrinsic", "is_key_frame", "sample_token", "channel"};
+  static const std::vector<std::string> wanted{"token",        "timestamp",        "translation",
+                                               "rotation",     "camera_intrinsic", "is_key_frame",
+                                               "sample_token", "channel"};
   const auto scan = [&](const RecordFilter& filter, std::size_t& records) {
     std::size_t next_index = 0;
     return stream_table_bytes(
@@ -58,7 +60,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   fuzz::run_with_small_stack([&] {
     std::size_t all = 0, kept = 0;
     const Status unfiltered = scan({}, all);
-    if (!unfiltered.is_ok() && unfiltered.message().rfind("table.json: malformed JSON at offset ", 0) != 0) {
+    if (!unfiltered.is_ok() &&
+        unfiltered.message().rfind("table.json: malformed JSON at offset ", 0) != 0) {
       fuzz::fail("a refused table does not name the file and the offset");
     }
     RecordFilter filter;

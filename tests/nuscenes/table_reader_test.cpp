@@ -162,9 +162,9 @@ TEST_F(TableReaderTest, FilterSkipsRejectedRecordsButChecksTheirStructure) {
       << s.message();
 }
 
-// Rejected records longer than one 64-byte block go through the block skipper: brackets inside strings, strings
-// and arrays across block boundaries, escapes, and errors deep inside a record must behave exactly as in the
-// byte-level path.
+// Rejected records longer than one 64-byte block go through the block skipper: brackets inside
+// strings, strings and arrays across block boundaries, escapes, and errors deep inside a record
+// must behave exactly as in the byte-level path.
 TEST_F(TableReaderTest, BlockSkipperAgreesWithTheByteLevelPathOnLongRecords) {
   const std::string path = dir_.file("long.json");
   std::string json = "[";
@@ -172,7 +172,8 @@ TEST_F(TableReaderTest, BlockSkipperAgreesWithTheByteLevelPathOnLongRecords) {
   for (int i = 0; i < 300; ++i) {
     const bool keep = i % 7 == 3;
     if (i) json += ",\n";
-    json += "{\"token\": \"t" + std::to_string(i) + "\", \"sample\": \"" + (keep ? "keep" : "drop") + "\"";
+    json += "{\"token\": \"t" + std::to_string(i) + "\", \"sample\": \"" +
+            (keep ? "keep" : "drop") + "\"";
     json += ", \"filename\": \"" + std::string(static_cast<std::size_t>(i % 97), 'x') + "{[}]] \"";
     json += ", \"nested\": [[" + std::to_string(i) + ", 2.5, [3]], {\"a\": \"}}}\", \"b\": [4]}]";
     if (i % 50 == 10) json += ", \"escaped\": \"quote \\\" and backslash \\\\ }\"";
@@ -186,7 +187,8 @@ TEST_F(TableReaderTest, BlockSkipperAgreesWithTheByteLevelPathOnLongRecords) {
   Status s = stream_table(
       path, {"token", "sample", "nested"},
       [&](const TableRecord& r, std::size_t) {
-        seen.push_back(r.fields[0].str + ":" + std::to_string(static_cast<int>(r.fields[2].nums.front())));
+        seen.push_back(r.fields[0].str + ":" +
+                       std::to_string(static_cast<int>(r.fields[2].nums.front())));
         return Status::ok();
       },
       filter);
@@ -194,7 +196,8 @@ TEST_F(TableReaderTest, BlockSkipperAgreesWithTheByteLevelPathOnLongRecords) {
   EXPECT_EQ(seen, expected);
 
   // Errors far inside a long rejected record, each reported at the offending byte.
-  const std::string head = R"([{"token": "b", "sample": "drop", "pad": ")" + std::string(150, 'p') + "\", ";
+  const std::string head =
+      R"([{"token": "b", "sample": "drop", "pad": ")" + std::string(150, 'p') + "\", ";
   struct Case {
     std::string body, needle, message;
   };
@@ -207,17 +210,18 @@ TEST_F(TableReaderTest, BlockSkipperAgreesWithTheByteLevelPathOnLongRecords) {
     const std::string doc = head + c.body + std::string(200, ' ');
     write_text(path, doc);
     s = stream_table(
-        path, {"token", "sample"}, [](const TableRecord&, std::size_t) { return Status::ok(); }, filter);
+        path, {"token", "sample"}, [](const TableRecord&, std::size_t) { return Status::ok(); },
+        filter);
     const std::size_t offset = doc.find(c.needle);
-    EXPECT_NE(s.message().find("malformed JSON at offset " + std::to_string(offset) + ": " + c.message),
-              std::string::npos)
+    EXPECT_NE(
+        s.message().find("malformed JSON at offset " + std::to_string(offset) + ": " + c.message),
+        std::string::npos)
         << s.message();
   }
 }
 
-
-// The typed reads dataset and bag convert use: a field of another type, or a fractional number where an
-// integer is expected, is refused (the caller reports the record), never converted.
+// The typed reads dataset and bag convert use: a field of another type, or a fractional number
+// where an integer is expected, is refused (the caller reports the record), never converted.
 TEST_F(TableReaderTest, TypedReadsRefuseOtherTypes) {
   const std::string json =
       R"([{"s": "x", "i": 1533151603547590, "f": 1.5, "e": 1e3, "b": true, "n": null, "l": [[1, 2], [3]],)"
@@ -251,15 +255,16 @@ TEST_F(TableReaderTest, TypedReadsRefuseOtherTypes) {
   EXPECT_FALSE(f[10].present);
 }
 
-// A table cut short is kTruncated (the download or copy stopped), anything else malformed is kCorruptData;
-// both name the file and the byte offset.
+// A table cut short is kTruncated (the download or copy stopped), anything else malformed is
+// kCorruptData; both name the file and the byte offset.
 TEST_F(TableReaderTest, ATableCutShortIsTruncated) {
   const std::string whole = R"([{"token": "a", "timestamp": 1533151603547590, "flag": true}])";
-  for (std::size_t cut : {std::size_t{1}, whole.find("\"a\"") + 1, whole.find("1533") + 4, whole.find("true") + 2,
-                          whole.size() - 1}) {
+  for (std::size_t cut : {std::size_t{1}, whole.find("\"a\"") + 1, whole.find("1533") + 4,
+                          whole.find("true") + 2, whole.size() - 1}) {
     const Status s = scan(whole.substr(0, cut), {"token", "timestamp", "flag"});
     EXPECT_EQ(s.code(), StatusCode::kTruncated) << cut << ": " << s.message();
-    EXPECT_NE(s.message().find("table.json: malformed JSON at offset"), std::string::npos) << s.message();
+    EXPECT_NE(s.message().find("table.json: malformed JSON at offset"), std::string::npos)
+        << s.message();
   }
   const Status bad = scan(R"([{"token": "a"} x])", {"token"});
   EXPECT_EQ(bad.code(), StatusCode::kCorruptData) << bad.message();
@@ -278,8 +283,9 @@ TEST_F(TableReaderTest, BadEscapesAreReportedAtTheirByte) {
   for (const auto& c : cases) {
     const Status s = scan(c.json, {"token"});
     EXPECT_EQ(s.code(), StatusCode::kCorruptData);
-    EXPECT_NE(s.message().find("malformed JSON at offset " + std::to_string(c.offset) + ": " + c.message),
-              std::string::npos)
+    EXPECT_NE(
+        s.message().find("malformed JSON at offset " + std::to_string(c.offset) + ": " + c.message),
+        std::string::npos)
         << c.json << " -> " << s.message();
   }
 }

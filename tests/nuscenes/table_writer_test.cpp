@@ -1,5 +1,5 @@
-// The table writer: the devkit's json.dump(indent=0) layout byte for byte, the compact layout, and both read
-// back by the one reader with every value intact.
+// The table writer: the devkit's json.dump(indent=0) layout byte for byte, the compact layout, and
+// both read back by the one reader with every value intact.
 #include "nuscenes/table_writer.hpp"
 
 #include <gtest/gtest.h>
@@ -47,7 +47,8 @@ class TableWriterTest : public ::testing::Test {
   void ExpectReadBack() {
     std::vector<TableRecord> records;
     const Status s = stream_table(
-        path_, {"token", "timestamp", "x", "fixed", "flag", "translation", "tokens", "camera_intrinsic"},
+        path_,
+        {"token", "timestamp", "x", "fixed", "flag", "translation", "tokens", "camera_intrinsic"},
         [&](const TableRecord& r, std::size_t) {
           records.push_back(r);
           return Status::ok();
@@ -74,8 +75,10 @@ class TableWriterTest : public ::testing::Test {
 TEST_F(TableWriterTest, Indent0LayoutIsTheDevkits) {
   const std::string text = Write(TableLayout::kIndent0);
   EXPECT_EQ(text,
-            "[\n{\n\"token\": \"a\\\"b\\\\c\",\n\"timestamp\": 1533151603547590,\n\"x\": 0.1,\n\"fixed\": 0.3333,\n"
-            "\"flag\": true,\n\"translation\": [\n1.5,\n-2.0,\n0.0\n],\n\"tokens\": [\n\"p\",\n\"q\"\n],\n"
+            "[\n{\n\"token\": \"a\\\"b\\\\c\",\n\"timestamp\": 1533151603547590,\n\"x\": "
+            "0.1,\n\"fixed\": 0.3333,\n"
+            "\"flag\": true,\n\"translation\": [\n1.5,\n-2.0,\n0.0\n],\n\"tokens\": "
+            "[\n\"p\",\n\"q\"\n],\n"
             "\"camera_intrinsic\": [\n[\n1.0,\n0.0\n],\n[\n0.0,\n1.0\n]\n]\n},\n"
             "{\n\"token\": \"d\",\n\"translation\": [],\n\"camera_intrinsic\": []\n}\n]");
   ExpectReadBack();
@@ -84,7 +87,8 @@ TEST_F(TableWriterTest, Indent0LayoutIsTheDevkits) {
 TEST_F(TableWriterTest, CompactLayoutHasOneRecordPerLine) {
   const std::string text = Write(TableLayout::kCompact);
   EXPECT_EQ(text,
-            "[\n{\"token\": \"a\\\"b\\\\c\", \"timestamp\": 1533151603547590, \"x\": 0.1, \"fixed\": 0.3333, "
+            "[\n{\"token\": \"a\\\"b\\\\c\", \"timestamp\": 1533151603547590, \"x\": 0.1, "
+            "\"fixed\": 0.3333, "
             "\"flag\": true, \"translation\": [1.5, -2.0, 0.0], \"tokens\": [\"p\", \"q\"], "
             "\"camera_intrinsic\": [[1.0, 0.0], [0.0, 1.0]]},\n"
             "{\"token\": \"d\", \"translation\": [], \"camera_intrinsic\": []}\n]\n");

@@ -27,7 +27,8 @@ class TempDir {
   explicit TempDir(const std::string& tag) {
     static int counter = 0;
     path_ = std::filesystem::temp_directory_path() /
-            ("faultline_nuscenes_" + tag + "_" + std::to_string(::getpid()) + "_" + std::to_string(counter++));
+            ("faultline_nuscenes_" + tag + "_" + std::to_string(::getpid()) + "_" +
+             std::to_string(counter++));
     std::filesystem::remove_all(path_);
     std::filesystem::create_directories(path_);
   }

@@ -1,11 +1,13 @@
-// The fault engine: camera_crash / frame_lost against the goldens in numpy mode, output modes, determinism.
+// The fault engine: camera_crash / frame_lost against the goldens in numpy mode, output modes,
+// determinism.
+#include "policy/fault_engine.hpp"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <string>
 
 #include "corruption/corrupt.hpp"
-#include "policy/fault_engine.hpp"
 #include "policy/seeding.hpp"
 #include "rng/golden_json.hpp"
 
@@ -52,14 +54,18 @@ TEST(FaultEngineTest, CameraCrashDeadSetsMatchGoldenAndTemporalDrawsInNumpyMode)
     const std::uint32_t seed = s["seed"].GetUint();
     for (const auto& sev : s["by_severity"].GetObject()) {
       const std::string severity = sev.name.GetString();
-      FaultEngine engine(Config("[{type: camera_crash, rng: numpy, severity: " + severity + "}]", seed));
+      FaultEngine engine(
+          Config("[{type: camera_crash, rng: numpy, severity: " + severity + "}]", seed));
       std::vector<int> dead;
       for (int frame = 0; frame < 3; ++frame) {  // the same set on every frame
         std::vector<int> now;
         for (int cam = 0; cam < kNumCameras; ++cam) {
-          const FramePlan plan = engine.decide(Frame(cam, static_cast<std::uint64_t>(frame + 1), frame * 0.5));
-          if (plan.action == Action::Black) now.push_back(cam);
-          else EXPECT_EQ(plan.action, Action::Pass);
+          const FramePlan plan =
+              engine.decide(Frame(cam, static_cast<std::uint64_t>(frame + 1), frame * 0.5));
+          if (plan.action == Action::Black)
+            now.push_back(cam);
+          else
+            EXPECT_EQ(plan.action, Action::Pass);
         }
         if (frame > 0) {
           EXPECT_EQ(now, dead);
@@ -77,8 +83,8 @@ TEST(FaultEngineTest, CameraCrashDeadSetsMatchGoldenAndTemporalDrawsInNumpyMode)
   EXPECT_EQ(checked, 50);
 }
 
-// Frames arrive per camera with a skew (camera m runs m instants behind camera 0): the masks still equal the
-// reference's, because a camera's n-th frame uses the n-th draw.
+// Frames arrive per camera with a skew (camera m runs m instants behind camera 0): the masks still
+// equal the reference's, because a camera's n-th frame uses the n-th draw.
 TEST(FaultEngineTest, FrameLostMasksMatchGoldenInNumpyModeWhateverTheInterleaving) {
   const auto doc = load_golden_json("frame_lost.json");
   int checked = 0;
@@ -86,7 +92,8 @@ TEST(FaultEngineTest, FrameLostMasksMatchGoldenInNumpyModeWhateverTheInterleavin
     const std::uint32_t seed = s["seed"].GetUint();
     for (const auto& sev : s["by_severity"].GetObject()) {
       const std::string severity = sev.name.GetString();
-      FaultEngine engine(Config("[{type: frame_lost, rng: numpy, severity: " + severity + "}]", seed));
+      FaultEngine engine(
+          Config("[{type: frame_lost, rng: numpy, severity: " + severity + "}]", seed));
       const auto& expected = sev.value["masks"];
       const int frames = static_cast<int>(expected.Size());
       std::vector<std::string> got(static_cast<std::size_t>(frames), std::string(kNumCameras, '?'));
@@ -94,12 +101,15 @@ TEST(FaultEngineTest, FrameLostMasksMatchGoldenInNumpyModeWhateverTheInterleavin
         for (int cam = kNumCameras - 1; cam >= 0; --cam) {
           const int f = step - cam;
           if (f < 0 || f >= frames) continue;
-          const FramePlan plan = engine.decide(Frame(cam, static_cast<std::uint64_t>(f + 1), f / 12.0));
-          got[static_cast<std::size_t>(f)][static_cast<std::size_t>(cam)] = plan.action == Action::Black ? '1' : '0';
+          const FramePlan plan =
+              engine.decide(Frame(cam, static_cast<std::uint64_t>(f + 1), f / 12.0));
+          got[static_cast<std::size_t>(f)][static_cast<std::size_t>(cam)] =
+              plan.action == Action::Black ? '1' : '0';
         }
       }
       for (int f = 0; f < frames; ++f) {
-        EXPECT_EQ(got[static_cast<std::size_t>(f)], expected[static_cast<rapidjson::SizeType>(f)].GetString())
+        EXPECT_EQ(got[static_cast<std::size_t>(f)],
+                  expected[static_cast<rapidjson::SizeType>(f)].GetString())
             << "seed " << seed << " severity " << severity << " frame " << f;
       }
       ++checked;
@@ -125,7 +135,8 @@ TEST(FaultEngineTest, FastFrameLostDropRateIsSeverityOverSix) {
   double dropped = 0;
   const int frames = 5000;
   for (int f = 0; f < frames; ++f) {
-    for (int cam = 0; cam < kNumCameras; ++cam) dropped += engine.decide(Frame(cam, f, f)).action == Action::Drop;
+    for (int cam = 0; cam < kNumCameras; ++cam)
+      dropped += engine.decide(Frame(cam, f, f)).action == Action::Drop;
   }
   const double n = frames * kNumCameras, p = 2.0 / 6.0;
   EXPECT_LT(std::fabs(dropped - n * p) / std::sqrt(n * p * (1 - p)), 5.0);
@@ -167,7 +178,8 @@ TEST(FaultEngineTest, DropAndDelayModesAreDecidedWithoutPixels) {
 
 TEST(FaultEngineTest, FreezeRepeatsTheLastGoodFrameOfThatCamera) {
   // CAM_FRONT_LEFT freezes from t = 1 s for 1 s; CAM_FRONT keeps flowing.
-  FaultEngine engine(Config("[{type: freeze, cameras: [CAM_FRONT_LEFT], start_s: 1, duration_s: 1}]", 1));
+  FaultEngine engine(
+      Config("[{type: freeze, cameras: [CAM_FRONT_LEFT], start_s: 1, duration_s: 1}]", 1));
   auto run = [&](int cam, std::uint64_t seq, double t, const cv::Mat& in) {
     cv::Mat image = in.clone();
     FramePlan plan = engine.decide(Frame(cam, seq, t));
@@ -227,7 +239,8 @@ TEST(FaultEngineTest, CorruptionSeedIsTheFrameSeedAndNumpyModeEqualsTheLibraryCa
 
 // Same config and input -> identical bytes per (camera, seq), however the cameras interleave.
 TEST(FaultEngineTest, OutputDependsOnlyOnConfigAndInputNotArrivalOrder) {
-  const std::string yaml = R"([{type: fog, level: mid}, {type: snow, severity: 1, cameras: [CAM_BACK]},
+  const std::string yaml =
+      R"([{type: fog, level: mid}, {type: snow, severity: 1, cameras: [CAM_BACK]},
                                {type: frame_lost, severity: 2}])";
   std::map<std::pair<int, int>, cv::Mat> a, b;
   auto run = [&](bool reversed, std::map<std::pair<int, int>, cv::Mat>& out) {
@@ -246,7 +259,8 @@ TEST(FaultEngineTest, OutputDependsOnlyOnConfigAndInputNotArrivalOrder) {
   run(true, b);
   ASSERT_EQ(a.size(), b.size());
   for (const auto& [key, image] : a) {
-    EXPECT_TRUE(image.empty() ? b[key].empty() : Equal(image, b[key])) << key.first << "," << key.second;
+    EXPECT_TRUE(image.empty() ? b[key].empty() : Equal(image, b[key]))
+        << key.first << "," << key.second;
   }
 }
 

@@ -1,13 +1,16 @@
 // The `faults` schedule: parsing, errors that name key and value, windows and ramps.
+#include "policy/fault_spec.hpp"
+
 #include <gtest/gtest.h>
 
 #include "common/config.hpp"
-#include "policy/fault_spec.hpp"
 
 namespace faultline::policy {
 namespace {
 
-std::vector<FaultSpec> Parse(const std::string& yaml) { return parse_faults(YAML::Load(yaml), "fault_injector"); }
+std::vector<FaultSpec> Parse(const std::string& yaml) {
+  return parse_faults(YAML::Load(yaml), "fault_injector");
+}
 
 std::string ErrorOf(const std::string& yaml) {
   try {
@@ -74,27 +77,39 @@ TEST(FaultSpecTest, NullOrMissingListMeansNoFaults) {
 }
 
 TEST(FaultSpecTest, ErrorsNameTheKeyAndTheValue) {
-  EXPECT_NE(ErrorOf("[{type: fog, colour: red}]").find("fault_injector: faults[0].colour = red: unknown key"),
+  EXPECT_NE(ErrorOf("[{type: fog, colour: red}]")
+                .find("fault_injector: faults[0].colour = red: unknown key"),
             std::string::npos);
-  EXPECT_NE(ErrorOf("[{type: fog}, {type: fgo}]").find("faults[1].type = fgo: expected"), std::string::npos);
-  EXPECT_NE(ErrorOf("[{type: fog, severity: abc}]").find("faults[0].severity = abc: expected integer"),
+  EXPECT_NE(ErrorOf("[{type: fog}, {type: fgo}]").find("faults[1].type = fgo: expected"),
             std::string::npos);
-  EXPECT_NE(ErrorOf("[{type: fog, severity: 7}]").find("faults[0].severity = 7: expected 1..5"), std::string::npos);
-  EXPECT_NE(ErrorOf("[{type: fog, level: extreme}]").find("faults[0].level = extreme"), std::string::npos);
-  EXPECT_NE(ErrorOf("[{type: fog, cameras: [CAM_TOP]}]").find("faults[0].cameras = CAM_TOP"), std::string::npos);
+  EXPECT_NE(
+      ErrorOf("[{type: fog, severity: abc}]").find("faults[0].severity = abc: expected integer"),
+      std::string::npos);
+  EXPECT_NE(ErrorOf("[{type: fog, severity: 7}]").find("faults[0].severity = 7: expected 1..5"),
+            std::string::npos);
+  EXPECT_NE(ErrorOf("[{type: fog, level: extreme}]").find("faults[0].level = extreme"),
+            std::string::npos);
+  EXPECT_NE(ErrorOf("[{type: fog, cameras: [CAM_TOP]}]").find("faults[0].cameras = CAM_TOP"),
+            std::string::npos);
   EXPECT_NE(ErrorOf("[{type: fog, rng: mt}]").find("faults[0].rng = mt"), std::string::npos);
-  EXPECT_NE(ErrorOf("[{type: fog, coherent: maybe}]").find("faults[0].coherent = maybe: expected bool"),
-            std::string::npos);
+  EXPECT_NE(
+      ErrorOf("[{type: fog, coherent: maybe}]").find("faults[0].coherent = maybe: expected bool"),
+      std::string::npos);
   EXPECT_NE(ErrorOf("[{type: fog, mode: drop}]").find("faults[0].mode = drop"), std::string::npos);
-  EXPECT_NE(ErrorOf("[{type: frame_lost, mode: vanish}]").find("faults[0].mode = vanish"), std::string::npos);
-  EXPECT_NE(ErrorOf("[{type: drop, start_s: -1}]").find("faults[0].start_s = -1"), std::string::npos);
-  EXPECT_NE(ErrorOf("[{type: drop, duration_s: soon}]").find("faults[0].duration_s = soon: expected number"),
+  EXPECT_NE(ErrorOf("[{type: frame_lost, mode: vanish}]").find("faults[0].mode = vanish"),
             std::string::npos);
-  EXPECT_NE(ErrorOf("[{type: fog, frames: some}]").find("faults[0].frames = some: expected key|all"),
+  EXPECT_NE(ErrorOf("[{type: drop, start_s: -1}]").find("faults[0].start_s = -1"),
             std::string::npos);
+  EXPECT_NE(ErrorOf("[{type: drop, duration_s: soon}]")
+                .find("faults[0].duration_s = soon: expected number"),
+            std::string::npos);
+  EXPECT_NE(
+      ErrorOf("[{type: fog, frames: some}]").find("faults[0].frames = some: expected key|all"),
+      std::string::npos);
   EXPECT_NE(ErrorOf("[{level: mid}]").find("faults[0].type"), std::string::npos);
   EXPECT_NE(ErrorOf("{type: fog}").find("faults = "), std::string::npos);
-  EXPECT_NE(ErrorOf("[{type: fog, rng: numpy, coherent: true}]").find("coherent"), std::string::npos);
+  EXPECT_NE(ErrorOf("[{type: fog, rng: numpy, coherent: true}]").find("coherent"),
+            std::string::npos);
 }
 
 TEST(FaultSpecTest, CorruptionShorthandIsOneFaultOnAllCameras) {
@@ -110,7 +125,9 @@ TEST(FaultSpecTest, CorruptionShorthandIsOneFaultOnAllCameras) {
     (void)parse_corruption_shorthand("fog/extreme", "fault_injector");
     FAIL() << "no error";
   } catch (const ConfigError& e) {
-    EXPECT_NE(std::string(e.what()).find("fault_injector: corruption = fog/extreme"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("fault_injector: corruption = fog/extreme"),
+              std::string::npos)
+        << e.what();
   }
 }
 
@@ -123,11 +140,12 @@ TEST(FaultSpecTest, AcceptsEveryImageCorruptionName) {
     EXPECT_EQ(f->severity, corruption::severity_for(c, corruption::Level::Hard)) << name;
   }
   EXPECT_EQ(Parse("[{type: iso_noise, level: mid}]")[0].severity, 3);
-  EXPECT_EQ(Parse("[{type: pixelate, severity: 2}]")[0].corruption, corruption::Corruption::Pixelate);
+  EXPECT_EQ(Parse("[{type: pixelate, severity: 2}]")[0].corruption,
+            corruption::Corruption::Pixelate);
 }
 
-// The sensor faults persist on the lens: coherent by default in fast mode; numpy mode or `coherent: false` redraws
-// them per frame.
+// The sensor faults persist on the lens: coherent by default in fast mode; numpy mode or `coherent:
+// false` redraws them per frame.
 TEST(FaultSpecTest, SensorFaultsAreCoherentByDefault) {
   for (const char* name : {"soiling", "water_drops", "glare", "exposure_flicker"}) {
     const auto f = parse_corruption_shorthand(std::string(name) + "/mid", "fault_injector");

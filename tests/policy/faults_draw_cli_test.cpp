@@ -1,4 +1,5 @@
-// `faultline faults draw --json` against the golden sets; bad arguments give a message and a non-zero exit.
+// `faultline faults draw --json` against the golden sets; bad arguments give a message and a
+// non-zero exit.
 #include <gtest/gtest.h>
 
 #include <array>
@@ -32,8 +33,9 @@ TEST(FaultsDrawCliTest, CameraCrashJsonEqualsGoldenSet) {
     const auto& s = doc["per_seed"][k];
     const unsigned seed = s["seed"].GetUint();
     for (int sev : {2, 5}) {
-      const auto r = run_faultline("faults draw --type camera_crash --severity " + std::to_string(sev) +
-                                   " --seed " + std::to_string(seed) + " --json");
+      const auto r =
+          run_faultline("faults draw --type camera_crash --severity " + std::to_string(sev) +
+                        " --seed " + std::to_string(seed) + " --json");
       ASSERT_EQ(r.exit_code, 0) << r.output;
       rapidjson::Document got;
       got.Parse(r.output.c_str());

@@ -1,6 +1,8 @@
-// calibration_drift and timestamp_skew: exact values per severity, the drift's persistence per camera, the
-// arithmetic applied to a calibration, and what the engine and the schedule parser make of them; rolling_shutter's
-// yaw rate from the ego poses of one camera's frames.
+// calibration_drift and timestamp_skew: exact values per severity, the drift's persistence per
+// camera, the arithmetic applied to a calibration, and what the engine and the schedule parser make
+// of them; rolling_shutter's yaw rate from the ego poses of one camera's frames.
+#include "policy/message_faults.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -8,7 +10,6 @@
 #include "common/config.hpp"
 #include "corruption/rolling_shutter.hpp"
 #include "policy/fault_engine.hpp"
-#include "policy/message_faults.hpp"
 #include "policy/seeding.hpp"
 
 namespace faultline::policy {
@@ -27,9 +28,12 @@ constexpr double kPi = 3.14159265358979323846;
 constexpr StampNs kT0 = 1'600'000'000'000'000'000;
 
 double RotationDeg(const CalibrationDrift& d) {
-  return std::sqrt(d.roll_rad * d.roll_rad + d.pitch_rad * d.pitch_rad + d.yaw_rad * d.yaw_rad) * 180 / kPi;
+  return std::sqrt(d.roll_rad * d.roll_rad + d.pitch_rad * d.pitch_rad + d.yaw_rad * d.yaw_rad) *
+         180 / kPi;
 }
-double ShiftM(const CalibrationDrift& d) { return std::sqrt(d.dx_m * d.dx_m + d.dy_m * d.dy_m + d.dz_m * d.dz_m); }
+double ShiftM(const CalibrationDrift& d) {
+  return std::sqrt(d.dx_m * d.dx_m + d.dy_m * d.dy_m + d.dz_m * d.dz_m);
+}
 
 TEST(CalibrationDriftTest, SeverityScalesOneSeededError) {
   const double rot[] = {0.1, 0.25, 0.5, 1.0, 2.0}, shift[] = {0.01, 0.025, 0.05, 0.10, 0.20},
@@ -44,7 +48,8 @@ TEST(CalibrationDriftTest, SeverityScalesOneSeededError) {
     EXPECT_NEAR(d.yaw_rad / rot[sev - 1], one.yaw_rad / rot[0], 1e-12);
     EXPECT_NEAR(d.dx_m / shift[sev - 1], one.dx_m / shift[0], 1e-12);
     EXPECT_EQ(d.focal_scale > 1, one.focal_scale > 1);
-    EXPECT_FALSE(std::isnan(d.roll_rad + d.pitch_rad + d.yaw_rad + d.dx_m + d.dy_m + d.dz_m + d.focal_scale));
+    EXPECT_FALSE(std::isnan(d.roll_rad + d.pitch_rad + d.yaw_rad + d.dx_m + d.dy_m + d.dz_m +
+                            d.focal_scale));
   }
   const CalibrationDrift again = calibration_drift(3, 42), other = calibration_drift(3, 43);
   EXPECT_EQ(again.yaw_rad, calibration_drift(3, 42).yaw_rad);
@@ -99,12 +104,13 @@ TEST(MessageFaultEngineTest, DriftPersistsPerCameraAndSkewHitsOnlyItsCameras) {
       {type: calibration_drift, severity: 4, cameras: [CAM_FRONT, CAM_BACK]},
       {type: timestamp_skew, severity: 2, cameras: CAM_FRONT, start_s: 0.2},
       {type: timestamp_skew, offset_ms: -7, cameras: CAM_FRONT}])"),
-                                    "test"),
+                                   "test"),
                       9});
   std::optional<CalibrationDrift> front, back;
   for (int k = 0; k < 6; ++k) {
     for (int cam = 0; cam < kNumCameras; ++cam) {
-      const FramePlan p = engine.decide(Info(kCameraNames[cam], static_cast<std::uint64_t>(k + 1), kT0 + k * 100'000'000));
+      const FramePlan p = engine.decide(
+          Info(kCameraNames[cam], static_cast<std::uint64_t>(k + 1), kT0 + k * 100'000'000));
       EXPECT_EQ(p.action, Action::Pass);
       EXPECT_FALSE(p.needs_pixels());
       if (cam != 0 && cam != 3) {
@@ -132,8 +138,8 @@ TEST(MessageFaultEngineTest, DriftPersistsPerCameraAndSkewHitsOnlyItsCameras) {
 }
 
 TEST(MessageFaultSpecTest, ParsesAndRefusesOffsets) {
-  const auto faults = parse_faults(YAML::Load("[{type: timestamp_skew, offset_ms: -12.5}, {type: calibration_drift}]"),
-                                   "test");
+  const auto faults = parse_faults(
+      YAML::Load("[{type: timestamp_skew, offset_ms: -12.5}, {type: calibration_drift}]"), "test");
   ASSERT_EQ(faults.size(), 2u);
   EXPECT_EQ(faults[0].kind, FaultKind::TimestampSkew);
   EXPECT_EQ(*faults[0].offset_ms, -12.5);
@@ -144,20 +150,24 @@ TEST(MessageFaultSpecTest, ParsesAndRefusesOffsets) {
     parse_faults(YAML::Load("[{type: fog, offset_ms: 3}]"), "test");
     FAIL() << "offset_ms on fog must be refused";
   } catch (const ConfigError& e) {
-    EXPECT_NE(std::string(e.what()).find("test: faults[0].offset_ms = 3: only timestamp_skew takes offset_ms"),
+    EXPECT_NE(std::string(e.what()).find(
+                  "test: faults[0].offset_ms = 3: only timestamp_skew takes offset_ms"),
               std::string::npos)
         << e.what();
   }
-  EXPECT_THROW(parse_faults(YAML::Load("[{type: timestamp_skew, offset_ms: .nan}]"), "test"), ConfigError);
+  EXPECT_THROW(parse_faults(YAML::Load("[{type: timestamp_skew, offset_ms: .nan}]"), "test"),
+               ConfigError);
   EXPECT_TRUE(parse_corruption_shorthand("calibration_drift/5", "test").has_value());
 }
 
-// The yaw rate comes from the previous frame of the same camera (heading wrapped across +-pi); the first frame, and
-// frames without a pose, pass unchanged and say so.
+// The yaw rate comes from the previous frame of the same camera (heading wrapped across +-pi); the
+// first frame, and frames without a pose, pass unchanged and say so.
 TEST(RollingShutterEngineTest, YawRateFromConsecutivePosesOfOneCamera) {
-  FaultEngine engine({parse_faults(YAML::Load("[{type: rolling_shutter, severity: 4, cameras: [CAM_FRONT, CAM_BACK]}]"),
-                                   "test"),
-                      5});
+  FaultEngine engine(
+      {parse_faults(
+           YAML::Load("[{type: rolling_shutter, severity: 4, cameras: [CAM_FRONT, CAM_BACK]}]"),
+           "test"),
+       5});
   auto frame = [](int cam, std::uint64_t seq, double t_s, std::optional<double> yaw) {
     FrameInfo f = Info(kCameraNames[cam], seq, kT0 + static_cast<StampNs>(t_s * 1e9));
     f.ego_yaw_rad = yaw;
@@ -176,7 +186,8 @@ TEST(RollingShutterEngineTest, YawRateFromConsecutivePosesOfOneCamera) {
   cv::Mat unchanged = image.clone();
   ASSERT_TRUE(engine.render(first, unchanged).is_ok());
   EXPECT_EQ(cv::norm(unchanged, image, cv::NORM_INF), 0.0);
-  // Another camera's pose in between does not count; the heading wraps from +3.1 to -3.1 rad: +0.0832 rad in 0.5 s.
+  // Another camera's pose in between does not count; the heading wraps from +3.1 to -3.1 rad:
+  // +0.0832 rad in 0.5 s.
   (void)engine.decide(frame(3, 1, 0.25, 0.0));
   FramePlan second = engine.decide(frame(0, 2, 0.5, -3.1));
   ASSERT_EQ(second.corruptions.size(), 1u);
@@ -188,7 +199,8 @@ TEST(RollingShutterEngineTest, YawRateFromConsecutivePosesOfOneCamera) {
   cv::Mat skewed = image.clone();
   ASSERT_TRUE(engine.render(second, skewed).is_ok());
   EXPECT_EQ(cv::norm(skewed, corruption::rolling_shutter(image, 4, want, 100), cv::NORM_INF), 0.0);
-  // A frame without a pose: no rate, and the next frame with a pose measures from the last pose it had.
+  // A frame without a pose: no rate, and the next frame with a pose measures from the last pose it
+  // had.
   FramePlan blind = engine.decide(frame(0, 3, 0.75, std::nullopt));
   EXPECT_TRUE(blind.corruptions.empty());
   EXPECT_EQ(blind.faults[0].params.at("no_yaw_rate"), 1.0);
@@ -198,7 +210,8 @@ TEST(RollingShutterEngineTest, YawRateFromConsecutivePosesOfOneCamera) {
 }
 
 TEST(RollingShutterEngineTest, CoherentIsRefused) {
-  EXPECT_THROW(parse_faults(YAML::Load("[{type: rolling_shutter, coherent: true}]"), "test"), ConfigError);
+  EXPECT_THROW(parse_faults(YAML::Load("[{type: rolling_shutter, coherent: true}]"), "test"),
+               ConfigError);
 }
 
 }  // namespace

@@ -1,10 +1,12 @@
-// Camera Crash sets and Frame Lost masks against the golden JSON (numpy mode), distributions in fast mode.
+// Camera Crash sets and Frame Lost masks against the golden JSON (numpy mode), distributions in
+// fast mode.
+#include "policy/temporal_draws.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <string>
 
-#include "policy/temporal_draws.hpp"
 #include "rng/golden_json.hpp"
 
 namespace faultline::policy {
@@ -42,7 +44,8 @@ TEST(FrameLostTest, MasksMatchGoldenForEverySeedAndSeverity) {
       for (rapidjson::SizeType f = 0; f < expected.Size(); ++f) {
         std::string got;
         for (bool d : masks[f]) got += d ? '1' : '0';
-        EXPECT_EQ(got, expected[f].GetString()) << "seed " << s["seed"].GetUint() << " sev " << severity << " f " << f;
+        EXPECT_EQ(got, expected[f].GetString())
+            << "seed " << s["seed"].GetUint() << " sev " << severity << " f " << f;
       }
       ++checked;
     }
@@ -81,7 +84,8 @@ TEST_P(FastFrameLostTest, DropRateIsBinomialWithPSeverityOverSix) {
 }
 INSTANTIATE_TEST_SUITE_P(Severities, FastFrameLostTest, ::testing::Values(1, 2, 3, 4, 5));
 
-// Fast mode: distinct dead cameras after k draws follow P(n) = C(6,n) S(k,n) n! / 6^k (spec §8), mean 6(1-(5/6)^k).
+// Fast mode: distinct dead cameras after k draws follow P(n) = C(6,n) S(k,n) n! / 6^k (spec §8),
+// mean 6(1-(5/6)^k).
 TEST(FastCameraCrashTest, DistinctCountMeanMatchesWithReplacementDraws) {
   for (int k = 1; k <= 5; ++k) {
     rng::FastRng rng(77);
@@ -96,7 +100,8 @@ TEST(FastCameraCrashTest, DistinctCountMeanMatchesWithReplacementDraws) {
     }
     const double mean = sum / trials;
     const double sd = std::sqrt(sq / trials - mean * mean);
-    EXPECT_NEAR(mean, 6.0 * (1.0 - std::pow(5.0 / 6.0, k)), 5 * sd / std::sqrt(trials) + 1e-9) << "k " << k;
+    EXPECT_NEAR(mean, 6.0 * (1.0 - std::pow(5.0 / 6.0, k)), 5 * sd / std::sqrt(trials) + 1e-9)
+        << "k " << k;
   }
 }
 

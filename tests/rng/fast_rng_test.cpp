@@ -1,10 +1,10 @@
 // FastRng: determinism per seed and first two moments of its uniform, normal and Poisson samplers.
+#include "rng/fast_rng.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <vector>
-
-#include "rng/fast_rng.hpp"
 
 namespace faultline::rng {
 namespace {
@@ -70,7 +70,8 @@ TEST_P(FastPoissonTest, MeanAndVarianceEqualLambda) {
   EXPECT_NEAR(var, lam, 0.05 * lam + 0.01);
 }
 
-INSTANTIATE_TEST_SUITE_P(Lambdas, FastPoissonTest, ::testing::Values(0.5, 3.0, 9.99, 10.0, 25.0, 125.0));
+INSTANTIATE_TEST_SUITE_P(Lambdas, FastPoissonTest,
+                         ::testing::Values(0.5, 3.0, 9.99, 10.0, 25.0, 125.0));
 
 }  // namespace
 }  // namespace faultline::rng

@@ -29,6 +29,8 @@ inline rapidjson::Document load_golden_json(const std::string& name) {
 }
 
 // Exact doubles are stored as strings ("%.17g" or C99 hex floats); strtod reads both.
-inline double exact_double(const rapidjson::Value& v) { return std::strtod(v.GetString(), nullptr); }
+inline double exact_double(const rapidjson::Value& v) {
+  return std::strtod(v.GetString(), nullptr);
+}
 
 }  // namespace faultline::testing

@@ -1,4 +1,7 @@
-// LaneRng: determinism per seed, independent lanes, balanced bits; fill_normals: bodies agree, moments, tails.
+// LaneRng: determinism per seed, independent lanes, balanced bits; fill_normals: bodies agree,
+// moments, tails.
+#include "rng/lane_rng.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -7,7 +10,6 @@
 #include <vector>
 
 #include "rng/fast_rng.hpp"
-#include "rng/lane_rng.hpp"
 
 namespace faultline::rng {
 namespace {
@@ -47,7 +49,8 @@ TEST(LaneRngTest, LanesDifferAndBitsAreBalanced) {
   }
   EXPECT_GT(distinct.size(), static_cast<std::size_t>(steps * 16 - 100));
   const double n = steps * 16.0;  // per bit: mean n/2, sd sqrt(n)/2 = 283
-  for (int bit = 0; bit < 32; ++bit) EXPECT_NEAR(static_cast<double>(ones[bit]), n / 2, 5 * 283) << bit;
+  for (int bit = 0; bit < 32; ++bit)
+    EXPECT_NEAR(static_cast<double>(ones[bit]), n / 2, 5 * 283) << bit;
 }
 
 TEST(LaneRngTest, FillNormalsBodiesAgreeAndConsumeTheSameDraws) {
@@ -58,7 +61,8 @@ TEST(LaneRngTest, FillNormalsBodiesAgreeAndConsumeTheSameDraws) {
     fill_normals(a.data(), n, 0.2, 0.3, la, sa, /*allow_simd=*/true);
     fill_normals(b.data(), n, 0.2, 0.3, lb, sb, /*allow_simd=*/false);
     EXPECT_EQ(a, b) << n;
-    EXPECT_EQ(sa.next_u64(), sb.next_u64()) << n;  // the same ziggurat rejections went to the slow path
+    EXPECT_EQ(sa.next_u64(), sb.next_u64())
+        << n;  // the same ziggurat rejections went to the slow path
   }
 }
 

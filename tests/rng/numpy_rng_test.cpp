@@ -1,5 +1,6 @@
-// NumpyRandomState against numpy_rng_vectors.json: raw MT19937, random_sample, polar normals with their cache,
-// Poisson on both sides of the lambda = 10 switch (with the uniforms consumed), choice(6).
+// NumpyRandomState against numpy_rng_vectors.json: raw MT19937, random_sample, polar normals with
+// their cache, Poisson on both sides of the lambda = 10 switch (with the uniforms consumed),
+// choice(6).
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -18,7 +19,9 @@ using faultline::testing::load_golden_json;
 
 class NumpyRngVectorsTest : public ::testing::Test {
  protected:
-  static void SetUpTestSuite() { doc_ = new rapidjson::Document(load_golden_json("numpy_rng_vectors.json")); }
+  static void SetUpTestSuite() {
+    doc_ = new rapidjson::Document(load_golden_json("numpy_rng_vectors.json"));
+  }
   static void TearDownTestSuite() {
     delete doc_;
     doc_ = nullptr;
@@ -38,7 +41,8 @@ TEST_F(NumpyRngVectorsTest, RawMt19937OutputsMatch) {
 TEST_F(NumpyRngVectorsTest, RandomSampleMatchesBitForBit) {
   for (const auto& s : seeds().GetArray()) {
     NumpyRandomState rng(s["seed"].GetUint());
-    for (const auto& v : s["random_sample"]["hex"].GetArray()) EXPECT_EQ(rng.random_sample(), exact_double(v));
+    for (const auto& v : s["random_sample"]["hex"].GetArray())
+      EXPECT_EQ(rng.random_sample(), exact_double(v));
   }
 }
 
@@ -47,7 +51,8 @@ TEST_F(NumpyRngVectorsTest, StandardNormalsIncludingCachedValues) {
     NumpyRandomState rng(s["seed"].GetUint());
     int i = 0;
     for (const auto& v : s["standard_normal"]["hex"].GetArray()) {
-      EXPECT_EQ(rng.standard_normal(), exact_double(v)) << "seed " << s["seed"].GetUint() << " normal " << i;
+      EXPECT_EQ(rng.standard_normal(), exact_double(v))
+          << "seed " << s["seed"].GetUint() << " normal " << i;
       ++i;
     }
     EXPECT_EQ(i, 21);
@@ -65,7 +70,8 @@ TEST_F(NumpyRngVectorsTest, PoissonValuesAndConsumption) {
         EXPECT_EQ(rng.poisson(lambda), v.GetInt64()) << "lambda " << lambda << " draw " << i;
         ++i;
       }
-      EXPECT_EQ(rng.random_sample(), exact_double(lam.value["next_random_sample"])) << "lambda " << lambda;
+      EXPECT_EQ(rng.random_sample(), exact_double(lam.value["next_random_sample"]))
+          << "lambda " << lambda;
     }
   }
 }
@@ -77,8 +83,8 @@ TEST_F(NumpyRngVectorsTest, ChoiceOfSix) {
   }
 }
 
-// randint(0, 6) is choice(6)'s draw (NumPy's masked rejection with mask 7), so the reference's vectors hold for it;
-// randint(-d, d) offsets the same draws; a one-value range consumes nothing.
+// randint(0, 6) is choice(6)'s draw (NumPy's masked rejection with mask 7), so the reference's
+// vectors hold for it; randint(-d, d) offsets the same draws; a one-value range consumes nothing.
 TEST_F(NumpyRngVectorsTest, RandintIsMaskedRejection) {
   for (const auto& s : seeds().GetArray()) {
     NumpyRandomState rng(s["seed"].GetUint());
@@ -89,7 +95,8 @@ TEST_F(NumpyRngVectorsTest, RandintIsMaskedRejection) {
   NumpyRandomState r(1), fresh(1);
   EXPECT_EQ(r.randint(7, 8), 7);
   EXPECT_EQ(r.next_u32(), fresh.next_u32());
-  // A range of 2^32 values takes one 32-bit draw as is; wider ranges take 64-bit draws (high word first).
+  // A range of 2^32 values takes one 32-bit draw as is; wider ranges take 64-bit draws (high word
+  // first).
   NumpyRandomState w(5), w_ref(5);
   EXPECT_EQ(w.randint(0, std::int64_t{1} << 32), static_cast<std::int64_t>(w_ref.next_u32()));
   const std::int64_t wide = w.randint(0, (std::int64_t{1} << 40) + 1);
@@ -152,8 +159,8 @@ class ReferencePolar {
 };
 
 TEST(NumpyRandomStateTest, BulkNormalsDrawAndSkipLikeSingleDraws) {
-  // Segments of draws and skips (odd and even, crossing block boundaries), from an aligned and from an odd
-  // stream position (one 32-bit draw first), each followed by single draws and a uniform.
+  // Segments of draws and skips (odd and even, crossing block boundaries), from an aligned and from
+  // an odd stream position (one 32-bit draw first), each followed by single draws and a uniform.
   for (bool odd_start : {false, true}) {
     NumpyRandomState bulk(11), plain(11);
     if (odd_start) {
@@ -178,12 +185,14 @@ TEST(NumpyRandomStateTest, BulkNormalsDrawAndSkipLikeSingleDraws) {
   }
 }
 
-// random_samples / skip_samples against one random_sample() at a time: from an aligned start, after an odd number
-// of 32-bit draws, at a block's last doubles, and across many whole blocks (which skip_samples only twists).
+// random_samples / skip_samples against one random_sample() at a time: from an aligned start, after
+// an odd number of 32-bit draws, at a block's last doubles, and across many whole blocks (which
+// skip_samples only twists).
 TEST(NumpyRandomStateTest, BulkSamplesFillAndSkipLikeSingleDraws) {
   for (const int u32_first : {0, 1, 3, 620, 623, 624, 1247}) {
-    for (const std::size_t n : {std::size_t{0}, std::size_t{1}, std::size_t{2}, std::size_t{311}, std::size_t{312},
-                                std::size_t{313}, std::size_t{5000}, std::size_t{100001}}) {
+    for (const std::size_t n :
+         {std::size_t{0}, std::size_t{1}, std::size_t{2}, std::size_t{311}, std::size_t{312},
+          std::size_t{313}, std::size_t{5000}, std::size_t{100001}}) {
       NumpyRandomState one(77), bulk(77), skip(77);
       for (int i = 0; i < u32_first; ++i) {
         one.next_u32();
@@ -208,19 +217,24 @@ TEST(NumpyRandomStateTest, BulkSamplesFillAndSkipLikeSingleDraws) {
   }
 }
 
-// poissons() against one poisson() call per element: a level table mixing lambda 0, the multiplication method,
-// PTRS and lambdas whose counts pass 255 (kept aside), over many blocks, from aligned and odd stream positions.
+// poissons() against one poisson() call per element: a level table mixing lambda 0, the
+// multiplication method, PTRS and lambdas whose counts pass 255 (kept aside), over many blocks,
+// from aligned and odd stream positions.
 TEST(NumpyRandomStateTest, BulkPoissonsEqualSingleDraws) {
   PoissonParams table[256];
   for (int v = 0; v < 256; ++v) {
-    const double lam = v < 20 ? 0.0 : v < 120 ? (v - 20) * 0.1 : v < 250 ? 10.0 + (v - 120) * 0.7 : 300.0 + v;
+    const double lam = v < 20    ? 0.0
+                       : v < 120 ? (v - 20) * 0.1
+                       : v < 250 ? 10.0 + (v - 120) * 0.7
+                                 : 300.0 + v;
     table[v] = prepare_poisson(lam);
   }
   std::vector<std::uint8_t> level(60001);
   std::uint32_t s = 12345u;
   for (auto& l : level) {
     s ^= s << 13, s ^= s >> 17, s ^= s << 5;
-    l = static_cast<std::uint8_t>((s >> 8) % 256u < 6u ? 250u + s % 6u : (s >> 16) % 250u);  // few large lambdas
+    l = static_cast<std::uint8_t>((s >> 8) % 256u < 6u ? 250u + s % 6u
+                                                       : (s >> 16) % 250u);  // few large lambdas
   }
   for (const int u32_first : {0, 1, 623}) {
     for (const std::size_t n : {std::size_t{0}, std::size_t{1}, std::size_t{97}, level.size()}) {
@@ -249,11 +263,13 @@ TEST(NumpyRandomStateTest, BulkPoissonsEqualSingleDraws) {
   }
 }
 
-// polar_pairs + cache_pair_half against standard_normal(): the same values (f * x2, then f * x1), the same cache
-// and the same stream afterwards, from aligned and odd positions and with a cached value already pending.
+// polar_pairs + cache_pair_half against standard_normal(): the same values (f * x2, then f * x1),
+// the same cache and the same stream afterwards, from aligned and odd positions and with a cached
+// value already pending.
 TEST(NumpyRandomStateTest, PolarPairsGiveTheNormalsOfSingleDraws) {
   for (const int u32_first : {0, 1}) {
-    for (const std::size_t pairs : {std::size_t{1}, std::size_t{3}, std::size_t{155}, std::size_t{4000}}) {
+    for (const std::size_t pairs :
+         {std::size_t{1}, std::size_t{3}, std::size_t{155}, std::size_t{4000}}) {
       NumpyRandomState bulk(21), one(21);
       for (int i = 0; i < u32_first; ++i) ASSERT_EQ(bulk.next_u32(), one.next_u32());
       double z = 0.0;
@@ -282,7 +298,8 @@ TEST(NumpyRandomStateTest, PolarPairsGiveTheNormalsOfSingleDraws) {
 TEST(NumpyLoggamTest, MatchesLgammaAtIntegers) {
   EXPECT_EQ(numpy_loggam(1.0), 0.0);
   EXPECT_EQ(numpy_loggam(2.0), 0.0);
-  for (int k = 3; k < 300; ++k) EXPECT_NEAR(numpy_loggam(k), std::lgamma(static_cast<double>(k)), 1e-10) << k;
+  for (int k = 3; k < 300; ++k)
+    EXPECT_NEAR(numpy_loggam(k), std::lgamma(static_cast<double>(k)), 1e-10) << k;
 }
 
 }  // namespace

@@ -1,12 +1,14 @@
-// CDR_LE layouts checked byte by byte against hand-computed offsets, round trips of every message, and
-// malformed input (truncation, lying counts, wrong encapsulation) reported as errors naming the field.
+// CDR_LE layouts checked byte by byte against hand-computed offsets, round trips of every message,
+// and malformed input (truncation, lying counts, wrong encapsulation) reported as errors naming the
+// field.
+#include "ros2/cdr.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cstring>
 #include <random>
 #include <string>
 
-#include "ros2/cdr.hpp"
 #include "ros2/messages.hpp"
 
 namespace faultline::ros2 {
@@ -24,7 +26,8 @@ double f64_at(const std::string& s, std::size_t offset) {
   return v;
 }
 
-// Built field by field: GCC 12 reports -Wmaybe-uninitialized (falsely) for nested brace-initialised strings.
+// Built field by field: GCC 12 reports -Wmaybe-uninitialized (falsely) for nested brace-initialised
+// strings.
 Header header(std::int32_t sec, std::uint32_t nanosec, const char* frame_id) {
   Header h;
   h.stamp.sec = sec;
@@ -58,10 +61,10 @@ std::uint32_t u32_at(const std::string& s, std::size_t offset) {
 
 TEST(CdrWriterTest, HeaderStringLayout) {
   EXPECT_EQ(serialize(header(1, 2, "ab")), bytes({0x00, 0x01, 0x00, 0x00,  // CDR_LE encapsulation
-                                 0x01, 0x00, 0x00, 0x00,  // sec
-                                 0x02, 0x00, 0x00, 0x00,  // nanosec
-                                 0x03, 0x00, 0x00, 0x00,  // length with NUL
-                                 'a', 'b', 0x00}));
+                                                  0x01, 0x00, 0x00, 0x00,  // sec
+                                                  0x02, 0x00, 0x00, 0x00,  // nanosec
+                                                  0x03, 0x00, 0x00, 0x00,  // length with NUL
+                                                  'a', 'b', 0x00}));
 }
 
 TEST(CdrWriterTest, Float64AfterStringAlignsToEightFromBodyStart) {
@@ -95,11 +98,12 @@ TEST(CdrWriterTest, TransformStampedLayout) {
 }
 
 TEST(CdrWriterTest, CameraInfoLayout) {
-  const CameraInfo info = camera_info_from_k({{0, 0}, "cam"}, 1600, 900, {1, 0, 2, 0, 3, 4, 0, 0, 1});
+  const CameraInfo info =
+      camera_info_from_k({{0, 0}, "cam"}, 1600, 900, {1, 0, 2, 0, 3, 4, 0, 0, 1});
   const std::string s = serialize(info);
-  // body: 0..7 stamp, 8..11 len 4, 12..15 "cam\0", 16 height, 20 width, 24 len 10, 28..37 "plumb_bob\0",
-  // 38..39 pad, 40 d count, 44..47 pad (float64 elements align to 8), 48..87 d, 88 k, 160 r, 232 p,
-  // 328 binning_x, 332 binning_y, 336..351 roi offsets/sizes, 352 do_rectify.
+  // body: 0..7 stamp, 8..11 len 4, 12..15 "cam\0", 16 height, 20 width, 24 len 10, 28..37
+  // "plumb_bob\0", 38..39 pad, 40 d count, 44..47 pad (float64 elements align to 8), 48..87 d, 88
+  // k, 160 r, 232 p, 328 binning_x, 332 binning_y, 336..351 roi offsets/sizes, 352 do_rectify.
   ASSERT_EQ(s.size(), 4u + 353u);
   EXPECT_EQ(u32_at(s, 4 + 16), 900u);
   EXPECT_EQ(u32_at(s, 4 + 20), 1600u);
@@ -119,10 +123,11 @@ TEST(CdrWriterTest, DefaultMarkerLayout) {
   MarkerArray a;
   a.markers.resize(1);
   const std::string s = serialize(a);
-  // body: 0 count, then the marker from 4: stamp 4..11, frame_id 12..16, ns 20..24, id/type/action 28..39,
-  // pose 40..95 (w at 88), scale 96..119, color 120..135, lifetime 136..143, frame_locked 144, points 148,
-  // colors 152, texture_resource 156..160, texture: stamp 164, frame_id 172..176, format 180..184, data 188,
-  // uv_coordinates 192, text 196..200, mesh_resource 204..208, mesh_file 212..216 + 220, embedded 224.
+  // body: 0 count, then the marker from 4: stamp 4..11, frame_id 12..16, ns 20..24,
+  // id/type/action 28..39, pose 40..95 (w at 88), scale 96..119, color 120..135, lifetime 136..143,
+  // frame_locked 144, points 148, colors 152, texture_resource 156..160, texture: stamp 164,
+  // frame_id 172..176, format 180..184, data 188, uv_coordinates 192, text 196..200, mesh_resource
+  // 204..208, mesh_file 212..216 + 220, embedded 224.
   ASSERT_EQ(s.size(), 4u + 225u);
   EXPECT_EQ(u32_at(s, 4 + 0), 1u);
   EXPECT_EQ(u32_at(s, 4 + 32), static_cast<std::uint32_t>(Marker::kCube));
@@ -134,12 +139,15 @@ TEST(CdrWriterTest, DefaultMarkerLayout) {
 }
 
 TEST(CdrWriterTest, CompressedImagePrefixPlusDataIsTheMessage) {
-  const CompressedImage img = jpeg_image(header(5, 6, "CAM_FRONT"), std::string("\xFF\xD8\xFF\xD9", 4));
-  EXPECT_EQ(compressed_image_prefix(img.header, img.format, img.data.size()) + img.data, serialize(img));
+  const CompressedImage img =
+      jpeg_image(header(5, 6, "CAM_FRONT"), std::string("\xFF\xD8\xFF\xD9", 4));
+  EXPECT_EQ(compressed_image_prefix(img.header, img.format, img.data.size()) + img.data,
+            serialize(img));
 }
 
 TEST(CdrRoundTripTest, EveryMessage) {
-  const CompressedImage img = jpeg_image(header(5, 6, "CAM_FRONT"), std::string("\xFF\xD8\x00\xFF\xD9", 5));
+  const CompressedImage img =
+      jpeg_image(header(5, 6, "CAM_FRONT"), std::string("\xFF\xD8\x00\xFF\xD9", 5));
   auto img2 = deserialize<CompressedImage>(serialize(img));
   ASSERT_TRUE(img2.is_ok()) << img2.status().to_string();
   EXPECT_EQ(img2->header.frame_id, "CAM_FRONT");
@@ -159,7 +167,8 @@ TEST(CdrRoundTripTest, EveryMessage) {
   EXPECT_EQ(raw2->encoding, "bgr8");
   EXPECT_EQ(raw2->data, raw.data);
 
-  CameraInfo info = camera_info_from_k({{3, 4}, "CAM_BACK"}, 1600, 900, {1266.4, 0, 816.3, 0, 1266.4, 491.5, 0, 0, 1});
+  CameraInfo info = camera_info_from_k({{3, 4}, "CAM_BACK"}, 1600, 900,
+                                       {1266.4, 0, 816.3, 0, 1266.4, 491.5, 0, 0, 1});
   info.roi = {1, 2, 3, 4, true};
   auto info2 = deserialize<CameraInfo>(serialize(info));
   ASSERT_TRUE(info2.is_ok());
@@ -170,8 +179,10 @@ TEST(CdrRoundTripTest, EveryMessage) {
   EXPECT_EQ(info2->roi.width, 4u);
 
   TFMessage tf;
-  tf.transforms.push_back(transform(header(1, 0, "map"), "base_link", {1, 2, 3}, {0.1, 0.2, 0.3, 0.9}));
-  tf.transforms.push_back(transform(header(1, 0, "base_link"), "CAM_FRONT", {4, 5, 6}, {0, 0, 0, 1}));
+  tf.transforms.push_back(
+      transform(header(1, 0, "map"), "base_link", {1, 2, 3}, {0.1, 0.2, 0.3, 0.9}));
+  tf.transforms.push_back(
+      transform(header(1, 0, "base_link"), "CAM_FRONT", {4, 5, 6}, {0, 0, 0, 1}));
   auto tf2 = deserialize<TFMessage>(serialize(tf));
   ASSERT_TRUE(tf2.is_ok());
   ASSERT_EQ(tf2->transforms.size(), 2u);
@@ -180,7 +191,10 @@ TEST(CdrRoundTripTest, EveryMessage) {
 
   DiagnosticArray diag;
   diag.header = {{7, 8}, "CAM_FRONT"};
-  diag.status.push_back({DiagnosticStatus::kWarn, "faultline/fog", "fog severity 3", "CAM_FRONT",
+  diag.status.push_back({DiagnosticStatus::kWarn,
+                         "faultline/fog",
+                         "fog severity 3",
+                         "CAM_FRONT",
                          {{"action", "corrupt"}, {"severity", "3"}}});
   auto diag2 = deserialize<DiagnosticArray>(serialize(diag));
   ASSERT_TRUE(diag2.is_ok());
@@ -238,10 +252,12 @@ TEST(CdrReaderTest, EveryTruncationIsAnErrorNotACrash) {
   for (std::size_t n = 0; n < full.size(); ++n) {
     auto r = deserialize<DiagnosticArray>(full.substr(0, n));
     ASSERT_FALSE(r.is_ok()) << "prefix of " << n << " bytes decoded";
-    EXPECT_TRUE(r.status().code() == StatusCode::kTruncated || r.status().code() == StatusCode::kCorruptData)
+    EXPECT_TRUE(r.status().code() == StatusCode::kTruncated ||
+                r.status().code() == StatusCode::kCorruptData)
         << r.status().to_string();
   }
-  const std::string info = serialize(camera_info_from_k({{0, 0}, "cam"}, 2, 2, {1, 0, 0, 0, 1, 0, 0, 0, 1}));
+  const std::string info =
+      serialize(camera_info_from_k({{0, 0}, "cam"}, 2, 2, {1, 0, 0, 0, 1, 0, 0, 0, 1}));
   for (std::size_t n = 0; n < info.size(); ++n) {
     EXPECT_FALSE(deserialize<CameraInfo>(info.substr(0, n)).is_ok()) << n;
   }
@@ -296,7 +312,8 @@ TEST(CdrReaderTest, LyingDataCountNamesTheField) {
   auto r = deserialize<CompressedImage>(s);
   ASSERT_FALSE(r.is_ok());
   EXPECT_EQ(r.status().code(), StatusCode::kCorruptData);
-  EXPECT_NE(r.status().message().find("sensor_msgs/msg/CompressedImage: field data at byte 32"), std::string::npos)
+  EXPECT_NE(r.status().message().find("sensor_msgs/msg/CompressedImage: field data at byte 32"),
+            std::string::npos)
       << r.status().message();
 }
 
@@ -307,7 +324,8 @@ TEST(CdrReaderTest, LyingSequenceCountOfStructsIsRejectedBeforeDecoding) {
   s += std::string(64, '\0');
   auto r = deserialize<TFMessage>(s);
   ASSERT_FALSE(r.is_ok());
-  EXPECT_NE(r.status().message().find("field transforms"), std::string::npos) << r.status().message();
+  EXPECT_NE(r.status().message().find("field transforms"), std::string::npos)
+      << r.status().message();
 }
 
 TEST(CdrReaderTest, StringWithoutNulIsCorrupt) {

@@ -1,10 +1,12 @@
-// ros2msg definitions: the exact text for a small type, and the rosbag2 order and uniqueness of dependencies.
+// ros2msg definitions: the exact text for a small type, and the rosbag2 order and uniqueness of
+// dependencies.
+#include "ros2/schema.hpp"
+
 #include <gtest/gtest.h>
 
 #include <string>
 
 #include "ros2/messages.hpp"
-#include "ros2/schema.hpp"
 
 namespace faultline::ros2 {
 namespace {
@@ -22,10 +24,14 @@ TEST(SchemaTest, CompressedImageExactText) {
   ASSERT_TRUE(def.is_ok());
   EXPECT_EQ(*def,
             "std_msgs/Header header\nstring format\nuint8[] data\n"
-            "\n" + kRule + "\nMSG: std_msgs/Header\n"
-            "builtin_interfaces/Time stamp\nstring frame_id\n"
-            "\n" + kRule + "\nMSG: builtin_interfaces/Time\n"
-            "int32 sec\nuint32 nanosec\n");
+            "\n" +
+                kRule +
+                "\nMSG: std_msgs/Header\n"
+                "builtin_interfaces/Time stamp\nstring frame_id\n"
+                "\n" +
+                kRule +
+                "\nMSG: builtin_interfaces/Time\n"
+                "int32 sec\nuint32 nanosec\n");
 }
 
 TEST(SchemaTest, DependenciesDepthFirstInSortedOrder) {
@@ -37,7 +43,7 @@ TEST(SchemaTest, DependenciesDepthFirstInSortedOrder) {
   ASSERT_NE(roi, std::string::npos);
   ASSERT_NE(header, std::string::npos);
   ASSERT_NE(time, std::string::npos);
-  EXPECT_LT(roi, header);  // "sensor_msgs/..." sorts before "std_msgs/..."
+  EXPECT_LT(roi, header);   // "sensor_msgs/..." sorts before "std_msgs/..."
   EXPECT_LT(header, time);  // Time is Header's dependency, written right after it
   EXPECT_EQ(def->rfind("std_msgs/Header header\n", 0), 0u);
 }
@@ -45,18 +51,20 @@ TEST(SchemaTest, DependenciesDepthFirstInSortedOrder) {
 TEST(SchemaTest, EachDependencyOnce) {
   auto def = ros2msg_definition("visualization_msgs/msg/MarkerArray");
   ASSERT_TRUE(def.is_ok());
-  for (const char* dep : {"visualization_msgs/Marker", "std_msgs/Header", "builtin_interfaces/Time",
-                          "builtin_interfaces/Duration", "geometry_msgs/Pose", "geometry_msgs/Point",
-                          "geometry_msgs/Quaternion", "geometry_msgs/Vector3", "std_msgs/ColorRGBA",
-                          "sensor_msgs/CompressedImage", "visualization_msgs/UVCoordinate",
-                          "visualization_msgs/MeshFile"}) {
+  for (const char* dep :
+       {"visualization_msgs/Marker", "std_msgs/Header", "builtin_interfaces/Time",
+        "builtin_interfaces/Duration", "geometry_msgs/Pose", "geometry_msgs/Point",
+        "geometry_msgs/Quaternion", "geometry_msgs/Vector3", "std_msgs/ColorRGBA",
+        "sensor_msgs/CompressedImage", "visualization_msgs/UVCoordinate",
+        "visualization_msgs/MeshFile"}) {
     EXPECT_EQ(count_of(*def, std::string("MSG: ") + dep + "\n"), 1u) << dep;
   }
   EXPECT_EQ(count_of(*def, kRule), 12u);
   auto tf = ros2msg_definition("tf2_msgs/msg/TFMessage");
   ASSERT_TRUE(tf.is_ok());
-  for (const char* dep : {"geometry_msgs/TransformStamped", "geometry_msgs/Transform", "geometry_msgs/Vector3",
-                          "geometry_msgs/Quaternion", "std_msgs/Header", "builtin_interfaces/Time"}) {
+  for (const char* dep :
+       {"geometry_msgs/TransformStamped", "geometry_msgs/Transform", "geometry_msgs/Vector3",
+        "geometry_msgs/Quaternion", "std_msgs/Header", "builtin_interfaces/Time"}) {
     EXPECT_EQ(count_of(*tf, std::string("MSG: ") + dep + "\n"), 1u) << dep;
   }
   auto diag = ros2msg_definition("diagnostic_msgs/msg/DiagnosticArray");
@@ -66,10 +74,11 @@ TEST(SchemaTest, EachDependencyOnce) {
 }
 
 TEST(SchemaTest, EveryTopLevelTypeHasADefinition) {
-  for (const char* t : {MessageTraits<CompressedImage>::kTypeName, MessageTraits<Image>::kTypeName,
-                        MessageTraits<CameraInfo>::kTypeName, MessageTraits<TFMessage>::kTypeName,
-                        MessageTraits<DiagnosticArray>::kTypeName, MessageTraits<MarkerArray>::kTypeName,
-                        MessageTraits<TransformStamped>::kTypeName}) {
+  for (const char* t :
+       {MessageTraits<CompressedImage>::kTypeName, MessageTraits<Image>::kTypeName,
+        MessageTraits<CameraInfo>::kTypeName, MessageTraits<TFMessage>::kTypeName,
+        MessageTraits<DiagnosticArray>::kTypeName, MessageTraits<MarkerArray>::kTypeName,
+        MessageTraits<TransformStamped>::kTypeName}) {
     EXPECT_TRUE(ros2msg_definition(t).is_ok()) << t;
   }
   EXPECT_EQ(known_types().size(), 22u);

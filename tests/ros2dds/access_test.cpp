@@ -1,7 +1,8 @@
-// Limits and access (#22) of the ROS 2 bridges' ZeroMQ sides: ros2_in's PUB binds beyond loopback only with
-// allow_remote and serves CURVE subscribers with the right key (every frame, by seq) but not a wrong one (refused,
-// counted); ros2_out's SUB takes every frame from a CURVE publisher with the right key and nothing with a wrong one.
-// DDS runs on loopback in a test-only domain, as in interop_test.cpp.
+// Limits and access (#22) of the ROS 2 bridges' ZeroMQ sides: ros2_in's PUB binds beyond loopback
+// only with allow_remote and serves CURVE subscribers with the right key (every frame, by seq) but
+// not a wrong one (refused, counted); ros2_out's SUB takes every frame from a CURVE publisher with
+// the right key and nothing with a wrong one. DDS runs on loopback in a test-only domain, as in
+// interop_test.cpp.
 #include <gtest/gtest.h>
 #include <spdlog/sinks/null_sink.h>
 #include <unistd.h>
@@ -64,9 +65,11 @@ class BridgeAccessTest : public ::testing::Test {
   void SetUp() override {
     domain_ = 100 + static_cast<int>(::getpid() % 100);
     ::setenv("CYCLONEDDS_URI",
-             "<CycloneDDS><Domain Id=\"any\"><General><Interfaces><NetworkInterface address=\"127.0.0.1\"/>"
+             "<CycloneDDS><Domain Id=\"any\"><General><Interfaces><NetworkInterface "
+             "address=\"127.0.0.1\"/>"
              "</Interfaces><AllowMulticast>false</AllowMulticast></General><Discovery>"
-             "<ParticipantIndex>auto</ParticipantIndex><MaxAutoParticipantIndex>19</MaxAutoParticipantIndex>"
+             "<ParticipantIndex>auto</ParticipantIndex><MaxAutoParticipantIndex>19</"
+             "MaxAutoParticipantIndex>"
              "<Peers><Peer address=\"127.0.0.1\"/></Peers></Discovery></Domain></CycloneDDS>",
              1);
   }
@@ -93,7 +96,8 @@ class BridgeAccessTest : public ::testing::Test {
 
 TEST_F(BridgeAccessTest, Ros2InBindsBeyondLoopbackOnlyWithAllowRemote) {
   InBridgeConfig cfg = In("tcp://0.0.0.0:*");
-  const std::string what = ThrownMessage([&] { InBridge b(cfg, "ros2_in", QuietLogger("ros2_in")); });
+  const std::string what =
+      ThrownMessage([&] { InBridge b(cfg, "ros2_in", QuietLogger("ros2_in")); });
   EXPECT_NE(what.find("endpoint = tcp://0.0.0.0:*"), std::string::npos) << what;
   EXPECT_NE(what.find("allow_remote"), std::string::npos) << what;
   cfg.access.allow_remote = true;
@@ -125,7 +129,8 @@ TEST_F(BridgeAccessTest, Ros2InServesTheRightKeyEveryFrameAndRefusesAWrongKey) {
     image.format("jpeg");
     image.data(Jpeg(i));
     ASSERT_TRUE(writer->write(&image));
-    ASSERT_EQ(writer->wait_for_acknowledgments(eprosima::fastrtps::Duration_t(30, 0)), ReturnCode_t::RETCODE_OK);
+    ASSERT_EQ(writer->wait_for_acknowledgments(eprosima::fastrtps::Duration_t(30, 0)),
+              ReturnCode_t::RETCODE_OK);
   }
   for (int seq = 1; seq <= kFrames; ++seq) {
     auto r = good.receive(30 * kNsPerSec);

@@ -1,5 +1,8 @@
-// The pure parts of the ROS 2 edge: stamps, names, raw encodings to BGR, CameraInfo from K, QoS and domain
-// parameters, static transform chains, fault events as diagnostics, and the bridges' topic rules.
+// The pure parts of the ROS 2 edge: stamps, names, raw encodings to BGR, CameraInfo from K, QoS and
+// domain parameters, static transform chains, fault events as diagnostics, and the bridges' topic
+// rules.
+#include "ros2dds/convert.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cstdlib>
@@ -8,7 +11,6 @@
 #include "ros2/naming.hpp"
 #include "ros2dds/bridge_in.hpp"
 #include "ros2dds/bridge_out.hpp"
-#include "ros2dds/convert.hpp"
 #include "ros2dds/dds.hpp"
 #include "ros2dds/diagnostics.hpp"
 #include "ros2dds/tf_tree.hpp"
@@ -36,7 +38,8 @@ TEST(RosTimeTest, NegativeStampKeepsNanosecInRange) {
 }
 
 TEST(NamesTest, RosTopicGetsTheRtPrefix) {
-  EXPECT_EQ(dds_topic_name("/cam_front/image_rect_compressed").value(), "rt/cam_front/image_rect_compressed");
+  EXPECT_EQ(dds_topic_name("/cam_front/image_rect_compressed").value(),
+            "rt/cam_front/image_rect_compressed");
   EXPECT_EQ(dds_topic_name("/tf_static").value(), "rt/tf_static");
 }
 
@@ -45,12 +48,14 @@ TEST(NamesTest, InvalidRosTopicsAreRefusedByName) {
     auto r = dds_topic_name(bad);
     ASSERT_FALSE(r) << bad;
     EXPECT_EQ(r.status().code(), StatusCode::kInvalidArgument);
-    EXPECT_NE(r.status().message().find(std::string("'") + bad + "'"), std::string::npos) << r.status().message();
+    EXPECT_NE(r.status().message().find(std::string("'") + bad + "'"), std::string::npos)
+        << r.status().message();
   }
 }
 
 TEST(NamesTest, DdsTypeNamesReadAsRosTypes) {
-  EXPECT_EQ(ros_type_name("sensor_msgs::msg::dds_::CompressedImage_"), "sensor_msgs/msg/CompressedImage");
+  EXPECT_EQ(ros_type_name("sensor_msgs::msg::dds_::CompressedImage_"),
+            "sensor_msgs/msg/CompressedImage");
   EXPECT_EQ(ros_type_name("std_msgs::msg::dds_::String_"), "std_msgs/msg/String");
   EXPECT_EQ(ros_type_name("SomethingElse"), "SomethingElse");
   EXPECT_EQ(image_type_of("sensor_msgs::msg::dds_::CompressedImage_"), ImageType::kCompressed);
@@ -70,8 +75,8 @@ TEST(NamesTest, ImageTransportConventions) {
 
 class RawToBgrTest : public ::testing::Test {
  protected:
-  static RawImageView View(const char* encoding, std::uint32_t w, std::uint32_t h, std::uint32_t step,
-                           const std::vector<std::uint8_t>& bytes) {
+  static RawImageView View(const char* encoding, std::uint32_t w, std::uint32_t h,
+                           std::uint32_t step, const std::vector<std::uint8_t>& bytes) {
     return RawImageView{encoding, w, h, step, false, bytes.data(), bytes.size()};
   }
   static void ExpectPixel(const cv::Mat& m, int x, int y, int b, int g, int r) {
@@ -118,10 +123,12 @@ TEST_F(RawToBgrTest, Bgra8AndRgba8DropAlpha) {
 }
 
 TEST_F(RawToBgrTest, Yuv422IsUyvyAndYuy2IsYuyv) {
-  // Neutral chroma (U = V = 128) gives grey; Y is video range (BT.601, as cv_bridge converts): 16 -> 0, 235 -> 255.
+  // Neutral chroma (U = V = 128) gives grey; Y is video range (BT.601, as cv_bridge converts): 16
+  // -> 0, 235 -> 255.
   const std::vector<std::uint8_t> uyvy{128, 16, 128, 235};
   const std::vector<std::uint8_t> yuyv{16, 128, 235, 128};
-  for (const auto& [encoding, bytes] : {std::pair{"yuv422", uyvy}, std::pair{"yuv422_yuy2", yuyv}}) {
+  for (const auto& [encoding, bytes] :
+       {std::pair{"yuv422", uyvy}, std::pair{"yuv422_yuy2", yuyv}}) {
     auto m = raw_to_bgr(View(encoding, 2, 1, 4, bytes));
     ASSERT_TRUE(m) << encoding << ": " << m.status().message();
     ExpectPixel(*m, 0, 0, 0, 0, 0);
@@ -155,8 +162,15 @@ TEST_F(RawToBgrTest, InconsistentSizesAreCorruptData) {
 }
 
 TEST(CameraInfoTest, NuScenesIntrinsicsBecomeRectifiedPlumbBob) {
-  const std::vector<double> k{1266.417203046554, 0.0, 816.2670197447984, 0.0, 1266.417203046554,
-                              491.50706579294757, 0.0, 0.0, 1.0};
+  const std::vector<double> k{1266.417203046554,
+                              0.0,
+                              816.2670197447984,
+                              0.0,
+                              1266.417203046554,
+                              491.50706579294757,
+                              0.0,
+                              0.0,
+                              1.0};
   const CameraInfoValues c = camera_info_from_intrinsics(k, 1600, 900);
   EXPECT_EQ(c.width, 1600u);
   EXPECT_EQ(c.height, 900u);
@@ -164,7 +178,8 @@ TEST(CameraInfoTest, NuScenesIntrinsicsBecomeRectifiedPlumbBob) {
   EXPECT_EQ(c.d, std::vector<double>(5, 0.0));
   EXPECT_EQ(c.r, (std::array<double, 9>{1, 0, 0, 0, 1, 0, 0, 0, 1}));
   EXPECT_EQ(c.k, (std::array<double, 9>{k[0], k[1], k[2], k[3], k[4], k[5], k[6], k[7], k[8]}));
-  EXPECT_EQ(c.p, (std::array<double, 12>{k[0], k[1], k[2], 0, k[3], k[4], k[5], 0, k[6], k[7], k[8], 0}));
+  EXPECT_EQ(
+      c.p, (std::array<double, 12>{k[0], k[1], k[2], 0, k[3], k[4], k[5], 0, k[6], k[7], k[8], 0}));
 }
 
 TEST(CameraInfoTest, UnknownIntrinsicsGiveZeroKAndP) {
@@ -213,7 +228,8 @@ TEST(DomainTest, BadValuesThrowNamingThem) {
 TEST(StaticTransformsTest, ChainComposesToTheBase) {
   StaticTransforms tf;
   const double h = std::sqrt(0.5);
-  // base_link -> camera_link: 1 m forward, yawed +90 degrees; camera_link -> optical: 0.5 m along camera_link x.
+  // base_link -> camera_link: 1 m forward, yawed +90 degrees; camera_link -> optical: 0.5 m along
+  // camera_link x.
   tf.set("base_link", "camera_link", Rigid{{1, 0, 0}, {h, 0, 0, h}});
   tf.set("camera_link", "optical", Rigid{{0.5, 0, 0}, {1, 0, 0, 0}});
   auto r = tf.lookup("base_link", "optical");
@@ -251,9 +267,9 @@ TEST(DiagnosticsTest, CorruptionIsAWarningListingTheFault) {
   EXPECT_EQ(d.hardware_id, "CAM_FRONT");
   EXPECT_EQ(d.message, "corrupt: fog/3");
   const std::vector<std::pair<std::string, std::string>> expected{
-      {"action", "corrupt"},      {"source_seq", "17"},     {"sample_token", "abc"},
-      {"injector_latency_ns", "1234"}, {"fault0.name", "fog"}, {"fault0.severity", "3"},
-      {"fault0.seed", "99"},      {"fault0.rng", "numpy"},  {"fault0.t", "0.5"}};
+      {"action", "corrupt"},           {"source_seq", "17"},    {"sample_token", "abc"},
+      {"injector_latency_ns", "1234"}, {"fault0.name", "fog"},  {"fault0.severity", "3"},
+      {"fault0.seed", "99"},           {"fault0.rng", "numpy"}, {"fault0.t", "0.5"}};
   EXPECT_EQ(d.values, expected);
 }
 
@@ -269,15 +285,18 @@ TEST(DiagnosticsTest, LevelsFollowTheAction) {
 
 TEST(TopicRulesTest, ReplayStripsTheFaultedNamespace) {
   OutBridgeConfig c;
-  EXPECT_EQ(ros_topic_for(c, "/faulty/cam_front/image_rect_compressed"), "/cam_front/image_rect_compressed");
-  EXPECT_EQ(ros_camera_info_topic_for(c, "/faulty/cam_front/image_rect_compressed"), "/cam_front/camera_info");
+  EXPECT_EQ(ros_topic_for(c, "/faulty/cam_front/image_rect_compressed"),
+            "/cam_front/image_rect_compressed");
+  EXPECT_EQ(ros_camera_info_topic_for(c, "/faulty/cam_front/image_rect_compressed"),
+            "/cam_front/camera_info");
   EXPECT_EQ(ros_topic_for(c, "/other/cam_front/image"), "");
 }
 
 TEST(TopicRulesTest, NuscenesNamesMatchTheRosbag2Conversion) {
   OutBridgeConfig c;
   c.names = "nuscenes";
-  EXPECT_EQ(ros_topic_for(c, "/faulty/cam_front/image_rect_compressed"), ros2::nuscenes_image_topic("CAM_FRONT"));
+  EXPECT_EQ(ros_topic_for(c, "/faulty/cam_front/image_rect_compressed"),
+            ros2::nuscenes_image_topic("CAM_FRONT"));
   EXPECT_EQ(ros_camera_info_topic_for(c, "/faulty/cam_back_left/image_rect_compressed"),
             ros2::nuscenes_camera_info_topic("CAM_BACK_LEFT"));
   EXPECT_EQ(ros_frame_id_for(c, "cam_front_right"), "CAM_FRONT_RIGHT");
@@ -287,7 +306,8 @@ TEST(TopicRulesTest, NuscenesNamesMatchTheRosbag2Conversion) {
   EXPECT_EQ(ros_frame_id_for(c, "cam_a_optical"), "cam_a_optical");
   EXPECT_EQ(ros_frame_id_for(c, "base_link"), "base_link");
   c.remap["/CAM_BACK/image_rect_compressed"] = "/rear/compressed";
-  EXPECT_EQ(ros_topic_for(c, "/faulty/cam_back/image_rect_compressed"), "/rear/compressed") << "remap comes after";
+  EXPECT_EQ(ros_topic_for(c, "/faulty/cam_back/image_rect_compressed"), "/rear/compressed")
+      << "remap comes after";
   c.names = "as_is";
   EXPECT_EQ(ros_frame_id_for(c, "cam_front_right"), "cam_front_right");
   c.names = "upper";
@@ -299,8 +319,10 @@ TEST(TopicRulesTest, ProxyAppendsTheSuffixAndRemaps) {
   c.strip_prefix = "/faulty/ros2";
   c.topic_suffix = "/faulty";
   c.remap["/rear/image_raw/faulty"] = "/rear_faulty/image_raw";
-  EXPECT_EQ(ros_topic_for(c, "/faulty/ros2/front/image_raw/compressed"), "/front/image_raw/compressed/faulty");
-  EXPECT_EQ(ros_camera_info_topic_for(c, "/faulty/ros2/front/image_raw/compressed"), "/front/camera_info/faulty");
+  EXPECT_EQ(ros_topic_for(c, "/faulty/ros2/front/image_raw/compressed"),
+            "/front/image_raw/compressed/faulty");
+  EXPECT_EQ(ros_camera_info_topic_for(c, "/faulty/ros2/front/image_raw/compressed"),
+            "/front/camera_info/faulty");
   EXPECT_EQ(ros_topic_for(c, "/faulty/ros2/rear/image_raw"), "/rear_faulty/image_raw");
   InBridgeConfig in;
   EXPECT_EQ(faultline_topic(in, "/front/image_raw/compressed"), "/ros2/front/image_raw/compressed");
@@ -311,8 +333,8 @@ TEST(CameraNamesTest, ExplicitThenNamespaceThenInOrder) {
   c.topics = {"/front/image_raw/compressed", "/cam_back/image_rect_compressed", "/left/image_raw",
               "/right/image_raw"};
   c.channels["/right/image_raw"] = "CAM_FRONT";
-  EXPECT_EQ(assign_cameras(c),
-            (std::vector<std::string>{"CAM_FRONT_RIGHT", "CAM_BACK", "CAM_FRONT_LEFT", "CAM_FRONT"}));
+  EXPECT_EQ(assign_cameras(c), (std::vector<std::string>{"CAM_FRONT_RIGHT", "CAM_BACK",
+                                                         "CAM_FRONT_LEFT", "CAM_FRONT"}));
 }
 
 TEST(CameraNamesTest, UnknownRepeatedOrSeventhIsAnError) {
@@ -327,7 +349,8 @@ TEST(CameraNamesTest, UnknownRepeatedOrSeventhIsAnError) {
   InBridgeConfig c;
   c.topics = {"/a/image", "/b/image"};
   c.channels["/a/image"] = "FRONT";
-  EXPECT_NE(message_of(c).find("channels./a/image = FRONT: unknown camera"), std::string::npos) << message_of(c);
+  EXPECT_NE(message_of(c).find("channels./a/image = FRONT: unknown camera"), std::string::npos)
+      << message_of(c);
   c.channels["/a/image"] = "CAM_BACK";
   c.channels["/b/image"] = "CAM_BACK";
   EXPECT_NE(message_of(c).find("CAM_BACK"), std::string::npos);

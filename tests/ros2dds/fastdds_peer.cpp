@@ -1,9 +1,9 @@
 #include "fastdds_peer.hpp"
 
-#include <fastdds/dds/domain/DomainParticipantFactory.hpp>
 #include <fastdds/rtps/transport/UDPv4TransportDescriptor.h>
 #include <fastrtps/utils/IPLocator.h>
 
+#include <fastdds/dds/domain/DomainParticipantFactory.hpp>
 #include <stdexcept>
 #include <thread>
 
@@ -20,8 +20,9 @@ FastPeer::FastPeer(int domain_id) {
   pq.transport().user_transports.push_back(udp);
   pq.wire_protocol().builtin.avoid_builtin_multicast = true;
   pq.wire_protocol().builtin.metatrafficMulticastLocatorList.clear();
-  // Unicast discovery: the RTPS well-known metatraffic ports of participant indices 0..19 on 127.0.0.1
-  // (7400 + 250 * domain + 10 + 2 * index), where Cyclone DDS (ParticipantIndex auto) listens too.
+  // Unicast discovery: the RTPS well-known metatraffic ports of participant indices 0..19 on
+  // 127.0.0.1 (7400 + 250 * domain + 10 + 2 * index), where Cyclone DDS (ParticipantIndex auto)
+  // listens too.
   for (std::uint32_t index = 0; index < 20; ++index) {
     eprosima::fastrtps::rtps::Locator_t peer;
     eprosima::fastrtps::rtps::IPLocator::setIPv4(peer, 127, 0, 0, 1);
@@ -29,7 +30,8 @@ FastPeer::FastPeer(int domain_id) {
     pq.wire_protocol().builtin.initialPeersList.push_back(peer);
   }
   participant_ = dds::DomainParticipantFactory::get_instance()->create_participant(domain_id, pq);
-  if (!participant_) throw std::runtime_error("Fast DDS participant on domain " + std::to_string(domain_id));
+  if (!participant_)
+    throw std::runtime_error("Fast DDS participant on domain " + std::to_string(domain_id));
   publisher_ = participant_->create_publisher(dds::PUBLISHER_QOS_DEFAULT);
   subscriber_ = participant_->create_subscriber(dds::SUBSCRIBER_QOS_DEFAULT);
 }
@@ -54,8 +56,10 @@ namespace {
 
 template <class Qos>
 void apply(Qos& q, const PeerQos& p) {
-  q.reliability().kind = p.reliable ? dds::RELIABLE_RELIABILITY_QOS : dds::BEST_EFFORT_RELIABILITY_QOS;
-  q.durability().kind = p.transient_local ? dds::TRANSIENT_LOCAL_DURABILITY_QOS : dds::VOLATILE_DURABILITY_QOS;
+  q.reliability().kind =
+      p.reliable ? dds::RELIABLE_RELIABILITY_QOS : dds::BEST_EFFORT_RELIABILITY_QOS;
+  q.durability().kind =
+      p.transient_local ? dds::TRANSIENT_LOCAL_DURABILITY_QOS : dds::VOLATILE_DURABILITY_QOS;
   q.history().kind = p.keep_all ? dds::KEEP_ALL_HISTORY_QOS : dds::KEEP_LAST_HISTORY_QOS;
   q.history().depth = p.depth;
 }
@@ -65,14 +69,16 @@ void apply(Qos& q, const PeerQos& p) {
 dds::DataWriter* FastPeer::make_writer(dds::Topic* topic, const PeerQos& qos) {
   dds::DataWriterQos wq = dds::DATAWRITER_QOS_DEFAULT;
   apply(wq, qos);
-  // Heartbeats every 20 ms instead of 3 s: wait_for_acknowledgments returns as soon as the reader acknowledged.
+  // Heartbeats every 20 ms instead of 3 s: wait_for_acknowledgments returns as soon as the reader
+  // acknowledged.
   wq.reliable_writer_qos().times.heartbeatPeriod = eprosima::fastrtps::Duration_t(0, 20'000'000);
   dds::DataWriter* w = publisher_->create_datawriter(topic, wq);
   if (!w) throw std::runtime_error("Fast DDS writer on " + topic->get_name());
   return w;
 }
 
-dds::DataReader* FastPeer::make_reader(dds::Topic* topic, const PeerQos& qos, dds::DataReaderListener* listener) {
+dds::DataReader* FastPeer::make_reader(dds::Topic* topic, const PeerQos& qos,
+                                       dds::DataReaderListener* listener) {
   dds::DataReaderQos rq = dds::DATAREADER_QOS_DEFAULT;
   apply(rq, qos);
   dds::DataReader* r = subscriber_->create_datareader(topic, rq, listener);
@@ -87,7 +93,8 @@ bool FastPeer::wait_matched(dds::DataWriter* writer, int count, std::chrono::mil
     (void)writer->get_publication_matched_status(st);
     if (st.current_count >= count) return true;
     if (std::chrono::steady_clock::now() > deadline) return false;
-    std::this_thread::sleep_for(std::chrono::milliseconds(5));  // discovery: bounded wait, not an assertion
+    std::this_thread::sleep_for(
+        std::chrono::milliseconds(5));  // discovery: bounded wait, not an assertion
   }
 }
 
@@ -98,7 +105,8 @@ bool FastPeer::wait_matched(dds::DataReader* reader, int count, std::chrono::mil
     (void)reader->get_subscription_matched_status(st);
     if (st.current_count >= count) return true;
     if (std::chrono::steady_clock::now() > deadline) return false;
-    std::this_thread::sleep_for(std::chrono::milliseconds(5));  // discovery: bounded wait, not an assertion
+    std::this_thread::sleep_for(
+        std::chrono::milliseconds(5));  // discovery: bounded wait, not an assertion
   }
 }
 

@@ -1,7 +1,10 @@
-// The Fast DDS side of the cross-vendor test: a participant on loopback UDP only (unicast discovery to 127.0.0.1,
-// no shared memory, no multicast), typed writers, and readers that collect every sample for the test to check.
+// The Fast DDS side of the cross-vendor test: a participant on loopback UDP only (unicast discovery
+// to 127.0.0.1, no shared memory, no multicast), typed writers, and readers that collect every
+// sample for the test to check.
 #pragma once
 
+#include <chrono>
+#include <condition_variable>
 #include <fastdds/dds/domain/DomainParticipant.hpp>
 #include <fastdds/dds/publisher/DataWriter.hpp>
 #include <fastdds/dds/publisher/Publisher.hpp>
@@ -10,9 +13,6 @@
 #include <fastdds/dds/subscriber/SampleInfo.hpp>
 #include <fastdds/dds/subscriber/Subscriber.hpp>
 #include <fastdds/dds/topic/TypeSupport.hpp>
-
-#include <chrono>
-#include <condition_variable>
 #include <map>
 #include <memory>
 #include <mutex>
@@ -70,25 +70,31 @@ class FastPeer {
     return make_writer(topic<PubSubType>(dds_topic), qos);
   }
   template <class PubSubType, class T>
-  eprosima::fastdds::dds::DataReader* reader(const std::string& dds_topic, const PeerQos& qos, Collector<T>* out) {
+  eprosima::fastdds::dds::DataReader* reader(const std::string& dds_topic, const PeerQos& qos,
+                                             Collector<T>* out) {
     return make_reader(topic<PubSubType>(dds_topic), qos, out);
   }
   // Polls until the writer matched `count` readers; false after `timeout`.
-  static bool wait_matched(eprosima::fastdds::dds::DataWriter* writer, int count, std::chrono::milliseconds timeout);
-  static bool wait_matched(eprosima::fastdds::dds::DataReader* reader, int count, std::chrono::milliseconds timeout);
+  static bool wait_matched(eprosima::fastdds::dds::DataWriter* writer, int count,
+                           std::chrono::milliseconds timeout);
+  static bool wait_matched(eprosima::fastdds::dds::DataReader* reader, int count,
+                           std::chrono::milliseconds timeout);
   static int offered_incompatible_qos(eprosima::fastdds::dds::DataWriter* writer);
 
  private:
   template <class PubSubType>
   eprosima::fastdds::dds::Topic* topic(const std::string& name) {
     eprosima::fastdds::dds::TypeSupport type(new PubSubType());
-    type.register_type(participant_);  // a second registration of the same type is refused harmlessly
+    type.register_type(
+        participant_);  // a second registration of the same type is refused harmlessly
     return make_topic(name, type.get_type_name());
   }
   eprosima::fastdds::dds::Topic* make_topic(const std::string& name, const std::string& type_name);
-  eprosima::fastdds::dds::DataWriter* make_writer(eprosima::fastdds::dds::Topic* topic, const PeerQos& qos);
-  eprosima::fastdds::dds::DataReader* make_reader(eprosima::fastdds::dds::Topic* topic, const PeerQos& qos,
-                                                  eprosima::fastdds::dds::DataReaderListener* listener);
+  eprosima::fastdds::dds::DataWriter* make_writer(eprosima::fastdds::dds::Topic* topic,
+                                                  const PeerQos& qos);
+  eprosima::fastdds::dds::DataReader* make_reader(
+      eprosima::fastdds::dds::Topic* topic, const PeerQos& qos,
+      eprosima::fastdds::dds::DataReaderListener* listener);
 
   eprosima::fastdds::dds::DomainParticipant* participant_ = nullptr;
   eprosima::fastdds::dds::Publisher* publisher_ = nullptr;

@@ -1,7 +1,8 @@
-// Cross-vendor live test: Faultline's bridges on Cyclone DDS and a peer on Fast DDS (types from the same IDL by
-// fastddsgen), both directions, over UDP on 127.0.0.1 in a test-only domain (100 + pid % 100). Cyclone is configured
-// through CYCLONEDDS_URI, as a ROS 2 user would. Every frame must arrive, decode, and carry the right stamp and
-// frame_id; waits are bounded, assertions are counts, bytes and values.
+// Cross-vendor live test: Faultline's bridges on Cyclone DDS and a peer on Fast DDS (types from the
+// same IDL by fastddsgen), both directions, over UDP on 127.0.0.1 in a test-only domain (100 + pid
+// % 100). Cyclone is configured through CYCLONEDDS_URI, as a ROS 2 user would. Every frame must
+// arrive, decode, and carry the right stamp and frame_id; waits are bounded, assertions are counts,
+// bytes and values.
 #include <gtest/gtest.h>
 #include <spdlog/sinks/base_sink.h>
 #include <spdlog/sinks/stdout_sinks.h>
@@ -41,13 +42,15 @@ const std::array<double, 9> kK{1266.4, 0.0, 816.3, 0.0, 1266.4, 491.5, 0.0, 0.0,
 
 int TestDomain() { return 100 + static_cast<int>(::getpid() % 100); }
 
-// Counts the lines of each level that contain a phrase: the warn-once and error-once contract of the bridges.
+// Counts the lines of each level that contain a phrase: the warn-once and error-once contract of
+// the bridges.
 class CountingSink : public spdlog::sinks::base_sink<std::mutex> {
  public:
   int count(spdlog::level::level_enum level, const std::string& phrase) {
     std::lock_guard<std::mutex> lock(mutex_);
     int n = 0;
-    for (const auto& [l, text] : lines_) n += (l == level && text.find(phrase) != std::string::npos) ? 1 : 0;
+    for (const auto& [l, text] : lines_)
+      n += (l == level && text.find(phrase) != std::string::npos) ? 1 : 0;
     return n;
   }
 
@@ -63,7 +66,8 @@ class CountingSink : public spdlog::sinks::base_sink<std::mutex> {
   std::vector<std::pair<spdlog::level::level_enum, std::string>> lines_;
 };
 
-std::shared_ptr<spdlog::logger> Logger(const std::string& name, std::shared_ptr<CountingSink> counter = nullptr) {
+std::shared_ptr<spdlog::logger> Logger(const std::string& name,
+                                       std::shared_ptr<CountingSink> counter = nullptr) {
   std::vector<spdlog::sink_ptr> sinks{std::make_shared<spdlog::sinks::stderr_sink_mt>()};
   if (counter) sinks.push_back(counter);
   auto log = std::make_shared<spdlog::logger>(name, sinks.begin(), sinks.end());
@@ -81,11 +85,14 @@ class InteropTest : public ::testing::Test {
  protected:
   void SetUp() override {
     domain_ = TestDomain();
-    // Loopback only, no multicast (lo has none), unicast discovery to the well-known ports on 127.0.0.1.
+    // Loopback only, no multicast (lo has none), unicast discovery to the well-known ports on
+    // 127.0.0.1.
     ::setenv("CYCLONEDDS_URI",
-             "<CycloneDDS><Domain Id=\"any\"><General><Interfaces><NetworkInterface address=\"127.0.0.1\"/>"
+             "<CycloneDDS><Domain Id=\"any\"><General><Interfaces><NetworkInterface "
+             "address=\"127.0.0.1\"/>"
              "</Interfaces><AllowMulticast>false</AllowMulticast></General><Discovery>"
-             "<ParticipantIndex>auto</ParticipantIndex><MaxAutoParticipantIndex>19</MaxAutoParticipantIndex>"
+             "<ParticipantIndex>auto</ParticipantIndex><MaxAutoParticipantIndex>19</"
+             "MaxAutoParticipantIndex>"
              "<Peers><Peer address=\"127.0.0.1\"/></Peers></Discovery></Domain></CycloneDDS>",
              1);
   }
@@ -113,13 +120,16 @@ TEST_F(InteropTest, FastDdsCamerasReachFaultlineAsCameraFrames) {
   std::thread runner([&] { rc = bridge.run(stop); });
 
   FastPeer peer(domain_);
-  auto* tf_static = peer.writer<tf2_msgs::msg::dds_::TFMessage_PubSubType>("rt/tf_static", {true, true, false, 1});
-  auto* cam_a = peer.writer<smsg::CompressedImage_PubSubType>("rt/test/cam_a/image_raw/compressed", {});
+  auto* tf_static = peer.writer<tf2_msgs::msg::dds_::TFMessage_PubSubType>("rt/tf_static",
+                                                                           {true, true, false, 1});
+  auto* cam_a =
+      peer.writer<smsg::CompressedImage_PubSubType>("rt/test/cam_a/image_raw/compressed", {});
   auto* info_a = peer.writer<smsg::CameraInfo_PubSubType>("rt/test/cam_a/camera_info", {});
   auto* cam_b = peer.writer<smsg::Image_PubSubType>("rt/test/cam_b/image_raw", {});
-  auto* not_image = peer.writer<diagnostic_msgs::msg::dds_::DiagnosticArray_PubSubType>("rt/test/not_image", {});
-  auto* best_effort = peer.writer<smsg::CompressedImage_PubSubType>("rt/test/cam_c/image_raw/compressed",
-                                                                    {false, false, false, 5});
+  auto* not_image =
+      peer.writer<diagnostic_msgs::msg::dds_::DiagnosticArray_PubSubType>("rt/test/not_image", {});
+  auto* best_effort = peer.writer<smsg::CompressedImage_PubSubType>(
+      "rt/test/cam_c/image_raw/compressed", {false, false, false, 5});
   (void)not_image;
 
   // base_link -> cam_a_optical, latched before anything else.
@@ -141,7 +151,8 @@ TEST_F(InteropTest, FastDdsCamerasReachFaultlineAsCameraFrames) {
   ASSERT_TRUE(FastPeer::wait_matched(cam_b, 1, 20s));
   ASSERT_TRUE(FastPeer::wait_matched(info_a, 1, 20s));
   ASSERT_TRUE(FastPeer::wait_matched(tf_static, 1, 20s));
-  ASSERT_EQ(tf_static->wait_for_acknowledgments(eprosima::fastrtps::Duration_t(10, 0)), ReturnCode_t::RETCODE_OK);
+  ASSERT_EQ(tf_static->wait_for_acknowledgments(eprosima::fastrtps::Duration_t(10, 0)),
+            ReturnCode_t::RETCODE_OK);
 
   std::vector<std::vector<std::uint8_t>> jpegs;
   std::vector<std::vector<std::uint8_t>> expected_b;
@@ -155,7 +166,8 @@ TEST_F(InteropTest, FastDdsCamerasReachFaultlineAsCameraFrames) {
     info.height(24);
     info.k(kK);
     ASSERT_TRUE(info_a->write(&info));
-    ASSERT_EQ(info_a->wait_for_acknowledgments(eprosima::fastrtps::Duration_t(10, 0)), ReturnCode_t::RETCODE_OK);
+    ASSERT_EQ(info_a->wait_for_acknowledgments(eprosima::fastrtps::Duration_t(10, 0)),
+              ReturnCode_t::RETCODE_OK);
 
     smsg::CompressedImage_ a;
     a.header().stamp().sec(static_cast<std::int32_t>(stamp / 1'000'000'000));
@@ -186,12 +198,16 @@ TEST_F(InteropTest, FastDdsCamerasReachFaultlineAsCameraFrames) {
     b.data(px);
     cv::Mat bgr(8, 16, CV_8UC3);
     for (int y = 0; y < 8; ++y) {
-      for (int x = 0; x < 16; ++x) bgr.at<cv::Vec3b>(y, x) = cv::Vec3b(200, static_cast<std::uint8_t>(x * 10), static_cast<std::uint8_t>(20 * i));
+      for (int x = 0; x < 16; ++x)
+        bgr.at<cv::Vec3b>(y, x) =
+            cv::Vec3b(200, static_cast<std::uint8_t>(x * 10), static_cast<std::uint8_t>(20 * i));
     }
     expected_b.push_back(codec::encode_jpeg(bgr, 95).value());
     ASSERT_TRUE(cam_b->write(&b));
-    ASSERT_EQ(cam_a->wait_for_acknowledgments(eprosima::fastrtps::Duration_t(10, 0)), ReturnCode_t::RETCODE_OK);
-    ASSERT_EQ(cam_b->wait_for_acknowledgments(eprosima::fastrtps::Duration_t(10, 0)), ReturnCode_t::RETCODE_OK);
+    ASSERT_EQ(cam_a->wait_for_acknowledgments(eprosima::fastrtps::Duration_t(10, 0)),
+              ReturnCode_t::RETCODE_OK);
+    ASSERT_EQ(cam_b->wait_for_acknowledgments(eprosima::fastrtps::Duration_t(10, 0)),
+              ReturnCode_t::RETCODE_OK);
   }
 
   std::map<std::string, std::vector<std::pair<msgs::CameraFrame, std::vector<std::uint8_t>>>> got;
@@ -202,13 +218,14 @@ TEST_F(InteropTest, FastDdsCamerasReachFaultlineAsCameraFrames) {
     if (!m) continue;
     auto view = transport::parse_camera_frame(*m);
     ASSERT_TRUE(view) << view.status().message();
-    got[std::string(m->topic())].emplace_back(view->header,
-                                              std::vector<std::uint8_t>(view->payload, view->payload + view->payload_size));
+    got[std::string(m->topic())].emplace_back(
+        view->header, std::vector<std::uint8_t>(view->payload, view->payload + view->payload_size));
     ++total;
   }
   // The mismatches are seen by discovery; give them the same bounded time.
-  while ((bridge.counts().type_mismatch.load() < 1 || bridge.counts().incompatible_qos.load() < 1) &&
-         std::chrono::steady_clock::now() < deadline) {
+  while (
+      (bridge.counts().type_mismatch.load() < 1 || bridge.counts().incompatible_qos.load() < 1) &&
+      std::chrono::steady_clock::now() < deadline) {
     std::this_thread::sleep_for(5ms);
   }
   stop = true;
@@ -231,7 +248,8 @@ TEST_F(InteropTest, FastDdsCamerasReachFaultlineAsCameraFrames) {
     EXPECT_EQ(fa.encoding(), "jpeg");
     EXPECT_EQ(fa.width(), 32u);
     EXPECT_EQ(fa.height(), 24u);
-    EXPECT_EQ(pa, jpegs[static_cast<std::size_t>(i)]) << "frame " << i << ": JPEG bytes passed through unchanged";
+    EXPECT_EQ(pa, jpegs[static_cast<std::size_t>(i)])
+        << "frame " << i << ": JPEG bytes passed through unchanged";
     const auto& [fb, pb] = b[static_cast<std::size_t>(i)];
     EXPECT_EQ(fb.header().seq(), static_cast<std::uint64_t>(i + 1));
     EXPECT_EQ(fb.header().capture_stamp_ns(), stamp);
@@ -239,7 +257,8 @@ TEST_F(InteropTest, FastDdsCamerasReachFaultlineAsCameraFrames) {
     EXPECT_EQ(fb.camera(), "CAM_FRONT_RIGHT");
     EXPECT_EQ(fb.width(), 16u);
     EXPECT_EQ(fb.height(), 8u);
-    EXPECT_EQ(pb, expected_b[static_cast<std::size_t>(i)]) << "frame " << i << ": rgb8 -> BGR -> JPEG q95";
+    EXPECT_EQ(pb, expected_b[static_cast<std::size_t>(i)])
+        << "frame " << i << ": rgb8 -> BGR -> JPEG q95";
   }
   // Every CameraInfo was acknowledged before its image was written: K is on every cam_a frame.
   for (const auto& [fa, pa] : a) {
@@ -258,14 +277,20 @@ TEST_F(InteropTest, FastDdsCamerasReachFaultlineAsCameraFrames) {
   EXPECT_EQ(c.bad_images.load(), 0u);
   EXPECT_EQ(c.camera_infos.load(), static_cast<std::uint64_t>(kFrames));
   EXPECT_EQ(c.tf_static.load(), 1u);
-  EXPECT_EQ(c.type_mismatch.load(), 1u) << "/test/not_image carries diagnostic_msgs/msg/DiagnosticArray";
+  EXPECT_EQ(c.type_mismatch.load(), 1u)
+      << "/test/not_image carries diagnostic_msgs/msg/DiagnosticArray";
   // DDS reports a mismatch per match attempt (a rediscovered writer counts again): at least one.
   EXPECT_GE(c.incompatible_qos.load(), 1u) << "best-effort writer vs reliable reader on cam_c";
   EXPECT_GE(FastPeer::offered_incompatible_qos(best_effort), 1);
-  EXPECT_EQ(lines->count(spdlog::level::err, "topic /test/not_image has a writer of type "
-                                              "diagnostic_msgs/msg/DiagnosticArray: not an image type"), 1);
-  EXPECT_EQ(lines->count(spdlog::level::warn, "QoS of /test/cam_c/image_raw/compressed never matched a writer"), 1);
-  EXPECT_EQ(lines->count(spdlog::level::warn, "never matched"), 1) << "warned once, then only counted";
+  EXPECT_EQ(lines->count(spdlog::level::err,
+                         "topic /test/not_image has a writer of type "
+                         "diagnostic_msgs/msg/DiagnosticArray: not an image type"),
+            1);
+  EXPECT_EQ(lines->count(spdlog::level::warn,
+                         "QoS of /test/cam_c/image_raw/compressed never matched a writer"),
+            1);
+  EXPECT_EQ(lines->count(spdlog::level::warn, "never matched"), 1)
+      << "warned once, then only counted";
 }
 
 TEST_F(InteropTest, FaultlineFramesReachFastDdsAsRosTopics) {
@@ -281,21 +306,26 @@ TEST_F(InteropTest, FaultlineFramesReachFastDdsAsRosTopics) {
   Collector<diagnostic_msgs::msg::dds_::DiagnosticArray_> diagnostics;
   Collector<tf2_msgs::msg::dds_::TFMessage_> tf_static, tf;
   std::vector<fdds::DataReader*> readers{
-      peer.reader<smsg::CompressedImage_PubSubType>("rt/cam_front/image_rect_compressed", keep_all, &front),
-      peer.reader<smsg::CompressedImage_PubSubType>("rt/cam_back/image_rect_compressed", keep_all, &back),
+      peer.reader<smsg::CompressedImage_PubSubType>("rt/cam_front/image_rect_compressed", keep_all,
+                                                    &front),
+      peer.reader<smsg::CompressedImage_PubSubType>("rt/cam_back/image_rect_compressed", keep_all,
+                                                    &back),
       peer.reader<smsg::CameraInfo_PubSubType>("rt/cam_front/camera_info", keep_all, &front_info),
       peer.reader<smsg::CameraInfo_PubSubType>("rt/cam_back/camera_info", keep_all, &back_info),
-      peer.reader<diagnostic_msgs::msg::dds_::DiagnosticArray_PubSubType>("rt/faultline/faults", keep_all,
-                                                                          &diagnostics),
-      peer.reader<tf2_msgs::msg::dds_::TFMessage_PubSubType>("rt/tf_static", {true, true, true, 1}, &tf_static),
+      peer.reader<diagnostic_msgs::msg::dds_::DiagnosticArray_PubSubType>("rt/faultline/faults",
+                                                                          keep_all, &diagnostics),
+      peer.reader<tf2_msgs::msg::dds_::TFMessage_PubSubType>("rt/tf_static", {true, true, true, 1},
+                                                             &tf_static),
       peer.reader<tf2_msgs::msg::dds_::TFMessage_PubSubType>("rt/tf", keep_all, &tf)};
 
   OutBridgeConfig cfg;
   cfg.domain_id = domain_;
   cfg.input_endpoints = {injector.endpoint()};
   cfg.publish_tf = true;
-  cfg.advertise = {"/faulty/cam_front/image_rect_compressed", "/faulty/cam_back/image_rect_compressed"};
-  cfg.wait_readers = 1;  // discovery is not symmetric: the writers must have matched the readers too
+  cfg.advertise = {"/faulty/cam_front/image_rect_compressed",
+                   "/faulty/cam_back/image_rect_compressed"};
+  cfg.wait_readers =
+      1;  // discovery is not symmetric: the writers must have matched the readers too
   cfg.wait_timeout_ms = 20000;
   cfg.stats_log_period_s = 0;
   cfg.validate();
@@ -303,11 +333,14 @@ TEST_F(InteropTest, FaultlineFramesReachFastDdsAsRosTopics) {
   std::atomic<bool> stop{false};
   int rc = -1;
   std::thread runner([&] { rc = bridge.run(stop); });
-  ASSERT_TRUE(injector.wait_for_subscribers("/faulty/cam_front/image_rect_compressed", 1, 10 * kNsPerSec).is_ok());
+  ASSERT_TRUE(
+      injector.wait_for_subscribers("/faulty/cam_front/image_rect_compressed", 1, 10 * kNsPerSec)
+          .is_ok());
   ASSERT_TRUE(injector.wait_for_subscribers("/sync/end", 1, 10 * kNsPerSec).is_ok());
-  // Every topic is advertised from the start: once each reader matched its writer (and, wait_readers, each writer
-  // its reader), no sample can be missed.
-  for (auto* r : readers) ASSERT_TRUE(FastPeer::wait_matched(r, 1, 20s)) << r->get_topicdescription()->get_name();
+  // Every topic is advertised from the start: once each reader matched its writer (and,
+  // wait_readers, each writer its reader), no sample can be missed.
+  for (auto* r : readers)
+    ASSERT_TRUE(FastPeer::wait_matched(r, 1, 20s)) << r->get_topicdescription()->get_name();
 
   const char* cams[] = {"CAM_FRONT", "CAM_BACK"};
   std::vector<std::vector<std::uint8_t>> jpegs;
@@ -332,8 +365,8 @@ TEST_F(InteropTest, FaultlineFramesReachFastDdsAsRosTopics) {
       f.mutable_ego_pose()->mutable_rotation()->set_w(1.0);
       jpegs.push_back(Jpeg(i + 20 * c));
       auto bytes = std::make_shared<const std::vector<std::uint8_t>>(jpegs.back());
-      ASSERT_TRUE(transport::send_camera_frame(injector, "/faulty/" + id + "/image_rect_compressed", f,
-                                               transport::Payload::of(bytes))
+      ASSERT_TRUE(transport::send_camera_frame(injector, "/faulty/" + id + "/image_rect_compressed",
+                                               f, transport::Payload::of(bytes))
                       .is_ok());
       msgs::FaultEvent e;
       e.mutable_header()->set_capture_stamp_ns(stamp);
@@ -389,7 +422,8 @@ TEST_F(InteropTest, FaultlineFramesReachFastDdsAsRosTopics) {
     EXPECT_EQ(info.d(), std::vector<double>(5, 0.0));
     EXPECT_EQ(info.k(), kK);
     EXPECT_EQ(info.r(), (std::array<double, 9>{1, 0, 0, 0, 1, 0, 0, 0, 1}));
-    EXPECT_EQ(info.p(), (std::array<double, 12>{kK[0], kK[1], kK[2], 0, kK[3], kK[4], kK[5], 0, kK[6], kK[7], kK[8], 0}));
+    EXPECT_EQ(info.p(), (std::array<double, 12>{kK[0], kK[1], kK[2], 0, kK[3], kK[4], kK[5], 0,
+                                                kK[6], kK[7], kK[8], 0}));
   }
   EXPECT_EQ(back_info.samples().size(), static_cast<std::size_t>(kFrames));
   EXPECT_EQ(back_info.samples().back().header().frame_id(), "cam_back");
@@ -435,7 +469,8 @@ TEST_F(InteropTest, RawOutputDecodesTheFaultedJpegToBgr8Images) {
   transport::Publisher injector(pc);
   FastPeer peer(domain_);
   Collector<smsg::Image_> images;
-  auto* reader = peer.reader<smsg::Image_PubSubType>("rt/front/image_raw/faulty", {true, false, true, 10}, &images);
+  auto* reader = peer.reader<smsg::Image_PubSubType>("rt/front/image_raw/faulty",
+                                                     {true, false, true, 10}, &images);
 
   OutBridgeConfig cfg;
   cfg.domain_id = domain_;
@@ -454,7 +489,8 @@ TEST_F(InteropTest, RawOutputDecodesTheFaultedJpegToBgr8Images) {
   std::atomic<bool> stop{false};
   int rc = -1;
   std::thread runner([&] { rc = bridge.run(stop); });
-  ASSERT_TRUE(injector.wait_for_subscribers("/faulty/ros2/front/image_raw", 1, 10 * kNsPerSec).is_ok());
+  ASSERT_TRUE(
+      injector.wait_for_subscribers("/faulty/ros2/front/image_raw", 1, 10 * kNsPerSec).is_ok());
   ASSERT_TRUE(injector.wait_for_subscribers("/sync/end", 1, 10 * kNsPerSec).is_ok());
   ASSERT_TRUE(FastPeer::wait_matched(reader, 1, 20s));
   std::vector<cv::Mat> expected;
@@ -471,7 +507,8 @@ TEST_F(InteropTest, RawOutputDecodesTheFaultedJpegToBgr8Images) {
     auto bytes = std::make_shared<const std::vector<std::uint8_t>>(Jpeg(i));
     expected.push_back(codec::decode_jpeg(bytes->data(), bytes->size()).value());
     ASSERT_TRUE(transport::send_camera_frame(injector, "/faulty/ros2/front/image_raw", f,
-                                             transport::Payload::of(bytes)).is_ok());
+                                             transport::Payload::of(bytes))
+                    .is_ok());
   }
   ASSERT_TRUE(transport::send_message(injector, "/sync/end", msgs::StreamEnd()).is_ok());
   runner.join();
@@ -487,10 +524,12 @@ TEST_F(InteropTest, RawOutputDecodesTheFaultedJpegToBgr8Images) {
     EXPECT_EQ(m.step(), 96u);
     EXPECT_EQ(m.is_bigendian(), 0);
     EXPECT_EQ(m.header().frame_id(), "front_optical");
-    EXPECT_EQ(m.header().stamp().nanosec(), static_cast<std::uint32_t>((kStamp0 + i * kPeriodNs) % 1'000'000'000));
+    EXPECT_EQ(m.header().stamp().nanosec(),
+              static_cast<std::uint32_t>((kStamp0 + i * kPeriodNs) % 1'000'000'000));
     const cv::Mat& e = expected[static_cast<std::size_t>(i)];
     ASSERT_EQ(m.data().size(), e.total() * e.elemSize());
-    EXPECT_TRUE(std::equal(m.data().begin(), m.data().end(), e.data)) << "frame " << i << ": the decoded JPEG";
+    EXPECT_TRUE(std::equal(m.data().begin(), m.data().end(), e.data))
+        << "frame " << i << ": the decoded JPEG";
   }
 }
 

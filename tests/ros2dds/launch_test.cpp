@@ -1,10 +1,11 @@
-// The ROS 2 launch files end to end, through `faultline launch` and real node processes, seen from a DDS peer in
-// this test (Cyclone DDS, loopback, domain 100 + pid % 100). launch/ros2_replay.yaml on a small generated nuScenes
-// dataset: every camera frame the player sent arrives with its nuScenes stamp and frame_id, its CameraInfo, one
-// DiagnosticArray, the ego pose on /tf and the six cameras on /tf_static. launch/ros2_proxy.yaml: two ROS 2 camera
-// topics come back faulted as <topic>/faulty with their stamps and frame_ids.
-#include <gtest/gtest.h>
+// The ROS 2 launch files end to end, through `faultline launch` and real node processes, seen from
+// a DDS peer in this test (Cyclone DDS, loopback, domain 100 + pid % 100). launch/ros2_replay.yaml
+// on a small generated nuScenes dataset: every camera frame the player sent arrives with its
+// nuScenes stamp and frame_id, its CameraInfo, one DiagnosticArray, the ego pose on /tf and the six
+// cameras on /tf_static. launch/ros2_proxy.yaml: two ROS 2 camera topics come back faulted as
+// <topic>/faulty with their stamps and frame_ids.
 #include <fcntl.h>
+#include <gtest/gtest.h>
 #include <signal.h>
 #include <spawn.h>
 #include <sys/wait.h>
@@ -36,9 +37,10 @@ std::vector<std::uint8_t> JpegForTest() {
   return codec::encode_jpeg(cv::Mat(24, 32, CV_8UC3, cv::Scalar(40, 120, 200)), 90).value();
 }
 
-// The replay's ROS 2 names are nuScenes' (names: nuscenes): /CAM_FRONT/image_rect_compressed, frame_id CAM_FRONT.
-const char* kCameras[] = {"CAM_FRONT", "CAM_FRONT_RIGHT", "CAM_FRONT_LEFT", "CAM_BACK", "CAM_BACK_LEFT",
-                          "CAM_BACK_RIGHT"};
+// The replay's ROS 2 names are nuScenes' (names: nuscenes): /CAM_FRONT/image_rect_compressed,
+// frame_id CAM_FRONT.
+const char* kCameras[] = {"CAM_FRONT", "CAM_FRONT_RIGHT", "CAM_FRONT_LEFT",
+                          "CAM_BACK",  "CAM_BACK_LEFT",   "CAM_BACK_RIGHT"};
 
 std::string Lower(std::string s) {
   for (char& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
@@ -80,9 +82,11 @@ class Ros2LaunchTest : public ::testing::Test {
     o.jpeg_quality = 70;
     ASSERT_TRUE(dataset::write_synthetic_dataset(o).is_ok());
     ::setenv("CYCLONEDDS_URI",
-             "<CycloneDDS><Domain Id=\"any\"><General><Interfaces><NetworkInterface address=\"127.0.0.1\"/>"
+             "<CycloneDDS><Domain Id=\"any\"><General><Interfaces><NetworkInterface "
+             "address=\"127.0.0.1\"/>"
              "</Interfaces><AllowMulticast>false</AllowMulticast></General><Discovery>"
-             "<ParticipantIndex>auto</ParticipantIndex><MaxAutoParticipantIndex>19</MaxAutoParticipantIndex>"
+             "<ParticipantIndex>auto</ParticipantIndex><MaxAutoParticipantIndex>19</"
+             "MaxAutoParticipantIndex>"
              "<Peers><Peer address=\"127.0.0.1\"/></Peers></Discovery></Domain></CycloneDDS>",
              1);
     ::setenv("FAULTLINE_RUN_DIR", (dir_ + "/graph").c_str(), 1);
@@ -114,7 +118,8 @@ TEST_F(Ros2LaunchTest, EveryFrameReachesRos2WithCalibrationPoseAndFaults) {
                                               ros2::nuscenes_image_topic(cam), all));
     infos.push_back(std::make_unique<Reader>(p, &sensor_msgs_msg_dds__CameraInfo__desc,
                                              ros2::nuscenes_camera_info_topic(cam), all));
-    advertise += std::string(advertise.size() > 1 ? "," : "") + "/faulty/" + Lower(cam) + "/image_rect_compressed";
+    advertise += std::string(advertise.size() > 1 ? "," : "") + "/faulty/" + Lower(cam) +
+                 "/image_rect_compressed";
   }
   advertise += "]";
   Reader faults(p, &diagnostic_msgs_msg_dds__DiagnosticArray__desc, "/faultline/faults", all);
@@ -122,16 +127,37 @@ TEST_F(Ros2LaunchTest, EveryFrameReachesRos2WithCalibrationPoseAndFaults) {
   Reader tf_static(p, &tf2_msgs_msg_dds__TFMessage__desc, "/tf_static", TopicQos{true, 1, true});
 
   const std::string ipc = "ipc://" + dir_ + "/";
-  std::vector<std::string> args{
-      std::string(FAULTLINE_BIN_DIR) + "/faultline", "launch", std::string(FAULTLINE_SOURCE_DIR) + "/launch/ros2_replay.yaml",
-      "-p", "nusc_player.dataroot:=" + dir_ + "/nuscenes", "-p", "nusc_player.rate:=0", "-p",
-      "nusc_player.endpoint:=" + ipc + "player", "-p", "nusc_player.hwm:=1000",
-      "-p", "fault_injector.input_endpoints:=[" + ipc + "player]", "-p",
-      "fault_injector.output_endpoint:=" + ipc + "injector", "-p", "fault_injector.input_hwm:=1000", "-p",
-      "fault_injector.output_hwm:=1000", "-p", "fault_injector.corruption:=brightness/mid",
-      "-p", "ros2_out.input_endpoints:=[" + ipc + "injector]", "-p", "ros2_out.input_hwm:=1000",
-      "-p", "ros2_out.domain_id:=" + std::to_string(domain), "-p", "ros2_out.advertise:=" + advertise,
-      "-p", "ros2_out.wait_readers:=1"};
+  std::vector<std::string> args{std::string(FAULTLINE_BIN_DIR) + "/faultline",
+                                "launch",
+                                std::string(FAULTLINE_SOURCE_DIR) + "/launch/ros2_replay.yaml",
+                                "-p",
+                                "nusc_player.dataroot:=" + dir_ + "/nuscenes",
+                                "-p",
+                                "nusc_player.rate:=0",
+                                "-p",
+                                "nusc_player.endpoint:=" + ipc + "player",
+                                "-p",
+                                "nusc_player.hwm:=1000",
+                                "-p",
+                                "fault_injector.input_endpoints:=[" + ipc + "player]",
+                                "-p",
+                                "fault_injector.output_endpoint:=" + ipc + "injector",
+                                "-p",
+                                "fault_injector.input_hwm:=1000",
+                                "-p",
+                                "fault_injector.output_hwm:=1000",
+                                "-p",
+                                "fault_injector.corruption:=brightness/mid",
+                                "-p",
+                                "ros2_out.input_endpoints:=[" + ipc + "injector]",
+                                "-p",
+                                "ros2_out.input_hwm:=1000",
+                                "-p",
+                                "ros2_out.domain_id:=" + std::to_string(domain),
+                                "-p",
+                                "ros2_out.advertise:=" + advertise,
+                                "-p",
+                                "ros2_out.wait_readers:=1"};
   std::vector<char*> argv;
   for (auto& a : args) argv.push_back(a.data());
   argv.push_back(nullptr);
@@ -144,7 +170,8 @@ TEST_F(Ros2LaunchTest, EveryFrameReachesRos2WithCalibrationPoseAndFaults) {
   ASSERT_EQ(posix_spawn(&pid, argv[0], &fa, nullptr, argv.data(), environ), 0);
   posix_spawn_file_actions_destroy(&fa);
 
-  // Take samples while the run goes (the launch ends when ros2_out's readers acknowledged the last frame).
+  // Take samples while the run goes (the launch ends when ros2_out's readers acknowledged the last
+  // frame).
   std::map<std::string, std::vector<StampNs>> got;            // channel -> stamps, in arrival order
   std::map<std::string, std::vector<std::string>> frame_ids;  // channel -> frame_ids
   std::map<std::string, std::size_t> infos_got;
@@ -152,33 +179,49 @@ TEST_F(Ros2LaunchTest, EveryFrameReachesRos2WithCalibrationPoseAndFaults) {
   std::vector<std::string> static_children;
   auto drain = [&] {
     for (std::size_t i = 0; i < 6; ++i) {
-      (void)images[i]->take([&](const void* s) {
-        const auto* m = static_cast<const sensor_msgs_msg_dds__CompressedImage_*>(s);
-        got[kCameras[i]].push_back(ns_from_time({m->header.stamp.sec, m->header.stamp.nanosec}));
-        frame_ids[kCameras[i]].push_back(m->header.frame_id);
-      }, 1000);
-      (void)infos[i]->take([&](const void* s) {
-        const auto* m = static_cast<const sensor_msgs_msg_dds__CameraInfo_*>(s);
-        if (std::string(m->distortion_model) == "plumb_bob" && m->k[8] == 1.0 && m->p[3] == 0.0) ++infos_got[kCameras[i]];
-      }, 1000);
+      (void)images[i]->take(
+          [&](const void* s) {
+            const auto* m = static_cast<const sensor_msgs_msg_dds__CompressedImage_*>(s);
+            got[kCameras[i]].push_back(
+                ns_from_time({m->header.stamp.sec, m->header.stamp.nanosec}));
+            frame_ids[kCameras[i]].push_back(m->header.frame_id);
+          },
+          1000);
+      (void)infos[i]->take(
+          [&](const void* s) {
+            const auto* m = static_cast<const sensor_msgs_msg_dds__CameraInfo_*>(s);
+            if (std::string(m->distortion_model) == "plumb_bob" && m->k[8] == 1.0 && m->p[3] == 0.0)
+              ++infos_got[kCameras[i]];
+          },
+          1000);
     }
-    (void)faults.take([&](const void* s) {
-      const auto* m = static_cast<const diagnostic_msgs_msg_dds__DiagnosticArray_*>(s);
-      ++events;
-      if (m->status._length == 1 && std::string(m->status._buffer[0].message).rfind("corrupt: brightness/", 0) == 0) ++corrupt;
-    }, 1000);
-    (void)tf.take([&](const void* s) {
-      const auto* m = static_cast<const tf2_msgs_msg_dds__TFMessage_*>(s);
-      if (m->transforms._length == 1 && std::string(m->transforms._buffer[0].header.frame_id) == "map" &&
-          std::string(m->transforms._buffer[0].child_frame_id) == "base_link") {
-        ++poses;
-      }
-    }, 1000);
-    (void)tf_static.take([&](const void* s) {
-      const auto* m = static_cast<const tf2_msgs_msg_dds__TFMessage_*>(s);
-      static_children.clear();
-      for (std::uint32_t k = 0; k < m->transforms._length; ++k) static_children.push_back(m->transforms._buffer[k].child_frame_id);
-    }, 1000);
+    (void)faults.take(
+        [&](const void* s) {
+          const auto* m = static_cast<const diagnostic_msgs_msg_dds__DiagnosticArray_*>(s);
+          ++events;
+          if (m->status._length == 1 &&
+              std::string(m->status._buffer[0].message).rfind("corrupt: brightness/", 0) == 0)
+            ++corrupt;
+        },
+        1000);
+    (void)tf.take(
+        [&](const void* s) {
+          const auto* m = static_cast<const tf2_msgs_msg_dds__TFMessage_*>(s);
+          if (m->transforms._length == 1 &&
+              std::string(m->transforms._buffer[0].header.frame_id) == "map" &&
+              std::string(m->transforms._buffer[0].child_frame_id) == "base_link") {
+            ++poses;
+          }
+        },
+        1000);
+    (void)tf_static.take(
+        [&](const void* s) {
+          const auto* m = static_cast<const tf2_msgs_msg_dds__TFMessage_*>(s);
+          static_children.clear();
+          for (std::uint32_t k = 0; k < m->transforms._length; ++k)
+            static_children.push_back(m->transforms._buffer[k].child_frame_id);
+        },
+        1000);
   };
   int status = 0;
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(90);
@@ -189,7 +232,8 @@ TEST_F(Ros2LaunchTest, EveryFrameReachesRos2WithCalibrationPoseAndFaults) {
       waitpid(pid, &status, 0);
       FAIL() << "launch did not end within 90 s\n" << ReadText(log);
     }
-    std::this_thread::sleep_for(std::chrono::milliseconds(20));  // polling the readers; not an assertion
+    std::this_thread::sleep_for(
+        std::chrono::milliseconds(20));  // polling the readers; not an assertion
   }
   drain();
   ASSERT_TRUE(WIFEXITED(status)) << ReadText(log);
@@ -201,7 +245,8 @@ TEST_F(Ros2LaunchTest, EveryFrameReachesRos2WithCalibrationPoseAndFaults) {
     std::vector<StampNs> want_ns;
     for (auto us : want) want_ns.push_back(ns_from_time(time_from_us(us)));
     EXPECT_EQ(got[cam], want_ns) << cam << ": every frame, in order, with its nuScenes stamp";
-    for (const auto& id : frame_ids[cam]) ASSERT_EQ(id, cam) << "the same frame_id as bag convert --format ros2";
+    for (const auto& id : frame_ids[cam])
+      ASSERT_EQ(id, cam) << "the same frame_id as bag convert --format ros2";
     EXPECT_EQ(infos_got[cam], want.size()) << cam;
     total += want.size();
   }
@@ -220,9 +265,11 @@ TEST_F(Ros2LaunchTest, ProxyRepublishesEachTopicFaulted) {
   const int domain = 100 + static_cast<int>(::getpid() % 100);
   Participant p(domain, "");
   const TopicQos all{true, 10000, false};
-  Writer front(p, &sensor_msgs_msg_dds__CompressedImage__desc, "/front/image_raw/compressed", TopicQos{});
+  Writer front(p, &sensor_msgs_msg_dds__CompressedImage__desc, "/front/image_raw/compressed",
+               TopicQos{});
   Writer rear(p, &sensor_msgs_msg_dds__Image__desc, "/rear/image_raw", TopicQos{});
-  Reader front_out(p, &sensor_msgs_msg_dds__CompressedImage__desc, "/front/image_raw/compressed/faulty", all);
+  Reader front_out(p, &sensor_msgs_msg_dds__CompressedImage__desc,
+                   "/front/image_raw/compressed/faulty", all);
   Reader rear_out(p, &sensor_msgs_msg_dds__CompressedImage__desc, "/rear/image_raw/faulty", all);
   Reader front_info(p, &sensor_msgs_msg_dds__CameraInfo__desc, "/front/camera_info/faulty", all);
   Reader rear_info(p, &sensor_msgs_msg_dds__CameraInfo__desc, "/rear/camera_info/faulty", all);
@@ -231,13 +278,29 @@ TEST_F(Ros2LaunchTest, ProxyRepublishesEachTopicFaulted) {
   const std::string ipc = "ipc://" + dir_ + "/";
   const std::string d = std::to_string(domain);
   const pid_t pid = SpawnLogged(
-      {std::string(FAULTLINE_BIN_DIR) + "/faultline", "launch", std::string(FAULTLINE_SOURCE_DIR) + "/launch/ros2_proxy.yaml",
-       "-p", "ros2_in.topics:=[/front/image_raw/compressed, /rear/image_raw]", "-p", "ros2_in.domain_id:=" + d,
-       "-p", "ros2_in.endpoint:=" + ipc + "in", "-p", "fault_injector.input_endpoints:=[" + ipc + "in]",
-       "-p", "fault_injector.output_endpoint:=" + ipc + "out", "-p", "fault_injector.corruption:=brightness/mid",
-       "-p", "ros2_out.input_endpoints:=[" + ipc + "out]", "-p", "ros2_out.domain_id:=" + d,
-       "-p", "ros2_out.advertise:=[/faulty/ros2/front/image_raw/compressed, /faulty/ros2/rear/image_raw]",
-       "-p", "ros2_out.wait_readers:=1"},
+      {std::string(FAULTLINE_BIN_DIR) + "/faultline",
+       "launch",
+       std::string(FAULTLINE_SOURCE_DIR) + "/launch/ros2_proxy.yaml",
+       "-p",
+       "ros2_in.topics:=[/front/image_raw/compressed, /rear/image_raw]",
+       "-p",
+       "ros2_in.domain_id:=" + d,
+       "-p",
+       "ros2_in.endpoint:=" + ipc + "in",
+       "-p",
+       "fault_injector.input_endpoints:=[" + ipc + "in]",
+       "-p",
+       "fault_injector.output_endpoint:=" + ipc + "out",
+       "-p",
+       "fault_injector.corruption:=brightness/mid",
+       "-p",
+       "ros2_out.input_endpoints:=[" + ipc + "out]",
+       "-p",
+       "ros2_out.domain_id:=" + d,
+       "-p",
+       "ros2_out.advertise:=[/faulty/ros2/front/image_raw/compressed, /faulty/ros2/rear/image_raw]",
+       "-p",
+       "ros2_out.wait_readers:=1"},
       dir_ + "/launch.log");
   ASSERT_GT(pid, 0);
   auto stop_launch = [&] {
@@ -246,8 +309,10 @@ TEST_F(Ros2LaunchTest, ProxyRepublishesEachTopicFaulted) {
     waitpid(pid, &status, 0);
     return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
   };
-  // Connected end to end: ros2_in subscribed (after the injector and ros2_out joined), ros2_out's writers matched.
-  if (!front.wait_for_readers(1, 30 * kNsPerSec).is_ok() || !rear.wait_for_readers(1, 30 * kNsPerSec).is_ok()) {
+  // Connected end to end: ros2_in subscribed (after the injector and ros2_out joined), ros2_out's
+  // writers matched.
+  if (!front.wait_for_readers(1, 30 * kNsPerSec).is_ok() ||
+      !rear.wait_for_readers(1, 30 * kNsPerSec).is_ok()) {
     stop_launch();
     FAIL() << "ros2_in did not subscribe\n" << ReadText(dir_ + "/launch.log");
   }
@@ -292,7 +357,8 @@ TEST_F(Ros2LaunchTest, ProxyRepublishesEachTopicFaulted) {
   std::size_t infos = 0, events = 0, corrupt = 0;
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(30);
   while ((got_front.size() < kFrames || got_rear.size() < kFrames || events < 2 * kFrames ||
-          infos < 2 * kFrames) && std::chrono::steady_clock::now() < deadline) {
+          infos < 2 * kFrames) &&
+         std::chrono::steady_clock::now() < deadline) {
     (void)front_out.take([&](const void* s) {
       const auto* m = static_cast<const sensor_msgs_msg_dds__CompressedImage_*>(s);
       got_front.push_back(ns_from_time({m->header.stamp.sec, m->header.stamp.nanosec}));
@@ -307,9 +373,12 @@ TEST_F(Ros2LaunchTest, ProxyRepublishesEachTopicFaulted) {
     (void)faults.take([&](const void* s) {
       const auto* m = static_cast<const diagnostic_msgs_msg_dds__DiagnosticArray_*>(s);
       ++events;
-      if (m->status._length == 1 && std::string(m->status._buffer[0].message).rfind("corrupt: brightness/", 0) == 0) ++corrupt;
+      if (m->status._length == 1 &&
+          std::string(m->status._buffer[0].message).rfind("corrupt: brightness/", 0) == 0)
+        ++corrupt;
     });
-    std::this_thread::sleep_for(std::chrono::milliseconds(10));  // polling the readers; not an assertion
+    std::this_thread::sleep_for(
+        std::chrono::milliseconds(10));  // polling the readers; not an assertion
   }
   EXPECT_EQ(stop_launch(), 0) << ReadText(dir_ + "/launch.log");
   std::vector<StampNs> want;
@@ -320,7 +389,8 @@ TEST_F(Ros2LaunchTest, ProxyRepublishesEachTopicFaulted) {
   EXPECT_EQ(ids_rear, std::vector<std::string>(kFrames, "rear_optical"));
   EXPECT_EQ(infos, 2u * kFrames);
   EXPECT_EQ(events, 2u * kFrames);
-  EXPECT_EQ(corrupt, 2u * kFrames) << "brightness/mid on both cameras (CAM_FRONT and CAM_FRONT_RIGHT by topic order)";
+  EXPECT_EQ(corrupt, 2u * kFrames)
+      << "brightness/mid on both cameras (CAM_FRONT and CAM_FRONT_RIGHT by topic order)";
 }
 
 }  // namespace

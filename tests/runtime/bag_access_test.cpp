@@ -1,6 +1,6 @@
-// Limits and access (#22) of the recorder and `bag play`: CURVE keys from files admit the right peer (every
-// message arrives, counted by seq) and refuse a wrong one (nothing arrives; the binding side counts it), and the
-// player binds beyond loopback only with allow_remote.
+// Limits and access (#22) of the recorder and `bag play`: CURVE keys from files admit the right
+// peer (every message arrives, counted by seq) and refuse a wrong one (nothing arrives; the binding
+// side counts it), and the player binds beyond loopback only with allow_remote.
 #include <gtest/gtest.h>
 #include <spdlog/sinks/null_sink.h>
 #include <spdlog/spdlog.h>
@@ -27,7 +27,8 @@ constexpr const char* kTopic = "/sync/sample";
 constexpr int kMessages = 10;
 
 std::shared_ptr<spdlog::logger> QuietLogger() {
-  return std::make_shared<spdlog::logger>("bag_access_test", std::make_shared<spdlog::sinks::null_sink_mt>());
+  return std::make_shared<spdlog::logger>("bag_access_test",
+                                          std::make_shared<spdlog::sinks::null_sink_mt>());
 }
 
 // Spins (yielding) until done() or 30 s; the bound only turns a hang into a failure.
@@ -51,7 +52,8 @@ std::string ThrownMessage(const std::function<void()>& f) {
 
 class BagAccessTest : public ::testing::Test {
  protected:
-  RecorderConfig Recorder(const std::string& name, transport::AccessConfig access, const std::string& endpoint) {
+  RecorderConfig Recorder(const std::string& name, transport::AccessConfig access,
+                          const std::string& endpoint) {
     RecorderConfig cfg;
     cfg.output = keys_.dir() + "/" + name + ".mcap";
     cfg.topics = {kTopic};
@@ -72,8 +74,8 @@ class BagAccessTest : public ::testing::Test {
     }
   }
 
-  // A CURVE publisher (server key, only "good" allowed) recorded by a recorder with the "good" key and one with
-  // the "bad" key; returns the good bag's path.
+  // A CURVE publisher (server key, only "good" allowed) recorded by a recorder with the "good" key
+  // and one with the "bad" key; returns the good bag's path.
   std::string RecordWithBothKeys() {
     transport::PublisherConfig pc;
     pc.endpoint = "tcp://127.0.0.1:*";
@@ -87,7 +89,8 @@ class BagAccessTest : public ::testing::Test {
     std::thread good_thread([&] { good_rc = good.run(stop); });
     std::thread bad_thread([&] { bad_rc = bad.run(stop); });
     EXPECT_TRUE(pub.wait_for_subscribers(kTopic, 1, 30 * kNsPerSec).is_ok());
-    EXPECT_TRUE(Eventually([&] { return pub.auth_refused() >= 1; }));  // the bad recorder, counted and logged
+    EXPECT_TRUE(Eventually(
+        [&] { return pub.auth_refused() >= 1; }));  // the bad recorder, counted and logged
     SendAll(pub);
     EXPECT_TRUE(Eventually([&] { return good.recorded() >= kMessages; }));
     stop = true;
@@ -107,7 +110,9 @@ class BagAccessTest : public ::testing::Test {
   test::CurveKeys keys_;
 };
 
-TEST_F(BagAccessTest, RecorderWithTheRightKeyRecordsEveryMessageAndAWrongKeyIsRefused) { RecordWithBothKeys(); }
+TEST_F(BagAccessTest, RecorderWithTheRightKeyRecordsEveryMessageAndAWrongKeyIsRefused) {
+  RecordWithBothKeys();
+}
 
 TEST_F(BagAccessTest, PlayerServesTheRightKeyEveryMessageAndRefusesAWrongKey) {
   const std::string bag = RecordWithBothKeys();
@@ -152,7 +157,8 @@ TEST_F(BagAccessTest, PlayerServesTheRightKeyEveryMessageAndRefusesAWrongKey) {
 
 TEST_F(BagAccessTest, PlayerBindsBeyondLoopbackOnlyWithAllowRemote) {
   BagPlayerConfig cfg;
-  cfg.files = {keys_.dir() + "/never_read.mcap"};  // sockets bind in the constructor; bags open in run()
+  cfg.files = {keys_.dir() +
+               "/never_read.mcap"};  // sockets bind in the constructor; bags open in run()
   cfg.endpoint = "tcp://0.0.0.0:*";
   std::string what = ThrownMessage([&] { BagPlayer p(cfg, QuietLogger()); });
   EXPECT_NE(what.find("endpoint = tcp://0.0.0.0:*"), std::string::npos) << what;

@@ -1,8 +1,9 @@
 // `bag convert` on a tiny synthetic nuScenes dataset: every frame byte-exact in the replay channels
 // (as the player publishes it), the Foxglove view, ground-truth boxes, faults baked in with the
 // injector's policy, deterministic output, the independent Node validator, and a speed figure.
-#include <gtest/gtest.h>
+#include "runtime/bag_convert.hpp"
 
+#include <gtest/gtest.h>
 #include <spdlog/sinks/null_sink.h>
 #include <spdlog/spdlog.h>
 #include <unistd.h>
@@ -23,7 +24,6 @@
 #include "fault.pb.h"
 #include "foxglove/CompressedImage.pb.h"
 #include "foxglove/SceneUpdate.pb.h"
-#include "runtime/bag_convert.hpp"
 #include "runtime/bag_layout.hpp"
 #include "runtime/engine_policy.hpp"
 #include "runtime/player_loop.hpp"
@@ -34,7 +34,8 @@ namespace {
 namespace fs = std::filesystem;
 
 std::shared_ptr<spdlog::logger> quiet_logger() {
-  return std::make_shared<spdlog::logger>("bag_convert_test", std::make_shared<spdlog::sinks::null_sink_mt>());
+  return std::make_shared<spdlog::logger>("bag_convert_test",
+                                          std::make_shared<spdlog::sinks::null_sink_mt>());
 }
 
 std::string file_bytes(const fs::path& p) {
@@ -47,7 +48,8 @@ std::string file_bytes(const fs::path& p) {
 // Runs the Node validator when installed; returns false only when it ran and failed.
 bool node_validates(const std::string& bag, std::uint64_t expected_messages) {
   const fs::path js = fs::path(FAULTLINE_SOURCE_DIR) / "tests/mcap_js";
-  if (!fs::exists(js / "node_modules/@mcap/core") || std::system("node --version > /dev/null 2>&1") != 0) {
+  if (!fs::exists(js / "node_modules/@mcap/core") ||
+      std::system("node --version > /dev/null 2>&1") != 0) {
     std::printf("SKIPPED Node validation: no node or tests/mcap_js/node_modules\n");
     return true;
   }
@@ -57,7 +59,8 @@ bool node_validates(const std::string& bag, std::uint64_t expected_messages) {
 }
 
 struct Content {
-  std::map<std::string, std::vector<std::pair<msgs::CameraFrame, std::string>>> frames;  // replay topic -> frames
+  std::map<std::string, std::vector<std::pair<msgs::CameraFrame, std::string>>>
+      frames;  // replay topic -> frames
   std::vector<msgs::SampleBoundary> boundaries;
   std::vector<msgs::FaultEvent> faults;
   std::map<std::string, std::string> schema_of_topic;
@@ -85,7 +88,8 @@ Content read_content(const std::string& path) {
       c.frames[topic->second].emplace_back(h, std::string(mp->payload));
     } else if (topic != v.channel->metadata.end() && topic->second == "/sync/sample") {
       c.boundaries.emplace_back();
-      EXPECT_TRUE(c.boundaries.back().ParseFromArray(v.data.data(), static_cast<int>(v.data.size())));
+      EXPECT_TRUE(
+          c.boundaries.back().ParseFromArray(v.data.data(), static_cast<int>(v.data.size())));
     } else if (topic != v.channel->metadata.end() && topic->second == "/faultline/faults") {
       c.faults.emplace_back();
       EXPECT_TRUE(c.faults.back().ParseFromArray(v.data.data(), static_cast<int>(v.data.size())));
@@ -106,7 +110,8 @@ Content read_content(const std::string& path) {
 class BagConvertTest : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
-    root_ = new fs::path(fs::temp_directory_path() / ("faultline_bag_convert_" + std::to_string(::getpid())));
+    root_ = new fs::path(fs::temp_directory_path() /
+                         ("faultline_bag_convert_" + std::to_string(::getpid())));
     fs::remove_all(*root_);
     dataset::SynthOptions o;
     o.out_dir = (*root_ / "nuscenes").string();
@@ -127,8 +132,10 @@ class BagConvertTest : public ::testing::Test {
   static std::string out(const std::string& name) { return (*root_ / name).string(); }
 
   // Converts `scenes` (empty = all) with optional corruptions; returns the counts.
-  static Result<ConvertCounts> convert(const std::string& output, const std::vector<std::string>& scenes,
-                                       const std::vector<std::string>& corrupt = {}, bool clean = true) {
+  static Result<ConvertCounts> convert(const std::string& output,
+                                       const std::vector<std::string>& scenes,
+                                       const std::vector<std::string>& corrupt = {},
+                                       bool clean = true) {
     auto source = NuScenesFrameSource::open(dataroot(), "v1.0-mini", scenes);
     if (!source) return source.status();
     std::set<std::string> samples;
@@ -141,13 +148,15 @@ class BagConvertTest : public ::testing::Test {
     if (!corrupt.empty()) {
       policy::EngineConfig engine;
       engine.seed = 7;
-      for (const auto& c : corrupt) engine.faults.push_back(*policy::parse_corruption_shorthand(c, "test"));
+      for (const auto& c : corrupt)
+        engine.faults.push_back(*policy::parse_corruption_shorthand(c, "test"));
       policy = std::make_unique<EnginePolicy>(engine);
     }
     ConvertConfig cfg;
     cfg.output = output;
     cfg.clean_frames = clean;
-    BagConverter converter(cfg, std::move(source).value(), std::move(gt).value(), std::move(policy), quiet_logger());
+    BagConverter converter(cfg, std::move(source).value(), std::move(gt).value(), std::move(policy),
+                           quiet_logger());
     std::atomic<bool> stop{false};
     return converter.run(stop);
   }
@@ -162,7 +171,8 @@ TEST_F(BagConvertTest, CleanBagHoldsEveryFrameAsThePlayerSendsItPlusTheFoxgloveV
   const std::string bag = out("clean.mcap");
   const auto t0 = std::chrono::steady_clock::now();
   auto counts = convert(bag, {});
-  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   ASSERT_TRUE(counts.is_ok()) << counts.status().to_string();
 
   auto reader = dataset::NuScenesReader::open(dataroot(), "v1.0-mini");
@@ -180,8 +190,10 @@ TEST_F(BagConvertTest, CleanBagHoldsEveryFrameAsThePlayerSendsItPlusTheFoxgloveV
   EXPECT_EQ(counts->gt_updates, samples->size());
   EXPECT_EQ(static_cast<std::int64_t>(counts->gt_boxes), annotations_);
   std::printf("converted %llu frames in %.3f s: %.0f frames/s (incl. table load)\n",
-              static_cast<unsigned long long>(counts->frames), seconds, static_cast<double>(counts->frames) / seconds);
-  RecordProperty("frames_per_second", static_cast<int>(static_cast<double>(counts->frames) / seconds));
+              static_cast<unsigned long long>(counts->frames), seconds,
+              static_cast<double>(counts->frames) / seconds);
+  RecordProperty("frames_per_second",
+                 static_cast<int>(static_cast<double>(counts->frames) / seconds));
 
   const Content c = read_content(bag);
   // Replay channels: per camera, seq 1..n in dataset order, the JPEG exactly as stored on disk.
@@ -214,11 +226,13 @@ TEST_F(BagConvertTest, CleanBagHoldsEveryFrameAsThePlayerSendsItPlusTheFoxgloveV
     EXPECT_GT(c.boundaries[i].frames_sent(), 0u);
   }
   // Foxglove view with nuscenes2mcap naming.
-  for (const char* cam : {"cam_front", "cam_front_left", "cam_front_right", "cam_back", "cam_back_left", "cam_back_right"}) {
+  for (const char* cam : {"cam_front", "cam_front_left", "cam_front_right", "cam_back",
+                          "cam_back_left", "cam_back_right"}) {
     const std::string image = std::string("/") + cam + "/image_rect_compressed";
     EXPECT_EQ(c.schema_of_topic.at(image), "foxglove.CompressedImage");
     EXPECT_EQ(c.count_of_topic.at(image), by_topic.at(image).size());
-    EXPECT_EQ(c.schema_of_topic.at(std::string("/") + cam + "/camera_info"), "foxglove.CameraCalibration");
+    EXPECT_EQ(c.schema_of_topic.at(std::string("/") + cam + "/camera_info"),
+              "foxglove.CameraCalibration");
   }
   EXPECT_EQ(c.schema_of_topic.at("/tf"), "foxglove.FrameTransform");
   EXPECT_EQ(c.count_of_topic.at("/tf"), 2 * counts->frames);
@@ -274,12 +288,14 @@ TEST_F(BagConvertTest, FaultsAreBakedInWithTheInjectorPolicy) {
     EXPECT_EQ(h.source_seq(), clean[i].first.header().seq());
     EXPECT_EQ(h.fault().action(), msgs::FAULT_ACTION_CORRUPT);
     EXPECT_NE(jpeg, clean[i].second);
-    const cv::Mat img = cv::imdecode(cv::Mat(1, static_cast<int>(jpeg.size()), CV_8U, const_cast<char*>(jpeg.data())),
-                                     cv::IMREAD_COLOR);
+    const cv::Mat img = cv::imdecode(
+        cv::Mat(1, static_cast<int>(jpeg.size()), CV_8U, const_cast<char*>(jpeg.data())),
+        cv::IMREAD_COLOR);
     ASSERT_FALSE(img.empty());
     EXPECT_EQ(img.cols, 320);
   }
-  EXPECT_EQ(c.schema_of_topic.at("/faulty/cam_front/image_rect_compressed"), "foxglove.CompressedImage");
+  EXPECT_EQ(c.schema_of_topic.at("/faulty/cam_front/image_rect_compressed"),
+            "foxglove.CompressedImage");
   EXPECT_EQ(c.schema_of_topic.at("/faultline/faults"), "faultline.msgs.FaultEvent");
   EXPECT_TRUE(node_validates(bag, counts->messages));
 

@@ -591,7 +591,8 @@ TEST_F(BagCorruptTest, NonImageTopicIsAnErrorBeforeAnyOutput) {
   EXPECT_EQ(leftovers("in.mcap"), std::vector<std::string>{});
 }
 
-// Message faults (calibration, stamps) are not pixels: bag corrupt refuses them by name instead of ignoring them.
+// Message faults (calibration, stamps) are not pixels: bag corrupt refuses them by name instead of
+// ignoring them.
 TEST_F(BagCorruptTest, MessageFaultsAreRefusedBeforeAnyOutput) {
   const std::string in = write_mcap();
   for (const char* fault : {"/cam/jpeg=calibration_drift:mid", "/cam/jpeg=timestamp_skew:2"}) {
@@ -600,7 +601,8 @@ TEST_F(BagCorruptTest, MessageFaultsAreRefusedBeforeAnyOutput) {
     auto r = corrupt_bag(cfg, stop_);
     ASSERT_FALSE(r) << fault;
     EXPECT_EQ(r.status().code(), StatusCode::kInvalidArgument);
-    EXPECT_NE(r.status().message().find("bag corrupt rewrites pixels only"), std::string::npos) << r.status().message();
+    EXPECT_NE(r.status().message().find("bag corrupt rewrites pixels only"), std::string::npos)
+        << r.status().message();
     EXPECT_EQ(leftovers("in.mcap"), std::vector<std::string>{});
   }
 }

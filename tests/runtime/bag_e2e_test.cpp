@@ -67,7 +67,8 @@ int WaitExit(Child& c, std::chrono::milliseconds timeout) {
       c.pid = -1;
       return -1;
     }
-    std::this_thread::sleep_for(std::chrono::milliseconds(5));  // polling a child's exit, not synchronising
+    std::this_thread::sleep_for(
+        std::chrono::milliseconds(5));  // polling a child's exit, not synchronising
   }
   c.pid = -1;
   return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
@@ -86,7 +87,8 @@ std::string Bin(const std::string& name) { return std::string(FAULTLINE_BIN_DIR)
 std::pair<std::uint64_t, std::uint64_t> PlayerSent(const std::string& log) {
   std::smatch m;
   const std::string text = ReadText(log);
-  if (!std::regex_search(text, m, std::regex("player done: (\\d+) frames, (\\d+) boundaries"))) return {0, 0};
+  if (!std::regex_search(text, m, std::regex("player done: (\\d+) frames, (\\d+) boundaries")))
+    return {0, 0};
   return {std::stoull(m[1]), std::stoull(m[2])};
 }
 
@@ -103,23 +105,27 @@ BagReplay ReadReplay(const std::string& path) {
   if (!reader) return out;
   out.indexed = (*reader)->load_summary().is_ok();
   EXPECT_TRUE((*reader)
-                  ->read_indexed({}, [&](const bag::MessageView& v) {
-                    ++out.messages;
-                    const auto t = v.channel->metadata.find(runtime::kMetaTopic);
-                    if (t != v.channel->metadata.end()) out.seqs[t->second].push_back(v.sequence);
-                    return true;
-                  })
+                  ->read_indexed({},
+                                 [&](const bag::MessageView& v) {
+                                   ++out.messages;
+                                   const auto t = v.channel->metadata.find(runtime::kMetaTopic);
+                                   if (t != v.channel->metadata.end())
+                                     out.seqs[t->second].push_back(v.sequence);
+                                   return true;
+                                 })
                   .is_ok());
   return out;
 }
 
 bool NodeValidates(const std::string& bag) {
   const fs::path js = fs::path(FAULTLINE_SOURCE_DIR) / "tests/mcap_js";
-  if (!fs::exists(js / "node_modules/@mcap/core") || std::system("node --version > /dev/null 2>&1") != 0) {
+  if (!fs::exists(js / "node_modules/@mcap/core") ||
+      std::system("node --version > /dev/null 2>&1") != 0) {
     std::printf("SKIPPED Node validation: no node or tests/mcap_js/node_modules\n");
     return true;
   }
-  return std::system(("node " + (js / "validate_mcap.mjs").string() + " " + bag + " > /dev/null").c_str()) == 0;
+  return std::system(("node " + (js / "validate_mcap.mjs").string() + " " + bag + " > /dev/null")
+                         .c_str()) == 0;
 }
 
 class BagProcessTest : public ::testing::Test {
@@ -154,25 +160,43 @@ class BagProcessTest : public ::testing::Test {
   std::string Dataroot() const { return *data_dir_ + "/nuscenes"; }
 
   std::vector<std::string> PlayerArgs(double rate, bool lockstep, int subscribers) const {
-    return {Bin("nusc_player"), "-p", "dataroot:=" + Dataroot(), "-p", "version:=v1.0-mini", "-p",
-            "rate:=" + std::to_string(rate), "-p", "endpoint:=" + Ipc("player"), "-p",
-            std::string("lockstep:=") + (lockstep ? "true" : "false"), "-p", "ack_endpoint:=" + Ipc("ack"), "-p",
-            "hwm:=1000", "-p", "wait_subscribers:=" + std::to_string(subscribers)};
+    return {Bin("nusc_player"),
+            "-p",
+            "dataroot:=" + Dataroot(),
+            "-p",
+            "version:=v1.0-mini",
+            "-p",
+            "rate:=" + std::to_string(rate),
+            "-p",
+            "endpoint:=" + Ipc("player"),
+            "-p",
+            std::string("lockstep:=") + (lockstep ? "true" : "false"),
+            "-p",
+            "ack_endpoint:=" + Ipc("ack"),
+            "-p",
+            "hwm:=1000",
+            "-p",
+            "wait_subscribers:=" + std::to_string(subscribers)};
   }
-  // player/bag play (at `input`) -> injector -> detector -> sink; `tag` names the endpoints and files.
-  std::vector<Child> Downstream(const std::string& input, const std::string& ack, const std::string& tag) const {
+  // player/bag play (at `input`) -> injector -> detector -> sink; `tag` names the endpoints and
+  // files.
+  std::vector<Child> Downstream(const std::string& input, const std::string& ack,
+                                const std::string& tag) const {
     std::vector<Child> nodes;
     nodes.push_back(Spawn({Bin("fault_injector"), "-p", "input_endpoints:=[" + input + "]", "-p",
-                           "output_endpoint:=" + Ipc("inj_" + tag), "-p", "decode:=true", "-p", "input_hwm:=64", "-p",
-                           "output_hwm:=64", "-p", "wait_subscribers:=2", "-p", "corruption:=fog/mid", "-p", "seed:=11"},
+                           "output_endpoint:=" + Ipc("inj_" + tag), "-p", "decode:=true", "-p",
+                           "input_hwm:=64", "-p", "output_hwm:=64", "-p", "wait_subscribers:=2",
+                           "-p", "corruption:=fog/mid", "-p", "seed:=11"},
                           Path("injector_" + tag + ".log")));
-    nodes.push_back(Spawn({Bin("detector"), "-p", "input_endpoints:=[" + Ipc("inj_" + tag) + "]", "-p",
-                           "sink_endpoint:=" + Ipc("sink_" + tag)},
+    nodes.push_back(Spawn({Bin("detector"), "-p", "input_endpoints:=[" + Ipc("inj_" + tag) + "]",
+                           "-p", "sink_endpoint:=" + Ipc("sink_" + tag)},
                           Path("detector_" + tag + ".log")));
-    nodes.push_back(Spawn({Bin("detection_sink"), "-p", "detections_endpoint:=" + Ipc("sink_" + tag), "-p",
-                           "sync_endpoints:=[" + Ipc("inj_" + tag) + "]", "-p", "output:=" + Path("results_" + tag + ".json"),
-                           "-p", "lockstep:=true", "-p", "ack_endpoint:=" + ack},
-                          Path("sink_" + tag + ".log")));
+    nodes.push_back(
+        Spawn({Bin("detection_sink"), "-p", "detections_endpoint:=" + Ipc("sink_" + tag), "-p",
+               "sync_endpoints:=[" + Ipc("inj_" + tag) + "]", "-p",
+               "output:=" + Path("results_" + tag + ".json"), "-p", "lockstep:=true", "-p",
+               "ack_endpoint:=" + ack},
+              Path("sink_" + tag + ".log")));
     return nodes;
   }
   void ExpectAllExit(std::vector<Child>& nodes, std::chrono::seconds timeout) {
@@ -190,8 +214,8 @@ class BagProcessTest : public ::testing::Test {
 std::string* BagProcessTest::data_dir_ = nullptr;
 
 TEST_F(BagProcessTest, RecorderProcessKeepsEveryFrameAndFinalisesOnSigint) {
-  Child recorder = Spawn({Bin("faultline"), "bag", "record", "-o", Path("rec.mcap"), "--all", "--endpoint",
-                          Ipc("player"), "--hwm", "1000"},
+  Child recorder = Spawn({Bin("faultline"), "bag", "record", "-o", Path("rec.mcap"), "--all",
+                          "--endpoint", Ipc("player"), "--hwm", "1000"},
                          Path("record.log"));
   Child player = Spawn(PlayerArgs(4.0, false, 1), Path("player.log"));  // waits for the recorder
   ASSERT_EQ(WaitExit(player, std::chrono::seconds(60)), 0) << ReadText(player.log);
@@ -201,7 +225,8 @@ TEST_F(BagProcessTest, RecorderProcessKeepsEveryFrameAndFinalisesOnSigint) {
   ASSERT_EQ(kill(recorder.pid, SIGINT), 0);
   EXPECT_EQ(WaitExit(recorder, std::chrono::seconds(5)), 0) << ReadText(recorder.log);
   const auto exit_ms =
-      std::chrono::duration_cast<std::chrono::milliseconds>(std::chrono::steady_clock::now() - t0).count();
+      std::chrono::duration_cast<std::chrono::milliseconds>(std::chrono::steady_clock::now() - t0)
+          .count();
   EXPECT_LT(exit_ms, 1500) << "bounded shutdown";
 
   const BagReplay bag = ReadReplay(Path("rec.mcap"));
@@ -221,8 +246,8 @@ TEST_F(BagProcessTest, RecorderProcessKeepsEveryFrameAndFinalisesOnSigint) {
 
 TEST_F(BagProcessTest, BagPlayThroughInjectorGivesTheSameDetectionsAsTheLiveRun) {
   // Live run, recorded.
-  Child recorder = Spawn({Bin("faultline"), "bag", "record", "-o", Path("live.mcap"), "--all", "--endpoint",
-                          Ipc("player"), "--hwm", "1000"},
+  Child recorder = Spawn({Bin("faultline"), "bag", "record", "-o", Path("live.mcap"), "--all",
+                          "--endpoint", Ipc("player"), "--hwm", "1000"},
                          Path("record.log"));
   auto live = Downstream(Ipc("player"), Ipc("ack"), "live");
   Child player = Spawn(PlayerArgs(0, true, 2), Path("player.log"));  // injector + recorder
@@ -233,13 +258,31 @@ TEST_F(BagProcessTest, BagPlayThroughInjectorGivesTheSameDetectionsAsTheLiveRun)
   const auto [frames, boundaries] = PlayerSent(player.log);
   const BagReplay bag = ReadReplay(Path("live.mcap"));
   ASSERT_EQ(bag.seqs.count("/sync/sample"), 1u);
-  ASSERT_EQ(bag.seqs.at("/sync/sample").size(), boundaries) << "the recording must hold the whole run";
+  ASSERT_EQ(bag.seqs.at("/sync/sample").size(), boundaries)
+      << "the recording must hold the whole run";
 
   // Replay of the recording through the same injector configuration.
   auto replay = Downstream(Ipc("play"), Ipc("ack2"), "replay");
-  Child play = Spawn({Bin("faultline"), "bag", "play", Path("live.mcap"), "--rate", "0", "--lockstep",
-                      "--ack-endpoint", Ipc("ack2"), "--endpoint", Ipc("play"), "--wait-subscribers", "1", "--hwm",
-                      "1000", "--ack-timeout-ms", "0", "--no-progress", "--include", "^/(cam_|sync/)"},
+  Child play = Spawn({Bin("faultline"),
+                      "bag",
+                      "play",
+                      Path("live.mcap"),
+                      "--rate",
+                      "0",
+                      "--lockstep",
+                      "--ack-endpoint",
+                      Ipc("ack2"),
+                      "--endpoint",
+                      Ipc("play"),
+                      "--wait-subscribers",
+                      "1",
+                      "--hwm",
+                      "1000",
+                      "--ack-timeout-ms",
+                      "0",
+                      "--no-progress",
+                      "--include",
+                      "^/(cam_|sync/)"},
                      Path("play.log"));
   ASSERT_EQ(WaitExit(play, std::chrono::seconds(120)), 0) << ReadText(play.log);
   ExpectAllExit(replay, std::chrono::seconds(30));
@@ -256,12 +299,13 @@ TEST_F(BagProcessTest, BagPlayThroughInjectorGivesTheSameDetectionsAsTheLiveRun)
   // Same frames reached the detector: the injectors saw the same input.
   const std::regex done("injector done: in (\\d+) out (\\d+)");
   std::smatch ma, mb;
-  const std::string la = ReadText(Path("injector_live.log")), lb = ReadText(Path("injector_replay.log"));
+  const std::string la = ReadText(Path("injector_live.log")),
+                    lb = ReadText(Path("injector_replay.log"));
   ASSERT_TRUE(std::regex_search(la, ma, done) && std::regex_search(lb, mb, done));
   EXPECT_EQ(ma[1], mb[1]);
   EXPECT_GT(std::stoull(ma[1]), 0u);
-  // The recording holds every frame the player sent, and both injectors saw every one of them: they stop at the
-  // stream end, after the sweeps that follow the last sample.
+  // The recording holds every frame the player sent, and both injectors saw every one of them: they
+  // stop at the stream end, after the sweeps that follow the last sample.
   std::uint64_t frames_in_bag = 0;
   for (const auto& [topic, seqs] : bag.seqs) {
     if (topic.find("/image_rect_compressed") != std::string::npos) frames_in_bag += seqs.size();
@@ -273,8 +317,8 @@ TEST_F(BagProcessTest, BagPlayThroughInjectorGivesTheSameDetectionsAsTheLiveRun)
 }
 
 TEST_F(BagProcessTest, ConvertedBagPlaysStartPausedUnderBagControl) {
-  Child convert = Spawn({Bin("faultline"), "bag", "convert", "--dataroot", Dataroot(), "--version", "v1.0-mini",
-                         "-o", Path("conv.mcap"), "--quiet"},
+  Child convert = Spawn({Bin("faultline"), "bag", "convert", "--dataroot", Dataroot(), "--version",
+                         "v1.0-mini", "-o", Path("conv.mcap"), "--quiet"},
                         Path("convert.log"));
   ASSERT_EQ(WaitExit(convert, std::chrono::seconds(60)), 0) << ReadText(convert.log);
   const BagReplay bag = ReadReplay(Path("conv.mcap"));
@@ -282,9 +326,9 @@ TEST_F(BagProcessTest, ConvertedBagPlaysStartPausedUnderBagControl) {
   for (const auto& [topic, seqs] : bag.seqs) replayable += seqs.size();
   ASSERT_GT(replayable, 10u);
 
-  Child play = Spawn({Bin("faultline"), "bag", "play", Path("conv.mcap"), "--rate", "0", "--start-paused",
-                      "--control", Ipc("ctl"), "--endpoint", Ipc("play"), "--wait-subscribers", "1", "--hwm", "1000",
-                      "--no-progress"},
+  Child play = Spawn({Bin("faultline"), "bag", "play", Path("conv.mcap"), "--rate", "0",
+                      "--start-paused", "--control", Ipc("ctl"), "--endpoint", Ipc("play"),
+                      "--wait-subscribers", "1", "--hwm", "1000", "--no-progress"},
                      Path("play.log"));
   {
     transport::SubscriberConfig sc;
@@ -294,18 +338,23 @@ TEST_F(BagProcessTest, ConvertedBagPlaysStartPausedUnderBagControl) {
     transport::RawSubscriber sub(sc);
     // Paused: nothing arrives (a bounded negative check).
     EXPECT_EQ(sub.receive(500 * kNsPerMs).status().code(), StatusCode::kWouldBlock);
-    Child step = Spawn({Bin("faultline"), "bag", "control", Ipc("ctl"), "step", "3"}, Path("step.log"));
+    Child step =
+        Spawn({Bin("faultline"), "bag", "control", Ipc("ctl"), "step", "3"}, Path("step.log"));
     ASSERT_EQ(WaitExit(step, std::chrono::seconds(10)), 0) << ReadText(step.log);
-    for (int i = 0; i < 3; ++i) ASSERT_TRUE(sub.receive(10 * kNsPerSec).is_ok()) << "step message " << i;
-    EXPECT_EQ(sub.receive(500 * kNsPerMs).status().code(), StatusCode::kWouldBlock) << "a step sends exactly N";
-    Child resume = Spawn({Bin("faultline"), "bag", "control", Ipc("ctl"), "resume"}, Path("resume.log"));
+    for (int i = 0; i < 3; ++i)
+      ASSERT_TRUE(sub.receive(10 * kNsPerSec).is_ok()) << "step message " << i;
+    EXPECT_EQ(sub.receive(500 * kNsPerMs).status().code(), StatusCode::kWouldBlock)
+        << "a step sends exactly N";
+    Child resume =
+        Spawn({Bin("faultline"), "bag", "control", Ipc("ctl"), "resume"}, Path("resume.log"));
     ASSERT_EQ(WaitExit(resume, std::chrono::seconds(10)), 0) << ReadText(resume.log);
     std::uint64_t got = 3;
     while (got < replayable && sub.receive(10 * kNsPerSec).is_ok()) ++got;
     EXPECT_EQ(got, replayable);
     EXPECT_EQ(WaitExit(play, std::chrono::seconds(30)), 0) << ReadText(play.log);
   }
-  EXPECT_NE(ReadText(Path("play.log")).find("control: step 3"), std::string::npos) << ReadText(Path("play.log"));
+  EXPECT_NE(ReadText(Path("play.log")).find("control: step 3"), std::string::npos)
+      << ReadText(Path("play.log"));
 }
 
 }  // namespace

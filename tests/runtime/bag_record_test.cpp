@@ -1,7 +1,6 @@
-// Recorder/player over the live transport: a publisher thread over ipc, BagRecorder in a thread with
-// a stop flag, then the bag read back and played into a RawSubscriber.
+// Recorder/player over the live transport: a publisher thread over ipc, BagRecorder in a thread
+// with a stop flag, then the bag read back and played into a RawSubscriber.
 #include <gtest/gtest.h>
-
 #include <spdlog/sinks/null_sink.h>
 #include <spdlog/spdlog.h>
 #include <unistd.h>
@@ -41,7 +40,8 @@ struct SentMessage {
 };
 
 std::shared_ptr<spdlog::logger> quiet_logger() {
-  return std::make_shared<spdlog::logger>("bag_record_test", std::make_shared<spdlog::sinks::null_sink_mt>());
+  return std::make_shared<spdlog::logger>("bag_record_test",
+                                          std::make_shared<spdlog::sinks::null_sink_mt>());
 }
 
 // Spins (yielding) until pred() holds or 20 s pass; the bound only turns a hang into a failure.
@@ -58,8 +58,9 @@ bool wait_for(Pred pred) {
 class BagRecordTest : public ::testing::Test {
  protected:
   void SetUp() override {
-    dir_ = fs::temp_directory_path() / ("faultline_bag_record_" + std::to_string(::getpid()) + "_" +
-                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    dir_ = fs::temp_directory_path() /
+           ("faultline_bag_record_" + std::to_string(::getpid()) + "_" +
+            ::testing::UnitTest::GetInstance()->current_test_info()->name());
     fs::create_directories(dir_);
     endpoint_ = "ipc://" + (dir_ / "pub.sock").string();
   }
@@ -84,7 +85,8 @@ class BagRecordTest : public ::testing::Test {
         for (int k = 0; k < 9; ++k) f.add_intrinsics(k == 0 || k == 4 ? 100.0 : k == 8 ? 1.0 : 0.0);
         f.mutable_ego_pose()->mutable_rotation()->set_w(1.0);
         std::string payload(1000 + 37 * i, '\0');
-        for (std::size_t b = 0; b < payload.size(); ++b) payload[b] = static_cast<char>((b * 31 + i) & 0xff);
+        for (std::size_t b = 0; b < payload.size(); ++b)
+          payload[b] = static_cast<char>((b * 31 + i) & 0xff);
         f.set_payload_bytes(static_cast<std::uint32_t>(payload.size()));
         out.push_back({kImageTopic, f.SerializeAsString(), payload, seq});
       }
@@ -152,7 +154,7 @@ class BagRecordTest : public ::testing::Test {
 };
 
 struct ReadBack {
-  std::vector<SentMessage> replay;          // from the replay channels, in file order
+  std::vector<SentMessage> replay;  // from the replay channels, in file order
   std::map<std::string, std::string> schema_of_topic;
   std::map<std::string, std::size_t> count_of_topic;
 };
@@ -222,7 +224,8 @@ TEST(BagLayoutTest, ReadsHeaderOfAnyMessage) {
   EXPECT_EQ(h.publish_stamp_ns, 123);
   EXPECT_EQ(h.publisher, "sink");
   EXPECT_FALSE(read_header_fields("\xff\xff", &h));
-  EXPECT_EQ(sibling_camera_info_topic("/faulty/cam_front/image_rect_compressed"), "/faulty/cam_front/camera_info");
+  EXPECT_EQ(sibling_camera_info_topic("/faulty/cam_front/image_rect_compressed"),
+            "/faulty/cam_front/camera_info");
 }
 
 TEST_F(BagRecordTest, RecordsLiveStreamByteExactWithDrops) {
@@ -282,7 +285,8 @@ TEST_F(BagRecordTest, PlayRepublishesRecordingExactly) {
     SentMessage m;
     m.topic = std::string(r->topic());
     m.header = std::string(r->header());
-    if (r->has_payload()) m.payload.assign(reinterpret_cast<const char*>(r->payload_data()), r->payload_size());
+    if (r->has_payload())
+      m.payload.assign(reinterpret_cast<const char*>(r->payload_data()), r->payload_size());
     HeaderFields h;
     ASSERT_TRUE(read_header_fields(m.header, &h));
     m.seq = h.seq;
@@ -306,7 +310,8 @@ TEST_F(BagRecordTest, LockstepPlayWaitsForEachSampleAck) {
   pc.endpoint = "ipc://" + (dir_ / "play.sock").string();
   pc.ack_endpoint = "ipc://" + (dir_ / "ack.sock").string();
   pc.lockstep = true;
-  pc.ack_timeout_ms = 0;  // wait forever: a missing ack would hang, caught by the receive timeout below
+  pc.ack_timeout_ms =
+      0;  // wait forever: a missing ack would hang, caught by the receive timeout below
   pc.wait_subscribers = 1;
   BagPlayer player(pc, quiet_logger());
   transport::SubscriberConfig sc;
@@ -331,7 +336,8 @@ TEST_F(BagRecordTest, LockstepPlayWaitsForEachSampleAck) {
     SentMessage m;
     m.topic = std::string(r->topic());
     m.header = std::string(r->header());
-    if (r->has_payload()) m.payload.assign(reinterpret_cast<const char*>(r->payload_data()), r->payload_size());
+    if (r->has_payload())
+      m.payload.assign(reinterpret_cast<const char*>(r->payload_data()), r->payload_size());
     HeaderFields h;
     ASSERT_TRUE(read_header_fields(m.header, &h));
     m.seq = h.seq;
@@ -382,20 +388,24 @@ TEST_F(BagRecordTest, StopDuringRecordingLeavesIndexedFile) {
   ASSERT_TRUE((*reader)->load_summary().is_ok());
   ASSERT_TRUE((*reader)->summary().statistics.has_value());
   std::uint64_t replayed = 0;
-  ASSERT_TRUE((*reader)->read_indexed({}, [&](const bag::MessageView& v) {
-    replayed += v.channel->metadata.count(kMetaFrames);
-    return true;
-  }).is_ok());
+  ASSERT_TRUE((*reader)
+                  ->read_indexed({},
+                                 [&](const bag::MessageView& v) {
+                                   replayed += v.channel->metadata.count(kMetaFrames);
+                                   return true;
+                                 })
+                  .is_ok());
   EXPECT_EQ(replayed, recorder.counts().messages);
   EXPECT_GE(replayed, 10u);
   // Independent check with @mcap/core when the Node validator is installed.
   const fs::path js = fs::path(FAULTLINE_SOURCE_DIR) / "tests/mcap_js";
-  if (fs::exists(js / "node_modules/@mcap/core") && std::system("node --version > /dev/null 2>&1") == 0) {
-    const std::string cmd = "node " + (js / "validate_mcap.mjs").string() + " " + cfg.output + " > /dev/null";
+  if (fs::exists(js / "node_modules/@mcap/core") &&
+      std::system("node --version > /dev/null 2>&1") == 0) {
+    const std::string cmd =
+        "node " + (js / "validate_mcap.mjs").string() + " " + cfg.output + " > /dev/null";
     EXPECT_EQ(std::system(cmd.c_str()), 0) << cmd;
   }
 }
-
 
 // A replay bag written directly with controlled log times: two-part messages on /a and /b
 // alternating, message i at 1e18 + i * 100 ms (+ gap_s after the first half), seq per topic.
@@ -436,8 +446,9 @@ class BagPlayOptionsTest : public BagRecordTest {
   }
   // Plays with `pc` into a subscriber until `expect` messages arrived (or 10 s of silence), then
   // stops the player; `during` runs after the subscriber connected.
-  std::vector<Played> play(BagPlayerConfig pc, std::size_t expect, double* wall_s = nullptr,
-                           const std::function<void(BagPlayer&, transport::RawSubscriber&)>& during = {}) {
+  std::vector<Played> play(
+      BagPlayerConfig pc, std::size_t expect, double* wall_s = nullptr,
+      const std::function<void(BagPlayer&, transport::RawSubscriber&)>& during = {}) {
     BagPlayer player(pc, quiet_logger());
     transport::SubscriberConfig sc;
     sc.endpoints = {player.endpoint()};
@@ -461,7 +472,8 @@ class BagPlayOptionsTest : public BagRecordTest {
     }
     if (pc.loop) stop = true;
     t.join();
-    if (wall_s) *wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    if (wall_s)
+      *wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     EXPECT_EQ(rc, 0);
     return got;
   }
@@ -533,7 +545,8 @@ TEST_F(BagPlayOptionsTest, StartPausedStepsAndResumesFromTheControlSocket) {
   pc.control_endpoint = "ipc://" + (dir_ / "ctl.sock").string();
   auto got = play(pc, 10, nullptr, [&](BagPlayer& player, transport::RawSubscriber& sub) {
     EXPECT_TRUE(player.paused());
-    EXPECT_EQ(sub.receive(300 * kNsPerMs).status().code(), StatusCode::kWouldBlock) << "paused: nothing sent";
+    EXPECT_EQ(sub.receive(300 * kNsPerMs).status().code(), StatusCode::kWouldBlock)
+        << "paused: nothing sent";
     transport::PublisherConfig cc;
     cc.endpoint = player.control_endpoint();
     cc.pattern = transport::Pattern::PushPull;
@@ -544,7 +557,8 @@ TEST_F(BagPlayOptionsTest, StartPausedStepsAndResumesFromTheControlSocket) {
     ASSERT_TRUE(wait_for([&] { return player.sent() == 2; }));
     EXPECT_EQ(sub.receive(300 * kNsPerMs).is_ok(), true);  // the two stepped messages are queued
     EXPECT_EQ(sub.receive(300 * kNsPerMs).is_ok(), true);
-    EXPECT_EQ(sub.receive(300 * kNsPerMs).status().code(), StatusCode::kWouldBlock) << "a step sends exactly N";
+    EXPECT_EQ(sub.receive(300 * kNsPerMs).status().code(), StatusCode::kWouldBlock)
+        << "a step sends exactly N";
     EXPECT_TRUE(player.paused());
     ASSERT_TRUE(ctl.send("/ctl", "bogus").is_ok());  // logged and ignored
     ASSERT_TRUE(ctl.send("/ctl", "resume").is_ok());

@@ -1,5 +1,8 @@
-// The engine as the injector's FramePolicy: FaultDecision contents, JPEG passthrough (re-encode, black, freeze),
-// decoded mode, config entry point, and a run through the real player and injector loops over ipc.
+// The engine as the injector's FramePolicy: FaultDecision contents, JPEG passthrough (re-encode,
+// black, freeze), decoded mode, config entry point, and a run through the real player and injector
+// loops over ipc.
+#include "runtime/engine_policy.hpp"
+
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -10,7 +13,6 @@
 #include "common/config.hpp"
 #include "common/logging.hpp"
 #include "policy/seeding.hpp"
-#include "runtime/engine_policy.hpp"
 #include "runtime/injector_loop.hpp"
 #include "runtime/player_loop.hpp"
 #include "transport/drop_counter.hpp"
@@ -55,7 +57,9 @@ EnginePolicy Policy(const std::string& yaml, std::uint64_t seed) {
   return EnginePolicy(EngineConfig{parse_faults(YAML::Load(yaml), "test"), seed});
 }
 
-cv::Mat Decode(const std::vector<std::uint8_t>& bytes) { return *codec::decode_jpeg(bytes.data(), bytes.size()); }
+cv::Mat Decode(const std::vector<std::uint8_t>& bytes) {
+  return *codec::decode_jpeg(bytes.data(), bytes.size());
+}
 
 TEST(EnginePolicyTest, CorruptionInJpegModeIsReencodedAndDescribed) {
   auto policy = Policy("[{type: motion_blur, severity: 3}]", 9);
@@ -78,7 +82,8 @@ TEST(EnginePolicyTest, CorruptionInJpegModeIsReencodedAndDescribed) {
   EXPECT_EQ(*again.apply(f.view, nullptr).replacement_jpeg, *d.replacement_jpeg);
 }
 
-// The injector's jpeg_quality reaches the re-encoder (issue #18: the quality of faulted frames is a parameter).
+// The injector's jpeg_quality reaches the re-encoder (issue #18: the quality of faulted frames is a
+// parameter).
 TEST(EnginePolicyTest, JpegQualityOfFaultedFramesIsAParameter) {
   const YAML::Node faults = YAML::Load("[{type: motion_blur, severity: 3}]");
   auto q95 = make_frame_policy(faults, "", 9, "test");
@@ -127,7 +132,8 @@ TEST(EnginePolicyTest, FreezeInJpegModeRepeatsTheLastGoodBytes) {
 }
 
 TEST(EnginePolicyTest, DecodedModeRendersInPlaceAndDropNeedsNoPixels) {
-  auto policy = Policy("[{type: black, cameras: [CAM_BACK]}, {type: drop, cameras: [CAM_FRONT]}]", 0);
+  auto policy =
+      Policy("[{type: black, cameras: [CAM_BACK]}, {type: drop, cameras: [CAM_FRONT]}]", 0);
   const TestFrame back = Frame("CAM_BACK", 1, 0, 90);
   cv::Mat image = Decode(back.bytes);
   EXPECT_EQ(policy.apply(back.view, &image).action, msgs::FAULT_ACTION_BLACK);
@@ -140,8 +146,11 @@ TEST(EnginePolicyTest, DecodedModeRendersInPlaceAndDropNeedsNoPixels) {
 }
 
 TEST(EnginePolicyTest, MakeFramePolicyAddsTheShorthandAndNamesErrors) {
-  EXPECT_NE(dynamic_cast<runtime::PassThroughPolicy*>(make_frame_policy(YAML::Node(), "", 0, "fi").get()), nullptr);
-  auto p = make_frame_policy(YAML::Load("[{type: drop, cameras: [CAM_FRONT]}]"), "fog/mid", 3, "fi");
+  EXPECT_NE(
+      dynamic_cast<runtime::PassThroughPolicy*>(make_frame_policy(YAML::Node(), "", 0, "fi").get()),
+      nullptr);
+  auto p =
+      make_frame_policy(YAML::Load("[{type: drop, cameras: [CAM_FRONT]}]"), "fog/mid", 3, "fi");
   auto* engine = dynamic_cast<EnginePolicy*>(p.get());
   ASSERT_NE(engine, nullptr);
   ASSERT_EQ(engine->engine().config().faults.size(), 2u);
@@ -151,12 +160,15 @@ TEST(EnginePolicyTest, MakeFramePolicyAddsTheShorthandAndNamesErrors) {
     (void)make_frame_policy(YAML::Load("[{type: fog, severity: 0}]"), "", 0, "fault_injector");
     FAIL() << "no error";
   } catch (const ConfigError& e) {
-    EXPECT_NE(std::string(e.what()).find("fault_injector: faults[0].severity = 0"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("fault_injector: faults[0].severity = 0"),
+              std::string::npos)
+        << e.what();
   }
 }
 
-// player -> injector(EnginePolicy) -> test subscriber over ipc: CAM_FRONT crashes in drop mode, CAM_BACK gets
-// fog. Dropped frames are not seq gaps downstream and every source frame has its FaultEvent.
+// player -> injector(EnginePolicy) -> test subscriber over ipc: CAM_FRONT crashes in drop mode,
+// CAM_BACK gets fog. Dropped frames are not seq gaps downstream and every source frame has its
+// FaultEvent.
 TEST(InjectorIntegrationTest, DroppedFramesAreEventsNotSeqGaps) {
   char tmpl[] = "/tmp/faultline-policy-XXXXXX";
   const std::string dir = ::mkdtemp(tmpl);
@@ -182,7 +194,8 @@ TEST(InjectorIntegrationTest, DroppedFramesAreEventsNotSeqGaps) {
         f.width = 48;
         f.height = 32;
         t_us += 1000;
-        images[f.filename] = std::make_shared<const std::vector<std::uint8_t>>(Jpeg(static_cast<int>(frames.size())));
+        images[f.filename] = std::make_shared<const std::vector<std::uint8_t>>(
+            Jpeg(static_cast<int>(frames.size())));
         frames.push_back(f);
       }
       t_us += 80'000;
@@ -196,8 +209,8 @@ TEST(InjectorIntegrationTest, DroppedFramesAreEventsNotSeqGaps) {
   pc.endpoint = "ipc://" + dir + "/player.sock";
   pc.wait_subscribers = 1;
   SystemClock clock;
-  runtime::PlayerLoop player(pc, "nusc_player", std::make_unique<runtime::MemoryFrameSource>(frames, images), clock,
-                             log);
+  runtime::PlayerLoop player(
+      pc, "nusc_player", std::make_unique<runtime::MemoryFrameSource>(frames, images), clock, log);
   runtime::InjectorConfig ic;
   ic.input_endpoints = {player.endpoint()};
   ic.output_endpoint = "ipc://" + dir + "/injector.sock";
@@ -253,7 +266,8 @@ TEST(InjectorIntegrationTest, DroppedFramesAreEventsNotSeqGaps) {
         EXPECT_EQ(view->header.fault().action(), msgs::FAULT_ACTION_CORRUPT);
         ASSERT_EQ(view->header.fault().faults_size(), 1);
         EXPECT_EQ(view->header.fault().faults(0).name(), "fog");
-        EXPECT_EQ(view->header.fault().faults(0).seed(), frame_seed(5, 3, view->header.source_seq(), /*fault_index=*/1));
+        EXPECT_EQ(view->header.fault().faults(0).seed(),
+                  frame_seed(5, 3, view->header.source_seq(), /*fault_index=*/1));
         const auto decoded = codec::decode_jpeg(view->payload, view->payload_size);
         ASSERT_TRUE(decoded.is_ok());
         EXPECT_EQ(decoded->size(), cv::Size(48, 32));
@@ -268,8 +282,10 @@ TEST(InjectorIntegrationTest, DroppedFramesAreEventsNotSeqGaps) {
 
   const int per_camera = samples * per_sample;
   EXPECT_EQ(frames_per_camera.count("CAM_FRONT"), 0u);
-  for (int cam = 1; cam < kNumCameras; ++cam) EXPECT_EQ(frames_per_camera[kCameraNames[cam]], per_camera);
-  for (int cam = 0; cam < kNumCameras; ++cam) EXPECT_EQ(events_per_camera[kCameraNames[cam]], per_camera);
+  for (int cam = 1; cam < kNumCameras; ++cam)
+    EXPECT_EQ(frames_per_camera[kCameraNames[cam]], per_camera);
+  for (int cam = 0; cam < kNumCameras; ++cam)
+    EXPECT_EQ(events_per_camera[kCameraNames[cam]], per_camera);
   EXPECT_EQ(dropped_events, per_camera);
   EXPECT_EQ(corrupt_frames, per_camera);
   EXPECT_EQ(corrupt_events, per_camera);

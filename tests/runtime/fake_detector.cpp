@@ -28,7 +28,8 @@ struct FakeDetector::Impl {
         }()) {}
 };
 
-FakeDetector::FakeDetector(const std::string& input_endpoint, const std::string& sink_endpoint, int hwm)
+FakeDetector::FakeDetector(const std::string& input_endpoint, const std::string& sink_endpoint,
+                           int hwm)
     : impl_(new Impl(input_endpoint, sink_endpoint, hwm)) {}
 
 FakeDetector::~FakeDetector() { delete impl_; }

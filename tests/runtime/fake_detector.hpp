@@ -12,7 +12,7 @@
 namespace faultline::runtime::testing {
 
 struct FakeDetectorResult {
-  std::uint64_t frames = 0;          // valid frames received
+  std::uint64_t frames = 0;  // valid frames received
   std::uint64_t malformed = 0;
   std::uint64_t boundaries = 0;
   std::uint64_t transport_drops = 0;  // from seq gaps per (publisher, topic)

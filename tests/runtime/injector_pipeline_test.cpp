@@ -1,7 +1,10 @@
-// The parallel injector without sockets: the same frames through 1, 2 and 4 workers give byte-identical output
-// (headers, seqs, payloads, FaultEvents, control messages, order), with coherent faults, a schedule, freeze,
-// frame_lost, delay and crash, Faultline's stream faults (a coherent transport corruption, recompression,
-// timestamp skew, calibration drift, rolling shutter from the ego poses); a stateful lane renders in plan order; the delay queue's order.
+// The parallel injector without sockets: the same frames through 1, 2 and 4 workers give
+// byte-identical output (headers, seqs, payloads, FaultEvents, control messages, order), with
+// coherent faults, a schedule, freeze, frame_lost, delay and crash, Faultline's stream faults (a
+// coherent transport corruption, recompression, timestamp skew, calibration drift, rolling shutter
+// from the ego poses); a stateful lane renders in plan order; the delay queue's order.
+#include "runtime/injector_pipeline.hpp"
+
 #include <google/protobuf/io/coded_stream.h>
 #include <google/protobuf/io/zero_copy_stream_impl_lite.h>
 #include <gtest/gtest.h>
@@ -19,7 +22,6 @@
 #include "runtime/delay_queue.hpp"
 #include "runtime/engine_policy.hpp"
 #include "runtime/injector_loop.hpp"
-#include "runtime/injector_pipeline.hpp"
 
 namespace faultline::runtime {
 namespace {
@@ -37,10 +39,13 @@ struct Sent {
   std::string topic;
   std::string header;   // serialised header / message
   std::string payload;  // frame bytes
-  bool operator==(const Sent& o) const { return topic == o.topic && header == o.header && payload == o.payload; }
+  bool operator==(const Sent& o) const {
+    return topic == o.topic && header == o.header && payload == o.payload;
+  }
 };
 
-// Protobuf map fields (fault params) serialise in hash order unless asked for a deterministic order.
+// Protobuf map fields (fault params) serialise in hash order unless asked for a deterministic
+// order.
 std::string Serialize(const google::protobuf::MessageLite& m) {
   std::string out;
   {
@@ -54,9 +59,11 @@ std::string Serialize(const google::protobuf::MessageLite& m) {
 
 class RecordingSink final : public PipelineSink {
  public:
-  Status send_frame(const std::string& topic, msgs::CameraFrame& h, const transport::Payload& p) override {
+  Status send_frame(const std::string& topic, msgs::CameraFrame& h,
+                    const transport::Payload& p) override {
     h.set_payload_bytes(p.size_bytes);
-    sent.push_back({topic, Serialize(h), std::string(reinterpret_cast<const char*>(p.data), p.size_bytes)});
+    sent.push_back(
+        {topic, Serialize(h), std::string(reinterpret_cast<const char*>(p.data), p.size_bytes)});
     return Status::ok();
   }
   Status send_message(const std::string& topic, const google::protobuf::MessageLite& m) override {
@@ -79,7 +86,8 @@ std::vector<Input> MakeInputs(int instants) {
     for (int cam = 0; cam < policy::kNumCameras; ++cam) {
       cv::Mat img(90, 160, CV_8UC3);
       cv::randu(img, cv::Scalar::all(0), cv::Scalar::all(255));
-      cv::rectangle(img, {10 + 7 * k, 10}, {60 + 7 * k, 50 + 5 * cam}, cv::Scalar(40 * cam, 200, 30 * k), cv::FILLED);
+      cv::rectangle(img, {10 + 7 * k, 10}, {60 + 7 * k, 50 + 5 * cam},
+                    cv::Scalar(40 * cam, 200, 30 * k), cv::FILLED);
       Input in;
       in.bytes = std::make_shared<std::vector<std::uint8_t>>(*codec::encode_jpeg(img, 90));
       in.topic = std::string("/cam_") + std::to_string(cam) + "/image_rect_compressed";
@@ -91,25 +99,26 @@ std::vector<Input> MakeInputs(int instants) {
       in.header.mutable_header()->set_publisher("source");
       in.header.mutable_header()->set_capture_stamp_ns(kT0 + k * kNsPerSec / 12);
       in.header.set_payload_bytes(in.bytes->size());
-      // The ego turns left at 0.6 rad/s (0.05 rad per 1/12 s): rolling_shutter's yaw rate, and the glare follows
-      // it; every camera looks along the ego's x axis.
+      // The ego turns left at 0.6 rad/s (0.05 rad per 1/12 s): rolling_shutter's yaw rate, and the
+      // glare follows it; every camera looks along the ego's x axis.
       auto* ego = in.header.mutable_ego_pose()->mutable_rotation();
       ego->set_w(std::cos(0.025 * k));
       ego->set_z(std::sin(0.025 * k));
       auto* cam_rot = in.header.mutable_sensor_to_ego()->mutable_rotation();
       cam_rot->set_w(0.5), cam_rot->set_x(-0.5), cam_rot->set_y(0.5), cam_rot->set_z(-0.5);
       in.header.mutable_sensor_to_ego()->mutable_translation()->set_x(1.7);
-      for (double v : {120.0, 0.0, 80.0, 0.0, 120.0, 45.0, 0.0, 0.0, 1.0}) in.header.add_intrinsics(v);
+      for (double v : {120.0, 0.0, 80.0, 0.0, 120.0, 45.0, 0.0, 0.0, 1.0})
+        in.header.add_intrinsics(v);
       inputs.push_back(std::move(in));
     }
   }
   return inputs;
 }
 
-// Coherent faults (fog ramping up, so its per-camera state restarts at each step), a ramp and a window (schedule),
-// per-frame seeds in numpy mode, freeze history, frame_lost, delay and a crash, the sensor faults (coherent by
-// default; glare following the ego pose), the stream and message faults: every kind of state the engine carries
-// between frames.
+// Coherent faults (fog ramping up, so its per-camera state restarts at each step), a ramp and a
+// window (schedule), per-frame seeds in numpy mode, freeze history, frame_lost, delay and a crash,
+// the sensor faults (coherent by default; glare following the ego pose), the stream and message
+// faults: every kind of state the engine carries between frames.
 constexpr const char* kFaults = R"([
   {type: fog, severity: 3, coherent: true, cameras: [CAM_FRONT, CAM_FRONT_LEFT], ramp_s: 0.4},
   {type: motion_blur, severity: 4, coherent: true, cameras: CAM_BACK, ramp_s: 0.6},
@@ -131,7 +140,8 @@ constexpr const char* kFaults = R"([
   {type: exposure_flicker, severity: 5, cameras: CAM_FRONT_LEFT, start_s: 0.2}
 ])";
 
-std::vector<Sent> RunPipeline(const std::vector<Input>& inputs, int workers, bool decode, int queue_frames) {
+std::vector<Sent> RunPipeline(const std::vector<Input>& inputs, int workers, bool decode,
+                              int queue_frames) {
   auto policy = make_frame_policy(YAML::Load(kFaults), "", 11, "test", 90);
   RecordingSink sink;
   FixedClock clock;
@@ -141,7 +151,8 @@ std::vector<Sent> RunPipeline(const std::vector<Input>& inputs, int workers, boo
   pc.queue_frames = queue_frames;
   pc.realtime_now = [] { return kT0 + 99 * kNsPerSec; };
   std::atomic<bool> stop{false};
-  InjectorPipeline pipeline(pc, *policy, sink, clock, logging::make_node_logger("pipeline_test", "warn"));
+  InjectorPipeline pipeline(pc, *policy, sink, clock,
+                            logging::make_node_logger("pipeline_test", "warn"));
   for (std::size_t i = 0; i < inputs.size(); ++i) {
     const Input& in = inputs[i];
     InputFrame f;
@@ -193,11 +204,14 @@ TEST_P(InjectorPipelineTest, OutputIsByteIdenticalForAnyWorkerCount) {
       msgs::CameraFrame h;
       ASSERT_TRUE(h.ParseFromString(s.header));
       ++frames;
-      EXPECT_EQ(h.header().seq(), ++last_seq[s.topic]) << s.topic;  // the injector's own seq, gap-free
+      EXPECT_EQ(h.header().seq(), ++last_seq[s.topic])
+          << s.topic;  // the injector's own seq, gap-free
       EXPECT_EQ(h.encoding(), decode ? "bgr8" : "jpeg");
-      // Message faults: CAM_FRONT_RIGHT's stamps 20 ms late, CAM_BACK_LEFT's calibration off, the rest as sent.
+      // Message faults: CAM_FRONT_RIGHT's stamps 20 ms late, CAM_BACK_LEFT's calibration off, the
+      // rest as sent.
       const StampNs sent_stamp = kT0 + static_cast<StampNs>(h.source_seq() - 1) * kNsPerSec / 12;
-      EXPECT_EQ(h.header().capture_stamp_ns(), sent_stamp + (h.camera() == "CAM_FRONT_RIGHT" ? 20 * kNsPerMs : 0));
+      EXPECT_EQ(h.header().capture_stamp_ns(),
+                sent_stamp + (h.camera() == "CAM_FRONT_RIGHT" ? 20 * kNsPerMs : 0));
       const bool drifted = h.camera() == "CAM_BACK_LEFT";
       EXPECT_EQ(h.intrinsics(0) != 120.0, drifted) << h.camera();
       EXPECT_EQ(h.intrinsics(2), 80.0);
@@ -206,7 +220,8 @@ TEST_P(InjectorPipelineTest, OutputIsByteIdenticalForAnyWorkerCount) {
       if (h.camera() == "CAM_FRONT_LEFT" && h.source_seq() > 1) {
         bool skewed = false;
         for (const auto& f : h.fault().faults()) {
-          if (f.name() == "rolling_shutter") skewed = std::abs(f.params().at("yaw_rate_deg_s") - 0.6 * 180 / M_PI) < 1e-6;
+          if (f.name() == "rolling_shutter")
+            skewed = std::abs(f.params().at("yaw_rate_deg_s") - 0.6 * 180 / M_PI) < 1e-6;
         }
         EXPECT_TRUE(skewed) << "seq " << h.source_seq();
       }
@@ -214,8 +229,8 @@ TEST_P(InjectorPipelineTest, OutputIsByteIdenticalForAnyWorkerCount) {
   }
   EXPECT_EQ(events, inputs.size());  // one FaultEvent per source frame
   EXPECT_EQ(frames + static_cast<std::size_t>(actions[msgs::FAULT_ACTION_DROP]), inputs.size());
-  for (auto a : {msgs::FAULT_ACTION_PASS, msgs::FAULT_ACTION_CORRUPT, msgs::FAULT_ACTION_DROP, msgs::FAULT_ACTION_BLACK,
-                 msgs::FAULT_ACTION_FREEZE, msgs::FAULT_ACTION_DELAY}) {
+  for (auto a : {msgs::FAULT_ACTION_PASS, msgs::FAULT_ACTION_CORRUPT, msgs::FAULT_ACTION_DROP,
+                 msgs::FAULT_ACTION_BLACK, msgs::FAULT_ACTION_FREEZE, msgs::FAULT_ACTION_DELAY}) {
     EXPECT_GT(actions[a], 0) << "action " << a;
   }
   for (const char* name : {"soiling", "water_drops", "glare", "exposure_flicker"}) {
@@ -231,8 +246,8 @@ TEST_P(InjectorPipelineTest, OutputIsByteIdenticalForAnyWorkerCount) {
       ASSERT_EQ(many.size(), one.size()) << workers << " workers, queue " << queue;
       for (std::size_t i = 0; i < one.size(); ++i) {
         ASSERT_EQ(many[i].topic, one[i].topic) << "message " << i << ", " << workers << " workers";
-        ASSERT_EQ(many[i].header, one[i].header) << "message " << i << " on " << one[i].topic << ", " << workers
-                                                 << " workers";
+        ASSERT_EQ(many[i].header, one[i].header)
+            << "message " << i << " on " << one[i].topic << ", " << workers << " workers";
         ASSERT_TRUE(many[i].payload == one[i].payload)
             << "payload " << i << " on " << one[i].topic << ", " << workers << " workers";
       }
@@ -241,10 +256,13 @@ TEST_P(InjectorPipelineTest, OutputIsByteIdenticalForAnyWorkerCount) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Modes, InjectorPipelineTest, ::testing::Values(false, true),
-                         [](const ::testing::TestParamInfo<bool>& p) { return p.param ? "Decode" : "Jpeg"; });
+                         [](const ::testing::TestParamInfo<bool>& p) {
+                           return p.param ? "Decode" : "Jpeg";
+                         });
 
-// A policy whose every frame is stateful in the lane of its camera: render() records the order it saw and burns
-// a frame-dependent amount of CPU, so that with several workers later frames would overtake earlier ones.
+// A policy whose every frame is stateful in the lane of its camera: render() records the order it
+// saw and burns a frame-dependent amount of CPU, so that with several workers later frames would
+// overtake earlier ones.
 class LaneRecordingPolicy final : public FramePolicy {
  public:
   PlannedFrame plan(const transport::CameraFrameView& frame) override {
@@ -252,11 +270,13 @@ class LaneRecordingPolicy final : public FramePolicy {
     p.lane = static_cast<int>(frame.header.source_seq() % 3);
     return p;
   }
-  FaultDecision render(PlannedFrame& planned, const transport::CameraFrameView& frame, cv::Mat*) override {
+  FaultDecision render(PlannedFrame& planned, const transport::CameraFrameView& frame,
+                       cv::Mat*) override {
     volatile std::uint64_t x = 0;
     const std::uint64_t spins = (frame.header.header().seq() * 7919) % 200000;
     for (std::uint64_t i = 0; i < spins; ++i) x = x + i;
-    order[static_cast<std::size_t>(planned.lane)].push_back(frame.header.header().seq());  // no lock: one at a time
+    order[static_cast<std::size_t>(planned.lane)].push_back(
+        frame.header.header().seq());  // no lock: one at a time
     return {};
   }
   std::array<std::vector<std::uint64_t>, 3> order;
@@ -272,7 +292,8 @@ TEST(InjectorPipelineLaneTest, FramesOfOneLaneRenderInPlanOrder) {
   std::atomic<bool> stop{false};
   auto bytes = std::make_shared<std::vector<std::uint8_t>>(16, 7);
   {
-    InjectorPipeline pipeline(pc, policy, sink, clock, logging::make_node_logger("pipeline_test", "warn"));
+    InjectorPipeline pipeline(pc, policy, sink, clock,
+                              logging::make_node_logger("pipeline_test", "warn"));
     for (std::uint64_t seq = 1; seq <= 300; ++seq) {
       InputFrame f;
       f.topic = "/cam/image";
@@ -289,7 +310,8 @@ TEST(InjectorPipelineLaneTest, FramesOfOneLaneRenderInPlanOrder) {
   }
   for (std::size_t lane = 0; lane < 3; ++lane) {
     ASSERT_EQ(policy.order[lane].size(), 100u);
-    for (std::size_t i = 0; i < 100; ++i) EXPECT_EQ(policy.order[lane][i], (lane == 0 ? 3 : lane) + 3 * i);
+    for (std::size_t i = 0; i < 100; ++i)
+      EXPECT_EQ(policy.order[lane][i], (lane == 0 ? 3 : lane) + 3 * i);
   }
   // Output order is input order.
   std::uint64_t expected = 0;
@@ -311,7 +333,8 @@ TEST(InjectorPipelineStopTest, FinishWithoutDrainCountsWhatWasNotSent) {
   pc.queue_frames = 8;
   std::atomic<bool> stop{false};
   auto bytes = std::make_shared<std::vector<std::uint8_t>>(16, 7);
-  InjectorPipeline pipeline(pc, policy, sink, clock, logging::make_node_logger("pipeline_test", "warn"));
+  InjectorPipeline pipeline(pc, policy, sink, clock,
+                            logging::make_node_logger("pipeline_test", "warn"));
   for (std::uint64_t seq = 1; seq <= 8; ++seq) {
     InputFrame f;
     f.view.header.set_source_seq(seq);

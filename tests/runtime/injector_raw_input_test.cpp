@@ -1,13 +1,14 @@
-// The injector with decode: true takes raw frames (a V4L2 camera in raw mode, a ROS 2 Image bridge), not only JPEG:
-// each raw layout is corrupted and sent on as bgr8; a frame whose bytes do not match its layout is malformed, one
-// in a layout the injector cannot decode is counted as undecodable, and neither is an injected fault.
+// The injector with decode: true takes raw frames (a V4L2 camera in raw mode, a ROS 2 Image
+// bridge), not only JPEG: each raw layout is corrupted and sent on as bgr8; a frame whose bytes do
+// not match its layout is malformed, one in a layout the injector cannot decode is counted as
+// undecodable, and neither is an injected fault.
 #include <gtest/gtest.h>
 #include <unistd.h>
 
 #include <chrono>
 #include <future>
-#include <thread>
 #include <opencv2/core.hpp>
+#include <thread>
 
 #include "codec/raw.hpp"
 #include "common/logging.hpp"
@@ -41,8 +42,10 @@ TEST(InjectorRawInputTest, RawLayoutsAreCorruptedAndBrokenOnesCountedAsMalformed
   ic.decode = true;
   ic.wait_subscribers = 1;
   ic.exit_on_last = true;
-  ic.workers = 2;  // broken frames are counted on the output thread, in order, with a worker pool too
-  InjectorLoop injector(ic, "fault_injector", make_frame_policy(YAML::Node(), "brightness/mid", 3, "fault_injector"),
+  ic.workers =
+      2;  // broken frames are counted on the output thread, in order, with a worker pool too
+  InjectorLoop injector(ic, "fault_injector",
+                        make_frame_policy(YAML::Node(), "brightness/mid", 3, "fault_injector"),
                         log);
   transport::SubscriberConfig sc;
   sc.endpoints = {injector.output_endpoint()};
@@ -53,8 +56,9 @@ TEST(InjectorRawInputTest, RawLayoutsAreCorruptedAndBrokenOnesCountedAsMalformed
   auto injector_rc = std::async(std::launch::async, [&] { return injector.run(stop); });
   ASSERT_TRUE(camera.wait_for_subscribers("/cam_front", 1, 20 * kNsPerSec).is_ok());
 
-  const std::vector<RawFrame> frames = {{"bgr8", 3, false},   {"rgb8", 3, false},  {"mono8", 1, false},
-                                        {"yuv422", 2, false}, {"bgr8", 3, true},   {"mono16", 2, false}};
+  const std::vector<RawFrame> frames = {{"bgr8", 3, false},  {"rgb8", 3, false},
+                                        {"mono8", 1, false}, {"yuv422", 2, false},
+                                        {"bgr8", 3, true},   {"mono16", 2, false}};
   constexpr int kWidth = 16, kHeight = 8;
   struct Input {
     std::string encoding;
@@ -65,7 +69,8 @@ TEST(InjectorRawInputTest, RawLayoutsAreCorruptedAndBrokenOnesCountedAsMalformed
   std::uint64_t seq = 0;
   for (const RawFrame& f : frames) {
     const std::uint32_t step = kWidth * f.channels + 4;  // row padding, as drivers add
-    auto bytes = std::make_shared<std::vector<std::uint8_t>>(step * kHeight - (f.broken ? 1 : 0), 100);
+    auto bytes =
+        std::make_shared<std::vector<std::uint8_t>>(step * kHeight - (f.broken ? 1 : 0), 100);
     if (!f.broken && f.encoding != "mono16") inputs.push_back({f.encoding, step, bytes});
     msgs::CameraFrame h;
     h.mutable_header()->set_seq(++seq);
@@ -76,8 +81,9 @@ TEST(InjectorRawInputTest, RawLayoutsAreCorruptedAndBrokenOnesCountedAsMalformed
     h.set_height(kHeight);
     h.set_step(step);
     h.set_sample_token("s");
-    ASSERT_TRUE(transport::send_camera_frame(camera, "/cam_front/image_raw", h,
-                                             transport::Payload::of(std::shared_ptr<const std::vector<std::uint8_t>>(bytes)))
+    ASSERT_TRUE(transport::send_camera_frame(
+                    camera, "/cam_front/image_raw", h,
+                    transport::Payload::of(std::shared_ptr<const std::vector<std::uint8_t>>(bytes)))
                     .is_ok());
   }
   msgs::SampleBoundary last;
@@ -104,7 +110,8 @@ TEST(InjectorRawInputTest, RawLayoutsAreCorruptedAndBrokenOnesCountedAsMalformed
     ASSERT_EQ(view->payload_size, static_cast<std::size_t>(view->header.step()) * kHeight);
     // Brightness raised the first pixel above what the input converts to.
     const auto& in = inputs.at(static_cast<std::size_t>(received));
-    auto base = codec::raw_to_bgr(in.encoding, kWidth, kHeight, in.step, in.bytes->data(), in.bytes->size());
+    auto base = codec::raw_to_bgr(in.encoding, kWidth, kHeight, in.step, in.bytes->data(),
+                                  in.bytes->size());
     ASSERT_TRUE(base.is_ok());
     EXPECT_GT(view->payload[0], base->at<cv::Vec3b>(0, 0)[0]) << in.encoding;
     ++received;
@@ -114,14 +121,16 @@ TEST(InjectorRawInputTest, RawLayoutsAreCorruptedAndBrokenOnesCountedAsMalformed
   EXPECT_EQ(injector_rc.get(), 0);
   EXPECT_EQ(received, 4);
   EXPECT_EQ(injector.counts().frames_in, 5u);
-  EXPECT_EQ(injector.counts().malformed, 1u);     // the short bgr8 payload: refused when parsed
-  EXPECT_EQ(injector.counts().corrupt_jpeg, 1u);  // mono16: a well-formed frame the injector cannot decode
+  EXPECT_EQ(injector.counts().malformed, 1u);  // the short bgr8 payload: refused when parsed
+  EXPECT_EQ(injector.counts().corrupt_jpeg,
+            1u);  // mono16: a well-formed frame the injector cannot decode
   EXPECT_EQ(injector.counts().frames_out, 4u);
   EXPECT_EQ(injector.counts().injected_drops, 0u);
 }
 
-// #22 item 7: frames lost after the last frame on their topic leave no seq gap; the StreamEnd's count of frames sent
-// shows them, and the injector counts them as transport drops instead of reporting 0.
+// #22 item 7: frames lost after the last frame on their topic leave no seq gap; the StreamEnd's
+// count of frames sent shows them, and the injector counts them as transport drops instead of
+// reporting 0.
 TEST(InjectorRawInputTest, FramesLostAtTheEndOfTheStreamAreCountedFromTheStreamEnd) {
   const std::string dir = ::testing::TempDir() + "stream_end_" + std::to_string(::getpid());
   transport::PublisherConfig pc;
@@ -132,7 +141,8 @@ TEST(InjectorRawInputTest, FramesLostAtTheEndOfTheStreamAreCountedFromTheStreamE
   ic.input_endpoints = {camera.endpoint()};
   ic.output_endpoint = "ipc://" + dir + "_injector.sock";
   ic.input_hwm = ic.output_hwm = 1000;
-  InjectorLoop injector(ic, "fault_injector", make_frame_policy(YAML::Node(), "", 3, "fault_injector"),
+  InjectorLoop injector(ic, "fault_injector",
+                        make_frame_policy(YAML::Node(), "", 3, "fault_injector"),
                         logging::make_node_logger("stream_end_test", "error"));
   std::atomic<bool> stop{false};
   auto injector_rc = std::async(std::launch::async, [&] { return injector.run(stop); });
@@ -141,7 +151,8 @@ TEST(InjectorRawInputTest, FramesLostAtTheEndOfTheStreamAreCountedFromTheStreamE
     std::this_thread::sleep_for(std::chrono::milliseconds(5));
   }
   ASSERT_GE(camera.subscriber_count("/cam_front"), 1);
-  // Frames 1-2 of CAM_FRONT and 1 of CAM_BACK arrive; CAM_FRONT 3 and CAM_BACK 2 are "lost" after them.
+  // Frames 1-2 of CAM_FRONT and 1 of CAM_BACK arrive; CAM_FRONT 3 and CAM_BACK 2 are "lost" after
+  // them.
   auto bytes = std::make_shared<const std::vector<std::uint8_t>>(6, 1);
   for (const auto& [topic, seq] : std::vector<std::pair<std::string, int>>{
            {"/cam_front/image_raw", 1}, {"/cam_front/image_raw", 2}, {"/cam_back/image_raw", 1}}) {
@@ -153,7 +164,8 @@ TEST(InjectorRawInputTest, FramesLostAtTheEndOfTheStreamAreCountedFromTheStreamE
     h.set_width(2);
     h.set_height(1);
     h.set_step(6);
-    ASSERT_TRUE(transport::send_camera_frame(camera, topic, h, transport::Payload::of(bytes)).is_ok());
+    ASSERT_TRUE(
+        transport::send_camera_frame(camera, topic, h, transport::Payload::of(bytes)).is_ok());
   }
   msgs::StreamEnd end;
   end.mutable_header()->set_seq(1);

@@ -1,6 +1,7 @@
-// The injector with output_shm: camera frames leave through its shared-memory ring, read by a C++ subscriber with
-// transport::ShmCameraReader byte for byte as sent, every seq present; a frame larger than a slot is refused and
-// counted; the ring file exists while the injector lives and is removed with it.
+// The injector with output_shm: camera frames leave through its shared-memory ring, read by a C++
+// subscriber with transport::ShmCameraReader byte for byte as sent, every seq present; a frame
+// larger than a slot is refused and counted; the ring file exists while the injector lives and is
+// removed with it.
 #include <gtest/gtest.h>
 #include <sys/stat.h>
 #include <unistd.h>
@@ -42,10 +43,12 @@ TEST(InjectorShmTest, FramesGoThroughTheRingByteIdenticalAndOversizeIsRefused) {
   ic.shm_slot_bytes = kWidth * kHeight * 3;
   std::string ring_path;
   {
-    InjectorLoop injector(ic, "fault_injector", make_frame_policy(YAML::Node(), "", 3, "fault_injector"),
+    InjectorLoop injector(ic, "fault_injector",
+                          make_frame_policy(YAML::Node(), "", 3, "fault_injector"),
                           logging::make_node_logger("shm_test", "error"));
     ring_path = injector.output_shm_path();
-    ASSERT_EQ(ring_path.rfind(::testing::TempDir() + "/faultline-fault_injector-", 0), 0u) << ring_path;
+    ASSERT_EQ(ring_path.rfind(::testing::TempDir() + "/faultline-fault_injector-", 0), 0u)
+        << ring_path;
     EXPECT_TRUE(file_exists(ring_path));
     transport::SubscriberConfig sc;
     sc.endpoints = {injector.output_endpoint()};
@@ -60,7 +63,8 @@ TEST(InjectorShmTest, FramesGoThroughTheRingByteIdenticalAndOversizeIsRefused) {
       const bool big = i == kFrames / 2;  // one frame twice the slot: refused by the ring
       const int height = big ? 2 * kHeight : kHeight;
       std::vector<std::uint8_t> pixels(static_cast<std::size_t>(kWidth * height * 3));
-      for (std::size_t k = 0; k < pixels.size(); ++k) pixels[k] = static_cast<std::uint8_t>(k * 3 + i * 11);
+      for (std::size_t k = 0; k < pixels.size(); ++k)
+        pixels[k] = static_cast<std::uint8_t>(k * 3 + i * 11);
       if (!big) sent.push_back(pixels);
       msgs::CameraFrame h;
       h.mutable_header()->set_seq(static_cast<std::uint64_t>(i + 1));
@@ -71,10 +75,11 @@ TEST(InjectorShmTest, FramesGoThroughTheRingByteIdenticalAndOversizeIsRefused) {
       h.set_height(static_cast<std::uint32_t>(height));
       h.set_step(kWidth * 3);
       h.set_source_seq(static_cast<std::uint64_t>(i + 1));
-      ASSERT_TRUE(transport::send_camera_frame(
-                      camera, "/cam_front/image_raw", h,
-                      transport::Payload::of(std::make_shared<const std::vector<std::uint8_t>>(pixels)))
-                      .is_ok());
+      ASSERT_TRUE(
+          transport::send_camera_frame(
+              camera, "/cam_front/image_raw", h,
+              transport::Payload::of(std::make_shared<const std::vector<std::uint8_t>>(pixels)))
+              .is_ok());
     }
     msgs::SampleBoundary last;
     last.mutable_header()->set_seq(1);

@@ -1,4 +1,5 @@
-// apply_message_edit: a decision's message faults on an output CameraFrame, exactly; absent calibration stays absent.
+// apply_message_edit: a decision's message faults on an output CameraFrame, exactly; absent
+// calibration stays absent.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -56,8 +57,9 @@ TEST(MessageEditTest, EmptyEditAndMissingCalibrationChangeNothing) {
 
 // The injector's policy from a schedule: the decision carries the edit, the pixels pass untouched.
 TEST(MessageEditTest, EnginePolicyHandsTheEditOnWithoutTouchingPixels) {
-  auto policy = make_frame_policy(YAML::Load("[{type: timestamp_skew, severity: 5}, {type: calibration_drift}]"), "",
-                                  3, "test");
+  auto policy = make_frame_policy(
+      YAML::Load("[{type: timestamp_skew, severity: 5}, {type: calibration_drift}]"), "", 3,
+      "test");
   transport::CameraFrameView view;
   view.header = CalibratedFrame();
   const std::vector<std::uint8_t> bytes = {0xFF, 0xD8, 0xFF, 0xD9};

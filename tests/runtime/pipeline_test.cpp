@@ -113,7 +113,8 @@ class PipelineTest : public ::testing::TestWithParam<std::string> {
 TEST_P(PipelineTest, LockstepRunDeliversEveryFrameAndWritesAllSamples) {
   Scenario sc = MakeScenario(/*samples=*/3, /*sweeps=*/2);  // 54 frames
   sc.images.erase(sc.frames[7].filename);                   // a missing file: skipped by the player
-  sc.images[sc.frames[10].filename] = std::make_shared<const std::vector<std::uint8_t>>(500, 0x42);  // not a JPEG
+  sc.images[sc.frames[10].filename] =
+      std::make_shared<const std::vector<std::uint8_t>>(500, 0x42);  // not a JPEG
 
   PlayerConfig pc;
   pc.rate = 0;
@@ -124,7 +125,8 @@ TEST_P(PipelineTest, LockstepRunDeliversEveryFrameAndWritesAllSamples) {
   pc.wait_subscribers = 1;
   pc.ack_timeout_ms = 20000;
   SystemClock clock;
-  PlayerLoop player(pc, "nusc_player", std::make_unique<MemoryFrameSource>(sc.frames, sc.images), clock, log_);
+  PlayerLoop player(pc, "nusc_player", std::make_unique<MemoryFrameSource>(sc.frames, sc.images),
+                    clock, log_);
 
   InjectorConfig ic;
   ic.input_endpoints = {player.endpoint()};
@@ -168,11 +170,13 @@ TEST_P(PipelineTest, LockstepRunDeliversEveryFrameAndWritesAllSamples) {
   EXPECT_EQ(player.counts().ack_timeouts, 0u);
   EXPECT_EQ(injector.counts().frames_in, 53u);
   EXPECT_EQ(injector.counts().corrupt_jpeg, 1u);
-  EXPECT_EQ(injector.counts().injected_drops, 0u);  // undecodable input is bad input, not an injected fault
+  EXPECT_EQ(injector.counts().injected_drops,
+            0u);  // undecodable input is bad input, not an injected fault
   EXPECT_EQ(injector.counts().frames_out, 52u);
   EXPECT_EQ(injector.counts().transport_drops, 0u);
   EXPECT_EQ(injector.counts().boundaries, 3u);
-  // Replayed frames carry dataset time: no age is computed from it (#22 item 7: it read ~2.6e11 ms).
+  // Replayed frames carry dataset time: no age is computed from it (#22 item 7: it read ~2.6e11
+  // ms).
   for (const auto& w : injector.stats_totals()) {
     EXPECT_GT(w.received, 0u) << w.topic;
     EXPECT_EQ(w.age_ms.count, 0u) << w.topic;
@@ -192,14 +196,15 @@ TEST_P(PipelineTest, LockstepRunDeliversEveryFrameAndWritesAllSamples) {
   for (int k = 0; k < 3; ++k) {
     EXPECT_EQ(doc["results"][("sample-" + std::to_string(k)).c_str()].Size(), 1u);
   }
-  EXPECT_NE(::access((kc.output + ".journal").c_str(), F_OK), 0) << "journal removed after a complete run";
+  EXPECT_NE(::access((kc.output + ".journal").c_str(), F_OK), 0)
+      << "journal removed after a complete run";
 }
 
 TEST_P(PipelineTest, SamplesWithoutDetectionsGetEmptyListsOnShutdown) {
   Scenario sc = MakeScenario(2, 1);
   SystemClock clock;
-  PlayerLoop player(UnpacedPlayer(), "nusc_player", std::make_unique<MemoryFrameSource>(sc.frames, sc.images), clock,
-                    log_);
+  PlayerLoop player(UnpacedPlayer(), "nusc_player",
+                    std::make_unique<MemoryFrameSource>(sc.frames, sc.images), clock, log_);
   SinkConfig kc;
   kc.detections_endpoint = Endpoint("sink");
   kc.sync_endpoints = {player.endpoint()};
@@ -218,8 +223,8 @@ TEST_P(PipelineTest, SamplesWithoutDetectionsGetEmptyListsOnShutdown) {
   EXPECT_EQ(doc["results"]["sample-1"].Size(), 0u);
 }
 
-// Sweeps recorded after a run's last key frame come after its last_in_run boundary; the injector still corrupts
-// and forwards them, then the stream end, and only then stops.
+// Sweeps recorded after a run's last key frame come after its last_in_run boundary; the injector
+// still corrupts and forwards them, then the stream end, and only then stops.
 TEST_P(PipelineTest, TrailingSweepsAfterTheLastSampleReachTheInjectorOutput) {
   Scenario sc = MakeScenario(/*samples=*/2, /*sweeps=*/1);  // 24 frames
   std::int64_t t = sc.frames.back().timestamp_us + 80'000;
@@ -240,8 +245,8 @@ TEST_P(PipelineTest, TrailingSweepsAfterTheLastSampleReachTheInjectorOutput) {
   const std::size_t total = sc.frames.size();  // 36
 
   SystemClock clock;
-  PlayerLoop player(UnpacedPlayer(), "nusc_player", std::make_unique<MemoryFrameSource>(sc.frames, sc.images), clock,
-                    log_);
+  PlayerLoop player(UnpacedPlayer(), "nusc_player",
+                    std::make_unique<MemoryFrameSource>(sc.frames, sc.images), clock, log_);
   InjectorConfig ic;
   ic.input_endpoints = {player.endpoint()};
   ic.output_endpoint = Endpoint("injector");
@@ -277,7 +282,8 @@ TEST_P(PipelineTest, TrailingSweepsAfterTheLastSampleReachTheInjectorOutput) {
       seen.push_back("F");
     }
   }
-  ASSERT_EQ(injector_rc.wait_for(std::chrono::seconds(10)), std::future_status::ready) << "injector did not stop";
+  ASSERT_EQ(injector_rc.wait_for(std::chrono::seconds(10)), std::future_status::ready)
+      << "injector did not stop";
   stop = true;
   EXPECT_EQ(player_rc.get(), 0);
   EXPECT_EQ(injector_rc.get(), 0);
@@ -287,7 +293,8 @@ TEST_P(PipelineTest, TrailingSweepsAfterTheLastSampleReachTheInjectorOutput) {
   // 12 frames, boundary, 12 frames, last boundary, the 12 trailing sweeps, end.
   std::string order;
   for (const auto& s : seen) order += s;
-  EXPECT_EQ(order, std::string(12, 'F') + "B" + std::string(12, 'F') + "L" + std::string(12, 'F') + "E");
+  EXPECT_EQ(order,
+            std::string(12, 'F') + "B" + std::string(12, 'F') + "L" + std::string(12, 'F') + "E");
 }
 
 INSTANTIATE_TEST_SUITE_P(Transports, PipelineTest, ::testing::Values("tcp", "ipc"));

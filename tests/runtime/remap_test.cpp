@@ -27,7 +27,8 @@ TEST(RemapTest, CameraTopicIsLowerCased) {
 
 TEST(RemapTest, FaultedTopicNames) {
   InjectorConfig c;
-  EXPECT_EQ(faulted_topic(c, "/cam_front/image_rect_compressed"), "/faulty/cam_front/image_rect_compressed");
+  EXPECT_EQ(faulted_topic(c, "/cam_front/image_rect_compressed"),
+            "/faulty/cam_front/image_rect_compressed");
   c.decode = true;
   EXPECT_EQ(faulted_topic(c, "/cam_front/image_rect_compressed"), "/faulty/cam_front/image_raw");
   c.remap = {{"/faulty/", "/fog/"}};

@@ -1,9 +1,10 @@
-// `bag convert --format ros2` on a tiny synthetic nuScenes dataset: every message decoded with lib/ros2 and
-// checked against the dataset (JPEG bytes, K, calibration, ego pose, boxes), metadata.yaml against the MCAP
-// file, faults as the Foxglove convert's FaultEvents (same policy, same seed), byte-identical reruns, and the
-// independent Node decoder when installed.
-#include <gtest/gtest.h>
+// `bag convert --format ros2` on a tiny synthetic nuScenes dataset: every message decoded with
+// lib/ros2 and checked against the dataset (JPEG bytes, K, calibration, ego pose, boxes),
+// metadata.yaml against the MCAP file, faults as the Foxglove convert's FaultEvents (same policy,
+// same seed), byte-identical reruns, and the independent Node decoder when installed.
+#include "runtime/ros2_convert.hpp"
 
+#include <gtest/gtest.h>
 #include <spdlog/sinks/null_sink.h>
 #include <spdlog/spdlog.h>
 #include <unistd.h>
@@ -26,7 +27,6 @@
 #include "runtime/bag_convert.hpp"
 #include "runtime/bag_layout.hpp"
 #include "runtime/engine_policy.hpp"
-#include "runtime/ros2_convert.hpp"
 
 namespace faultline::runtime {
 namespace {
@@ -34,7 +34,8 @@ namespace {
 namespace fs = std::filesystem;
 
 std::shared_ptr<spdlog::logger> quiet_logger() {
-  return std::make_shared<spdlog::logger>("ros2_convert_test", std::make_shared<spdlog::sinks::null_sink_mt>());
+  return std::make_shared<spdlog::logger>("ros2_convert_test",
+                                          std::make_shared<spdlog::sinks::null_sink_mt>());
 }
 
 std::string file_bytes(const fs::path& p) {
@@ -99,7 +100,8 @@ Ros2Content read_ros2(const std::string& mcap) {
   return c;
 }
 
-// The Node decoder (tests/mcap_js/validate_ros2_bag.mjs) when installed; false only when it ran and failed.
+// The Node decoder (tests/mcap_js/validate_ros2_bag.mjs) when installed; false only when it ran and
+// failed.
 bool node_validates(const std::string& dir, const std::string& dataroot,
                     const std::map<std::string, std::uint64_t>& expect) {
   const fs::path js = fs::path(FAULTLINE_SOURCE_DIR) / "tests/mcap_js";
@@ -108,8 +110,8 @@ bool node_validates(const std::string& dir, const std::string& dataroot,
     std::printf("SKIPPED Node validation: no node or tests/mcap_js/node_modules\n");
     return true;
   }
-  std::string cmd = "node " + (js / "validate_ros2_bag.mjs").string() + " " + dir + " --dataroot " + dataroot +
-                    " --version v1.0-mini";
+  std::string cmd = "node " + (js / "validate_ros2_bag.mjs").string() + " " + dir + " --dataroot " +
+                    dataroot + " --version v1.0-mini";
   for (const auto& [topic, n] : expect) cmd += " --expect " + topic + "=" + std::to_string(n);
   return std::system(cmd.c_str()) == 0;
 }
@@ -117,7 +119,8 @@ bool node_validates(const std::string& dir, const std::string& dataroot,
 class Ros2ConvertTest : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
-    root_ = new fs::path(fs::temp_directory_path() / ("faultline_ros2_convert_" + std::to_string(::getpid())));
+    root_ = new fs::path(fs::temp_directory_path() /
+                         ("faultline_ros2_convert_" + std::to_string(::getpid())));
     fs::remove_all(*root_);
     dataset::SynthOptions o;
     o.out_dir = (*root_ / "nuscenes").string();
@@ -141,7 +144,8 @@ class Ros2ConvertTest : public ::testing::Test {
     if (corrupt.empty()) return nullptr;
     policy::EngineConfig engine;
     engine.seed = 7;
-    for (const auto& c : corrupt) engine.faults.push_back(*policy::parse_corruption_shorthand(c, "test"));
+    for (const auto& c : corrupt)
+      engine.faults.push_back(*policy::parse_corruption_shorthand(c, "test"));
     return std::make_unique<EnginePolicy>(engine);
   }
 
@@ -153,7 +157,8 @@ class Ros2ConvertTest : public ::testing::Test {
     return load_gt_boxes(dataroot(), "v1.0-mini", samples);
   }
 
-  static Result<Ros2ConvertCounts> convert(const std::string& dir, const std::vector<std::string>& corrupt = {},
+  static Result<Ros2ConvertCounts> convert(const std::string& dir,
+                                           const std::vector<std::string>& corrupt = {},
                                            bool clean = true) {
     auto source = NuScenesFrameSource::open(dataroot(), "v1.0-mini", {});
     if (!source) return source.status();
@@ -162,8 +167,8 @@ class Ros2ConvertTest : public ::testing::Test {
     Ros2ConvertConfig cfg;
     cfg.output = dir;
     cfg.clean_frames = clean;
-    Ros2BagConverter converter(cfg, std::move(source).value(), std::move(gt).value(), policy_for(corrupt),
-                               quiet_logger());
+    Ros2BagConverter converter(cfg, std::move(source).value(), std::move(gt).value(),
+                               policy_for(corrupt), quiet_logger());
     std::atomic<bool> stop{false};
     return converter.run(stop);
   }
@@ -289,7 +294,8 @@ TEST_F(Ros2ConvertTest, CleanBagHoldsEveryFrameWithCalibrationTfAndBoxes) {
   std::map<std::string, std::uint64_t> expect = {{"/tf", frames->size()},
                                                  {"/tf_static", counts->tf_static},
                                                  {"/markers/annotations", samples->size()}};
-  for (const auto& [channel, list] : by_channel) expect[ros2::nuscenes_image_topic(channel)] = list.size();
+  for (const auto& [channel, list] : by_channel)
+    expect[ros2::nuscenes_image_topic(channel)] = list.size();
   EXPECT_TRUE(node_validates(dir, dataroot(), expect));
 
   // An existing directory is never overwritten.
@@ -312,7 +318,8 @@ TEST_F(Ros2ConvertTest, FaultsMatchTheFoxgloveConvertAndRerunsAreByteIdentical) 
   fox.output = out("crash_foxglove.mcap");
   auto source = NuScenesFrameSource::open(dataroot(), "v1.0-mini", {});
   ASSERT_TRUE(source.is_ok());
-  BagConverter foxglove(fox, std::move(source).value(), {}, policy_for({"camera_crash/hard"}), quiet_logger());
+  BagConverter foxglove(fox, std::move(source).value(), {}, policy_for({"camera_crash/hard"}),
+                        quiet_logger());
   std::atomic<bool> stop{false};
   ASSERT_TRUE(foxglove.run(stop).is_ok());
   std::vector<msgs::FaultEvent> events;
@@ -322,11 +329,13 @@ TEST_F(Ros2ConvertTest, FaultsMatchTheFoxgloveConvertAndRerunsAreByteIdentical) 
                   ->read_linear({},
                                 [&](const bag::MessageView& v) {
                                   const auto topic = v.channel->metadata.find(kMetaTopic);
-                                  if (topic == v.channel->metadata.end() || topic->second != "/faultline/faults") {
+                                  if (topic == v.channel->metadata.end() ||
+                                      topic->second != "/faultline/faults") {
                                     return true;
                                   }
                                   msgs::FaultEvent e;
-                                  EXPECT_TRUE(e.ParseFromArray(v.data.data(), static_cast<int>(v.data.size())));
+                                  EXPECT_TRUE(e.ParseFromArray(v.data.data(),
+                                                               static_cast<int>(v.data.size())));
                                   events.push_back(e);
                                   return true;
                                 })
@@ -344,12 +353,14 @@ TEST_F(Ros2ConvertTest, FaultsMatchTheFoxgloveConvertAndRerunsAreByteIdentical) 
     for (char& ch : action) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
     EXPECT_EQ(values.at("action"), action) << i;
     EXPECT_EQ(s.hardware_id, events[i].camera());
-    EXPECT_EQ(s.level, action == "pass" ? ros2::DiagnosticStatus::kOk : ros2::DiagnosticStatus::kError);
+    EXPECT_EQ(s.level,
+              action == "pass" ? ros2::DiagnosticStatus::kOk : ros2::DiagnosticStatus::kError);
     not_passed += action != "pass";
     ++by_action[action];
   }
   EXPECT_GT(not_passed, 0u);
-  // Clean and faulted streams: every faulted topic under /faulty holds the frames that were not dropped.
+  // Clean and faulted streams: every faulted topic under /faulty holds the frames that were not
+  // dropped.
   std::uint64_t faulted = 0;
   for (const auto& [topic, imgs] : c.images) {
     if (topic.rfind("/faulty/", 0) == 0) faulted += imgs.size();
@@ -357,7 +368,8 @@ TEST_F(Ros2ConvertTest, FaultsMatchTheFoxgloveConvertAndRerunsAreByteIdentical) 
   EXPECT_EQ(faulted, counts->faulted_frames);
   EXPECT_EQ(c.images.size(), 12u);
 
-  // Same input, same seed: the same bytes (under the same bag name: the file name is part of the metadata).
+  // Same input, same seed: the same bytes (under the same bag name: the file name is part of the
+  // metadata).
   auto again = convert(out("rerun/crash_ros2"), {"camera_crash/hard"});
   ASSERT_TRUE(again.is_ok());
   EXPECT_EQ(file_bytes(fs::path(dir) / "crash_ros2_0.mcap"),
@@ -368,23 +380,28 @@ TEST_F(Ros2ConvertTest, FaultsMatchTheFoxgloveConvertAndRerunsAreByteIdentical) 
   std::map<std::string, std::uint64_t> expect = {{"/faultline/faults", counts->frames}};
   EXPECT_TRUE(node_validates(dir, dataroot(), expect));
 
-  // Without the clean stream the faulted frames take the plain camera topics (the bag plays into a stack as is).
+  // Without the clean stream the faulted frames take the plain camera topics (the bag plays into a
+  // stack as is).
   auto only = convert(out("crash_only_ros2"), {"camera_crash/hard"}, /*clean=*/false);
   ASSERT_TRUE(only.is_ok());
-  const Ros2Content o = read_ros2((fs::path(out("crash_only_ros2")) / "crash_only_ros2_0.mcap").string());
+  const Ros2Content o =
+      read_ros2((fs::path(out("crash_only_ros2")) / "crash_only_ros2_0.mcap").string());
   std::uint64_t plain = 0;
   for (const auto& [topic, imgs] : o.images) {
     EXPECT_NE(topic.rfind("/CAM_", 0), std::string::npos) << topic;
     plain += imgs.size();
   }
   EXPECT_EQ(plain, only->faulted_frames);
-  EXPECT_TRUE(node_validates(out("crash_only_ros2"), dataroot(), {{"/faultline/faults", only->frames}}));
+  EXPECT_TRUE(
+      node_validates(out("crash_only_ros2"), dataroot(), {{"/faultline/faults", only->frames}}));
 }
 
-// From memory: a calibration that changes between scenes is published again on /tf_static (every camera, the new
-// pose), and an unreadable image is counted and skipped while the other topics go on.
+// From memory: a calibration that changes between scenes is published again on /tf_static (every
+// camera, the new pose), and an unreadable image is counted and skipped while the other topics go
+// on.
 TEST(Ros2ConvertMemoryTest, CalibrationChangeRepublishesTfStaticAndMissingImagesAreCounted) {
-  auto frame = [](const char* channel, std::int64_t us, double x, const char* file, const char* sample) {
+  auto frame = [](const char* channel, std::int64_t us, double x, const char* file,
+                  const char* sample) {
     dataset::CameraFrameRecord f;
     f.channel = channel;
     f.filename = file;
@@ -400,16 +417,20 @@ TEST(Ros2ConvertMemoryTest, CalibrationChangeRepublishesTfStaticAndMissingImages
     return f;
   };
   std::vector<dataset::CameraFrameRecord> frames = {
-      frame("CAM_FRONT", 1'000'000, 1.0, "a.jpg", "s1"), frame("CAM_BACK", 1'000'010, -1.0, "b.jpg", "s1"),
-      frame("CAM_FRONT", 1'500'000, 1.2, "c.jpg", "s2"), frame("CAM_BACK", 1'500'010, -1.0, "missing.jpg", "s2")};
-  const auto jpeg =
-      std::make_shared<const std::vector<std::uint8_t>>(std::vector<std::uint8_t>{0xFF, 0xD8, 0xFF, 0xD9});
+      frame("CAM_FRONT", 1'000'000, 1.0, "a.jpg", "s1"),
+      frame("CAM_BACK", 1'000'010, -1.0, "b.jpg", "s1"),
+      frame("CAM_FRONT", 1'500'000, 1.2, "c.jpg", "s2"),
+      frame("CAM_BACK", 1'500'010, -1.0, "missing.jpg", "s2")};
+  const auto jpeg = std::make_shared<const std::vector<std::uint8_t>>(
+      std::vector<std::uint8_t>{0xFF, 0xD8, 0xFF, 0xD9});
   std::map<std::string, ImageBytes> images = {{"a.jpg", jpeg}, {"b.jpg", jpeg}, {"c.jpg", jpeg}};
-  const fs::path dir = fs::temp_directory_path() / ("faultline_ros2_memory_" + std::to_string(::getpid()));
+  const fs::path dir =
+      fs::temp_directory_path() / ("faultline_ros2_memory_" + std::to_string(::getpid()));
   fs::remove_all(dir);
   Ros2ConvertConfig cfg;
   cfg.output = dir.string();
-  Ros2BagConverter converter(cfg, std::make_unique<MemoryFrameSource>(frames, images), {}, nullptr, quiet_logger());
+  Ros2BagConverter converter(cfg, std::make_unique<MemoryFrameSource>(frames, images), {}, nullptr,
+                             quiet_logger());
   std::atomic<bool> stop{false};
   auto counts = converter.run(stop);
   ASSERT_TRUE(counts.is_ok()) << counts.status().to_string();

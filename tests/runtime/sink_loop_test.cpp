@@ -190,9 +190,9 @@ TEST_F(SinkLoopTest, JournalOfAnotherRunStopsTheSinkAtStart) {
   EXPECT_FALSE(std::ifstream(config_.output).good());  // nothing written
 }
 
-// #22 item 7: a message with a wrong frame count (5 parts) is refused by the socket and counted in the results'
-// meta, and the sink carries on with the next one.
-// A respawned player or detector sends a sample again: the last array is kept and each repeat counted.
+// #22 item 7: a message with a wrong frame count (5 parts) is refused by the socket and counted in
+// the results' meta, and the sink carries on with the next one. A respawned player or detector
+// sends a sample again: the last array is kept and each repeat counted.
 TEST_F(SinkLoopTest, ASecondArrayForASampleReplacesTheFirstAndIsCounted) {
   Run({Array("s1", 1), Array("s1", 2), Array("s2", 1)});
   EXPECT_EQ(counts_.duplicate_arrays, 1u);
@@ -257,7 +257,8 @@ TEST_F(SinkLoopTest, AFivePartMessageIsCountedAsMalformedInTheMeta) {
     zmq::message_t part("x", 1);
     push.send(part, i < 4 ? zmq::send_flags::sndmore : zmq::send_flags::none);
   }
-  const std::string body = Array("s1", 1).SerializeAsString();  // one socket keeps order: after the bad one
+  const std::string body =
+      Array("s1", 1).SerializeAsString();  // one socket keeps order: after the bad one
   zmq::message_t topic("/detections", 11), payload(body.data(), body.size());
   push.send(topic, zmq::send_flags::sndmore);
   push.send(payload, zmq::send_flags::none);

@@ -1,10 +1,11 @@
-// Hand-computed small tables: the spec §7 worked example, tie order, the numpy grid and interp rules,
-// yaw, the bike-rack faces and the metric aggregation.
+// Hand-computed small tables: the spec §7 worked example, tie order, the numpy grid and interp
+// rules, yaw, the bike-rack faces and the metric aggregation.
+#include "scoring/accumulate.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
 
-#include "scoring/accumulate.hpp"
 #include "scoring/geometry.hpp"
 #include "scoring/metrics.hpp"
 
@@ -51,7 +52,7 @@ TEST_F(AccumulateTest, WorkedExampleOfSpecSection7) {
     EXPECT_DOUBLE_EQ(md.precision[static_cast<std::size_t>(i)], 1.0) << i;
     EXPECT_DOUBLE_EQ(md.confidence[static_cast<std::size_t>(i)], 0.9) << i;
   }
-  EXPECT_DOUBLE_EQ(md.precision[50], 0.5);  // last of the run of equal recalls
+  EXPECT_DOUBLE_EQ(md.precision[50], 0.5);   // last of the run of equal recalls
   EXPECT_DOUBLE_EQ(md.confidence[50], 0.8);  // the FP's score
   EXPECT_NEAR(md.precision[75], 0.5 + 0.5 * (2.0 / 3.0 - 0.5), 1e-12);
   EXPECT_NEAR(md.confidence[75], 0.75, 1e-12);
@@ -63,7 +64,8 @@ TEST_F(AccumulateTest, WorkedExampleOfSpecSection7) {
   EXPECT_EQ(md.max_recall_ind(), 100);
   // AP: precision - 0.1 clipped, mean over indices 11..100, / 0.9.
   double sum = 0;
-  for (int i = 11; i <= 100; ++i) sum += std::max(md.precision[static_cast<std::size_t>(i)] - 0.1, 0.0);
+  for (int i = 11; i <= 100; ++i)
+    sum += std::max(md.precision[static_cast<std::size_t>(i)] - 0.1, 0.0);
   EXPECT_NEAR(calc_ap(md), sum / 90 / 0.9, 1e-12);
 }
 
@@ -143,9 +145,9 @@ TEST(GeometryTest, YawUsesFullQuaternionNotHalfAngleShortcut) {
 
 TEST(GeometryTest, BikeRackTestIsInclusiveAndThreeDimensional) {
   RackBox rack{{10, 20, 1}, {2, 4, 1}, {1, 0, 0, 0}};  // w 2, l 4, h 1, yaw 0
-  EXPECT_TRUE(point_in_box(rack, {12, 20, 1}));      // exactly on the +x face
-  EXPECT_TRUE(point_in_box(rack, {10, 21, 1.5}));    // corner edge
-  EXPECT_FALSE(point_in_box(rack, {10, 20, 1.55}));  // above
+  EXPECT_TRUE(point_in_box(rack, {12, 20, 1}));        // exactly on the +x face
+  EXPECT_TRUE(point_in_box(rack, {10, 21, 1.5}));      // corner edge
+  EXPECT_FALSE(point_in_box(rack, {10, 20, 1.55}));    // above
   EXPECT_FALSE(point_in_box(rack, {12.01, 20, 1}));
 }
 

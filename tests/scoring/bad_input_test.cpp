@@ -1,5 +1,5 @@
-// Bad submissions and datasets: each gives a clear error naming the place, writes no metrics, and the
-// CLI exits non-zero. Also the defined behaviour where the devkit crashes (no box at all).
+// Bad submissions and datasets: each gives a clear error naming the place, writes no metrics, and
+// the CLI exits non-zero. Also the defined behaviour where the devkit crashes (no box at all).
 #include <gtest/gtest.h>
 #include <rapidjson/document.h>
 #include <rapidjson/stringbuffer.h>
@@ -26,7 +26,8 @@ class BadInputTest : public ::testing::Test {
  protected:
   void SetUp() override {
     const std::string text = read_text(golden_dir() + "/predictions/perfect.json");
-    doc_.Parse<rapidjson::kParseNanAndInfFlag | rapidjson::kParseFullPrecisionFlag>(text.c_str(), text.size());
+    doc_.Parse<rapidjson::kParseNanAndInfFlag | rapidjson::kParseFullPrecisionFlag>(text.c_str(),
+                                                                                    text.size());
     ASSERT_FALSE(doc_.HasParseError());
     first_token_ = doc_["results"].MemberBegin()->name.GetString();
   }
@@ -34,8 +35,8 @@ class BadInputTest : public ::testing::Test {
 
   std::string Write(const std::string& name) {
     rapidjson::StringBuffer buf;
-    rapidjson::Writer<rapidjson::StringBuffer, rapidjson::UTF8<>, rapidjson::UTF8<>, rapidjson::CrtAllocator,
-                      rapidjson::kWriteNanAndInfFlag>
+    rapidjson::Writer<rapidjson::StringBuffer, rapidjson::UTF8<>, rapidjson::UTF8<>,
+                      rapidjson::CrtAllocator, rapidjson::kWriteNanAndInfFlag>
         w(buf);
     doc_.Accept(w);
     const std::string path = dir_.file(name);
@@ -110,19 +111,22 @@ TEST_F(BadInputTest, UnknownAttributeIsRejected) {
 TEST_F(BadInputTest, MoreThan500BoxesIsRejected) {
   auto& list = doc_["results"].MemberBegin()->value;
   rapidjson::Value box(list[0], doc_.GetAllocator());
-  while (list.Size() <= 500) list.PushBack(rapidjson::Value(box, doc_.GetAllocator()), doc_.GetAllocator());
+  while (list.Size() <= 500)
+    list.PushBack(rapidjson::Value(box, doc_.GetAllocator()), doc_.GetAllocator());
   ExpectRejected(Write("many.json"), {first_token_, "Only <= 500 boxes per sample allowed", "501"});
 }
 
 TEST_F(BadInputTest, MissingSampleOfPredefinedSplitIsRejected) {
   doc_["results"].RemoveMember(first_token_.c_str());
-  ExpectRejected(Write("missing.json"), {"Samples in split doesn't match", "missing", first_token_});
+  ExpectRejected(Write("missing.json"),
+                 {"Samples in split doesn't match", "missing", first_token_});
 }
 
 TEST_F(BadInputTest, ExtraSampleOfPredefinedSplitIsRejected) {
-  doc_["results"].AddMember("0000000000000000000000000000beef", rapidjson::Value(rapidjson::kArrayType),
-                            doc_.GetAllocator());
-  ExpectRejected(Write("extra.json"), {"Samples in split doesn't match", "0000000000000000000000000000beef"});
+  doc_["results"].AddMember("0000000000000000000000000000beef",
+                            rapidjson::Value(rapidjson::kArrayType), doc_.GetAllocator());
+  ExpectRejected(Write("extra.json"),
+                 {"Samples in split doesn't match", "0000000000000000000000000000beef"});
 }
 
 TEST_F(BadInputTest, NegativeScoreIsRejected) {
@@ -287,8 +291,8 @@ TEST_F(BadInputTest, CliExitsNonZeroAndNamesTheFile) {
   write_text(path, text);
   const std::string err = dir_.file("stderr.txt");
   const std::string cmd = bin + " score --results " + path + " --dataroot " + golden_dir() +
-                          "/dataset --version v1.0-mini --eval_set mini_val --output_dir " + dir_.file("o") +
-                          " > /dev/null 2> " + err;
+                          "/dataset --version v1.0-mini --eval_set mini_val --output_dir " +
+                          dir_.file("o") + " > /dev/null 2> " + err;
   const int rc = std::system(cmd.c_str());
   EXPECT_NE(rc, 0);
   EXPECT_NE(read_text(err).find("cli_bad.json: malformed JSON at offset 100"), std::string::npos)

@@ -37,7 +37,8 @@ TEST(PyJsonWriterTest, IndentTwoLayout) {
   w.key("c");
   w.value_string("x\"\xc3\xa9");
   w.end_object();
-  EXPECT_EQ(w.str(), "{\n  \"a\": [\n    0.5,\n    2\n  ],\n  \"b\": {},\n  \"c\": \"x\\\"\\u00e9\"\n}");
+  EXPECT_EQ(w.str(),
+            "{\n  \"a\": [\n    0.5,\n    2\n  ],\n  \"b\": {},\n  \"c\": \"x\\\"\\u00e9\"\n}");
 }
 
 TEST(SplitsTest, DevkitSceneCountsAndDisjointness) {

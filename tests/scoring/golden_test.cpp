@@ -1,6 +1,6 @@
 // Every golden case of golden/nusc_eval: all numbers of both metrics files within 1e-6 (NaN on both
-// sides), cfg and meta exactly equal, filter counts equal to eval_log.txt, neg_* cases rejected with
-// no metrics written.
+// sides), cfg and meta exactly equal, filter counts equal to eval_log.txt, neg_* cases rejected
+// with no metrics written.
 #include <gtest/gtest.h>
 #include <rapidjson/document.h>
 
@@ -30,8 +30,8 @@ rapidjson::Document parse(const std::string& path) {
 }
 
 // Recursively compares; `tol` < 0 means exact (types and values).
-void compare(const rapidjson::Value& mine, const rapidjson::Value& ref, const std::string& path, double tol,
-             std::vector<std::string>& diffs) {
+void compare(const rapidjson::Value& mine, const rapidjson::Value& ref, const std::string& path,
+             double tol, std::vector<std::string>& diffs) {
   if (diffs.size() > 10) return;
   if (ref.IsObject()) {
     if (!mine.IsObject()) {
@@ -41,8 +41,9 @@ void compare(const rapidjson::Value& mine, const rapidjson::Value& ref, const st
     std::vector<std::string> mk, rk;
     for (const auto& m : mine.GetObject()) mk.emplace_back(m.name.GetString());
     for (const auto& m : ref.GetObject()) rk.emplace_back(m.name.GetString());
-    if (mk != rk) diffs.push_back(path + ": keys differ (count " + std::to_string(mk.size()) + " vs " +
-                                  std::to_string(rk.size()) + ")");
+    if (mk != rk)
+      diffs.push_back(path + ": keys differ (count " + std::to_string(mk.size()) + " vs " +
+                      std::to_string(rk.size()) + ")");
     for (const auto& m : ref.GetObject()) {
       const std::string key = m.name.GetString();
       if (key == "eval_time") continue;
@@ -139,8 +140,9 @@ TEST_P(GoldenCaseTest, MatchesDevkit) {
   const auto expected = log_counts(read_text(ref_dir + "/eval_log.txt"));
   const auto& p = outcome->pred_counts;
   const auto& g = outcome->gt_counts;
-  const std::vector<std::size_t> got = {p.original,       p.after_distance, p.after_points, p.after_bike_rack,
-                                        g.original,       g.after_distance, g.after_points, g.after_bike_rack};
+  const std::vector<std::size_t> got = {p.original,        p.after_distance, p.after_points,
+                                        p.after_bike_rack, g.original,       g.after_distance,
+                                        g.after_points,    g.after_bike_rack};
   EXPECT_EQ(got, expected) << name << ": filter counts differ from eval_log.txt";
 }
 
@@ -162,7 +164,8 @@ INSTANTIATE_TEST_SUITE_P(NuscEval, GoldenCaseTest, ::testing::ValuesIn(case_name
 TEST(GoldenSetTest, HasSixteenAcceptedAndThreeRejectedCases) {
   const rapidjson::Document cases = parse(golden_dir() + "/predictions/cases.json");
   int accepted = 0, rejected = 0;
-  for (const auto& m : cases.GetObject()) (m.value["expect_error"].IsNull() ? accepted : rejected)++;
+  for (const auto& m : cases.GetObject())
+    (m.value["expect_error"].IsNull() ? accepted : rejected)++;
   EXPECT_EQ(accepted, 16);
   EXPECT_EQ(rejected, 3);
   std::vector<std::string> in_file;

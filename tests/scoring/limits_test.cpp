@@ -1,5 +1,6 @@
-// Size limits of the scorer's readers (#22): a custom splits.json over kMaxParamsFileBytes is refused, naming the
-// file and the limit. The nuScenes table reader's limit is tested with it (tests/nuscenes/limits_test.cpp).
+// Size limits of the scorer's readers (#22): a custom splits.json over kMaxParamsFileBytes is
+// refused, naming the file and the limit. The nuScenes table reader's limit is tested with it
+// (tests/nuscenes/limits_test.cpp).
 #include <gtest/gtest.h>
 #include <sys/stat.h>
 #include <unistd.h>

@@ -13,8 +13,8 @@ namespace {
 Submission parse(const std::string& translation, const std::string& velocity) {
   const std::string text =
       R"({"meta": {"use_camera": true, "big": 12345678901234567890, "neg": -5, "z": 0.00e100},)"
-      R"( "results": {"s1": [{"sample_token": "s1", "translation": )" + translation +
-      R"(, "size": [1, 2, 3], "rotation": [1, 0, 0, 0], "velocity": )" + velocity +
+      R"( "results": {"s1": [{"sample_token": "s1", "translation": )" +
+      translation + R"(, "size": [1, 2, 3], "rotation": [1, 0, 0, 0], "velocity": )" + velocity +
       R"(, "detection_name": "car", "detection_score": 0.5, "attribute_name": ""}]}})";
   auto sub = parse_submission(text, "results.json", SubmissionScope{});
   EXPECT_TRUE(sub.is_ok()) << sub.status().to_string();

@@ -100,7 +100,8 @@ TEST(RobustnessTest, JsonRoundTripsAndTablesCarryThePercentages) {
   EXPECT_NE(robustness_csv(*r).find("DETR3D,snow,hard,0.1616"), std::string::npos);
 }
 
-// A mid-only benchmark's robustness.json keeps its level names through the report's reader (it showed "easy").
+// A mid-only benchmark's robustness.json keeps its level names through the report's reader (it
+// showed "easy").
 TEST(RobustnessTest, JsonKeepsTheLevelNamesOfAReducedMatrix) {
   DetectorScores mid_only = detr3d_baseline();
   for (auto& c : mid_only.corruptions) c.nds_by_level = {c.nds_by_level[1]};
@@ -111,7 +112,8 @@ TEST(RobustnessTest, JsonKeepsTheLevelNamesOfAReducedMatrix) {
   ASSERT_TRUE(back.is_ok()) << back.status().message();
   EXPECT_EQ(back->level_names, std::vector<std::string>{"mid"});
   EXPECT_EQ(level_name(*back, 0), "mid");
-  EXPECT_NE(robustness_csv(*back).find("DETR3D,snow,mid,"), std::string::npos) << robustness_csv(*back);
+  EXPECT_NE(robustness_csv(*back).find("DETR3D,snow,mid,"), std::string::npos)
+      << robustness_csv(*back);
 }
 
 // Scored run folders of the DETR3D table + a YAML manifest reproduce the paper's figures end to

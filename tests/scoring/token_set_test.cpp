@@ -35,8 +35,9 @@ TEST(TokenSetTest, AnswersLikeAnUnorderedSet) {
     const std::string t = token(i);
     EXPECT_EQ(set.contains(t), reference.count(t) == 1) << t;
   }
-  for (const std::string& t : {std::string(""), std::string("short"), std::string("shor"), std::string(41, 'x'),
-                               std::string(40, 'x'), members[5].substr(0, 31), members[5] + "0"}) {
+  for (const std::string& t :
+       {std::string(""), std::string("short"), std::string("shor"), std::string(41, 'x'),
+        std::string(40, 'x'), members[5].substr(0, 31), members[5] + "0"}) {
     EXPECT_EQ(set.contains(t), reference.count(t) == 1) << t;
   }
 }

@@ -44,7 +44,8 @@ TEST(TopicHzEndToEndTest, CountsEveryFourMegabyteFrameAtSeventyTwoHertz) {
       publisher_error = s.to_string();
       return;
     }
-    const auto pixels = std::make_shared<const std::vector<std::uint8_t>>(kFrameBytes, std::uint8_t{0x5a});
+    const auto pixels =
+        std::make_shared<const std::vector<std::uint8_t>>(kFrameBytes, std::uint8_t{0x5a});
     msgs::CameraFrame header;
     header.set_camera("CAM_FRONT");
     header.set_encoding("rgb8");
@@ -54,7 +55,8 @@ TEST(TopicHzEndToEndTest, CountsEveryFourMegabyteFrameAtSeventyTwoHertz) {
     SystemClock clock;
     const StampNs t0 = clock.now_ns() + 20 * kNsPerMs;
     for (int i = 0; i < kFrames && !stop.load(); ++i) {
-      clock.sleep_until_ns(t0 + static_cast<StampNs>(i) * kNsPerSec / 72);  // absolute schedule: no drift
+      clock.sleep_until_ns(t0 + static_cast<StampNs>(i) * kNsPerSec /
+                                    72);  // absolute schedule: no drift
       while (i - counted.load() >= kMaxAhead && !stop.load()) {
         std::this_thread::sleep_for(std::chrono::microseconds(250));
       }
@@ -62,7 +64,9 @@ TEST(TopicHzEndToEndTest, CountsEveryFourMegabyteFrameAtSeventyTwoHertz) {
       header.mutable_header()->set_capture_stamp_ns(realtime_now_ns());
       send_ns.push_back(monotonic_now_ns());
       header.mutable_header()->set_publish_mono_ns(send_ns.back());
-      if (const Status s = transport::send_camera_frame(pub, kTopic, header, transport::Payload::of(pixels)); !s) {
+      if (const Status s =
+              transport::send_camera_frame(pub, kTopic, header, transport::Payload::of(pixels));
+          !s) {
         publisher_error = s.to_string();
         return;
       }
@@ -77,7 +81,8 @@ TEST(TopicHzEndToEndTest, CountsEveryFourMegabyteFrameAtSeventyTwoHertz) {
     auto r = subscriber.receive(timeout_ns);
     if (!r.is_ok()) return r.status();
     counted.fetch_add(1);
-    // Test-only bookkeeping: the publisher's send stamps as they arrived, to compare counts exactly.
+    // Test-only bookkeeping: the publisher's send stamps as they arrived, to compare counts
+    // exactly.
     const auto frame = transport::parse_camera_frame(*r);
     if (frame.is_ok()) stamp_meter.add(frame->header.header().publish_mono_ns(), r->size_bytes());
     return ProbeSample{r->receive_mono_ns(), r->size_bytes(), kNoDelay};
@@ -97,13 +102,15 @@ TEST(TopicHzEndToEndTest, CountsEveryFourMegabyteFrameAtSeventyTwoHertz) {
   EXPECT_GE(result.total.size_bytes.min, static_cast<double>(kFrameBytes));
   const double publisher_rate_hz =
       (kFrames - 1) / (static_cast<double>(send_ns.back() - send_ns.front()) / 1e9);
-  // Exact: every frame arrived with its send stamp, so the rate over send stamps is the publisher's.
+  // Exact: every frame arrived with its send stamp, so the rate over send stamps is the
+  // publisher's.
   EXPECT_EQ(stamp_meter.total().count, static_cast<std::uint64_t>(kFrames));
   EXPECT_NEAR(stamp_meter.total().rate_hz, publisher_rate_hz, 1e-9 * publisher_rate_hz);
   // The probe's own figure, from receive times, depends on the machine's load: printed, not
   // asserted.
-  std::printf("measured %.3f Hz, publisher %.3f Hz, %.1f MB/s, period std %.3f ms\n", result.total.rate_hz,
-              publisher_rate_hz, result.total.bytes_per_s / 1e6, result.total.period_ms.stddev);
+  std::printf("measured %.3f Hz, publisher %.3f Hz, %.1f MB/s, period std %.3f ms\n",
+              result.total.rate_hz, publisher_rate_hz, result.total.bytes_per_s / 1e6,
+              result.total.period_ms.stddev);
 }
 
 }  // namespace

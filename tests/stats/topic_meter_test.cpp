@@ -21,8 +21,8 @@ class TopicMeterTest : public ::testing::Test {
   void ReceiveEvery(double period_ms, int n, std::uint64_t size_bytes = 1000) {
     for (int i = 0; i < n; ++i) meter_.add(Ms(period_ms * i), size_bytes);
   }
-  static void ExpectRate(const MeterStats& s, std::uint64_t count, double rate_hz, double period_mean_ms,
-                         double period_std_ms) {
+  static void ExpectRate(const MeterStats& s, std::uint64_t count, double rate_hz,
+                         double period_mean_ms, double period_std_ms) {
     EXPECT_EQ(s.count, count);
     EXPECT_NEAR(s.rate_hz, rate_hz, 1e-6);
     EXPECT_NEAR(s.period_ms.mean, period_mean_ms, 1e-6);
@@ -34,7 +34,8 @@ class TopicMeterTest : public ::testing::Test {
 
 TEST_F(TopicMeterTest, SteadyStreamGivesExactRateAndNoJitter) {
   ReceiveAtMs({0, 10, 20, 30, 40});
-  ExpectRate(meter_.total(), /*count=*/5, /*rate_hz=*/100, /*period_mean_ms=*/10, /*period_std_ms=*/0);
+  ExpectRate(meter_.total(), /*count=*/5, /*rate_hz=*/100, /*period_mean_ms=*/10,
+             /*period_std_ms=*/0);
   EXPECT_DOUBLE_EQ(meter_.total().period_ms.min, 10);
   EXPECT_DOUBLE_EQ(meter_.total().period_ms.max, 10);
 }
@@ -90,7 +91,8 @@ TEST_F(TopicMeterTest, DelayPercentilesAreNearestRank) {
   std::vector<int> delays_ms(100);
   for (int i = 0; i < 100; ++i) delays_ms[static_cast<std::size_t>(i)] = i + 1;
   std::shuffle(delays_ms.begin(), delays_ms.end(), std::mt19937(7));
-  for (int i = 0; i < 100; ++i) meter_.add(Ms(i), 10, delays_ms[static_cast<std::size_t>(i)] * kNsPerMs);
+  for (int i = 0; i < 100; ++i)
+    meter_.add(Ms(i), 10, delays_ms[static_cast<std::size_t>(i)] * kNsPerMs);
   const MeterStats s = meter_.total();
   EXPECT_DOUBLE_EQ(s.delay_p50_ms, 50);
   EXPECT_DOUBLE_EQ(s.delay_p99_ms, 99);
@@ -119,10 +121,11 @@ TEST_P(NearestRankTest, MatchesTable) {
   EXPECT_DOUBLE_EQ(nearest_rank(v, GetParam().q), GetParam().expected);
 }
 
-INSTANTIATE_TEST_SUITE_P(Rows, NearestRankTest,
-                         ::testing::Values(RankRow{{}, 0.5, 0}, RankRow{{3}, 0.99, 3}, RankRow{{4, 1, 3, 2}, 0.5, 2},
-                                           RankRow{{4, 1, 3, 2}, 0.75, 3}, RankRow{{4, 1, 3, 2}, 0.76, 4},
-                                           RankRow{{4, 1, 3, 2}, 0.0, 1}, RankRow{{4, 1, 3, 2}, 1.0, 4}));
+INSTANTIATE_TEST_SUITE_P(
+    Rows, NearestRankTest,
+    ::testing::Values(RankRow{{}, 0.5, 0}, RankRow{{3}, 0.99, 3}, RankRow{{4, 1, 3, 2}, 0.5, 2},
+                      RankRow{{4, 1, 3, 2}, 0.75, 3}, RankRow{{4, 1, 3, 2}, 0.76, 4},
+                      RankRow{{4, 1, 3, 2}, 0.0, 1}, RankRow{{4, 1, 3, 2}, 1.0, 4}));
 
 // A scripted receive: returns the samples at their times and otherwise lets the fake clock run.
 class ProbeTest : public ::testing::Test {
@@ -134,12 +137,14 @@ class ProbeTest : public ::testing::Test {
         now_ = std::max(now_, samples_[next].receive_ns);
         return samples_[next++];
       }
-      if (next >= samples_.size() && cancel_when_exhausted_) return Status{StatusCode::kCancelled, "ctx"};
+      if (next >= samples_.size() && cancel_when_exhausted_)
+        return Status{StatusCode::kCancelled, "ctx"};
       now_ += timeout_ns;
       return Status{StatusCode::kWouldBlock, "timeout"};
     };
-    return run_probe(receive, options, stop_, [&](const MeterStats& s) { reports_.push_back(s); },
-                     [&] { return now_; });
+    return run_probe(
+        receive, options, stop_, [&](const MeterStats& s) { reports_.push_back(s); },
+        [&] { return now_; });
   }
   void SamplesEveryMs(double period_ms, int n) {
     for (int i = 0; i < n; ++i) samples_.push_back({Ms(period_ms * (i + 1)), 100, kNoDelay});
@@ -205,7 +210,8 @@ TEST(FormatTest, SummaryLineHasKeyValues) {
   m.add(Ms(0), 2000, 3 * kNsPerMs);
   m.add(Ms(500), 2000, 5 * kNsPerMs);
   const std::string line = format_summary("/cam_front/image", m.total());
-  EXPECT_EQ(line.rfind("summary topic=/cam_front/image count=2 span_s=0.500 rate_hz=2.000", 0), 0u) << line;
+  EXPECT_EQ(line.rfind("summary topic=/cam_front/image count=2 span_s=0.500 rate_hz=2.000", 0), 0u)
+      << line;
   EXPECT_NE(line.find("bw_mb_s=0.004"), std::string::npos) << line;
   EXPECT_NE(line.find("delay_ms_p50=3.000 delay_ms_p99=5.000"), std::string::npos) << line;
 }

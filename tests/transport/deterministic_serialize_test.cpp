@@ -1,4 +1,5 @@
-// Equal messages must give equal bytes on the wire and in bags, whatever order their map entries were set in.
+// Equal messages must give equal bytes on the wire and in bags, whatever order their map entries
+// were set in.
 #include "deterministic_serialize.hpp"
 
 #include <gtest/gtest.h>

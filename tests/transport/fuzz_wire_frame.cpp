@@ -37,7 +37,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       std::uint64_t rows = 0, last = 0;
       const bool overflow =
           __builtin_mul_overflow(std::uint64_t{h.height() - 1}, std::uint64_t{h.step()}, &rows) ||
-          __builtin_add_overflow(rows, std::uint64_t{h.width()} * static_cast<unsigned>(bpp), &last);
+          __builtin_add_overflow(rows, std::uint64_t{h.width()} * static_cast<unsigned>(bpp),
+                                 &last);
       if (bpp == 0 || overflow || last > view->payload_size) {
         fuzz::fail("accepted raw frame reaches beyond its payload");
       }

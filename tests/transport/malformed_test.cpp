@@ -24,12 +24,13 @@ class MalformedTest : public ::testing::Test {
   }
   void SendFrames(const std::vector<std::string>& frames) {
     for (std::size_t i = 0; i < frames.size(); ++i) {
-      push_.send(zmq::buffer(frames[i]), i + 1 < frames.size() ? zmq::send_flags::sndmore
-                                                               : zmq::send_flags::none);
+      push_.send(zmq::buffer(frames[i]),
+                 i + 1 < frames.size() ? zmq::send_flags::sndmore : zmq::send_flags::none);
     }
   }
   static std::string Header(std::uint32_t payload_bytes, const std::string& encoding = "jpeg",
-                            std::uint32_t width = 0, std::uint32_t height = 0, std::uint32_t step = 0) {
+                            std::uint32_t width = 0, std::uint32_t height = 0,
+                            std::uint32_t step = 0) {
     msgs::CameraFrame f;
     f.set_encoding(encoding);
     f.set_payload_bytes(payload_bytes);

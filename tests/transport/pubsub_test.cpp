@@ -3,9 +3,9 @@
 #include <atomic>
 #include <thread>
 
+#include "test_util.hpp"
 #include "transport/publisher.hpp"
 #include "transport/subscriber.hpp"
-#include "test_util.hpp"
 #include "transport/typed.hpp"
 
 namespace faultline::transport {
@@ -49,7 +49,8 @@ TEST(PubSubTest, TcpPortIsReadBackFromLastEndpoint) {
 
 TEST(PubSubTest, WaitForSubscribersSeesTheSubscription) {
   PubSubPair p("tcp://127.0.0.1:*", {"/cam_front/"});
-  ASSERT_TRUE(p.pub.wait_for_subscribers("/cam_front/image_rect_compressed", 1, 5 * kNsPerSec).is_ok());
+  ASSERT_TRUE(
+      p.pub.wait_for_subscribers("/cam_front/image_rect_compressed", 1, 5 * kNsPerSec).is_ok());
   EXPECT_EQ(p.pub.subscriber_count("/cam_back/image_rect_compressed"), 0);
   EXPECT_EQ(p.pub.wait_for_subscribers("/cam_back/x", 1, 0).code(), StatusCode::kWouldBlock);
 }
@@ -193,9 +194,9 @@ TEST(PubSubTest, FrameLargerThanMaxMessageSizeIsRefused) {
   EXPECT_EQ(sub.receive(200 * kNsPerMs).status().code(), StatusCode::kWouldBlock);
 }
 
-// #22 item 1: libzmq answers a part over the subscriber's ZMQ_MAXMSGSIZE by closing the connection (and does not
-// reopen it). The subscriber's monitor sees the close and counts it, so the cut is never silent; the reconnect
-// that follows is in reconnect_test.cpp.
+// #22 item 1: libzmq answers a part over the subscriber's ZMQ_MAXMSGSIZE by closing the connection
+// (and does not reopen it). The subscriber's monitor sees the close and counts it, so the cut is
+// never silent; the reconnect that follows is in reconnect_test.cpp.
 TEST(PubSubTest, OversizePartFromAForeignPublisherIsCountedAsAClosedConnection) {
   PublisherConfig pc;
   pc.endpoint = "tcp://127.0.0.1:*";
@@ -208,7 +209,7 @@ TEST(PubSubTest, OversizePartFromAForeignPublisherIsCountedAsAClosedConnection) 
   ASSERT_TRUE(pub.wait_for_subscribers("/raw", 1, 5 * kNsPerSec).is_ok());
   ASSERT_TRUE(pub.send("/raw", "h", BytesPayload(4096, 7)).is_ok());
   for (int i = 0; i < 1000 && sub.disconnects() == 0; ++i) {  // up to ~20 s on a loaded machine
-    EXPECT_FALSE(sub.receive(20 * kNsPerMs).is_ok());        // the oversize part never arrives
+    EXPECT_FALSE(sub.receive(20 * kNsPerMs).is_ok());         // the oversize part never arrives
   }
   EXPECT_EQ(sub.disconnects(), 1u);
 }

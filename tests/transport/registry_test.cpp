@@ -28,8 +28,11 @@ TEST_F(RegistryTest, AdvertisedTopicsAreListedAndRemovedOnExit) {
   {
     TopicRegistry reg("nusc_player");
     ASSERT_TRUE(reg.advertise("/cam_front/image_rect_compressed", "faultline.msgs.CameraFrame",
-                              "tcp://127.0.0.1:5600").is_ok());
-    ASSERT_TRUE(reg.advertise("/sync/sample", "faultline.msgs.SampleBoundary", "tcp://127.0.0.1:5600").is_ok());
+                              "tcp://127.0.0.1:5600")
+                    .is_ok());
+    ASSERT_TRUE(
+        reg.advertise("/sync/sample", "faultline.msgs.SampleBoundary", "tcp://127.0.0.1:5600")
+            .is_ok());
     const auto topics = list_topics();
     ASSERT_EQ(topics.size(), 2u);
     EXPECT_EQ(topics[0].topic, "/cam_front/image_rect_compressed");

@@ -1,5 +1,7 @@
-// The shared-memory frame ring: slot reuse, overwrite detection (counted), sizes, stale and live files, and the
-// descriptor path through a real publisher and subscriber.
+// The shared-memory frame ring: slot reuse, overwrite detection (counted), sizes, stale and live
+// files, and the descriptor path through a real publisher and subscriber.
+#include "transport/shm_ring.hpp"
+
 #include <gtest/gtest.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
@@ -12,7 +14,6 @@
 
 #include "common/config.hpp"
 #include "test_util.hpp"
-#include "transport/shm_ring.hpp"
 #include "transport/typed.hpp"
 
 namespace faultline::transport {
@@ -103,7 +104,8 @@ TEST_F(ShmRingTest, FrameBiggerThanASlotIsRefusedCountedAndLeavesTheRingAsItWas)
   auto r = w.write(big.data(), big.size());
   ASSERT_FALSE(r.is_ok());
   EXPECT_EQ(r.status().code(), StatusCode::kInvalidArgument);
-  EXPECT_NE(r.status().message().find("frame of 17 bytes refused by shm ring " + path_), std::string::npos);
+  EXPECT_NE(r.status().message().find("frame of 17 bytes refused by shm ring " + path_),
+            std::string::npos);
   EXPECT_NE(r.status().message().find("slots hold 16 bytes"), std::string::npos);
   EXPECT_EQ(w.oversize_refused(), 1u);
   EXPECT_EQ(w.frames_written(), 0u);
@@ -150,7 +152,10 @@ TEST_F(ShmRingTest, BadConfigurationAndBadFilesNameTheProblem) {
 }
 
 TEST_F(ShmRingTest, TheWriterRemovesItsFileAtExit) {
-  { ShmRingWriter w(Config(2, 16)); EXPECT_TRUE(Exists()); }
+  {
+    ShmRingWriter w(Config(2, 16));
+    EXPECT_TRUE(Exists());
+  }
   EXPECT_FALSE(Exists());
 }
 
@@ -195,7 +200,8 @@ TEST_F(ShmRingTest, RingOfALiveWriterIsNotTaken) {
     ShmRingWriter w(Config(2, 16));
     ADD_FAILURE() << "a live writer's ring was taken over";
   } catch (const ConfigError& e) {
-    EXPECT_NE(std::string(e.what()).find("in use by the running process " + std::to_string(child)), std::string::npos)
+    EXPECT_NE(std::string(e.what()).find("in use by the running process " + std::to_string(child)),
+              std::string::npos)
         << e.what();
   }
   ::kill(child, SIGKILL);
@@ -234,7 +240,9 @@ TEST_F(ShmRingTest, DescriptorsTravelOnTheSocketAndTheReaderMapsThePixels) {
     h.set_step(12);
     h.mutable_header()->set_seq(static_cast<std::uint64_t>(i + 1));
     const auto pixels = std::make_shared<const std::vector<std::uint8_t>>(Frame(i, 24));
-    ASSERT_TRUE(send_camera_frame_shm(pub, ring, "/faulty/cam_front/image_raw", h, Payload::of(pixels)).is_ok());
+    ASSERT_TRUE(
+        send_camera_frame_shm(pub, ring, "/faulty/cam_front/image_raw", h, Payload::of(pixels))
+            .is_ok());
     EXPECT_FALSE(h.has_shm());  // the caller's header is left without the descriptor
   }
   const std::uint64_t expected_overwritten = 1;  // 3 frames in 2 slots, read after all were sent
@@ -259,8 +267,10 @@ TEST_F(ShmRingTest, DescriptorsTravelOnTheSocketAndTheReaderMapsThePixels) {
   msgs::CameraFrame big;
   big.set_encoding("bgr8");
   const auto too_big = std::make_shared<const std::vector<std::uint8_t>>(25);
-  EXPECT_EQ(send_camera_frame_shm(pub, ring, "/faulty/cam_front/image_raw", big, Payload::of(too_big)).code(),
-            StatusCode::kInvalidArgument);
+  EXPECT_EQ(
+      send_camera_frame_shm(pub, ring, "/faulty/cam_front/image_raw", big, Payload::of(too_big))
+          .code(),
+      StatusCode::kInvalidArgument);
   EXPECT_EQ(ring.oversize_refused(), 1u);
 }
 

@@ -25,10 +25,11 @@ std::string ErrorOf(const std::string& path) {
 }
 
 TEST(CalibrationTest, ReadsNuscenesStyleKeys) {
-  const auto path = Write("front.yaml",
-                          "channel: CAM_FRONT_LEFT\nwidth: 1600\nheight: 900\n"
-                          "intrinsics: [1266, 0, 800, 0, 1266, 450, 0, 0, 1]\n"
-                          "sensor_to_ego: {translation: [1.5, 0.5, 1.5], rotation: [2, 0, 0, 0]}\n");
+  const auto path =
+      Write("front.yaml",
+            "channel: CAM_FRONT_LEFT\nwidth: 1600\nheight: 900\n"
+            "intrinsics: [1266, 0, 800, 0, 1266, 450, 0, 0, 1]\n"
+            "sensor_to_ego: {translation: [1.5, 0.5, 1.5], rotation: [2, 0, 0, 0]}\n");
   const Calibration c = load_calibration(path);
   EXPECT_EQ(c.channel, "CAM_FRONT_LEFT");
   EXPECT_EQ(c.width, 1600u);
@@ -38,9 +39,10 @@ TEST(CalibrationTest, ReadsNuscenesStyleKeys) {
 }
 
 TEST(CalibrationTest, ReadsRosCameraInfo) {
-  const auto path = Write("ros.yaml",
-                          "image_width: 640\nimage_height: 480\ncamera_name: CAM_BACK\n"
-                          "camera_matrix: {rows: 3, cols: 3, data: [500, 0, 320, 0, 500, 240, 0, 0, 1]}\n");
+  const auto path =
+      Write("ros.yaml",
+            "image_width: 640\nimage_height: 480\ncamera_name: CAM_BACK\n"
+            "camera_matrix: {rows: 3, cols: 3, data: [500, 0, 320, 0, 500, 240, 0, 0, 1]}\n");
   const Calibration c = load_calibration(path);
   EXPECT_EQ(c.channel, "CAM_BACK");
   EXPECT_EQ(c.height, 480u);

@@ -36,8 +36,9 @@ TEST(CameraLoopTest, TopicNames) {
   EXPECT_EQ(camera_output_topic("CAM_BACK", "bgr8"), "/cam_back/image_raw");
 }
 
-// The node's publish path end to end: recorded MJPEG and YUYV buffers go through Capture and come out of a
-// real ZeroMQ PUB socket as CameraFrames with calibration, in order, with per-publisher seq from 1.
+// The node's publish path end to end: recorded MJPEG and YUYV buffers go through Capture and come
+// out of a real ZeroMQ PUB socket as CameraFrames with calibration, in order, with per-publisher
+// seq from 1.
 class CameraPublishTest : public ::testing::TestWithParam<std::uint32_t> {};
 
 TEST_P(CameraPublishTest, PublishesEveryRecordedBufferAsACameraFrame) {
@@ -54,10 +55,11 @@ TEST_P(CameraPublishTest, PublishesEveryRecordedBufferAsACameraFrame) {
       bytes.assign(static_cast<std::size_t>(w * h * 2), 0);  // YUYV: Y=0x80, U=V=0x80 (grey)
       std::fill(bytes.begin(), bytes.end(), std::uint8_t{0x80});
     }
-    script->buffers.push_back({std::move(bytes), static_cast<std::uint32_t>(i), 5'000'000'000LL + i * 33'000'000LL,
-                               true, false});
+    script->buffers.push_back({std::move(bytes), static_cast<std::uint32_t>(i),
+                               5'000'000'000LL + i * 33'000'000LL, true, false});
   }
-  const std::string cal_path = ::testing::TempDir() + "/cam_cal_" + std::to_string(format) + ".yaml";
+  const std::string cal_path =
+      ::testing::TempDir() + "/cam_cal_" + std::to_string(format) + ".yaml";
   {
     std::ofstream cal(cal_path);
     cal << "channel: CAM_FRONT_LEFT\nintrinsics: [500, 0, 32, 0, 500, 16, 0, 0, 1]\n"
@@ -75,13 +77,15 @@ TEST_P(CameraPublishTest, PublishesEveryRecordedBufferAsACameraFrame) {
   cfg.wait_subscribers = 1;  // the node starts capturing once our subscriber is connected
   cfg.hwm = 16;              // recorded buffers come as one burst; a real camera paces them
   cfg.poll_timeout_ms = 20;
-  auto log = std::make_shared<spdlog::logger>("cam", std::make_shared<spdlog::sinks::null_sink_mt>());
+  auto log =
+      std::make_shared<spdlog::logger>("cam", std::make_shared<spdlog::sinks::null_sink_mt>());
   std::promise<std::string> bound;
   std::atomic<bool> stop{false};
   SystemClock clock;
   std::future<int> node = std::async(std::launch::async, [&] {
-    return run_camera_node(cfg, "v4l2_camera", [script] { return std::make_unique<RecordedDevice>(script); }, clock,
-                           log, stop, [&](const std::string& ep) { bound.set_value(ep); });
+    return run_camera_node(
+        cfg, "v4l2_camera", [script] { return std::make_unique<RecordedDevice>(script); }, clock,
+        log, stop, [&](const std::string& ep) { bound.set_value(ep); });
   });
   transport::SubscriberConfig sc;
   sc.endpoints = {bound.get_future().get()};
@@ -97,9 +101,9 @@ TEST_P(CameraPublishTest, PublishesEveryRecordedBufferAsACameraFrame) {
     EXPECT_EQ(std::string(m->topic()), format == kMjpeg ? "/cam_front_left/image_rect_compressed"
                                                         : "/cam_front_left/image_raw");
     if (format == kMjpeg) {
-      const cv::Mat decoded =
-          cv::imdecode(cv::Mat(1, static_cast<int>(view->payload_size), CV_8UC1,
-                               const_cast<std::uint8_t*>(view->payload)), cv::IMREAD_COLOR);
+      const cv::Mat decoded = cv::imdecode(cv::Mat(1, static_cast<int>(view->payload_size), CV_8UC1,
+                                                   const_cast<std::uint8_t*>(view->payload)),
+                                           cv::IMREAD_COLOR);
       EXPECT_EQ(decoded.cols, w);  // MJPEG passes through as the JPEG bytes
     } else {
       EXPECT_EQ(view->payload_size, static_cast<std::size_t>(w * h * 3));  // YUYV converted to bgr8
@@ -121,7 +125,8 @@ TEST_P(CameraPublishTest, PublishesEveryRecordedBufferAsACameraFrame) {
     EXPECT_EQ(f.sensor_to_ego().translation().x(), 1.5);
     EXPECT_EQ(f.sensor_to_ego().rotation().w(), 0.5);
     if (i > 0) {
-      EXPECT_GT(f.header().capture_stamp_ns(), got[static_cast<std::size_t>(i - 1)].header().capture_stamp_ns());
+      EXPECT_GT(f.header().capture_stamp_ns(),
+                got[static_cast<std::size_t>(i - 1)].header().capture_stamp_ns());
     }
   }
 }

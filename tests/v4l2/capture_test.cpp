@@ -47,7 +47,8 @@ cv::Mat TestPattern(int w, int h) {
   cv::Mat img(h, w, CV_8UC3);
   for (int y = 0; y < h; ++y)
     for (int x = 0; x < w; ++x)
-      img.at<cv::Vec3b>(y, x) = cv::Vec3b(static_cast<uchar>(x * 255 / w), static_cast<uchar>(y * 255 / h), 128);
+      img.at<cv::Vec3b>(y, x) =
+          cv::Vec3b(static_cast<uchar>(x * 255 / w), static_cast<uchar>(y * 255 / h), 128);
   cv::rectangle(img, {w / 4, h / 4}, {w / 2, h / 2}, {0, 0, 255}, cv::FILLED);
   return img;
 }
@@ -62,21 +63,27 @@ class CaptureTest : public ::testing::Test {
  protected:
   void SetUp() override {
     script_ = std::make_shared<RecordedScript>();
-    log_ = std::make_shared<spdlog::logger>("v4l2_test", std::make_shared<spdlog::sinks::null_sink_mt>());
+    log_ = std::make_shared<spdlog::logger>("v4l2_test",
+                                            std::make_shared<spdlog::sinks::null_sink_mt>());
   }
-  void Offer(std::uint32_t code, std::uint32_t w, std::uint32_t h) { script_->formats.push_back({code, {w, h}, {30.0}}); }
+  void Offer(std::uint32_t code, std::uint32_t w, std::uint32_t h) {
+    script_->formats.push_back({code, {w, h}, {30.0}});
+  }
   void AddBuffer(std::vector<std::uint8_t> bytes, std::uint32_t seq, bool error = false) {
-    script_->buffers.push_back({std::move(bytes), seq, 5'000'000'000LL + seq * 33'000'000LL, true, error});
+    script_->buffers.push_back(
+        {std::move(bytes), seq, 5'000'000'000LL + seq * 33'000'000LL, true, error});
   }
-  std::unique_ptr<Capture> MakeCapture(const std::string& format = "auto", bool wait_for_device = false) {
+  std::unique_ptr<Capture> MakeCapture(const std::string& format = "auto",
+                                       bool wait_for_device = false) {
     CaptureConfig cfg;
     cfg.wait_for_device = wait_for_device;
     cfg.device = "/dev/video7";
     cfg.format = format;
     cfg.width = 64;
     cfg.height = 32;
-    return std::make_unique<Capture>(cfg, [s = script_] { return std::make_unique<RecordedDevice>(s); }, log_,
-                                     clock_, [] { return std::int64_t{1'700'000'000'000'000'000}; });
+    return std::make_unique<Capture>(
+        cfg, [s = script_] { return std::make_unique<RecordedDevice>(s); }, log_, clock_,
+        [] { return std::int64_t{1'700'000'000'000'000'000}; });
   }
   // Polls until `n` frames arrived or the script ran dry (bounded, no sleeping).
   std::vector<CapturedFrame> Drain(Capture& c, std::size_t n) {
@@ -113,7 +120,8 @@ TEST(ConvertTest, YuyvRoundTripCloseToSource) {
   const cv::Mat out(32, 64, CV_8UC3, bgr.data());
   cv::Mat diff;
   cv::absdiff(src, out, diff);
-  EXPECT_LT(cv::mean(diff)[0] + cv::mean(diff)[1] + cv::mean(diff)[2], 3 * 6.0);  // chroma subsampling blurs edges
+  EXPECT_LT(cv::mean(diff)[0] + cv::mean(diff)[1] + cv::mean(diff)[2],
+            3 * 6.0);  // chroma subsampling blurs edges
 }
 
 TEST(ConvertTest, StrideIsHonoured) {
@@ -136,7 +144,8 @@ TEST(ConvertTest, MjpegChecks) {
   auto padded = jpeg;
   padded.resize(jpeg.size() + 37, 0);
   ASSERT_EQ(*check_mjpeg(padded.data(), padded.size()), jpeg.size());
-  auto torn = std::vector<std::uint8_t>(jpeg.begin(), jpeg.begin() + static_cast<long>(jpeg.size() / 2));
+  auto torn =
+      std::vector<std::uint8_t>(jpeg.begin(), jpeg.begin() + static_cast<long>(jpeg.size() / 2));
   EXPECT_EQ(check_mjpeg(torn.data(), torn.size()).status().code(), StatusCode::kCorruptData);
   std::vector<std::uint8_t> garbage(500, 0x42);
   EXPECT_FALSE(check_mjpeg(garbage.data(), garbage.size()).is_ok());
@@ -169,7 +178,8 @@ TEST_F(CaptureTest, YuyvFramesConvertedWithRealtimeStamps) {
   EXPECT_EQ(frames[0].encoding, "bgr8");
   EXPECT_EQ(frames[0].bytes.size(), 64u * 32u * 3u);
   EXPECT_EQ(frames[0].step, 64u * 3u);
-  EXPECT_EQ(frames[1].capture_stamp_ns, 1'700'000'000'000'000'000LL + 5'000'000'000LL + 33'000'000LL);
+  EXPECT_EQ(frames[1].capture_stamp_ns,
+            1'700'000'000'000'000'000LL + 5'000'000'000LL + 33'000'000LL);
   EXPECT_EQ(cap->stats().frames, 3u);
 }
 
@@ -179,7 +189,8 @@ TEST_F(CaptureTest, RawOutputKeepsYuyvBytes) {
   AddBuffer(yuyv, 0);
   CaptureConfig cfg;
   cfg.output = "raw";
-  Capture cap(cfg, [s = script_] { return std::make_unique<RecordedDevice>(s); }, log_, clock_);
+  Capture cap(
+      cfg, [s = script_] { return std::make_unique<RecordedDevice>(s); }, log_, clock_);
   ASSERT_TRUE(cap.start().is_ok());
   const auto frames = Drain(cap, 1);
   ASSERT_EQ(frames.size(), 1u);
@@ -275,13 +286,15 @@ TEST(HardwareTest, CapturesFramesFromFirstDevice) {
     const std::string p = "/dev/video" + std::to_string(i);
     if (std::filesystem::exists(p)) path = p;
   }
-  if (path.empty()) GTEST_SKIP() << "no /dev/video* device on this machine: hardware capture test skipped";
+  if (path.empty())
+    GTEST_SKIP() << "no /dev/video* device on this machine: hardware capture test skipped";
   SystemClock clock;
   CaptureConfig cfg;
   cfg.device = path;
   cfg.width = 640;
   cfg.height = 480;
-  auto log = std::make_shared<spdlog::logger>("hw", std::make_shared<spdlog::sinks::null_sink_mt>());
+  auto log =
+      std::make_shared<spdlog::logger>("hw", std::make_shared<spdlog::sinks::null_sink_mt>());
   Capture cap(cfg, make_kernel_device, log, clock);
   const Status s = cap.start();
   if (s.code() == StatusCode::kUnsupported) GTEST_SKIP() << s.message();

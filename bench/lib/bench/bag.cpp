@@ -24,14 +24,16 @@ namespace faultline::bench {
 namespace {
 
 const char* const kCameras[] = {"CAM_FRONT", "CAM_FRONT_LEFT", "CAM_FRONT_RIGHT",
-                                "CAM_BACK", "CAM_BACK_LEFT", "CAM_BACK_RIGHT"};
+                                "CAM_BACK",  "CAM_BACK_LEFT",  "CAM_BACK_RIGHT"};
 
 double wall_seconds() {
   return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
 }
 
 // The upper median, as this benchmark has always reported it.
-double median(std::vector<double> v) { return stats::median(std::move(v), stats::Interpolation::NearestHalfUp); }
+double median(std::vector<double> v) {
+  return stats::median(std::move(v), stats::Interpolation::NearestHalfUp);
+}
 
 // JPEG whose size is closest to target_bytes over a few qualities.
 std::string jpeg_near(const cv::Mat& img, std::size_t target_bytes) {
@@ -64,8 +66,10 @@ RunFigures run_once(const std::string& path, bag::Compression compression, int f
     if (!w) return f;
     std::vector<std::uint16_t> channels;
     for (const char* cam : kCameras) {
-      channels.push_back(raw ? *(*w)->channel_for<foxglove::RawImage>("/" + bag::camera_frame_id(cam) + "/image_raw")
-                             : *(*w)->channel_for<foxglove::CompressedImage>(bag::image_topic(cam)));
+      channels.push_back(
+          raw ? *(*w)->channel_for<foxglove::RawImage>("/" + bag::camera_frame_id(cam) +
+                                                       "/image_raw")
+              : *(*w)->channel_for<foxglove::CompressedImage>(bag::image_topic(cam)));
     }
     msgs::CameraFrame frame;
     frame.set_width(1600);
@@ -78,7 +82,8 @@ RunFigures run_once(const std::string& path, bag::Compression compression, int f
         const StampNs t = t0 + i * 83'333'333LL + static_cast<StampNs>(c) * 1'000'000;
         frame.set_camera(kCameras[c]);
         frame.mutable_header()->set_capture_stamp_ns(t);
-        const std::string& payload = payloads[(static_cast<std::size_t>(i) * 6 + c) % payloads.size()];
+        const std::string& payload =
+            payloads[(static_cast<std::size_t>(i) * 6 + c) % payloads.size()];
         const Status s = raw ? (*w)->write_proto(channels[c], static_cast<std::uint64_t>(i), t, t,
                                                  bag::to_raw_image(frame, payload))
                              : (*w)->write_proto(channels[c], static_cast<std::uint64_t>(i), t, t,
@@ -126,27 +131,32 @@ int run_bag(const BagOptions& o) {
     } else {
       FrameSpec spec;
       spec.seed = static_cast<std::uint64_t>(s);
-      spec.noise = 32;  // heavy: the decoded frames stay noisy, so lz4 gains nothing on them and zstd ~13%
+      spec.noise =
+          32;  // heavy: the decoded frames stay noisy, so lz4 gains nothing on them and zstd ~13%
       jpegs.push_back(jpeg_near(synthetic_frame(spec), 400 * 1024));
     }
     // Raw frames are decoded JPEGs, as the injector produces them from nuScenes images.
-    const cv::Mat decoded = cv::imdecode(cv::Mat(1, static_cast<int>(jpegs.back().size()), CV_8UC1,
-                                                 jpegs.back().data()), cv::IMREAD_COLOR);
+    const cv::Mat decoded = cv::imdecode(
+        cv::Mat(1, static_cast<int>(jpegs.back().size()), CV_8UC1, jpegs.back().data()),
+        cv::IMREAD_COLOR);
     raws.emplace_back(reinterpret_cast<const char*>(decoded.data), decoded.total() * 3);
   }
   double jpeg_mean = 0;
   for (const auto& j : jpegs) jpeg_mean += static_cast<double>(j.size()) / jpegs.size();
-  std::printf("payloads: 12 %s 1600x900 frames; JPEG mean %.0f KB; raw bgr8 (decoded JPEG) %zu KB\n",
-              to_string(o.frames), jpeg_mean / 1024, raws[0].size() / 1024);
+  std::printf(
+      "payloads: 12 %s 1600x900 frames; JPEG mean %.0f KB; raw bgr8 (decoded JPEG) %zu KB\n",
+      to_string(o.frames), jpeg_mean / 1024, raws[0].size() / 1024);
   std::printf("%-6s %-5s %8s %10s %12s %11s %12s %10s %9s\n", "data", "comp", "msgs", "cpu ms/s",
               "core %", "write MB/s", "read x real", "stored/raw", "raw chunks");
   for (const bool raw : {false, true}) {
     const int data_s = raw ? raw_seconds : seconds;
-    for (const bag::Compression c : {bag::Compression::kNone, bag::Compression::kZstd, bag::Compression::kLz4}) {
+    for (const bag::Compression c :
+         {bag::Compression::kNone, bag::Compression::kZstd, bag::Compression::kLz4}) {
       std::vector<double> cpu, wall, read_x, ratio;
       RunFigures last;
       for (int r = 0; r < repeats; ++r) {
-        const std::string path = dir + "/faultline_bench_bag_" + std::to_string(::getpid()) + ".mcap";
+        const std::string path =
+            dir + "/faultline_bench_bag_" + std::to_string(::getpid()) + ".mcap";
         last = run_once(path, c, data_s * 12, raw ? raws : jpegs, raw);
         if (last.messages == 0) {
           std::fprintf(stderr, "bench bag: writing %s failed\n", path.c_str());
@@ -158,16 +168,18 @@ int run_bag(const BagOptions& o) {
         ratio.push_back(static_cast<double>(last.file_bytes) / static_cast<double>(last.raw_bytes));
       }
       const double cpu_med = median(cpu);
-      std::printf("%-6s %-5s %8llu %10.1f %11.1f%% %11.0f %11.1fx %10.3f %5llu/%llu\n", raw ? "bgr8" : "jpeg",
-                  bag::display_name(c), static_cast<unsigned long long>(last.messages),
-                  1000.0 * cpu_med / data_s, 100.0 * cpu_med / data_s,
-                  static_cast<double>(last.raw_bytes) / 1e6 / median(wall), median(read_x), median(ratio),
-                  static_cast<unsigned long long>(last.chunks_stored_raw),
+      std::printf("%-6s %-5s %8llu %10.1f %11.1f%% %11.0f %11.1fx %10.3f %5llu/%llu\n",
+                  raw ? "bgr8" : "jpeg", bag::display_name(c),
+                  static_cast<unsigned long long>(last.messages), 1000.0 * cpu_med / data_s,
+                  100.0 * cpu_med / data_s,
+                  static_cast<double>(last.raw_bytes) / 1e6 / median(wall), median(read_x),
+                  median(ratio), static_cast<unsigned long long>(last.chunks_stored_raw),
                   static_cast<unsigned long long>(last.chunks));
     }
   }
-  std::printf("cpu ms/s = process CPU per second of recorded data (incl. protobuf wrapping, CRC, "
-              "compression, write syscalls); read = linear read with decompression and chunk CRCs.\n");
+  std::printf(
+      "cpu ms/s = process CPU per second of recorded data (incl. protobuf wrapping, CRC, "
+      "compression, write syscalls); read = linear read with decompression and chunk CRCs.\n");
   return 0;
 }
 

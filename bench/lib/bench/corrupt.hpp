@@ -12,15 +12,16 @@
 namespace faultline::bench {
 
 struct CorruptOptions {
-  int reps = 9;                    // timed runs per case after one warm-up; the median is reported
-  std::string image_path;          // "" = a built-in frame (frames.hpp) at width x height
-  FrameKind frames = FrameKind::kRealistic;  // the built-in frame: realistic (decoded q90 JPEG) or noisy (worst case)
-  int width = 1600, height = 900;  // pixels of the built-in frame
-  std::uint32_t seed = 130;        // seed of the random corruptions
-  std::vector<std::string> only;   // corruption types to run; empty = all
-  bool json = false;               // print a JSON array instead of the table
-  bool fidelity = false;           // also PSNR / max abs diff of fast mode against numpy mode
-  std::string out_path;            // also write the JSON array (with fidelity) here; "" = none
+  int reps = 9;            // timed runs per case after one warm-up; the median is reported
+  std::string image_path;  // "" = a built-in frame (frames.hpp) at width x height
+  FrameKind frames = FrameKind::kRealistic;  // the built-in frame: realistic (decoded q90 JPEG) or
+                                             // noisy (worst case)
+  int width = 1600, height = 900;            // pixels of the built-in frame
+  std::uint32_t seed = 130;                  // seed of the random corruptions
+  std::vector<std::string> only;             // corruption types to run; empty = all
+  bool json = false;                         // print a JSON array instead of the table
+  bool fidelity = false;  // also PSNR / max abs diff of fast mode against numpy mode
+  std::string out_path;   // also write the JSON array (with fidelity) here; "" = none
 };
 
 // Prints the table (or the JSON array) on stdout. Returns the exit code: 0, or 1 (message on

@@ -1,8 +1,7 @@
 #include "bench/frames.hpp"
 
-#include <random>
-
 #include <opencv2/imgproc.hpp>
+#include <random>
 
 #include "codec/jpeg.hpp"
 #include "dataset/geometry.hpp"
@@ -22,9 +21,10 @@ struct Mount {
 };
 
 // The synthetic dataset's six camera mounts (close to the real nuScenes rig).
-constexpr Mount kMounts[6] = {{0, 1266.4, {1.70, 0.016, 1.51}},    {-55, 1260.5, {1.55, -0.49, 1.50}},
-                              {55, 1272.6, {1.52, 0.49, 1.51}},    {180, 800.0, {0.03, 0.0, 1.56}},
-                              {110, 1256.7, {1.04, 0.48, 1.57}},   {-110, 1259.5, {1.05, -0.48, 1.56}}};
+constexpr Mount kMounts[6] = {
+    {0, 1266.4, {1.70, 0.016, 1.51}},  {-55, 1260.5, {1.55, -0.49, 1.50}},
+    {55, 1272.6, {1.52, 0.49, 1.51}},  {180, 800.0, {0.03, 0.0, 1.56}},
+    {110, 1256.7, {1.04, 0.48, 1.57}}, {-110, 1259.5, {1.05, -0.48, 1.56}}};
 
 dataset::CameraModel camera_model(const Mount& m, int width, int height) {
   dataset::CameraModel cam;
@@ -35,10 +35,11 @@ dataset::CameraModel camera_model(const Mount& m, int width, int height) {
   cam.fy = m.focal_px * sy;
   cam.cx = width / 2.0;
   cam.cy = height / 2.0;
-  // Camera axes (x right, y down, z forward) in the ego frame (x forward, y left, z up), then the mount's yaw.
+  // Camera axes (x right, y down, z forward) in the ego frame (x forward, y left, z up), then the
+  // mount's yaw.
   const dataset::Mat3 camera_axes = {0, 0, 1, -1, 0, 0, 0, -1, 0};
-  cam.sensor_to_ego.rotation =
-      dataset::mat_mul(dataset::quat_to_matrix(dataset::yaw_quat(m.yaw_deg * kPi / 180)), camera_axes);
+  cam.sensor_to_ego.rotation = dataset::mat_mul(
+      dataset::quat_to_matrix(dataset::yaw_quat(m.yaw_deg * kPi / 180)), camera_axes);
   cam.sensor_to_ego.translation = m.translation;
   return cam;
 }
@@ -64,7 +65,8 @@ std::optional<FrameKind> frame_kind_from_string(const std::string& name) {
 }
 
 cv::Mat bench_pixels(const BenchFrame& frame) {
-  if (frame.kind == FrameKind::kRealistic) return realistic_frame(frame.width, frame.height, frame.seed);
+  if (frame.kind == FrameKind::kRealistic)
+    return realistic_frame(frame.width, frame.height, frame.seed);
   FrameSpec spec;
   spec.width = frame.width;
   spec.height = frame.height;
@@ -76,9 +78,10 @@ cv::Mat bench_pixels(const BenchFrame& frame) {
 Result<std::vector<std::uint8_t>> bench_jpeg(const BenchFrame& frame) {
   const int quality = frame.kind == FrameKind::kRealistic ? kRealisticQuality : frame.noisy_quality;
   if (frame.width < 16 || frame.height < 16 || quality < 1 || quality > 100) {
-    return Status(StatusCode::kInvalidArgument, "bench frame: " + std::to_string(frame.width) + "x" +
-                                                    std::to_string(frame.height) + " at quality " +
-                                                    std::to_string(quality) + ": expected >= 16x16 and 1..100");
+    return Status(StatusCode::kInvalidArgument, "bench frame: " + std::to_string(frame.width) +
+                                                    "x" + std::to_string(frame.height) +
+                                                    " at quality " + std::to_string(quality) +
+                                                    ": expected >= 16x16 and 1..100");
   }
   return codec::encode_jpeg(bench_pixels(frame), quality);
 }

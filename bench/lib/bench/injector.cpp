@@ -1,13 +1,18 @@
-// `faultline bench injector`: 6 cameras x 12 Hz of 1600x900 JPEG frames through the real InjectorLoop (ipc), with
-// decode + one corruption per run (each type at one level, fast mode), paced in real time for N seconds, or as fast
-// as the injector takes them (--rate-hz 0: at most 4 frames per worker outstanding). Each corruption runs once per
-// --workers count, side by side. Reports frames/s, the injector's CPU (its threads' CLOCK_THREAD_CPUTIME_ID: % of
-// one core and ms per frame; the whole process's CPU per frame beside it), p50/p99 added latency per frame (capture -> received downstream, and the injector's
-// own receive -> publish), and unintended drops. With --coherent, each corruption also runs as a coherent fault
-// (`coherent: true`: one persistent CoherentCorruptor per camera) right after its non-coherent fast form.
+// `faultline bench injector`: 6 cameras x 12 Hz of 1600x900 JPEG frames through the real
+// InjectorLoop (ipc), with decode + one corruption per run (each type at one level, fast mode),
+// paced in real time for N seconds, or as fast as the injector takes them (--rate-hz 0: at most 4
+// frames per worker outstanding). Each corruption runs once per
+// --workers count, side by side. Reports frames/s, the injector's CPU (its threads'
+// CLOCK_THREAD_CPUTIME_ID: % of one core and ms per frame; the whole process's CPU per frame beside
+// it), p50/p99 added latency per frame (capture -> received downstream, and the injector's own
+// receive -> publish), and unintended drops. With --coherent, each corruption also runs as a
+// coherent fault
+// (`coherent: true`: one persistent CoherentCorruptor per camera) right after its non-coherent fast
+// form.
 #include "bench/injector.hpp"
 
 #include <unistd.h>
+#include <yaml-cpp/yaml.h>
 
 #include <algorithm>
 #include <cctype>
@@ -16,12 +21,10 @@
 #include <fstream>
 #include <future>
 #include <limits>
+#include <opencv2/core.hpp>
 #include <string>
 #include <thread>
 #include <vector>
-
-#include <opencv2/core.hpp>
-#include <yaml-cpp/yaml.h>
 
 #include "bench/cpu_time.hpp"
 #include "bench/frames.hpp"
@@ -45,7 +48,8 @@ struct Row {
   int severity = 0;
   int workers = 1;
   double fps = 0, cpu_ms_per_frame = 0, process_cpu_ms_per_frame = 0;
-  double receive_ms_per_frame = 0, workers_ms_per_frame = 0, send_ms_per_frame = 0;  // the injector's threads
+  double receive_ms_per_frame = 0, workers_ms_per_frame = 0,
+         send_ms_per_frame = 0;  // the injector's threads
   std::uint64_t window_full_waits = 0;
   std::uint64_t sent = 0, received = 0, injected_drops = 0, unintended_drops = 0;
   double seconds = 0, cpu_pct = 0;
@@ -63,13 +67,17 @@ struct Frame {
   int width = 0, height = 0;
 };
 
-// Sends 6 cameras' frames: paced at rate_hz, or (rate_hz 0) whenever fewer than `window` are outstanding.
-std::uint64_t send_frames(transport::Publisher& source, const std::vector<Frame>& frames, double seconds,
-                          double rate_hz, const std::atomic<std::uint64_t>& received, std::uint64_t window) {
-  const auto period = std::chrono::nanoseconds(rate_hz > 0 ? static_cast<std::int64_t>(1e9 / rate_hz) : 0);
+// Sends 6 cameras' frames: paced at rate_hz, or (rate_hz 0) whenever fewer than `window` are
+// outstanding.
+std::uint64_t send_frames(transport::Publisher& source, const std::vector<Frame>& frames,
+                          double seconds, double rate_hz,
+                          const std::atomic<std::uint64_t>& received, std::uint64_t window) {
+  const auto period =
+      std::chrono::nanoseconds(rate_hz > 0 ? static_cast<std::int64_t>(1e9 / rate_hz) : 0);
   const auto start = std::chrono::steady_clock::now();
   const auto end = start + std::chrono::nanoseconds(static_cast<std::int64_t>(seconds * 1e9));
-  const int ticks = rate_hz > 0 ? static_cast<int>(seconds * rate_hz) : std::numeric_limits<int>::max();
+  const int ticks =
+      rate_hz > 0 ? static_cast<int>(seconds * rate_hz) : std::numeric_limits<int>::max();
   std::uint64_t sent = 0;
   for (int k = 0; k < ticks; ++k) {
     if (rate_hz > 0) {
@@ -79,7 +87,8 @@ std::uint64_t send_frames(transport::Publisher& source, const std::vector<Frame>
     }
     for (int cam = 0; cam < policy::kNumCameras; ++cam) {
       while (rate_hz <= 0 && sent >= received.load() + window) {
-        std::this_thread::sleep_for(std::chrono::microseconds(200));  // closed loop: wait for the injector
+        std::this_thread::sleep_for(
+            std::chrono::microseconds(200));  // closed loop: wait for the injector
       }
       std::string name = policy::kCameraNames[cam];
       std::string topic = "/" + name + "/image_rect_compressed";
@@ -120,8 +129,9 @@ YAML::Node coherent_faults(const std::string& type, const std::string& level) {
   return faults;
 }
 
-Row run_one(const std::string& type, const std::string& level, bool coherent, double seconds, double rate_hz,
-            bool decode, int workers, const std::vector<Frame>& frames, const std::string& dir, int run_index) {
+Row run_one(const std::string& type, const std::string& level, bool coherent, double seconds,
+            double rate_hz, bool decode, int workers, const std::vector<Frame>& frames,
+            const std::string& dir, int run_index) {
   Row row;
   row.corruption = type;
   row.coherent = coherent;
@@ -141,9 +151,11 @@ Row run_one(const std::string& type, const std::string& level, bool coherent, do
   ic.wait_subscribers = 1;
   ic.workers = workers;
   const std::string shorthand = type == "none" ? "" : type + "/" + level;
-  auto policy = coherent ? runtime::make_frame_policy(coherent_faults(type, level), "", 7, "bench --coherent")
-                         : runtime::make_frame_policy(YAML::Node(), shorthand, 7, "bench");
-  if (auto* ep = dynamic_cast<runtime::EnginePolicy*>(policy.get())) row.severity = ep->engine().config().faults[0].severity;
+  auto policy =
+      coherent ? runtime::make_frame_policy(coherent_faults(type, level), "", 7, "bench --coherent")
+               : runtime::make_frame_policy(YAML::Node(), shorthand, 7, "bench");
+  if (auto* ep = dynamic_cast<runtime::EnginePolicy*>(policy.get()))
+    row.severity = ep->engine().config().faults[0].severity;
   runtime::InjectorLoop injector(ic, "fault_injector", std::move(policy), log);
   transport::SubscriberConfig sc;
   sc.endpoints = {injector.output_endpoint()};
@@ -153,7 +165,8 @@ Row run_one(const std::string& type, const std::string& level, bool coherent, do
 
   std::atomic<bool> stop{false};
   auto injector_rc = std::async(std::launch::async, [&] { return injector.run(stop); });
-  if (!source.wait_for_subscribers("/cam_front/image_rect_compressed", 1, 20 * kNsPerSec, &stop).is_ok()) {
+  if (!source.wait_for_subscribers("/cam_front/image_rect_compressed", 1, 20 * kNsPerSec, &stop)
+           .is_ok()) {
     stop = true;
     injector_rc.get();
     throw std::runtime_error("injector did not subscribe");
@@ -162,7 +175,8 @@ Row run_one(const std::string& type, const std::string& level, bool coherent, do
   const auto t0 = std::chrono::steady_clock::now();
   const double process_cpu0 = process_cpu_s();
   auto publisher = std::async(std::launch::async, [&] {
-    return send_frames(source, frames, seconds, rate_hz, received, 4 * static_cast<std::uint64_t>(workers));
+    return send_frames(source, frames, seconds, rate_hz, received,
+                       4 * static_cast<std::uint64_t>(workers));
   });
 
   std::vector<double> e2e_ms, inj_ms;
@@ -179,16 +193,19 @@ Row run_one(const std::string& type, const std::string& level, bool coherent, do
     if (!view) continue;
     ++row.received;
     received.store(row.received);
-    e2e_ms.push_back(static_cast<double>(realtime_now_ns() - view->header.header().capture_stamp_ns()) / 1e6);
+    e2e_ms.push_back(
+        static_cast<double>(realtime_now_ns() - view->header.header().capture_stamp_ns()) / 1e6);
     inj_ms.push_back(static_cast<double>(view->header.fault().injector_latency_ns()) / 1e6);
   }
-  const double elapsed_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const double elapsed_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   const double process_cpu = process_cpu_s() - process_cpu0;
   stop = true;
   row.sent = publisher.get();
   (void)injector_rc.get();
   const runtime::InjectorCounts& c = injector.counts();
-  const double cpu_s = static_cast<double>(c.dispatch_cpu_ns + c.worker_cpu_ns + c.output_cpu_ns) / 1e9;
+  const double cpu_s =
+      static_cast<double>(c.dispatch_cpu_ns + c.worker_cpu_ns + c.output_cpu_ns) / 1e9;
   row.seconds = elapsed_s;
   row.fps = static_cast<double>(row.received) / elapsed_s;
   row.cpu_pct = 100.0 * cpu_s / elapsed_s;
@@ -199,8 +216,10 @@ Row run_one(const std::string& type, const std::string& level, bool coherent, do
   row.receive_ms_per_frame = static_cast<double>(c.dispatch_cpu_ns) / 1e6 / frames_in;
   row.workers_ms_per_frame = static_cast<double>(c.worker_cpu_ns) / 1e6 / frames_in;
   row.send_ms_per_frame = static_cast<double>(c.output_cpu_ns) / 1e6 / frames_in;
-  // Everything this process spent: the injector, its libzmq I/O threads, and the bench's own source and sink.
-  row.process_cpu_ms_per_frame = 1e3 * process_cpu / static_cast<double>(std::max<std::uint64_t>(1, c.frames_in));
+  // Everything this process spent: the injector, its libzmq I/O threads, and the bench's own source
+  // and sink.
+  row.process_cpu_ms_per_frame =
+      1e3 * process_cpu / static_cast<double>(std::max<std::uint64_t>(1, c.frames_in));
   row.injected_drops = c.injected_drops;
   row.unintended_drops = row.sent - row.received - row.injected_drops;
   row.e2e_p50_ms = pct(e2e_ms, 0.5);
@@ -220,19 +239,24 @@ std::string load_average() {
   return text;
 }
 
-// One run's line; with `first` (the same corruption's run with the first --workers count), the fps ratio too.
+// One run's line; with `first` (the same corruption's run with the first --workers count), the fps
+// ratio too.
 void print_row(const Row& r, const Row* first) {
   const std::string label = r.corruption + (r.coherent ? " coh" : "");
-  std::printf("%-16s sev %d  workers %d  %7.1f fps  cpu %6.1f %% of one core, %6.2f ms/frame (receive %.2f workers "
-              "%.2f send %.2f; process %6.2f)  e2e p50 %7.2f ms p99 %7.2f ms  injector p50 %7.2f ms p99 %7.2f ms  sent %llu recv %llu unintended "
-              "drops %llu (window full %llu times)",
-              label.c_str(), r.severity, r.workers, r.fps, r.cpu_pct, r.cpu_ms_per_frame,
-              r.receive_ms_per_frame, r.workers_ms_per_frame, r.send_ms_per_frame, r.process_cpu_ms_per_frame,
-              r.e2e_p50_ms,
-              r.e2e_p99_ms, r.inj_p50_ms, r.inj_p99_ms, static_cast<unsigned long long>(r.sent),
-              static_cast<unsigned long long>(r.received), static_cast<unsigned long long>(r.unintended_drops),
-              static_cast<unsigned long long>(r.window_full_waits));
-  if (first && first != &r && first->fps > 0) std::printf("  fps x%.2f vs %d worker(s)", r.fps / first->fps, first->workers);
+  std::printf(
+      "%-16s sev %d  workers %d  %7.1f fps  cpu %6.1f %% of one core, %6.2f ms/frame (receive %.2f "
+      "workers "
+      "%.2f send %.2f; process %6.2f)  e2e p50 %7.2f ms p99 %7.2f ms  injector p50 %7.2f ms p99 "
+      "%7.2f ms  sent %llu recv %llu unintended "
+      "drops %llu (window full %llu times)",
+      label.c_str(), r.severity, r.workers, r.fps, r.cpu_pct, r.cpu_ms_per_frame,
+      r.receive_ms_per_frame, r.workers_ms_per_frame, r.send_ms_per_frame,
+      r.process_cpu_ms_per_frame, r.e2e_p50_ms, r.e2e_p99_ms, r.inj_p50_ms, r.inj_p99_ms,
+      static_cast<unsigned long long>(r.sent), static_cast<unsigned long long>(r.received),
+      static_cast<unsigned long long>(r.unintended_drops),
+      static_cast<unsigned long long>(r.window_full_waits));
+  if (first && first != &r && first->fps > 0)
+    std::printf("  fps x%.2f vs %d worker(s)", r.fps / first->fps, first->workers);
   std::printf("\n");
   std::fflush(stdout);
 }
@@ -241,18 +265,25 @@ void print_json(const std::vector<Row>& rows, const std::string& output) {
   std::printf("[\n");
   for (std::size_t i = 0; i < rows.size(); ++i) {
     const Row& r = rows[i];
-    std::printf("  {\"corruption\": \"%s\", \"coherent\": %s, \"severity\": %d, \"output\": \"%s\", \"workers\": %d, "
-                "\"seconds\": %.1f, \"fps\": %.2f, \"cpu_pct_one_core\": %.1f, \"cpu_ms_per_frame\": %.3f, \"process_cpu_ms_per_frame\": %.3f, "
-                "\"receive_ms_per_frame\": %.3f, \"workers_ms_per_frame\": %.3f, \"send_ms_per_frame\": %.3f, "
-                "\"e2e_p50_ms\": %.2f, \"e2e_p99_ms\": %.2f, \"injector_p50_ms\": %.2f, \"injector_p99_ms\": %.2f, "
-                "\"sent\": %llu, \"received\": %llu, \"injected_drops\": %llu, \"unintended_drops\": %llu, "
-                "\"window_full_waits\": %llu}%s\n",
-                r.corruption.c_str(), r.coherent ? "true" : "false", r.severity, output.c_str(), r.workers, r.seconds, r.fps, r.cpu_pct,
-                r.cpu_ms_per_frame, r.process_cpu_ms_per_frame, r.receive_ms_per_frame, r.workers_ms_per_frame,
-                r.send_ms_per_frame, r.e2e_p50_ms, r.e2e_p99_ms, r.inj_p50_ms, r.inj_p99_ms,
-                static_cast<unsigned long long>(r.sent), static_cast<unsigned long long>(r.received),
-                static_cast<unsigned long long>(r.injected_drops), static_cast<unsigned long long>(r.unintended_drops),
-                static_cast<unsigned long long>(r.window_full_waits), i + 1 < rows.size() ? "," : "");
+    std::printf(
+        "  {\"corruption\": \"%s\", \"coherent\": %s, \"severity\": %d, \"output\": \"%s\", "
+        "\"workers\": %d, "
+        "\"seconds\": %.1f, \"fps\": %.2f, \"cpu_pct_one_core\": %.1f, \"cpu_ms_per_frame\": %.3f, "
+        "\"process_cpu_ms_per_frame\": %.3f, "
+        "\"receive_ms_per_frame\": %.3f, \"workers_ms_per_frame\": %.3f, \"send_ms_per_frame\": "
+        "%.3f, "
+        "\"e2e_p50_ms\": %.2f, \"e2e_p99_ms\": %.2f, \"injector_p50_ms\": %.2f, "
+        "\"injector_p99_ms\": %.2f, "
+        "\"sent\": %llu, \"received\": %llu, \"injected_drops\": %llu, \"unintended_drops\": %llu, "
+        "\"window_full_waits\": %llu}%s\n",
+        r.corruption.c_str(), r.coherent ? "true" : "false", r.severity, output.c_str(), r.workers,
+        r.seconds, r.fps, r.cpu_pct, r.cpu_ms_per_frame, r.process_cpu_ms_per_frame,
+        r.receive_ms_per_frame, r.workers_ms_per_frame, r.send_ms_per_frame, r.e2e_p50_ms,
+        r.e2e_p99_ms, r.inj_p50_ms, r.inj_p99_ms, static_cast<unsigned long long>(r.sent),
+        static_cast<unsigned long long>(r.received),
+        static_cast<unsigned long long>(r.injected_drops),
+        static_cast<unsigned long long>(r.unintended_drops),
+        static_cast<unsigned long long>(r.window_full_waits), i + 1 < rows.size() ? "," : "");
   }
   std::printf("]\n");
 }
@@ -265,20 +296,23 @@ int run_injector(const InjectorOptions& o) {
   const std::vector<std::string>& types = o.types;
   const std::vector<std::string>& images = o.images;
   const bool json = o.json;
-  cv::setNumThreads(0);  // all corruption work on the injector's own threads, so their CPU clocks see all of it
+  cv::setNumThreads(
+      0);  // all corruption work on the injector's own threads, so their CPU clocks see all of it
   std::vector<Frame> frames;
   if (images.empty()) {
     for (int cam = 0; cam < policy::kNumCameras; ++cam) {
       BenchFrame spec;
       spec.kind = o.frames;
-      spec.seed = static_cast<std::uint64_t>(cam);  // realistic: camera k's mount; noisy: its own buildings
-      spec.noisy_noise = 2;                         // noisy: q95 JPEGs of ~370 KB
+      spec.seed =
+          static_cast<std::uint64_t>(cam);  // realistic: camera k's mount; noisy: its own buildings
+      spec.noisy_noise = 2;                 // noisy: q95 JPEGs of ~370 KB
       auto bytes = bench_jpeg(spec);
       if (!bytes) {
         std::fprintf(stderr, "faultline bench injector: %s\n", bytes.status().message().c_str());
         return 1;
       }
-      frames.push_back({std::make_shared<const std::vector<std::uint8_t>>(std::move(bytes).value()), 1600, 900});
+      frames.push_back(
+          {std::make_shared<const std::vector<std::uint8_t>>(std::move(bytes).value()), 1600, 900});
     }
   } else {
     for (const auto& path : images) {
@@ -287,10 +321,12 @@ int run_injector(const InjectorOptions& o) {
         std::fprintf(stderr, "faultline bench injector: %s\n", bytes.status().to_string().c_str());
         return 2;
       }
-      frames.push_back({std::make_shared<const std::vector<std::uint8_t>>(std::move(bytes).value()), 0, 0});
+      frames.push_back(
+          {std::make_shared<const std::vector<std::uint8_t>>(std::move(bytes).value()), 0, 0});
     }
   }
-  // The frames' sizes and the decode cost the injector pays for them (median of 9 decodes each, this thread).
+  // The frames' sizes and the decode cost the injector pays for them (median of 9 decodes each,
+  // this thread).
   {
     codec::JpegDecoder decoder;
     cv::Mat bgr;
@@ -302,7 +338,8 @@ int run_injector(const InjectorOptions& o) {
         const double c0 = thread_cpu_s();
         if (Status st = decoder.decode(f.jpeg->data(), f.jpeg->size(), bgr); !st) {
           std::fprintf(stderr, "faultline bench injector: %s: %s\n",
-                       images.empty() ? "built-in frame" : images[i].c_str(), st.to_string().c_str());
+                       images.empty() ? "built-in frame" : images[i].c_str(),
+                       st.to_string().c_str());
           return 2;
         }
         if (r > 0) ms.push_back(1e3 * (thread_cpu_s() - c0));
@@ -311,15 +348,17 @@ int run_injector(const InjectorOptions& o) {
       f.height = bgr.rows;
       kb += static_cast<double>(f.jpeg->size()) / 1024.0 / static_cast<double>(frames.size());
     }
-    std::fprintf(json ? stderr : stdout, "frames: %zu JPEG(s) %s, %dx%d, mean %.0f KB, TurboJPEG decode median %.2f ms "
-                                         "(thread CPU)\n",
+    std::fprintf(json ? stderr : stdout,
+                 "frames: %zu JPEG(s) %s, %dx%d, mean %.0f KB, TurboJPEG decode median %.2f ms "
+                 "(thread CPU)\n",
                  frames.size(),
-                 !images.empty() ? "(--images)"
-                 : o.frames == FrameKind::kRealistic ? "(built-in realistic)" : "(built-in noisy)",
-                 frames[0].width,
-                 frames[0].height, kb, pct(ms, 0.5));
+                 !images.empty()                     ? "(--images)"
+                 : o.frames == FrameKind::kRealistic ? "(built-in realistic)"
+                                                     : "(built-in noisy)",
+                 frames[0].width, frames[0].height, kb, pct(ms, 0.5));
   }
-  std::fprintf(json ? stderr : stdout, "load: %s (the machine's 1/5/15-min load average when the runs start)\n",
+  std::fprintf(json ? stderr : stdout,
+               "load: %s (the machine's 1/5/15-min load average when the runs start)\n",
                load_average().c_str());
   char tmpl[] = "/tmp/faultline-bench-injector-XXXXXX";
   const std::string dir = ::mkdtemp(tmpl);
@@ -330,12 +369,13 @@ int run_injector(const InjectorOptions& o) {
     for (const auto& t : types) {
       for (const bool coherent : {false, true}) {
         if (coherent && (!o.coherent || t == "none")) continue;
-        // Worker counts side by side, per corruption, so that they share the machine's load of the moment.
+        // Worker counts side by side, per corruption, so that they share the machine's load of the
+        // moment.
         const std::size_t first = rows.size();
         for (const int workers : o.workers) {
           // "none" with bgr8 output still decodes; with jpeg output it is a pure passthrough.
-          rows.push_back(
-              run_one(t, level, coherent, seconds, rate_hz, output == "bgr8", workers, frames, dir, index++));
+          rows.push_back(run_one(t, level, coherent, seconds, rate_hz, output == "bgr8", workers,
+                                 frames, dir, index++));
           if (!json) print_row(rows.back(), o.workers.size() > 1 ? &rows[first] : nullptr);
         }
       }

@@ -1,8 +1,10 @@
 // `faultline bench record`: recorder CPU for N cameras x R Hz of JPEG frames over ipc (the recorder
 // thread, and the whole process for honesty: publisher and zmq I/O threads included), player speed
 // (rate 0 into a draining subscriber) and bag size versus the raw message bytes. Frames: JPEGs from
-// --images DIR (e.g. nuScenes samples/CAM_FRONT), else the benchmarks' built-in frames (frames.hpp): realistic, or
-// (--frames noisy) the noisy road scene at noise 13, quality 90 (~470 KB, the frames of the earlier figures).
+// --images DIR (e.g. nuScenes samples/CAM_FRONT), else the benchmarks' built-in frames
+// (frames.hpp): realistic, or
+// (--frames noisy) the noisy road scene at noise 13, quality 90 (~470 KB, the frames of the earlier
+// figures).
 #include "bench/record.hpp"
 
 #include <spdlog/sinks/null_sink.h>
@@ -36,10 +38,12 @@ namespace faultline::bench {
 namespace {
 
 const char* const kCameras[] = {"CAM_FRONT", "CAM_FRONT_LEFT", "CAM_FRONT_RIGHT",
-                                "CAM_BACK", "CAM_BACK_LEFT", "CAM_BACK_RIGHT"};
+                                "CAM_BACK",  "CAM_BACK_LEFT",  "CAM_BACK_RIGHT"};
 
 // The upper median, as this benchmark has always reported it.
-double median(std::vector<double> v) { return stats::median(std::move(v), stats::Interpolation::NearestHalfUp); }
+double median(std::vector<double> v) {
+  return stats::median(std::move(v), stats::Interpolation::NearestHalfUp);
+}
 
 std::vector<std::vector<std::uint8_t>> dir_jpegs(const std::string& dir, int cameras) {
   std::vector<std::string> files;
@@ -61,9 +65,11 @@ struct RunFigures {
          stored_over_raw = 0;
 };
 
-RunFigures run_once(const std::vector<std::vector<std::uint8_t>>& jpegs, double seconds, double rate_hz,
-                    const std::string& dir, int rep, bool view, const std::string& compression) {
-  auto log = std::make_shared<spdlog::logger>("bench_record", std::make_shared<spdlog::sinks::null_sink_mt>());
+RunFigures run_once(const std::vector<std::vector<std::uint8_t>>& jpegs, double seconds,
+                    double rate_hz, const std::string& dir, int rep, bool view,
+                    const std::string& compression) {
+  auto log = std::make_shared<spdlog::logger>("bench_record",
+                                              std::make_shared<spdlog::sinks::null_sink_mt>());
   const std::string ep = "ipc://" + dir + "/bench_pub_" + std::to_string(rep) + ".sock";
   transport::PublisherConfig pc;
   pc.endpoint = ep;
@@ -118,14 +124,16 @@ RunFigures run_once(const std::vector<std::vector<std::uint8_t>>& jpegs, double 
   stop = true;
   t.join();
   const double process_s = process_cpu_s() - p0;
-  const double process_wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - pw0).count();
+  const double process_wall =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - pw0).count();
   RunFigures fig;
   fig.record_cpu_pct = 100.0 * cpu_s / wall_s;
   fig.process_cpu_pct = 100.0 * process_s / process_wall;
   fig.bag_mb = static_cast<double>(recorder.writer_stats().file_bytes) / 1e6;
   fig.message_mb = static_cast<double>(recorder.writer_stats().message_bytes) / 1e6;
-  fig.stored_over_raw = static_cast<double>(recorder.writer_stats().chunk_stored_bytes) /
-                        static_cast<double>(std::max<std::uint64_t>(1, recorder.writer_stats().chunk_raw_bytes));
+  fig.stored_over_raw =
+      static_cast<double>(recorder.writer_stats().chunk_stored_bytes) /
+      static_cast<double>(std::max<std::uint64_t>(1, recorder.writer_stats().chunk_raw_bytes));
 
   runtime::BagPlayerConfig plc;
   plc.files = recorder.paths();
@@ -150,14 +158,18 @@ RunFigures run_once(const std::vector<std::vector<std::uint8_t>>& jpegs, double 
   while (got < recorder.counts().messages && sub.receive(2 * kNsPerSec).is_ok()) ++got;
   pt.join();
   fig.play_speed = player.counts().bag_seconds / std::max(1e-9, play_wall);
-  std::printf("rep %d: recorded %llu/%llu msgs, recorder thread %.2f%% of one core (process %.1f%%), play %.1fx "
-              "real time (%llu received), bag %.1f MB, message bytes %.1f MB, chunks stored/raw %.3f (%llu of %llu "
-              "chunks not tried)\n",
-              rep, static_cast<unsigned long long>(recorder.counts().messages),
-              static_cast<unsigned long long>(sent), fig.record_cpu_pct, fig.process_cpu_pct, fig.play_speed,
-              static_cast<unsigned long long>(got), fig.bag_mb, fig.message_mb, fig.stored_over_raw,
-              static_cast<unsigned long long>(recorder.writer_stats().chunks_not_tried),
-              static_cast<unsigned long long>(recorder.writer_stats().chunks));
+  std::printf(
+      "rep %d: recorded %llu/%llu msgs, recorder thread %.2f%% of one core (process %.1f%%), play "
+      "%.1fx "
+      "real time (%llu received), bag %.1f MB, message bytes %.1f MB, chunks stored/raw %.3f (%llu "
+      "of %llu "
+      "chunks not tried)\n",
+      rep, static_cast<unsigned long long>(recorder.counts().messages),
+      static_cast<unsigned long long>(sent), fig.record_cpu_pct, fig.process_cpu_pct,
+      fig.play_speed, static_cast<unsigned long long>(got), fig.bag_mb, fig.message_mb,
+      fig.stored_over_raw,
+      static_cast<unsigned long long>(recorder.writer_stats().chunks_not_tried),
+      static_cast<unsigned long long>(recorder.writer_stats().chunks));
   for (const auto& p : recorder.paths()) std::filesystem::remove(p);
   return fig;
 }
@@ -175,7 +187,8 @@ int run_record(const RecordOptions& o) {
   if (!images.empty()) {
     jpegs = dir_jpegs(images, cameras);
     if (jpegs.empty()) {
-      std::fprintf(stderr, "faultline bench record: --images %s: no readable .jpg/.jpeg file\n", images.c_str());
+      std::fprintf(stderr, "faultline bench record: --images %s: no readable .jpg/.jpeg file\n",
+                   images.c_str());
       return 2;
     }
   } else {
@@ -198,9 +211,11 @@ int run_record(const RecordOptions& o) {
   while (static_cast<int>(jpegs.size()) < cameras) jpegs.push_back(jpegs.front());
   std::size_t jpeg_bytes = 0;
   for (const auto& j : jpegs) jpeg_bytes += j.size();
-  std::printf("%d cameras x %.0f Hz, JPEG %zu bytes mean (%s), %.1f s per rep, foxglove view %s, compression %s\n",
-              cameras, rate_hz, jpeg_bytes / jpegs.size(), source.c_str(), seconds, view ? "on" : "off",
-              compression.c_str());
+  std::printf(
+      "%d cameras x %.0f Hz, JPEG %zu bytes mean (%s), %.1f s per rep, foxglove view %s, "
+      "compression %s\n",
+      cameras, rate_hz, jpeg_bytes / jpegs.size(), source.c_str(), seconds, view ? "on" : "off",
+      compression.c_str());
   std::vector<double> cpu, pcpu, speed, ratio, mb;
   for (int r = 0; r < reps; ++r) {
     const RunFigures f = run_once(jpegs, seconds, rate_hz, dir, r, view, compression);
@@ -210,9 +225,11 @@ int run_record(const RecordOptions& o) {
     ratio.push_back(f.stored_over_raw);
     mb.push_back(f.bag_mb / seconds);
   }
-  std::printf("median: recorder thread %.2f%% of one core (whole process incl. publisher %.1f%%) | play %.1fx real "
-              "time | bag %.1f MB/s | chunks stored/raw %.3f\n",
-              median(cpu), median(pcpu), median(speed), median(mb), median(ratio));
+  std::printf(
+      "median: recorder thread %.2f%% of one core (whole process incl. publisher %.1f%%) | play "
+      "%.1fx real "
+      "time | bag %.1f MB/s | chunks stored/raw %.3f\n",
+      median(cpu), median(pcpu), median(speed), median(mb), median(ratio));
   return 0;
 }
 

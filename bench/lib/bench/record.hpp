@@ -15,14 +15,14 @@ struct RecordOptions {
   int cameras = 6;            // 1..6
   int reps = 3;               // repetitions; medians are printed
   bool foxglove_view = true;  // also the recorder's Foxglove view channels
-  std::string images;         // folder of JPEGs to send (first N, one per camera); "" = built-in frames
+  std::string images;  // folder of JPEGs to send (first N, one per camera); "" = built-in frames
   FrameKind frames = FrameKind::kRealistic;  // built-in frames (bench/frames.hpp)
-  bool noise = false;         // the older spelling of frames = kNoisy
+  bool noise = false;                        // the older spelling of frames = kNoisy
   std::string compression = "lz4";  // recorder compression: none | zstd | lz4 (its default)
 };
 
-// Prints one line per rep and the medians on stdout. Returns the exit code: 0; 1 when a frame cannot be encoded;
-// 2 when --images holds no readable JPEG.
+// Prints one line per rep and the medians on stdout. Returns the exit code: 0; 1 when a frame
+// cannot be encoded; 2 when --images holds no readable JPEG.
 int run_record(const RecordOptions& o);
 
 }  // namespace faultline::bench

@@ -1,5 +1,6 @@
-// `faultline bench ros2`: see ros2.hpp. The three proxy nodes run as child processes, so the DDS traffic between
-// this process (camera rig and sink) and the proxy crosses the loopback network as it would from a ROS 2 stack.
+// `faultline bench ros2`: see ros2.hpp. The three proxy nodes run as child processes, so the DDS
+// traffic between this process (camera rig and sink) and the proxy crosses the loopback network as
+// it would from a ROS 2 stack.
 #include "bench/ros2.hpp"
 
 #include <fcntl.h>
@@ -9,8 +10,8 @@
 #include <unistd.h>
 
 #include <algorithm>
-#include <cctype>
 #include <atomic>
+#include <cctype>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
@@ -26,9 +27,9 @@
 #include "bench/frames.hpp"
 #include "codec/jpeg.hpp"
 #include "dataset/synth.hpp"
+#include "diagnostic_msgs.h"
 #include "ros2dds/convert.hpp"
 #include "ros2dds/dds.hpp"
-#include "diagnostic_msgs.h"
 #include "sensor_msgs.h"
 #include "stats/percentile.hpp"
 
@@ -47,11 +48,13 @@ struct Row {
   std::uint64_t events = 0;  // DiagnosticArrays received (one per frame the injector saw)
   double p50_ms = 0, p99_ms = 0, max_ms = 0;
   double cpu_pct = 0;  // the three nodes, % of one core
-  std::uint64_t udp_overflows = 0;  // UDP datagrams this host dropped for a full receive buffer during the run
+  std::uint64_t udp_overflows =
+      0;  // UDP datagrams this host dropped for a full receive buffer during the run
 };
 
-// The host's UDP RcvbufErrors (/proc/net/snmp): datagrams dropped because a socket's receive buffer was full. DDS
-// recovers each by NACK and retransmission, which is where a reliable topic's latency tail comes from.
+// The host's UDP RcvbufErrors (/proc/net/snmp): datagrams dropped because a socket's receive buffer
+// was full. DDS recovers each by NACK and retransmission, which is where a reliable topic's latency
+// tail comes from.
 std::uint64_t udp_rcvbuf_errors() {
   std::ifstream in("/proc/net/snmp");
   std::string header, values, line;
@@ -131,23 +134,28 @@ std::string self_dir() {
   return path.substr(0, path.rfind('/'));
 }
 
-// Loopback only with unicast discovery (lo has no multicast), as the interop test configures Cyclone, plus what
-// ~550 KB samples at 72/s need (docs/ros2.md): 64 KB datagrams instead of 1344-byte fragments, and socket buffers
-// of 4 MB at least and up to 32 MB where net.core.rmem_max allows (a burst of six frames overflows 4 MB, and each
-// datagram lost there is a NACK and a retransmission: tens to hundreds of ms).
+// Loopback only with unicast discovery (lo has no multicast), as the interop test configures
+// Cyclone, plus what ~550 KB samples at 72/s need (docs/ros2.md): 64 KB datagrams instead of
+// 1344-byte fragments, and socket buffers of 4 MB at least and up to 32 MB where net.core.rmem_max
+// allows (a burst of six frames overflows 4 MB, and each datagram lost there is a NACK and a
+// retransmission: tens to hundreds of ms).
 constexpr const char* kLoopbackConfig =
-    "<CycloneDDS><Domain Id=\"any\"><General><Interfaces><NetworkInterface address=\"127.0.0.1\"/></Interfaces>"
+    "<CycloneDDS><Domain Id=\"any\"><General><Interfaces><NetworkInterface "
+    "address=\"127.0.0.1\"/></Interfaces>"
     "<AllowMulticast>false</AllowMulticast><MaxMessageSize>65500B</MaxMessageSize>"
     "<FragmentSize>65000B</FragmentSize></General>"
     "<Internal><SocketReceiveBufferSize min=\"4MB\" max=\"32MB\"/></Internal>"
-    "<Discovery><ParticipantIndex>auto</ParticipantIndex><MaxAutoParticipantIndex>19</MaxAutoParticipantIndex>"
+    "<Discovery><ParticipantIndex>auto</ParticipantIndex><MaxAutoParticipantIndex>19</"
+    "MaxAutoParticipantIndex>"
     "<Peers><Peer address=\"127.0.0.1\"/></Peers></Discovery></Domain></CycloneDDS>";
 
 // nuScenes camera names (the fault engine's cameras): /cam_front/image_raw/compressed -> CAM_FRONT.
-const char* const kCameraNames[] = {"cam_front", "cam_front_right", "cam_front_left", "cam_back", "cam_back_left",
-                                    "cam_back_right"};
+const char* const kCameraNames[] = {"cam_front", "cam_front_right", "cam_front_left",
+                                    "cam_back",  "cam_back_left",   "cam_back_right"};
 
-std::string topic_of(int cam) { return std::string("/") + kCameraNames[cam % 6] + "/image_raw/compressed"; }
+std::string topic_of(int cam) {
+  return std::string("/") + kCameraNames[cam % 6] + "/image_raw/compressed";
+}
 
 // When each camera fires within the frame period, in firing order.
 struct Trigger {
@@ -155,15 +163,20 @@ struct Trigger {
   std::chrono::nanoseconds offset{0};
 };
 
-// The rig's cameras fire one after another as the lidar sweeps past them (the offsets the synthetic dataset
-// replays with); --cameras-together fires them all at once, the worst-case burst for every queue on the way.
+// The rig's cameras fire one after another as the lidar sweeps past them (the offsets the synthetic
+// dataset replays with); --cameras-together fires them all at once, the worst-case burst for every
+// queue on the way.
 std::vector<Trigger> camera_triggers(const Ros2Options& o) {
   std::vector<Trigger> triggers;
   for (int c = 0; c < o.cameras; ++c) {
     std::string channel = kCameraNames[c % 6];
-    std::transform(channel.begin(), channel.end(), channel.begin(), [](unsigned char ch) { return std::toupper(ch); });
-    // Faster than the rig's 12 Hz, the sweep shrinks with the period so every camera still fires once per frame.
-    const double ms = o.cameras_together ? 0 : dataset::camera_trigger_offset_ms(channel) * std::min(1.0, 12 / o.rate_hz);
+    std::transform(channel.begin(), channel.end(), channel.begin(),
+                   [](unsigned char ch) { return std::toupper(ch); });
+    // Faster than the rig's 12 Hz, the sweep shrinks with the period so every camera still fires
+    // once per frame.
+    const double ms = o.cameras_together ? 0
+                                         : dataset::camera_trigger_offset_ms(channel) *
+                                               std::min(1.0, 12 / o.rate_hz);
     triggers.push_back({c, std::chrono::nanoseconds(static_cast<std::int64_t>(ms * 1e6))});
   }
   std::stable_sort(triggers.begin(), triggers.end(),
@@ -171,25 +184,33 @@ std::vector<Trigger> camera_triggers(const Ros2Options& o) {
   return triggers;
 }
 
-std::string params_yaml(const Ros2Options& o, const std::string& dir, int domain, const std::string& corruption) {
+std::string params_yaml(const Ros2Options& o, const std::string& dir, int domain,
+                        const std::string& corruption) {
   std::ostringstream y;
   y << "ros2_in:\n  domain_id: " << domain << "\n  topics: [";
   for (int c = 0; c < o.cameras; ++c) y << (c ? ", " : "") << topic_of(c);
-  y << "]\n  endpoint: ipc://" << dir << "/in.sock\n  hwm: 96\n  wait_subscribers: 1\n  stats_log_period_s: 0\n"
-    << "fault_injector:\n  input_endpoints: [ipc://" << dir << "/in.sock]\n  input_topics: [/ros2/]\n"
-    << "  output_endpoint: ipc://" << dir << "/out.sock\n  input_hwm: 96\n  output_hwm: 240\n  decode: false\n"
+  y << "]\n  endpoint: ipc://" << dir
+    << "/in.sock\n  hwm: 96\n  wait_subscribers: 1\n  stats_log_period_s: 0\n"
+    << "fault_injector:\n  input_endpoints: [ipc://" << dir
+    << "/in.sock]\n  input_topics: [/ros2/]\n"
+    << "  output_endpoint: ipc://" << dir
+    << "/out.sock\n  input_hwm: 96\n  output_hwm: 240\n  decode: false\n"
     << "  exit_on_last: false\n  wait_subscribers: 1\n  stats_log_period_s: 1000\n  seed: 7\n";
   if (!corruption.empty()) y << "  corruption: " << corruption << "\n";
-  y << "ros2_out:\n  domain_id: " << domain << "\n  input_endpoints: [ipc://" << dir << "/out.sock]\n"
-    << "  input_hwm: 240\n  input_topics: [/faulty/ros2/, /sync/sample]\n  strip_prefix: /faulty/ros2\n  topic_suffix: /faulty\n"
-    << "  exit_on_end: false\n  wait_readers: 1\n  camera_info: false\n  stats_log_period_s: 0\n  advertise: [";
+  y << "ros2_out:\n  domain_id: " << domain << "\n  input_endpoints: [ipc://" << dir
+    << "/out.sock]\n"
+    << "  input_hwm: 240\n  input_topics: [/faulty/ros2/, /sync/sample]\n  strip_prefix: "
+       "/faulty/ros2\n  topic_suffix: /faulty\n"
+    << "  exit_on_end: false\n  wait_readers: 1\n  camera_info: false\n  stats_log_period_s: 0\n  "
+       "advertise: [";
   for (int c = 0; c < o.cameras; ++c) y << (c ? ", " : "") << "/faulty/ros2" << topic_of(c);
   y << "]\n";
   return y.str();
 }
 
-Row run_one(const Ros2Options& o, const std::string& config, const std::string& corruption, int domain,
-            const std::vector<std::vector<std::uint8_t>>& jpegs, int run_index, int repeat) {
+Row run_one(const Ros2Options& o, const std::string& config, const std::string& corruption,
+            int domain, const std::vector<std::vector<std::uint8_t>>& jpegs, int run_index,
+            int repeat) {
   Row row;
   row.config = config;
   const std::string dir = o.work_dir + "/faultline-bench-ros2-" + std::to_string(::getpid()) + "-" +
@@ -205,24 +226,28 @@ Row run_one(const Ros2Options& o, const std::string& config, const std::string& 
   std::vector<std::unique_ptr<Reader>> readers;
   ros2dds::WaitSet waitset(participant);
   for (int c = 0; c < o.cameras; ++c) {
-    writers.push_back(std::make_unique<Writer>(participant, &sensor_msgs_msg_dds__CompressedImage__desc, topic_of(c),
-                                               ros2dds::TopicQos{}));
-    readers.push_back(std::make_unique<Reader>(participant, &sensor_msgs_msg_dds__CompressedImage__desc,
+    writers.push_back(std::make_unique<Writer>(participant,
+                                               &sensor_msgs_msg_dds__CompressedImage__desc,
+                                               topic_of(c), ros2dds::TopicQos{}));
+    readers.push_back(std::make_unique<Reader>(participant,
+                                               &sensor_msgs_msg_dds__CompressedImage__desc,
                                                topic_of(c) + "/faulty", ros2dds::TopicQos{}));
     waitset.attach(readers.back()->handle());
   }
   // What was injected, one DiagnosticArray per frame: read (and counted) like a ROS 2 tool would.
-  Reader faults(participant, &diagnostic_msgs_msg_dds__DiagnosticArray__desc, "/faultline/faults", ros2dds::TopicQos{});
+  Reader faults(participant, &diagnostic_msgs_msg_dds__DiagnosticArray__desc, "/faultline/faults",
+                ros2dds::TopicQos{});
   waitset.attach(faults.handle());
   std::atomic<std::uint64_t> events{0};
   std::vector<Child> nodes;
   for (const char* name : {"ros2_out", "fault_injector", "ros2_in"}) {
-    nodes.push_back(spawn(bin + "/" + name, {"--params", params, "--name", name},
-                          dir + "/" + name + ".log"));
+    nodes.push_back(
+        spawn(bin + "/" + name, {"--params", params, "--name", name}, dir + "/" + name + ".log"));
     if (nodes.back().pid <= 0) throw std::runtime_error("cannot start " + bin + "/" + name);
   }
-  // Connected end to end before the first frame: ros2_in subscribed (it waits for the injector, which waits for
-  // ros2_out), and the sink matched ros2_out's advertised writers (ros2_out waits for it too: wait_readers).
+  // Connected end to end before the first frame: ros2_in subscribed (it waits for the injector,
+  // which waits for ros2_out), and the sink matched ros2_out's advertised writers (ros2_out waits
+  // for it too: wait_readers).
   const StampNs match_deadline = monotonic_now_ns() + 30 * kNsPerSec;
   for (auto& r : readers) {
     while (r->status().matched < 1 && monotonic_now_ns() < match_deadline) {
@@ -232,7 +257,8 @@ Row run_one(const Ros2Options& o, const std::string& config, const std::string& 
   for (auto& w : writers) {
     if (!w->wait_for_readers(1, 30 * kNsPerSec).is_ok()) {
       for (auto& n : nodes) stop_child(n);
-      throw std::runtime_error("ros2_in did not subscribe " + w->ros_topic() + " within 30 s (logs in " + dir + ")");
+      throw std::runtime_error("ros2_in did not subscribe " + w->ros_topic() +
+                               " within 30 s (logs in " + dir + ")");
     }
   }
 
@@ -255,15 +281,18 @@ Row run_one(const Ros2Options& o, const std::string& config, const std::string& 
       for (int c = 0; c < o.cameras; ++c) {
         (void)readers[static_cast<std::size_t>(c)]->take([&](const void* s) {
           const auto* m = static_cast<const sensor_msgs_msg_dds__CompressedImage_*>(s);
-          const StampNs stamp = ros2dds::ns_from_time({m->header.stamp.sec, m->header.stamp.nanosec});
+          const StampNs stamp =
+              ros2dds::ns_from_time({m->header.stamp.sec, m->header.stamp.nanosec});
           std::lock_guard<std::mutex> lock(mutex);
           auto it = sent_at.find({c, stamp});
-          if (it != sent_at.end()) latency_ms.push_back(static_cast<double>(now - it->second) / 1e6);
+          if (it != sent_at.end())
+            latency_ms.push_back(static_cast<double>(now - it->second) / 1e6);
           ++received;
           last_rx = now;
         });
       }
-      if (sending_done && ((received.load() >= sent.load() && events.load() >= sent.load()) || now - last_rx > idle_limit)) {
+      if (sending_done && ((received.load() >= sent.load() && events.load() >= sent.load()) ||
+                           now - last_rx > idle_limit)) {
         break;
       }
     }
@@ -279,7 +308,8 @@ Row run_one(const Ros2Options& o, const std::string& config, const std::string& 
   for (int k = 0; k < ticks; ++k) {
     for (const Trigger& trigger : triggers) {
       const int c = trigger.camera;
-      std::this_thread::sleep_until(start + k * period + trigger.offset);  // the camera rig's pacing
+      std::this_thread::sleep_until(start + k * period +
+                                    trigger.offset);  // the camera rig's pacing
       const auto& jpeg = jpegs[static_cast<std::size_t>(c) % jpegs.size()];
       sensor_msgs_msg_dds__CompressedImage_ m{};
       const StampNs stamp = realtime_now_ns();
@@ -299,7 +329,8 @@ Row run_one(const Ros2Options& o, const std::string& config, const std::string& 
       if (writers[static_cast<std::size_t>(c)]->write(&m).is_ok()) ++sent;
     }
   }
-  const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const double elapsed =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   double cpu = 0;
   for (std::size_t i = 0; i < nodes.size(); ++i) cpu += child_cpu_s(nodes[i].pid) - cpu0[i];
   row.cpu_pct = 100.0 * cpu / elapsed;
@@ -320,8 +351,8 @@ Row run_one(const Ros2Options& o, const std::string& config, const std::string& 
     std::error_code ignored;
     std::filesystem::remove_all(dir, ignored);
   } else {
-    std::fprintf(stderr, "faultline bench ros2: %s run %d lost frames; node logs kept in %s\n", config.c_str(),
-                 repeat + 1, dir.c_str());
+    std::fprintf(stderr, "faultline bench ros2: %s run %d lost frames; node logs kept in %s\n",
+                 config.c_str(), repeat + 1, dir.c_str());
   }
   return row;
 }
@@ -352,7 +383,8 @@ int run_ros2(const Ros2Options& o) {
     spec.width = o.width;
     spec.height = o.height;
     // Realistic: camera c's mount; noisy: the seeds of the earlier figures.
-    spec.seed = o.frames == FrameKind::kRealistic ? static_cast<std::uint64_t>(c) : 7 + static_cast<std::uint64_t>(c);
+    spec.seed = o.frames == FrameKind::kRealistic ? static_cast<std::uint64_t>(c)
+                                                  : 7 + static_cast<std::uint64_t>(c);
     spec.noisy_noise = o.noise;
     auto bytes = bench_jpeg(spec);
     if (!bytes) {
@@ -362,27 +394,33 @@ int run_ros2(const Ros2Options& o) {
     kb += static_cast<double>(bytes->size()) / 1024.0 / o.cameras;
     jpegs.push_back(std::move(bytes).value());
   }
-  std::fprintf(o.json ? stderr : stdout,
-               "ros2 proxy: %d cameras x %.1f Hz of %dx%d %s JPEG (mean %.0f KB), %s, %.0f s per run, DDS domain %d, "
-               "CYCLONEDDS_URI %s\n",
-               o.cameras, o.rate_hz, o.width, o.height, to_string(o.frames), kb,
-               o.cameras_together ? "cameras fire together" : "cameras fire at the rig's trigger offsets", o.seconds,
-               domain,
-               std::getenv("CYCLONEDDS_URI")[0] == '<' ? "(loopback XML)" : std::getenv("CYCLONEDDS_URI"));
+  std::fprintf(
+      o.json ? stderr : stdout,
+      "ros2 proxy: %d cameras x %.1f Hz of %dx%d %s JPEG (mean %.0f KB), %s, %.0f s per run, DDS "
+      "domain %d, "
+      "CYCLONEDDS_URI %s\n",
+      o.cameras, o.rate_hz, o.width, o.height, to_string(o.frames), kb,
+      o.cameras_together ? "cameras fire together" : "cameras fire at the rig's trigger offsets",
+      o.seconds, domain,
+      std::getenv("CYCLONEDDS_URI")[0] == '<' ? "(loopback XML)" : std::getenv("CYCLONEDDS_URI"));
   std::vector<Row> rows;
-  const std::pair<std::string, std::string> configs[] = {{"passthrough", ""}, {o.corruption, o.corruption}};
+  const std::pair<std::string, std::string> configs[] = {{"passthrough", ""},
+                                                         {o.corruption, o.corruption}};
   int index = 0;
   try {
     for (int r = 0; r < o.repeats; ++r) {
       for (const auto& [name, corruption] : configs) {
         Row row = run_one(o, name, corruption, domain, jpegs, index++, r);
         if (!o.json) {
-          std::printf("%-16s run %d  sent %5llu  received %5llu  diagnostics %5llu  drops %4llu  added latency p50 %7.2f ms  p99 %7.2f ms  "
-                      "max %7.2f ms  nodes cpu %5.1f %%  udp overflows %llu\n",
-                      row.config.c_str(), r + 1, static_cast<unsigned long long>(row.sent),
-                      static_cast<unsigned long long>(row.received), static_cast<unsigned long long>(row.events),
-                      static_cast<unsigned long long>(row.unintended_drops), row.p50_ms, row.p99_ms, row.max_ms,
-                      row.cpu_pct, static_cast<unsigned long long>(row.udp_overflows));
+          std::printf(
+              "%-16s run %d  sent %5llu  received %5llu  diagnostics %5llu  drops %4llu  added "
+              "latency p50 %7.2f ms  p99 %7.2f ms  "
+              "max %7.2f ms  nodes cpu %5.1f %%  udp overflows %llu\n",
+              row.config.c_str(), r + 1, static_cast<unsigned long long>(row.sent),
+              static_cast<unsigned long long>(row.received),
+              static_cast<unsigned long long>(row.events),
+              static_cast<unsigned long long>(row.unintended_drops), row.p50_ms, row.p99_ms,
+              row.max_ms, row.cpu_pct, static_cast<unsigned long long>(row.udp_overflows));
           std::fflush(stdout);
         }
         rows.push_back(row);
@@ -394,8 +432,10 @@ int run_ros2(const Ros2Options& o) {
   }
   bool passthrough_dropped = false;
   if (o.json) {
-    std::printf("{\"cameras\": %d, \"rate_hz\": %.1f, \"seconds\": %.1f, \"cameras_together\": %s, \"configs\": [\n",
-                o.cameras, o.rate_hz, o.seconds, o.cameras_together ? "true" : "false");
+    std::printf(
+        "{\"cameras\": %d, \"rate_hz\": %.1f, \"seconds\": %.1f, \"cameras_together\": %s, "
+        "\"configs\": [\n",
+        o.cameras, o.rate_hz, o.seconds, o.cameras_together ? "true" : "false");
   }
   int printed = 0;
   for (const auto& [name, corruption] : configs) {
@@ -413,17 +453,22 @@ int run_ros2(const Ros2Options& o) {
     const Summary a = summarize(p50), b = summarize(p99), d = summarize(drops), c = summarize(cpu),
                   s = summarize(sent), v = summarize(received);
     if (o.json) {
-      std::printf("  %s{\"config\": \"%s\", \"runs\": %zu, \"sent_median\": %.0f, \"received_median\": %.0f, "
-                  "\"drops_median\": %.0f, \"drops_max\": %.0f, \"p50_ms_median\": %.2f, \"p50_ms_min\": %.2f, "
-                  "\"p50_ms_max\": %.2f, \"p99_ms_median\": %.2f, \"p99_ms_min\": %.2f, \"p99_ms_max\": %.2f, "
-                  "\"cpu_pct_median\": %.1f}\n",
-                  printed++ ? "," : "", name.c_str(), p50.size(), s.median, v.median, d.median, d.hi, a.median, a.lo,
-                  a.hi, b.median, b.lo, b.hi, c.median);
+      std::printf(
+          "  %s{\"config\": \"%s\", \"runs\": %zu, \"sent_median\": %.0f, \"received_median\": "
+          "%.0f, "
+          "\"drops_median\": %.0f, \"drops_max\": %.0f, \"p50_ms_median\": %.2f, \"p50_ms_min\": "
+          "%.2f, "
+          "\"p50_ms_max\": %.2f, \"p99_ms_median\": %.2f, \"p99_ms_min\": %.2f, \"p99_ms_max\": "
+          "%.2f, "
+          "\"cpu_pct_median\": %.1f}\n",
+          printed++ ? "," : "", name.c_str(), p50.size(), s.median, v.median, d.median, d.hi,
+          a.median, a.lo, a.hi, b.median, b.lo, b.hi, c.median);
     } else {
-      std::printf("%-16s median of %zu: in %.0f out %.0f, drops %.0f (max %.0f), added latency p50 %.2f ms "
-                  "[%.2f..%.2f], p99 %.2f ms [%.2f..%.2f], nodes cpu %.1f %% [%.1f..%.1f]\n",
-                  name.c_str(), p50.size(), s.median, v.median, d.median, d.hi, a.median, a.lo, a.hi, b.median, b.lo,
-                  b.hi, c.median, c.lo, c.hi);
+      std::printf(
+          "%-16s median of %zu: in %.0f out %.0f, drops %.0f (max %.0f), added latency p50 %.2f ms "
+          "[%.2f..%.2f], p99 %.2f ms [%.2f..%.2f], nodes cpu %.1f %% [%.1f..%.1f]\n",
+          name.c_str(), p50.size(), s.median, v.median, d.median, d.hi, a.median, a.lo, a.hi,
+          b.median, b.lo, b.hi, c.median, c.lo, c.hi);
     }
   }
   if (o.json) std::printf("]}\n");

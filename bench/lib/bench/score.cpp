@@ -22,11 +22,13 @@ int run_score(const ScoreOptions& o) {
       std::fprintf(stderr, "faultline bench score: error: %s\n", stats.status().message().c_str());
       return 1;
     }
-    std::printf("wrote %s: %d scenes, %d val samples, %zu annotations, %zu sample_data records, %zu predictions in "
-                "%.1f s\n",
-                make_dir.c_str(), stats->scenes, stats->samples, stats->annotations, stats->sample_data,
-                stats->predictions,
-                std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+    std::printf(
+        "wrote %s: %d scenes, %d val samples, %zu annotations, %zu sample_data records, %zu "
+        "predictions in "
+        "%.1f s\n",
+        make_dir.c_str(), stats->scenes, stats->samples, stats->annotations, stats->sample_data,
+        stats->predictions,
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
   }
   if (dir.empty()) return make_dir.empty() ? 2 : 0;
   scoring::EvalOptions opts;
@@ -40,7 +42,8 @@ int run_score(const ScoreOptions& o) {
     const auto t0 = std::chrono::steady_clock::now();
     auto outcome = scoring::evaluate_detection(opts, nullptr);
     if (!outcome) {
-      std::fprintf(stderr, "faultline bench score: error: %s\n", outcome.status().message().c_str());
+      std::fprintf(stderr, "faultline bench score: error: %s\n",
+                   outcome.status().message().c_str());
       return 1;
     }
     if (Status s = scoring::write_eval_outputs(*outcome, opts.output_dir); !s) {
@@ -49,17 +52,22 @@ int run_score(const ScoreOptions& o) {
     }
     times.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
     if (r == 0) {
-      std::printf("samples %zu, predictions %zu -> %zu, GT %zu -> %zu, NDS %.4f, mAP %.4f\n", outcome->samples,
-                  outcome->pred_counts.original, outcome->pred_counts.after_bike_rack, outcome->gt_counts.original,
-                  outcome->gt_counts.after_bike_rack, outcome->metrics.nd_score, outcome->metrics.mean_ap);
+      std::printf("samples %zu, predictions %zu -> %zu, GT %zu -> %zu, NDS %.4f, mAP %.4f\n",
+                  outcome->samples, outcome->pred_counts.original,
+                  outcome->pred_counts.after_bike_rack, outcome->gt_counts.original,
+                  outcome->gt_counts.after_bike_rack, outcome->metrics.nd_score,
+                  outcome->metrics.mean_ap);
     }
     const auto& t = outcome->timings;
-    std::printf("  run %d phases: submission %.3f s | ground truth %.3f s (waited %.3f s) | filter %.3f s | "
-                "accumulate %.3f s\n",
-                r + 1, t.submission_s, t.ground_truth_s, t.ground_truth_wait_s, t.filter_s, t.accumulate_s);
+    std::printf(
+        "  run %d phases: submission %.3f s | ground truth %.3f s (waited %.3f s) | filter %.3f s "
+        "| "
+        "accumulate %.3f s\n",
+        r + 1, t.submission_s, t.ground_truth_s, t.ground_truth_wait_s, t.filter_s, t.accumulate_s);
   }
   std::printf("score wall time: median %.3f s (min %.3f, max %.3f, n=%zu), peak RSS %.1f MB\n",
-              stats::median(times, stats::Interpolation::NearestHalfUp), *std::min_element(times.begin(), times.end()),
+              stats::median(times, stats::Interpolation::NearestHalfUp),
+              *std::min_element(times.begin(), times.end()),
               *std::max_element(times.begin(), times.end()), times.size(), peak_rss_mb());
   return 0;
 }

@@ -1,5 +1,5 @@
-// Synthetic val-sized tables, written through the one table writer (nuscenes/table_writer.hpp) in its compact
-// layout, and a submission.
+// Synthetic val-sized tables, written through the one table writer (nuscenes/table_writer.hpp) in
+// its compact layout, and a submission.
 #include "bench/synthetic_val.hpp"
 
 #include <algorithm>
@@ -47,14 +47,16 @@ class Tokens {
   std::uint64_t state_;
 };
 
-// The tables of one synthetic set, each open for writing in the compact layout (one record per line).
+// The tables of one synthetic set, each open for writing in the compact layout (one record per
+// line).
 class Tables {
  public:
   explicit Tables(std::string dir) : dir_(std::move(dir)) {}
   // Opens <dir>/<table>.json; the first failure is kept and returned by close_all().
   TableWriter& open(const char* table) {
     auto& w = writers_.emplace_back(std::make_unique<TableWriter>(nuscenes::TableLayout::kCompact));
-    if (Status s = w->open(dir_ + "/" + table + ".json"); !s && first_error_.is_ok()) first_error_ = s;
+    if (Status s = w->open(dir_ + "/" + table + ".json"); !s && first_error_.is_ok())
+      first_error_ = s;
     return *w;
   }
   bool failed() const { return !first_error_.is_ok(); }
@@ -245,7 +247,8 @@ Result<SyntheticValStats> write_synthetic_val(const std::string& dir,
       calib_w.field("translation", std::vector<double>{0.94, 0.0, 1.84});
       calib_w.field("rotation", std::vector<double>{0.7071, 0.0, 0.0, -0.7071});
       if (c < 6) {
-        calib_w.matrix("camera_intrinsic", {{1266.4, 0.0, 816.3}, {0.0, 1266.4, 491.5}, {0.0, 0.0, 1.0}});
+        calib_w.matrix("camera_intrinsic",
+                       {{1266.4, 0.0, 816.3}, {0.0, 1266.4, 491.5}, {0.0, 0.0, 1.0}});
       } else {
         calib_w.matrix("camera_intrinsic", {});
       }
@@ -385,9 +388,10 @@ Result<SyntheticValStats> write_synthetic_val(const std::string& dir,
         ann_w.field("sample_token", sample_toks[uk]);
         ann_w.field("instance_token", o.inst);
         ann_w.field("visibility_token", "4");
-        ann_w.field("attribute_tokens", o.attr >= 0
-                                            ? std::vector<std::string>{attr_tokens[static_cast<std::size_t>(o.attr)]}
-                                            : std::vector<std::string>{});
+        ann_w.field("attribute_tokens",
+                    o.attr >= 0
+                        ? std::vector<std::string>{attr_tokens[static_cast<std::size_t>(o.attr)]}
+                        : std::vector<std::string>{});
         ann_w.field("translation", std::vector<double>{x, y, z}, 6);
         ann_w.field("size", std::vector<double>{o.w, o.l, o.h}, 3);
         ann_w.field("rotation", {Number{std::cos(o.yaw / 2), 9}, Number{0.0}, Number{0.0},

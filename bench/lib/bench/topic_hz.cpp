@@ -1,14 +1,16 @@
-// `faultline bench topic-hz`: a paced publisher thread (raw frames, absolute schedule) and the `topic hz`
-// probe loop in one process; prints sent/received counts and the measured vs the publisher's rate, for
-// a receiver that uses payloads in place and one that copies each payload (what a copying client does).
+// `faultline bench topic-hz`: a paced publisher thread (raw frames, absolute schedule) and the
+// `topic hz` probe loop in one process; prints sent/received counts and the measured vs the
+// publisher's rate, for a receiver that uses payloads in place and one that copies each payload
+// (what a copying client does).
 // `--serve` only publishes (advertised in the registry) so the topic commands can be tried by hand.
 #include "bench/topic_hz.hpp"
+
+#include <unistd.h>
 
 #include <algorithm>
 #include <cstdio>
 #include <cstring>
 #include <thread>
-#include <unistd.h>
 
 #include "common/shutdown.hpp"
 #include "stats/percentile.hpp"
@@ -21,13 +23,13 @@ namespace {
 
 struct RoundResult {
   std::uint64_t sent = 0, received = 0;
-  double publisher_rate_hz = 0, measured_rate_hz = 0, bw_mb_s = 0, period_std_ms = 0, delay_p50_ms = 0,
-         delay_p99_ms = 0;
+  double publisher_rate_hz = 0, measured_rate_hz = 0, bw_mb_s = 0, period_std_ms = 0,
+         delay_p50_ms = 0, delay_p99_ms = 0;
 };
 
 // Sends frames on an absolute schedule until `count` are sent or `stop`; records send times.
-void publish(const TopicHzOptions& o, transport::Publisher& pub, std::uint64_t count, const std::atomic<bool>& stop,
-             std::vector<StampNs>* send_ns) {
+void publish(const TopicHzOptions& o, transport::Publisher& pub, std::uint64_t count,
+             const std::atomic<bool>& stop, std::vector<StampNs>* send_ns) {
   const std::size_t bytes = static_cast<std::size_t>(o.width) * o.height * 3;
   const auto pixels = std::make_shared<const std::vector<std::uint8_t>>(bytes, std::uint8_t{0x42});
   msgs::CameraFrame header;
@@ -91,8 +93,8 @@ RoundResult run_round(const TopicHzOptions& o, const std::string& endpoint, bool
   rr.sent = send_ns.size();
   rr.received = result.total.count;
   if (send_ns.size() >= 2) {
-    rr.publisher_rate_hz =
-        static_cast<double>(send_ns.size() - 1) / (static_cast<double>(send_ns.back() - send_ns.front()) / 1e9);
+    rr.publisher_rate_hz = static_cast<double>(send_ns.size() - 1) /
+                           (static_cast<double>(send_ns.back() - send_ns.front()) / 1e9);
   }
   rr.measured_rate_hz = result.total.rate_hz;
   rr.bw_mb_s = result.total.bytes_per_s / 1e6;
@@ -107,8 +109,8 @@ int serve(const TopicHzOptions& o) {
   transport::Publisher pub(pc);
   transport::TopicRegistry registry("bench_topic_hz");
   (void)registry.advertise(o.topic, "faultline.msgs.CameraFrame", pub.endpoint());
-  std::printf("publishing %s at %.1f Hz (%ux%u rgb8) on %s; Ctrl-C to stop\n", o.topic.c_str(), o.rate_hz, o.width,
-              o.height, pub.endpoint().c_str());
+  std::printf("publishing %s at %.1f Hz (%ux%u rgb8) on %s; Ctrl-C to stop\n", o.topic.c_str(),
+              o.rate_hz, o.width, o.height, pub.endpoint().c_str());
   std::fflush(stdout);
   const auto frames = o.duration_s > 0 ? static_cast<std::uint64_t>(o.duration_s * o.rate_hz) : 0;
   publish(o, pub, frames, shutdown_requested(), nullptr);
@@ -121,16 +123,19 @@ int run_topic_hz(const TopicHzOptions& o) {
   if (o.serve) return serve(o);
   const int repeat = o.repeat;
   const std::string& transport_kind = o.transport;
-  std::printf("bench topic-hz: %ux%u rgb8 (%.2f MB) at %.1f Hz for %.1f s over %s, %d rounds per mode\n", o.width,
-              o.height, o.width * o.height * 3 / 1e6, o.rate_hz, o.duration_s, transport_kind.c_str(), repeat);
-  std::printf("%-10s %8s %8s %12s %12s %10s %10s\n", "receiver", "sent", "recv", "pub_hz", "measured_hz", "MB/s",
-              "std_ms");
+  std::printf(
+      "bench topic-hz: %ux%u rgb8 (%.2f MB) at %.1f Hz for %.1f s over %s, %d rounds per mode\n",
+      o.width, o.height, o.width * o.height * 3 / 1e6, o.rate_hz, o.duration_s,
+      transport_kind.c_str(), repeat);
+  std::printf("%-10s %8s %8s %12s %12s %10s %10s\n", "receiver", "sent", "recv", "pub_hz",
+              "measured_hz", "MB/s", "std_ms");
   int failures = 0;
   for (const bool copy : {false, true}) {
     std::vector<double> measured, published, bw, std_ms;
     std::uint64_t sent = 0, received = 0;
     for (int i = 0; i < repeat; ++i) {
-      const std::string ep = transport_kind == "ipc"   ? "ipc:///tmp/faultline-bench-hz-" + std::to_string(::getpid())
+      const std::string ep = transport_kind == "ipc"
+                                 ? "ipc:///tmp/faultline-bench-hz-" + std::to_string(::getpid())
                              : transport_kind == "tcp" ? std::string("tcp://127.0.0.1:*")
                                                        : "inproc://bench-hz-" + std::to_string(i);
       const RoundResult r = run_round(o, ep, copy);
@@ -143,10 +148,12 @@ int run_topic_hz(const TopicHzOptions& o) {
     }
     if (received != sent) ++failures;
     std::printf("%-10s %8llu %8llu %12.3f %12.3f %10.1f %10.3f\n", copy ? "copying" : "in-place",
-                static_cast<unsigned long long>(sent), static_cast<unsigned long long>(received), stats::median(published),
-                stats::median(measured), stats::median(bw), stats::median(std_ms));
+                static_cast<unsigned long long>(sent), static_cast<unsigned long long>(received),
+                stats::median(published), stats::median(measured), stats::median(bw),
+                stats::median(std_ms));
   }
-  std::printf("summary rounds=%d lost_rounds=%d (medians over rounds; counts summed)\n", repeat, failures);
+  std::printf("summary rounds=%d lost_rounds=%d (medians over rounds; counts summed)\n", repeat,
+              failures);
   return failures == 0 ? 0 : 1;
 }
 

@@ -1,7 +1,8 @@
 // `faultline bench transport`: 6 cameras x 12 Hz of 1600x900 JPEG frames through player -> injector
-// (pass-through policy, optionally decoded to bgr8) -> subscriber, as loops in threads of this process
-// over ipc, in real time. Prints frames per second, per-hop and end-to-end latency p50/p99, CPU per
-// frame (getrusage per loop thread and for the whole process) and unintended drops (must be 0).
+// (pass-through policy, optionally decoded to bgr8) -> subscriber, as loops in threads of this
+// process over ipc, in real time. Prints frames per second, per-hop and end-to-end latency p50/p99,
+// CPU per frame (getrusage per loop thread and for the whole process) and unintended drops (must be
+// 0).
 #include "bench/transport.hpp"
 
 #include <unistd.h>
@@ -30,8 +31,9 @@ namespace {
 const char* const kCameras[] = {"CAM_FRONT", "CAM_FRONT_RIGHT", "CAM_FRONT_LEFT",
                                 "CAM_BACK",  "CAM_BACK_LEFT",   "CAM_BACK_RIGHT"};
 
-// Camera `index`'s frame, JPEG-encoded once: realistic (q90, 130-165 KB) or the noisy road scene at noise 11,
-// quality 90 (~440 KB, the frames of the earlier figures). Empty bytes if it cannot be encoded.
+// Camera `index`'s frame, JPEG-encoded once: realistic (q90, 130-165 KB) or the noisy road scene at
+// noise 11, quality 90 (~440 KB, the frames of the earlier figures). Empty bytes if it cannot be
+// encoded.
 runtime::ImageBytes make_jpeg(FrameKind kind, int index) {
   BenchFrame spec;
   spec.kind = kind;
@@ -51,10 +53,12 @@ struct Tap {  // the downstream subscriber: hop-2 and end-to-end latency, seq ga
   double cpu_s = 0;
 };
 
-Tap run_tap(transport::RawSubscriber& faulty, transport::RawSubscriber& clean, const std::atomic<bool>& stop) {
+Tap run_tap(transport::RawSubscriber& faulty, transport::RawSubscriber& clean,
+            const std::atomic<bool>& stop) {
   const double cpu0 = thread_cpu_s();
   Tap tap;
-  std::map<std::pair<std::string, std::uint64_t>, StampNs> sent_mono;  // (camera, source_seq) -> player publish
+  std::map<std::pair<std::string, std::uint64_t>, StampNs>
+      sent_mono;  // (camera, source_seq) -> player publish
   std::vector<transport::RawSubscriber*> inputs{&faulty, &clean};
   bool done = false;
   while (!stop.load() && !done) {
@@ -80,8 +84,10 @@ Tap run_tap(transport::RawSubscriber& faulty, transport::RawSubscriber& clean, c
     ++tap.frames;
     if (tap.first_ns == 0) tap.first_ns = r->receive_mono_ns();
     tap.last_ns = r->receive_mono_ns();
-    tap.drops.observe(v->header.header().publisher(), std::string(r->topic()), v->header.header().seq());
-    tap.hop2_ms.add(static_cast<double>(r->receive_mono_ns() - v->header.header().publish_mono_ns()) / 1e6);
+    tap.drops.observe(v->header.header().publisher(), std::string(r->topic()),
+                      v->header.header().seq());
+    tap.hop2_ms.add(
+        static_cast<double>(r->receive_mono_ns() - v->header.header().publish_mono_ns()) / 1e6);
     if (auto it = sent_mono.find(key); it != sent_mono.end()) {
       tap.e2e_ms.add(static_cast<double>(r->receive_mono_ns() - it->second) / 1e6);
       sent_mono.erase(it);
@@ -124,7 +130,8 @@ int run_transport(const TransportOptions& o) {
       f.sample_data_token = std::to_string(t) + "-" + std::to_string(c);
       f.sample_token = "sample-" + std::to_string(t / 6);
       f.is_key_frame = t % 6 == 5;
-      f.timestamp_us = 1'600'000'000'000'000 + t * 83'333 + c * 8'000;  // cameras staggered like nuScenes
+      f.timestamp_us =
+          1'600'000'000'000'000 + t * 83'333 + c * 8'000;  // cameras staggered like nuScenes
       f.width = 1600;
       f.height = 900;
       frames.push_back(f);
@@ -139,10 +146,11 @@ int run_transport(const TransportOptions& o) {
   ic.decode = mode == "bgr8";
   ic.wait_subscribers = 1;
   SystemClock clock;
-  runtime::PlayerLoop player(pc, "nusc_player", std::make_unique<runtime::MemoryFrameSource>(frames, images), clock,
-                             log);
+  runtime::PlayerLoop player(
+      pc, "nusc_player", std::make_unique<runtime::MemoryFrameSource>(frames, images), clock, log);
   ic.input_endpoints = {player.endpoint()};
-  runtime::InjectorLoop injector(ic, "fault_injector", std::make_unique<runtime::PassThroughPolicy>(), log);
+  runtime::InjectorLoop injector(ic, "fault_injector",
+                                 std::make_unique<runtime::PassThroughPolicy>(), log);
   transport::SubscriberConfig fc;
   fc.endpoints = {injector.output_endpoint()};
   fc.topics = {"/faulty/", "/sync/sample"};
@@ -186,7 +194,8 @@ int run_transport(const TransportOptions& o) {
     }
   }
   const std::uint64_t sent = player.counts().frames_sent;
-  const std::uint64_t unintended = (sent - std::min(sent, result.frames)) + result.drops.total().transport_drops;
+  const std::uint64_t unintended =
+      (sent - std::min(sent, result.frames)) + result.drops.total().transport_drops;
   const double span_s = static_cast<double>(result.last_ns - result.first_ns) / 1e9;
   const double fps = span_s > 0 ? static_cast<double>(result.frames - 1) / span_s : 0.0;
   const double n = std::max<double>(1.0, static_cast<double>(result.frames));
@@ -194,32 +203,47 @@ int run_transport(const TransportOptions& o) {
 
   if (json) {
     std::printf(
-        "{\"mode\":\"%s\",\"frames\":\"%s\",\"seconds\":%.1f,\"frames_sent\":%llu,\"frames_received\":%llu,"
+        "{\"mode\":\"%s\",\"frames\":\"%s\",\"seconds\":%.1f,\"frames_sent\":%llu,\"frames_"
+        "received\":%llu,"
         "\"fps\":%.2f,"
-        "\"jpeg_kb_mean\":%.0f,\"latency_ms_p50\":%.3f,\"latency_ms_p99\":%.3f,\"hop1_ms_p50\":%.3f,"
-        "\"hop1_ms_p99\":%.3f,\"injector_ms_p50\":%.3f,\"injector_ms_p99\":%.3f,\"hop2_ms_p50\":%.3f,"
+        "\"jpeg_kb_mean\":%.0f,\"latency_ms_p50\":%.3f,\"latency_ms_p99\":%.3f,\"hop1_ms_p50\":%."
+        "3f,"
+        "\"hop1_ms_p99\":%.3f,\"injector_ms_p50\":%.3f,\"injector_ms_p99\":%.3f,\"hop2_ms_p50\":%."
+        "3f,"
         "\"hop2_ms_p99\":%.3f,\"cpu_ms_per_frame\":%.3f,\"cpu_ms_per_frame_player\":%.3f,"
-        "\"cpu_ms_per_frame_injector\":%.3f,\"cpu_ms_per_frame_subscriber\":%.3f,\"unintended_drops\":%llu,"
+        "\"cpu_ms_per_frame_injector\":%.3f,\"cpu_ms_per_frame_subscriber\":%.3f,\"unintended_"
+        "drops\":%llu,"
         "\"injector_seq_gaps\":%llu,\"wall_s\":%.2f}\n",
         mode.c_str(), to_string(o.frames), seconds, static_cast<unsigned long long>(sent),
-        static_cast<unsigned long long>(result.frames),
-        fps, static_cast<double>(jpeg_bytes) / 6 / 1024, result.e2e_ms.percentile(0.5), result.e2e_ms.percentile(0.99),
-        hop1_p50, hop1_p99, inj_p50, inj_p99, result.hop2_ms.percentile(0.5), result.hop2_ms.percentile(0.99),
-        total_cpu * 1e3 / n, player_cpu * 1e3 / n, injector_cpu * 1e3 / n, result.cpu_s * 1e3 / n,
-        static_cast<unsigned long long>(unintended), static_cast<unsigned long long>(injector_gaps), wall_s);
+        static_cast<unsigned long long>(result.frames), fps,
+        static_cast<double>(jpeg_bytes) / 6 / 1024, result.e2e_ms.percentile(0.5),
+        result.e2e_ms.percentile(0.99), hop1_p50, hop1_p99, inj_p50, inj_p99,
+        result.hop2_ms.percentile(0.5), result.hop2_ms.percentile(0.99), total_cpu * 1e3 / n,
+        player_cpu * 1e3 / n, injector_cpu * 1e3 / n, result.cpu_s * 1e3 / n,
+        static_cast<unsigned long long>(unintended), static_cast<unsigned long long>(injector_gaps),
+        wall_s);
   } else {
-    std::printf("bench transport: 6 cameras x 12 Hz, 1600x900 %s JPEG (mean %.0f KB), injector output %s, ipc, "
-                "%.0f s\n",
-                to_string(o.frames), static_cast<double>(jpeg_bytes) / 6 / 1024, mode.c_str(), seconds);
-    std::printf("  frames sent %llu, received %llu, %.1f frames/s\n", static_cast<unsigned long long>(sent),
+    std::printf(
+        "bench transport: 6 cameras x 12 Hz, 1600x900 %s JPEG (mean %.0f KB), injector output %s, "
+        "ipc, "
+        "%.0f s\n",
+        to_string(o.frames), static_cast<double>(jpeg_bytes) / 6 / 1024, mode.c_str(), seconds);
+    std::printf("  frames sent %llu, received %llu, %.1f frames/s\n",
+                static_cast<unsigned long long>(sent),
                 static_cast<unsigned long long>(result.frames), fps);
-    std::printf("  latency ms p50/p99: player->injector %.2f/%.2f, injector %.2f/%.2f, injector->subscriber "
-                "%.2f/%.2f, end-to-end %.2f/%.2f\n",
-                hop1_p50, hop1_p99, inj_p50, inj_p99, result.hop2_ms.percentile(0.5), result.hop2_ms.percentile(0.99),
-                result.e2e_ms.percentile(0.5), result.e2e_ms.percentile(0.99));
-    std::printf("  CPU ms per frame: process %.2f (player %.2f, injector %.2f, subscriber %.2f; rest = zmq I/O)\n",
-                total_cpu * 1e3 / n, player_cpu * 1e3 / n, injector_cpu * 1e3 / n, result.cpu_s * 1e3 / n);
-    std::printf("  unintended drops %llu (injector seq gaps %llu)\n", static_cast<unsigned long long>(unintended),
+    std::printf(
+        "  latency ms p50/p99: player->injector %.2f/%.2f, injector %.2f/%.2f, "
+        "injector->subscriber "
+        "%.2f/%.2f, end-to-end %.2f/%.2f\n",
+        hop1_p50, hop1_p99, inj_p50, inj_p99, result.hop2_ms.percentile(0.5),
+        result.hop2_ms.percentile(0.99), result.e2e_ms.percentile(0.5),
+        result.e2e_ms.percentile(0.99));
+    std::printf(
+        "  CPU ms per frame: process %.2f (player %.2f, injector %.2f, subscriber %.2f; rest = zmq "
+        "I/O)\n",
+        total_cpu * 1e3 / n, player_cpu * 1e3 / n, injector_cpu * 1e3 / n, result.cpu_s * 1e3 / n);
+    std::printf("  unintended drops %llu (injector seq gaps %llu)\n",
+                static_cast<unsigned long long>(unintended),
                 static_cast<unsigned long long>(injector_gaps));
   }
   return unintended == 0 ? 0 : 1;

@@ -14,7 +14,8 @@ struct TransportOptions {
   double seconds = 10;        // run length in seconds (real time)
   std::string mode = "bgr8";  // injector output: bgr8 (decode) or jpeg (passthrough)
   bool json = false;          // print one JSON object instead of the text
-  FrameKind frames = FrameKind::kRealistic;  // bench/frames.hpp; noisy: the road scene at noise 11, q90 (~440 KB)
+  FrameKind frames =
+      FrameKind::kRealistic;  // bench/frames.hpp; noisy: the road scene at noise 11, q90 (~440 KB)
 };
 
 // Prints the figures on stdout. Returns the exit code: 0, or 1 when frames were lost
