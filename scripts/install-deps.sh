@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Installs Faultline's build and test dependencies from Debian packages (idempotent: only what is missing).
-# Usage: scripts/install-deps.sh [--with-browser]   (--with-browser adds what only the tests need: chromium for the
-#                                                   report render test, and nodejs + npm for the MCAP validator)
+# Usage: scripts/install-deps.sh [--with-browser]   (--with-browser adds what only the tests and CI need: chromium for
+#                                                   the report render test, nodejs + npm for the MCAP validator,
+#                                                   clang-format-14 for the format check)
 set -euo pipefail
 
 packages=(
@@ -23,7 +24,7 @@ packages=(
   python3-zmq python3-protobuf python3-numpy python3-opencv
   slurmctld slurmd slurm-client munge    # tests: the Slurm job-array test starts a one-node cluster (docs/cluster.md)
 )
-if [[ "${1:-}" == "--with-browser" ]]; then packages+=(chromium); fi
+if [[ "${1:-}" == "--with-browser" ]]; then packages+=(chromium clang-format-14); fi
 # Node.js runs the independent MCAP validator (tests/mcap_js); a node already on PATH (any install) is kept.
 if [[ "${1:-}" == "--with-browser" ]] && ! command -v node >/dev/null; then packages+=(nodejs npm); fi
 
