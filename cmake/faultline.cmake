@@ -1,4 +1,5 @@
 # Small helpers that keep the per-directory CMakeLists short.
+include(${CMAKE_CURRENT_LIST_DIR}/gtest_suites.cmake)
 
 # Warnings for our own targets; generated protobuf code is compiled without them.
 function(faultline_warnings target)
@@ -23,11 +24,11 @@ function(faultline_add_library concern)
 endfunction()
 
 # faultline_add_test(<name> SOURCES ... LIBS ... [LABELS ...] [RESOURCE_LOCK <lock>] [SCALAR_TOO]): one GoogleTest
-# executable, discovered by
-# CTest, built after the fixtures are unpacked (tests/test_data.hpp says where they are). SCALAR_TOO registers every
-# test a second time as scalar.<test> with FAULTLINE_SCALAR=1, so the portable fallbacks of the hand-dispatched SIMD
-# kernels are held to the same assertions (goldens included) on a CPU that has the vector units. RESOURCE_LOCK keeps
-# tests that share something outside the process (e.g. a DDS domain) from running at the same time under ctest -j.
+# executable, one CTest test per GoogleTest suite (cmake/gtest_suites.cmake), built after the fixtures are unpacked
+# (tests/test_data.hpp says where they are). SCALAR_TOO registers every suite a second time as scalar.<suite> with
+# FAULTLINE_SCALAR=1, so the portable fallbacks of the hand-dispatched SIMD kernels are held to the same assertions
+# (goldens included) on a CPU that has the vector units. RESOURCE_LOCK keeps suites that share something outside
+# the process (e.g. a DDS domain) from running at the same time under ctest -j.
 function(faultline_add_test name)
   cmake_parse_arguments(ARG "SCALAR_TOO" "RESOURCE_LOCK" "SOURCES;LIBS;LABELS" ${ARGN})
   add_executable(${name} ${ARG_SOURCES})
@@ -40,14 +41,10 @@ function(faultline_add_test name)
   target_include_directories(${name} PRIVATE ${PROJECT_SOURCE_DIR}/tests)
   add_dependencies(${name} faultline_test_data)
   faultline_warnings(${name})
-  if(ARG_RESOURCE_LOCK)
-    gtest_discover_tests(${name} DISCOVERY_TIMEOUT 60 PROPERTIES LABELS "${ARG_LABELS}" RESOURCE_LOCK ${ARG_RESOURCE_LOCK})
-  else()
-    gtest_discover_tests(${name} DISCOVERY_TIMEOUT 60 PROPERTIES LABELS "${ARG_LABELS}")
-  endif()
+  faultline_discover_suites(${name} LABELS ${ARG_LABELS} RESOURCE_LOCK "${ARG_RESOURCE_LOCK}")
   if(ARG_SCALAR_TOO)
-    gtest_discover_tests(${name} DISCOVERY_TIMEOUT 60 TEST_PREFIX "scalar."
-      PROPERTIES LABELS "${ARG_LABELS};scalar" ENVIRONMENT "FAULTLINE_SCALAR=1")
+    faultline_discover_suites(${name} PREFIX "scalar." LABELS ${ARG_LABELS} scalar ENVIRONMENT "FAULTLINE_SCALAR=1"
+      RESOURCE_LOCK "${ARG_RESOURCE_LOCK}")
   endif()
 endfunction()
 
