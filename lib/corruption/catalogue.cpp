@@ -235,9 +235,9 @@ const char* fidelity_note(Corruption c) {
   switch (c) {
     case Corruption::Dark:
     case Corruption::IsoNoise:
-      return "severity 5: own (the reference raises IndexError)";
+      return "severity 5 own: the reference raises IndexError there";
     case Corruption::ImpulseNoise:
-      return "skimage's algorithm on the seeded stream (the reference's draws cannot be seeded)";
+      return "skimage's algorithm on the seeded stream: the reference's draws cannot be seeded";
     default:
       return "";
   }

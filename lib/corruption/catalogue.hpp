@@ -26,7 +26,7 @@ Fidelity fidelity(Corruption c);
 // "Faultline".
 const char* origin(Corruption c);
 
-// A caveat to the class ("severity 5: own"), or "" when there is none.
+// A caveat to the class ("severity 5 own: ..."), or "" when there is none.
 const char* fidelity_note(Corruption c);
 
 // The corruption's parameters at `severity` (1..5; clamped), short and with units, e.g.

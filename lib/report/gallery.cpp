@@ -3,6 +3,7 @@
 #include "report/gallery.hpp"
 
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
@@ -12,7 +13,6 @@
 #include "corruption/catalogue.hpp"
 #include "corruption/corrupt.hpp"
 #include "dataset/synth_frame.hpp"
-#include "report/svg.hpp"
 
 namespace faultline::report {
 namespace fs = std::filesystem;
@@ -21,6 +21,12 @@ using corruption::Corruption;
 namespace {
 
 constexpr int kGapPx = 2;  // white between the tiles of a strip
+
+std::string fmt_g(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%g", v);
+  return buf;
+}
 
 std::vector<Corruption> types_of(const GalleryOptions& options) {
   if (!options.types.empty()) return options.types;
@@ -65,7 +71,7 @@ std::string parameters_line(Corruption type) {
 std::string class_text(Corruption type) {
   std::string text = corruption::to_string(corruption::fidelity(type));
   const std::string note = corruption::fidelity_note(type);
-  if (!note.empty()) text += " (" + note + ")";
+  if (!note.empty()) text += "; " + note;
   return text;
 }
 
@@ -212,7 +218,7 @@ std::string gallery_markdown(const std::vector<GalleryEntry>& entries,
   md += "corrupted at full size with a fresh `" + std::string(corruption::to_string(options.rng)) +
         "` RNG seeded " + std::to_string(options.seed) + " and scaled to " +
         std::to_string(options.thumb_width) + " px wide; rolling_shutter turns at " +
-        svg::num(options.yaw_rate_deg_s) + " deg/s.";
+        fmt_g(options.yaw_rate_deg_s) + " deg/s.";
   if (!options.command.empty()) md += " Made by `" + options.command + "`.";
   md += "\n\n| name | from | class |\n|---|---|---|\n";
   for (const auto& e : entries) {

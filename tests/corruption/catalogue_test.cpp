@@ -30,7 +30,8 @@ TEST(CatalogueTest, ClassesFollowTheReferences) {
   EXPECT_STREQ(origin(Corruption::IsoNoise), "RoboBEV");
   EXPECT_STREQ(origin(Corruption::GlassBlur), "imagecorruptions 1.1.2");
   EXPECT_STREQ(origin(Corruption::TransportCorruption), "Faultline");
-  EXPECT_NE(std::string(fidelity_note(Corruption::IsoNoise)).find("severity 5"), std::string::npos);
+  EXPECT_NE(std::string(fidelity_note(Corruption::IsoNoise)).find("severity 5 own"),
+            std::string::npos);
   EXPECT_STREQ(fidelity_note(Corruption::Fog), "");
 }
 

@@ -12,6 +12,7 @@
 #include <map>
 
 #include "codec/jpeg.hpp"
+#include "corruption/catalogue.hpp"
 #include "dataset/synth_frame.hpp"
 #include "report/report.hpp"
 
