@@ -144,6 +144,17 @@ Result<scoring::DetectorScores> baseline_scores(const BenchmarkOptions& o) {
   return baseline;
 }
 
+// The report's picture of each corruption the benchmark applied, on the built-in frame with seed 1
+// (the first seed of every run).
+std::vector<report::CorruptionThumbnail> thumbnails(const BenchmarkOptions& o) {
+  std::vector<report::ThumbnailRequest> requests;
+  for (const auto& c : o.corruptions) requests.push_back({c, injector_corruption_name(c)});
+  report::GalleryOptions g;
+  g.seed = 1;
+  g.thumb_width = 192;
+  return report::corruption_thumbnails(requests, o.levels, report::gallery_frame(), g);
+}
+
 // robustness.{md,csv,json} and report.html; sets b.report_path.
 void write_tables_and_report(const BenchmarkOptions& o, const std::string& model_name,
                              BenchmarkResult& b) {
@@ -177,6 +188,7 @@ void write_tables_and_report(const BenchmarkOptions& o, const std::string& model
     v.fps = r.detector_ms_per_sample > 0 ? 1000.0 / r.detector_ms_per_sample : -1.0;
     data.variants.push_back(v);
   }
+  data.thumbnails = thumbnails(o);
   b.report_path = (out / "report.html").string();
   (void)write_text_atomic(b.report_path, report::render_html(data));
 }

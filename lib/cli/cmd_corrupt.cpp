@@ -1,7 +1,8 @@
 // `faultline corrupt`: applies one image corruption to a file (OpenCV I/O, BGR array as loaded). A
 // .jpg/.jpeg output is encoded with the codec every other Faultline JPEG goes through (TurboJPEG,
 // 4:2:0, quality 95 by default), so a frame corrupted here has the bytes the injector, `export` and
-// `bag corrupt` write for the same seed.
+// `bag corrupt` write for the same seed. `--gallery DIR` instead renders every corruption at
+// severities 1-5 on one frame (report/gallery.hpp), the pictures of docs/faults.md.
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <cctype>
@@ -20,9 +21,32 @@
 #include "codec/jpeg.hpp"
 #include "common/bounded_read.hpp"
 #include "corruption/corrupt.hpp"
+#include "report/gallery.hpp"
 
 namespace faultline::cli {
 namespace {
+
+// Everything the command line sets.
+struct CorruptArgs {
+  std::string type_name, level_name, rng_name = "fast", in_path, out_path;
+  std::optional<int> severity;
+  std::uint32_t seed = 0;
+  std::optional<double> angle_deg;
+  std::optional<double> yaw_rate_deg_s;
+  double focal_px = 0;
+  std::string frost_dir;
+  std::optional<int> jpeg_quality;  // default 95, or 80 for the gallery
+  bool allow_partial = false;
+  std::string gallery_dir;
+  std::vector<std::string> gallery_types;
+  int thumb_width = report::GalleryOptions{}.thumb_width;
+};
+
+// Prints "faultline corrupt: <message>" on stderr and returns `code`.
+int fail(int code, const std::string& message) {
+  std::fprintf(stderr, "faultline corrupt: %s\n", message.c_str());
+  return code;
+}
 
 // Reads the input image. A JPEG goes through TurboJPEG first, which notices a truncated or corrupt
 // file that OpenCV would silently render half grey; `allow_partial` then keeps OpenCV's partial
@@ -87,159 +111,217 @@ Result<std::vector<cv::Mat>> read_frost_textures(const std::string& dir) {
   return textures;
 }
 
-int run(int argc, char** argv) {
-  CLI::App app(
-      "Apply an image corruption (nuScenes-C's, imagecorruptions 1.1.2's and RoboBEV's ISONoise) "
-      "to an "
-      "image (read and written with OpenCV, BGR order).",
-      argv[0]);
-  std::string type_name, level_name, rng_name = "fast", in_path, out_path;
-  int severity = -1;
-  std::uint32_t seed = 0;
-  std::optional<double> angle;
-  bool allow_partial = false;
-  int jpeg_quality = 95;
-  app.add_option("--type", type_name, type_names())->required();
+// The options of one corruption of one file.
+void add_single_options(CLI::App& app, CorruptArgs& a) {
+  app.add_option("--type", a.type_name, type_names() + " (required without --gallery)");
   auto* sev_opt =
-      app.add_option("--severity", severity, "1..5 as the reference numbers them (0 = off)");
+      app.add_option("--severity", a.severity, "1..5 as the reference numbers them (0 = off)");
   auto* level_opt =
-      app.add_option("--level", level_name, "easy, mid or hard (nuScenes-C's mapping)");
+      app.add_option("--level", a.level_name, "easy, mid or hard (nuScenes-C's mapping)");
   sev_opt->excludes(level_opt);
-  app.add_option("--seed", seed, "RNG seed (numpy mode: as np.random.seed(seed) before the call)");
-  app.add_option("--rng", rng_name, "numpy (bit-exact with the reference) or fast (default)");
-  app.add_option("--angle", angle,
+  app.add_option("--angle", a.angle_deg,
                  "motion_blur: inject the blur angle in degrees instead of drawing it");
-  std::optional<double> yaw_rate_deg_s;
-  double focal_px = 0;
-  app.add_option("--yaw-rate", yaw_rate_deg_s,
-                 "rolling_shutter: the ego yaw rate in degrees per second (> 0 turning left); "
-                 "without it there is "
-                 "no motion and the image is unchanged");
-  app.add_option("--focal-px", focal_px,
+  app.add_option("--focal-px", a.focal_px,
                  "rolling_shutter: horizontal focal length in pixels (default 0.8 x width)");
-  std::string frost_dir;
   app.add_option(
-      "--frost-dir", frost_dir,
+      "--frost-dir", a.frost_dir,
       "frost: draw from the .png/.jpg textures in this directory (name order) instead of the five "
       "built-in imagecorruptions textures");
-  app.add_option("--in", in_path, "input image")->required();
-  app.add_option("--out", out_path, "output image (use .png for lossless)")->required();
-  app.add_option("--jpeg-quality", jpeg_quality,
-                 "quality of a .jpg/.jpeg output (TurboJPEG, 4:2:0)")
-      ->check(CLI::Range(1, 100))
-      ->capture_default_str();
-  app.add_flag("--allow-partial", allow_partial,
+  app.add_option("--out", a.out_path,
+                 "output image (use .png for lossless; required without --gallery)");
+  app.add_flag("--allow-partial", a.allow_partial,
                "corrupt a truncated or damaged JPEG as a decoder renders it, with a warning "
                "(default: refuse it)");
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    return usage_exit(app, e);
+}
+
+// The options both modes share, and the gallery's.
+void add_common_and_gallery_options(CLI::App& app, CorruptArgs& a) {
+  app.add_option("--in", a.in_path,
+                 "input image (required without --gallery; the gallery's default is a built-in "
+                 "1600x900 synthetic road scene)");
+  app.add_option("--seed", a.seed,
+                 "RNG seed (numpy mode: as np.random.seed(seed) before the call)");
+  app.add_option("--rng", a.rng_name, "numpy (bit-exact with the reference) or fast (default)");
+  app.add_option("--yaw-rate", a.yaw_rate_deg_s,
+                 "rolling_shutter: the ego yaw rate in degrees per second (> 0 turning left); "
+                 "without it there is no motion and the image is unchanged (the gallery turns at " +
+                     std::to_string(static_cast<int>(report::kGalleryYawRateDegS)) + " deg/s)");
+  app.add_option("--jpeg-quality", a.jpeg_quality,
+                 "quality of a .jpg/.jpeg output and of the gallery's strips (TurboJPEG, 4:2:0; "
+                 "default 95, gallery 80)")
+      ->check(CLI::Range(1, 100));
+  auto* gallery = app.add_option(
+      "--gallery", a.gallery_dir,
+      "render every corruption (or --types) at severities 1-5 beside the frame into OUT_DIR: one "
+      "<type>.jpg strip each and index.md with each one's parameters and fidelity class");
+  gallery->type_name("OUT_DIR");
+  app.add_option("--types", a.gallery_types, "--gallery: only these corruptions (comma-separated)")
+      ->delimiter(',')
+      ->needs(gallery);
+  app.add_option("--thumb-width", a.thumb_width, "--gallery: width of each picture in pixels")
+      ->check(CLI::Range(16, 1600))
+      ->capture_default_str()
+      ->needs(gallery);
+  for (const char* single : {"--type", "--severity", "--level", "--angle", "--focal-px",
+                             "--frost-dir", "--out", "--allow-partial"}) {
+    gallery->excludes(app.get_option(single));
   }
-  const auto type = corruption::corruption_from_string(type_name);
-  if (!type) {
-    std::fprintf(stderr, "faultline corrupt: unknown --type '%s' (expected %s)\n",
-                 type_name.c_str(), type_names().c_str());
-    return 2;
-  }
-  if (!level_name.empty()) {
-    const auto level = corruption::level_from_string(level_name);
+}
+
+// The severity from --severity or --level; nullopt after printing the error.
+std::optional<int> resolve_severity(const CorruptArgs& a, corruption::Corruption type) {
+  int severity = a.severity.value_or(-1);
+  if (!a.level_name.empty()) {
+    const auto level = corruption::level_from_string(a.level_name);
     if (!level) {
-      std::fprintf(stderr, "faultline corrupt: unknown --level '%s' (expected easy, mid or hard)\n",
-                   level_name.c_str());
-      return 2;
+      fail(2, "unknown --level '" + a.level_name + "' (expected easy, mid or hard)");
+      return std::nullopt;
     }
-    severity = corruption::severity_for(*type, *level);
-  } else if (severity < 0 && sev_opt->count() == 0) {
-    std::fprintf(stderr, "faultline corrupt: one of --severity or --level is required\n");
-    return 2;
+    severity = corruption::severity_for(type, *level);
+  } else if (!a.severity) {
+    fail(2, "one of --severity or --level is required");
+    return std::nullopt;
   }
   if (Status s = corruption::validate_severity(severity); !s) {
-    std::fprintf(stderr, "faultline corrupt: --severity %d is invalid: expected 1..5 (0 = off)\n",
-                 severity);
-    return 2;
+    fail(2, "--severity " + std::to_string(severity) + " is invalid: expected 1..5 (0 = off)");
+    return std::nullopt;
   }
-  if (angle && !std::isfinite(*angle)) {
-    std::fprintf(stderr, "faultline corrupt: --angle must be a finite number of degrees, got %g\n",
-                 *angle);
-    return 2;
-  }
-  const auto mode = corruption::rng_mode_from_string(rng_name);
-  if (!mode) {
-    std::fprintf(stderr, "faultline corrupt: unknown --rng '%s' (expected numpy or fast)\n",
-                 rng_name.c_str());
-    return 2;
-  }
-  const auto input = read_input(in_path, allow_partial);
-  if (!input) {
-    std::fprintf(stderr, "faultline corrupt: %s\n", input.status().message().c_str());
-    return 1;
-  }
-  const cv::Mat& in = *input;
-  corruption::CorruptOptions options;
-  options.angle_deg = angle;
-  if (yaw_rate_deg_s) options.yaw_rate_rad_s = *yaw_rate_deg_s * M_PI / 180.0;
-  options.focal_px = focal_px;
-  if (*type == corruption::Corruption::RollingShutter && !yaw_rate_deg_s && severity > 0) {
-    std::fprintf(
-        stderr,
-        "faultline corrupt: rolling_shutter without --yaw-rate: no motion, image unchanged\n");
-  }
-  std::vector<cv::Mat> frost_textures;
-  if (!frost_dir.empty()) {
-    auto t = read_frost_textures(frost_dir);
-    if (!t) {
-      std::fprintf(stderr, "faultline corrupt: %s\n", t.status().message().c_str());
-      return 2;
-    }
-    frost_textures = std::move(*t);
-    options.frost_textures = &frost_textures;
-  }
-  Result<cv::Mat> out = Status(StatusCode::kInternal, "not run");
-  if (*mode == corruption::RngMode::Numpy) {
-    rng::NumpyRandomState rng(seed);
-    out = corruption::corrupt(in, *type, severity, rng, options);
-  } else {
-    rng::FastRng rng(seed);
-    out = corruption::corrupt(in, *type, severity, rng, options);
-  }
-  if (!out) {
-    std::fprintf(stderr, "faultline corrupt: %s\n", out.status().to_string().c_str());
-    return 1;
-  }
-  std::string ext = out_path.substr(std::min(out_path.size(), out_path.rfind('.') + 1));
+  return severity;
+}
+
+// Writes the corrupted image: TurboJPEG for .jpg/.jpeg, OpenCV otherwise.
+Status write_output(const std::string& path, const cv::Mat& image, int jpeg_quality) {
+  std::string ext = path.substr(std::min(path.size(), path.rfind('.') + 1));
   std::transform(ext.begin(), ext.end(), ext.begin(),
                  [](unsigned char c) { return std::tolower(c); });
-  if (out_path.find('.') != std::string::npos && (ext == "jpg" || ext == "jpeg")) {
-    auto jpeg = codec::encode_jpeg(*out, jpeg_quality);
-    std::ofstream file(out_path, std::ios::binary | std::ios::trunc);
-    if (jpeg)
-      file.write(reinterpret_cast<const char*>(jpeg->data()),
-                 static_cast<std::streamsize>(jpeg->size()));
+  const std::string what = "cannot write output image '" + path + "'";
+  if (path.find('.') != std::string::npos && (ext == "jpg" || ext == "jpeg")) {
+    auto jpeg = codec::encode_jpeg(image, jpeg_quality);
+    if (!jpeg) return Status(StatusCode::kIoError, what + ": " + jpeg.status().message());
+    std::ofstream file(path, std::ios::binary | std::ios::trunc);
+    file.write(reinterpret_cast<const char*>(jpeg->data()),
+               static_cast<std::streamsize>(jpeg->size()));
     file.close();
-    if (!jpeg || !file) {
-      std::fprintf(stderr, "faultline corrupt: cannot write output image '%s'%s%s\n",
-                   out_path.c_str(), jpeg ? "" : ": ", jpeg ? "" : jpeg.status().message().c_str());
-      return 1;
-    }
-    return 0;
+    return file ? Status::ok() : Status(StatusCode::kIoError, what);
   }
-  bool written = false;
   try {
-    written = cv::imwrite(out_path, *out);
+    if (cv::imwrite(path, image)) return Status::ok();
   } catch (const cv::Exception& e) {
-    std::fprintf(stderr, "faultline corrupt: cannot write output image '%s': %s\n",
-                 out_path.c_str(), e.what());
-    return 1;
+    return Status(StatusCode::kIoError, what + ": " + e.what());
   }
-  if (!written) {
-    std::fprintf(stderr, "faultline corrupt: cannot write output image '%s'\n", out_path.c_str());
-    return 1;
+  return Status(StatusCode::kIoError, what);
+}
+
+// The CorruptOptions of the flags; frost textures are read into `frost` (which must outlive them).
+Result<corruption::CorruptOptions> corrupt_options(const CorruptArgs& a,
+                                                   std::vector<cv::Mat>& frost) {
+  corruption::CorruptOptions options;
+  options.angle_deg = a.angle_deg;
+  if (a.yaw_rate_deg_s) options.yaw_rate_rad_s = *a.yaw_rate_deg_s * M_PI / 180.0;
+  options.focal_px = a.focal_px;
+  if (!a.frost_dir.empty()) {
+    auto t = read_frost_textures(a.frost_dir);
+    if (!t) return t.status();
+    frost = std::move(*t);
+    options.frost_textures = &frost;
   }
+  return options;
+}
+
+// One corruption of one file.
+int run_single(const CorruptArgs& a, corruption::RngMode mode) {
+  if (a.type_name.empty()) return fail(2, "--type is required (or --gallery OUT_DIR)");
+  if (a.in_path.empty() || a.out_path.empty())
+    return fail(2, std::string(a.in_path.empty() ? "--in" : "--out") + " is required");
+  const auto type = corruption::corruption_from_string(a.type_name);
+  if (!type) {
+    return fail(2, "unknown --type '" + a.type_name + "' (expected " + type_names() + ")");
+  }
+  const auto severity = resolve_severity(a, *type);
+  if (!severity) return 2;
+  if (a.angle_deg && !std::isfinite(*a.angle_deg)) {
+    return fail(2,
+                "--angle must be a finite number of degrees, got " + std::to_string(*a.angle_deg));
+  }
+  const auto input = read_input(a.in_path, a.allow_partial);
+  if (!input) return fail(1, input.status().message());
+  if (*type == corruption::Corruption::RollingShutter && !a.yaw_rate_deg_s && *severity > 0)
+    fail(0, "rolling_shutter without --yaw-rate: no motion, image unchanged");
+  std::vector<cv::Mat> frost;
+  auto options = corrupt_options(a, frost);
+  if (!options) return fail(2, options.status().message());
+  auto out = corruption::corrupt_seeded(*input, *type, *severity, mode, a.seed, *options);
+  if (!out) return fail(1, out.status().to_string());
+  if (Status s = write_output(a.out_path, *out, a.jpeg_quality.value_or(95)); !s)
+    return fail(1, s.message());
   return 0;
+}
+
+// The gallery: every corruption (or --types) at severities 1-5 on one frame.
+int run_gallery(const CorruptArgs& a, corruption::RngMode mode, const std::string& command) {
+  report::GalleryOptions g;
+  for (const auto& name : a.gallery_types) {
+    const auto type = corruption::corruption_from_string(name);
+    if (!type)
+      return fail(2, "unknown --types entry '" + name + "' (expected " + type_names() + ")");
+    g.types.push_back(*type);
+  }
+  g.seed = a.seed;
+  g.rng = mode;
+  g.thumb_width = a.thumb_width;
+  g.jpeg_quality = a.jpeg_quality.value_or(80);
+  g.yaw_rate_deg_s = a.yaw_rate_deg_s.value_or(report::kGalleryYawRateDegS);
+  g.command = command;
+  cv::Mat frame;
+  if (a.in_path.empty()) {
+    frame = report::gallery_frame();
+  } else {
+    auto input = read_input(a.in_path, false);
+    if (!input) return fail(1, input.status().message());
+    frame = std::move(*input);
+    g.frame_label = "the frame `" + std::filesystem::path(a.in_path).filename().string() + "`";
+  }
+  auto progress = [](std::size_t i, std::size_t n, corruption::Corruption t) {
+    std::fprintf(stderr, "faultline corrupt: gallery [%zu/%zu] %s\n", i + 1, n,
+                 corruption::to_string(t));
+  };
+  auto entries = report::write_gallery(a.gallery_dir, frame, g, progress);
+  if (!entries) return fail(1, entries.status().message());
+  std::size_t bytes = 0;
+  for (const auto& e : *entries) bytes += e.size_bytes;
+  std::fprintf(stderr, "faultline corrupt: wrote %zu strips (%zu KB) and index.md to %s\n",
+               entries->size(), (bytes + 1023) / 1024, a.gallery_dir.c_str());
+  return 0;
+}
+
+// "faultline corrupt --gallery docs/faults ...": the command line, for the gallery's index.
+std::string command_line(int argc, char** argv) {
+  std::string line = "faultline corrupt";
+  for (int i = 1; i < argc; ++i) line += std::string(" ") + argv[i];
+  return line;
+}
+
+int run(int argc, char** argv) {
+  CLI::App app(
+      "Apply an image corruption (nuScenes-C's, imagecorruptions 1.1.2's, RoboBEV's ISONoise and "
+      "Faultline's own) to an image (read and written with OpenCV, BGR order), or with --gallery "
+      "render them all at every severity on one frame.",
+      argv[0]);
+  CorruptArgs a;
+  add_single_options(app, a);
+  add_common_and_gallery_options(app, a);
+  FAULTLINE_PARSE(app, argc, argv);
+  const auto mode = corruption::rng_mode_from_string(a.rng_name);
+  if (!mode) return fail(2, "unknown --rng '" + a.rng_name + "' (expected numpy or fast)");
+  if (a.yaw_rate_deg_s && !std::isfinite(*a.yaw_rate_deg_s))
+    return fail(2, "--yaw-rate must be a finite number of degrees per second");
+  if (!a.gallery_dir.empty()) return run_gallery(a, *mode, command_line(argc, argv));
+  return run_single(a, *mode);
 }
 
 }  // namespace
 FAULTLINE_COMMAND(corrupt, "corrupt",
-                  "apply an image corruption (nuScenes-C, imagecorruptions) to a file", &run);
+                  "apply an image corruption (nuScenes-C, imagecorruptions) to a file, or render "
+                  "the fault gallery",
+                  &run);
 }  // namespace faultline::cli

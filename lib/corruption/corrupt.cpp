@@ -226,4 +226,14 @@ Result<cv::Mat> corrupt(const cv::Mat& bgr, Corruption type, int severity, rng::
   return Status(StatusCode::kInvalidArgument, "unknown corruption");
 }
 
+Result<cv::Mat> corrupt_seeded(const cv::Mat& bgr, Corruption type, int severity, RngMode mode,
+                               std::uint32_t seed, const CorruptOptions& options) {
+  if (mode == RngMode::Numpy) {
+    rng::NumpyRandomState rng(seed);
+    return corrupt(bgr, type, severity, rng, options);
+  }
+  rng::FastRng rng(seed);
+  return corrupt(bgr, type, severity, rng, options);
+}
+
 }  // namespace faultline::corruption

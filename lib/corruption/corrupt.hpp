@@ -4,6 +4,7 @@
 // (spec corruptions.md).
 #pragma once
 
+#include <cstdint>
 #include <opencv2/core.hpp>
 #include <optional>
 #include <vector>
@@ -39,6 +40,11 @@ Result<cv::Mat> corrupt(const cv::Mat& bgr, Corruption type, int severity,
 // is float32 (within one level).
 Result<cv::Mat> corrupt(const cv::Mat& bgr, Corruption type, int severity, rng::FastRng& rng,
                         const CorruptOptions& options = {});
+
+// One call with a fresh RNG of `mode` seeded with `seed`: what `faultline corrupt --seed S --rng
+// MODE` applies (numpy mode as after np.random.seed(seed)).
+Result<cv::Mat> corrupt_seeded(const cv::Mat& bgr, Corruption type, int severity, RngMode mode,
+                               std::uint32_t seed, const CorruptOptions& options = {});
 
 // Checks the input image and severity; the error names what is wrong.
 Status validate_input(const cv::Mat& bgr, int severity);

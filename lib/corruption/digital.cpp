@@ -73,9 +73,13 @@ void saturate_pixel(const std::uint8_t* in, std::uint8_t* out, double a, double 
 
 }  // namespace
 
-cv::Mat contrast(const cv::Mat& bgr, int severity) {
+double contrast_factor(int severity) {
   static constexpr double kC[] = {0.4, .3, .2, .1, .05};
-  const double c = kC[sev_index(severity)];
+  return kC[sev_index(severity)];
+}
+
+cv::Mat contrast(const cv::Mat& bgr, int severity) {
+  const double c = contrast_factor(severity);
   const cv::Mat in = continuous(bgr);
   double x_of[256];
   for (int v = 0; v < 256; ++v) x_of[v] = v / 255.0;
@@ -108,6 +112,10 @@ namespace {
 constexpr double kSatA[] = {0.3, 0.1, 2, 5, 20};
 constexpr double kSatB[] = {0, 0, 0, 0.1, 0.2};
 }  // namespace
+
+SaturateParams saturate_params(int severity) {
+  return {kSatA[sev_index(severity)], kSatB[sev_index(severity)]};
+}
 
 namespace {
 

@@ -17,10 +17,18 @@ namespace faultline::corruption {
 // = v / 255 are summed in float64 in memory order, as numpy's mean over axes (0, 1) of an HxWx3
 // array does. Bit-exact.
 cv::Mat contrast(const cv::Mat& bgr, int severity);
+// The contrast factor c of severity 1..5 (clamped).
+double contrast_factor(int severity);
 
 // saturate: skimage rgb2hsv, S = clip(S * a + b, 0, 1), hsv2rgb; (a, b) = (0.3, 0) (0.1, 0) (2, 0)
 // (5, 0.1) (20, 0.2). Mirrors the float path per pixel in double: bit-exact.
 cv::Mat saturate(const cv::Mat& bgr, int severity);
+struct SaturateParams {
+  double scale;   // a
+  double offset;  // b
+};
+// (a, b) of severity 1..5.
+SaturateParams saturate_params(int severity);
 // fast mode: the same map in closed form, c' = V - (V - c) * S' / S per channel, in float32
 // (vectorisable). It rounds differently, so a truncated value may differ by one
 // (tests/corruption/fast_ext_test.cpp bounds the share).
@@ -48,6 +56,8 @@ cv::Mat gaussian_blur_fast(const cv::Mat& bgr, int severity);
 // resampler), then back with NEAREST (Pillow's affine scale), c = .6 .5 .4 .3 .25. Bit-exact. Sizes
 // below 1 pixel become 1 (the reference raises there).
 cv::Mat pixelate(const cv::Mat& bgr, int severity);
+// The downscale factor c of severity 1..5 (clamped).
+double pixelate_factor(int severity);
 
 // JPEG quality of jpeg_compression by severity: 25 18 15 10 7.
 int jpeg_compression_quality(int severity);

@@ -154,9 +154,13 @@ using TjHandle = std::unique_ptr<void, TjDeleter>;
 
 }  // namespace
 
-cv::Mat pixelate(const cv::Mat& bgr, int severity) {
+double pixelate_factor(int severity) {
   static constexpr double kC[] = {0.6, 0.5, 0.4, 0.3, 0.25};
-  const double c = kC[static_cast<std::size_t>(std::clamp(severity, 1, 5) - 1)];
+  return kC[static_cast<std::size_t>(std::clamp(severity, 1, 5) - 1)];
+}
+
+cv::Mat pixelate(const cv::Mat& bgr, int severity) {
+  const double c = pixelate_factor(severity);
   const int w = std::max(1, static_cast<int>(bgr.cols * c)),
             h = std::max(1, static_cast<int>(bgr.rows * c));
   if (w == bgr.cols && h == bgr.rows)

@@ -408,6 +408,26 @@ std::string variants_section(const ReportData& data, const VariantAxes& axes) {
   return h;
 }
 
+// The corruptions as they looked: one inline JPEG per corruption (its levels side by side), or
+// the caption alone when it has no picture.
+std::string thumbnails_section(const ReportData& data) {
+  if (data.thumbnails.empty()) return "";
+  std::string h = "<h2>Corruptions as run</h2>\n<div class=\"row\">";
+  for (const auto& t : data.thumbnails) {
+    h += "<figure class=\"thumb\">";
+    if (!t.jpeg.empty()) {
+      h += "<img src=\"data:image/jpeg;base64," + base64(t.jpeg) + "\" width=\"" +
+           std::to_string(t.width) + "\" height=\"" + std::to_string(t.height) + "\" alt=\"" +
+           svg::esc(t.name) + "\">";
+    }
+    h += "<figcaption>" + svg::esc(t.caption) + "</figcaption></figure>";
+  }
+  h += "</div>\n<p class=\"note\">Each on the built-in synthetic front-camera frame at the "
+       "run's levels, as <code>faultline corrupt</code> renders it; docs/faults.md has every "
+       "corruption at every severity.</p>\n";
+  return h;
+}
+
 }  // namespace
 
 std::string render_html(const ReportData& data) {
@@ -416,9 +436,11 @@ std::string render_html(const ReportData& data) {
       "</title><style>body{font-family:sans-serif;margin:24px;background:#fff;color:#222}"
       "table{border-collapse:collapse;margin:12px 0}td,th{border:1px solid #ccc;padding:4px 10px;"
       "text-align:right}th{background:#f0f0f0}.row{display:flex;flex-wrap:wrap;gap:16px}"
-      ".note{color:#666;font-size:13px}</style></head><body>\n";
+      ".note{color:#666;font-size:13px}figure.thumb{margin:0}figcaption{font-size:13px}"
+      "</style></head><body>\n";
   h += "<h1>" + svg::esc(data.title) + "</h1>\n";
   h += robustness_sections(data);
+  h += thumbnails_section(data);
   const VariantAxes axes = variant_axes(data);
   h += speed_section(data, axes);
   h += variants_section(data, axes);

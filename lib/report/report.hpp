@@ -1,13 +1,15 @@
 // A self-contained HTML robustness report (inline SVG, no scripts, no network) with the RoboBEV
 // views: per-corruption NDS bars by level, an NDS radar by corruption (paper Fig. 1), NDS vs mCE /
-// mRR scatter for several detectors, and speed-vs-accuracy charts (detector latency vs NDS;
-// corruption engine time vs fidelity from bench/results/corrupt.json).
+// mRR scatter for several detectors, speed-vs-accuracy charts (detector latency vs NDS;
+// corruption engine time vs fidelity from bench/results/corrupt.json), and a thumbnail of each
+// corruption the run applied (inline JPEGs).
 #pragma once
 
 #include <string>
 #include <vector>
 
 #include "common/status.hpp"
+#include "report/gallery.hpp"
 #include "scoring/robustness.hpp"
 
 namespace faultline::report {
@@ -37,6 +39,9 @@ struct ReportData {
   std::vector<scoring::RobustnessSummary> detectors;
   std::vector<CorruptBenchPoint> corrupt_bench;
   std::vector<DetectorVariantRun> variants;
+  // One per corruption the run applied (corruption_thumbnails), embedded as data: URIs so the page
+  // stays one self-contained file.
+  std::vector<CorruptionThumbnail> thumbnails;
 };
 
 // Renders the whole page. Pure function: no I/O.

@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <memory>
 #include <opencv2/imgcodecs.hpp>
 #include <string>
@@ -217,6 +218,44 @@ TEST(CorruptCliTest, TruncatedJpegIsRefusedUnlessPartialIsAllowed) {
   EXPECT_EQ(cv::imread(out, cv::IMREAD_COLOR).size(), cv::Size(640, 360));
   std::remove(out.c_str());
   std::remove(in.c_str());
+}
+
+// --gallery: one strip per --types entry with progress on stderr, on the input frame or the
+// built-in one; bad entries, paths and mixed modes are named errors.
+TEST(CorruptCliTest, GalleryWritesStripsAndIndexAndNamesItsErrors) {
+  const std::string dir =
+      ::testing::TempDir() + "/faultline_gallery_cli_" + std::to_string(::getpid());
+  std::filesystem::remove_all(dir);
+  const std::string in = test_data::fixture(golden_dir() + "/inputs/chart_333x197.png");
+  auto r = run_faultline("corrupt --gallery " + dir + " --types fog,brightness --thumb-width 48 " +
+                         "--seed 3 --in " + in);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("[1/2] fog"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("[2/2] brightness"), std::string::npos) << r.output;
+  for (const char* f : {"fog.jpg", "brightness.jpg"}) {
+    // 48 px tiles of a 333 x 197 frame: 28 px high; six of them 2 px apart.
+    EXPECT_EQ(cv::imread(dir + "/" + f, cv::IMREAD_COLOR).size(), cv::Size(6 * 48 + 10, 28)) << f;
+  }
+  std::ifstream index(dir + "/index.md");
+  const std::string md((std::istreambuf_iterator<char>(index)), std::istreambuf_iterator<char>());
+  EXPECT_NE(md.find("`chart_333x197.png`"), std::string::npos) << md;
+  EXPECT_NE(md.find("--types fog,brightness"), std::string::npos) << md;
+  r = run_faultline("corrupt --gallery " + dir + " --types fog,rain");
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("unknown --types entry 'rain'"), std::string::npos) << r.output;
+  r = run_faultline("corrupt --gallery " + dir + " --in /nonexistent/frame.png");
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("/nonexistent/frame.png"), std::string::npos) << r.output;
+  r = run_faultline("corrupt --gallery " + dir + " --type fog --severity 2");
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("--type"), std::string::npos) << r.output;
+  r = run_faultline("corrupt --severity 2 --in " + in + " --out " + dir + "/x.png");
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("--type is required"), std::string::npos) << r.output;
+  r = run_faultline("corrupt --help");
+  EXPECT_NE(r.output.find("--gallery"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("--thumb-width"), std::string::npos) << r.output;
+  std::filesystem::remove_all(dir);
 }
 
 }  // namespace

@@ -20,6 +20,7 @@
 #include <vector>
 
 #include "common/status.hpp"
+#include "dataset/synth_frame.hpp"
 
 namespace faultline::bench {
 
@@ -38,7 +39,7 @@ cv::Mat synthetic_frame(const FrameSpec& spec = {});
 
 // The realistic frame's sensor noise (8-bit levels) and JPEG quality: the synthetic dataset's
 // defaults.
-constexpr int kRealisticNoise = 4;
+constexpr int kRealisticNoise = dataset::kRealisticNoise;
 constexpr int kRealisticQuality = 90;
 
 // A realistic frame before encoding: BGR CV_8UC3 of width x height (>= 16 each). The seed picks the
