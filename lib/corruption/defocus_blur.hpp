@@ -24,7 +24,10 @@ cv::Mat defocus_kernel(int severity);
 // numpy mode: float64 per channel, as the reference; exact.
 cv::Mat defocus_blur_exact(const cv::Mat& bgr, int severity);
 
-// fast mode: the same kernel on all three channels at once in float32 (within 1 of numpy mode).
+// fast mode: the disk as vertical runs of column prefix sums (exact integers), then the
+// anti-aliasing Gaussian in float32, plus three taps per side for the rim the grid folds back in
+// (severities 4, 5); the cost hardly grows with the radius. Within 1 of numpy mode on < 1 % of
+// values (tests/corruption/fast_mode_ext_spatial_test.cpp).
 cv::Mat defocus_blur_fast(const cv::Mat& bgr, int severity);
 
 }  // namespace faultline::corruption

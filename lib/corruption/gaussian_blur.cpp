@@ -1,11 +1,12 @@
-// gaussian_blur: scipy.ndimage's separable float64 correlation mirrored exactly, and a float32 fast
-// path.
+// gaussian_blur: scipy.ndimage's separable float64 correlation mirrored exactly, and a fixed-point
+// fast path.
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <opencv2/imgproc.hpp>
 #include <vector>
 
+#include "common/simd.hpp"
 #include "corruption/digital.hpp"
 #include "corruption/ndimage.hpp"
 
@@ -117,25 +118,41 @@ cv::Mat gaussian_blur_weights(const cv::Mat& bgr, const std::vector<double>& w) 
 
 }  // namespace detail
 
+namespace {
+
+// dst = src - 1 (saturating at 0) where the dither pattern of row y holds a one: the pixels whose
+// x + y is even, except two in every 8 x 8 tile, (0, 0) and (4, 4) (30 ones per 64 pixels).
+FAULTLINE_CLONES("avx2")
+void subtract_dither(std::uint8_t* dst, const std::uint8_t* src, std::size_t pixels, int y) {
+  for (std::size_t x = 0; x < pixels; ++x) {
+    const auto xi = static_cast<int>(x & 7u);
+    const int yi = y & 7;
+    const bool one = ((xi + yi) & 1) == 0 && !(xi == yi && (xi & 3) == 0);
+    for (std::size_t c = 0; c < 3; ++c) {
+      const std::uint8_t v = src[3 * x + c];
+      dst[3 * x + c] = static_cast<std::uint8_t>(v - std::min<std::uint8_t>(v, one ? 1 : 0));
+    }
+  }
+}
+
+}  // namespace
+
 cv::Mat gaussian_blur_fast(const cv::Mat& bgr, int severity) {
   const double sigma = gaussian_blur_sigma(severity);
   const int r = kernel_radius(sigma);
-  const std::vector<double> w = gaussian_kernel(sigma, r);
-  cv::Mat kernel(static_cast<int>(w.size()), 1, CV_32F);
-  for (std::size_t i = 0; i < w.size(); ++i)
-    kernel.at<float>(static_cast<int>(i)) = static_cast<float>(w[i]);
-  cv::Mat f, blurred;
-  bgr.convertTo(f, CV_32F);
-  cv::sepFilter2D(f, blurred, CV_32F, kernel, kernel, cv::Point(-1, -1), 0.0, cv::BORDER_REPLICATE);
-  // Truncation like the reference (convertTo would round).
-  cv::Mat out(bgr.size(), CV_8UC3);
-  const std::size_t row_len = static_cast<std::size_t>(bgr.cols) * 3;
+  // OpenCV's 8-bit Gaussian is fixed-point (16-bit weights and sums, the same taps and 'nearest'
+  // border) and rounds, where the reference truncates: floor(x) = round(x - b) for 0 < b <= 1/2
+  // wherever frac(x) < b + 1/2. A dither pattern of ones subtracted before the blur blurs to b =
+  // 0.45-0.49 for sigma >= 1 (a checkerboard, whose frequency the blur removes, thinned so that b
+  // stays below 1/2 despite the fixed-point weights): flat areas keep their value, and a value is
+  // one too high only where frac(x) >= b + 1/2 (a few %, never more than one level).
+  cv::Mat shifted(bgr.size(), CV_8UC3), out;
   for (int y = 0; y < bgr.rows; ++y) {
-    const float* src = blurred.ptr<float>(y);
-    std::uint8_t* dst = out.ptr<std::uint8_t>(y);
-    for (std::size_t e = 0; e < row_len; ++e)
-      dst[e] = static_cast<std::uint8_t>(std::min(std::max(src[e], 0.0f), 255.0f));
+    subtract_dither(shifted.ptr<std::uint8_t>(y), bgr.ptr<std::uint8_t>(y),
+                    static_cast<std::size_t>(bgr.cols), y);
   }
+  cv::GaussianBlur(shifted, out, cv::Size(2 * r + 1, 2 * r + 1), sigma, sigma,
+                   cv::BORDER_REPLICATE);
   return out;
 }
 

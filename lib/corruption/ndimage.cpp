@@ -8,6 +8,8 @@
 #include <cstring>
 #include <limits>
 
+#include "common/simd.hpp"
+
 namespace faultline::corruption::nd {
 
 namespace {
@@ -181,20 +183,60 @@ void gaussian_filter(cv::Mat& img, double sigma_y, double sigma_x, Extend mode, 
   cur.convertTo(img, img.type());  // float32: round to nearest, as ndimage's (float) cast
 }
 
+namespace {
+
+// Axis 0 of gaussian_blur_u8 for one output row, as correlate_rows: the centre times w[0], then the
+// pairs from the outermost in (the same operations per element, vectorised across the row).
+FAULTLINE_CLONES("avx2")
+void blur_rows_u8(double* out, const double* const* rows, const double* w, int r, std::size_t n) {
+  const double* c = rows[r];
+  for (std::size_t x = 0; x < n; ++x) out[x] = c[x] * w[0];
+  for (int k = r; k >= 1; --k) {
+    const double* a = rows[r - k];
+    const double* b = rows[r + k];
+    const double wk = w[k];
+    for (std::size_t x = 0; x < n; ++x) out[x] += (a[x] + b[x]) * wk;
+  }
+}
+
+// Axis 1 over an interleaved row of 3 channels padded by r pixels each side (`ext` points at the
+// first real element), as correlate_line per channel, then clip * 255 truncated to uint8.
+FAULTLINE_CLONES("avx2")
+void blur_cols_u8(unsigned char* dst, const double* ext, double* acc, const double* w, int r,
+                  std::size_t n) {
+  for (std::size_t x = 0; x < n; ++x) acc[x] = ext[x] * w[0];
+  for (int k = r; k >= 1; --k) {
+    const double* a = ext - 3 * k;
+    const double* b = ext + 3 * k;
+    const double wk = w[k];
+    for (std::size_t x = 0; x < n; ++x) acc[x] += (a[x] + b[x]) * wk;
+  }
+  for (std::size_t x = 0; x < n; ++x) {
+    // clip(acc, 0, 1) * 255 truncated, clamped after the int32 conversion instead (the same bytes:
+    // truncation goes toward zero), which lets the loop vectorise.
+    std::int32_t v = static_cast<std::int32_t>(acc[x] * 255.0);
+    v = v < 0 ? 0 : v;
+    dst[x] = static_cast<unsigned char>(v > 255 ? 255 : v);
+  }
+}
+
+}  // namespace
+
 cv::Mat gaussian_blur_u8(const cv::Mat& bgr, double sigma) {
   CV_Assert(bgr.type() == CV_8UC3);
   const auto w = gaussian_kernel(sigma, gaussian_radius(sigma, 4.0));
   const int r = static_cast<int>(w.size()) - 1, rows = bgr.rows, cols = bgr.cols, width = cols * 3;
   const int slots = 2 * r + 1;
+  const auto n = static_cast<std::size_t>(width);
   // Source row j (as u8 / 255 in float64) lives in slot j % slots while output rows i - r .. i + r
   // need it.
-  std::vector<double> ring(static_cast<std::size_t>(slots) * static_cast<std::size_t>(width));
-  auto slot = [&](int j) {
-    return ring.data() + static_cast<std::size_t>(j % slots) * static_cast<std::size_t>(width);
-  };
+  std::vector<double> ring(static_cast<std::size_t>(slots) * n);
+  auto slot = [&](int j) { return ring.data() + static_cast<std::size_t>(j % slots) * n; };
   int loaded = -1;
-  std::vector<double> mid(static_cast<std::size_t>(width)),
-      ext(static_cast<std::size_t>(cols + 2 * r)), line(static_cast<std::size_t>(cols));
+  // The axis-0 result with r edge pixels replicated on each side, and the axis-1 sums.
+  std::vector<double> line(n + 6 * static_cast<std::size_t>(r)), acc(n);
+  double* mid = line.data() + 3 * r;
+  std::vector<const double*> taps(static_cast<std::size_t>(slots));
   cv::Mat out(bgr.size(), CV_8UC3);
   for (int i = 0; i < rows; ++i) {
     for (; loaded < std::min(i + r, rows - 1); ++loaded) {
@@ -202,28 +244,17 @@ cv::Mat gaussian_blur_u8(const cv::Mat& bgr, double sigma) {
       double* d = slot(loaded + 1);
       for (int x = 0; x < width; ++x) d[x] = s[x] / 255.0;
     }
-    // Axis 0, as correlate_rows: centre times w[0], then the pairs from the outermost in.
-    const double* c = slot(i);
-    for (int x = 0; x < width; ++x) mid[static_cast<std::size_t>(x)] = c[x] * w[0];
-    for (int k = r; k >= 1; --k) {
-      const double* a = slot(extend_index(i - k, rows, Extend::Nearest));
-      const double* b = slot(extend_index(i + k, rows, Extend::Nearest));
-      const double wk = w[static_cast<std::size_t>(k)];
-      for (int x = 0; x < width; ++x) mid[static_cast<std::size_t>(x)] += (a[x] + b[x]) * wk;
+    for (int k = -r; k <= r; ++k) {
+      taps[static_cast<std::size_t>(k + r)] = slot(extend_index(i + k, rows, Extend::Nearest));
     }
-    // Axis 1 per channel, then the truncating store.
-    unsigned char* o = out.ptr<unsigned char>(i);
-    for (int ch = 0; ch < 3; ++ch) {
-      for (int x = -r; x < cols + r; ++x) {
-        ext[static_cast<std::size_t>(x + r)] =
-            mid[static_cast<std::size_t>(extend_index(x, cols, Extend::Nearest) * 3 + ch)];
-      }
-      correlate_line(ext.data(), cols, r, w, line.data());
-      for (int x = 0; x < cols; ++x) {
-        o[3 * x + ch] = static_cast<unsigned char>(
-            std::min(std::max(line[static_cast<std::size_t>(x)], 0.0), 1.0) * 255.0);
+    blur_rows_u8(mid, taps.data(), w.data(), r, n);
+    for (int k = 1; k <= r; ++k) {
+      for (int ch = 0; ch < 3; ++ch) {
+        mid[-3 * k + ch] = mid[ch];
+        mid[width - 3 + 3 * k + ch] = mid[width - 3 + ch];
       }
     }
+    blur_cols_u8(out.ptr<unsigned char>(i), mid, acc.data(), w.data(), r, n);
   }
   return out;
 }

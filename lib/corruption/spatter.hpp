@@ -30,8 +30,8 @@ SpatterParams spatter_params(int severity);
 // reference calls them.
 cv::Mat spatter_numpy(const cv::Mat& bgr, int severity, rng::NumpyRandomState& rng);
 
-// fast mode: FastRng normals and OpenCV's float32 Gaussian for the smoothing; the rest is numpy
-// mode's code.
+// fast mode: FastRng normals (eight-lane ziggurat) and OpenCV's float32 Gaussian for the smoothing;
+// the water is numpy mode's code, the mud is blended in float32 from the float32 field.
 cv::Mat spatter_fast(const cv::Mat& bgr, int severity, rng::FastRng& rng);
 
 // The stages after the smoothing, given the smoothed liquid field (CV_64F, H x W): shared by both

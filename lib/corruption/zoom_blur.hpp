@@ -15,8 +15,10 @@ std::vector<double> zoom_blur_factors(int severity);
 // numpy mode: exact.
 cv::Mat zoom_blur_exact(const cv::Mat& bgr, int severity);
 
-// fast mode: each layer an 8-bit bilinear warp of the same crop geometry (OpenCV, 1/32-pixel
-// positions), summed in integers; within a few levels of numpy mode, mean difference below 0.5.
+// fast mode: 16 layers from four cascaded zooms (A <- A + zoom(A), OpenCV bilinear on 16-bit sums,
+// the reference's crop geometry per factor), the four factors fitted so that the layers' log
+// scales follow the reference's; an approximation: PSNR > 35 dB against numpy mode, mean within
+// 0.25, values off by tens of levels at high-contrast edges far from the centre.
 cv::Mat zoom_blur_fast(const cv::Mat& bgr, int severity);
 
 }  // namespace faultline::corruption

@@ -1,6 +1,7 @@
 // fast mode of defocus_blur, zoom_blur, glass_blur, frost, elastic_transform and spatter against
 // numpy mode (the reference's arithmetic, held to the goldens by golden_ext_spatial_test) on
-// 1600x900 frames. Deterministic ones: close to numpy mode value for value. Random ones: as close
+// 1600x900 frames. Defocus: close to numpy mode value for value; zoom: close in PSNR and mean.
+// Random ones: as close
 // to a numpy-mode output as another numpy-mode seed is (PSNR within a margin of the seed-to-seed
 // PSNR, histogram and mean), measured here on the same frame.
 #include <gtest/gtest.h>
@@ -72,28 +73,43 @@ using Case = std::tuple<Corruption, int>;
 
 class FastDeterministicTest : public ::testing::TestWithParam<Case> {};
 
-// Defocus: the same kernel in float32 (a value differs where the float64 sum truncates the other
-// way). Zoom: 8-bit layers at 1/32-pixel positions instead of float32 layers; each output is a mean
-// of 13-17 of them.
+// Defocus: the disk as vertical runs of column prefix sums (exact integers), the anti-aliasing
+// Gaussian after it in float32, and at severities 4 and 5 three taps per side for the rim the
+// reference's grid folds back in (a value differs where the float64 sum truncates the other way).
 TEST_P(FastDeterministicTest, CloseToNumpyModeValueForValue) {
   const auto [c, sev] = GetParam();
   const cv::Mat ref = numpy_out(c, sev, 0), out = fast_out(c, sev, 0);
-  const double max_diff = cv::norm(out, ref, cv::NORM_INF);
-  if (c == Corruption::DefocusBlur) {
-    EXPECT_LE(max_diff, 1.0);
-    EXPECT_LT(fraction_different(out, ref), 0.01);
-  } else {
-    EXPECT_LE(max_diff, 3.0);
-    EXPECT_LT(fraction_different(out, ref), 0.25);
-    EXPECT_GT(psnr(out, ref), 45.0);
-  }
-  EXPECT_NEAR(mean_of(out), mean_of(ref), c == Corruption::DefocusBlur ? 0.1 : 0.25);
+  EXPECT_LE(cv::norm(out, ref, cv::NORM_INF), 1.0);
+  EXPECT_LT(fraction_different(out, ref), 0.01);
+  EXPECT_NEAR(mean_of(out), mean_of(ref), 0.1);
 }
 
 INSTANTIATE_TEST_SUITE_P(Blurs, FastDeterministicTest,
-                         ::testing::Combine(::testing::Values(Corruption::DefocusBlur,
-                                                              Corruption::ZoomBlur),
-                                            ::testing::Values(1, 3, 5)));
+                         ::testing::Combine(::testing::Values(Corruption::DefocusBlur),
+                                            ::testing::Values(1, 2, 3, 4, 5)));
+
+class FastZoomTest : public ::testing::TestWithParam<int> {};
+
+// Zoom: 16 layers from four cascaded zooms (every product of a subset of four fitted factors)
+// instead of the reference's 12-17 single zooms, 8-bit rounded 16-bit sums. The layers' scales
+// follow the reference's within about 1 % of scale, but each cascaded zoom resamples again and the
+// crops' half-pixel offsets add up: values move by tens of levels at high-contrast edges far from
+// the centre, and the bulk stays close (PSNR and mean bounds measured on this frame with margin:
+// 37.2-42.0 dB, mean within 0.06, mean abs diff up to 1.8).
+TEST_P(FastZoomTest, CloseToNumpyModeInPsnrAndMean) {
+  const int sev = GetParam();
+  const cv::Mat ref = numpy_out(Corruption::ZoomBlur, sev, 0);
+  const cv::Mat out = fast_out(Corruption::ZoomBlur, sev, 0);
+  EXPECT_GT(psnr(out, ref), 35.0);
+  EXPECT_NEAR(mean_of(out), mean_of(ref), 0.25);
+  cv::Mat diff;
+  cv::absdiff(out, ref, diff);
+  EXPECT_LT(mean_of(diff), 2.5);  // 1.5-1.8 measured at severities 3-5
+  // Blurred, not sharp: the fast output is much closer to the reference than the input is.
+  EXPECT_GT(psnr(out, ref), psnr(frame_1600x900(), ref) + 8.0);
+}
+
+INSTANTIATE_TEST_SUITE_P(Severities, FastZoomTest, ::testing::Values(1, 2, 3, 4, 5));
 
 class FastRandomTest : public ::testing::TestWithParam<Case> {};
 
