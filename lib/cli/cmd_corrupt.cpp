@@ -20,6 +20,7 @@
 #include "codec/jpeg.hpp"
 #include "common/bounded_read.hpp"
 #include "corruption/corrupt.hpp"
+#include "policy/fault_spec.hpp"
 
 namespace faultline::cli {
 namespace {
@@ -137,6 +138,16 @@ int run(int argc, char** argv) {
     return usage_exit(app, e);
   }
   const auto type = corruption::corruption_from_string(type_name);
+  if (!type && policy::is_stream_fault(type_name)) {
+    std::fprintf(
+        stderr,
+        "faultline corrupt: --type %s is a stream fault: it acts on a camera's stream (when "
+        "or whether frames arrive, their stamps or calibration), not on pixels, so one "
+        "image gives it nothing to do; use it in the injector's faults or in bag "
+        "convert --corrupt / bag corrupt --fault (docs/faults.md)\n",
+        type_name.c_str());
+    return 2;
+  }
   if (!type) {
     std::fprintf(stderr, "faultline corrupt: unknown --type '%s' (expected %s)\n",
                  type_name.c_str(), type_names().c_str());
