@@ -24,6 +24,13 @@ std::vector<std::string> split_commas(const std::string& s) {
   return out;
 }
 
+std::string suite_list() {
+  std::string out;
+  for (const char* c : scoring::kRoboDrive18Corruptions)
+    out += (out.empty() ? "" : ",") + std::string(c);
+  return out;
+}
+
 }  // namespace
 
 void add_benchmark_options(CLI::App& app, BenchmarkArgs& args) {
@@ -37,13 +44,20 @@ void add_benchmark_options(CLI::App& app, BenchmarkArgs& args) {
   app.add_option("--eval-set", o.eval_set, "split to score: mini_val, val or a splits.json key")
       ->capture_default_str();
   app.add_option("--scenes", o.scenes, "scenes to replay (default: all)")->delimiter(',');
-  app.add_option("--corruptions", args.corruptions,
-                 "comma list of camera_crash, frame_lost, low_light or any image corruption (" +
-                     corruption::corruption_names(",") +
-                     ", and Faultline's message faults calibration_drift, timestamp_skew), or all "
-                     "(nuScenes-C's eight); "
-                     "mCE covers those the baseline has")
-      ->capture_default_str();
+  auto* corruptions =
+      app.add_option("--corruptions", args.corruptions,
+                     "comma list of camera_crash, frame_lost, low_light or any image corruption (" +
+                         corruption::corruption_names(",") +
+                         ", and Faultline's message faults calibration_drift, timestamp_skew; not "
+                         "stale_frames, whose wall-clock lag lockstep does not keep), or all "
+                         "(nuScenes-C's eight); mCE covers those the baseline has")
+          ->capture_default_str();
+  app.add_option("--suite", args.suite,
+                 "a named corruption set instead of --corruptions: robodrive18 = the RoboDrive "
+                 "Challenge 2024's 18 (" +
+                     suite_list() + ")")
+      ->check(CLI::IsMember({"robodrive18"}))
+      ->excludes(corruptions);
   app.add_option("--levels", args.levels,
                  "comma list of easy,mid,hard (default: mid; --full: all)");
   app.add_flag("--full", args.full, "the full matrix: 8 corruptions x 3 levels");
@@ -81,7 +95,9 @@ void add_benchmark_options(CLI::App& app, BenchmarkArgs& args) {
 int resolve_benchmark_options(BenchmarkArgs& args, const char* command) {
   campaign::BenchmarkOptions& o = args.options;
   o.variants = !args.no_variants;
-  if (args.corruptions == "all") {
+  if (args.suite == "robodrive18") {
+    for (const char* c : scoring::kRoboDrive18Corruptions) o.corruptions.push_back(c);
+  } else if (args.corruptions == "all") {
     for (const char* c : scoring::kRoboBevCorruptions) o.corruptions.push_back(c);
   } else {
     for (const auto& c : split_commas(args.corruptions)) {
@@ -92,6 +108,16 @@ int resolve_benchmark_options(BenchmarkArgs& args, const char* command) {
       // Faultline's message faults run in the injector like any fault (the detector lifts boxes
       // with the drifted calibration and the skewed stamps).
       known |= canon == "calibration_drift" || canon == "timestamp_skew";
+      if (canon == "stale_frames") {
+        // Its lag is wall-clock time in the injector, which the lockstep benchmark does not keep:
+        // the score would depend on how fast the machine ran.
+        std::fprintf(stderr,
+                     "faultline %s: --corruptions: stale_frames delays frames in wall-clock time, "
+                     "which the lockstep benchmark does not follow (the score would depend on the "
+                     "machine's speed); use it in the injector or bag convert --corrupt\n",
+                     command);
+        return 2;
+      }
       if (!known) {
         std::fprintf(stderr, "faultline %s: --corruptions: unknown corruption '%s'\n", command,
                      c.c_str());

@@ -12,10 +12,11 @@ namespace faultline::cli {
 struct BenchmarkArgs {
   campaign::BenchmarkOptions options;
   std::string corruptions = "all", levels, synth_dir = "data/synth";
+  std::string suite;  // a named corruption set (robodrive18) instead of --corruptions; "" = none
   bool full = false, no_variants = false;
 };
 
-// Adds --out, --dataroot, --corruptions, --levels, --seeds, ... to `app`.
+// Adds --out, --dataroot, --corruptions or --suite, --levels, --seeds, ... to `app`.
 void add_benchmark_options(CLI::App& app, BenchmarkArgs& args);
 
 // After parsing: corruption and level lists checked, defaults applied, the synthetic dataset made

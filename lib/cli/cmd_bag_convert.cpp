@@ -79,7 +79,7 @@ int run(int argc, char** argv) {
       "TYPE:LEVEL fault on all cameras, e.g. fog:mid, snow:3, iso_noise:hard, camera_crash:hard "
       "(repeatable; the injector's `corruption` shorthand; TYPE: " +
           corruption::corruption_names() +
-          ", camera_crash, frame_lost, calibration_drift, timestamp_skew)");
+          ", camera_crash, frame_lost, calibration_drift, timestamp_skew, stale_frames)");
   app.add_option("--seed", cfg.run_metadata["seed"], "run seed of the fault draws")
       ->default_str("0");
   app.add_flag(

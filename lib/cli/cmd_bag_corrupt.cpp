@@ -44,7 +44,7 @@ int run(int argc, char** argv) {
                  "/cam/image_raw=snow:3, "
                  "/cam/compressed=frame_lost:hard (repeatable; TYPE: " +
                      corruption::corruption_names() +
-                     ", camera_crash, frame_lost, black, freeze, drop, delay; LEVEL "
+                     ", camera_crash, frame_lost, black, freeze, drop, delay, stale_frames; LEVEL "
                      "easy|mid|hard or 1..5)");
   app.add_option("--faults", schedule,
                  "YAML schedule: topic -> list of faults with the injector's keys (type, "

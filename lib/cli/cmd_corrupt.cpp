@@ -21,6 +21,7 @@
 #include "codec/jpeg.hpp"
 #include "common/bounded_read.hpp"
 #include "corruption/corrupt.hpp"
+#include "policy/fault_spec.hpp"
 #include "report/gallery.hpp"
 
 namespace faultline::cli {
@@ -234,6 +235,14 @@ int run_single(const CorruptArgs& a, corruption::RngMode mode) {
   if (a.in_path.empty() || a.out_path.empty())
     return fail(2, std::string(a.in_path.empty() ? "--in" : "--out") + " is required");
   const auto type = corruption::corruption_from_string(a.type_name);
+  if (!type && policy::is_stream_fault(a.type_name)) {
+    return fail(2,
+                "--type " + a.type_name +
+                    " is a stream fault: it acts on a camera's stream (when or whether frames "
+                    "arrive, their stamps or calibration), not on pixels, so one image gives it "
+                    "nothing to do; use it in the injector's faults or in bag convert --corrupt / "
+                    "bag corrupt --fault (docs/faults.md)");
+  }
   if (!type) {
     return fail(2, "unknown --type '" + a.type_name + "' (expected " + type_names() + ")");
   }

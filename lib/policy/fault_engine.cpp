@@ -175,6 +175,7 @@ FramePlan FaultEngine::decide(const FrameInfo& frame) {
   const int cam = plan.camera;
   plan.context.time_s = static_cast<double>(elapsed) * 1e-9;
   plan.context.geometry = frame.geometry;
+  std::optional<StaleHit> stale;
   auto hit = [&](Action a, DurationNs delay_ns) {
     if (rank(a) > rank(plan.action)) plan.action = a;
     if (a == Action::Delay) plan.delay_ns = std::max(plan.delay_ns, delay_ns);
@@ -247,6 +248,14 @@ FramePlan FaultEngine::decide(const FrameInfo& frame) {
         add_message_fault(spec, i, cam, severity, plan.edit, f);
         break;
       }
+      case FaultKind::StaleFrames: {
+        if (!spec.applies_to(cam)) continue;
+        const DurationNs lag = stale_frames_ns(severity, spec.lag_ms);
+        f.params["delay_ms"] = static_cast<double>(lag) / 1e6;
+        stale = StaleHit{plan.faults.size(), severity};
+        hit(Action::Delay, lag);
+        break;
+      }
       case FaultKind::Black:
       case FaultKind::Freeze:
       case FaultKind::Drop:
@@ -267,8 +276,38 @@ FramePlan FaultEngine::decide(const FrameInfo& frame) {
     }
     plan.faults.push_back(std::move(f));
   }
+  keep_stale_order(plan, frame.capture_stamp_ns, stale);
   if (plan.action == Action::Pass && !plan.corruptions.empty()) plan.action = Action::Corrupt;
   return plan;
+}
+
+// A stale camera's frames leave in capture order: when its lag ends or shrinks (the window closes,
+// a shorter lag takes over), later frames are held until the ones before them are out (catch_up)
+// instead of overtaking them. Drop, black and freeze still win over the lag, as over delay.
+void FaultEngine::keep_stale_order(FramePlan& plan, StampNs stamp_ns,
+                                   const std::optional<StaleHit>& stale) {
+  auto& held = stale_held_[static_cast<std::size_t>(plan.camera)];
+  if (stale) held.severity = stale->severity;
+  if (plan.action != Action::Pass && plan.action != Action::Delay) return;
+  const DurationNs own = plan.action == Action::Delay ? plan.delay_ns : 0;
+  if (held.release_ns && *held.release_ns > stamp_ns + own) {
+    plan.action = Action::Delay;
+    plan.delay_ns = *held.release_ns - stamp_ns;
+    AppliedFault* f = stale ? &plan.faults[stale->applied_index] : nullptr;
+    if (!f) {
+      f = &plan.faults.emplace_back();
+      f->name = "stale_frames";
+      f->severity = held.severity;
+      f->rng = "fast";
+    }
+    f->params["catch_up"] = 1;
+    f->params["held_ms"] = static_cast<double>(plan.delay_ns) / 1e6;
+    held.release_ns = stamp_ns + plan.delay_ns;
+  } else if (stale) {
+    held.release_ns = stamp_ns + plan.delay_ns;
+  } else {
+    held.release_ns.reset();  // caught up: the camera is live again
+  }
 }
 
 bool FaultEngine::stateful(const FramePlan& plan) const {

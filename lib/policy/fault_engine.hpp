@@ -22,6 +22,8 @@
 // (decide() keeps the
 //   last heading per camera); without a previous pose the frame passes unchanged (no pixel work)
 //   and the fault says no_yaw_rate.
+// - stale_frames: a delay of stale_frames_ns() (message_faults.hpp), stamps kept; per camera the
+//   frames stay in capture order when the lag ends (keep_stale_order).
 // - calibration_drift / timestamp_skew: no action of their own; they fill FramePlan::edit
 // (message_faults.hpp), with
 //   the drift's direction seeded per (run seed, fault, camera) so it persists across the camera's
@@ -119,6 +121,11 @@ class FaultEngine {
 
  private:
   double lost_uniform(std::size_t i, const FaultSpec& spec, int camera);
+  struct StaleHit {
+    std::size_t applied_index = 0;  // its entry in FramePlan::faults
+    int severity = 0;
+  };
+  void keep_stale_order(FramePlan& plan, StampNs stamp_ns, const std::optional<StaleHit>& stale);
   void add_message_fault(const FaultSpec& spec, std::size_t i, int cam, int severity,
                          MessageEdit& edit, AppliedFault& f) const;
 
@@ -146,6 +153,11 @@ class FaultEngine {
     double yaw_rad = 0;
   };
   std::array<std::optional<Heading>, kNumCameras> last_heading_;  // decide() only
+  struct StaleHeld {
+    std::optional<StampNs> release_ns;  // capture stamp + lag of the camera's last held frame
+    int severity = 0;                   // of its last stale_frames hit (reported on catch_up)
+  };
+  std::array<StaleHeld, kNumCameras> stale_held_;  // decide() only
   std::optional<double> yaw_rate(int cam, const FrameInfo& frame);
 };
 

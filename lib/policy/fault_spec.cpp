@@ -13,6 +13,8 @@
 namespace faultline::policy {
 namespace {
 
+constexpr double kMaxStaleMs = 10'000;
+
 const std::set<std::string> kKeys = {"type",     "level",  "severity", "cameras", "rng",
                                      "coherent", "mode",   "delay_ms", "start_s", "duration_s",
                                      "ramp_s",   "frames", "offset_ms"};
@@ -46,7 +48,8 @@ constexpr TypeName kTemporal[] = {{"camera_crash", FaultKind::CameraCrash},
                                   {"drop", FaultKind::Drop},
                                   {"delay", FaultKind::Delay},
                                   {"calibration_drift", FaultKind::CalibrationDrift},
-                                  {"timestamp_skew", FaultKind::TimestampSkew}};
+                                  {"timestamp_skew", FaultKind::TimestampSkew},
+                                  {"stale_frames", FaultKind::StaleFrames}};
 
 // camera_crash / frame_lost levels: the severities nuScenes-C used (p = 1/3, 2/3, 5/6 for
 // frame_lost).
@@ -106,7 +109,8 @@ FaultSpec parse_one(const YAML::Node& node, const std::string& where) {
   if (!set_type(spec, type)) {
     fail(where, "type", type,
          "expected " + corruption::corruption_names("|") +
-             "|camera_crash|frame_lost|black|freeze|drop|delay|calibration_drift|timestamp_skew");
+             "|camera_crash|frame_lost|black|freeze|drop|delay|calibration_drift|timestamp_skew"
+             "|stale_frames");
   }
   if (node["level"] && node["severity"])
     fail(where, "level", config::yaml_to_string(node["level"]), "give level or severity, not both");
@@ -114,7 +118,7 @@ FaultSpec parse_one(const YAML::Node& node, const std::string& where) {
   const bool graded = spec.kind == FaultKind::Corruption || spec.kind == FaultKind::CameraCrash ||
                       spec.kind == FaultKind::FrameLost ||
                       spec.kind == FaultKind::CalibrationDrift ||
-                      spec.kind == FaultKind::TimestampSkew;
+                      spec.kind == FaultKind::TimestampSkew || spec.kind == FaultKind::StaleFrames;
   spec.severity = graded ? level_severity(spec, corruption::Level::Mid) : 1;
   if (node["level"]) {
     const auto text = read<std::string>(node["level"], where, "level", "string");
@@ -194,6 +198,14 @@ FaultSpec parse_one(const YAML::Node& node, const std::string& where) {
       fail(where, key, config::yaml_to_string(node[key]), "expected a number >= 0");
   };
   non_negative("delay_ms", spec.delay_ms);
+  if (node["delay_ms"] && spec.kind == FaultKind::StaleFrames) {
+    // The lag is held in memory (every frame of the camera within it): a bound keeps a typo from
+    // holding minutes of images.
+    if (spec.delay_ms > kMaxStaleMs)
+      fail(where, "delay_ms", config::yaml_to_string(node["delay_ms"]),
+           "stale_frames lags at most 10000 ms");
+    spec.lag_ms = spec.delay_ms;
+  }
   non_negative("start_s", spec.start_s);
   non_negative("ramp_s", spec.ramp_s);
   if (node["duration_s"]) {
@@ -236,6 +248,11 @@ std::string FaultSpec::name() const {
 
 bool FaultSpec::applies_to(int camera) const {
   return cameras.empty() || std::find(cameras.begin(), cameras.end(), camera) != cameras.end();
+}
+
+bool is_stream_fault(const std::string& type) {
+  return std::any_of(std::begin(kTemporal), std::end(kTemporal),
+                     [&](const TypeName& t) { return type == t.name; });
 }
 
 int camera_index(const std::string& name) {

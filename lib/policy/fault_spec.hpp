@@ -18,7 +18,7 @@ namespace faultline::policy {
 
 // What a fault does: an image corruption, one of the two RoboBEV temporal faults, a scripted output
 // action, or one of Faultline's message faults (policy/message_faults.hpp: the frame's calibration
-// or stamp, pixels untouched).
+// or stamp, or its output time for stale_frames; pixels untouched).
 enum class FaultKind {
   Corruption,
   CameraCrash,
@@ -28,7 +28,8 @@ enum class FaultKind {
   Drop,
   Delay,
   CalibrationDrift,
-  TimestampSkew
+  TimestampSkew,
+  StaleFrames
 };
 // How a camera_crash / frame_lost hit is rendered. Black is the reference's behaviour.
 enum class OutputMode { Black, Drop, Freeze, Delay };
@@ -46,6 +47,7 @@ struct FaultSpec {
   OutputMode mode = OutputMode::Black;  // camera_crash / frame_lost
   double delay_ms = 200;                // mode delay / kind Delay
   std::optional<double> offset_ms;  // timestamp_skew: stamp offset (either sign); none = severity's
+  std::optional<double> lag_ms;     // stale_frames: its `delay_ms:` (the lag); none = severity's
   double start_s = 0;               // window start, relative to the first frame's capture time
   std::optional<double> duration_s;  // none = until the end
   double ramp_s = 0;                 // linear severity ramp 1 -> severity over this time
@@ -67,6 +69,11 @@ std::optional<FaultSpec> parse_corruption_shorthand(const std::string& text,
 // Severity in effect `elapsed_ns` after the first frame: 0 outside the window, else 1..severity
 // along the ramp (each of the `severity` steps lasts ramp_s / severity).
 int severity_at(const FaultSpec& spec, DurationNs elapsed_ns);
+
+// Whether `type` names a fault that acts on a stream, not on pixels (camera_crash, frame_lost,
+// black, freeze, drop, delay, calibration_drift, timestamp_skew, stale_frames): tools that corrupt
+// one image refuse these by name.
+bool is_stream_fault(const std::string& type);
 
 // Index of a camera name in kCameraNames, or -1.
 int camera_index(const std::string& name);

@@ -1,4 +1,5 @@
-// Calibration drift and timestamp skew: seeded, severity-scaled, exact arithmetic.
+// Calibration drift, timestamp skew and stale frames' lag: seeded, severity-scaled, exact
+// arithmetic.
 #include "policy/message_faults.hpp"
 
 #include <algorithm>
@@ -83,6 +84,12 @@ DurationNs timestamp_skew_ns(int severity, std::optional<double> offset_ms) {
   if (severity <= 0) return 0;
   static constexpr double kMs[] = {5, 10, 20, 50, 100};
   const double ms = offset_ms ? *offset_ms : kMs[level(severity)];
+  return static_cast<DurationNs>(std::llround(ms * 1e6));
+}
+
+DurationNs stale_frames_ns(int severity, std::optional<double> delay_ms) {
+  if (severity <= 0) return 0;
+  const double ms = delay_ms ? *delay_ms : kStaleFramePeriods[level(severity)] * 1000.0 / 12.0;
   return static_cast<DurationNs>(std::llround(ms * 1e6));
 }
 

@@ -9,6 +9,9 @@
 // - timestamp_skew: capture stamps offset by a fixed amount, as a camera whose clock lost its PTP
 // sync, or a driver
 //   that stamps on arrival instead of at exposure.
+// - stale_frames: a camera's frames reach the consumer late by a fixed lag and keep their true
+//   capture stamps, as behind a filling driver queue or a stalled link: a consumer fusing by stamp
+//   gets old images. The stamps stay, the output time moves (the runtime's delay machinery).
 // Pure arithmetic: the runtime maps it onto msgs::CameraFrame (runtime/engine_policy.hpp).
 #pragma once
 
@@ -47,6 +50,12 @@ void apply_drift(const CalibrationDrift& drift, Calibration& calibration);
 // lasts 83 ms). `offset_ms` (a configured amount, either sign) replaces the table. Severity 0: no
 // offset.
 DurationNs timestamp_skew_ns(int severity, std::optional<double> offset_ms = std::nullopt);
+
+// Severity 1..5: the lag in frame periods of a 12 Hz camera (nuScenes' rate, 83.3 ms a frame):
+// 1/2/3/5/8 periods = 83.3/166.7/250/416.7/666.7 ms, rounded to the ns. `delay_ms` (a configured
+// amount, >= 0) replaces the table. Severity 0: no lag.
+DurationNs stale_frames_ns(int severity, std::optional<double> delay_ms = std::nullopt);
+inline constexpr int kStaleFramePeriods[] = {1, 2, 3, 5, 8};
 
 // What the message faults of one frame change; several faults on a frame add up (rotations compose,
 // focal scales multiply).

@@ -15,6 +15,27 @@ namespace faultline::scoring {
 inline constexpr std::array<const char*, 8> kRoboBevCorruptions = {
     "camera_crash", "frame_lost", "color_quant", "motion_blur",
     "brightness",   "low_light",  "fog",         "snow"};
+// The RoboDrive Challenge 2024's 18 camera corruptions (the `corruptions` list of track 1's
+// config in robodrive-24/toolkit), in Faultline's names: `faultline benchmark --suite robodrive18`.
+inline constexpr std::array<const char*, 18> kRoboDrive18Corruptions = {  // RoboDrive's order
+    "brightness",
+    "dark",
+    "fog",
+    "frost",
+    "snow",
+    "contrast",
+    "defocus_blur",
+    "glass_blur",
+    "motion_blur",
+    "zoom_blur",
+    "elastic_transform",
+    "color_quant",
+    "gaussian_noise",
+    "impulse_noise",
+    "shot_noise",
+    "iso_noise",
+    "pixelate",
+    "jpeg_compression"};
 inline constexpr std::array<const char*, 3> kSeverityLevels = {"easy", "mid", "hard"};
 
 struct CorruptionScores {

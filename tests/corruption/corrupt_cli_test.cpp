@@ -85,6 +85,14 @@ TEST(CorruptCliTest, BadTypeSeverityAndFilesAreNamedErrors) {
   auto r = run_faultline("corrupt --type rain --severity 2 --in " + in + " --out " + out);
   EXPECT_NE(r.exit_code, 0);
   EXPECT_NE(r.output.find("rain"), std::string::npos) << r.output;
+  // A stream fault is a known name, but one image gives it nothing to act on.
+  for (const char* type : {"stale_frames", "timestamp_skew", "camera_crash"}) {
+    r = run_faultline("corrupt --type " + std::string(type) + " --in " + in + " --out " + out);
+    EXPECT_EQ(r.exit_code, 2);
+    EXPECT_NE(r.output.find("--type " + std::string(type) + " is a stream fault"),
+              std::string::npos)
+        << r.output;
+  }
   r = run_faultline("corrupt --type fog --severity 7 --in " + in + " --out " + out);
   EXPECT_NE(r.exit_code, 0);
   EXPECT_NE(r.output.find("severity"), std::string::npos) << r.output;

@@ -24,6 +24,7 @@
 #include "fault.pb.h"
 #include "foxglove/CompressedImage.pb.h"
 #include "foxglove/SceneUpdate.pb.h"
+#include "policy/message_faults.hpp"
 #include "runtime/bag_layout.hpp"
 #include "runtime/engine_policy.hpp"
 #include "runtime/player_loop.hpp"
@@ -313,6 +314,52 @@ TEST_F(BagConvertTest, FaultsAreBakedInWithTheInjectorPolicy) {
   std::size_t not_passed = 0;
   for (const auto& e : cc.faults) not_passed += e.state().action() != msgs::FAULT_ACTION_PASS;
   EXPECT_GT(not_passed, 0u);
+}
+
+// stale_frames in a bag: a lagged frame is written at its late log (and publish) time, log time +
+// the lag, with its original capture stamp; it keeps its place in the file. Nothing is dropped.
+TEST_F(BagConvertTest, StaleFramesAreLoggedLateWithTheirCaptureStamps) {
+  const std::string bag = out("stale.mcap");
+  auto counts = convert(bag, {}, {"stale_frames/2"});
+  ASSERT_TRUE(counts.is_ok()) << counts.status().to_string();
+  EXPECT_EQ(counts->faulted_frames, counts->frames);
+  EXPECT_EQ(counts->changed_frames, 0u);
+  struct Logged {
+    StampNs log_ns = 0, publish_ns = 0;
+    msgs::CameraFrame frame;
+  };
+  std::map<std::string, std::vector<Logged>> by_topic;
+  auto reader = bag::Reader::open(bag);
+  ASSERT_TRUE(reader.is_ok());
+  auto scan = (*reader)->read_linear({}, [&](const bag::MessageView& v) {
+    if (v.channel->message_encoding != kMultipartEncoding) return true;
+    auto mp = decode_multipart(v.data);
+    EXPECT_TRUE(mp.is_ok());
+    Logged l{v.log_time_ns, v.publish_time_ns, {}};
+    EXPECT_TRUE(l.frame.ParseFromArray(mp->header.data(), static_cast<int>(mp->header.size())));
+    by_topic[v.channel->metadata.at(kMetaTopic)].push_back(std::move(l));
+    return true;
+  });
+  ASSERT_TRUE(scan.is_ok());
+  const DurationNs lag = policy::stale_frames_ns(2);
+  ASSERT_EQ(lag, 166'666'667);
+  std::size_t checked = 0;
+  for (const char* cam : {"cam_front", "cam_back_left"}) {
+    const auto& clean = by_topic.at(std::string("/") + cam + "/image_rect_compressed");
+    const auto& late = by_topic.at(std::string("/faulty/") + cam + "/image_rect_compressed");
+    ASSERT_EQ(clean.size(), late.size()) << cam;
+    for (std::size_t i = 0; i < clean.size(); ++i) {
+      EXPECT_EQ(late[i].frame.header().capture_stamp_ns(),
+                clean[i].frame.header().capture_stamp_ns());
+      EXPECT_EQ(late[i].log_ns, clean[i].log_ns + lag) << cam << " frame " << i;
+      EXPECT_EQ(late[i].publish_ns, late[i].log_ns);
+      EXPECT_EQ(late[i].frame.fault().action(), msgs::FAULT_ACTION_DELAY);
+      ASSERT_EQ(late[i].frame.fault().faults_size(), 1);
+      EXPECT_EQ(late[i].frame.fault().faults(0).name(), "stale_frames");
+      ++checked;
+    }
+  }
+  EXPECT_GT(checked, 20u);
 }
 
 }  // namespace

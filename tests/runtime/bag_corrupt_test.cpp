@@ -697,6 +697,38 @@ TEST_F(BagCorruptTest, TemporalFaultsDropFreezeAndBlackFrames) {
   EXPECT_EQ(drops, 2);
 }
 
+// stale_frames on a ROS 2 topic: every frame is written at its log and publish time + the lag
+// with its bytes (and header stamp) untouched, in its place in the file; none is dropped.
+TEST_F(BagCorruptTest, StaleFramesMoveLogTimesAndKeepStamps) {
+  const std::string in = write_mcap();
+  const std::string schedule = (dir_ / "stale.yaml").string();
+  std::ofstream(schedule) << "/cam/bgr:\n  - {type: stale_frames, delay_ms: 250}\n";
+  auto cfg = config(in, "out.mcap");
+  cfg.faults = load_fault_schedule(schedule, corruption::RngMode::Fast);
+  auto counts = corrupt_bag(cfg, stop_);
+  ASSERT_TRUE(counts) << counts.status().to_string();
+  EXPECT_EQ(counts->delayed, static_cast<std::uint64_t>(kFrames));
+  EXPECT_EQ(counts->dropped, 0u);
+  const Bag a = read_bag(in), b = read_bag(cfg.output);
+  const auto src = a.on("/cam/bgr"), dst = b.on("/cam/bgr");
+  ASSERT_EQ(dst.size(), src.size());
+  for (std::size_t i = 0; i < src.size(); ++i) {
+    EXPECT_EQ(dst[i]->log_ns, src[i]->log_ns + 250'000'000) << i;
+    EXPECT_EQ(dst[i]->publish_ns, src[i]->publish_ns + 250'000'000) << i;
+    EXPECT_EQ(dst[i]->data, src[i]->data) << "bytes and header stamp kept, frame " << i;
+  }
+  int delayed = 0;
+  for (const Message* e : b.on("/faultline/faults")) {
+    auto v = event_values(e->data);
+    if (v["topic"] != "/cam/bgr") continue;
+    EXPECT_EQ(v["action"], "delay");
+    EXPECT_EQ(v["delay_ns"], "250000000");
+    EXPECT_EQ(v["fault"], "stale_frames");
+    ++delayed;
+  }
+  EXPECT_EQ(delayed, kFrames);
+}
+
 TEST_F(BagCorruptTest, Yuv422BlackFrameIsVideoRangeBlack) {
   // A black frame written back as UYVY: the BT.601 limited-range matrix that COLOR_YUV2BGR_UYVY
   // inverts.
