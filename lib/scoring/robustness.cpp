@@ -51,6 +51,17 @@ std::string canonical_corruption(const std::string& name) {
   return out;
 }
 
+namespace {
+// RoboDrive and the injector call it "dark", RoboBEV's baseline tables "low_light": one corruption.
+bool same_corruption(const std::string& a, const std::string& b) {
+  auto key = [](const std::string& name) {
+    const std::string c = canonical_corruption(name);
+    return c == "dark" ? std::string("low_light") : c;
+  };
+  return key(a) == key(b);
+}
+}  // namespace
+
 int severity_index(const std::string& level) {
   std::string l;
   for (char c : level) l.push_back(static_cast<char>(std::tolower(static_cast<unsigned char>(c))));
@@ -106,7 +117,7 @@ Result<RobustnessSummary> compute_robustness(const DetectorScores& model,
     r.rr = r.mean_nds / model.clean_nds;
     r.ce = std::numeric_limits<double>::quiet_NaN();
     for (const CorruptionScores& b : baseline.corruptions) {
-      if (b.name != c.name) continue;
+      if (!same_corruption(b.name, c.name)) continue;
       if (b.nds_by_level.size() != c.nds_by_level.size()) {
         return Status(StatusCode::kInvalidArgument,
                       model.name + ": corruption " + c.name + " has " +

@@ -58,6 +58,19 @@ TEST(RobustnessTest, UnknownCorruptionHasNoCeAndLevelMismatchFails) {
   EXPECT_NE(bad.status().message().find("fog"), std::string::npos);
 }
 
+// RoboDrive's suite runs "dark"; the DETR3D baseline table calls it "low_light".
+TEST(RobustnessTest, DarkIsScoredAgainstTheBaselinesLowLight) {
+  DetectorScores dark{"m", 0.5, {{"dark", {0.3, 0.25, 0.2}}}};
+  DetectorScores low_light{"m", 0.5, {{"low_light", {0.3, 0.25, 0.2}}}};
+  auto a = compute_robustness(dark, detr3d_baseline());
+  auto b = compute_robustness(low_light, detr3d_baseline());
+  ASSERT_TRUE(a.is_ok());
+  ASSERT_TRUE(b.is_ok());
+  ASSERT_FALSE(std::isnan(a->corruptions[0].ce));
+  EXPECT_DOUBLE_EQ(a->corruptions[0].ce, b->corruptions[0].ce);
+  EXPECT_EQ(a->corruptions[0].name, "dark");
+}
+
 TEST(RobustnessTest, TablesNameTheLevelsThatWereRun) {
   DetectorScores model = detr3d_baseline();
   DetectorScores base = detr3d_baseline();
