@@ -18,7 +18,6 @@
 
 namespace faultline::exporter {
 
-std::uint64_t fnv1a64(const std::string& text);
 std::uint64_t splitmix64(std::uint64_t x);
 
 std::uint64_t derive_seed64(std::uint64_t run_seed, Condition c, corruption::Level level,

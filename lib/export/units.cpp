@@ -5,10 +5,9 @@
 #include <rapidjson/stringbuffer.h>
 #include <unistd.h>
 
-#include <cinttypes>
-#include <cstdio>
 #include <filesystem>
 
+#include "common/hash.hpp"
 #include "dataset/nuscenes.hpp"
 #include "export/manifest.hpp"
 #include "export/seeds.hpp"
@@ -75,12 +74,6 @@ std::string plan_text(const ExportPlan& p, bool with_id) {
   w.EndArray();
   w.EndObject();
   return std::string(buf.GetString(), buf.GetSize()) + "\n";
-}
-
-std::string fnv1a64_hex(const std::string& text) {
-  char hex[17];
-  std::snprintf(hex, sizeof hex, "%016" PRIx64, fnv1a64(text));
-  return hex;
 }
 
 Status write_text(const std::string& path, const std::string& text) {

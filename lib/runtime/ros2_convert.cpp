@@ -7,6 +7,7 @@
 
 #include "common/config.hpp"
 #include "fault.pb.h"
+#include "ros2/fault_report.hpp"
 #include "ros2/messages.hpp"
 #include "ros2/naming.hpp"
 
@@ -76,39 +77,31 @@ std::string number(double v) {
   return s;
 }
 
-// The injector's decision for one frame as a DiagnosticArray: level OK (pass), WARN (corrupt,
-// delay) or ERROR (drop, black, freeze); values name the action, the frame and every fault's
-// parameters.
+// The injector's decision for one frame as a DiagnosticArray (ros2/fault_report.hpp): level OK
+// (pass), WARN (corrupt, delay) or ERROR (drop, black, freeze); values name the action, the frame
+// and every fault's parameters.
 ros2::DiagnosticArray fault_report(const dataset::CameraFrameRecord& f, std::uint64_t source_seq,
                                    const FaultDecision& d) {
-  ros2::DiagnosticArray a;
-  a.header = {ros2::time_from_us(f.timestamp_us), f.channel};
-  ros2::DiagnosticStatus s;
-  s.level = action_level(d.action);
-  s.name = "faultline/" + f.channel;
-  s.hardware_id = f.channel;
-  std::string faults;
-  for (const auto& fault : d.faults) {
-    faults += (faults.empty() ? "" : " ") + fault.name() + "/" + std::to_string(fault.severity());
-  }
-  s.message = action_name(d.action) + (faults.empty() ? "" : " " + faults);
-  s.values.push_back({"action", action_name(d.action)});
-  s.values.push_back({"source_seq", std::to_string(source_seq)});
-  s.values.push_back({"sample_data_token", f.sample_data_token});
-  s.values.push_back({"sample_token", f.sample_token});
+  ros2::FaultReport r;
+  r.header = {ros2::time_from_us(f.timestamp_us), f.channel};
+  r.level = action_level(d.action);
+  r.name = "faultline/" + f.channel;
+  r.hardware_id = f.channel;
+  r.action = action_name(d.action);
+  r.values.push_back({"action", r.action});
+  r.values.push_back({"source_seq", std::to_string(source_seq)});
+  r.values.push_back({"sample_data_token", f.sample_data_token});
+  r.values.push_back({"sample_token", f.sample_token});
   if (d.action == msgs::FAULT_ACTION_DELAY)
-    s.values.push_back({"delay_ns", std::to_string(d.delay_ns)});
+    r.values.push_back({"delay_ns", std::to_string(d.delay_ns)});
   for (const auto& fault : d.faults) {
-    s.values.push_back({fault.name() + ".severity", std::to_string(fault.severity())});
-    s.values.push_back({fault.name() + ".seed", std::to_string(fault.seed())});
-    s.values.push_back({fault.name() + ".rng", fault.rng()});
+    ros2::ReportedFault rf{fault.name(), fault.severity(), fault.seed(), fault.rng(), {}};
     const std::map<std::string, double> params(fault.params().begin(),
                                                fault.params().end());  // sorted
-    for (const auto& [key, value] : params)
-      s.values.push_back({fault.name() + "." + key, number(value)});
+    for (const auto& [key, value] : params) rf.params.push_back({key, number(value)});
+    r.faults.push_back(std::move(rf));
   }
-  a.status.push_back(std::move(s));
-  return a;
+  return ros2::to_diagnostic_array(r);
 }
 
 // Ground-truth boxes of one sample: a DELETEALL marker, then one cube per box in `map` (ns =

@@ -10,6 +10,7 @@
 
 #include "common/bounded_read.hpp"
 #include "common/config.hpp"
+#include "common/logging.hpp"
 #include "transport/endpoint.hpp"
 #include "transport/zap.hpp"
 
@@ -45,7 +46,7 @@ void check_bind_allowed(const AccessConfig& access, const std::string& endpoint)
                       "(curve_secret_key_file) to authenticate");
   }
   if (!access.curve()) {
-    spdlog::warn(
+    logging::node_logger()->warn(
         "{} bound beyond loopback without CURVE: anyone on the network can read and send its "
         "streams",
         endpoint);

@@ -21,6 +21,7 @@
 #include <sstream>
 
 #include "common/config.hpp"
+#include "common/hash.hpp"
 
 namespace faultline::transport {
 namespace {
@@ -92,20 +93,13 @@ bool writer_alive(const std::string& path, long* pid_out) {
   return start == 0 || process_start_ticks(pid) == start;
 }
 
-std::uint64_t fnv1a(const std::string& text) {
-  std::uint64_t h = 0xcbf29ce484222325ULL;
-  for (const unsigned char c : text) h = (h ^ c) * 0x100000001b3ULL;
-  return h;
-}
-
 std::uint64_t round_up(std::uint64_t v, std::uint64_t to) { return (v + to - 1) / to * to; }
 
 }  // namespace
 
 std::string shm_ring_path(const std::string& dir, const std::string& node,
                           const std::string& endpoint) {
-  char hex[17];
-  std::snprintf(hex, sizeof hex, "%016llx", static_cast<unsigned long long>(fnv1a(endpoint)));
+  const std::string hex = fnv1a64_hex(endpoint);
   std::string safe_node;
   for (const char c : node)
     safe_node += std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '-' ? c : '_';

@@ -8,6 +8,7 @@
 #include <cstring>
 
 #include "common/config.hpp"
+#include "common/logging.hpp"
 #include "transport/context.hpp"
 #include "transport/endpoint.hpp"
 #include "transport/log_limiter.hpp"
@@ -20,6 +21,18 @@ LogLimiter& malformed_limiter() {
   thread_local LogLimiter limiter;
   return limiter;
 }
+
+// This socket's CURVE public key in Z85, as a refusing peer sees it ("" when none is set).
+std::string own_public_key(zmq::socket_t& socket) {
+  char key[41] = {};
+  std::size_t size = sizeof key;
+  if (zmq_getsockopt(socket.handle(), ZMQ_CURVE_PUBLICKEY, key, &size) != 0 || size != sizeof key) {
+    return {};
+  }
+  const std::string z85(key, 40);
+  return z85.find_first_not_of('0') == std::string::npos ? std::string() : z85;
+}
+
 }  // namespace
 
 std::size_t ReceivedMessage::size_bytes() const {
@@ -38,7 +51,15 @@ RawSubscriber::~RawSubscriber() {
   if (socket_.handle() != nullptr) (void)zmq_socket_monitor(socket_.handle(), nullptr, 0);
 }
 
-RawSubscriber::RawSubscriber(const SubscriberConfig& config) : config_(config) { open_socket(); }
+RawSubscriber::RawSubscriber(const SubscriberConfig& config)
+    : config_(config),
+      log_(logging::node_logger()),
+      handshakes_(!config.bind, config.access.curve(), "", "publisher", log_) {
+  open_socket();
+  // The key is known once apply_curve has set it; no event is read before this.
+  handshakes_ = HandshakeTracker(!config_.bind, config_.access.curve(), own_public_key(socket_),
+                                 "publisher", log_);
+}
 
 void RawSubscriber::open_socket() {
   socket_ =
@@ -61,7 +82,8 @@ void RawSubscriber::open_socket() {
       "inproc://faultline-subscriber-monitor-" + std::to_string(++monitor_ids);
   constexpr int kEvents = ZMQ_EVENT_DISCONNECTED | ZMQ_EVENT_CONNECT_RETRIED | ZMQ_EVENT_CONNECTED |
                           ZMQ_EVENT_HANDSHAKE_FAILED_NO_DETAIL |
-                          ZMQ_EVENT_HANDSHAKE_FAILED_PROTOCOL | ZMQ_EVENT_HANDSHAKE_FAILED_AUTH;
+                          ZMQ_EVENT_HANDSHAKE_FAILED_PROTOCOL | ZMQ_EVENT_HANDSHAKE_FAILED_AUTH |
+                          ZMQ_EVENT_HANDSHAKE_SUCCEEDED;
   if (zmq_socket_monitor(socket_.handle(), monitor_address.c_str(), kEvents) != 0) {
     throw ConfigError("cannot monitor the subscriber socket: " +
                       std::string(zmq_strerror(zmq_errno())));
@@ -102,31 +124,34 @@ void RawSubscriber::handle_monitor_events() {
     std::string where(static_cast<const char*>(address.data()), address.size());
     if (id == ZMQ_EVENT_HANDSHAKE_FAILED_NO_DETAIL || id == ZMQ_EVENT_HANDSHAKE_FAILED_PROTOCOL ||
         id == ZMQ_EVENT_HANDSHAKE_FAILED_AUTH) {
-      ++handshake_failures_;
-      thread_local LogLimiter limiter;
-      if (limiter.allow()) {
-        spdlog::error(
-            "handshake with {} failed ({}; {} so far): wrong CURVE keys on either side, or a peer "
-            "with{} CURVE; not retried",
-            where, id == ZMQ_EVENT_HANDSHAKE_FAILED_AUTH ? "refused by the server" : "protocol",
-            handshake_failures_, config_.access.curve() ? "out" : "");
+      std::uint32_t value = 0;  // the ZAP status, protocol error code or errno
+      if (event.size() >= sizeof id + sizeof value) {
+        std::memcpy(&value, static_cast<const char*>(event.data()) + sizeof id, sizeof value);
       }
-      refused_endpoints_.insert(where);
+      handshakes_.failed(where, id, value);
       awaiting_reconnect_.erase(where);
       continue;
     }
+    if (id == ZMQ_EVENT_HANDSHAKE_SUCCEEDED) {
+      handshakes_.succeeded(where);
+      awaiting_reconnect_.erase(where);
+      continue;
+    }
+    // The close of a connection whose handshake failed: counted and logged as that failure; libzmq
+    // does not reconnect it, and neither does this socket (the keys will not change by themselves).
+    if (id == ZMQ_EVENT_DISCONNECTED && handshakes_.closes_failed_handshake(where)) continue;
     if (id != ZMQ_EVENT_DISCONNECTED) {
       awaiting_reconnect_.erase(where);  // libzmq reconnects (or has) by itself
       continue;
     }
     ++disconnects_;
-    spdlog::info(
+    log_->info(
         "connection {} closed ({} so far): the peer exited, or sent a part over max_msg_bytes ({} "
         "bytes)",
         where, disconnects_, config_.max_msg_bytes);
     // A bound socket's peers reconnect themselves; a connecting one waits to see whether libzmq
-    // does. A refused handshake is not retried: the keys will not change by themselves.
-    if (!config_.bind && refused_endpoints_.count(where) == 0) {
+    // does.
+    if (!config_.bind) {
       awaiting_reconnect_[std::move(where)] = monotonic_now_ns() + kReconnectGraceNs;
     }
   }
@@ -160,11 +185,11 @@ void RawSubscriber::reconnect_if_abandoned() {
   try {
     open_socket();
   } catch (const std::exception& e) {
-    spdlog::error("cannot reopen the subscriber socket after {} was cut: {}", cut, e.what());
+    log_->error("cannot reopen the subscriber socket after {} was cut: {}", cut, e.what());
     return;
   }
   ++reconnects_;
-  spdlog::warn(
+  log_->warn(
       "connection {} was cut and libzmq did not reconnect it (a protocol error, e.g. a part over "
       "max_msg_bytes = {} bytes): socket recreated and reconnected ({} so far); messages in flight "
       "show as seq gaps",
@@ -208,8 +233,8 @@ Result<ReceivedMessage> RawSubscriber::read_one(bool wait) {
   if (msg.parts_.size() != 2 && msg.parts_.size() != 3) {
     ++malformed_;
     if (malformed_limiter().allow()) {
-      spdlog::warn("malformed message: {} frames (expected 2 or 3), dropped; {} malformed so far",
-                   msg.parts_.size(), malformed_);
+      log_->warn("malformed message: {} frames (expected 2 or 3), dropped; {} malformed so far",
+                 msg.parts_.size(), malformed_);
     }
     return Status{StatusCode::kCorruptData,
                   "wrong frame count " + std::to_string(msg.parts_.size())};

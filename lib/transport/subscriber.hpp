@@ -11,19 +11,21 @@
 // connection and, for that protocol error, never reconnects (session_base.cpp: only a connection or
 // timeout error on a connecting session reconnects; ZMQ_RECONNECT_IVL does not apply). Faultline's
 // publishers refuse such parts. A socket monitor sees every closed connection, which is counted
-// (disconnects()) and logged. On a connecting socket, libzmq announces its own reconnect
-// (ZMQ_EVENT_CONNECT_RETRIED) right after the close; when that does not come within
-// kReconnectGraceNs, the whole socket is recreated between messages (whole messages already queued
-// are kept; a zmq_disconnect on a pipe that may hold a message aborted libzmq 4.3.4 in fq.cpp) and
-// counted in reconnects(). Messages in flight at that moment are lost and show as seq gaps
-// downstream. Messages with a wrong frame count are counted as malformed and skipped (receive()
-// returns the next good one). A RawSubscriber belongs to one thread.
+// (disconnects()) and logged; the close of a connection whose handshake failed (CURVE) is counted
+// and logged as that failure instead (handshake_failures(), refused_by_peer()). On a connecting
+// socket, libzmq announces its own reconnect (ZMQ_EVENT_CONNECT_RETRIED) right after the close;
+// when that does not come within kReconnectGraceNs, the whole socket is recreated between messages
+// (whole messages already queued are kept; a zmq_disconnect on a pipe that may hold a message
+// aborted libzmq 4.3.4 in fq.cpp) and counted in reconnects(). Messages in flight at that moment
+// are lost and show as seq gaps downstream. Messages with a wrong frame count are counted as
+// malformed and skipped (receive() returns the next good one). A RawSubscriber belongs to one
+// thread.
 #pragma once
 
 #include <cstdint>
 #include <deque>
 #include <map>
-#include <set>
+#include <memory>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -31,6 +33,7 @@
 
 #include "common/clock.hpp"
 #include "common/status.hpp"
+#include "transport/handshake.hpp"
 #include "transport/publisher.hpp"
 
 namespace faultline::transport {
@@ -104,9 +107,14 @@ class RawSubscriber {
   // Times this (connecting) socket was recreated because libzmq did not reconnect a closed
   // connection.
   std::uint64_t reconnects() const { return reconnects_; }
-  // Handshakes that failed (CURVE: a wrong key on either side, a peer without CURVE; each logged).
-  // libzmq does not retry a refused connection, and neither does this socket.
-  std::uint64_t handshake_failures() const { return handshake_failures_; }
+  // Handshakes that failed (CURVE: a wrong key on either side, a peer without CURVE); each
+  // endpoint's cause is logged once (transport/handshake.hpp). libzmq does not retry a failed
+  // handshake, and neither does this socket.
+  std::uint64_t handshake_failures() const { return handshakes_.failures(); }
+  // A connecting CURVE socket: handshakes refused by the publisher's ZAP handler because this
+  // node's public key is not in its allowed-clients list (logged once per endpoint, naming it and
+  // the key). Neither libzmq nor this socket retries them.
+  std::uint64_t refused_by_peer() const { return handshakes_.refused_by_peer(); }
   // A binding CURVE socket: clients refused by its allowed-clients list.
   std::uint64_t auth_refused() const;
 
@@ -131,9 +139,9 @@ class RawSubscriber {
   std::uint64_t malformed_ = 0;
   std::uint64_t disconnects_ = 0;
   std::uint64_t reconnects_ = 0;
-  std::uint64_t handshake_failures_ = 0;
+  std::shared_ptr<spdlog::logger> log_;  // the node's (logging::node_logger)
+  HandshakeTracker handshakes_;
   std::string zap_domain_;
-  std::set<std::string> refused_endpoints_;  // handshake failed: not reconnected when closed
   // Connecting endpoints closed without a reconnect announced yet, with the deadline of their
   // grace.
   std::map<std::string, StampNs> awaiting_reconnect_;

@@ -3,12 +3,14 @@
 #include <spdlog/spdlog.h>
 
 #include <map>
+#include <memory>
 #include <mutex>
 #include <thread>
 #include <vector>
 #include <zmq.hpp>
 
 #include "common/config.hpp"
+#include "common/logging.hpp"
 #include "transport/context.hpp"
 #include "transport/log_limiter.hpp"
 
@@ -21,6 +23,9 @@ struct ZapState {
   std::mutex mutex;
   std::map<std::string, std::set<std::string>> allowed;  // domain -> 32-byte binary public keys
   std::map<std::string, std::uint64_t> refused;          // domain -> clients refused
+  // domain -> the logger of the node that registered it (its refusals are that node's news).
+  std::map<std::string, std::shared_ptr<spdlog::logger>> log;
+  std::map<std::string, LogLimiter> limiter;  // domain -> its refusal lines' rate limit
   std::uint64_t next_domain = 0;
   bool started = false;
 };
@@ -64,19 +69,18 @@ bool decide(const std::vector<zmq::message_t>& request, std::string& why) {
     return true;
   }
   const std::uint64_t n = ++s.refused[domain];
-  thread_local LogLimiter limiter;
-  if (limiter.allow()) {
-    spdlog::warn(
+  if (s.limiter[domain].allow()) {
+    s.log[domain]->warn(
         "refused a {} client from {} with public key {} (not in the allowed-clients list; {} "
-        "refused in "
-        "this domain so far)",
+        "refused in this domain so far)",
         mechanism, address, z85(key), n);
   }
   why = "client key not allowed";
   return false;
 }
 
-void serve(zmq::socket_t socket) {
+// `log`: the logger of the node that started the handler, for the handler's own failures.
+void serve(zmq::socket_t socket, std::shared_ptr<spdlog::logger> log) {
   for (;;) {
     std::vector<zmq::message_t> request;
     try {
@@ -98,7 +102,8 @@ void serve(zmq::socket_t socket) {
       socket.send(zmq::message_t(), zmq::send_flags::none);  // no metadata
     } catch (const zmq::error_t& e) {
       if (e.num() == ETERM) return;  // the context terminates: close and end
-      spdlog::error("ZAP handler: {}", e.what());
+      log->error("ZAP handler: {}; CURVE clients of this process can no longer be authenticated",
+                 e.what());
       return;
     }
   }
@@ -116,6 +121,7 @@ std::string register_zap_domain(const std::set<std::string>& allowed_public_keys
     }
     binary.insert(std::move(key));
   }
+  auto log = logging::node_logger();
   ZapState& s = state();
   std::lock_guard<std::mutex> lock(s.mutex);
   if (!s.started) {
@@ -128,11 +134,12 @@ std::string register_zap_domain(const std::set<std::string>& allowed_public_keys
       throw ConfigError(std::string("cannot start the ZAP handler at ") + kZapEndpoint + ": " +
                         e.what());
     }
-    std::thread(serve, std::move(socket)).detach();
+    std::thread(serve, std::move(socket), log).detach();
     s.started = true;
   }
   std::string domain = "faultline-" + std::to_string(++s.next_domain);
   s.allowed[domain] = std::move(binary);
+  s.log[domain] = std::move(log);
   return domain;
 }
 

@@ -12,7 +12,8 @@ namespace faultline::transport {
 // set as the socket's ZMQ_ZAP_DOMAIN before it binds. Starts the handler on first use (one thread,
 // bound to inproc://zeromq.zap.01 on the shared context; it ends when the context terminates).
 // Thread-safe. Requests for a domain not registered here (a CURVE server without a list) are
-// accepted.
+// accepted. The domain's refusals are logged through the calling node's logger
+// (logging::node_logger(), taken now), never through whatever spdlog's default is at that moment.
 std::string register_zap_domain(const std::set<std::string>& allowed_public_keys_z85);
 // Clients refused so far in `domain` (0 for an unknown domain). Thread-safe.
 std::uint64_t zap_refused(const std::string& domain);

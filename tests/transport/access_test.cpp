@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "common/config.hpp"
+#include "common/logging.hpp"
 #include "test_util.hpp"
 #include "transport/publisher.hpp"
 #include "transport/subscriber.hpp"
@@ -108,6 +109,7 @@ TEST_F(CurveTest, TheRightKeyReceivesAndAWrongClientKeyIsRefusedCountedAndGetsNo
   pc.snd_hwm = 64;  // lockstep sends can outrun libzmq's credit refresh at a small HWM (drops, not
                     // this test)
   Publisher pub(pc);
+  testing::LogCapture log;
   RawSubscriber good(Sub(pub.endpoint(), Client("good")));
   RawSubscriber bad(Sub(pub.endpoint(), Client("bad")));
   ASSERT_TRUE(pub.wait_for_subscribers("/raw", 1, 20 * kNsPerSec).is_ok());
@@ -128,6 +130,48 @@ TEST_F(CurveTest, TheRightKeyReceivesAndAWrongClientKeyIsRefusedCountedAndGetsNo
   EXPECT_EQ(bad.receive(100 * kNsPerMs).status().code(), StatusCode::kWouldBlock);
   EXPECT_EQ(good.handshake_failures(), 0u);
   EXPECT_EQ(bad.reconnects(), 0u);  // a refusal is not retried
+  // The refused side says so once, naming the endpoint and its key, and counts it as a refusal,
+  // not as a closed data connection or a silence.
+  EXPECT_EQ(bad.refused_by_peer(), 1u);
+  EXPECT_EQ(bad.handshake_failures(), 1u);
+  EXPECT_EQ(bad.disconnects(), 0u);
+  EXPECT_EQ(good.refused_by_peer(), 0u);
+  EXPECT_EQ(log.count("refused by the publisher at " + pub.endpoint() +
+                      ": its ZAP handler answered 400 (key not allowed): this node's CURVE public "
+                      "key " +
+                      read_curve_key(dir_ + "/bad.public")),
+            1)
+      << log.all();
+  EXPECT_EQ(log.count("connection " + pub.endpoint() + " closed"), 0) << log.all();
+}
+
+// The ZAP handler runs on its own thread: a refusal goes to the logger of the node that opened the
+// socket, named in the line, not to whatever spdlog's default logger is when the client knocks.
+TEST_F(CurveTest, TheZapHandlerLogsARefusalThroughThePublishingNodesLogger) {
+  const auto saved_default = spdlog::default_logger();
+  auto node = logging::make_node_logger("zap_test_node", "info");
+  testing::LogCapture node_log(node);
+  PublisherConfig pc;
+  pc.endpoint = "tcp://127.0.0.1:*";
+  pc.access = Server();
+  Publisher pub(pc);
+  auto other = std::make_shared<spdlog::logger>("other");
+  spdlog::set_default_logger(other);
+  testing::LogCapture other_log(other);
+  RawSubscriber bad(Sub(pub.endpoint(), Client("bad")));
+  const bool refused = testing::eventually(
+      [&] {
+        (void)bad.receive(10 * kNsPerMs);
+        return pub.auth_refused() >= 1 && bad.refused_by_peer() >= 1;
+      },
+      30 * kNsPerSec);
+  spdlog::set_default_logger(saved_default);
+  spdlog::drop("zap_test_node");
+  ASSERT_TRUE(refused);
+  const std::string zap_line = "refused a CURVE client from 127.0.0.1 with public key " +
+                               read_curve_key(dir_ + "/bad.public");
+  EXPECT_EQ(node_log.count(zap_line), 1) << node_log.all();
+  EXPECT_EQ(other_log.count("refused a CURVE client"), 0) << other_log.all();
 }
 
 TEST_F(CurveTest, AWrongServerKeyOrNoCurveAtAllGetsNothing) {
@@ -135,6 +179,7 @@ TEST_F(CurveTest, AWrongServerKeyOrNoCurveAtAllGetsNothing) {
   pc.endpoint = "tcp://127.0.0.1:*";
   pc.access = Server();
   Publisher pub(pc);
+  testing::LogCapture log;
   RawSubscriber wrong_server(Sub(pub.endpoint(), Client("good", /*server_key=*/"bad")));
   RawSubscriber plain(Sub(pub.endpoint(), AccessConfig{}));
   ASSERT_TRUE(testing::eventually(
@@ -148,6 +193,13 @@ TEST_F(CurveTest, AWrongServerKeyOrNoCurveAtAllGetsNothing) {
   ASSERT_TRUE(pub.send("/raw", "0", BytesPayload(32, 1)).is_ok());
   EXPECT_FALSE(wrong_server.receive(100 * kNsPerMs).is_ok());
   EXPECT_FALSE(plain.receive(10 * kNsPerMs).is_ok());
+  // Each cause once, in words that name what to fix; no refusal and no closed connection.
+  EXPECT_EQ(log.count("curve_server_public_key_file does not hold"), 1) << log.all();
+  EXPECT_EQ(log.count("the peer uses CURVE and this node has no curve_secret_key_file"), 1)
+      << log.all();
+  EXPECT_EQ(wrong_server.refused_by_peer() + plain.refused_by_peer(), 0u);
+  EXPECT_EQ(wrong_server.disconnects() + plain.disconnects(), 0u);
+  EXPECT_EQ(log.count("closed ("), 0) << log.all();
 }
 
 TEST_F(CurveTest, PushPullToABindingSinkWithCurve) {

@@ -3,10 +3,7 @@
 // the subscriber logs and counts the cut, recreates its socket, and receives the later frames,
 // checked here by sequence.
 #include <gtest/gtest.h>
-#include <spdlog/sinks/ringbuffer_sink.h>
-#include <spdlog/spdlog.h>
 
-#include <algorithm>
 #include <memory>
 #include <string>
 #include <vector>
@@ -22,28 +19,6 @@ namespace {
 Payload BytesPayload(std::size_t n, std::uint8_t fill) {
   return Payload::of(std::make_shared<const std::vector<std::uint8_t>>(n, fill));
 }
-
-// Captures what the library logs through spdlog's default logger for the life of the fixture.
-class LogCapture {
- public:
-  LogCapture() : ring_(std::make_shared<spdlog::sinks::ringbuffer_sink_mt>(256)) {
-    ring_->set_pattern("%l %v");
-    spdlog::default_logger()->sinks().push_back(ring_);
-  }
-  ~LogCapture() {
-    auto& sinks = spdlog::default_logger()->sinks();
-    sinks.erase(std::remove(sinks.begin(), sinks.end(), ring_), sinks.end());
-  }
-  int count(const std::string& needle) const {
-    int n = 0;
-    for (const auto& line : ring_->last_formatted())
-      n += line.find(needle) != std::string::npos ? 1 : 0;
-    return n;
-  }
-
- private:
-  std::shared_ptr<spdlog::sinks::ringbuffer_sink_mt> ring_;
-};
 
 class ReconnectTest : public ::testing::Test {
  protected:
@@ -89,7 +64,7 @@ class ReconnectTest : public ::testing::Test {
 };
 
 TEST_F(ReconnectTest, OversizePartIsCountedLoggedAndLaterFramesArriveAfterTheReconnect) {
-  LogCapture log;
+  testing::LogCapture log;
   ASSERT_TRUE(pub_.wait_for_subscribers("/raw", 1, 10 * kNsPerSec).is_ok());
   std::uint64_t seq = 0;
   for (; seq < kBefore; ++seq) {
