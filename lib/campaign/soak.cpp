@@ -16,6 +16,7 @@
 
 #include "camera_frame.pb.h"
 #include "campaign/benchmark.hpp"
+#include "campaign/soak_report.hpp"
 #include "detection.pb.h"
 #include "launch/supervisor.hpp"
 #include "scoring/evaluate.hpp"
@@ -27,6 +28,11 @@
 
 namespace faultline::campaign {
 namespace fs = std::filesystem;
+using soak_detail::fmt;
+using soak_detail::period_line;
+using soak_detail::periods_csv;
+using soak_detail::soak_json;
+using soak_detail::write_loop_results;
 
 double track_continuity(const std::vector<TrackPoint>& previous,
                         const std::vector<TrackPoint>& current, double radius_m) {
@@ -129,72 +135,6 @@ std::string camera_of(const std::string& topic) {
   return topic.substr(at + 1, end == std::string::npos ? std::string::npos : end - at - 1);
 }
 
-std::string fmt(double v, int prec = 3) {
-  char b[48];
-  std::snprintf(b, sizeof b, "%.*f", prec, std::isfinite(v) ? v : 0.0);
-  return b;
-}
-
-std::string json_escape(const std::string& s) {
-  std::string o;
-  for (char c : s) {
-    if (c == '"' || c == '\\') o += '\\';
-    if (static_cast<unsigned char>(c) < 0x20) continue;
-    o += c;
-  }
-  return o;
-}
-
-// Writes one loop's detections as a nuScenes submission; samples without output get an empty list,
-// so a detector that fell behind is scored on what it delivered.
-Status write_loop_results(const std::string& path, const std::vector<std::string>& split_samples,
-                          const std::unordered_map<std::string, msgs::DetectionArray>& got) {
-  std::ofstream out(path, std::ios::binary);
-  if (!out) return Status(StatusCode::kIoError, path + ": cannot write");
-  out << "{\"meta\": {\"use_camera\": true, \"use_lidar\": false, \"use_radar\": false, "
-         "\"use_map\": false, "
-         "\"use_external\": false}, \"results\": {";
-  char num[64];
-  auto put = [&](double v) {
-    std::snprintf(num, sizeof num, "%.9g", std::isfinite(v) ? v : 0.0);
-    out << num;
-  };
-  auto list = [&](const google::protobuf::RepeatedField<double>& v) {
-    out << "[";
-    for (int i = 0; i < v.size(); ++i) {
-      if (i) out << ", ";
-      put(v[i]);
-    }
-    out << "]";
-  };
-  for (std::size_t s = 0; s < split_samples.size(); ++s) {
-    out << (s ? ",\n" : "\n") << "\"" << split_samples[s] << "\": [";
-    auto it = got.find(split_samples[s]);
-    if (it != got.end()) {
-      int k = 0;
-      for (const auto& d : it->second.detections()) {
-        if (k++) out << ", ";
-        out << "{\"sample_token\": \"" << split_samples[s] << "\", \"translation\": ";
-        list(d.translation());
-        out << ", \"size\": ";
-        list(d.size());
-        out << ", \"rotation\": ";
-        list(d.rotation());
-        out << ", \"velocity\": ";
-        list(d.velocity());
-        out << ", \"detection_name\": \"" << json_escape(d.detection_name())
-            << "\", \"detection_score\": ";
-        put(d.detection_score());
-        out << ", \"attribute_name\": \"" << json_escape(d.attribute_name()) << "\"}";
-      }
-    }
-    out << "]";
-  }
-  out << "\n}}\n";
-  out.close();
-  return out ? Status::ok() : Status(StatusCode::kIoError, path + ": write failed");
-}
-
 std::vector<launch::ChildSpec> soak_children(const SoakOptions& o, const std::string& player,
                                              const std::string& frames, const std::string& det) {
   // In a soak every node must survive: each is required, so an exit ends the run and is reported.
@@ -258,184 +198,246 @@ struct PeriodAccumulator {
   std::size_t continuity_n = 0;
 };
 
-std::string period_line(const SoakPeriod& p) {
-  std::uint64_t in = 0, out = 0;
-  for (const auto& [k, v] : p.frames_in) in += v;
-  for (const auto& [k, v] : p.frames_out) out += v;
-  std::string mem;
-  for (const auto& m : p.memory) mem += " " + m.node + "=" + fmt(m.rss_mb, 1) + "MB";
-  return "period " + std::to_string(p.index) + " @" + fmt(p.end_s, 0) + "s: frames in " +
-         std::to_string(in) + " out " + std::to_string(out) + ", unintended drops " +
-         std::to_string(p.transport_drops) + ", injected drops " +
-         std::to_string(p.injected_drops) + ", samples " + std::to_string(p.samples_published) +
-         " -> detections " + std::to_string(p.detection_arrays) + ", latency p50/p99 " +
-         fmt(p.latency_ms_p50, 1) + "/" + fmt(p.latency_ms_p99, 1) + " ms, continuity " +
-         (p.continuity < 0 ? std::string("n/a") : fmt(p.continuity, 3)) + ", RSS" + mem;
-}
+// One soak: the nodes under a supervisor, the detections, sample boundaries and statistics they
+// publish, accumulated per period and scored per replay loop.
+class SoakRun {
+ public:
+  SoakRun(const SoakOptions& o, const std::atomic<bool>& stop, std::FILE* log)
+      : o_(o), stop_(stop), log_(log) {}
 
-std::string soak_json(const SoakOptions& o, const SoakResult& r) {
-  std::ostringstream js;
-  js << "{\n  \"dataroot\": \"" << json_escape(o.dataroot) << "\", \"version\": \"" << o.version
-     << "\", \"eval_set\": \"" << o.eval_set << "\",\n  \"duration_s\": " << fmt(o.duration_s, 1)
-     << ", \"period_s\": " << fmt(o.period_s, 1) << ", \"rate\": " << fmt(o.rate, 3)
-     << ", \"corruption\": \"" << json_escape(o.corruption) << "\", \"injector_params_file\": \""
-     << json_escape(o.injector_params_file) << "\",\n  \"detector\": \""
-     << json_escape(o.detector_cmd.empty() ? "faultline detector" : o.detector_cmd)
-     << "\",\n  \"rss_growth_mb\": " << fmt(r.rss_growth_mb, 1) << ",\n  \"node_failures\": [";
-  for (std::size_t i = 0; i < r.node_failures.size(); ++i) {
-    js << (i ? ", " : "") << "\"" << json_escape(r.node_failures[i]) << "\"";
-  }
-  js << "],\n  \"periods\": [";
-  for (std::size_t i = 0; i < r.periods.size(); ++i) {
-    const auto& p = r.periods[i];
-    js << (i ? "," : "") << "\n    {\"index\": " << p.index << ", \"end_s\": " << fmt(p.end_s, 1)
-       << ", \"frames_in\": {";
-    int k = 0;
-    for (const auto& [cam, n] : p.frames_in) js << (k++ ? ", " : "") << "\"" << cam << "\": " << n;
-    js << "}, \"frames_out\": {";
-    k = 0;
-    for (const auto& [cam, n] : p.frames_out) js << (k++ ? ", " : "") << "\"" << cam << "\": " << n;
-    js << "}, \"unintended_drops\": " << p.transport_drops << ", \"superseded\": " << p.superseded
-       << ", \"injected_drops\": " << p.injected_drops
-       << ", \"samples_published\": " << p.samples_published
-       << ", \"detection_arrays\": " << p.detection_arrays << ", \"malformed\": " << p.malformed
-       << ", \"latency_ms_p50\": " << fmt(p.latency_ms_p50, 2)
-       << ", \"latency_ms_p99\": " << fmt(p.latency_ms_p99, 2) << ", \"track_continuity\": "
-       << (p.continuity < 0 ? std::string("null") : fmt(p.continuity, 4)) << ", \"rss_mb\": {";
-    k = 0;
-    for (const auto& m : p.memory)
-      js << (k++ ? ", " : "") << "\"" << json_escape(m.node) << "\": " << fmt(m.rss_mb, 1);
-    js << "}}";
-  }
-  js << "\n  ],\n  \"loops\": [";
-  for (std::size_t i = 0; i < r.loops.size(); ++i) {
-    const auto& l = r.loops[i];
-    js << (i ? "," : "") << "\n    {\"index\": " << l.index << ", \"samples\": " << l.samples
-       << ", \"samples_with_detections\": " << l.samples_with_detections
-       << ", \"scored\": " << (l.scored ? "true" : "false") << ", \"nds\": " << fmt(l.nds, 4)
-       << ", \"map\": " << fmt(l.map, 4) << ", \"error\": \"" << json_escape(l.error) << "\"}";
-  }
-  js << "\n  ]\n}\n";
-  return js.str();
-}
-
-}  // namespace
-
-Result<SoakResult> run_soak(const SoakOptions& o, const std::atomic<bool>& stop, std::FILE* log) {
-  for (const char* n : {"nusc_player", "fault_injector", "detector"}) {
-    if (!o.detector_cmd.empty() && std::string(n) == "detector") continue;
-    if (!fs::exists(fs::path(o.bin_dir) / n)) {
-      return Status(StatusCode::kNotFound,
-                    (fs::path(o.bin_dir) / n).string() + ": node executable not found");
+  Result<SoakResult> run() {
+    if (Status s = check_nodes(); !s) return s;
+    fs::create_directories(fs::path(o_.out_dir) / "loops", ec_);
+    if (ec_) return Status(StatusCode::kIoError, o_.out_dir + ": cannot create: " + ec_.message());
+    if (Status s = load_split(); !s) return s;
+    if (Status s = open_sockets(); !s) return s;
+    start_nodes();
+    monitor();
+    const double end_s = elapsed_s();
+    if (acc_.row.samples_published || acc_.row.detection_arrays) finish_period(end_s);
+    sup_stop_.store(true);
+    sup_thread_.join();
+    fs::remove_all(sock_, ec_);
+    measure_growth();
+    result_.summary_path = (fs::path(o_.out_dir) / "soak.json").string();
+    {
+      std::ofstream js(result_.summary_path);
+      js << soak_json(o_, result_);
     }
+    {
+      std::ofstream csv(fs::path(o_.out_dir) / "periods.csv");
+      csv << periods_csv(result_);
+    }
+    return result_;
   }
-  std::error_code ec;
-  fs::create_directories(fs::path(o.out_dir) / "loops", ec);
-  if (ec) return Status(StatusCode::kIoError, o.out_dir + ": cannot create: " + ec.message());
+
+ private:
+  Status check_nodes() const {
+    for (const char* n : {"nusc_player", "fault_injector", "detector"}) {
+      if (!o_.detector_cmd.empty() && std::string(n) == "detector") continue;
+      if (!fs::exists(fs::path(o_.bin_dir) / n)) {
+        return Status(StatusCode::kNotFound,
+                      (fs::path(o_.bin_dir) / n).string() + ": node executable not found");
+      }
+    }
+    return Status::ok();
+  }
+
   // The split each loop is scored on; samples the player replays outside it are ignored.
-  std::vector<std::string> split_samples;
-  {
+  Status load_split() {
     std::vector<std::string> scenes;
-    if (scoring::is_predefined_split(o.eval_set)) {
-      auto names = scoring::predefined_split_scenes(o.eval_set, o.version);
+    if (scoring::is_predefined_split(o_.eval_set)) {
+      auto names = scoring::predefined_split_scenes(o_.eval_set, o_.version);
       if (!names) return names.status();
       scenes = *names;
     } else {
-      auto names = scoring::custom_split_scenes(o.eval_set, o.dataroot, o.version);
+      auto names = scoring::custom_split_scenes(o_.eval_set, o_.dataroot, o_.version);
       if (!names) return names.status();
       scenes = *names;
     }
-    auto tokens = scoring::split_sample_tokens(o.dataroot, o.version, scenes);
+    auto tokens = scoring::split_sample_tokens(o_.dataroot, o_.version, scenes);
     if (!tokens) return tokens.status();
-    split_samples = std::move(*tokens);
+    split_samples_ = std::move(*tokens);
+    in_split_ = std::set<std::string>(split_samples_.begin(), split_samples_.end());
+    return Status::ok();
   }
-  const std::set<std::string> in_split(split_samples.begin(), split_samples.end());
 
-  char sock_template[] = "/tmp/flsoak-XXXXXX";
-  const char* sock_dir = mkdtemp(sock_template);
-  if (!sock_dir) return Status(StatusCode::kIoError, "cannot create a socket directory in /tmp");
-  const std::string sock(sock_dir);
-  const std::string player = "ipc://" + sock + "/player", frames = "ipc://" + sock + "/frames",
-                    det = "ipc://" + sock + "/det";
+  // ipc endpoints in a fresh /tmp directory, and our subscribers on them.
+  Status open_sockets() {
+    char sock_template[] = "/tmp/flsoak-XXXXXX";
+    const char* sock_dir = mkdtemp(sock_template);
+    if (!sock_dir) return Status(StatusCode::kIoError, "cannot create a socket directory in /tmp");
+    sock_ = sock_dir;
+    player_ = "ipc://" + sock_ + "/player";
+    frames_ = "ipc://" + sock_ + "/frames";
+    det_ = "ipc://" + sock_ + "/det";
 
-  transport::SubscriberConfig dc;
-  dc.endpoints = {det};
-  dc.pattern = transport::Pattern::PushPull;
-  dc.bind = true;
-  dc.rcv_hwm = 1000;
-  transport::RawSubscriber detections(dc);
-  transport::SubscriberConfig pc;
-  pc.endpoints = {player};
-  pc.topics = {"/sync/sample", "/statistics"};
-  pc.rcv_hwm = 1000;
-  transport::RawSubscriber player_sub(pc);
-  transport::SubscriberConfig ic;
-  ic.endpoints = {frames};
-  ic.topics = {"/statistics"};
-  ic.rcv_hwm = 1000;
-  transport::RawSubscriber injector_sub(ic);
+    transport::SubscriberConfig dc;
+    dc.endpoints = {det_};
+    dc.pattern = transport::Pattern::PushPull;
+    dc.bind = true;
+    dc.rcv_hwm = 1000;
+    detections_ = std::make_unique<transport::RawSubscriber>(dc);
+    transport::SubscriberConfig pc;
+    pc.endpoints = {player_};
+    pc.topics = {"/sync/sample", "/statistics"};
+    pc.rcv_hwm = 1000;
+    player_sub_ = std::make_unique<transport::RawSubscriber>(pc);
+    transport::SubscriberConfig ic;
+    ic.endpoints = {frames_};
+    ic.topics = {"/statistics"};
+    ic.rcv_hwm = 1000;
+    injector_sub_ = std::make_unique<transport::RawSubscriber>(ic);
+    return Status::ok();
+  }
 
-  std::ofstream node_log(fs::path(o.out_dir) / "nodes.log");
-  std::mutex log_mutex;
-  launch::SupervisorOptions so;
-  so.grace_ns = 3 * kNsPerSec;
-  so.env["FAULTLINE_FRAMES"] = frames;
-  so.env["FAULTLINE_DETECTIONS"] = det;
-  so.sink = [&](const std::string& node, std::string_view line, launch::OutputStream) {
-    std::lock_guard<std::mutex> lock(log_mutex);
-    node_log << "[" << node << "] " << line << "\n";
-  };
-  SoakResult result;
-  std::mutex failures_mutex;
-  so.on_exit = [&](const launch::ChildOutcome& c) {
-    std::lock_guard<std::mutex> lock(failures_mutex);
-    if (!c.signalled_by_us) {
-      result.node_failures.push_back(
-          c.name + (c.term_signal ? " died from signal " + std::to_string(c.term_signal)
-                                  : " exited with code " + std::to_string(c.exit_code)));
+  // The nodes under a supervisor on its own thread; their output goes to nodes.log.
+  void start_nodes() {
+    node_log_.open(fs::path(o_.out_dir) / "nodes.log");
+    launch::SupervisorOptions so;
+    so.grace_ns = 3 * kNsPerSec;
+    so.env["FAULTLINE_FRAMES"] = frames_;
+    so.env["FAULTLINE_DETECTIONS"] = det_;
+    so.sink = [this](const std::string& node, std::string_view line, launch::OutputStream) {
+      std::lock_guard<std::mutex> lock(log_mutex_);
+      node_log_ << "[" << node << "] " << line << "\n";
+    };
+    so.on_exit = [this](const launch::ChildOutcome& c) {
+      std::lock_guard<std::mutex> lock(failures_mutex_);
+      if (!c.signalled_by_us) {
+        result_.node_failures.push_back(
+            c.name + (c.term_signal ? " died from signal " + std::to_string(c.term_signal)
+                                    : " exited with code " + std::to_string(c.exit_code)));
+      }
+    };
+    sup_ = std::make_unique<launch::Supervisor>(soak_children(o_, player_, frames_, det_), so);
+    sup_thread_ = std::thread([this] {
+      launch_result_ = sup_->run(sup_stop_);
+      sup_done_.store(true);
+    });
+    t0_ = std::chrono::steady_clock::now();
+    acc_.row.index = 1;
+    next_period_s_ = o_.period_s;
+  }
+
+  double elapsed_s() const {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0_).count();
+  }
+
+  // Until stopped, the nodes are gone or the duration is over.
+  void monitor() {
+    std::vector<transport::RawSubscriber*> subs{detections_.get(), player_sub_.get(),
+                                                injector_sub_.get()};
+    while (!stop_.load() && !sup_done_.load() && elapsed_s() < o_.duration_s) {
+      const int ready = transport::wait_readable(subs, 100 * kNsPerMs);
+      if (elapsed_s() >= next_period_s_) {
+        finish_period(next_period_s_);
+        next_period_s_ += o_.period_s;
+      }
+      if (ready < 0) continue;
+      auto msg = subs[static_cast<std::size_t>(ready)]->receive(0);
+      if (!msg) continue;
+      const std::string topic(msg->topic());
+      if (ready == 0) {
+        on_detections(*msg);
+      } else if (topic == "/sync/sample") {
+        on_boundary(*msg);
+      } else if (topic == "/statistics") {
+        on_statistics(*msg, *subs[static_cast<std::size_t>(ready)], ready == 1);
+      }
     }
-  };
-  std::atomic<bool> sup_stop{false}, sup_done{false};
-  launch::Supervisor sup(soak_children(o, player, frames, det), so);
-  launch::LaunchResult launch_result;
-  std::thread sup_thread([&] {
-    launch_result = sup.run(sup_stop);
-    sup_done.store(true);
-  });
+  }
 
-  const auto t0 = std::chrono::steady_clock::now();
-  auto elapsed_s = [&] {
-    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  };
-  std::unordered_map<std::string, StampNs>
-      boundary_mono;  // sample -> player's boundary publish time
-  std::unordered_map<std::string, std::int64_t> sample_time_us;
-  std::string first_sample;  // opens every loop
-  int loop = 0;
-  std::size_t boundaries_in_loop = 0;
-  std::unordered_map<std::string, msgs::DetectionArray> loop_detections;
-  std::vector<TrackPoint> previous_points;
-  std::int64_t previous_time_us = 0;
-  PeriodAccumulator acc;
-  acc.row.index = 1;
-  double next_period_s = o.period_s;
-  std::map<std::string, double> first_rss;
+  void on_detections(const transport::ReceivedMessage& msg) {
+    msgs::DetectionArray d;
+    if (!transport::parse_message(msg, &d).is_ok()) {
+      detections_->count_malformed();
+      return;
+    }
+    ++acc_.row.detection_arrays;
+    auto b = boundary_mono_.find(d.sample_token());
+    if (b != boundary_mono_.end()) {
+      acc_.latencies_ms.push_back(static_cast<double>(msg.receive_mono_ns() - b->second) / 1e6);
+    }
+    std::vector<TrackPoint> points;
+    for (const auto& x : d.detections()) {
+      if (x.translation_size() >= 2)
+        points.push_back({x.translation(0), x.translation(1), x.detection_name()});
+    }
+    const auto t = sample_time_us_.find(d.sample_token());
+    const std::int64_t now_us = t == sample_time_us_.end() ? 0 : t->second;
+    // Consecutive samples of one scene are 0.5 s apart; a larger gap is a new scene or a lost
+    // sample.
+    if (previous_time_us_ && now_us > previous_time_us_ && now_us - previous_time_us_ < 700000) {
+      acc_.continuity_sum += track_continuity(previous_points_, points);
+      ++acc_.continuity_n;
+    }
+    previous_points_ = std::move(points);
+    previous_time_us_ = now_us;
+    if (in_split_.count(d.sample_token())) loop_detections_[d.sample_token()] = std::move(d);
+  }
 
-  auto close_loop = [&](int index) {
+  void on_boundary(const transport::ReceivedMessage& msg) {
+    msgs::SampleBoundary b;
+    if (!transport::parse_message(msg, &b).is_ok()) {
+      player_sub_->count_malformed();
+      return;
+    }
+    ++acc_.row.samples_published;
+    if (first_sample_.empty()) {
+      first_sample_ = b.sample_token();
+      loop_ = 1;
+    } else if (b.sample_token() == first_sample_) {
+      ++loop_;
+      boundaries_in_loop_ = 0;
+    }
+    ++boundaries_in_loop_;
+    // Loop N is scored once loop N+1 is 3 samples in: its last detections have arrived by then.
+    if (loop_ >= 2 && boundaries_in_loop_ == 3 &&
+        static_cast<int>(result_.loops.size()) < loop_ - 1) {
+      close_loop(loop_ - 1);
+    }
+    boundary_mono_[b.sample_token()] = b.header().publish_mono_ns();
+    sample_time_us_[b.sample_token()] = b.timestamp_us();
+  }
+
+  // `from_player`: the player's statistics (frames in); else the injector's.
+  void on_statistics(const transport::ReceivedMessage& msg, transport::RawSubscriber& sub,
+                     bool from_player) {
+    msgs::TopicStats s;
+    if (!transport::parse_message(msg, &s).is_ok()) {
+      sub.count_malformed();
+      return;
+    }
+    if (!camera_topic(s.topic())) return;
+    const std::string cam = camera_of(s.topic());
+    if (from_player) {
+      acc_.row.frames_in[cam] += s.received();
+    } else if (s.topic().rfind("/faulty/", 0) == 0) {
+      acc_.row.frames_out[cam] += s.received();  // the injector's published frames
+    } else {                                     // the injector's input side
+      acc_.row.transport_drops += s.transport_drops();
+      acc_.row.superseded += s.superseded();
+      acc_.row.injected_drops += s.injected_drops();
+    }
+  }
+
+  // Writes loop `index`'s detections and scores them.
+  void close_loop(int index) {
     SoakLoop l;
     l.index = index;
-    l.samples = split_samples.size();
-    for (const auto& s : split_samples) l.samples_with_detections += loop_detections.count(s);
+    l.samples = split_samples_.size();
+    for (const auto& s : split_samples_) l.samples_with_detections += loop_detections_.count(s);
     const std::string path =
-        (fs::path(o.out_dir) / "loops" / ("loop_" + std::to_string(index) + ".json")).string();
-    if (Status s = write_loop_results(path, split_samples, loop_detections); !s) {
+        (fs::path(o_.out_dir) / "loops" / ("loop_" + std::to_string(index) + ".json")).string();
+    if (Status s = write_loop_results(path, split_samples_, loop_detections_); !s) {
       l.error = s.message();
     } else {
       scoring::EvalOptions eo;
       eo.results_path = path;
-      eo.dataroot = o.dataroot;
-      eo.version = o.version;
-      eo.eval_set = o.eval_set;
+      eo.dataroot = o_.dataroot;
+      eo.version = o_.version;
+      eo.eval_set = o_.eval_set;
       auto outcome = scoring::evaluate_detection(eo, nullptr);
       if (outcome) {
         l.scored = true;
@@ -445,156 +447,80 @@ Result<SoakResult> run_soak(const SoakOptions& o, const std::atomic<bool>& stop,
         l.error = outcome.status().message();
       }
     }
-    if (log) {
-      std::fprintf(log, "loop %d: %zu/%zu samples with detections, NDS %s mAP %s%s\n", l.index,
+    if (log_) {
+      std::fprintf(log_, "loop %d: %zu/%zu samples with detections, NDS %s mAP %s%s\n", l.index,
                    l.samples_with_detections, l.samples, fmt(l.nds, 4).c_str(),
                    fmt(l.map, 4).c_str(), l.error.empty() ? "" : (" (" + l.error + ")").c_str());
-      std::fflush(log);
+      std::fflush(log_);
     }
-    result.loops.push_back(l);
-    loop_detections.clear();
-  };
-
-  auto finish_period = [&](double end_s) {
-    SoakPeriod& p = acc.row;
-    p.end_s = end_s;
-    p.latency_ms_p50 = percentile(acc.latencies_ms, 0.5);
-    p.latency_ms_p99 = percentile(acc.latencies_ms, 0.99);
-    p.continuity =
-        acc.continuity_n ? acc.continuity_sum / static_cast<double>(acc.continuity_n) : -1.0;
-    p.malformed = detections.malformed() + player_sub.malformed() + injector_sub.malformed();
-    p.memory = child_processes(static_cast<int>(::getpid()));
-    if (log) {
-      std::fprintf(log, "%s\n", period_line(p).c_str());
-      std::fflush(log);
-    }
-    result.periods.push_back(p);
-    const int next = p.index + 1;
-    acc = PeriodAccumulator{};
-    acc.row.index = next;
-  };
-
-  std::vector<transport::RawSubscriber*> subs{&detections, &player_sub, &injector_sub};
-  while (!stop.load() && !sup_done.load() && elapsed_s() < o.duration_s) {
-    const int ready = transport::wait_readable(subs, 100 * kNsPerMs);
-    if (elapsed_s() >= next_period_s) {
-      finish_period(next_period_s);
-      next_period_s += o.period_s;
-    }
-    if (ready < 0) continue;
-    auto msg = subs[static_cast<std::size_t>(ready)]->receive(0);
-    if (!msg) continue;
-    const std::string topic(msg->topic());
-    if (ready == 0) {  // detections
-      msgs::DetectionArray d;
-      if (!transport::parse_message(*msg, &d).is_ok()) {
-        detections.count_malformed();
-        continue;
-      }
-      ++acc.row.detection_arrays;
-      auto b = boundary_mono.find(d.sample_token());
-      if (b != boundary_mono.end()) {
-        acc.latencies_ms.push_back(static_cast<double>(msg->receive_mono_ns() - b->second) / 1e6);
-      }
-      std::vector<TrackPoint> points;
-      for (const auto& x : d.detections()) {
-        if (x.translation_size() >= 2)
-          points.push_back({x.translation(0), x.translation(1), x.detection_name()});
-      }
-      const auto t = sample_time_us.find(d.sample_token());
-      const std::int64_t now_us = t == sample_time_us.end() ? 0 : t->second;
-      // Consecutive samples of one scene are 0.5 s apart; a larger gap is a new scene or a lost
-      // sample.
-      if (previous_time_us && now_us > previous_time_us && now_us - previous_time_us < 700000) {
-        acc.continuity_sum += track_continuity(previous_points, points);
-        ++acc.continuity_n;
-      }
-      previous_points = std::move(points);
-      previous_time_us = now_us;
-      if (in_split.count(d.sample_token())) loop_detections[d.sample_token()] = std::move(d);
-      continue;
-    }
-    if (topic == "/sync/sample") {
-      msgs::SampleBoundary b;
-      if (!transport::parse_message(*msg, &b).is_ok()) {
-        player_sub.count_malformed();
-        continue;
-      }
-      ++acc.row.samples_published;
-      if (first_sample.empty()) {
-        first_sample = b.sample_token();
-        loop = 1;
-      } else if (b.sample_token() == first_sample) {
-        ++loop;
-        boundaries_in_loop = 0;
-      }
-      ++boundaries_in_loop;
-      // Loop N is scored once loop N+1 is 3 samples in: its last detections have arrived by then.
-      if (loop >= 2 && boundaries_in_loop == 3 &&
-          static_cast<int>(result.loops.size()) < loop - 1) {
-        close_loop(loop - 1);
-      }
-      boundary_mono[b.sample_token()] = b.header().publish_mono_ns();
-      sample_time_us[b.sample_token()] = b.timestamp_us();
-      continue;
-    }
-    if (topic == "/statistics") {
-      msgs::TopicStats s;
-      if (!transport::parse_message(*msg, &s).is_ok()) {
-        subs[static_cast<std::size_t>(ready)]->count_malformed();
-        continue;
-      }
-      if (!camera_topic(s.topic())) continue;
-      const std::string cam = camera_of(s.topic());
-      if (ready == 1) {
-        acc.row.frames_in[cam] += s.received();
-      } else if (s.topic().rfind("/faulty/", 0) == 0) {
-        acc.row.frames_out[cam] += s.received();  // the injector's published frames
-      } else {                                    // the injector's input side
-        acc.row.transport_drops += s.transport_drops();
-        acc.row.superseded += s.superseded();
-        acc.row.injected_drops += s.injected_drops();
-      }
-    }
+    result_.loops.push_back(l);
+    loop_detections_.clear();
   }
-  const double end_s = elapsed_s();
-  if (acc.row.samples_published || acc.row.detection_arrays) finish_period(end_s);
-  sup_stop.store(true);
-  sup_thread.join();
-  fs::remove_all(sock, ec);
+
+  void finish_period(double end_s) {
+    SoakPeriod& p = acc_.row;
+    p.end_s = end_s;
+    p.latency_ms_p50 = percentile(acc_.latencies_ms, 0.5);
+    p.latency_ms_p99 = percentile(acc_.latencies_ms, 0.99);
+    p.continuity =
+        acc_.continuity_n ? acc_.continuity_sum / static_cast<double>(acc_.continuity_n) : -1.0;
+    p.malformed = detections_->malformed() + player_sub_->malformed() + injector_sub_->malformed();
+    p.memory = child_processes(static_cast<int>(::getpid()));
+    if (log_) {
+      std::fprintf(log_, "%s\n", period_line(p).c_str());
+      std::fflush(log_);
+    }
+    result_.periods.push_back(p);
+    const int next = p.index + 1;
+    acc_ = PeriodAccumulator{};
+    acc_.row.index = next;
+  }
 
   // Memory growth: from the second period (after start-up allocations) to the last.
-  if (result.periods.size() >= 3) {
-    std::map<std::string, double> start;
-    for (const auto& m : result.periods[1].memory) start[m.node] = m.rss_mb;
-    for (const auto& m : result.periods.back().memory) {
-      if (start.count(m.node))
-        result.rss_growth_mb = std::max(result.rss_growth_mb, m.rss_mb - start[m.node]);
+  void measure_growth() {
+    if (result_.periods.size() >= 3) {
+      std::map<std::string, double> start;
+      for (const auto& m : result_.periods[1].memory) start[m.node] = m.rss_mb;
+      for (const auto& m : result_.periods.back().memory) {
+        if (start.count(m.node))
+          result_.rss_growth_mb = std::max(result_.rss_growth_mb, m.rss_mb - start[m.node]);
+      }
     }
   }
-  result.summary_path = (fs::path(o.out_dir) / "soak.json").string();
-  {
-    std::ofstream js(result.summary_path);
-    js << soak_json(o, result);
-  }
-  {
-    std::ofstream csv(fs::path(o.out_dir) / "periods.csv");
-    csv << "period,end_s,frames_in,frames_out,unintended_drops,injected_drops,samples,detections,"
-           "latency_ms_p50,"
-           "latency_ms_p99,continuity,rss_mb_total\n";
-    for (const auto& p : result.periods) {
-      std::uint64_t in = 0, out = 0;
-      for (const auto& [k, v] : p.frames_in) in += v;
-      for (const auto& [k, v] : p.frames_out) out += v;
-      double rss = 0;
-      for (const auto& m : p.memory) rss += m.rss_mb;
-      csv << p.index << "," << fmt(p.end_s, 1) << "," << in << "," << out << ","
-          << p.transport_drops << "," << p.injected_drops << "," << p.samples_published << ","
-          << p.detection_arrays << "," << fmt(p.latency_ms_p50, 2) << ","
-          << fmt(p.latency_ms_p99, 2) << "," << fmt(p.continuity, 4) << "," << fmt(rss, 1) << "\n";
-    }
-  }
-  return result;
+
+  const SoakOptions& o_;
+  const std::atomic<bool>& stop_;
+  std::FILE* log_;
+  std::error_code ec_;
+  std::vector<std::string> split_samples_;
+  std::set<std::string> in_split_;
+  std::string sock_, player_, frames_, det_;
+  std::unique_ptr<transport::RawSubscriber> detections_, player_sub_, injector_sub_;
+  std::ofstream node_log_;
+  std::mutex log_mutex_;
+  SoakResult result_;
+  std::mutex failures_mutex_;
+  std::atomic<bool> sup_stop_{false}, sup_done_{false};
+  std::unique_ptr<launch::Supervisor> sup_;
+  launch::LaunchResult launch_result_;
+  std::thread sup_thread_;
+  std::chrono::steady_clock::time_point t0_;
+  std::unordered_map<std::string, StampNs> boundary_mono_;  // sample -> player's boundary publish
+  std::unordered_map<std::string, std::int64_t> sample_time_us_;
+  std::string first_sample_;  // opens every loop
+  int loop_ = 0;
+  std::size_t boundaries_in_loop_ = 0;
+  std::unordered_map<std::string, msgs::DetectionArray> loop_detections_;
+  std::vector<TrackPoint> previous_points_;
+  std::int64_t previous_time_us_ = 0;
+  PeriodAccumulator acc_;
+  double next_period_s_ = 0;
+};
+
+}  // namespace
+
+Result<SoakResult> run_soak(const SoakOptions& o, const std::atomic<bool>& stop, std::FILE* log) {
+  return SoakRun(o, stop, log).run();
 }
 
 }  // namespace faultline::campaign

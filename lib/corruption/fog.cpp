@@ -1,6 +1,6 @@
 // Fog: the plasma fractal (fog_plasma.cpp) normalised or blended straight from the finest level's
-// planes, the exact and float32 blends (fog_kernels.cpp), and the fast mode's quarter-resolution
-// field.
+// planes, the exact and float32 blends (fog_blend_kernels.cpp), and the fast mode's
+// quarter-resolution field.
 #include "corruption/fog.hpp"
 
 #include <algorithm>

@@ -62,7 +62,7 @@ void blur_quantise(const LayerRowMaker& make_row, int lh, int lw, const int* dx,
 // + 0.114 c2) * 1.5 + 127.5 and out_k = trunc(min(b c_k + (1 - b) max(c_k, bright) + l + r, 255)),
 // where l = layer[x] and r = rot[x], or rot[cols - 1 - x] when `rot_reversed` (rot is then the
 // mirrored row itself). In 16-bit fixed point with 6 fraction bits and truncating products
-// (snow_kernels.cpp BlendFixed): within 1 of the float32 formula.
+// (snow_blend_kernels.cpp BlendFixed): within 1 of the float32 formula.
 void blend_fast_row(const std::uint8_t* src, const std::uint8_t* layer, const std::uint8_t* rot,
                     bool rot_reversed, std::uint8_t* dst, int cols, float b, float one_minus_b,
                     bool allow_simd = true);
@@ -103,5 +103,9 @@ void blur_quantise64(const double* const* rows, const double* weights, int taps,
 void blend_exact_row(const std::uint8_t* src, const std::uint8_t* layer, const std::uint8_t* rot,
                      bool rot_reversed, std::uint8_t* dst, int cols, float b, float one_minus_b,
                      bool allow_simd = true);
+
+// Whether the AVX2 bodies run: allowed by the caller and supported by the CPU (shared by
+// snow_layer_kernels.cpp and snow_blend_kernels.cpp).
+bool use_avx2(bool allow_simd);
 
 }  // namespace faultline::corruption::snow_kernels

@@ -155,6 +155,111 @@ struct DetectorLoop::Impl {
           d.photometric.enabled = cfg.normalise;
           return d;
         }()) {}
+
+  // Boundary seq gaps: those samples get no DetectionArray from us (scored as empty); say so,
+  // never skip them silently.
+  void count_lost_boundaries(const msgs::SampleBoundary& b, const std::string& topic,
+                             DetectorLoopCounts& counts) {
+    const std::uint64_t lost_before =
+        boundary_seqs.counts(b.header().publisher(), topic).transport_drops;
+    check_break(boundary_seqs.observe(b.header().publisher(), topic, b.header().seq()), b, counts);
+    const std::uint64_t lost =
+        boundary_seqs.counts(b.header().publisher(), topic).transport_drops - lost_before;
+    if (lost == 0) return;
+    counts.boundaries_lost += lost;
+    log->warn(
+        "{} sample boundar{} lost in transport before sample {}: no detections for {} ({} lost "
+        "so far)",
+        lost, lost == 1 ? "y" : "ies", b.sample_token(),
+        lost == 1 ? "that sample" : "those samples", counts.boundaries_lost);
+  }
+
+  // Per-sample mode: the kept frames of sample b go to the detector at its boundary.
+  void add_pending_frames(const msgs::SampleBoundary& b, DetectorLoopCounts& counts) {
+    for (auto& [camera, p] : pending) {
+      if (p.header.sample_token() != b.sample_token()) continue;
+      auto in = to_input(p.header, p.payload.data(), p.payload.size());
+      if (!in) {
+        ++counts.undecodable;
+        continue;
+      }
+      detector.add_frame(*in);
+      const std::int64_t cap = p.header.header().capture_stamp_ns();
+      if (first_capture_ns == 0 || cap < first_capture_ns) first_capture_ns = cap;
+    }
+    pending.clear();
+  }
+
+  // Finishes sample b and pushes its DetectionArray (header seq `seq`); `t0` is when the boundary
+  // arrived.
+  void publish_detections(const msgs::SampleBoundary& b, std::uint64_t seq,
+                          std::chrono::steady_clock::time_point t0, DetectorLoopCounts& counts) {
+    const auto boxes = detector.finish_sample(b.timestamp_us());
+    msgs::DetectionArray d;
+    d.set_sample_token(b.sample_token());
+    d.set_detector(detector.config().describe());
+    for (const auto& box : boxes) to_detection(box, d.add_detections());
+    d.set_processing_ns(sample_processing_ns + std::chrono::duration_cast<std::chrono::nanoseconds>(
+                                                   std::chrono::steady_clock::now() - t0)
+                                                   .count());
+    d.set_first_frame_capture_ns(first_capture_ns);
+    d.mutable_header()->set_seq(seq);
+    d.mutable_header()->set_publisher(node);
+    d.mutable_header()->set_capture_stamp_ns(b.timestamp_us() * 1000);
+    d.mutable_header()->set_capture_clock(b.header().capture_clock());
+    d.mutable_header()->set_publish_stamp_ns(realtime_now_ns());
+    d.mutable_header()->set_publish_mono_ns(monotonic_now_ns());
+    if (transport::send_message(push, cfg.detections_topic, d).is_ok()) {
+      ++counts.arrays_sent;
+    } else {
+      ++counts.send_failures;
+    }
+    sample_processing_ns = 0;
+    first_capture_ns = 0;
+  }
+
+  // Temporal mode: every frame goes to the detector as it arrives.
+  void add_frame_now(const transport::ReceivedMessage& r, const transport::CameraFrameView& view,
+                     const std::string& topic, DetectorLoopCounts& counts) {
+    const msgs::CameraFrame& h = view.header;
+    const auto t0 = std::chrono::steady_clock::now();
+    auto in = to_input(h, view.payload, view.payload_size);
+    if (!r.has_payload() &&
+        !shm.intact(view)) {  // overwritten while decoding: the pixels may be torn
+      counts.shm_overwritten = shm.overwritten();
+      return;
+    }
+    if (!in) {
+      ++counts.undecodable;  // a frame the injector broke: the tracks coast through it
+      if (bad_limiter.allow())
+        log->warn("undecodable frame on {}: {}", topic, in.status().message());
+      return;
+    }
+    detector.add_frame(*in);
+    sample_processing_ns +=
+        std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now() - t0)
+            .count();
+    const std::int64_t cap = h.header().capture_stamp_ns();
+    if (first_capture_ns == 0 || cap < first_capture_ns) first_capture_ns = cap;
+  }
+
+  // Per-sample mode: keeps the camera's latest frame (its key frame, once seen) for the boundary.
+  void keep_frame(const transport::ReceivedMessage& r, const transport::CameraFrameView& view,
+                  DetectorLoopCounts& counts) {
+    const msgs::CameraFrame& h = view.header;
+    auto it = pending.find(h.camera());
+    if (it != pending.end() && it->second.header.sample_token() == h.sample_token() &&
+        it->second.header.is_key_frame() && !h.is_key_frame())
+      return;  // keep the key frame of this sample
+    std::vector<std::uint8_t> bytes(view.payload, view.payload + view.payload_size);
+    if (!r.has_payload() && !shm.intact(view)) {  // overwritten while copying
+      counts.shm_overwritten = shm.overwritten();
+      return;
+    }
+    auto& p = pending[h.camera()];
+    p.header = h;
+    p.payload = std::move(bytes);
+  }
 };
 
 DetectorLoop::DetectorLoop(DetectorLoopConfig config, std::string node,
@@ -183,60 +288,11 @@ int DetectorLoop::run(const std::atomic<bool>& stop) {
         continue;
       }
       ++counts_.boundaries;
-      const std::uint64_t lost_before =
-          m.boundary_seqs.counts(b.header().publisher(), topic).transport_drops;
-      m.check_break(m.boundary_seqs.observe(b.header().publisher(), topic, b.header().seq()), b,
-                    counts_);
-      const std::uint64_t lost =
-          m.boundary_seqs.counts(b.header().publisher(), topic).transport_drops - lost_before;
-      if (lost > 0) {
-        // Those samples get no DetectionArray from us (scored as empty): say so, never skip them
-        // silently.
-        counts_.boundaries_lost += lost;
-        m.log->warn(
-            "{} sample boundar{} lost in transport before sample {}: no detections for {} ({} lost "
-            "so far)",
-            lost, lost == 1 ? "y" : "ies", b.sample_token(),
-            lost == 1 ? "that sample" : "those samples", counts_.boundaries_lost);
-      }
+      m.count_lost_boundaries(b, topic, counts_);
       m.check_complete(b, counts_);
       const auto t0 = Clock::now();
-      if (!m.cfg.temporal) {
-        for (auto& [camera, p] : m.pending) {
-          if (p.header.sample_token() != b.sample_token()) continue;
-          auto in = to_input(p.header, p.payload.data(), p.payload.size());
-          if (!in) {
-            ++counts_.undecodable;
-            continue;
-          }
-          m.detector.add_frame(*in);
-          const std::int64_t cap = p.header.header().capture_stamp_ns();
-          if (m.first_capture_ns == 0 || cap < m.first_capture_ns) m.first_capture_ns = cap;
-        }
-        m.pending.clear();
-      }
-      const auto boxes = m.detector.finish_sample(b.timestamp_us());
-      msgs::DetectionArray d;
-      d.set_sample_token(b.sample_token());
-      d.set_detector(m.detector.config().describe());
-      for (const auto& box : boxes) to_detection(box, d.add_detections());
-      d.set_processing_ns(
-          m.sample_processing_ns +
-          std::chrono::duration_cast<std::chrono::nanoseconds>(Clock::now() - t0).count());
-      d.set_first_frame_capture_ns(m.first_capture_ns);
-      d.mutable_header()->set_seq(++seq);
-      d.mutable_header()->set_publisher(m.node);
-      d.mutable_header()->set_capture_stamp_ns(b.timestamp_us() * 1000);
-      d.mutable_header()->set_capture_clock(b.header().capture_clock());
-      d.mutable_header()->set_publish_stamp_ns(realtime_now_ns());
-      d.mutable_header()->set_publish_mono_ns(monotonic_now_ns());
-      if (transport::send_message(m.push, m.cfg.detections_topic, d).is_ok()) {
-        ++counts_.arrays_sent;
-      } else {
-        ++counts_.send_failures;
-      }
-      m.sample_processing_ns = 0;
-      m.first_capture_ns = 0;
+      if (!m.cfg.temporal) m.add_pending_frames(b, counts_);
+      m.publish_detections(b, ++seq, t0, counts_);
       if (b.last_in_run() && m.cfg.exit_on_last) return 0;
       continue;
     }
@@ -258,37 +314,9 @@ int DetectorLoop::run(const std::atomic<bool>& stop) {
     const msgs::CameraFrame& h = view->header;
     if (h.is_key_frame()) ++m.key_frames_seen[h.sample_token()];
     if (m.cfg.temporal) {
-      const auto t0 = Clock::now();
-      auto in = to_input(h, view->payload, view->payload_size);
-      if (!r->has_payload() &&
-          !m.shm.intact(*view)) {  // overwritten while decoding: the pixels may be torn
-        counts_.shm_overwritten = m.shm.overwritten();
-        continue;
-      }
-      if (!in) {
-        ++counts_.undecodable;  // a frame the injector broke: the tracks coast through it
-        if (m.bad_limiter.allow())
-          m.log->warn("undecodable frame on {}: {}", topic, in.status().message());
-        continue;
-      }
-      m.detector.add_frame(*in);
-      m.sample_processing_ns +=
-          std::chrono::duration_cast<std::chrono::nanoseconds>(Clock::now() - t0).count();
-      const std::int64_t cap = h.header().capture_stamp_ns();
-      if (m.first_capture_ns == 0 || cap < m.first_capture_ns) m.first_capture_ns = cap;
+      m.add_frame_now(*r, *view, topic, counts_);
     } else {
-      auto it = m.pending.find(h.camera());
-      if (it != m.pending.end() && it->second.header.sample_token() == h.sample_token() &&
-          it->second.header.is_key_frame() && !h.is_key_frame())
-        continue;  // keep the key frame of this sample
-      std::vector<std::uint8_t> bytes(view->payload, view->payload + view->payload_size);
-      if (!r->has_payload() && !m.shm.intact(*view)) {  // overwritten while copying
-        counts_.shm_overwritten = m.shm.overwritten();
-        continue;
-      }
-      auto& p = m.pending[h.camera()];
-      p.header = h;
-      p.payload = std::move(bytes);
+      m.keep_frame(*r, *view, counts_);
     }
   }
   return 0;

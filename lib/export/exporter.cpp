@@ -410,6 +410,129 @@ Result<std::vector<std::string>> select_scenes(const ExportConfig& config,
   return shard;
 }
 
+namespace {
+
+// The run's settings as every manifest echoes them (resuming compares them).
+std::map<std::string, std::string> config_echo_of(const ExportConfig& cfg,
+                                                  const std::vector<std::string>& scenes) {
+  std::string scene_list;
+  for (const auto& n : scenes) scene_list += (scene_list.empty() ? "" : ",") + n;
+  return {
+      {"dataroot", cfg.dataroot},
+      {"version", cfg.version},
+      {"rng", corruption::to_string(cfg.rng)},
+      {"seed", std::to_string(cfg.seed)},
+      {"quality", std::to_string(cfg.quality)},
+      {"subsampling", subsampling_name(cfg.subsampling)},
+      {"sweeps", cfg.sweeps ? "true" : "false"},
+      {"split", cfg.split},
+      {"scenes", scene_list},
+      {"shard", std::to_string(cfg.shard_index) + "/" + std::to_string(cfg.shard_count)},
+  };
+}
+
+// One condition x level folder: created, an earlier run's manifest read for resuming (problems go
+// to the summary), the camera_crash dead set drawn, the manifest header filled.
+Result<std::unique_ptr<Output>> make_output(const ExportConfig& cfg, Condition c,
+                                            corruption::Level level,
+                                            const std::map<std::string, std::string>& config_echo,
+                                            ExportSummary& summary) {
+  auto o = std::make_unique<Output>();
+  o->condition = c;
+  o->level = level;
+  o->severity = severity_of(c, level);
+  o->dir = cfg.out_dir + "/" + class_name(c) + "/" + corruption::to_string(level);
+  o->manifest_path = o->dir + "/" + manifest_name(cfg.shard_index, cfg.shard_count);
+  std::error_code ec;
+  for (const char* cam : policy::kCameraNames) fs::create_directories(o->dir + "/" + cam, ec);
+  if (ec) return Status(StatusCode::kIoError, "cannot create " + o->dir + ": " + ec.message());
+  if (fs::exists(o->manifest_path)) {
+    auto prev = read_manifest(o->manifest_path);
+    // An unreadable manifest only costs a redo of everything in that folder.
+    if (!prev) {
+      summary.problems.push_back("resume: " + prev.status().to_string() + " (redoing the folder)");
+    } else if (const std::string key = config_mismatch(prev->config, config_echo); !key.empty()) {
+      // Files made with another seed, rng or encoder setting are not this run's outputs.
+      summary.problems.push_back("resume: " + o->manifest_path + ": " + key +
+                                 " differs from the earlier run (redoing the folder)");
+    } else {
+      o->previous = std::move(prev->files);
+    }
+  }
+  if (c == Condition::CameraCrash) {
+    o->crash_seed = derive_seed64(cfg.seed, c, level, "run");
+    o->dead_cameras = cfg.rng == corruption::RngMode::Numpy
+                          ? dead_set<rng::NumpyRandomState>(o->severity, numpy_seed(o->crash_seed))
+                          : dead_set<rng::FastRng>(o->severity, o->crash_seed);
+  }
+  Manifest& m = o->manifest;
+  m.tool_version = cfg.tool_version;
+  m.condition = class_name(c);
+  m.level = corruption::to_string(level);
+  m.severity = o->severity;
+  m.config = config_echo;
+  m.seed_derivation = kSeedDerivation;
+  m.dead_cameras = o->dead_cameras;
+  m.expected = summary.frames;
+  return o;
+}
+
+// Runs `threads` workers to the end, reporting progress and flushing the manifests every
+// manifest_flush_seconds meanwhile.
+void run_workers(const ExportConfig& cfg, Runner& runner, int threads, std::int64_t total,
+                 Clock::time_point t0, const ExportProgressFn& progress,
+                 double progress_interval_s) {
+  std::mutex mu;
+  std::condition_variable cv;
+  int running = threads;
+  std::vector<std::thread> pool;
+  for (int i = 0; i < threads; ++i) {
+    pool.emplace_back([&] {
+      runner.worker(static_cast<std::size_t>(threads));
+      std::lock_guard<std::mutex> lock(mu);
+      --running;
+      cv.notify_all();
+    });
+  }
+  auto last_flush = Clock::now();
+  {
+    std::unique_lock<std::mutex> lock(mu);
+    while (running > 0) {
+      cv.wait_for(lock, std::chrono::duration<double>(progress_interval_s));
+      if (progress && running > 0) progress(runner.done.load(), total, seconds_since(t0));
+      if (seconds_since(last_flush) >= cfg.manifest_flush_seconds && running > 0) {
+        lock.unlock();
+        (void)flush_manifests(runner.outputs_);  // best effort; the final flush reports errors
+        last_flush = Clock::now();
+        lock.lock();
+      }
+    }
+  }
+  for (auto& t : pool) t.join();
+}
+
+// The per-condition and total counts, and every manifest error as a problem line.
+void add_up(const Runner& runner, ExportSummary& summary) {
+  for (const auto& o : runner.outputs_) {
+    auto& st = summary.per_condition[class_name(o->condition)];
+    st.images += o->written.load();
+    st.busy_seconds += static_cast<double>(o->busy_ns.load()) * 1e-9;
+    st.cpu_seconds += static_cast<double>(o->cpu_ns.load()) * 1e-9;
+    summary.written += o->manifest.written;
+    summary.skipped += o->manifest.skipped;
+    summary.failed += static_cast<std::int64_t>(o->manifest.errors.size());
+    for (const auto& [rel, e] : o->manifest.errors) {
+      summary.problems.push_back(o->manifest.condition + "/" + o->manifest.level + "/" + rel +
+                                 ": " + e.error);
+    }
+  }
+  summary.read_decode_seconds = static_cast<double>(runner.decode_ns.load()) * 1e-9;
+  summary.read_decode_cpu_seconds = static_cast<double>(runner.decode_cpu_ns.load()) * 1e-9;
+  summary.frames_decoded = runner.decoded.load();
+}
+
+}  // namespace
+
 Result<ExportSummary> run_export(const ExportConfig& cfg, const ExportProgressFn& progress,
                                  double progress_interval_s) {
   const auto t0 = Clock::now();
@@ -440,68 +563,13 @@ Result<ExportSummary> run_export(const ExportConfig& cfg, const ExportProgressFn
   }
   summary.frames = static_cast<std::int64_t>(frames.size());
 
-  std::map<std::string, std::string> config_echo = {
-      {"dataroot", cfg.dataroot},
-      {"version", cfg.version},
-      {"rng", corruption::to_string(cfg.rng)},
-      {"seed", std::to_string(cfg.seed)},
-      {"quality", std::to_string(cfg.quality)},
-      {"subsampling", subsampling_name(cfg.subsampling)},
-      {"sweeps", cfg.sweeps ? "true" : "false"},
-      {"split", cfg.split},
-      {"scenes",
-       [&] {
-         std::string s;
-         for (const auto& n : *scenes) s += (s.empty() ? "" : ",") + n;
-         return s;
-       }()},
-      {"shard", std::to_string(cfg.shard_index) + "/" + std::to_string(cfg.shard_count)},
-  };
-
+  const std::map<std::string, std::string> config_echo = config_echo_of(cfg, *scenes);
   std::vector<std::unique_ptr<Output>> outputs;
   for (Condition c : cfg.conditions) {
     for (auto level : cfg.levels) {
-      auto o = std::make_unique<Output>();
-      o->condition = c;
-      o->level = level;
-      o->severity = severity_of(c, level);
-      o->dir = cfg.out_dir + "/" + class_name(c) + "/" + corruption::to_string(level);
-      o->manifest_path = o->dir + "/" + manifest_name(cfg.shard_index, cfg.shard_count);
-      std::error_code ec;
-      for (const char* cam : policy::kCameraNames) fs::create_directories(o->dir + "/" + cam, ec);
-      if (ec) return Status(StatusCode::kIoError, "cannot create " + o->dir + ": " + ec.message());
-      if (fs::exists(o->manifest_path)) {
-        auto prev = read_manifest(o->manifest_path);
-        // An unreadable manifest only costs a redo of everything in that folder.
-        if (!prev) {
-          summary.problems.push_back("resume: " + prev.status().to_string() +
-                                     " (redoing the folder)");
-        } else if (const std::string key = config_mismatch(prev->config, config_echo);
-                   !key.empty()) {
-          // Files made with another seed, rng or encoder setting are not this run's outputs.
-          summary.problems.push_back("resume: " + o->manifest_path + ": " + key +
-                                     " differs from the earlier run (redoing the folder)");
-        } else {
-          o->previous = std::move(prev->files);
-        }
-      }
-      if (c == Condition::CameraCrash) {
-        o->crash_seed = derive_seed64(cfg.seed, c, level, "run");
-        o->dead_cameras =
-            cfg.rng == corruption::RngMode::Numpy
-                ? dead_set<rng::NumpyRandomState>(o->severity, numpy_seed(o->crash_seed))
-                : dead_set<rng::FastRng>(o->severity, o->crash_seed);
-      }
-      Manifest& m = o->manifest;
-      m.tool_version = cfg.tool_version;
-      m.condition = class_name(c);
-      m.level = corruption::to_string(level);
-      m.severity = o->severity;
-      m.config = config_echo;
-      m.seed_derivation = kSeedDerivation;
-      m.dead_cameras = o->dead_cameras;
-      m.expected = summary.frames;
-      outputs.push_back(std::move(o));
+      auto o = make_output(cfg, c, level, config_echo, summary);
+      if (!o) return o.status();
+      outputs.push_back(std::move(o).value());
     }
   }
   const std::int64_t total = summary.frames * static_cast<std::int64_t>(outputs.size());
@@ -512,51 +580,9 @@ Result<ExportSummary> run_export(const ExportConfig& cfg, const ExportProgressFn
   threads = std::max(1, threads);
   summary.threads = threads;
   Runner runner(cfg, *reader, std::move(frames), std::move(outputs));
-  std::mutex mu;
-  std::condition_variable cv;
-  int running = threads;
-  std::vector<std::thread> pool;
-  for (int i = 0; i < threads; ++i) {
-    pool.emplace_back([&] {
-      runner.worker(static_cast<std::size_t>(threads));
-      std::lock_guard<std::mutex> lock(mu);
-      --running;
-      cv.notify_all();
-    });
-  }
-  auto last_flush = Clock::now();
-  {
-    std::unique_lock<std::mutex> lock(mu);
-    while (running > 0) {
-      cv.wait_for(lock, std::chrono::duration<double>(progress_interval_s));
-      if (progress && running > 0) progress(runner.done.load(), total, seconds_since(t0));
-      if (seconds_since(last_flush) >= cfg.manifest_flush_seconds && running > 0) {
-        lock.unlock();
-        (void)flush_manifests(runner.outputs_);  // best effort; the final flush reports errors
-        last_flush = Clock::now();
-        lock.lock();
-      }
-    }
-  }
-  for (auto& t : pool) t.join();
+  run_workers(cfg, runner, threads, total, t0, progress, progress_interval_s);
   if (Status s = flush_manifests(runner.outputs_); !s) return s;
-
-  for (const auto& o : runner.outputs_) {
-    auto& st = summary.per_condition[class_name(o->condition)];
-    st.images += o->written.load();
-    st.busy_seconds += static_cast<double>(o->busy_ns.load()) * 1e-9;
-    st.cpu_seconds += static_cast<double>(o->cpu_ns.load()) * 1e-9;
-    summary.written += o->manifest.written;
-    summary.skipped += o->manifest.skipped;
-    summary.failed += static_cast<std::int64_t>(o->manifest.errors.size());
-    for (const auto& [rel, e] : o->manifest.errors) {
-      summary.problems.push_back(o->manifest.condition + "/" + o->manifest.level + "/" + rel +
-                                 ": " + e.error);
-    }
-  }
-  summary.read_decode_seconds = static_cast<double>(runner.decode_ns.load()) * 1e-9;
-  summary.read_decode_cpu_seconds = static_cast<double>(runner.decode_cpu_ns.load()) * 1e-9;
-  summary.frames_decoded = runner.decoded.load();
+  add_up(runner, summary);
   summary.wall_seconds = seconds_since(t0);
   if (progress) progress(runner.done.load(), total, summary.wall_seconds);
   return summary;

@@ -146,6 +146,108 @@ struct BagPlayer::Impl {
     }
     return false;
   }
+
+  // The bag duration for the progress line, from the statistics of the indexed files.
+  void add_up_duration() {
+    for (const auto& file : cfg.files) {
+      auto reader = bag::Reader::open(file);
+      if (reader && (*reader)->load_summary().is_ok() && (*reader)->summary().statistics) {
+        const auto& st = *(*reader)->summary().statistics;
+        total_s += static_cast<double>(st.message_end_time - st.message_start_time) / 1e9;
+      }
+    }
+  }
+
+  // 2 or 3 (multipart frames) for a replay channel that is played, 0 for any other channel.
+  int frames_of(const bag::Channel& channel) {
+    auto it = channel_frames.find(channel.id);
+    if (it == channel_frames.end()) {
+      int frames = 0;
+      const auto f = channel.metadata.find(kMetaFrames);
+      const auto t = channel.metadata.find(kMetaTopic);
+      if (f != channel.metadata.end() && t != channel.metadata.end() && wanted(t->second)) {
+        frames = f->second == "3" ? 3 : f->second == "2" ? 2 : 0;
+      }
+      it = channel_frames.emplace(channel.id, frames).first;
+    }
+    return it->second;
+  }
+
+  // Before the first message: wait (bounded) for the configured number of subscribers.
+  void wait_subscribers_once(const std::string& topic, const std::atomic<bool>& stop) {
+    if (waited || cfg.wait_subscribers <= 0) return;
+    waited = true;
+    const Status w =
+        pub->wait_for_subscribers(topic, cfg.wait_subscribers,
+                                  static_cast<DurationNs>(cfg.wait_timeout_ms) * kNsPerMs, &stop);
+    if (!w.is_ok())
+      log->warn("starting without {} subscriber(s) on {}: {}", cfg.wait_subscribers, topic,
+                w.to_string());
+  }
+
+  // Pause / step: nothing is sent while paused; one message per step. False when stopped.
+  bool hold_while_paused(const std::atomic<bool>& stop, std::atomic<bool>& paused,
+                         std::atomic<int>& steps, BagPlayerCounts& counts) {
+    poll_control(0, paused, steps, counts);
+    if (!paused.load()) return true;
+    bool was_waiting = false;
+    while (paused.load() && steps.load() == 0 && !stop.load()) {
+      if (cfg.progress && !was_waiting) print_progress(counts, true);
+      was_waiting = true;
+      poll_control(50 * kNsPerMs, paused, steps, counts);
+    }
+    if (stop.load()) return false;
+    if (paused.load()) steps.fetch_sub(1);  // one message for this step
+    base_log_ns = -1;                       // the pacing clock restarts after a pause
+    return true;
+  }
+
+  // Sleeps until the message is due at cfg.rate (a gap over max_gap_s is skipped). False when
+  // stopped.
+  bool pace(StampNs log_time_ns, const std::atomic<bool>& stop) {
+    if (cfg.rate > 0 && cfg.max_gap_s > 0 && prev_log_ns >= 0 &&
+        log_time_ns - prev_log_ns > static_cast<StampNs>(cfg.max_gap_s * kNsPerSec)) {
+      base_log_ns = -1;  // skip the gap
+    }
+    prev_log_ns = log_time_ns;
+    if (cfg.rate <= 0) return true;
+    if (base_log_ns < 0) {
+      base_log_ns = log_time_ns;
+      base_wall_ns = monotonic_now_ns();
+    }
+    const auto due = base_wall_ns + static_cast<StampNs>(
+                                        static_cast<double>(log_time_ns - base_log_ns) / cfg.rate);
+    return sleep_until(due, stop);
+  }
+
+  // Publishes one message as recorded: multipart (`frames` 3) or single-frame; `sent` is the
+  // publisher's outcome. False (counted as malformed, nothing sent) when a multipart record does
+  // not decode.
+  bool send(int frames, const std::string& topic, std::string_view data, BagPlayerCounts& counts,
+            Status& sent) {
+    if (frames != 3) {
+      sent = pub->send(topic, data);
+      return true;
+    }
+    auto mp = decode_multipart(data);
+    if (!mp) {
+      ++counts.malformed;
+      return false;
+    }
+    transport::Payload p;
+    p.data = reinterpret_cast<const std::uint8_t*>(mp->payload.data());
+    p.size_bytes = mp->payload.size();
+    sent = pub->send(topic, mp->header, p);
+    return true;
+  }
+
+  void send_stream_end() {
+    msgs::StreamEnd end;
+    end.mutable_header()->set_publisher("bag_player");
+    end.mutable_header()->set_publish_stamp_ns(realtime_now_ns());
+    end.mutable_header()->set_publish_mono_ns(monotonic_now_ns());
+    if (transport::send_message(*pub, cfg.end_topic, end).is_ok()) log->debug("stream end sent");
+  }
 };
 
 BagPlayer::BagPlayer(BagPlayerConfig config, std::shared_ptr<spdlog::logger> log)
@@ -205,17 +307,55 @@ int BagPlayer::run(const std::atomic<bool>& stop) {
   const StampNs offset_ns = static_cast<StampNs>(m.cfg.start_offset_s * kNsPerSec);
   const StampNs span_ns =
       m.cfg.duration_s > 0 ? static_cast<StampNs>(m.cfg.duration_s * kNsPerSec) : -1;
-  bool ended = false;                     // the duration limit was reached
-  for (const auto& file : m.cfg.files) {  // duration for the progress line (indexed files only)
-    auto reader = bag::Reader::open(file);
-    if (reader && (*reader)->load_summary().is_ok() && (*reader)->summary().statistics) {
-      const auto& st = *(*reader)->summary().statistics;
-      m.total_s += static_cast<double>(st.message_end_time - st.message_start_time) / 1e9;
-    }
-  }
+  bool ended = false;  // the duration limit was reached
+  m.add_up_duration();
   if (m.cfg.start_paused) m.log->info("paused: waiting for resume or step");
   bool end_owed =
       false;  // a played last_in_run boundary announced a StreamEnd that has not been played
+  auto on_message = [&](const bag::MessageView& v) -> bool {
+    if (stop.load()) return false;
+    const int frames = m.frames_of(*v.channel);
+    if (frames == 0) return true;
+    if (m.first_log_ns < 0) m.first_log_ns = v.log_time_ns;
+    const StampNs rel = v.log_time_ns - m.first_log_ns;
+    if (rel < offset_ns) return true;
+    if (span_ns >= 0 && rel - offset_ns > span_ns) {
+      ended = true;
+      return false;
+    }
+    std::string topic = v.channel->metadata.at(kMetaTopic);
+    if (const auto r = m.cfg.remap.find(topic); r != m.cfg.remap.end()) topic = r->second;
+    m.wait_subscribers_once(topic, stop);
+    if (!m.hold_while_paused(stop, paused_, steps_, counts_)) return false;
+    if (!m.pace(v.log_time_ns, stop)) return false;
+    Status s;
+    if (!m.send(frames, topic, v.data, counts_, s)) return true;
+    if (!s.is_ok()) {
+      ++counts_.send_failures;
+      return s.code() != StatusCode::kCancelled;
+    }
+    ++counts_.messages_sent;
+    sent_.store(counts_.messages_sent);
+    // A boundary is parsed once: for the stream end it may announce and for the lockstep ack
+    // below.
+    msgs::SampleBoundary boundary;
+    const bool is_boundary =
+        topic == m.cfg.sync_topic &&
+        boundary.ParseFromArray(v.data.data(), static_cast<int>(v.data.size()));
+    if (topic == m.cfg.end_topic) end_owed = false;
+    if (is_boundary && boundary.last_in_run() && boundary.stream_end_follows()) end_owed = true;
+    counts_.bytes_sent += v.data.size();
+    counts_.bag_seconds = static_cast<double>(rel) / 1e9;
+    if (m.cfg.progress && monotonic_now_ns() - m.last_progress_ns > 200 * kNsPerMs) {
+      m.last_progress_ns = monotonic_now_ns();
+      m.print_progress(counts_, paused_.load());
+    }
+    if (m.cfg.lockstep && topic == m.cfg.sync_topic) {
+      if (is_boundary && !m.wait_ack(boundary.sample_token(), stop, counts_)) return false;
+      m.base_log_ns = -1;  // pacing restarts after the sink caught up
+    }
+    return true;
+  };
   do {
     m.base_log_ns = -1;
     for (const auto& file : m.cfg.files) {
@@ -226,106 +366,6 @@ int BagPlayer::run(const std::atomic<bool>& stop) {
       }
       m.channel_frames.clear();
       bag::ReadOptions ro;
-      auto on_message = [&](const bag::MessageView& v) -> bool {
-        if (stop.load()) return false;
-        auto it = m.channel_frames.find(v.channel->id);
-        if (it == m.channel_frames.end()) {
-          int frames = 0;
-          const auto f = v.channel->metadata.find(kMetaFrames);
-          const auto t = v.channel->metadata.find(kMetaTopic);
-          if (f != v.channel->metadata.end() && t != v.channel->metadata.end() &&
-              m.wanted(t->second)) {
-            frames = f->second == "3" ? 3 : f->second == "2" ? 2 : 0;
-          }
-          it = m.channel_frames.emplace(v.channel->id, frames).first;
-        }
-        if (it->second == 0) return true;
-        if (m.first_log_ns < 0) m.first_log_ns = v.log_time_ns;
-        const StampNs rel = v.log_time_ns - m.first_log_ns;
-        if (rel < offset_ns) return true;
-        if (span_ns >= 0 && rel - offset_ns > span_ns) {
-          ended = true;
-          return false;
-        }
-        std::string topic = v.channel->metadata.at(kMetaTopic);
-        if (const auto r = m.cfg.remap.find(topic); r != m.cfg.remap.end()) topic = r->second;
-        if (!m.waited && m.cfg.wait_subscribers > 0) {
-          m.waited = true;
-          const Status w = m.pub->wait_for_subscribers(
-              topic, m.cfg.wait_subscribers,
-              static_cast<DurationNs>(m.cfg.wait_timeout_ms) * kNsPerMs, &stop);
-          if (!w.is_ok())
-            m.log->warn("starting without {} subscriber(s) on {}: {}", m.cfg.wait_subscribers,
-                        topic, w.to_string());
-        }
-        // Pause / step: nothing is sent while paused; one message per step.
-        m.poll_control(0, paused_, steps_, counts_);
-        if (paused_.load()) {
-          bool was_waiting = false;
-          while (paused_.load() && steps_.load() == 0 && !stop.load()) {
-            if (m.cfg.progress && !was_waiting) m.print_progress(counts_, true);
-            was_waiting = true;
-            m.poll_control(50 * kNsPerMs, paused_, steps_, counts_);
-          }
-          if (stop.load()) return false;
-          if (paused_.load()) steps_.fetch_sub(1);  // one message for this step
-          m.base_log_ns = -1;                       // the pacing clock restarts after a pause
-        }
-        if (m.cfg.rate > 0 && m.cfg.max_gap_s > 0 && m.prev_log_ns >= 0 &&
-            v.log_time_ns - m.prev_log_ns > static_cast<StampNs>(m.cfg.max_gap_s * kNsPerSec)) {
-          m.base_log_ns = -1;  // skip the gap
-        }
-        m.prev_log_ns = v.log_time_ns;
-        if (m.cfg.rate > 0) {
-          if (m.base_log_ns < 0) {
-            m.base_log_ns = v.log_time_ns;
-            m.base_wall_ns = monotonic_now_ns();
-          }
-          const auto due =
-              m.base_wall_ns +
-              static_cast<StampNs>(static_cast<double>(v.log_time_ns - m.base_log_ns) / m.cfg.rate);
-          if (!Impl::sleep_until(due, stop)) return false;
-        }
-        Status s;
-        if (it->second == 3) {
-          auto mp = decode_multipart(v.data);
-          if (!mp) {
-            ++counts_.malformed;
-            return true;
-          }
-          transport::Payload p;
-          p.data = reinterpret_cast<const std::uint8_t*>(mp->payload.data());
-          p.size_bytes = mp->payload.size();
-          s = m.pub->send(topic, mp->header, p);
-        } else {
-          s = m.pub->send(topic, v.data);
-        }
-        if (!s.is_ok()) {
-          ++counts_.send_failures;
-          return s.code() != StatusCode::kCancelled;
-        }
-        ++counts_.messages_sent;
-        sent_.store(counts_.messages_sent);
-        // A boundary is parsed once: for the stream end it may announce and for the lockstep ack
-        // below.
-        msgs::SampleBoundary boundary;
-        const bool is_boundary =
-            topic == m.cfg.sync_topic &&
-            boundary.ParseFromArray(v.data.data(), static_cast<int>(v.data.size()));
-        if (topic == m.cfg.end_topic) end_owed = false;
-        if (is_boundary && boundary.last_in_run() && boundary.stream_end_follows()) end_owed = true;
-        counts_.bytes_sent += v.data.size();
-        counts_.bag_seconds = static_cast<double>(rel) / 1e9;
-        if (m.cfg.progress && monotonic_now_ns() - m.last_progress_ns > 200 * kNsPerMs) {
-          m.last_progress_ns = monotonic_now_ns();
-          m.print_progress(counts_, paused_.load());
-        }
-        if (m.cfg.lockstep && topic == m.cfg.sync_topic) {
-          if (is_boundary && !m.wait_ack(boundary.sample_token(), stop, counts_)) return false;
-          m.base_log_ns = -1;  // pacing restarts after the sink caught up
-        }
-        return true;
-      };
       auto scan = (*reader)->read_linear(ro, on_message, [&](const bag::Problem& p) {
         ++counts_.bag_problems;
         m.log->warn("{}: {}", file, p.to_string());
@@ -337,16 +377,9 @@ int BagPlayer::run(const std::atomic<bool>& stop) {
       if (stop.load() || ended) break;
     }
   } while (m.cfg.loop && !stop.load() && !ended);
-  if (!stop.load() && end_owed) {
-    // Converted bags (and recordings without /sync/end, or played without it) announce a stream end
-    // on their last boundary; this is it.
-    msgs::StreamEnd end;
-    end.mutable_header()->set_publisher("bag_player");
-    end.mutable_header()->set_publish_stamp_ns(realtime_now_ns());
-    end.mutable_header()->set_publish_mono_ns(monotonic_now_ns());
-    if (transport::send_message(*m.pub, m.cfg.end_topic, end).is_ok())
-      m.log->debug("stream end sent");
-  }
+  // Converted bags (and recordings without /sync/end, or played without it) announce a stream end
+  // on their last boundary; this is it.
+  if (!stop.load() && end_owed) m.send_stream_end();
   if (m.cfg.progress) std::fprintf(stderr, "\n");
   m.log->info(
       "played {} messages ({} bytes, {:.2f} s of bag time), {} send failures, {} ack timeouts",
