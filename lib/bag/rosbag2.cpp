@@ -128,8 +128,11 @@ void emit_metadata(YAML::Emitter& e, const Rosbag2Metadata& m) {
 
 }  // namespace
 
+// Non-ASCII is written escaped: a raw U+0085/U+2028/U+2029 in a quoted string reads back as a line
+// break (folded to a space), so metadata.yaml would not read back the same (found by fuzzing).
 std::string rosbag2_metadata_yaml(const Rosbag2Metadata& m) {
   YAML::Emitter e;
+  e.SetOutputCharset(YAML::EscapeNonAscii);
   e << YAML::BeginMap << YAML::Key << "rosbag2_bagfile_information" << YAML::Value;
   emit_metadata(e, m);
   e << YAML::EndMap;
@@ -138,9 +141,32 @@ std::string rosbag2_metadata_yaml(const Rosbag2Metadata& m) {
 
 std::string rosbag2_serialized_metadata(const Rosbag2Metadata& m) {
   YAML::Emitter e;
+  e.SetOutputCharset(YAML::EscapeNonAscii);
   emit_metadata(e, m);
   return e.c_str();
 }
+
+namespace {
+Status check_utf8_fields(const Rosbag2Metadata& m, const std::string& path) {
+  auto check = [&](const std::string& value, const std::string& what) {
+    if (first_bad_utf8(value) == std::string::npos) return Status::ok();
+    return Status(StatusCode::kCorruptData,
+                  path + ": " + what + " is not UTF-8 text after its escapes");
+  };
+  Status s = check(m.storage_identifier, "storage_identifier");
+  for (const Rosbag2TopicInfo& t : m.topics) {
+    if (s.is_ok()) s = check(t.name, "a topic name");
+    if (s.is_ok()) s = check(t.type, "the type of " + t.name);
+    if (s.is_ok()) s = check(t.serialization_format, "the serialization_format of " + t.name);
+    if (s.is_ok()) s = check(t.offered_qos_profiles, "the offered_qos_profiles of " + t.name);
+  }
+  for (const std::string& p : m.relative_file_paths)
+    if (s.is_ok()) s = check(p, "a relative_file_paths entry");
+  for (const Rosbag2FileInfo& f : m.files)
+    if (s.is_ok()) s = check(f.path, "a files path");
+  return s;
+}
+}  // namespace
 
 Result<Rosbag2Metadata> parse_rosbag2_metadata(const std::string& text, const std::string& path) {
   // YAML is Unicode text: bytes that are not UTF-8 would not be written back as they were read
@@ -196,6 +222,8 @@ Result<Rosbag2Metadata> parse_rosbag2_metadata(const std::string& text, const st
         m.files.push_back(std::move(fi));
       }
     }
+    // A quoted escape can still decode to bytes that are not UTF-8 ("\N" gives a lone 0x85).
+    if (Status s = check_utf8_fields(m, path); !s.is_ok()) return s;
     return m;
   } catch (const YAML::Exception& e) {
     return Status(StatusCode::kCorruptData, path + ": " + key + ": " + e.what());

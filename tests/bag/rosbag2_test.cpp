@@ -284,5 +284,20 @@ TEST_F(Rosbag2Test, MetadataThatIsNotUtf8IsRefusedNamingTheByte) {
             "b: missing rosbag2_bagfile_information");  // valid UTF-8 gets as far as the keys
 }
 
+// Found by fuzz_rosbag2_metadata in CI's fuzz stage: a quoted "\N" escape decodes to a lone 0x85
+// byte, which the writer cannot give back; it is refused by name like raw bytes that are not UTF-8.
+TEST_F(Rosbag2Test, AnEscapeThatDecodesToNonUtf8IsRefusedNamingTheField) {
+  const std::string text =
+      "rosbag2_bagfile_information:\n  version: 5\n  storage_identifier: mcap\n"
+      "  duration: {nanoseconds: 1}\n  starting_time: {nanoseconds_since_epoch: 1}\n"
+      "  message_count: 1\n  topics_with_message_count:\n    - topic_metadata: {name: /a, type: t, "
+      "serialization_format: cdr, offered_qos_profiles: \"x\\Ny\"}\n      message_count: 1\n"
+      "  relative_file_paths: [b_0.mcap]\n";
+  const auto m = parse_rosbag2_metadata(text, "b/metadata.yaml");
+  ASSERT_FALSE(m.is_ok());
+  EXPECT_EQ(m.status().message(),
+            "b/metadata.yaml: the offered_qos_profiles of /a is not UTF-8 text after its escapes");
+}
+
 }  // namespace
 }  // namespace faultline::bag
