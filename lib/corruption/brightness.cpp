@@ -10,62 +10,17 @@
 #include <vector>
 
 #include "common/simd.hpp"
+#include "corruption/skimage_hsv.hpp"
 
 namespace faultline::corruption {
 namespace {
 
-std::uint8_t to_u8(double v) {
-  return static_cast<std::uint8_t>(std::min(std::max(v, 0.0), 1.0) * 255.0);
-}
+using skimage::to_u8;
 
 // One pixel through rgb2hsv, V += c, hsv2rgb (skimage 0.19 semantics, channels in stored order).
 void hsv_shift_pixel(const std::uint8_t* in, std::uint8_t* out, double c) {
-  const double a0 = in[0] / 255.0, a1 = in[1] / 255.0, a2 = in[2] / 255.0;
-  const double v = std::max(std::max(a0, a1), a2);
-  const double delta = v - std::min(std::min(a0, a1), a2);
-  double s = delta / v;
-  if (delta == 0.0) s = 0.0;
-  double h = 0.0;
-  if (a0 == v) h = (a1 - a2) / delta;
-  if (a1 == v) h = 2.0 + (a2 - a0) / delta;
-  if (a2 == v) h = 4.0 + (a0 - a1) / delta;
-  // numpy floor-mod: fmod, then shift negatives into [0, 1). h lies in [-1, 5] (or is NaN), so |h /
-  // 6| < 1 and fmod(h / 6, 1) is exactly h / 6: the libm call is skipped without changing a bit.
-  double hue = h / 6.0;
-  if (hue != 0.0 && hue < 0.0) hue += 1.0;
-  if (delta == 0.0) hue = 0.0;
-  if (std::isnan(hue)) hue = 0.0;
-  if (std::isnan(s)) s = 0.0;
-  const double v2 = std::min(std::max(v + c, 0.0), 1.0);
-  const double hi = std::floor(hue * 6.0);
-  const double f = hue * 6.0 - hi;
-  const double p = v2 * (1.0 - s);
-  const double q = v2 * (1.0 - f * s);
-  const double t = v2 * (1.0 - (1.0 - f) * s);
-  double r0 = 0.0, r1 = 0.0, r2 = 0.0;
-  switch (static_cast<std::uint8_t>(hi) % 6) {
-    case 0:
-      r0 = v2, r1 = t, r2 = p;
-      break;
-    case 1:
-      r0 = q, r1 = v2, r2 = p;
-      break;
-    case 2:
-      r0 = p, r1 = v2, r2 = t;
-      break;
-    case 3:
-      r0 = p, r1 = q, r2 = v2;
-      break;
-    case 4:
-      r0 = t, r1 = p, r2 = v2;
-      break;
-    default:
-      r0 = v2, r1 = p, r2 = q;
-      break;
-  }
-  out[0] = to_u8(r0);
-  out[1] = to_u8(r1);
-  out[2] = to_u8(r2);
+  const skimage::Hsv hsv = skimage::rgb_to_hsv(in);
+  skimage::hsv_to_rgb_u8(hsv.h, hsv.s, std::min(std::max(hsv.v + c, 0.0), 1.0), out);
 }
 
 cv::Mat continuous(const cv::Mat& m) { return m.isContinuous() ? m : m.clone(); }

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "common/simd.hpp"
+#include "corruption/skimage_hsv.hpp"
 
 namespace faultline::corruption {
 namespace {
@@ -15,60 +16,15 @@ std::size_t sev_index(int severity) {
   return static_cast<std::size_t>(std::clamp(severity, 1, 5) - 1);
 }
 
-inline std::uint8_t to_u8(double v) {
-  return static_cast<std::uint8_t>(std::min(std::max(v, 0.0), 1.0) * 255.0);
-}
+using skimage::to_u8;
 
 cv::Mat continuous(const cv::Mat& m) { return m.isContinuous() ? m : m.clone(); }
 
 // One pixel through rgb2hsv, S = clip(S * a + b, 0, 1), hsv2rgb (skimage 0.19, channels in stored
 // order).
 void saturate_pixel(const std::uint8_t* in, std::uint8_t* out, double a, double b) {
-  const double a0 = in[0] / 255.0, a1 = in[1] / 255.0, a2 = in[2] / 255.0;
-  const double v = std::max(std::max(a0, a1), a2);
-  const double delta = v - std::min(std::min(a0, a1), a2);
-  double s = delta / v;
-  if (delta == 0.0) s = 0.0;
-  double h = 0.0;
-  if (a0 == v) h = (a1 - a2) / delta;
-  if (a1 == v) h = 2.0 + (a2 - a0) / delta;
-  if (a2 == v) h = 4.0 + (a0 - a1) / delta;
-  // numpy's floor-mod of h / 6 by 1: |h / 6| < 1, so only negatives move (by +1, which may round
-  // to 1.0).
-  double hue = h / 6.0;
-  if (hue < 0.0) hue += 1.0;
-  if (delta == 0.0 || std::isnan(hue)) hue = 0.0;
-  if (std::isnan(s)) s = 0.0;
-  const double s2 = std::min(std::max(s * a + b, 0.0), 1.0);
-  const double hi = std::floor(hue * 6.0);
-  const double f = hue * 6.0 - hi;
-  const double p = v * (1.0 - s2);
-  const double q = v * (1.0 - f * s2);
-  const double t = v * (1.0 - (1.0 - f) * s2);
-  double r0 = 0.0, r1 = 0.0, r2 = 0.0;
-  switch (static_cast<std::uint8_t>(hi) % 6) {
-    case 0:
-      r0 = v, r1 = t, r2 = p;
-      break;
-    case 1:
-      r0 = q, r1 = v, r2 = p;
-      break;
-    case 2:
-      r0 = p, r1 = v, r2 = t;
-      break;
-    case 3:
-      r0 = p, r1 = q, r2 = v;
-      break;
-    case 4:
-      r0 = t, r1 = p, r2 = v;
-      break;
-    default:
-      r0 = v, r1 = p, r2 = q;
-      break;
-  }
-  out[0] = to_u8(r0);
-  out[1] = to_u8(r1);
-  out[2] = to_u8(r2);
+  const skimage::Hsv hsv = skimage::rgb_to_hsv(in);
+  skimage::hsv_to_rgb_u8(hsv.h, std::min(std::max(hsv.s * a + b, 0.0), 1.0), hsv.v, out);
 }
 
 }  // namespace
