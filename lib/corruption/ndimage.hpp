@@ -8,6 +8,8 @@
 #include <opencv2/core.hpp>
 #include <vector>
 
+#include "common/pairwise_sum.hpp"
+
 namespace faultline::corruption::nd {
 
 // np.exp on float64 as NumPy 1.24 computes it on an AVX-512 CPU (its AVX512F table method after
@@ -15,9 +17,8 @@ namespace faultline::corruption::nd {
 // outputs.
 double numpy_exp(double x);
 
-// np.sum of a contiguous float64 vector: NumPy's pairwise summation (8 accumulators per block of <=
-// 128).
-double pairwise_sum(const double* a, std::size_t n);
+// np.sum of a contiguous float64 vector (common/pairwise_sum.hpp).
+using ::faultline::pairwise_sum;
 
 // scipy.ndimage's order-0 Gaussian weights for offsets -radius..radius: exp(-0.5 / sigma^2 * x^2),
 // normalised by their pairwise sum. radius = int(truncate * sigma + 0.5).

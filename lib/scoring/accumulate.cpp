@@ -7,32 +7,11 @@
 #include <limits>
 #include <numeric>
 
+#include "common/pairwise_sum.hpp"
 #include "scoring/geometry.hpp"
 
 namespace faultline::scoring {
 namespace {
-
-double pairwise(const double* a, std::size_t n) {
-  if (n < 8) {
-    double res = 0.;
-    for (std::size_t i = 0; i < n; ++i) res += a[i];
-    return res;
-  }
-  if (n <= 128) {
-    double r[8];
-    for (std::size_t j = 0; j < 8; ++j) r[j] = a[j];
-    std::size_t i = 8;
-    for (; i < n - (n % 8); i += 8) {
-      for (std::size_t j = 0; j < 8; ++j) r[j] += a[i + j];
-    }
-    double res = ((r[0] + r[1]) + (r[2] + r[3])) + ((r[4] + r[5]) + (r[6] + r[7]));
-    for (; i < n; ++i) res += a[i];
-    return res;
-  }
-  std::size_t n2 = n / 2;
-  n2 -= n2 % 8;
-  return pairwise(a, n2) + pairwise(a + n2, n - n2);
-}
 
 // NaN-aware cumulative mean; all ones when every value is NaN.
 std::vector<double> cummean(const std::vector<double>& x) {
@@ -59,7 +38,7 @@ std::vector<double> cummean(const std::vector<double>& x) {
 
 double np_sum(const double* v, std::size_t n) {
   if (n == 0) return 0.0;
-  return v[0] + pairwise(v + 1, n - 1);
+  return v[0] + pairwise_sum(v + 1, n - 1);
 }
 
 double np_mean(const double* v, std::size_t n) { return np_sum(v, n) / static_cast<double>(n); }
