@@ -2,51 +2,75 @@
 
 #include <opencv2/imgproc.hpp>
 #include <string>
-#include <vector>
 
 namespace faultline::codec {
+namespace {
 
-bool is_raw_encoding(std::string_view encoding) {
-  return encoding == "bgr8" || encoding == "rgb8" || encoding == "mono8" || encoding == "yuv422" ||
-         encoding == "yuv422_yuy2";
+struct EncodingInfo {
+  const char* name;
+  int bytes_per_pixel;
+  int cv_code;  // -1: already BGR
+  int cv_type;
+};
+
+// ROS "yuv422" is UYVY (U Y0 V Y1), "yuv422_yuy2" YUYV (sensor_msgs/image_encodings.hpp).
+constexpr EncodingInfo kEncodings[] = {
+    {"bgr8", 3, -1, CV_8UC3},
+    {"rgb8", 3, cv::COLOR_RGB2BGR, CV_8UC3},
+    {"mono8", 1, cv::COLOR_GRAY2BGR, CV_8UC1},
+    {"yuv422", 2, cv::COLOR_YUV2BGR_UYVY, CV_8UC2},
+    {"yuv422_yuy2", 2, cv::COLOR_YUV2BGR_YUYV, CV_8UC2},
+    {"bgra8", 4, cv::COLOR_BGRA2BGR, CV_8UC4},
+    {"rgba8", 4, cv::COLOR_RGBA2BGR, CV_8UC4},
+};
+
+const EncodingInfo* find_encoding(std::string_view encoding) {
+  for (const auto& e : kEncodings) {
+    if (encoding == e.name) return &e;
+  }
+  return nullptr;
 }
+
+}  // namespace
+
+bool is_raw_encoding(std::string_view encoding) { return find_encoding(encoding) != nullptr; }
 
 Result<cv::Mat> raw_to_bgr(std::string_view encoding, std::uint32_t width, std::uint32_t height,
                            std::uint32_t step, const std::uint8_t* data, std::size_t size) {
-  if (!is_raw_encoding(encoding)) {
-    return Status(StatusCode::kInvalidArgument,
-                  "encoding \"" + std::string(encoding) +
-                      "\" is not one of bgr8, rgb8, mono8, yuv422, yuv422_yuy2");
+  const EncodingInfo* enc = find_encoding(encoding);
+  if (!enc) {
+    return Status(StatusCode::kUnsupported,
+                  "encoding '" + std::string(encoding) +
+                      "': expected bgr8, rgb8, mono8, yuv422, yuv422_yuy2, bgra8 or rgba8");
   }
-  const bool yuv = encoding == "yuv422" || encoding == "yuv422_yuy2";
-  const int channels = encoding == "mono8" ? 1 : yuv ? 2 : 3;
-  if (yuv && width % 2 != 0)
-    return Status(StatusCode::kCorruptData, "yuv422 frame of odd width " + std::to_string(width));
-  if (width == 0 || height == 0) return Status(StatusCode::kCorruptData, "raw frame of 0 pixels");
-  if (static_cast<std::uint64_t>(step) < static_cast<std::uint64_t>(width) * channels) {
-    return Status(StatusCode::kCorruptData, "step " + std::to_string(step) +
-                                                " is less than width " + std::to_string(width) +
-                                                " x " + std::to_string(channels));
+  if (width == 0 || height == 0) {
+    return Status(StatusCode::kCorruptData, "image size " + std::to_string(width) + "x" +
+                                                std::to_string(height) + ": must be > 0");
   }
-  if (static_cast<std::uint64_t>(step) * height != size) {
+  if (enc->bytes_per_pixel == 2 && width % 2 != 0) {
     return Status(StatusCode::kCorruptData,
-                  std::to_string(size) + " payload bytes, expected step x height = " +
-                      std::to_string(static_cast<std::uint64_t>(step) * height));
+                  "width " + std::to_string(width) + ": 4:2:2 needs an even width");
+  }
+  const std::uint64_t row =
+      static_cast<std::uint64_t>(width) * static_cast<std::uint64_t>(enc->bytes_per_pixel);
+  if (step < row) {
+    return Status(StatusCode::kCorruptData, "step " + std::to_string(step) + " < width x " +
+                                                std::to_string(enc->bytes_per_pixel) + " = " +
+                                                std::to_string(row));
+  }
+  const std::uint64_t need = static_cast<std::uint64_t>(step) * height;
+  if (size < need || data == nullptr) {
+    return Status(StatusCode::kCorruptData, "data " + std::to_string(size) +
+                                                " bytes < step x height = " + std::to_string(need));
   }
   // A header over the caller's bytes (const_cast: only read), then one copy into the BGR result.
-  const cv::Mat in(static_cast<int>(height), static_cast<int>(width), CV_8UC(channels),
+  const cv::Mat in(static_cast<int>(height), static_cast<int>(width), enc->cv_type,
                    const_cast<std::uint8_t*>(data), step);
-  cv::Mat bgr(in.size(), CV_8UC3);
-  if (yuv) {  // ROS "yuv422" is UYVY (U Y0 V Y1); "yuv422_yuy2" is YUYV
-    cv::cvtColor(in, bgr, encoding == "yuv422" ? cv::COLOR_YUV2BGR_UYVY : cv::COLOR_YUV2BGR_YUY2);
-  } else if (encoding == "bgr8") {
-    in.copyTo(bgr);
-  } else if (encoding == "rgb8") {
-    const int swap[] = {0, 2, 1, 1, 2, 0};
-    cv::mixChannels(&in, 1, &bgr, 1, swap, 3);
+  cv::Mat bgr;
+  if (enc->cv_code < 0) {
+    bgr = in.clone();
   } else {
-    const int spread[] = {0, 0, 0, 1, 0, 2};
-    cv::mixChannels(&in, 1, &bgr, 1, spread, 3);
+    cv::cvtColor(in, bgr, enc->cv_code);
   }
   return bgr;
 }

@@ -2,7 +2,8 @@
 
 #include <algorithm>
 #include <cctype>
-#include <opencv2/imgproc.hpp>
+
+#include "codec/raw.hpp"
 
 namespace faultline::ros2dds {
 namespace {
@@ -84,75 +85,11 @@ std::optional<ImageType> image_type_of(const std::string& dds_type_name) {
   return std::nullopt;
 }
 
-namespace {
-
-struct EncodingInfo {
-  const char* name;
-  int bytes_per_pixel;
-  int cv_code;  // -1: already BGR
-  int cv_type;
-};
-
-constexpr EncodingInfo kEncodings[] = {
-    {"bgr8", 3, -1, CV_8UC3},
-    {"rgb8", 3, cv::COLOR_RGB2BGR, CV_8UC3},
-    {"mono8", 1, cv::COLOR_GRAY2BGR, CV_8UC1},
-    {"yuv422", 2, cv::COLOR_YUV2BGR_UYVY, CV_8UC2},
-    {"yuv422_yuy2", 2, cv::COLOR_YUV2BGR_YUYV, CV_8UC2},
-    {"bgra8", 4, cv::COLOR_BGRA2BGR, CV_8UC4},
-    {"rgba8", 4, cv::COLOR_RGBA2BGR, CV_8UC4},
-};
-
-const EncodingInfo* find_encoding(std::string_view encoding) {
-  for (const auto& e : kEncodings) {
-    if (encoding == e.name) return &e;
-  }
-  return nullptr;
-}
-
-}  // namespace
-
-bool is_supported_encoding(std::string_view encoding) { return find_encoding(encoding) != nullptr; }
+bool is_supported_encoding(std::string_view encoding) { return codec::is_raw_encoding(encoding); }
 
 Result<cv::Mat> raw_to_bgr(const RawImageView& image) {
-  const EncodingInfo* enc = find_encoding(image.encoding);
-  if (!enc) {
-    return Result<cv::Mat>(
-        StatusCode::kUnsupported,
-        "encoding '" + std::string(image.encoding) +
-            "': expected bgr8, rgb8, mono8, yuv422, yuv422_yuy2, bgra8 or rgba8");
-  }
-  if (image.width == 0 || image.height == 0) {
-    return Result<cv::Mat>(StatusCode::kCorruptData, "image size " + std::to_string(image.width) +
-                                                         "x" + std::to_string(image.height) +
-                                                         ": must be > 0");
-  }
-  if (enc->bytes_per_pixel == 2 && image.width % 2 != 0) {
-    return Result<cv::Mat>(StatusCode::kCorruptData,
-                           "width " + std::to_string(image.width) + ": 4:2:2 needs an even width");
-  }
-  const std::uint64_t row =
-      static_cast<std::uint64_t>(image.width) * static_cast<std::uint64_t>(enc->bytes_per_pixel);
-  if (image.step < row) {
-    return Result<cv::Mat>(StatusCode::kCorruptData,
-                           "step " + std::to_string(image.step) + " < width x " +
-                               std::to_string(enc->bytes_per_pixel) + " = " + std::to_string(row));
-  }
-  const std::uint64_t need = static_cast<std::uint64_t>(image.step) * image.height;
-  if (image.size_bytes < need || image.data == nullptr) {
-    return Result<cv::Mat>(StatusCode::kCorruptData,
-                           "data " + std::to_string(image.size_bytes) +
-                               " bytes < step x height = " + std::to_string(need));
-  }
-  const cv::Mat in(static_cast<int>(image.height), static_cast<int>(image.width), enc->cv_type,
-                   const_cast<std::uint8_t*>(image.data), image.step);
-  cv::Mat out;
-  if (enc->cv_code < 0) {
-    out = in.clone();
-  } else {
-    cv::cvtColor(in, out, enc->cv_code);
-  }
-  return out;
+  return codec::raw_to_bgr(image.encoding, image.width, image.height, image.step, image.data,
+                           image.size_bytes);
 }
 
 CameraInfoValues camera_info_from_intrinsics(const std::vector<double>& k, std::uint32_t width,

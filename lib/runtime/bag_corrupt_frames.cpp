@@ -10,6 +10,7 @@
 #include <opencv2/imgproc.hpp>
 #include <thread>
 
+#include "codec/raw.hpp"
 #include "runtime/bag_corrupt_input.hpp"
 
 namespace faultline::runtime::bag_corrupt_detail {
@@ -50,18 +51,11 @@ Status check_image(const ros2::Image& m) {
 
 Status image_to_bgr(const ros2::Image& m, cv::Mat& bgr) {
   if (Status s = check_image(m); !s) return s;
-  const int w = static_cast<int>(m.width), h = static_cast<int>(m.height);
-  auto* data =
-      const_cast<char*>(m.data.data());  // read only: the Mat headers below are never written
-  if (m.encoding == "bgr8") {
-    cv::Mat(h, w, CV_8UC3, data, m.step).copyTo(bgr);
-  } else if (m.encoding == "rgb8") {
-    cv::cvtColor(cv::Mat(h, w, CV_8UC3, data, m.step), bgr, cv::COLOR_RGB2BGR);
-  } else if (m.encoding == "mono8") {
-    cv::cvtColor(cv::Mat(h, w, CV_8UC1, data, m.step), bgr, cv::COLOR_GRAY2BGR);
-  } else {  // yuv422 = UYVY (sensor_msgs/image_encodings.hpp)
-    cv::cvtColor(cv::Mat(h, w, CV_8UC2, data, m.step), bgr, cv::COLOR_YUV2BGR_UYVY);
-  }
+  auto decoded =
+      codec::raw_to_bgr(m.encoding, m.width, m.height, m.step,
+                        reinterpret_cast<const std::uint8_t*>(m.data.data()), m.data.size());
+  if (!decoded) return decoded.status();
+  bgr = std::move(decoded).value();
   return Status::ok();
 }
 

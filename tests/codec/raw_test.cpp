@@ -35,6 +35,19 @@ TEST(RawToBgrTest, Rgb8IsSwappedAndMono8IsSpread) {
   EXPECT_EQ(b->at<cv::Vec3b>(0, 1), cv::Vec3b(200, 200, 200));
 }
 
+// The ROS 2 bridge's four-channel encodings: alpha dropped, rgba swapped; bytes past step x height
+// (a ROS message may carry them) are ignored.
+TEST(RawToBgrTest, FourChannelEncodingsDropAlphaAndTrailingBytesAreIgnored) {
+  const std::vector<std::uint8_t> px = {1, 2, 3, 4, 0xEE};
+  auto a = raw_to_bgr("bgra8", 1, 1, 4, px.data(), px.size());
+  auto b = raw_to_bgr("rgba8", 1, 1, 4, px.data(), px.size());
+  ASSERT_TRUE(a.is_ok() && b.is_ok()) << a.status().message() << b.status().message();
+  EXPECT_EQ(a->at<cv::Vec3b>(0, 0), cv::Vec3b(1, 2, 3));
+  EXPECT_EQ(b->at<cv::Vec3b>(0, 0), cv::Vec3b(3, 2, 1));
+  EXPECT_TRUE(is_raw_encoding("rgba8"));
+  EXPECT_FALSE(is_raw_encoding("mono16"));
+}
+
 // Grey in YUV (U = V = 128) stays grey; the two byte orders of yuv422 give the same picture.
 TEST(RawToBgrTest, Yuv422InBothByteOrders) {
   const std::vector<std::uint8_t> uyvy = {128, 16, 128,
@@ -57,11 +70,11 @@ TEST(RawToBgrTest, WrongSizesAndEncodingsAreRefused) {
   EXPECT_EQ(raw_to_bgr("bgr8", 0, 2, 6, bytes.data(), 12).status().code(),
             StatusCode::kCorruptData);
   EXPECT_EQ(raw_to_bgr("yuv420", 2, 2, 6, bytes.data(), 12).status().code(),
-            StatusCode::kInvalidArgument);
+            StatusCode::kUnsupported);
   EXPECT_EQ(raw_to_bgr("yuv422", 3, 2, 6, bytes.data(), 12).status().code(),
             StatusCode::kCorruptData);
   EXPECT_EQ(raw_to_bgr("jpeg", 2, 2, 6, bytes.data(), 12).status().code(),
-            StatusCode::kInvalidArgument);
+            StatusCode::kUnsupported);
 }
 
 }  // namespace
