@@ -1,9 +1,11 @@
 #!/usr/bin/env bash
 # Builds the libFuzzer targets with clang in build-fuzz/ (-DFAULTLINE_FUZZ=ON: every library instrumented for
 # coverage, ASan and UBSan; cmake/fuzz.cmake) and runs each for a bounded time.
-# Usage: scripts/fuzz.sh [--seconds N] [--jobs J] [target ...]
+# Usage: scripts/fuzz.sh [--seconds N] [--jobs J] [--seed S] [target ...]
 #   --seconds N  run each target N seconds (default 60); every target in build-fuzz/fuzz_targets.txt unless named
 #   --jobs J     run J targets at a time, one process each (default: nproc); FUZZ_BUILD_JOBS sets the build's -j
+#   --seed S     libFuzzer's -seed (default: a new one each run). CI passes 1: from the same seeds and corpus the
+#                same inputs come in the same order, so a commit's fuzz stage passes or fails the same way again
 # build-fuzz/ is also the ASan+UBSan test tree of scripts/sanitize.sh asan (scripts/clang-tree.sh), so after that
 # script the libraries are already built and only the fuzz targets' own sources compile and link here.
 #
@@ -17,6 +19,7 @@ cd "$(dirname "$0")/.."
 
 seconds=60
 jobs="$(nproc)"
+seed_flags=()
 wanted=()
 while (($#)); do
   case "$1" in
@@ -24,7 +27,9 @@ while (($#)); do
     --seconds=*) seconds="${1#*=}"; shift ;;
     --jobs) jobs="$2"; shift 2 ;;
     --jobs=*) jobs="${1#*=}"; shift ;;
-    -h|--help) sed -n '2,14p' "$0"; exit 0 ;;
+    --seed) seed_flags=(-seed="$2"); shift 2 ;;
+    --seed=*) seed_flags=(-seed="${1#*=}"); shift ;;
+    -h|--help) sed -n '2,16p' "$0"; exit 0 ;;
     *) wanted+=("$1"); shift ;;
   esac
 done
@@ -56,7 +61,7 @@ fuzz_one() {
   local status=0
   # -timeout: one input taking 25 s is a hang; -close_fd_mask=1 silences the readers' stdout, not the reports.
   "$binary" -max_total_time="$seconds" -max_len="$max_len" -rss_limit_mb=2048 -timeout=25 -close_fd_mask=1 \
-    -print_final_stats=1 -artifact_prefix="$artifacts/" "${dirs[@]}" >"$log" 2>&1 || status=$?
+    -print_final_stats=1 "${seed_flags[@]}" -artifact_prefix="$artifacts/" "${dirs[@]}" >"$log" 2>&1 || status=$?
   local execs rate units result=ok
   execs=$(sed -n 's/^stat::number_of_executed_units: *//p' "$log" | tail -1)
   rate=$(sed -n 's/^stat::average_exec_per_sec: *//p' "$log" | tail -1)
