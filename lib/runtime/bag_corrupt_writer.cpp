@@ -190,7 +190,7 @@ Status Corrupter::write_frame(Job& job) {
     *e.mutable_state() = fault_state(job.plan, job.error);
     event = msgs::serialize_deterministic(e);
   } else {
-    event = ros2::serialize(fault_event(job, topic, action, why));
+    event = ros2::serialize(ros2::to_diagnostic_array(fault_report(job, topic, action, why)));
   }
   if (Status s = write(faults_channel_, static_cast<std::uint32_t>(counts_.fault_events + 1),
                        job.log_ns, job.log_ns, event);

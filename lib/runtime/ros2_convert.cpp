@@ -58,52 +58,6 @@ std::string action_name(msgs::FaultAction action) {
   return name;
 }
 
-std::uint8_t action_level(msgs::FaultAction action) {
-  switch (action) {
-    case msgs::FAULT_ACTION_PASS:
-      return ros2::DiagnosticStatus::kOk;
-    case msgs::FAULT_ACTION_CORRUPT:
-    case msgs::FAULT_ACTION_DELAY:
-      return ros2::DiagnosticStatus::kWarn;
-    default:
-      return ros2::DiagnosticStatus::kError;  // drop, black, freeze: the frame's content is lost
-  }
-}
-
-std::string number(double v) {
-  std::string s = std::to_string(v);
-  while (!s.empty() && s.back() == '0') s.pop_back();
-  if (!s.empty() && s.back() == '.') s.pop_back();
-  return s;
-}
-
-// The injector's decision for one frame as a DiagnosticArray (ros2/fault_report.hpp): level OK
-// (pass), WARN (corrupt, delay) or ERROR (drop, black, freeze); values name the action, the frame
-// and every fault's parameters.
-ros2::DiagnosticArray fault_report(const dataset::CameraFrameRecord& f, std::uint64_t source_seq,
-                                   const FaultDecision& d) {
-  ros2::FaultReport r;
-  r.header = {ros2::time_from_us(f.timestamp_us), f.channel};
-  r.level = action_level(d.action);
-  r.name = "faultline/" + f.channel;
-  r.hardware_id = f.channel;
-  r.action = action_name(d.action);
-  r.values.push_back({"action", r.action});
-  r.values.push_back({"source_seq", std::to_string(source_seq)});
-  r.values.push_back({"sample_data_token", f.sample_data_token});
-  r.values.push_back({"sample_token", f.sample_token});
-  if (d.action == msgs::FAULT_ACTION_DELAY)
-    r.values.push_back({"delay_ns", std::to_string(d.delay_ns)});
-  for (const auto& fault : d.faults) {
-    ros2::ReportedFault rf{fault.name(), fault.severity(), fault.seed(), fault.rng(), {}};
-    const std::map<std::string, double> params(fault.params().begin(),
-                                               fault.params().end());  // sorted
-    for (const auto& [key, value] : params) rf.params.push_back({key, number(value)});
-    r.faults.push_back(std::move(rf));
-  }
-  return ros2::to_diagnostic_array(r);
-}
-
 // Ground-truth boxes of one sample: a DELETEALL marker, then one cube per box in `map` (ns =
 // category, id = index from 1, text = instance token), nuScenes size (w, l, h) as scale (l, w, h).
 ros2::MarkerArray gt_markers(const std::vector<bag::GtBox>& boxes, const ros2::Time& stamp) {
@@ -131,6 +85,27 @@ ros2::MarkerArray gt_markers(const std::vector<bag::GtBox>& boxes, const ros2::T
 }
 
 }  // namespace
+
+ros2::FaultReport ros2_fault_report(const dataset::CameraFrameRecord& f, std::uint64_t source_seq,
+                                    const FaultDecision& d) {
+  ros2::FaultReport r;
+  r.header = {ros2::time_from_us(f.timestamp_us), f.channel};
+  r.name = "faultline/" + f.channel;
+  r.hardware_id = f.channel;
+  r.action = action_name(d.action);
+  r.values.push_back({"action", r.action});
+  r.values.push_back({"source_seq", std::to_string(source_seq)});
+  r.values.push_back({"sample_data_token", f.sample_data_token});
+  r.values.push_back({"sample_token", f.sample_token});
+  if (d.action == msgs::FAULT_ACTION_DELAY)
+    r.values.push_back({"delay_ns", std::to_string(d.delay_ns)});
+  for (const auto& fault : d.faults) {
+    r.faults.push_back(ros2::reported_fault(
+        fault.name(), fault.severity(), fault.seed(), fault.rng(),
+        std::map<std::string, double>(fault.params().begin(), fault.params().end())));
+  }
+  return r;
+}
 
 struct Ros2BagConverter::Impl {
   Ros2ConvertConfig cfg;
@@ -222,7 +197,8 @@ struct Ros2BagConverter::Impl {
     view.payload = image->data();
     view.payload_size = image->size();
     const FaultDecision d = policy->apply(view, nullptr);
-    check(writer->write(faults_channel, log_ns, ros2::serialize(fault_report(f, s, d))));
+    check(writer->write(faults_channel, log_ns,
+                        ros2::serialize(ros2::to_diagnostic_array(ros2_fault_report(f, s, d)))));
     ++counts.fault_reports;
     if (d.action == msgs::FAULT_ACTION_DROP) {
       ++counts.injected_drops;
