@@ -245,6 +245,11 @@ void process(Job& job, const FaultedTopic& topic, bool keep_good, int quality, W
     ros2::CdrReader hr(job.data, type);
     ros2::decode(hr, job.header);
     job.header_ok = hr.ok();
+    // A stamp to move in a header that does not read: the fault cannot be applied (reported).
+    if (!job.header_ok && job.plan.edit.stamp_offset_ns != 0) {
+      job.error = hr.status();
+      return;
+    }
   }
   const policy::Action action = job.plan.action;
   if (action == policy::Action::Drop) return;

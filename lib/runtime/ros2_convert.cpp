@@ -158,12 +158,14 @@ struct Ros2BagConverter::Impl {
     return camera_channels.emplace(image_topic, c).first->second;
   }
 
-  // Image + CameraInfo of one frame under `ns` ("" or the faulted prefix), logged at log_ns.
+  // Image + CameraInfo of one frame under `ns` ("" or the faulted prefix), logged at log_ns,
+  // stamped at its capture time + stamp_offset_ns (timestamp_skew).
   void write_camera(const std::string& ns, const dataset::CameraFrameRecord& f,
-                    std::string_view jpeg, StampNs log_ns) {
+                    std::string_view jpeg, StampNs log_ns, DurationNs stamp_offset_ns = 0) {
     CameraChannels& ch = channels_for(ns + ros2::nuscenes_image_topic(f.channel),
                                       ns + ros2::nuscenes_camera_info_topic(f.channel));
-    const ros2::Header header{ros2::time_from_us(f.timestamp_us), f.channel};
+    const ros2::Header header{ros2::time_from_ns(f.timestamp_us * 1000 + stamp_offset_ns),
+                              f.channel};
     prefix = ros2::compressed_image_prefix(header, "jpeg", jpeg.size());
     check(writer->write_parts(ch.image, log_ns, {prefix, jpeg}));
     const auto info = ros2::camera_info_from_k(header, static_cast<std::uint32_t>(f.width),
@@ -211,7 +213,8 @@ struct Ros2BagConverter::Impl {
       ++counts.changed_frames;
     }
     const StampNs out_log = log_ns + (d.action == msgs::FAULT_ACTION_DELAY ? d.delay_ns : 0);
-    write_camera(cfg.clean_frames ? cfg.output_prefix : "", f, jpeg, out_log);
+    write_camera(cfg.clean_frames ? cfg.output_prefix : "", f, jpeg, out_log,
+                 d.edit.stamp_offset_ns);
     ++counts.faulted_frames;
   }
 };
