@@ -5,11 +5,10 @@
 #include <rapidjson/stringbuffer.h>
 #include <unistd.h>
 
-#include <cinttypes>
-#include <cstdio>
 #include <filesystem>
 
 #include "campaign/text_file.hpp"
+#include "common/hash.hpp"
 
 namespace faultline::campaign {
 namespace fs = std::filesystem;
@@ -168,14 +167,6 @@ std::string plan_text(const BenchmarkPlan& p, bool with_id) {
   return std::string(buf.GetString(), buf.GetSize()) + "\n";
 }
 
-std::string fnv1a64_hex(const std::string& text) {
-  std::uint64_t h = 1469598103934665603ull;
-  for (unsigned char c : text) h = (h ^ c) * 1099511628211ull;
-  char hex[17];
-  std::snprintf(hex, sizeof hex, "%016" PRIx64, h);
-  return hex;
-}
-
 Result<rapidjson::Document> parse_json(const std::string& json, const std::string& origin) {
   rapidjson::Document d;
   d.Parse<kParseFlags>(json.c_str(), json.size());
@@ -194,7 +185,7 @@ BenchmarkPlan make_plan(const BenchmarkOptions& opts, const std::string& tool_ve
   p.options.bin_dir.clear();
   p.runs = plan_runs(opts);
   p.tool_version = tool_version;
-  p.plan_id = fnv1a64_hex(plan_text(p, false));
+  p.plan_id = fnv1a64_hex(plan_text(p, false), kFnv1a64LegacyBasis);  // ids already on disk
   return p;
 }
 

@@ -106,11 +106,12 @@ int run(int argc, char** argv) {
   std::printf(
       "frames %llu: %llu unchanged, %llu corrupted, %llu black, %llu frozen, %llu delayed, %llu "
       "dropped, "
-      "%llu undecodable (copied unchanged)\n",
+      "%llu undecodable (copied unchanged), %llu with a skewed stamp\n",
       static_cast<ull>(counts->frames), static_cast<ull>(counts->unchanged),
       static_cast<ull>(counts->corrupted), static_cast<ull>(counts->black),
       static_cast<ull>(counts->frozen), static_cast<ull>(counts->delayed),
-      static_cast<ull>(counts->dropped), static_cast<ull>(counts->undecodable));
+      static_cast<ull>(counts->dropped), static_cast<ull>(counts->undecodable),
+      static_cast<ull>(counts->skewed));
   std::printf("%.2f s wall, %.1f frames/s\n", s,
               s > 0 ? static_cast<double>(counts->frames) / s : 0.0);
   return 0;

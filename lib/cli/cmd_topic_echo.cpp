@@ -35,7 +35,7 @@ void print_message(const transport::ReceivedMessage& m, const std::string& type)
   }
   if (m.has_payload()) {
     std::printf("payload: <%zu bytes, fnv1a64 %016" PRIx64 ">\n", m.payload_size(),
-                topic::fnv1a64(m.payload_data(), m.payload_size()));
+                topic::digest(m.payload_data(), m.payload_size()));
   }
   std::fflush(stdout);
 }

@@ -18,6 +18,7 @@
 #include "cli/parse.hpp"
 #include "cli/topic_tools.hpp"
 #include "common/config.hpp"
+#include "common/hash.hpp"
 #include "common/shutdown.hpp"
 #include "detection.pb.h"
 #include "fault.pb.h"
@@ -63,10 +64,8 @@ bool extract_header(std::string_view bytes, msgs::Header* header) {
   return false;
 }
 
-std::uint64_t fnv1a64(const std::uint8_t* data, std::size_t size) {
-  std::uint64_t h = 1469598103934665603ULL;
-  for (std::size_t i = 0; i < size; ++i) h = (h ^ data[i]) * 1099511628211ULL;
-  return h;
+std::uint64_t digest(const void* data, std::size_t size) {
+  return fnv1a64(data, size, kFnv1a64LegacyBasis);  // the digests earlier versions printed
 }
 
 namespace {
@@ -76,7 +75,7 @@ class BytesAsLengthAndHash : public pb::TextFormat::FastFieldValuePrinter {
   void PrintBytes(const std::string& value, pb::TextFormat::BaseTextGenerator* out) const override {
     char buf[96];
     std::snprintf(buf, sizeof(buf), "<%zu bytes, fnv1a64 %016" PRIx64 ">", value.size(),
-                  fnv1a64(reinterpret_cast<const std::uint8_t*>(value.data()), value.size()));
+                  digest(value.data(), value.size()));
     out->PrintString(buf);
   }
 };

@@ -29,8 +29,9 @@ Target resolve(const std::string& topic, const std::vector<std::string>& endpoin
 // bytes without knowing the message type. False when absent or malformed.
 bool extract_header(std::string_view message_bytes, msgs::Header* header);
 
-// 64-bit FNV-1a, shown by `topic echo` for payloads and bytes fields.
-std::uint64_t fnv1a64(const std::uint8_t* data, std::size_t size);
+// The digest `topic echo` shows for payloads and bytes fields: common/hash.hpp's FNV-1a-64 with
+// kFnv1a64LegacyBasis.
+std::uint64_t digest(const void* data, std::size_t size);
 
 // Text form of a serialized message of a known type (fully qualified protobuf name); `bytes` fields
 // are shown as length + hash. Empty when the type is unknown or the bytes do not parse.

@@ -318,6 +318,24 @@ StampNs to_ns(const Time& t) {
   return static_cast<StampNs>(t.sec) * kNsPerSec + static_cast<StampNs>(t.nanosec);
 }
 
+Status set_header_stamp(std::string& message, const Time& stamp) {
+  constexpr std::size_t kStampEnd = kEncapsulationBytes + 8;
+  if (message.size() < kStampEnd) {
+    return Status(StatusCode::kTruncated,
+                  "message of " + std::to_string(message.size()) + " bytes has no header stamp");
+  }
+  // The representation id (the first two bytes) says CDR_LE; the options bytes may be anything.
+  if (message[0] != '\x00' || message[1] != '\x01') {
+    return Status(StatusCode::kCorruptData, "header stamp: the message is not CDR_LE");
+  }
+  const auto sec = static_cast<std::uint32_t>(stamp.sec);
+  for (std::size_t i = 0; i < 4; ++i) {
+    message[kEncapsulationBytes + i] = static_cast<char>((sec >> (8 * i)) & 0xFF);
+    message[kEncapsulationBytes + 4 + i] = static_cast<char>((stamp.nanosec >> (8 * i)) & 0xFF);
+  }
+  return Status::ok();
+}
+
 CameraInfo camera_info_from_k(const Header& header, std::uint32_t width, std::uint32_t height,
                               const std::array<double, 9>& k) {
   CameraInfo info;

@@ -238,6 +238,12 @@ Time time_from_us(std::int64_t us);
 Time time_from_ns(StampNs ns);
 StampNs to_ns(const Time& t);
 
+// Rewrites the header stamp of a serialized message whose first field is a std_msgs/Header
+// (CompressedImage, Image, CameraInfo, ...) in place: sec and nanosec are the first 8 bytes of the
+// CDR_LE body, and every other byte is kept. kTruncated when shorter than that, kCorruptData when
+// the encapsulation is not CDR_LE.
+Status set_header_stamp(std::string& message, const Time& stamp);
+
 // A rectified camera's CameraInfo from its 3x3 intrinsics K (row-major): distortion "plumb_bob"
 // with five zero coefficients, R = identity, P = [K | 0], no binning, empty ROI.
 CameraInfo camera_info_from_k(const Header& header, std::uint32_t width, std::uint32_t height,

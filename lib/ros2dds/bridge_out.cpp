@@ -489,10 +489,10 @@ int OutBridge::run(const std::atomic<bool>& stop) {
   m.log->info(
       "stopped: frames_in={} frames_out={} events={} malformed={} transport_drops={} "
       "write_failures={} "
-      "incompatible_qos={} handshake_failures={}",
+      "incompatible_qos={} handshake_failures={} refused_by_peer={}",
       c.frames_in.load(), c.frames_out.load(), c.events.load(), c.malformed.load(),
       c.transport_drops.load(), c.write_failures.load(), c.incompatible_qos.load(),
-      m.sub.handshake_failures());
+      m.sub.handshake_failures(), m.sub.refused_by_peer());
   return rc;
 }
 

@@ -4,6 +4,8 @@
 
 #include <map>
 
+#include "ros2/fault_report.hpp"
+
 namespace faultline::ros2dds {
 
 const char* action_name(msgs::FaultAction action) {
@@ -30,17 +32,7 @@ DiagnosticValues diagnostic_from_event(const msgs::FaultEvent& event) {
   d.stamp_ns = event.header().capture_stamp_ns();
   d.frame_id = event.header().frame_id();
   const msgs::FaultAction action = event.state().action();
-  switch (action) {
-    case msgs::FAULT_ACTION_PASS:
-      d.level = DiagnosticLevel::kOk;
-      break;
-    case msgs::FAULT_ACTION_DROP:
-      d.level = DiagnosticLevel::kError;
-      break;
-    default:
-      d.level = DiagnosticLevel::kWarn;
-      break;
-  }
+  d.level = static_cast<DiagnosticLevel>(ros2::fault_level(action_name(action)));  // one rule
   d.name = "faultline/" + event.camera();
   d.hardware_id = event.camera();
   d.message = action_name(action);

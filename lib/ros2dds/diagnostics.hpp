@@ -19,11 +19,12 @@ enum class DiagnosticLevel : std::uint8_t { kOk = 0, kWarn = 1, kError = 2, kSta
 struct DiagnosticValues {
   StampNs stamp_ns = 0;  // the frame's capture stamp (header.stamp)
   std::string frame_id;  // the frame's frame_id
-  DiagnosticLevel level =
-      DiagnosticLevel::kOk;  // OK: passed; WARN: corrupted/black/freeze/delay; ERROR: dropped
-  std::string name;          // "faultline/<camera>"
-  std::string message;       // action and faults: "corrupt: fog/3", "pass", "drop: frame_lost/2"
-  std::string hardware_id;   // the camera
+  // ros2::fault_level's rule, as the bags' reports: OK passed; WARN corrupted or delayed; ERROR
+  // dropped, black or frozen (the frame's content is lost).
+  DiagnosticLevel level = DiagnosticLevel::kOk;
+  std::string name;         // "faultline/<camera>"
+  std::string message;      // action and faults: "corrupt: fog/3", "pass", "drop: frame_lost/2"
+  std::string hardware_id;  // the camera
   std::vector<std::pair<std::string, std::string>>
       values;  // action, source_seq, sample_token, fault[i].*
 };

@@ -44,16 +44,17 @@ Status Corrupter::plan_topics() {
   }
   std::vector<std::string> order;
   for (const auto& f : config_.faults) {
-    // Message faults rewrite a frame's calibration or stamps; this tool rewrites pixels only (ROS 2
-    // bags carry calibration on CameraInfo topics), so it refuses them rather than pass them
-    // silently.
+    // Message faults: timestamp_skew rewrites a ROS 2 image's header stamp; calibration_drift (ROS
+    // 2 bags carry calibration on CameraInfo topics) and a Faultline frame's stamp are not
+    // rewritten here, so they are refused rather than passed silently.
+    const bool faultline_topic = camera_topics.count(f.topic) != 0;
     if (f.spec.kind == policy::FaultKind::CalibrationDrift ||
-        f.spec.kind == policy::FaultKind::TimestampSkew) {
+        (f.spec.kind == policy::FaultKind::TimestampSkew && faultline_topic)) {
       return Status(StatusCode::kInvalidArgument,
                     "fault " + f.spec.name() + " on " + f.topic +
-                        ": bag corrupt rewrites pixels only; calibration_drift and timestamp_skew "
-                        "apply in the "
-                        "injector and in bag convert --corrupt");
+                        ": bag corrupt applies calibration_drift nowhere and timestamp_skew only "
+                        "to ROS 2 image topics; both apply in the injector and in bag convert "
+                        "--corrupt");
     }
     if (std::find(order.begin(), order.end(), f.topic) == order.end()) order.push_back(f.topic);
   }

@@ -22,6 +22,9 @@
 //   own encoding and row step; a Faultline frame also gets its FaultState); a frozen frame carries
 //   the topic's last good image under its own header; a dropped frame is absent; a delayed frame
 //   has its log and publish time moved by the delay (it keeps its place in the file).
+// - timestamp_skew moves a ROS 2 image's header stamp by its offset (the stamp's 8 bytes rewritten,
+//   every other byte kept; counted in `skewed`); its fault report keeps the true stamp.
+//   calibration_drift, and timestamp_skew on a Faultline recording, are refused by name.
 // - A faults topic gets one message per frame of a faulted topic, at that frame's log time. ROS 2
 // bags:
 //   diagnostic_msgs/msg/DiagnosticArray as `bag convert --format ros2` writes it: level OK (pass),
@@ -77,7 +80,9 @@ struct BagCorruptCounts {
   std::uint64_t black = 0, frozen = 0;
   std::uint64_t delayed = 0;       // ... of the unchanged and corrupted ones, moved in time
   std::uint64_t dropped = 0;       // injected drops (absent from the output)
-  std::uint64_t undecodable = 0;   // needed new pixels but could not be decoded: copied unchanged
+  std::uint64_t undecodable = 0;   // needed new pixels (or a stamp) but could not be decoded:
+                                   // copied unchanged
+  std::uint64_t skewed = 0;        // written with their header stamp moved (timestamp_skew)
   std::uint64_t fault_events = 0;  // messages on the faults topic
 };
 

@@ -1,5 +1,5 @@
 // `bag corrupt` workers: sensor_msgs/Image and CompressedImage (and Faultline frames) <-> BGR, and
-// the per-frame decode + render + encode step; fault reports in the ROS 2 diagnostics layout.
+// the per-frame decode + render + encode step; fault reports (ros2/fault_report.hpp).
 #include "runtime/bag_corrupt_frames.hpp"
 
 #include <algorithm>
@@ -239,6 +239,11 @@ void process(Job& job, const FaultedTopic& topic, bool keep_good, int quality, W
     ros2::CdrReader hr(job.data, type);
     ros2::decode(hr, job.header);
     job.header_ok = hr.ok();
+    // A stamp to move in a header that does not read: the fault cannot be applied (reported).
+    if (!job.header_ok && job.plan.edit.stamp_offset_ns != 0) {
+      job.error = hr.status();
+      return;
+    }
   }
   const policy::Action action = job.plan.action;
   if (action == policy::Action::Drop) return;
@@ -294,50 +299,22 @@ void run_parallel(std::size_t n, std::vector<Worker>& workers,
   for (auto& t : pool) t.join();
 }
 
-namespace {
-
-std::string format_param(double v) {
-  if (v == static_cast<double>(static_cast<std::int64_t>(v)) && std::abs(v) < 1e15) {
-    return std::to_string(static_cast<std::int64_t>(v));
-  }
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.17g", v);
-  return buf;
-}
-
-}  // namespace
-
-ros2::DiagnosticArray fault_event(const Job& job, const FaultedTopic& topic,
-                                  const std::string& action, const std::string& why) {
-  ros2::DiagnosticArray a;
-  a.header = job.header_ok ? job.header : ros2::Header{ros2::time_from_ns(job.log_ns), ""};
-  ros2::DiagnosticStatus s;
-  const policy::Action act = job.plan.action;
-  const bool error = !job.error.is_ok() || act == policy::Action::Drop ||
-                     act == policy::Action::Black || act == policy::Action::Freeze;
-  s.level = error                         ? ros2::DiagnosticStatus::kError
-            : act == policy::Action::Pass ? ros2::DiagnosticStatus::kOk
-                                          : ros2::DiagnosticStatus::kWarn;
-  s.name = "faultline" + topic.topic;
-  s.hardware_id = a.header.frame_id;
-  s.message = action;
+ros2::FaultReport fault_report(const Job& job, const FaultedTopic& topic, const std::string& action,
+                               const std::string& why) {
+  ros2::FaultReport r;
+  r.header = job.header_ok ? job.header : ros2::Header{ros2::time_from_ns(job.log_ns), ""};
+  r.name = "faultline" + topic.topic;
+  r.hardware_id = r.header.frame_id;
+  r.action = action;
+  r.why = why;
+  r.values.push_back({"action", action});
+  r.values.push_back({"source_seq", std::to_string(job.source_seq)});
+  r.values.push_back({"topic", topic.topic});
+  if (job.plan.action == policy::Action::Delay)
+    r.values.push_back({"delay_ns", std::to_string(job.plan.delay_ns)});
   for (const auto& f : job.plan.faults)
-    s.message += " " + f.name + "/" + std::to_string(f.severity);
-  if (!why.empty()) s.message += ": " + why;
-  s.values.push_back({"action", action});
-  s.values.push_back({"source_seq", std::to_string(job.source_seq)});
-  s.values.push_back({"topic", topic.topic});
-  if (act == policy::Action::Delay)
-    s.values.push_back({"delay_ns", std::to_string(job.plan.delay_ns)});
-  for (const auto& f : job.plan.faults) {
-    s.values.push_back({f.name + ".severity", std::to_string(f.severity)});
-    s.values.push_back({f.name + ".seed", std::to_string(f.seed)});
-    s.values.push_back({f.name + ".rng", f.rng});
-    for (const auto& [key, value] : f.params)
-      s.values.push_back({f.name + "." + key, format_param(value)});
-  }
-  a.status.push_back(std::move(s));
-  return a;
+    r.faults.push_back(ros2::reported_fault(f.name, f.severity, f.seed, f.rng, f.params));
+  return r;
 }
 
 }  // namespace faultline::runtime::bag_corrupt_detail

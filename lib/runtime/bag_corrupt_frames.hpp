@@ -15,6 +15,7 @@
 #include "deterministic_serialize.hpp"
 #include "fault.pb.h"
 #include "policy/fault_engine.hpp"
+#include "ros2/fault_report.hpp"
 #include "ros2/messages.hpp"
 #include "runtime/bag_layout.hpp"
 
@@ -100,11 +101,10 @@ void process(Job& job, const FaultedTopic& topic, bool keep_good, int quality, W
 void run_parallel(std::size_t n, std::vector<Worker>& workers,
                   const std::function<void(std::size_t, Worker&)>& fn);
 
-// What was done to one frame, in the layout `bag convert --format ros2` writes its
-// /faultline/faults reports with (runtime/ros2_convert.cpp): name faultline<topic>, hardware_id the
-// frame_id, message the action and faults, values action, source_seq, topic, delay_ns and per fault
-// <name>.severity, .seed, .rng and its parameters.
-ros2::DiagnosticArray fault_event(const Job& job, const FaultedTopic& topic,
-                                  const std::string& action, const std::string& why);
+// What was done to one frame, as its /faultline/faults report (ros2/fault_report.hpp, the builder
+// `bag convert --format ros2` uses too; it sets the level from `action`): name faultline<topic>,
+// hardware_id the frame_id, values action, source_seq, topic, delay_ns and the faults.
+ros2::FaultReport fault_report(const Job& job, const FaultedTopic& topic, const std::string& action,
+                               const std::string& why);
 
 }  // namespace faultline::runtime::bag_corrupt_detail

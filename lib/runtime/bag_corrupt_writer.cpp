@@ -129,7 +129,9 @@ Status Corrupter::write_frame(Job& job) {
   bool written = true;
   if (!job.error.is_ok()) {
     action = "undecodable";
-    why = std::string(policy::to_string(act)) + " not applied: " + job.error.message();
+    const bool stamp_only = act == policy::Action::Pass && job.plan.edit.stamp_offset_ns != 0;
+    why = std::string(stamp_only ? "timestamp_skew" : policy::to_string(act)) +
+          " not applied: " + job.error.message();
     ++counts_.undecodable;
   } else if (act == policy::Action::Drop) {
     written = false;
@@ -168,6 +170,21 @@ Status Corrupter::write_frame(Job& job) {
   }
   if (!job.error.is_ok()) ++counts_.unchanged;
   if (job.good && keep_good_) last_good_[static_cast<std::size_t>(job.topic)] = std::move(job.good);
+  // timestamp_skew (ROS 2 topics; process() checked the header reads): the written image's header
+  // stamp moves by the offset, every other byte stays; the fault report keeps the true stamp.
+  std::string skewed;
+  const DurationNs offset = job.plan.edit.stamp_offset_ns;
+  if (written && offset != 0 && job.error.is_ok() && !topic.faultline) {
+    skewed.assign(out);
+    if (Status s = ros2::set_header_stamp(
+            skewed, ros2::time_from_ns(ros2::to_ns(job.header.stamp) + offset));
+        !s) {
+      return Status(s.code(), topic.topic + " message " + std::to_string(job.source_seq) + ": " +
+                                  s.message());
+    }
+    out = skewed;
+    ++counts_.skewed;
+  }
   if (written) {
     if (Status s = write(job.out_channel, job.sequence, log_ns, publish_ns, out); !s) return s;
     ++topic_counts_[topic.topic];
@@ -190,7 +207,7 @@ Status Corrupter::write_frame(Job& job) {
     *e.mutable_state() = fault_state(job.plan, job.error);
     event = msgs::serialize_deterministic(e);
   } else {
-    event = ros2::serialize(fault_event(job, topic, action, why));
+    event = ros2::serialize(ros2::to_diagnostic_array(fault_report(job, topic, action, why)));
   }
   if (Status s = write(faults_channel_, static_cast<std::uint32_t>(counts_.fault_events + 1),
                        job.log_ns, job.log_ns, event);

@@ -58,52 +58,6 @@ std::string action_name(msgs::FaultAction action) {
   return name;
 }
 
-std::uint8_t action_level(msgs::FaultAction action) {
-  switch (action) {
-    case msgs::FAULT_ACTION_PASS:
-      return ros2::DiagnosticStatus::kOk;
-    case msgs::FAULT_ACTION_CORRUPT:
-    case msgs::FAULT_ACTION_DELAY:
-      return ros2::DiagnosticStatus::kWarn;
-    default:
-      return ros2::DiagnosticStatus::kError;  // drop, black, freeze: the frame's content is lost
-  }
-}
-
-std::string number(double v) {
-  std::string s = std::to_string(v);
-  while (!s.empty() && s.back() == '0') s.pop_back();
-  if (!s.empty() && s.back() == '.') s.pop_back();
-  return s;
-}
-
-// The injector's decision for one frame as a DiagnosticArray (ros2/fault_report.hpp): level OK
-// (pass), WARN (corrupt, delay) or ERROR (drop, black, freeze); values name the action, the frame
-// and every fault's parameters.
-ros2::DiagnosticArray fault_report(const dataset::CameraFrameRecord& f, std::uint64_t source_seq,
-                                   const FaultDecision& d) {
-  ros2::FaultReport r;
-  r.header = {ros2::time_from_us(f.timestamp_us), f.channel};
-  r.level = action_level(d.action);
-  r.name = "faultline/" + f.channel;
-  r.hardware_id = f.channel;
-  r.action = action_name(d.action);
-  r.values.push_back({"action", r.action});
-  r.values.push_back({"source_seq", std::to_string(source_seq)});
-  r.values.push_back({"sample_data_token", f.sample_data_token});
-  r.values.push_back({"sample_token", f.sample_token});
-  if (d.action == msgs::FAULT_ACTION_DELAY)
-    r.values.push_back({"delay_ns", std::to_string(d.delay_ns)});
-  for (const auto& fault : d.faults) {
-    ros2::ReportedFault rf{fault.name(), fault.severity(), fault.seed(), fault.rng(), {}};
-    const std::map<std::string, double> params(fault.params().begin(),
-                                               fault.params().end());  // sorted
-    for (const auto& [key, value] : params) rf.params.push_back({key, number(value)});
-    r.faults.push_back(std::move(rf));
-  }
-  return ros2::to_diagnostic_array(r);
-}
-
 // Ground-truth boxes of one sample: a DELETEALL marker, then one cube per box in `map` (ns =
 // category, id = index from 1, text = instance token), nuScenes size (w, l, h) as scale (l, w, h).
 ros2::MarkerArray gt_markers(const std::vector<bag::GtBox>& boxes, const ros2::Time& stamp) {
@@ -131,6 +85,27 @@ ros2::MarkerArray gt_markers(const std::vector<bag::GtBox>& boxes, const ros2::T
 }
 
 }  // namespace
+
+ros2::FaultReport ros2_fault_report(const dataset::CameraFrameRecord& f, std::uint64_t source_seq,
+                                    const FaultDecision& d) {
+  ros2::FaultReport r;
+  r.header = {ros2::time_from_us(f.timestamp_us), f.channel};
+  r.name = "faultline/" + f.channel;
+  r.hardware_id = f.channel;
+  r.action = action_name(d.action);
+  r.values.push_back({"action", r.action});
+  r.values.push_back({"source_seq", std::to_string(source_seq)});
+  r.values.push_back({"sample_data_token", f.sample_data_token});
+  r.values.push_back({"sample_token", f.sample_token});
+  if (d.action == msgs::FAULT_ACTION_DELAY)
+    r.values.push_back({"delay_ns", std::to_string(d.delay_ns)});
+  for (const auto& fault : d.faults) {
+    r.faults.push_back(ros2::reported_fault(
+        fault.name(), fault.severity(), fault.seed(), fault.rng(),
+        std::map<std::string, double>(fault.params().begin(), fault.params().end())));
+  }
+  return r;
+}
 
 struct Ros2BagConverter::Impl {
   Ros2ConvertConfig cfg;
@@ -183,12 +158,14 @@ struct Ros2BagConverter::Impl {
     return camera_channels.emplace(image_topic, c).first->second;
   }
 
-  // Image + CameraInfo of one frame under `ns` ("" or the faulted prefix), logged at log_ns.
+  // Image + CameraInfo of one frame under `ns` ("" or the faulted prefix), logged at log_ns,
+  // stamped at its capture time + stamp_offset_ns (timestamp_skew).
   void write_camera(const std::string& ns, const dataset::CameraFrameRecord& f,
-                    std::string_view jpeg, StampNs log_ns) {
+                    std::string_view jpeg, StampNs log_ns, DurationNs stamp_offset_ns = 0) {
     CameraChannels& ch = channels_for(ns + ros2::nuscenes_image_topic(f.channel),
                                       ns + ros2::nuscenes_camera_info_topic(f.channel));
-    const ros2::Header header{ros2::time_from_us(f.timestamp_us), f.channel};
+    const ros2::Header header{ros2::time_from_ns(f.timestamp_us * 1000 + stamp_offset_ns),
+                              f.channel};
     prefix = ros2::compressed_image_prefix(header, "jpeg", jpeg.size());
     check(writer->write_parts(ch.image, log_ns, {prefix, jpeg}));
     const auto info = ros2::camera_info_from_k(header, static_cast<std::uint32_t>(f.width),
@@ -222,7 +199,8 @@ struct Ros2BagConverter::Impl {
     view.payload = image->data();
     view.payload_size = image->size();
     const FaultDecision d = policy->apply(view, nullptr);
-    check(writer->write(faults_channel, log_ns, ros2::serialize(fault_report(f, s, d))));
+    check(writer->write(faults_channel, log_ns,
+                        ros2::serialize(ros2::to_diagnostic_array(ros2_fault_report(f, s, d)))));
     ++counts.fault_reports;
     if (d.action == msgs::FAULT_ACTION_DROP) {
       ++counts.injected_drops;
@@ -235,7 +213,8 @@ struct Ros2BagConverter::Impl {
       ++counts.changed_frames;
     }
     const StampNs out_log = log_ns + (d.action == msgs::FAULT_ACTION_DELAY ? d.delay_ns : 0);
-    write_camera(cfg.clean_frames ? cfg.output_prefix : "", f, jpeg, out_log);
+    write_camera(cfg.clean_frames ? cfg.output_prefix : "", f, jpeg, out_log,
+                 d.edit.stamp_offset_ns);
     ++counts.faulted_frames;
   }
 };

@@ -35,6 +35,7 @@
 
 #include "bag/foxglove.hpp"
 #include "bag/rosbag2.hpp"
+#include "ros2/fault_report.hpp"
 #include "runtime/bag_convert.hpp"
 #include "runtime/frame_policy.hpp"
 #include "runtime/frame_source.hpp"
@@ -88,5 +89,11 @@ class Ros2BagConverter {
   bag::WriterStats writer_stats_;
   std::string mcap_path_;
 };
+
+// The injector's decision for one source frame as its /faultline/faults report: name
+// faultline/<channel>, hardware_id the channel, values action, source_seq, sample_data_token,
+// sample_token, delay_ns (delay only), then the faults (ros2/fault_report.hpp sets the level).
+ros2::FaultReport ros2_fault_report(const dataset::CameraFrameRecord& frame,
+                                    std::uint64_t source_seq, const FaultDecision& decision);
 
 }  // namespace faultline::runtime

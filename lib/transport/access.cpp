@@ -86,6 +86,16 @@ std::set<std::string> read_allowed_clients(const std::string& path) {
   return keys;
 }
 
+std::string curve_public_key(zmq::socket_t& socket) {
+  char key[41] = {};
+  std::size_t size = sizeof key;
+  if (zmq_getsockopt(socket.handle(), ZMQ_CURVE_PUBLICKEY, key, &size) != 0 || size != sizeof key) {
+    return {};
+  }
+  const std::string z85(key, 40);
+  return z85.find_first_not_of('0') == std::string::npos ? std::string() : z85;
+}
+
 std::string apply_curve(zmq::socket_t& socket, const AccessConfig& access, bool server) {
   if (!access.curve()) return {};
   if (!zmq_has("curve"))

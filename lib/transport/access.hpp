@@ -66,6 +66,10 @@ void check_bind_allowed(const AccessConfig& access, const std::string& endpoint)
 // ConfigError naming the file.
 std::string apply_curve(zmq::socket_t& socket, const AccessConfig& access, bool server);
 
+// The CURVE public key (Z85) set on `socket` by apply_curve, as a refusing peer sees it; "" when
+// the socket has none.
+std::string curve_public_key(zmq::socket_t& socket);
+
 // Reads the Z85 key of `path` (ConfigError naming the file: missing, over kMaxKeyFileBytes, not one
 // 40-character Z85 key).
 std::string read_curve_key(const std::string& path);

@@ -81,6 +81,20 @@ std::string HandshakeTracker::describe(const std::string& endpoint, std::uint16_
   return fmt::format("handshake with {} failed ({}){}", endpoint, std::strerror(err), retry);
 }
 
+bool HandshakeTracker::on_event(const MonitorEvent& event) {
+  if (event.id == ZMQ_EVENT_HANDSHAKE_FAILED_NO_DETAIL ||
+      event.id == ZMQ_EVENT_HANDSHAKE_FAILED_PROTOCOL ||
+      event.id == ZMQ_EVENT_HANDSHAKE_FAILED_AUTH) {
+    failed(event.endpoint, event.id, event.value);
+    return true;
+  }
+  if (event.id == ZMQ_EVENT_HANDSHAKE_SUCCEEDED) {
+    succeeded(event.endpoint);
+    return true;
+  }
+  return false;
+}
+
 void HandshakeTracker::failed(const std::string& endpoint, std::uint16_t event,
                               std::uint32_t value) {
   ++failures_;

@@ -1,6 +1,7 @@
 // What a socket's failed ZMTP handshakes mean, from its monitor events: counted, and each
 // endpoint's cause logged once in words a user can act on (a refusal by the peer's allowed-clients
-// list, a wrong server key, CURVE on one side only), instead of a generic closed connection.
+// list, a wrong server key, CURVE on one side only), instead of a generic closed connection. Used
+// by subscribers and by connecting publishers (e.g. a detector's PUSH to the sink).
 #pragma once
 
 #include <spdlog/spdlog.h>
@@ -10,7 +11,14 @@
 #include <memory>
 #include <string>
 
+#include "transport/monitor.hpp"
+
 namespace faultline::transport {
+
+// The monitor events a HandshakeTracker handles.
+inline constexpr int kHandshakeEvents =
+    ZMQ_EVENT_HANDSHAKE_FAILED_NO_DETAIL | ZMQ_EVENT_HANDSHAKE_FAILED_PROTOCOL |
+    ZMQ_EVENT_HANDSHAKE_FAILED_AUTH | ZMQ_EVENT_HANDSHAKE_SUCCEEDED;
 
 class HandshakeTracker {
  public:
@@ -20,6 +28,9 @@ class HandshakeTracker {
   HandshakeTracker(bool connecting, bool curve, std::string own_public_key_z85, std::string peer,
                    std::shared_ptr<spdlog::logger> log);
 
+  // One event of the socket's monitor: a handshake event (failed or succeeded) is handled here
+  // (true); any other is the caller's (false).
+  bool on_event(const MonitorEvent& event);
   // A ZMQ_EVENT_HANDSHAKE_FAILED_* event (`event`, its `value`) on `endpoint`: counted; the first
   // failure of an endpoint, and a later one with another cause, is logged at error, the rest at
   // debug (a binding socket sees one per refused client; libzmq does not retry a connecting

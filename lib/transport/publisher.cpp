@@ -6,6 +6,7 @@
 #include <chrono>
 
 #include "common/config.hpp"
+#include "common/logging.hpp"
 #include "transport/context.hpp"
 #include "transport/endpoint.hpp"
 #include "transport/zap.hpp"
@@ -43,6 +44,11 @@ Publisher::Publisher(const PublisherConfig& config)
   }
   if (config.bind) check_bind_allowed(config.access, config.endpoint);
   zap_domain_ = apply_curve(socket_, config.access, /*server=*/config.bind);
+  if (!config.bind) {  // before connecting, so that no handshake goes unseen
+    monitor_.start(socket_, kHandshakeEvents, "the publisher socket for " + config.endpoint);
+    handshakes_.emplace(/*connecting=*/true, config.access.curve(), curve_public_key(socket_),
+                        "receiver", logging::node_logger());
+  }
   try {
     if (config.bind) {
       socket_.bind(config.endpoint);
@@ -54,6 +60,69 @@ Publisher::Publisher(const PublisherConfig& config)
   } catch (const zmq::error_t& e) {
     throw ConfigError("endpoint = " + config.endpoint + ": cannot " +
                       (config.bind ? "bind" : "connect") + " (" + e.what() + ")");
+  }
+}
+
+Publisher::~Publisher() { monitor_.stop(socket_); }
+
+Publisher& Publisher::operator=(Publisher&& other) noexcept {
+  if (this == &other) return *this;
+  monitor_.stop(socket_);  // before its reading end is replaced (transport/monitor.hpp)
+  config_ = std::move(other.config_);
+  endpoint_ = std::move(other.endpoint_);
+  socket_ = std::move(other.socket_);
+  subscriptions_ = std::move(other.subscriptions_);
+  would_block_ = other.would_block_;
+  oversize_refused_ = other.oversize_refused_;
+  zap_domain_ = std::move(other.zap_domain_);
+  monitor_ = std::move(other.monitor_);
+  handshakes_ = std::move(other.handshakes_);
+  return *this;
+}
+
+void Publisher::read_monitor() {
+  if (!handshakes_) return;
+  while (auto event = monitor_.next()) (void)handshakes_->on_event(*event);
+}
+
+std::uint64_t Publisher::handshake_failures() {
+  read_monitor();
+  return handshakes_ ? handshakes_->failures() : 0;
+}
+
+std::uint64_t Publisher::refused_by_peer() {
+  read_monitor();
+  return handshakes_ ? handshakes_->refused_by_peer() : 0;
+}
+
+Status Publisher::send_first(zmq::message_t& topic_frame) {
+  read_monitor();
+  if (!handshakes_ || config_.pattern != Pattern::PushPull) {
+    if (socket_.send(topic_frame, zmq::send_flags::sndmore)) return Status::ok();
+    ++would_block_;
+    return {StatusCode::kWouldBlock, "send timed out (peer queue full)"};
+  }
+  const bool forever = config_.send_timeout_ns < 0;
+  const StampNs deadline = forever ? 0 : monotonic_now_ns() + config_.send_timeout_ns;
+  for (;;) {
+    zmq::pollitem_t items[2] = {{socket_.handle(), 0, ZMQ_POLLOUT, 0},
+                                {monitor_.handle(), 0, ZMQ_POLLIN, 0}};
+    long wait_ms = -1;
+    if (!forever) {
+      const DurationNs left = deadline - monotonic_now_ns();
+      wait_ms = left <= 0 ? 0 : static_cast<long>((left + kNsPerMs - 1) / kNsPerMs);
+    }
+    (void)zmq::poll(items, 2, std::chrono::milliseconds(wait_ms));  // throws as send would
+    if (items[1].revents & ZMQ_POLLIN) read_monitor();
+    // A peer can take it: this send does not block (it only fails if that peer just left).
+    if ((items[0].revents & ZMQ_POLLOUT) &&
+        socket_.send(topic_frame, zmq::send_flags::sndmore | zmq::send_flags::dontwait)) {
+      return Status::ok();
+    }
+    if (!forever && monotonic_now_ns() >= deadline) {
+      ++would_block_;
+      return {StatusCode::kWouldBlock, "send timed out (peer queue full)"};
+    }
   }
 }
 
@@ -70,10 +139,7 @@ Status Publisher::send_parts(std::string_view topic, const std::string_view* mid
   }
   try {
     zmq::message_t topic_frame(topic.data(), topic.size());
-    if (!socket_.send(topic_frame, zmq::send_flags::sndmore)) {
-      ++would_block_;
-      return {StatusCode::kWouldBlock, "send timed out (peer queue full)"};
-    }
+    if (Status s = send_first(topic_frame); !s.is_ok()) return s;
     zmq::message_t body(middle->data(), middle->size());
     if (!payload) {
       (void)socket_.send(body, zmq::send_flags::none);

@@ -7,6 +7,13 @@
 // nothing is lost; several PULL peers are load balanced, not fanned out. ZMQ_IMMEDIATE is set when
 // connecting.
 //
+// A connecting publisher (bind = false) watches its handshakes with a socket monitor, as a
+// subscriber does (transport/handshake.hpp): a receiver that refuses it (its CURVE allowed-clients
+// list, a wrong server key, CURVE on one side only) is logged once per endpoint, naming it and this
+// node's key, and counted (handshake_failures(), refused_by_peer()); libzmq does not retry it. The
+// monitor is read on every send, and a PushPull send waits for a peer with zmq_poll over the socket
+// and the monitor, so that a refusal is reported while the sender waits.
+//
 // Framing: image topics [topic][header][payload], other topics [topic][body]. LINGER is 0.
 // A Publisher belongs to one thread.
 #pragma once
@@ -14,6 +21,7 @@
 #include <atomic>
 #include <cstdint>
 #include <map>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <zmq.hpp>
@@ -21,6 +29,8 @@
 #include "common/clock.hpp"
 #include "common/status.hpp"
 #include "transport/access.hpp"
+#include "transport/handshake.hpp"
+#include "transport/monitor.hpp"
 #include "transport/payload.hpp"
 
 namespace faultline::transport {
@@ -59,7 +69,8 @@ class Publisher {
   // loopback without access.allow_remote; naming the file when a CURVE key cannot be read.
   explicit Publisher(const PublisherConfig& config);
   Publisher(Publisher&&) noexcept = default;
-  Publisher& operator=(Publisher&&) noexcept = default;
+  Publisher& operator=(Publisher&& other) noexcept;  // stops this one's monitor first
+  ~Publisher();  // stops the monitor before its reading end closes
 
   // The endpoint actually bound (ZMQ_LAST_ENDPOINT), e.g. "tcp://127.0.0.1:40123"; for a
   // connecting socket the configured endpoint.
@@ -86,12 +97,21 @@ class Publisher {
   // CURVE clients refused because their key is not in access.curve_allowed_clients_file (each
   // logged).
   std::uint64_t auth_refused() const;
+  // A connecting publisher: handshakes that failed (each attempt), and those refused by the
+  // receiver's ZAP handler because this node's key is not in its allowed-clients list. Both read
+  // the monitor's queued events first; 0 for a binding publisher.
+  std::uint64_t handshake_failures();
+  std::uint64_t refused_by_peer();
   // Changes ZMQ_LINGER, e.g. to 0 before closing on shutdown so exit stays prompt.
   void set_linger(int linger_ms);
 
  private:
   void drain_subscriptions(int timeout_ms);
   Status send_parts(std::string_view topic, const std::string_view* middle, const Payload* payload);
+  // Sends the first part, which is the one that can block: with a monitor, PushPull waits in
+  // zmq_poll (reading the monitor) until the peer can take it or send_timeout_ns passed.
+  Status send_first(zmq::message_t& topic_frame);
+  void read_monitor();  // hands the queued monitor events to handshakes_
 
   PublisherConfig config_;
   std::string endpoint_;
@@ -100,6 +120,8 @@ class Publisher {
   std::uint64_t would_block_ = 0;
   std::uint64_t oversize_refused_ = 0;
   std::string zap_domain_;  // set when a CURVE server checks an allowed-clients list
+  SocketMonitor monitor_;   // connecting publishers only; stopped before it closes
+  std::optional<HandshakeTracker> handshakes_;  // set with monitor_
 };
 
 }  // namespace faultline::transport

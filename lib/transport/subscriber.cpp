@@ -3,9 +3,7 @@
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
-#include <atomic>
 #include <chrono>
-#include <cstring>
 
 #include "common/config.hpp"
 #include "common/logging.hpp"
@@ -22,17 +20,6 @@ LogLimiter& malformed_limiter() {
   return limiter;
 }
 
-// This socket's CURVE public key in Z85, as a refusing peer sees it ("" when none is set).
-std::string own_public_key(zmq::socket_t& socket) {
-  char key[41] = {};
-  std::size_t size = sizeof key;
-  if (zmq_getsockopt(socket.handle(), ZMQ_CURVE_PUBLICKEY, key, &size) != 0 || size != sizeof key) {
-    return {};
-  }
-  const std::string z85(key, 40);
-  return z85.find_first_not_of('0') == std::string::npos ? std::string() : z85;
-}
-
 }  // namespace
 
 std::size_t ReceivedMessage::size_bytes() const {
@@ -47,9 +34,7 @@ ReceivedMessage ReceivedMessage::from_frames(const std::vector<std::string_view>
   return msg;
 }
 
-RawSubscriber::~RawSubscriber() {
-  if (socket_.handle() != nullptr) (void)zmq_socket_monitor(socket_.handle(), nullptr, 0);
-}
+RawSubscriber::~RawSubscriber() { monitor_.stop(socket_); }
 
 RawSubscriber::RawSubscriber(const SubscriberConfig& config)
     : config_(config),
@@ -57,7 +42,7 @@ RawSubscriber::RawSubscriber(const SubscriberConfig& config)
       handshakes_(!config.bind, config.access.curve(), "", "publisher", log_) {
   open_socket();
   // The key is known once apply_curve has set it; no event is read before this.
-  handshakes_ = HandshakeTracker(!config_.bind, config_.access.curve(), own_public_key(socket_),
+  handshakes_ = HandshakeTracker(!config_.bind, config_.access.curve(), curve_public_key(socket_),
                                  "publisher", log_);
 }
 
@@ -77,20 +62,10 @@ void RawSubscriber::open_socket() {
   const std::string domain = apply_curve(socket_, config_.access, /*server=*/config_.bind);
   if (!domain.empty()) zap_domain_ = domain;
   // Monitor before connecting, so that no closed connection goes unseen.
-  static std::atomic<std::uint64_t> monitor_ids{0};
-  const std::string monitor_address =
-      "inproc://faultline-subscriber-monitor-" + std::to_string(++monitor_ids);
-  constexpr int kEvents = ZMQ_EVENT_DISCONNECTED | ZMQ_EVENT_CONNECT_RETRIED | ZMQ_EVENT_CONNECTED |
-                          ZMQ_EVENT_HANDSHAKE_FAILED_NO_DETAIL |
-                          ZMQ_EVENT_HANDSHAKE_FAILED_PROTOCOL | ZMQ_EVENT_HANDSHAKE_FAILED_AUTH |
-                          ZMQ_EVENT_HANDSHAKE_SUCCEEDED;
-  if (zmq_socket_monitor(socket_.handle(), monitor_address.c_str(), kEvents) != 0) {
-    throw ConfigError("cannot monitor the subscriber socket: " +
-                      std::string(zmq_strerror(zmq_errno())));
-  }
-  monitor_ = zmq::socket_t(shared_context(), zmq::socket_type::pair);
-  monitor_.set(zmq::sockopt::linger, 0);
-  monitor_.connect(monitor_address);
+  monitor_.start(
+      socket_,
+      ZMQ_EVENT_DISCONNECTED | ZMQ_EVENT_CONNECT_RETRIED | ZMQ_EVENT_CONNECTED | kHandshakeEvents,
+      "the subscriber socket");
   endpoints_.clear();
   for (const auto& ep : config_.endpoints) {
     try {
@@ -109,31 +84,10 @@ void RawSubscriber::open_socket() {
 }
 
 void RawSubscriber::handle_monitor_events() {
-  for (;;) {
-    zmq::message_t event, address;
-    try {
-      if (!monitor_.recv(event, zmq::recv_flags::dontwait)) return;
-      if (!event.more() || !monitor_.recv(address, zmq::recv_flags::none)) continue;
-    } catch (const zmq::error_t&) {
-      return;
-    }
-    std::uint16_t id = 0;
-    if (event.size() >= sizeof id) std::memcpy(&id, event.data(), sizeof id);
-    // A connecting session names its endpoint the same way in every event (the connecter's
-    // address).
-    std::string where(static_cast<const char*>(address.data()), address.size());
-    if (id == ZMQ_EVENT_HANDSHAKE_FAILED_NO_DETAIL || id == ZMQ_EVENT_HANDSHAKE_FAILED_PROTOCOL ||
-        id == ZMQ_EVENT_HANDSHAKE_FAILED_AUTH) {
-      std::uint32_t value = 0;  // the ZAP status, protocol error code or errno
-      if (event.size() >= sizeof id + sizeof value) {
-        std::memcpy(&value, static_cast<const char*>(event.data()) + sizeof id, sizeof value);
-      }
-      handshakes_.failed(where, id, value);
-      awaiting_reconnect_.erase(where);
-      continue;
-    }
-    if (id == ZMQ_EVENT_HANDSHAKE_SUCCEEDED) {
-      handshakes_.succeeded(where);
+  while (auto event = monitor_.next()) {
+    std::string& where = event->endpoint;
+    const std::uint16_t id = event->id;
+    if (handshakes_.on_event(*event)) {
       awaiting_reconnect_.erase(where);
       continue;
     }
@@ -178,10 +132,8 @@ void RawSubscriber::reconnect_if_abandoned() {
   }
   handle_monitor_events();  // count what the old socket saw last
   awaiting_reconnect_.clear();
-  (void)zmq_socket_monitor(socket_.handle(), nullptr,
-                           0);  // stop events before the reading end closes
+  monitor_.stop(socket_);  // before the reading end closes
   socket_.close();
-  monitor_.close();
   try {
     open_socket();
   } catch (const std::exception& e) {

@@ -34,6 +34,7 @@
 #include "common/clock.hpp"
 #include "common/status.hpp"
 #include "transport/handshake.hpp"
+#include "transport/monitor.hpp"
 #include "transport/publisher.hpp"
 
 namespace faultline::transport {
@@ -129,10 +130,8 @@ class RawSubscriber {
 
   SubscriberConfig config_;
   std::vector<std::string> endpoints_;
-  // Declared before socket_, so it closes after it. libzmq's I/O thread sends monitor events with a
-  // blocking send: an event for a PAIR whose reader is gone would stall every socket of the
-  // context.
-  zmq::socket_t monitor_;  // PAIR end of zmq_socket_monitor(socket_, ZMQ_EVENT_DISCONNECTED)
+  // Declared before socket_, so it closes after it; stopped first (transport/monitor.hpp).
+  SocketMonitor monitor_;  // closed connections, libzmq's reconnects, handshakes
   zmq::socket_t socket_;
   std::deque<ReceivedMessage> pending_;  // latest-only: drained, newest per image topic
   std::uint64_t superseded_ = 0;

@@ -135,6 +135,13 @@ TEST_F(CliAccessTest, TopicHzWithAWrongKeyIsRefusedAndGetsNothing) {
   EXPECT_NE(out.find("count=0"), std::string::npos) << out;
   EXPECT_EQ(pub.subscriber_count("/t"), 0);
   EXPECT_EQ(pub.auth_refused(), 1u);
+  // The tool's log says once why it heard nothing (the default logger writes to stdout), and does
+  // not call the refusal a closed connection.
+  const std::string refused = "refused by the publisher at " + pub.endpoint() + ": its ZAP handler";
+  const auto first = out.find(refused);
+  EXPECT_NE(first, std::string::npos) << out;
+  EXPECT_EQ(out.find(refused, first + 1), std::string::npos) << out;
+  EXPECT_EQ(out.find("connection " + pub.endpoint() + " closed"), std::string::npos) << out;
 }
 
 // As a process: `bag play` terminates the process's ZeroMQ context when it ends.

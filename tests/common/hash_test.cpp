@@ -27,5 +27,16 @@ TEST(HashTest, HexIsSixteenLowerCaseDigitsZeroPadded) {
   EXPECT_EQ(fnv1a64_hex(std::string("\0\xff", 2)), "0831c907b4ea2b60");  // leading zero kept
 }
 
+// The legacy basis gives what the campaign's and `topic echo`'s own loops gave before they shared
+// this function (expected values from that loop, computed outside this code).
+TEST(HashTest, TheLegacyBasisGivesTheOldLoopsValues) {
+  EXPECT_EQ(fnv1a64(std::string_view(), kFnv1a64LegacyBasis), kFnv1a64LegacyBasis.value);
+  EXPECT_EQ(fnv1a64("foobar", kFnv1a64LegacyBasis), 0x88fad7c0a8ff07f2ULL);
+  const unsigned char bytes[] = {0x00, 0xff};
+  EXPECT_EQ(fnv1a64(bytes, sizeof bytes, kFnv1a64LegacyBasis), 0x9a68e000c5486252ULL);
+  EXPECT_EQ(fnv1a64_hex("foobar", kFnv1a64LegacyBasis), "88fad7c0a8ff07f2");
+  EXPECT_NE(fnv1a64("foobar", kFnv1a64LegacyBasis), fnv1a64("foobar"));
+}
+
 }  // namespace
 }  // namespace faultline

@@ -4,6 +4,8 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -21,7 +23,6 @@ FaultReport TwoFaults() {
   r.header.stamp.sec = 12;
   r.header.stamp.nanosec = 345;
   r.header.frame_id = "CAM_FRONT";
-  r.level = DiagnosticStatus::kWarn;
   r.name = "faultline/CAM_FRONT";
   r.hardware_id = "CAM_FRONT";
   r.action = "corrupt";
@@ -55,10 +56,43 @@ TEST(FaultReportTest, APassWithoutFaultsIsTheActionAloneAndAReasonFollowsAColon)
   EXPECT_EQ(to_diagnostic_array(r).status.at(0).message, "pass");
   EXPECT_EQ(Pairs(to_diagnostic_array(r).status.at(0)), std::vector<std::string>{"action=pass"});
   FaultReport failed = TwoFaults();
-  failed.level = DiagnosticStatus::kError;
-  failed.why = "JPEG decode failed";
+  failed.action = "undecodable";
+  failed.why = "corrupt not applied: JPEG decode failed";
   EXPECT_EQ(to_diagnostic_array(failed).status.at(0).message,
-            "corrupt fog/3 motion_blur/5: JPEG decode failed");
+            "undecodable fog/3 motion_blur/5: corrupt not applied: JPEG decode failed");
+  EXPECT_EQ(to_diagnostic_array(failed).status.at(0).level, DiagnosticStatus::kError);
+}
+
+// One rule for every writer: OK passes, WARN keeps the frame's content (changed or late), ERROR
+// loses it or could not apply the fault.
+TEST(FaultReportTest, TheLevelFollowsTheActionByOneRule) {
+  EXPECT_EQ(fault_level("pass"), DiagnosticStatus::kOk);
+  EXPECT_EQ(fault_level("corrupt"), DiagnosticStatus::kWarn);
+  EXPECT_EQ(fault_level("delay"), DiagnosticStatus::kWarn);
+  for (const char* lost : {"drop", "black", "freeze", "undecodable", "something new"}) {
+    EXPECT_EQ(fault_level(lost), DiagnosticStatus::kError) << lost;
+  }
+  FaultReport r = TwoFaults();
+  r.action = "black";
+  EXPECT_EQ(to_diagnostic_array(r).status.at(0).level, DiagnosticStatus::kError);
+}
+
+// Parameters are written as the shortest text that reads back as the same double: neither rounded
+// to six decimals (2.5e-07 became "0") nor padded to 17 digits (0.1 became "0.10000000000000001").
+TEST(FaultReportTest, ParametersAreTheShortestTextThatReadsBackExactly) {
+  EXPECT_EQ(fault_param_text(0.1), "0.1");
+  EXPECT_EQ(fault_param_text(3), "3");
+  EXPECT_EQ(fault_param_text(-2), "-2");
+  EXPECT_EQ(fault_param_text(2.5e-7), "2.5e-07");
+  EXPECT_EQ(fault_param_text(0.1 + 0.2), "0.30000000000000004");
+  EXPECT_EQ(fault_param_text(1e300), "1e+300");
+  EXPECT_EQ(fault_param_text(std::numeric_limits<double>::infinity()), "inf");
+  EXPECT_EQ(fault_param_text(-std::numeric_limits<double>::infinity()), "-inf");
+  EXPECT_EQ(fault_param_text(std::nan("")), "nan");
+  const ReportedFault f = reported_fault("fog", 3, 7, "fast", {{"t", 0.1}, {"beta", 2.5e-7}});
+  ASSERT_EQ(f.params.size(), 2u);
+  EXPECT_EQ(f.params[0].key + "=" + f.params[0].value, "beta=2.5e-07");  // name order
+  EXPECT_EQ(f.params[1].key + "=" + f.params[1].value, "t=0.1");
 }
 
 TEST(FaultReportTest, SurvivesACdrRoundTrip) {

@@ -5,8 +5,10 @@
 // interop_test.cpp.
 #include <gtest/gtest.h>
 #include <spdlog/sinks/null_sink.h>
+#include <spdlog/sinks/ringbuffer_sink.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdlib>
 #include <functional>
@@ -35,6 +37,14 @@ constexpr const char* kRosTopic = "/test/cam_front/image_raw/compressed";
 
 std::shared_ptr<spdlog::logger> QuietLogger(const std::string& name) {
   return std::make_shared<spdlog::logger>(name, std::make_shared<spdlog::sinks::null_sink_mt>());
+}
+
+// Lines of `ring` containing `needle`.
+int Count(spdlog::sinks::ringbuffer_sink_mt& ring, const std::string& needle) {
+  int n = 0;
+  for (const auto& line : ring.last_formatted())
+    n += line.find(needle) != std::string::npos ? 1 : 0;
+  return n;
 }
 
 bool Eventually(const std::function<bool()>& done) {
@@ -162,8 +172,16 @@ TEST_F(BridgeAccessTest, Ros2OutTakesEveryFrameWithTheRightKeyAndNothingWithAWro
     cfg.access = keys_.client(key);
     return cfg;
   };
+  // The bad bridge's own lines (its stop line), and the transport's (the refusal, logged through
+  // the process's node logger: spdlog's default here).
+  auto bad_lines = std::make_shared<spdlog::sinks::ringbuffer_sink_mt>(64);
+  bad_lines->set_pattern("%v");
+  auto transport_lines = std::make_shared<spdlog::sinks::ringbuffer_sink_mt>(64);
+  transport_lines->set_pattern("%v");
+  spdlog::default_logger()->sinks().push_back(transport_lines);
   OutBridge good(out_config("good"), "ros2_out", QuietLogger("ros2_out_good"));
-  OutBridge bad(out_config("bad"), "ros2_out", QuietLogger("ros2_out_bad"));
+  OutBridge bad(out_config("bad"), "ros2_out",
+                std::make_shared<spdlog::logger>("ros2_out_bad", bad_lines));
   std::atomic<bool> stop{false};
   int good_rc = -1, bad_rc = -1;
   std::thread good_runner([&] { good_rc = good.run(stop); });
@@ -188,9 +206,21 @@ TEST_F(BridgeAccessTest, Ros2OutTakesEveryFrameWithTheRightKeyAndNothingWithAWro
     ASSERT_TRUE(injector.send(topic, f.SerializeAsString(), p).is_ok());
   }
   ASSERT_TRUE(Eventually([&] { return good.counts().frames_in.load() >= kFrames; }));
+  // Counted when logged: wait for the line, so the stop line's count is exact.
+  const bool refusal_seen = Eventually([&] {
+    return Count(*transport_lines, "refused by the publisher at " + injector.endpoint()) >= 1;
+  });
   stop = true;
   good_runner.join();
   bad_runner.join();
+  auto& default_sinks = spdlog::default_logger()->sinks();
+  default_sinks.erase(std::remove(default_sinks.begin(), default_sinks.end(), transport_lines),
+                      default_sinks.end());
+  EXPECT_TRUE(refusal_seen);
+  // ros2_out's stop line says why it took nothing, as the other nodes' counts do.
+  EXPECT_EQ(Count(*bad_lines, "stopped: frames_in=0 "), 1);
+  EXPECT_EQ(Count(*bad_lines, " handshake_failures=1 refused_by_peer=1"), 1)
+      << (bad_lines->last_formatted().empty() ? "" : bad_lines->last_formatted().back());
   EXPECT_EQ(good_rc, 0);
   EXPECT_EQ(good.counts().frames_in.load(), static_cast<std::uint64_t>(kFrames));
   EXPECT_EQ(good.counts().transport_drops.load(), 0u);

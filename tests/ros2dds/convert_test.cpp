@@ -279,7 +279,12 @@ TEST(DiagnosticsTest, LevelsFollowTheAction) {
   EXPECT_EQ(diagnostic_from_event(e).message, "pass");
   e.mutable_state()->set_action(msgs::FAULT_ACTION_DROP);
   EXPECT_EQ(diagnostic_from_event(e).level, DiagnosticLevel::kError);
+  // The bags' rule (ros2/fault_report.hpp): a black or frozen frame has lost its content.
   e.mutable_state()->set_action(msgs::FAULT_ACTION_FREEZE);
+  EXPECT_EQ(diagnostic_from_event(e).level, DiagnosticLevel::kError);
+  e.mutable_state()->set_action(msgs::FAULT_ACTION_BLACK);
+  EXPECT_EQ(diagnostic_from_event(e).level, DiagnosticLevel::kError);
+  e.mutable_state()->set_action(msgs::FAULT_ACTION_DELAY);
   EXPECT_EQ(diagnostic_from_event(e).level, DiagnosticLevel::kWarn);
 }
 

@@ -591,20 +591,85 @@ TEST_F(BagCorruptTest, NonImageTopicIsAnErrorBeforeAnyOutput) {
   EXPECT_EQ(leftovers("in.mcap"), std::vector<std::string>{});
 }
 
-// Message faults (calibration, stamps) are not pixels: bag corrupt refuses them by name instead of
-// ignoring them.
-TEST_F(BagCorruptTest, MessageFaultsAreRefusedBeforeAnyOutput) {
+// calibration_drift is not rewritten here (ROS 2 calibration lives on CameraInfo topics): bag
+// corrupt refuses it by name instead of ignoring it.
+TEST_F(BagCorruptTest, CalibrationDriftIsRefusedBeforeAnyOutput) {
   const std::string in = write_mcap();
-  for (const char* fault : {"/cam/jpeg=calibration_drift:mid", "/cam/jpeg=timestamp_skew:2"}) {
-    auto cfg = config(in, "out.mcap");
-    cfg.faults.push_back(parse_topic_fault(fault, corruption::RngMode::Fast));
-    auto r = corrupt_bag(cfg, stop_);
-    ASSERT_FALSE(r) << fault;
-    EXPECT_EQ(r.status().code(), StatusCode::kInvalidArgument);
-    EXPECT_NE(r.status().message().find("bag corrupt rewrites pixels only"), std::string::npos)
-        << r.status().message();
-    EXPECT_EQ(leftovers("in.mcap"), std::vector<std::string>{});
+  auto cfg = config(in, "out.mcap");
+  cfg.faults.push_back(
+      parse_topic_fault("/cam/bgr=calibration_drift:mid", corruption::RngMode::Fast));
+  auto r = corrupt_bag(cfg, stop_);
+  ASSERT_FALSE(r);
+  EXPECT_EQ(r.status().code(), StatusCode::kInvalidArgument);
+  EXPECT_NE(r.status().message().find("fault calibration_drift on /cam/bgr: bag corrupt applies "
+                                      "calibration_drift nowhere"),
+            std::string::npos)
+      << r.status().message();
+  EXPECT_EQ(leftovers("in.mcap"), std::vector<std::string>{});
+}
+
+ros2::Header StampOf(const std::string& cdr) {
+  ros2::CdrReader r(cdr, "image");
+  ros2::Header h;
+  ros2::decode(r, h);
+  EXPECT_TRUE(r.ok()) << r.status().to_string();
+  return h;
+}
+
+// timestamp_skew on ROS 2 image topics of a rosbag2 directory (#19): each written image's header
+// stamp is its own plus the offset, read back from the output bag; every other byte, the log time
+// and the topics left alone are as they were, and the fault report keeps the true stamp.
+TEST_F(BagCorruptTest, TimestampSkewMovesTheHeaderStampsOfRos2Images) {
+  const std::string in = write_rosbag2();
+  const std::string schedule = (dir_ / "skew.yaml").string();
+  std::ofstream(schedule) << "/cam/bgr:\n  - {type: timestamp_skew, offset_ms: -30}\n"
+                          << "/CAM_FRONT/image_rect_compressed:\n"
+                          << "  - {type: timestamp_skew, severity: 4}\n";
+  auto cfg = config(in, "out_bag");
+  cfg.faults = load_fault_schedule(schedule, corruption::RngMode::Fast);
+  auto counts = corrupt_bag(cfg, stop_);
+  ASSERT_TRUE(counts) << counts.status().to_string();
+  EXPECT_EQ(counts->frames, 2u * kFrames);
+  EXPECT_EQ(counts->skewed, 2u * kFrames);
+  EXPECT_EQ(counts->unchanged, 2u * kFrames);  // pixels untouched
+  EXPECT_EQ(counts->undecodable + counts->dropped + counts->delayed, 0u);
+  const Bag a = read_bag((fs::path(in) / "in_bag_0.mcap").string());
+  const Bag b = read_bag((fs::path(cfg.output) / "out_bag_0.mcap").string());
+  const std::map<std::string, StampNs> offsets = {{"/cam/bgr", -30'000'000},
+                                                  {"/CAM_FRONT/image_rect_compressed", 50'000'000}};
+  for (const auto& [topic, offset] : offsets) {
+    const auto src = a.on(topic), dst = b.on(topic);
+    ASSERT_EQ(dst.size(), static_cast<std::size_t>(kFrames)) << topic;
+    for (std::size_t i = 0; i < dst.size(); ++i) {
+      EXPECT_EQ(ros2::to_ns(StampOf(dst[i]->data).stamp),
+                ros2::to_ns(StampOf(src[i]->data).stamp) + offset)
+          << topic << " frame " << i;
+      EXPECT_EQ(StampOf(dst[i]->data).frame_id, StampOf(src[i]->data).frame_id);
+      EXPECT_EQ(dst[i]->log_ns, src[i]->log_ns);
+      std::string rest_in = src[i]->data, rest_out = dst[i]->data;
+      rest_in.erase(4, 8);  // the stamp: sec and nanosec after the encapsulation header
+      rest_out.erase(4, 8);
+      EXPECT_EQ(rest_out, rest_in) << topic << " frame " << i;
+    }
   }
+  for (const char* topic : {"/cam/rgb", "/cam/mono", "/tf", "/chatter"}) {
+    ASSERT_EQ(b.on(topic).size(), a.on(topic).size()) << topic;
+    for (std::size_t i = 0; i < a.on(topic).size(); ++i)
+      EXPECT_EQ(b.on(topic)[i]->data, a.on(topic)[i]->data) << topic;
+  }
+  int reports = 0;
+  for (const Message* e : b.on("/faultline/faults")) {
+    auto v = event_values(e->data);
+    EXPECT_EQ(v["action"], "pass");
+    EXPECT_EQ(v["fault"], "timestamp_skew");
+    EXPECT_EQ(v["level"], "0");
+    const auto src = a.on(v["topic"]).at(std::stoul(v["source_seq"]) - 1);
+    auto report = ros2::deserialize<ros2::DiagnosticArray>(e->data);
+    ASSERT_TRUE(report);
+    EXPECT_EQ(ros2::to_ns(report->header.stamp), ros2::to_ns(StampOf(src->data).stamp));
+    ++reports;
+  }
+  EXPECT_EQ(reports, 2 * kFrames);
 }
 
 TEST_F(BagCorruptTest, ExistingOutputIsRefusedAndKept) {
@@ -848,6 +913,17 @@ TEST_F(BagCorruptTest, FaultlineRecordingGetsTheInjectorsSeedsStateAndEvents) {
     }
     ASSERT_TRUE((*w)->close());
   }
+  // A Faultline frame's stamp is not rewritten here: timestamp_skew on its topic is refused by
+  // name.
+  auto skew = config(path, "skewed.mcap");
+  skew.faults.push_back(parse_topic_fault(topic + "=timestamp_skew:2", corruption::RngMode::Fast));
+  auto refused = corrupt_bag(skew, stop_);
+  ASSERT_FALSE(refused);
+  EXPECT_NE(refused.status().message().find("timestamp_skew only to ROS 2 image topics"),
+            std::string::npos)
+      << refused.status().message();
+  EXPECT_FALSE(fs::exists(skew.output));
+
   auto cfg = config(path, "out.mcap");
   const std::string schedule = (dir_ / "faults.yaml").string();
   std::ofstream(schedule) << topic << ":\n  - {type: fog, level: mid, frames: key}\n";

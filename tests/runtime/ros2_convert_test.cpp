@@ -65,7 +65,9 @@ M decode_or_fail(std::string_view data) {
   return m ? *m : M{};
 }
 
-Ros2Content read_ros2(const std::string& mcap) {
+// Images are stamped at their log time, the faulted ones (/faulty/...) at log time +
+// faulty_stamp_offset_ns (timestamp_skew).
+Ros2Content read_ros2(const std::string& mcap, StampNs faulty_stamp_offset_ns = 0) {
   Ros2Content c;
   auto reader = bag::Reader::open(mcap);
   EXPECT_TRUE(reader.is_ok());
@@ -80,7 +82,8 @@ Ros2Content read_ros2(const std::string& mcap) {
     const std::string& type = v.schema->name;
     if (type == "sensor_msgs/msg/CompressedImage") {
       c.images[topic].push_back(decode_or_fail<ros2::CompressedImage>(v.data));
-      EXPECT_EQ(ros2::to_ns(c.images[topic].back().header.stamp), v.log_time_ns) << topic;
+      const StampNs offset = topic.rfind("/faulty/", 0) == 0 ? faulty_stamp_offset_ns : 0;
+      EXPECT_EQ(ros2::to_ns(c.images[topic].back().header.stamp), v.log_time_ns + offset) << topic;
     } else if (type == "sensor_msgs/msg/CameraInfo") {
       c.infos[topic].push_back(decode_or_fail<ros2::CameraInfo>(v.data));
     } else if (topic == "/tf_static") {
@@ -302,6 +305,43 @@ TEST_F(Ros2ConvertTest, CleanBagHoldsEveryFrameWithCalibrationTfAndBoxes) {
   auto again = convert(dir);
   ASSERT_FALSE(again.is_ok());
   EXPECT_NE(again.status().message().find("exists"), std::string::npos);
+}
+
+// timestamp_skew (#19): the faulted images and their CameraInfos carry the skewed header stamp
+// (read back from the bag), the clean copies the true one, and log times stay the capture times.
+TEST_F(Ros2ConvertTest, TimestampSkewMovesTheFaultedHeaderStamps) {
+  const std::string dir = out("skew_ros2");
+  auto counts = convert(dir, {"timestamp_skew/4"});  // 50 ms late
+  ASSERT_TRUE(counts.is_ok()) << counts.status().to_string();
+  EXPECT_EQ(counts->faulted_frames, counts->frames);
+  const Ros2Content c = read_ros2((fs::path(dir) / "skew_ros2_0.mcap").string(), 50'000'000);
+  std::uint64_t faulted = 0, infos = 0;
+  for (const auto& [topic, imgs] : c.images) {
+    if (topic.rfind("/faulty/", 0) != 0) continue;
+    const auto& clean = c.images.at(topic.substr(7));
+    ASSERT_EQ(imgs.size(), clean.size()) << topic;
+    for (std::size_t i = 0; i < imgs.size(); ++i) {
+      EXPECT_EQ(ros2::to_ns(imgs[i].header.stamp), ros2::to_ns(clean[i].header.stamp) + 50'000'000)
+          << topic << " frame " << i;
+      EXPECT_EQ(imgs[i].data, clean[i].data);  // pixels untouched
+    }
+    faulted += imgs.size();
+  }
+  for (const auto& [topic, list] : c.infos) {
+    if (topic.rfind("/faulty/", 0) != 0) continue;
+    const auto& clean = c.infos.at(topic.substr(7));
+    ASSERT_EQ(list.size(), clean.size()) << topic;
+    for (std::size_t i = 0; i < list.size(); ++i) {
+      EXPECT_EQ(ros2::to_ns(list[i].header.stamp), ros2::to_ns(clean[i].header.stamp) + 50'000'000)
+          << topic << " info " << i;
+    }
+    infos += list.size();
+  }
+  EXPECT_EQ(faulted, counts->frames);
+  EXPECT_EQ(infos, counts->frames);
+  // A stamp moved, the pixels kept: each frame's report is a pass (level OK).
+  ASSERT_EQ(c.faults.size(), counts->frames);
+  for (const auto& f : c.faults) EXPECT_EQ(f.status.at(0).level, ros2::DiagnosticStatus::kOk);
 }
 
 TEST_F(Ros2ConvertTest, FaultsMatchTheFoxgloveConvertAndRerunsAreByteIdentical) {

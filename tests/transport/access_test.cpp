@@ -220,6 +220,46 @@ TEST_F(CurveTest, PushPullToABindingSinkWithCurve) {
   ASSERT_TRUE(r.is_ok()) << r.status().to_string();
   EXPECT_EQ(r->header(), "d");
   EXPECT_EQ(sink.auth_refused(), 0u);
+  EXPECT_EQ(detector.handshake_failures(), 0u);
+  EXPECT_EQ(detector.refused_by_peer(), 0u);
+}
+
+// A connecting publisher (a detector's PUSH to the sink) whose key the sink's allowed-clients list
+// does not hold is told, as a refused subscriber is: once in its log, naming the endpoint and its
+// key, and counted; not retried, nothing arrives, and a send waiting for the sink says so too.
+TEST_F(CurveTest, APushPublisherRefusedByTheSinkSaysSoOnceAndCountsIt) {
+  SubscriberConfig sc;
+  sc.endpoints = {"tcp://127.0.0.1:*"};
+  sc.bind = true;
+  sc.pattern = Pattern::PushPull;
+  sc.access = Server();
+  RawSubscriber sink(sc);
+  testing::LogCapture log;
+  PublisherConfig pc;
+  pc.endpoint = sink.endpoints()[0];
+  pc.bind = false;
+  pc.pattern = Pattern::PushPull;
+  pc.access = Client("bad");
+  pc.send_timeout_ns = 20 * kNsPerMs;
+  Publisher detector(pc);
+  ASSERT_TRUE(testing::eventually(
+      [&] {
+        (void)sink.receive(10 * kNsPerMs);
+        EXPECT_EQ(detector.send("/detections", "d").code(), StatusCode::kWouldBlock);
+        return sink.auth_refused() >= 1 && detector.refused_by_peer() >= 1;
+      },
+      30 * kNsPerSec));
+  EXPECT_EQ(detector.send("/detections", "d").code(), StatusCode::kWouldBlock);
+  EXPECT_EQ(sink.receive(100 * kNsPerMs).status().code(), StatusCode::kWouldBlock);
+  EXPECT_EQ(detector.refused_by_peer(), 1u);
+  EXPECT_EQ(detector.handshake_failures(), 1u);
+  EXPECT_EQ(sink.auth_refused(), 1u);
+  EXPECT_EQ(log.count("refused by the receiver at " + sink.endpoints()[0] +
+                      ": its ZAP handler answered 400 (key not allowed): this node's CURVE public "
+                      "key " +
+                      read_curve_key(dir_ + "/bad.public")),
+            1)
+      << log.all();
 }
 
 TEST_F(CurveTest, KeyFileErrorsNameTheFile) {
