@@ -64,9 +64,16 @@ TEST_F(RunTest, SoakReportsEveryPeriodAndScoresEveryLoop) {
   // 6 s of scenes per loop: several loops in 24 s, each scored by the official metric.
   const auto& loops = d["loops"];
   ASSERT_GE(loops.Size(), 2u) << read_text(root_ / "soak.log");
+  // The soak runs in real time: on a loaded machine the detector may miss a loop's samples, and NDS
+  // then is whatever the detections that did arrive give (0 when none did). What cannot depend on
+  // the load: every loop is scored, and a loop whose every sample got detections scores above 0.
   for (const auto& l : loops.GetArray()) {
     EXPECT_TRUE(l["scored"].GetBool()) << l["error"].GetString();
-    EXPECT_GT(l["nds"].GetDouble(), 0.0);
+    EXPECT_GE(l["nds"].GetDouble(), 0.0);
+    EXPECT_LE(l["nds"].GetDouble(), 1.0);
+    if (l["samples_with_detections"].GetUint64() == l["samples"].GetUint64()) {
+      EXPECT_GT(l["nds"].GetDouble(), 0.0) << "loop " << l["index"].GetInt();
+    }
   }
   EXPECT_TRUE(fs::exists(out / "periods.csv"));
   EXPECT_TRUE(fs::exists(out / "loops" / "loop_1.json"));
