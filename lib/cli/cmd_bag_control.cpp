@@ -1,7 +1,6 @@
 // `faultline bag control ENDPOINT pause|resume|toggle|step [N]`: drives a `bag play --control
 // ENDPOINT`.
 #include <CLI/CLI.hpp>
-#include <cstdio>
 
 #include "cli/access_options.hpp"
 #include "cli/command.hpp"
@@ -12,7 +11,7 @@
 namespace faultline::cli {
 namespace {
 
-int run(int argc, char** argv) {
+ExitStatus run(int argc, char** argv) {
   CLI::App app{
       "Send a pause/resume/toggle/step command to `faultline bag play --control ENDPOINT`."};
   std::string endpoint, command;
@@ -26,7 +25,7 @@ int run(int argc, char** argv) {
   add_access_options(app, access, SocketSides::Connect);
   FAULTLINE_PARSE(app, argc, argv);
   if (command == "step" && count > 1) command += " " + std::to_string(count);
-  int rc = 0;
+  Status sent;
   {
     transport::PublisherConfig pc;
     pc.endpoint = endpoint;
@@ -36,14 +35,11 @@ int run(int argc, char** argv) {
     pc.send_timeout_ns = 5 * kNsPerSec;  // no player listening: fail instead of blocking
     pc.access = access;
     transport::Publisher push(pc);
-    const Status s = push.send("/bag_play/control", command);
-    if (!s.is_ok()) {
-      std::fprintf(stderr, "bag control: %s\n", s.to_string().c_str());
-      rc = 1;
-    }
+    sent = push.send("/bag_play/control", command);
   }
   transport::terminate_context();
-  return rc;
+  if (!sent.is_ok()) return failure(sent.to_string());
+  return 0;
 }
 
 }  // namespace

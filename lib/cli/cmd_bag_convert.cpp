@@ -107,7 +107,7 @@ std::uint64_t parse_seed(const std::string& text) {
   try {
     return std::stoull(text);
   } catch (const std::exception&) {
-    throw ConfigError("bag convert: --seed " + text + ": expected an unsigned integer");
+    throw ConfigError("--seed " + text + ": expected an unsigned integer");
   }
 }
 
@@ -146,7 +146,7 @@ void print_faults_and_timing(const std::string& faults_text, const Counts& count
       static_cast<double>(file_bytes) / 1e6, static_cast<double>(counts.image_bytes) / 1e6);
 }
 
-int run(int argc, char** argv) {
+ExitStatus run(int argc, char** argv) {
   CLI::App app{
       "Write nuScenes scenes straight into an MCAP bag: camera frames as the player publishes them "
       "(replayable "
@@ -167,92 +167,79 @@ int run(int argc, char** argv) {
   FAULTLINE_PARSE(app, argc, argv);
   runtime::ConvertConfig& cfg = a.cfg;
   if (cfg.run_metadata["seed"].empty()) cfg.run_metadata["seed"] = "0";
-  try {
-    auto log = logging::make_node_logger("bag_convert", "info");
-    const std::uint64_t seed = parse_seed(cfg.run_metadata["seed"]);
-    std::string faults_text;
-    std::unique_ptr<runtime::FramePolicy> frame_policy = make_policy(a.corrupt, seed, faults_text);
+  // A bad --corrupt spec is a ConfigError: dispatch prints it and exits 2.
+  auto log = logging::make_node_logger("bag_convert", "info");
+  const std::uint64_t seed = parse_seed(cfg.run_metadata["seed"]);
+  std::string faults_text;
+  std::unique_ptr<runtime::FramePolicy> frame_policy = make_policy(a.corrupt, seed, faults_text);
 
-    const auto t0 = std::chrono::steady_clock::now();
-    const double c0 = process_cpu_s();
-    const auto scene_list = split_list(a.scenes);
-    auto source = runtime::NuScenesFrameSource::open(a.dataroot, a.version, scene_list);
-    if (!source) {
-      std::fprintf(stderr, "bag convert: %s\n", source.status().to_string().c_str());
-      return 1;
-    }
-    std::map<std::string, std::vector<bag::GtBox>> boxes;
-    const bool ros2 = a.format == "ros2";
-    if (a.gt && (cfg.foxglove_view || ros2)) boxes = load_boxes(a, **source, log);
-    cfg.run_metadata["dataroot"] = a.dataroot;
-    cfg.run_metadata["dataset_version"] = a.version;
-    cfg.run_metadata["scenes"] = a.scenes.empty() ? "all" : a.scenes;
-    cfg.run_metadata["faults"] = faults_text;
-    const double load_s =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const auto t0 = std::chrono::steady_clock::now();
+  const double c0 = process_cpu_s();
+  const auto scene_list = split_list(a.scenes);
+  auto source = runtime::NuScenesFrameSource::open(a.dataroot, a.version, scene_list);
+  if (!source) return failure(source.status().to_string());
+  std::map<std::string, std::vector<bag::GtBox>> boxes;
+  const bool ros2 = a.format == "ros2";
+  if (a.gt && (cfg.foxglove_view || ros2)) boxes = load_boxes(a, **source, log);
+  cfg.run_metadata["dataroot"] = a.dataroot;
+  cfg.run_metadata["dataset_version"] = a.version;
+  cfg.run_metadata["scenes"] = a.scenes.empty() ? "all" : a.scenes;
+  cfg.run_metadata["faults"] = faults_text;
+  const double load_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 
-    const auto t1 = std::chrono::steady_clock::now();
-    const bool quiet = a.quiet;
-    auto progress = [&](std::uint64_t done, std::uint64_t total) {
-      if (quiet) return;
-      const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count();
-      std::fprintf(stderr, "\r[convert] %llu/%llu frames  %.0f frames/s  ",
-                   static_cast<unsigned long long>(done), static_cast<unsigned long long>(total),
-                   s > 0 ? static_cast<double>(done) / s : 0.0);
-    };
-    if (ros2) {
-      runtime::Ros2ConvertConfig& ros2_cfg = a.ros2_cfg;
-      ros2_cfg.output = cfg.output;
-      ros2_cfg.compression = cfg.compression;
-      ros2_cfg.clean_frames = cfg.clean_frames;
-      ros2_cfg.run_metadata = cfg.run_metadata;
-      runtime::Ros2BagConverter converter(ros2_cfg, std::move(source).value(), std::move(boxes),
-                                          std::move(frame_policy), log);
-      auto counts = converter.run(shutdown_requested(), progress);
-      if (!quiet) std::fprintf(stderr, "\n");
-      if (!counts) {
-        std::fprintf(stderr, "bag convert: %s\n", counts.status().to_string().c_str());
-        return 1;
-      }
-      const double write_s =
-          std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count();
-      std::printf("%s\n", ros2_cfg.output.c_str());
-      std::printf("frames %llu (missing %llu), tf_static %llu, gt boxes %llu, messages %llu\n",
-                  static_cast<unsigned long long>(counts->frames),
-                  static_cast<unsigned long long>(counts->missing_images),
-                  static_cast<unsigned long long>(counts->tf_static),
-                  static_cast<unsigned long long>(counts->gt_boxes),
-                  static_cast<unsigned long long>(counts->messages));
-      print_faults_and_timing(faults_text, *counts, load_s, write_s, process_cpu_s() - c0,
-                              converter.writer_stats().file_bytes);
-      return shutdown_requested().load() ? 130 : 0;
-    }
-
-    runtime::BagConverter converter(cfg, std::move(source).value(), std::move(boxes),
-                                    std::move(frame_policy), log);
+  const auto t1 = std::chrono::steady_clock::now();
+  const bool quiet = a.quiet;
+  auto progress = [&](std::uint64_t done, std::uint64_t total) {
+    if (quiet) return;
+    const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count();
+    std::fprintf(stderr, "\r[convert] %llu/%llu frames  %.0f frames/s  ",
+                 static_cast<unsigned long long>(done), static_cast<unsigned long long>(total),
+                 s > 0 ? static_cast<double>(done) / s : 0.0);
+  };
+  if (ros2) {
+    runtime::Ros2ConvertConfig& ros2_cfg = a.ros2_cfg;
+    ros2_cfg.output = cfg.output;
+    ros2_cfg.compression = cfg.compression;
+    ros2_cfg.clean_frames = cfg.clean_frames;
+    ros2_cfg.run_metadata = cfg.run_metadata;
+    runtime::Ros2BagConverter converter(ros2_cfg, std::move(source).value(), std::move(boxes),
+                                        std::move(frame_policy), log);
     auto counts = converter.run(shutdown_requested(), progress);
     if (!quiet) std::fprintf(stderr, "\n");
-    if (!counts) {
-      std::fprintf(stderr, "bag convert: %s\n", counts.status().to_string().c_str());
-      return 1;
-    }
+    if (!counts) return failure(counts.status().to_string());
     const double write_s =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count();
-    const double cpu_s = process_cpu_s() - c0;
-    std::printf("%s\n", cfg.output.c_str());
-    std::printf("frames %llu (missing %llu), boundaries %llu, gt boxes %llu, messages %llu\n",
+    std::printf("%s\n", ros2_cfg.output.c_str());
+    std::printf("frames %llu (missing %llu), tf_static %llu, gt boxes %llu, messages %llu\n",
                 static_cast<unsigned long long>(counts->frames),
                 static_cast<unsigned long long>(counts->missing_images),
-                static_cast<unsigned long long>(counts->boundaries),
+                static_cast<unsigned long long>(counts->tf_static),
                 static_cast<unsigned long long>(counts->gt_boxes),
                 static_cast<unsigned long long>(counts->messages));
-    print_faults_and_timing(faults_text, *counts, load_s, write_s, cpu_s,
+    print_faults_and_timing(faults_text, *counts, load_s, write_s, process_cpu_s() - c0,
                             converter.writer_stats().file_bytes);
-    return shutdown_requested().load() ? 130 : 0;
-  } catch (const ConfigError& e) {
-    std::fprintf(stderr, "bag convert: %s\n", e.what());
-    return 2;
+    return shutdown_requested().load() ? kExitInterrupted : 0;
   }
+
+  runtime::BagConverter converter(cfg, std::move(source).value(), std::move(boxes),
+                                  std::move(frame_policy), log);
+  auto counts = converter.run(shutdown_requested(), progress);
+  if (!quiet) std::fprintf(stderr, "\n");
+  if (!counts) return failure(counts.status().to_string());
+  const double write_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count();
+  const double cpu_s = process_cpu_s() - c0;
+  std::printf("%s\n", cfg.output.c_str());
+  std::printf("frames %llu (missing %llu), boundaries %llu, gt boxes %llu, messages %llu\n",
+              static_cast<unsigned long long>(counts->frames),
+              static_cast<unsigned long long>(counts->missing_images),
+              static_cast<unsigned long long>(counts->boundaries),
+              static_cast<unsigned long long>(counts->gt_boxes),
+              static_cast<unsigned long long>(counts->messages));
+  print_faults_and_timing(faults_text, *counts, load_s, write_s, cpu_s,
+                          converter.writer_stats().file_bytes);
+  return shutdown_requested().load() ? kExitInterrupted : 0;
 }
 
 }  // namespace

@@ -9,7 +9,6 @@
 
 #include "cli/command.hpp"
 #include "cli/parse.hpp"
-#include "common/config.hpp"
 #include "common/shutdown.hpp"
 #include "corruption/types.hpp"
 #include "runtime/bag_corrupt.hpp"
@@ -19,7 +18,7 @@ namespace {
 
 using ull = unsigned long long;
 
-int run(int argc, char** argv) {
+ExitStatus run(int argc, char** argv) {
   CLI::App app{
       "Apply the injector's faults to the image topics of a recorded bag and write the same kind "
       "of "
@@ -62,19 +61,14 @@ int run(int argc, char** argv) {
       ->capture_default_str();
   app.add_flag("-q,--quiet", quiet, "no progress line");
   FAULTLINE_PARSE(app, argc, argv);
-  try {
-    const auto rng = corruption::rng_mode_from_string(rng_name);
-    if (!rng) throw ConfigError("bag corrupt: --rng " + rng_name + ": expected numpy or fast");
-    for (const auto& f : fault_args) cfg.faults.push_back(runtime::parse_topic_fault(f, *rng));
-    if (!schedule.empty()) {
-      for (auto& f : runtime::load_fault_schedule(schedule, *rng))
-        cfg.faults.push_back(std::move(f));
-    }
-    cfg.validate();
-  } catch (const ConfigError& e) {
-    std::fprintf(stderr, "%s\n", e.what());
-    return 2;
+  const auto rng = corruption::rng_mode_from_string(rng_name);
+  if (!rng) return usage_error("--rng " + rng_name + ": expected numpy or fast");
+  // A bad --fault, --faults file or option value is a ConfigError: dispatch exits 2.
+  for (const auto& f : fault_args) cfg.faults.push_back(runtime::parse_topic_fault(f, *rng));
+  if (!schedule.empty()) {
+    for (auto& f : runtime::load_fault_schedule(schedule, *rng)) cfg.faults.push_back(std::move(f));
   }
+  cfg.validate();
   const auto t0 = std::chrono::steady_clock::now();
   auto progress = [&](std::uint64_t done, std::uint64_t total) {
     if (quiet) return;
@@ -93,10 +87,12 @@ int run(int argc, char** argv) {
   auto counts = runtime::corrupt_bag(cfg, shutdown_requested(), progress);
   if (progress_shown) std::fprintf(stderr, "\n");
   if (!counts) {
-    std::fprintf(stderr, "bag corrupt: %s\n", counts.status().to_string().c_str());
     // A named topic that is absent or not an image, or an existing output, is a usage error.
-    if (counts.status().code() == StatusCode::kInvalidArgument) return 2;
-    return counts.status().code() == StatusCode::kCancelled ? 130 : 1;
+    const StatusCode code = counts.status().code();
+    const int exit_code = code == StatusCode::kInvalidArgument ? kExitUsage
+                          : code == StatusCode::kCancelled     ? kExitInterrupted
+                                                               : kExitFailure;
+    return failure(counts.status().to_string(), exit_code);
   }
   const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   std::printf("%s\n", cfg.output.c_str());

@@ -85,12 +85,9 @@ int print_mcap(const std::string& path, const bag::BagInfo& info) {
 }
 
 // A rosbag2 directory: what metadata.yaml says, then each file, then where the two disagree.
-int print_rosbag2(const std::string& dir) {
+ExitStatus print_rosbag2(const std::string& dir) {
   auto result = bag::inspect_rosbag2(dir);
-  if (!result) {
-    std::fprintf(stderr, "bag info: %s: %s\n", dir.c_str(), result.status().to_string().c_str());
-    return 1;
-  }
+  if (!result) return failure(dir + ": " + result.status().to_string());
   const bag::Rosbag2Info& r = *result;
   const bag::Rosbag2Metadata& m = r.metadata;
   std::printf("rosbag2:     %s (metadata.yaml version %d, storage %s, %zu file(s))\n", dir.c_str(),
@@ -126,7 +123,7 @@ int print_rosbag2(const std::string& dir) {
   return rc;
 }
 
-int run(int argc, char** argv) {
+ExitStatus run(int argc, char** argv) {
   CLI::App app{
       "Show what a bag holds and check its integrity (every chunk CRC, the data section CRC, the "
       "summary "
@@ -141,10 +138,7 @@ int run(int argc, char** argv) {
 
   if (std::filesystem::is_directory(path)) return print_rosbag2(path);
   auto result = bag::inspect_bag(path);
-  if (!result) {
-    std::fprintf(stderr, "bag info: %s: %s\n", path.c_str(), result.status().to_string().c_str());
-    return 1;
-  }
+  if (!result) return failure(path + ": " + result.status().to_string());
   return print_mcap(path, *result);
 }
 

@@ -5,13 +5,11 @@
 
 #include <CLI/CLI.hpp>
 #include <atomic>
-#include <cstdio>
 #include <thread>
 
 #include "cli/access_options.hpp"
 #include "cli/command.hpp"
 #include "cli/parse.hpp"
-#include "common/config.hpp"
 #include "common/logging.hpp"
 #include "common/shutdown.hpp"
 #include "runtime/bag_player.hpp"
@@ -61,7 +59,7 @@ class KeyControl {
   std::thread thread_;
 };
 
-int run(int argc, char** argv) {
+ExitStatus run(int argc, char** argv) {
   CLI::App app{
       "Republish the replay channels of a bag (same bytes, order and seq) on one PUB socket.\n"
       "Pause control: with stdin on a terminal, SPACE toggles pause and 's' sends one message; "
@@ -111,31 +109,25 @@ int run(int argc, char** argv) {
   FAULTLINE_PARSE(app, argc, argv);
   for (const auto& r : remaps) {
     const auto sep = r.find(":=");
-    if (sep == std::string::npos || sep == 0 || sep + 2 >= r.size()) {
-      std::fprintf(stderr, "bag play: --remap %s: expected FROM:=TO\n", r.c_str());
-      return 2;
-    }
+    if (sep == std::string::npos || sep == 0 || sep + 2 >= r.size())
+      return usage_error("--remap " + r + ": expected FROM:=TO");
     cfg.remap[r.substr(0, sep)] = r.substr(sep + 2);
   }
-  try {
-    auto log = logging::make_node_logger("bag_play", "info");
-    int rc = 0;
-    {
-      runtime::BagPlayer player(cfg, log);
-      log->info(
-          "playing on {}{}{}", player.endpoint(),
-          cfg.lockstep ? " (lockstep, acks on " + player.ack_endpoint() + ")" : "",
-          cfg.control_endpoint.empty() ? "" : " (control on " + player.control_endpoint() + ")");
-      std::unique_ptr<KeyControl> key_control;
-      if (keys) key_control = std::make_unique<KeyControl>(player);
-      rc = player.run(shutdown_requested());
-    }
-    transport::terminate_context();
-    return rc;
-  } catch (const ConfigError& e) {
-    std::fprintf(stderr, "bag play: %s\n", e.what());
-    return 2;
+  // The player validates its config: a ConfigError reaches dispatch, which exits 2.
+  auto log = logging::make_node_logger("bag_play", "info");
+  int rc = 0;
+  {
+    runtime::BagPlayer player(cfg, log);
+    log->info(
+        "playing on {}{}{}", player.endpoint(),
+        cfg.lockstep ? " (lockstep, acks on " + player.ack_endpoint() + ")" : "",
+        cfg.control_endpoint.empty() ? "" : " (control on " + player.control_endpoint() + ")");
+    std::unique_ptr<KeyControl> key_control;
+    if (keys) key_control = std::make_unique<KeyControl>(player);
+    rc = player.run(shutdown_requested());
   }
+  transport::terminate_context();
+  return rc;
 }
 
 }  // namespace

@@ -5,7 +5,6 @@
 #include "cli/access_options.hpp"
 #include "cli/command.hpp"
 #include "cli/parse.hpp"
-#include "common/config.hpp"
 #include "common/logging.hpp"
 #include "common/shutdown.hpp"
 #include "runtime/bag_recorder.hpp"
@@ -14,7 +13,7 @@
 namespace faultline::cli {
 namespace {
 
-int run(int argc, char** argv) {
+ExitStatus run(int argc, char** argv) {
   CLI::App app{
       "Record Faultline topics (found in the topic registry, or at --endpoint) into an MCAP bag. "
       "Image messages are stored byte-exact for `bag play` plus a Foxglove view. SIGINT "
@@ -43,30 +42,23 @@ int run(int argc, char** argv) {
   cfg.split_bytes = static_cast<std::uint64_t>(split_mb * 1024 * 1024);
   for (const auto& kv : meta) {
     const auto eq = kv.find('=');
-    if (eq == std::string::npos) {
-      std::fprintf(stderr, "bag record: --meta %s: expected KEY=VALUE\n", kv.c_str());
-      return 2;
-    }
+    if (eq == std::string::npos) return usage_error("--meta " + kv + ": expected KEY=VALUE");
     cfg.run_metadata[kv.substr(0, eq)] = kv.substr(eq + 1);
   }
-  try {
-    auto log = logging::make_node_logger("bag_record", level);
-    int rc = 0;
-    {
-      runtime::BagRecorder recorder(cfg, log);
-      rc = recorder.run(shutdown_requested());
-      for (const auto& p : recorder.paths()) std::printf("%s\n", p.c_str());
-      const auto total = recorder.drops().total();
-      std::printf("recorded %llu messages, %llu transport drops\n",
-                  static_cast<unsigned long long>(recorder.counts().messages),
-                  static_cast<unsigned long long>(total.transport_drops));
-    }
-    transport::terminate_context();
-    return rc;
-  } catch (const ConfigError& e) {
-    std::fprintf(stderr, "bag record: %s\n", e.what());
-    return 2;
+  // The recorder validates its config: a ConfigError reaches dispatch, which exits 2.
+  auto log = logging::make_node_logger("bag_record", level);
+  int rc = 0;
+  {
+    runtime::BagRecorder recorder(cfg, log);
+    rc = recorder.run(shutdown_requested());
+    for (const auto& p : recorder.paths()) std::printf("%s\n", p.c_str());
+    const auto total = recorder.drops().total();
+    std::printf("recorded %llu messages, %llu transport drops\n",
+                static_cast<unsigned long long>(recorder.counts().messages),
+                static_cast<unsigned long long>(total.transport_drops));
   }
+  transport::terminate_context();
+  return rc;
 }
 
 }  // namespace

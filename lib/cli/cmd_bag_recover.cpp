@@ -13,7 +13,7 @@
 namespace faultline::cli {
 namespace {
 
-int run(int argc, char** argv) {
+ExitStatus run(int argc, char** argv) {
   CLI::App app{
       "Rewrite every complete chunk of a bag that was not closed (e.g. after SIGKILL: no "
       "footer) or is damaged into a valid indexed bag, and report what was lost."};
@@ -30,17 +30,11 @@ int run(int argc, char** argv) {
   std::optional<bag::Compression> comp;
   if (!compression.empty()) {
     auto c = bag::compression_from_string(compression);
-    if (!c) {
-      std::fprintf(stderr, "bag recover: --compression: %s\n", c.status().message().c_str());
-      return 2;
-    }
+    if (!c) return usage_error("--compression: " + c.status().message());
     comp = *c;
   }
   auto report = bag::recover_bag(in, out, comp);
-  if (!report) {
-    std::fprintf(stderr, "bag recover: %s\n", report.status().to_string().c_str());
-    return 1;
-  }
+  if (!report) return failure(report.status().to_string());
   const bag::RecoverReport& r = *report;
   std::printf("input:      %s (%llu bytes, %s)\n", in.c_str(),
               static_cast<unsigned long long>(r.input_bytes),

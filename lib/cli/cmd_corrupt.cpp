@@ -43,12 +43,6 @@ struct CorruptArgs {
   int thumb_width = report::GalleryOptions{}.thumb_width;
 };
 
-// Prints "faultline corrupt: <message>" on stderr and returns `code`.
-int fail(int code, const std::string& message) {
-  std::fprintf(stderr, "faultline corrupt: %s\n", message.c_str());
-  return code;
-}
-
 // Reads the input image. A JPEG goes through TurboJPEG first, which notices a truncated or corrupt
 // file that OpenCV would silently render half grey; `allow_partial` then keeps OpenCV's partial
 // rendering, with a warning.
@@ -169,23 +163,22 @@ void add_common_and_gallery_options(CLI::App& app, CorruptArgs& a) {
   }
 }
 
-// The severity from --severity or --level; nullopt after printing the error.
-std::optional<int> resolve_severity(const CorruptArgs& a, corruption::Corruption type) {
+// The severity from --severity or --level; kInvalidArgument names the bad option.
+Result<int> resolve_severity(const CorruptArgs& a, corruption::Corruption type) {
   int severity = a.severity.value_or(-1);
   if (!a.level_name.empty()) {
     const auto level = corruption::level_from_string(a.level_name);
     if (!level) {
-      fail(2, "unknown --level '" + a.level_name + "' (expected easy, mid or hard)");
-      return std::nullopt;
+      return Status(StatusCode::kInvalidArgument,
+                    "unknown --level '" + a.level_name + "' (expected easy, mid or hard)");
     }
     severity = corruption::severity_for(type, *level);
   } else if (!a.severity) {
-    fail(2, "one of --severity or --level is required");
-    return std::nullopt;
+    return Status(StatusCode::kInvalidArgument, "one of --severity or --level is required");
   }
   if (Status s = corruption::validate_severity(severity); !s) {
-    fail(2, "--severity " + std::to_string(severity) + " is invalid: expected 1..5 (0 = off)");
-    return std::nullopt;
+    return Status(StatusCode::kInvalidArgument, "--severity " + std::to_string(severity) +
+                                                    " is invalid: expected 1..5 (0 = off)");
   }
   return severity;
 }
@@ -230,49 +223,50 @@ Result<corruption::CorruptOptions> corrupt_options(const CorruptArgs& a,
 }
 
 // One corruption of one file.
-int run_single(const CorruptArgs& a, corruption::RngMode mode) {
-  if (a.type_name.empty()) return fail(2, "--type is required (or --gallery OUT_DIR)");
+ExitStatus run_single(const CorruptArgs& a, corruption::RngMode mode) {
+  if (a.type_name.empty()) return usage_error("--type is required (or --gallery OUT_DIR)");
   if (a.in_path.empty() || a.out_path.empty())
-    return fail(2, std::string(a.in_path.empty() ? "--in" : "--out") + " is required");
+    return usage_error(std::string(a.in_path.empty() ? "--in" : "--out") + " is required");
   const auto type = corruption::corruption_from_string(a.type_name);
   if (!type && policy::is_stream_fault(a.type_name)) {
-    return fail(2,
-                "--type " + a.type_name +
-                    " is a stream fault: it acts on a camera's stream (when or whether frames "
-                    "arrive, their stamps or calibration), not on pixels, so one image gives it "
-                    "nothing to do; use it in the injector's faults or in bag convert --corrupt / "
-                    "bag corrupt --fault (docs/faults.md)");
+    return usage_error(
+        "--type " + a.type_name +
+        " is a stream fault: it acts on a camera's stream (when or whether frames "
+        "arrive, their stamps or calibration), not on pixels, so one image gives it "
+        "nothing to do; use it in the injector's faults or in bag convert --corrupt / "
+        "bag corrupt --fault (docs/faults.md)");
   }
   if (!type) {
-    return fail(2, "unknown --type '" + a.type_name + "' (expected " + type_names() + ")");
+    return usage_error("unknown --type '" + a.type_name + "' (expected " + type_names() + ")");
   }
   const auto severity = resolve_severity(a, *type);
-  if (!severity) return 2;
+  if (!severity) return usage_error(severity.status().message());
   if (a.angle_deg && !std::isfinite(*a.angle_deg)) {
-    return fail(2,
-                "--angle must be a finite number of degrees, got " + std::to_string(*a.angle_deg));
+    return usage_error("--angle must be a finite number of degrees, got " +
+                       std::to_string(*a.angle_deg));
   }
   const auto input = read_input(a.in_path, a.allow_partial);
-  if (!input) return fail(1, input.status().message());
+  if (!input) return input.status();
   if (*type == corruption::Corruption::RollingShutter && !a.yaw_rate_deg_s && *severity > 0)
-    fail(0, "rolling_shutter without --yaw-rate: no motion, image unchanged");
+    std::fprintf(stderr,
+                 "faultline corrupt: rolling_shutter without --yaw-rate: no motion, image "
+                 "unchanged\n");  // a warning: the command goes on
   std::vector<cv::Mat> frost;
   auto options = corrupt_options(a, frost);
-  if (!options) return fail(2, options.status().message());
+  if (!options) return usage_error(options.status().message());
   auto out = corruption::corrupt_seeded(*input, *type, *severity, mode, a.seed, *options);
-  if (!out) return fail(1, out.status().to_string());
-  if (Status s = write_output(a.out_path, *out, a.jpeg_quality.value_or(95)); !s)
-    return fail(1, s.message());
+  if (!out) return failure(out.status().to_string());
+  if (Status s = write_output(a.out_path, *out, a.jpeg_quality.value_or(95)); !s) return s;
   return 0;
 }
 
 // The gallery: every corruption (or --types) at severities 1-5 on one frame.
-int run_gallery(const CorruptArgs& a, corruption::RngMode mode, const std::string& command) {
+ExitStatus run_gallery(const CorruptArgs& a, corruption::RngMode mode, const std::string& command) {
   report::GalleryOptions g;
   for (const auto& name : a.gallery_types) {
     const auto type = corruption::corruption_from_string(name);
     if (!type)
-      return fail(2, "unknown --types entry '" + name + "' (expected " + type_names() + ")");
+      return usage_error("unknown --types entry '" + name + "' (expected " + type_names() + ")");
     g.types.push_back(*type);
   }
   g.seed = a.seed;
@@ -286,7 +280,7 @@ int run_gallery(const CorruptArgs& a, corruption::RngMode mode, const std::strin
     frame = report::gallery_frame();
   } else {
     auto input = read_input(a.in_path, false);
-    if (!input) return fail(1, input.status().message());
+    if (!input) return input.status();
     frame = std::move(*input);
     g.frame_label = "the frame `" + std::filesystem::path(a.in_path).filename().string() + "`";
   }
@@ -295,7 +289,7 @@ int run_gallery(const CorruptArgs& a, corruption::RngMode mode, const std::strin
                  corruption::to_string(t));
   };
   auto entries = report::write_gallery(a.gallery_dir, frame, g, progress);
-  if (!entries) return fail(1, entries.status().message());
+  if (!entries) return entries.status();
   std::size_t bytes = 0;
   for (const auto& e : *entries) bytes += e.size_bytes;
   std::fprintf(stderr, "faultline corrupt: wrote %zu strips (%zu KB) and index.md to %s\n",
@@ -310,7 +304,7 @@ std::string command_line(int argc, char** argv) {
   return line;
 }
 
-int run(int argc, char** argv) {
+ExitStatus run(int argc, char** argv) {
   CLI::App app(
       "Apply an image corruption (nuScenes-C's, imagecorruptions 1.1.2's, RoboBEV's ISONoise and "
       "Faultline's own) to an image (read and written with OpenCV, BGR order), or with --gallery "
@@ -321,9 +315,9 @@ int run(int argc, char** argv) {
   add_common_and_gallery_options(app, a);
   FAULTLINE_PARSE(app, argc, argv);
   const auto mode = corruption::rng_mode_from_string(a.rng_name);
-  if (!mode) return fail(2, "unknown --rng '" + a.rng_name + "' (expected numpy or fast)");
+  if (!mode) return usage_error("unknown --rng '" + a.rng_name + "' (expected numpy or fast)");
   if (a.yaw_rate_deg_s && !std::isfinite(*a.yaw_rate_deg_s))
-    return fail(2, "--yaw-rate must be a finite number of degrees per second");
+    return usage_error("--yaw-rate must be a finite number of degrees per second");
   if (!a.gallery_dir.empty()) return run_gallery(a, *mode, command_line(argc, argv));
   return run_single(a, *mode);
 }

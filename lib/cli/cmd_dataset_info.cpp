@@ -10,7 +10,7 @@
 namespace faultline::cli {
 namespace {
 
-int run(int argc, char** argv) {
+ExitStatus run(int argc, char** argv) {
   CLI::App app{
       "List the scenes of a nuScenes dataroot with sample and frame counts (one streaming pass "
       "over "
@@ -23,18 +23,12 @@ int run(int argc, char** argv) {
   FAULTLINE_PARSE(app, argc, argv);
 
   auto reader = dataset::NuScenesReader::open(dataroot, version);
-  if (!reader) {
-    std::fprintf(stderr, "dataset info: %s\n", reader.status().to_string().c_str());
-    return 1;
-  }
+  if (!reader) return failure(reader.status().to_string());
   std::int64_t problems = 0;
   auto counts = reader->count_frames([&](const Status& s) {
     if (problems++ < 5) std::fprintf(stderr, "warning: %s\n", s.message().c_str());
   });
-  if (!counts) {
-    std::fprintf(stderr, "dataset info: %s\n", counts.status().to_string().c_str());
-    return 1;
-  }
+  if (!counts) return failure(counts.status().to_string());
   std::printf("%s/%s: %zu scenes\n", reader->dataroot().c_str(), version.c_str(),
               reader->scenes().size());
   std::printf("%-12s %8s %14s %10s %12s\n", "scene", "samples", "camera_frames", "cam_keys",

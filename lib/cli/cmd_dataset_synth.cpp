@@ -10,7 +10,7 @@
 namespace faultline::cli {
 namespace {
 
-int run(int argc, char** argv) {
+ExitStatus run(int argc, char** argv) {
   CLI::App app{
       "Write a small synthetic dataset in the exact nuScenes format: all tables the camera replay "
       "and the "
@@ -49,10 +49,7 @@ int run(int argc, char** argv) {
         std::fflush(stderr);
       });
   std::fprintf(stderr, "\n");
-  if (!result) {
-    std::fprintf(stderr, "dataset synth: %s\n", result.status().to_string().c_str());
-    return 1;
-  }
+  if (!result) return failure(result.status().to_string());
   const auto& s = *result;
   std::printf(
       "wrote %s/%s: %d scenes, %d samples, %lld sample_data (%lld camera), %lld images, %lld "

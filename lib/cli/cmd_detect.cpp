@@ -23,12 +23,7 @@ dataset::Rigid to_rigid(const dataset::Pose& p) {
   return dataset::make_rigid(p.rotation, p.translation);
 }
 
-int fail(const std::string& msg) {
-  std::fprintf(stderr, "faultline detect: %s\n", msg.c_str());
-  return 1;
-}
-
-int run(int argc, char** argv) {
+ExitStatus run(int argc, char** argv) {
   CLI::App app{
       "Runs the reference colour detector over a (synthetic) nuScenes dataset and writes results "
       "JSON."};
@@ -57,26 +52,27 @@ int run(int argc, char** argv) {
     return usage_exit(app, e);
   }
   if (scale != 1.0 && scale != 0.5 && scale != 0.25)
-    return fail("--scale must be 1.0, 0.5 or 0.25");
+    return failure("--scale must be 1.0, 0.5 or 0.25");
   std::optional<corruption::Corruption> ctype;
   int severity = 0;
   if (!corrupt_spec.empty()) {
     const auto slash = corrupt_spec.find('/');
     const std::string tname = corrupt_spec.substr(0, slash);
     ctype = corruption::corruption_from_string(tname);
-    if (!ctype) return fail("unknown corruption '" + tname + "' in --corrupt " + corrupt_spec);
+    if (!ctype) return failure("unknown corruption '" + tname + "' in --corrupt " + corrupt_spec);
     const auto level = corruption::level_from_string(
         slash == std::string::npos ? "mid" : corrupt_spec.substr(slash + 1));
     if (!level)
-      return fail("unknown level in --corrupt " + corrupt_spec + " (expected easy, mid or hard)");
+      return failure("unknown level in --corrupt " + corrupt_spec +
+                     " (expected easy, mid or hard)");
     severity = corruption::severity_for(*ctype, *level);
   }
   auto reader = dataset::NuScenesReader::open(dataroot, version);
-  if (!reader) return fail(reader.status().message());
+  if (!reader) return reader.status();
   auto frames = reader->load_camera_frames(scenes);
-  if (!frames) return fail(frames.status().message());
+  if (!frames) return frames.status();
   auto samples = reader->samples_of(scenes);
-  if (!samples) return fail(samples.status().message());
+  if (!samples) return samples.status();
 
   detector::DetectorConfig cfg;
   cfg.scale = scale;
@@ -102,14 +98,14 @@ int run(int argc, char** argv) {
     }
     if (cfg.temporal || f.is_key_frame) {
       auto bytes = dataset::read_file(reader->path_of(f));
-      if (!bytes) return fail(bytes.status().message());
+      if (!bytes) return bytes.status();
       auto img = codec::decode_jpeg(bytes->data(), bytes->size());
-      if (!img) return fail(reader->path_of(f) + ": " + img.status().message());
+      if (!img) return failure(reader->path_of(f) + ": " + img.status().message());
       cv::Mat bgr = *img;
       if (ctype) {
         rng::FastRng rng(seed + i);
         auto c = corruption::corrupt(bgr, *ctype, severity, rng);
-        if (!c) return fail(c.status().message());
+        if (!c) return c.status();
         bgr = *c;
       }
       detector::CameraInput in;
@@ -137,8 +133,7 @@ int run(int argc, char** argv) {
       if (!cfg.temporal) ms.push_back(dt / 6.0);  // six cameras detected at the boundary
     }
   }
-  if (Status s = detector::write_results_json(out, results, cfg.describe()); !s)
-    return fail(s.message());
+  if (Status s = detector::write_results_json(out, results, cfg.describe()); !s) return s;
   std::sort(ms.begin(), ms.end());
   std::size_t boxes = 0;
   for (const auto& [t, b] : results) boxes += b.size();

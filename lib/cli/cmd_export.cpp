@@ -21,12 +21,7 @@ namespace {
 
 constexpr int kCompletedWithErrors = 3;
 
-int fail(const std::string& msg, int code) {
-  std::fprintf(stderr, "faultline export: %s\n", msg.c_str());
-  return code;
-}
-
-int run(int argc, char** argv) {
+ExitStatus run(int argc, char** argv) {
   CLI::App app(
       "Write nuScenes-C (RoboBEV layout <out>/<Corruption>/<level>/<CAM_X>/<file>) from a nuScenes "
       "dataroot. "
@@ -53,9 +48,9 @@ int run(int argc, char** argv) {
   if (!merge.empty()) {
     const std::string out = cfg.out_dir.empty() ? merge.front() : cfg.out_dir;
     if (cfg.out_dir.empty() && merge.size() > 1)
-      return fail("--merge with several folders needs --out", 2);
+      return usage_error("--merge with several folders needs --out");
     auto m = exporter::merge_exports(merge, out, cfg.tool_version);
-    if (!m) return fail(m.status().to_string(), 1);
+    if (!m) return failure(m.status().to_string());
     std::fprintf(stderr, "merged %d folders into %s: %lld files (%lld copied), %lld failed\n",
                  m->folders, out.c_str(), static_cast<long long>(m->files),
                  static_cast<long long>(m->copied), static_cast<long long>(m->failed));
@@ -63,15 +58,15 @@ int run(int argc, char** argv) {
     return m->failed > 0 ? kCompletedWithErrors : 0;
   }
   if (cfg.dataroot.empty() || cfg.version.empty() || cfg.out_dir.empty()) {
-    return fail("--dataroot, --version and --out are required", 2);
+    return usage_error("--dataroot, --version and --out are required");
   }
   if (const std::string problem = resolve_export_options(args); !problem.empty())
-    return fail(problem, 2);
+    return usage_error(problem);
   if (!shard.empty()) {
     int k = 0, n = 0;
     char extra = 0;
     if (std::sscanf(shard.c_str(), "%d/%d%c", &k, &n, &extra) != 2 || n < 1 || k < 1 || k > n) {
-      return fail("--shard '" + shard + "': expected K/N with 1 <= K <= N", 2);
+      return usage_error("--shard '" + shard + "': expected K/N with 1 <= K <= N");
     }
     cfg.shard_index = k;
     cfg.shard_count = n;
@@ -81,7 +76,7 @@ int run(int argc, char** argv) {
   if (!no_progress)
     progress = exporter::make_progress_printer(::isatty(STDERR_FILENO) != 0, stderr);
   auto summary = exporter::run_export(cfg, progress);
-  if (!summary) return fail(summary.status().to_string(), 1);
+  if (!summary) return failure(summary.status().to_string());
   print_export_summary(*summary);
   if (stats) std::fputs(exporter::stats_table(*summary).c_str(), stdout);
   return summary->failed > 0 ? kCompletedWithErrors : 0;

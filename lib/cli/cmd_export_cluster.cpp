@@ -25,12 +25,7 @@ namespace fs = std::filesystem;
 
 constexpr int kCompletedWithErrors = 3;
 
-int fail(const char* command, const std::string& msg, int code) {
-  std::fprintf(stderr, "faultline export %s: %s\n", command, msg.c_str());
-  return code;
-}
-
-int plan(int argc, char** argv) {
+ExitStatus plan(int argc, char** argv) {
   CLI::App app{
       "Writes an export (the same options as `faultline export`) as a plan of --units independent "
       "units split by scene, for a cluster scheduler: run unit I with `faultline export unit "
@@ -49,17 +44,17 @@ int plan(int argc, char** argv) {
   FAULTLINE_PARSE(app, argc, argv);
   exporter::ExportConfig& cfg = args.config;
   if (cfg.dataroot.empty() || cfg.version.empty() || cfg.out_dir.empty()) {
-    return fail("plan", "--dataroot, --version and --out are required", 2);
+    return usage_error("--dataroot, --version and --out are required");
   }
   if (const std::string problem = resolve_export_options(args); !problem.empty()) {
-    return fail("plan", problem, 2);
+    return usage_error(problem);
   }
   cfg.dataroot = fs::absolute(cfg.dataroot).lexically_normal().string();
   cfg.out_dir = fs::absolute(cfg.out_dir).lexically_normal().string();
   auto p = exporter::make_export_plan(cfg, units, FAULTLINE_VERSION);
   if (!p)
-    return fail("plan", p.status().message(),
-                p.status().code() == StatusCode::kInvalidArgument ? 2 : 1);
+    return failure(p.status().message(),
+                   p.status().code() == StatusCode::kInvalidArgument ? kExitUsage : kExitFailure);
   if (plan_path.empty()) plan_path = cfg.out_dir + "/export-plan.json";
   std::error_code ec;
   fs::create_directories(fs::path(plan_path).parent_path(), ec);
@@ -67,7 +62,7 @@ int plan(int argc, char** argv) {
   if (Status s = exporter::write_file_atomic(
           plan_path, reinterpret_cast<const std::uint8_t*>(text.data()), text.size());
       !s) {
-    return fail("plan", s.message(), 1);
+    return s;
   }
   std::printf("plan: %s (%zu units, plan_id %s)\n", plan_path.c_str(), p->units.size(),
               p->plan_id.c_str());
@@ -77,7 +72,7 @@ int plan(int argc, char** argv) {
   return 0;
 }
 
-int unit(int argc, char** argv) {
+ExitStatus unit(int argc, char** argv) {
   CLI::App app{
       "Runs one unit of an export plan into <out>/units/<I>/ (resuming the outputs already "
       "complete; "
@@ -99,26 +94,26 @@ int unit(int argc, char** argv) {
   app.add_flag("--no-progress", no_progress, "no progress output");
   FAULTLINE_PARSE(app, argc, argv);
   auto p = exporter::read_export_plan(plan_path);
-  if (!p) return fail("unit", p.status().message(), 2);
+  if (!p) return usage_error(p.status().message());
   Result<int> i =
       campaign::resolve_unit_index(index, static_cast<int>(p->units.size()), std::getenv);
   if (!only.empty()) {
     auto list = campaign::parse_index_ranges(only, static_cast<int>(p->units.size()));
     i = list ? campaign::resolve_unit_in(*list, index, std::getenv) : Result<int>(list.status());
   }
-  if (!i) return fail("unit", i.status().message(), 2);
+  if (!i) return usage_error(i.status().message());
   exporter::ExportProgressFn progress;
   if (!no_progress)
     progress = exporter::make_progress_printer(::isatty(STDERR_FILENO) != 0, stderr);
   std::fprintf(stderr, "export unit %d of %zu: %zu scene(s)\n", *i, p->units.size(),
                p->units[static_cast<std::size_t>(*i)].size());
   auto summary = exporter::run_export_unit(*p, *i, threads, FAULTLINE_VERSION, progress);
-  if (!summary) return fail("unit", summary.status().to_string(), 1);
+  if (!summary) return failure(summary.status().to_string());
   print_export_summary(*summary);
   return summary->failed > 0 ? kCompletedWithErrors : 0;
 }
 
-int collect(int argc, char** argv) {
+ExitStatus collect(int argc, char** argv) {
   CLI::App app{
       "Merges the units of an export plan into its output folder (hard links where possible, else "
       "checksum-verified copies; one manifest.json per <Condition>/<level>, as a single export "
@@ -128,9 +123,9 @@ int collect(int argc, char** argv) {
   app.add_option("--plan", plan_path, "the plan written by `faultline export plan`")->required();
   FAULTLINE_PARSE(app, argc, argv);
   auto p = exporter::read_export_plan(plan_path);
-  if (!p) return fail("collect", p.status().message(), 2);
+  if (!p) return usage_error(p.status().message());
   auto c = exporter::collect_export(*p, FAULTLINE_VERSION);
-  if (!c) return fail("collect", c.status().to_string(), 1);
+  if (!c) return failure(c.status().to_string());
   if (!c->merged) {
     std::fprintf(stderr,
                  "faultline export collect: %zu of %zu units missing (%s), nothing merged:\n",

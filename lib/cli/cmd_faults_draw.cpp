@@ -20,7 +20,7 @@ int level_severity(const std::string& level) {
   return -1;
 }
 
-int run(int argc, char** argv) {
+ExitStatus run(int argc, char** argv) {
   CLI::App app(
       "Draw the temporal faults of nuScenes-C (camera order CAM_FRONT, CAM_FRONT_RIGHT, "
       "CAM_FRONT_LEFT, "
@@ -44,36 +44,21 @@ int run(int argc, char** argv) {
     return usage_exit(app, e);
   }
   if (type != "camera_crash" && type != "frame_lost") {
-    std::fprintf(
-        stderr,
-        "faultline faults draw: unknown --type '%s' (expected camera_crash or frame_lost)\n",
-        type.c_str());
-    return 2;
+    return usage_error("unknown --type '" + type + "' (expected camera_crash or frame_lost)");
   }
   if (!level.empty()) {
     severity = level_severity(level);
-    if (severity < 0) {
-      std::fprintf(stderr,
-                   "faultline faults draw: unknown --level '%s' (expected easy, mid or hard)\n",
-                   level.c_str());
-      return 2;
-    }
+    if (severity < 0)
+      return usage_error("unknown --level '" + level + "' (expected easy, mid or hard)");
   }
   if (severity < 1 || severity > 5) {
-    std::fprintf(stderr,
-                 "faultline faults draw: --severity %d is invalid: expected 1..5 (or --level)\n",
-                 severity);
-    return 2;
+    return usage_error("--severity " + std::to_string(severity) +
+                       " is invalid: expected 1..5 (or --level)");
   }
-  if (frames < 0) {
-    std::fprintf(stderr, "faultline faults draw: --frames %d is invalid: expected >= 0\n", frames);
-    return 2;
-  }
-  if (rng_name != "numpy" && rng_name != "fast") {
-    std::fprintf(stderr, "faultline faults draw: unknown --rng '%s' (expected numpy or fast)\n",
-                 rng_name.c_str());
-    return 2;
-  }
+  if (frames < 0)
+    return usage_error("--frames " + std::to_string(frames) + " is invalid: expected >= 0");
+  if (rng_name != "numpy" && rng_name != "fast")
+    return usage_error("unknown --rng '" + rng_name + "' (expected numpy or fast)");
   rng::NumpyRandomState numpy_rng(seed);
   rng::FastRng fast_rng(seed);
   const bool numpy = rng_name == "numpy";

@@ -10,7 +10,7 @@
 
 namespace faultline::cli {
 namespace {
-int run(int argc, char** argv) {
+ExitStatus run(int argc, char** argv) {
   CLI::App app{
       "Writes a new ZeroMQ CURVE key pair: PREFIX.secret (mode 0600; this node's "
       "curve_secret_key_file) "
@@ -23,15 +23,9 @@ int run(int argc, char** argv) {
   app.add_flag("--force", force, "replace existing files");
   FAULTLINE_PARSE(app, argc, argv);
   auto pair = transport::generate_curve_keypair();
-  if (!pair.is_ok()) {
-    std::fprintf(stderr, "keys generate: %s\n", pair.status().message().c_str());
-    return 1;
-  }
+  if (!pair.is_ok()) return pair.status();
   const Status written = transport::write_curve_key_files(*pair, prefix, force);
-  if (!written.is_ok()) {
-    std::fprintf(stderr, "keys generate: %s\n", written.message().c_str());
-    return 1;
-  }
+  if (!written.is_ok()) return written;
   std::printf("wrote %s.secret (keep private) and %s.public: %s\n", prefix.c_str(), prefix.c_str(),
               pair->public_key.c_str());
   return 0;

@@ -22,7 +22,7 @@ bool slurp(const std::string& path, std::string& text) {
   return true;
 }
 
-int run(int argc, char** argv) {
+ExitStatus run(int argc, char** argv) {
   CLI::App app{
       "Renders a self-contained HTML report (inline SVG) from `faultline robustness --out` "
       "folders."};
@@ -43,36 +43,21 @@ int run(int argc, char** argv) {
   for (const auto& d : dirs) {
     const std::string path = std::filesystem::is_directory(d) ? d + "/robustness.json" : d;
     std::string text;
-    if (!slurp(path, text)) {
-      std::fprintf(stderr, "faultline report: error: %s: not found\n", path.c_str());
-      return 1;
-    }
+    if (!slurp(path, text)) return failure(path + ": not found");
     auto s = scoring::parse_robustness_json(text, path);
-    if (!s) {
-      std::fprintf(stderr, "faultline report: error: %s\n", s.status().message().c_str());
-      return 1;
-    }
+    if (!s) return s.status();
     data.detectors.push_back(*s);
   }
   if (!bench.empty()) {
     std::string text;
-    if (!slurp(bench, text)) {
-      std::fprintf(stderr, "faultline report: error: %s: not found\n", bench.c_str());
-      return 1;
-    }
+    if (!slurp(bench, text)) return failure(bench + ": not found");
     auto b = report::parse_corrupt_bench(text, bench);
-    if (!b) {
-      std::fprintf(stderr, "faultline report: error: %s\n", b.status().message().c_str());
-      return 1;
-    }
+    if (!b) return b.status();
     data.corrupt_bench = *b;
   }
   std::ofstream f(out, std::ios::binary);
   f << report::render_html(data);
-  if (!f) {
-    std::fprintf(stderr, "faultline report: error: cannot write %s\n", out.c_str());
-    return 1;
-  }
+  if (!f) return failure("cannot write " + out);
   std::printf("wrote %s (%zu detector(s), %zu benchmark record(s))\n", out.c_str(),
               data.detectors.size(), data.corrupt_bench.size());
   return 0;

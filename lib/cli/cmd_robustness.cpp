@@ -17,7 +17,7 @@ bool write(const std::string& path, const std::string& text) {
   return static_cast<bool>(out);
 }
 
-int run(int argc, char** argv) {
+ExitStatus run(int argc, char** argv) {
   CLI::App app{
       "Computes per-corruption mean NDS, CE and RR and the mCE / mRR of one detector (RoboBEV), "
       "against the paper's DETR3D baseline or another scored detector."};
@@ -45,47 +45,28 @@ int run(int argc, char** argv) {
   std::string manifest_name;
   if (!manifest.empty()) {
     auto m = scoring::read_run_manifest(manifest, &manifest_name, &latency_ms);
-    if (!m) {
-      std::fprintf(stderr, "faultline robustness: error: %s\n", m.status().message().c_str());
-      return 1;
-    }
+    if (!m) return m.status();
     conditions = *m;
   }
   for (const auto& r : runs) conditions.emplace_back(scoring::condition_from_path(r), r);
-  if (conditions.empty()) {
-    std::fprintf(stderr, "faultline robustness: error: give run folders or --manifest\n");
-    return 2;
-  }
+  if (conditions.empty()) return usage_error("give run folders or --manifest");
   if (name.empty()) name = manifest_name.empty() ? "detector" : manifest_name;
   auto model = scoring::collect_detector_scores(name, conditions);
-  if (!model) {
-    std::fprintf(stderr, "faultline robustness: error: %s\n", model.status().message().c_str());
-    return 1;
-  }
+  if (!model) return model.status();
   model->latency_ms = latency_ms;
   scoring::DetectorScores baseline = scoring::detr3d_baseline();
   if (!baseline_manifest.empty()) {
     std::string bname = "baseline";
     auto b = scoring::read_run_manifest(baseline_manifest, &bname, nullptr);
-    if (!b) {
-      std::fprintf(stderr, "faultline robustness: error: %s\n", b.status().message().c_str());
-      return 1;
-    }
+    if (!b) return b.status();
     auto bs = scoring::collect_detector_scores(bname, *b);
-    if (!bs) {
-      std::fprintf(stderr, "faultline robustness: error: baseline: %s\n",
-                   bs.status().message().c_str());
-      return 1;
-    }
+    if (!bs) return failure("baseline: " + bs.status().message());
     baseline = *bs;
   }
   scoring::RobustnessOptions opts;
   opts.round_mean_nds_4dp = !exact;
   auto summary = scoring::compute_robustness(*model, baseline, opts);
-  if (!summary) {
-    std::fprintf(stderr, "faultline robustness: error: %s\n", summary.status().message().c_str());
-    return 1;
-  }
+  if (!summary) return summary.status();
   std::printf("%s", scoring::robustness_markdown(*summary).c_str());
   if (!out_dir.empty()) {
     std::error_code ec;
@@ -93,10 +74,7 @@ int run(int argc, char** argv) {
     const bool ok = write(out_dir + "/robustness.md", scoring::robustness_markdown(*summary)) &&
                     write(out_dir + "/robustness.csv", scoring::robustness_csv(*summary)) &&
                     write(out_dir + "/robustness.json", scoring::robustness_json(*summary));
-    if (!ok) {
-      std::fprintf(stderr, "faultline robustness: error: cannot write into %s\n", out_dir.c_str());
-      return 1;
-    }
+    if (!ok) return failure("cannot write into " + out_dir);
   }
   return 0;
 }

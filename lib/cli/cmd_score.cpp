@@ -8,7 +8,7 @@
 
 namespace faultline::cli {
 namespace {
-int run(int argc, char** argv) {
+ExitStatus run(int argc, char** argv) {
   CLI::App app{
       "Scores a nuScenes detection submission exactly like the devkit (NDS, mAP, TP errors) and "
       "writes metrics_summary.json and metrics_details.json."};
@@ -34,15 +34,9 @@ int run(int argc, char** argv) {
   }
   std::FILE* log = quiet ? nullptr : stdout;
   auto outcome = scoring::evaluate_detection(opts, log);
-  if (!outcome) {
-    std::fprintf(stderr, "faultline score: error: %s\n", outcome.status().message().c_str());
-    return 1;
-  }
+  if (!outcome) return outcome.status();
   if (!quiet) std::printf("Saving metrics to: %s\n", opts.output_dir.c_str());
-  if (Status s = scoring::write_eval_outputs(*outcome, opts.output_dir); !s) {
-    std::fprintf(stderr, "faultline score: error: %s\n", s.message().c_str());
-    return 1;
-  }
+  if (Status s = scoring::write_eval_outputs(*outcome, opts.output_dir); !s) return s;
   if (!quiet) std::printf("%s", scoring::summary_table(outcome->metrics).c_str());
   return 0;
 }

@@ -14,8 +14,8 @@
 namespace faultline::cli {
 namespace {
 
-int probe_first_message(const std::string& topic, const std::vector<std::string>& endpoints,
-                        double timeout_s, const transport::AccessConfig& access) {
+ExitStatus probe_first_message(const std::string& topic, const std::vector<std::string>& endpoints,
+                               double timeout_s, const transport::AccessConfig& access) {
   transport::SubscriberConfig sc;
   sc.endpoints = endpoints;
   sc.access = access;
@@ -41,11 +41,12 @@ int probe_first_message(const std::string& topic, const std::vector<std::string>
     return 0;
   }
   std::printf("summary topic=%s heard=0\n", topic.c_str());
-  std::fprintf(stderr, "no message on %s within %.1f s\n", topic.c_str(), timeout_s);
-  return 1;
+  char waited[32];
+  std::snprintf(waited, sizeof(waited), "%.1f s", timeout_s);
+  return failure("no message on " + topic + " within " + waited);
 }
 
-int run(int argc, char** argv) {
+ExitStatus run(int argc, char** argv) {
   CLI::App app{"Show a topic's type, publishers and endpoints.", argv[0]};
   std::string topic;
   std::vector<std::string> endpoints;
@@ -65,11 +66,9 @@ int run(int argc, char** argv) {
   for (const auto& t : transport::list_topics()) {
     if (t.topic == topic) publishers.push_back(t);
   }
-  if (publishers.empty()) {
-    std::fprintf(stderr, "topic %s: no live publisher in the registry %s\n", topic.c_str(),
-                 transport::run_dir().c_str());
-    return 1;
-  }
+  if (publishers.empty())
+    return failure("topic " + topic + ": no live publisher in the registry " +
+                   transport::run_dir());
   std::printf("Topic: %s\nType: %s\nPublishers: %zu\n", topic.c_str(),
               publishers.front().type.c_str(), publishers.size());
   for (const auto& p : publishers) {

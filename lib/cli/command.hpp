@@ -7,24 +7,71 @@
 #pragma once
 
 #include <string>
+#include <utility>
 #include <vector>
+
+#include "common/status.hpp"
 
 namespace faultline::cli {
 
+// Exit codes every command keeps (README, docs/export.md): 0 done, 1 failed, 2 usage error.
+// Commands may end with others: export's 3 (completed with errors), a launched node's own code.
+constexpr int kExitFailure = 1;
+constexpr int kExitUsage = 2;
+constexpr int kExitInterrupted = 130;  // stopped by SIGINT, as a shell reports it (128 + 2)
+
+// How a command ends: the process exit code and, when it failed, the message `dispatch` prints
+// once on stderr as "faultline <name>: <message>". A command returns its failure instead of
+// printing it:
+//   return reader.status();                        // exit 1 with the Status's message
+//   return usage_error("--meta " + kv + ": expected KEY=VALUE");   // exit 2
+//   return failure(report.status().to_string());   // exit 1 with this text
+//   return 3;                                      // an exit code alone: nothing more to print
+class [[nodiscard]] ExitStatus {
+ public:
+  ExitStatus(int exit_code) : exit_code_(exit_code) {}  // NOLINT(google-explicit-constructor)
+  // An ok Status exits 0; any other exits 1 with its message (not its code name).
+  ExitStatus(const Status& status)  // NOLINT(google-explicit-constructor)
+      : exit_code_(status.is_ok() ? 0 : kExitFailure), message_(status.message()) {}
+  ExitStatus(int exit_code, std::string message)
+      : exit_code_(exit_code), message_(std::move(message)) {}
+
+  int exit_code() const { return exit_code_; }
+  // What dispatch prints after "faultline <name>: "; empty when there is nothing to say.
+  const std::string& message() const { return message_; }
+
+ private:
+  int exit_code_ = 0;
+  std::string message_;
+};
+
+inline ExitStatus usage_error(std::string message) { return {kExitUsage, std::move(message)}; }
+inline ExitStatus failure(std::string message, int exit_code = kExitFailure) {
+  return {exit_code, std::move(message)};
+}
+
 struct Command {
-  const char* name;                   // "score", "bench corrupt"
-  const char* summary;                // one line for `faultline --help`
-  int (*run)(int argc, char** argv);  // argv[0] is "faultline <name>"; returns the exit code
+  const char* name;                          // "score", "bench corrupt"
+  const char* summary;                       // one line for `faultline --help`
+  ExitStatus (*run)(int argc, char** argv);  // argv[0] is "faultline <name>"
 };
 
 const std::vector<const Command*>& all_commands();
 
+// Adapts a command function returning ExitStatus, Status or a plain exit code to Command::run.
+template <auto Fn>
+ExitStatus run_command(int argc, char** argv) {
+  return Fn(argc, argv);
+}
+
 // Defines the command object with external linkage so the generated registry can reach it.
 #define FAULTLINE_COMMAND(stem, name, summary, fn) \
   extern const Command kCommand_##stem;            \
-  const Command kCommand_##stem { name, summary, fn }
+  const Command kCommand_##stem { name, summary, &run_command<fn> }
 
-// Runs the command named by argv[1] (and argv[2] for two-word names). Exit code 2 on usage errors.
+// Runs the command named by argv[1] (and argv[2] for two-word names) and returns its exit code,
+// after printing its failure as "faultline <name>: <message>" on stderr. Exit code 2 on usage
+// errors, also for a ConfigError that escapes the command; 1 for any other exception.
 int dispatch(int argc, char** argv);
 
 }  // namespace faultline::cli

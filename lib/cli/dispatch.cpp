@@ -28,6 +28,11 @@ void print_usage(const std::string& prefix) {
   }
 }
 
+// The one place a command's failure reaches the user: "faultline <command>: <message>".
+void print_failure(const char* command, const std::string& message) {
+  std::fprintf(stderr, "faultline %s: %s\n", command, message.c_str());
+}
+
 }  // namespace
 
 int dispatch(int argc, char** argv) {
@@ -78,13 +83,15 @@ int dispatch(int argc, char** argv) {
   args.push_back(program.data());
   for (int i = 1 + words; i < argc; ++i) args.push_back(argv[i]);
   try {
-    return best->run(static_cast<int>(args.size()), args.data());
+    const ExitStatus result = best->run(static_cast<int>(args.size()), args.data());
+    if (!result.message().empty()) print_failure(best->name, result.message());
+    return result.exit_code();
   } catch (const ConfigError& e) {
-    std::fprintf(stderr, "faultline %s: %s\n", best->name, e.what());
-    return 2;
+    print_failure(best->name, e.what());  // names the file, key or option and the value
+    return kExitUsage;
   } catch (const std::exception& e) {
-    std::fprintf(stderr, "faultline %s: error: %s\n", best->name, e.what());
-    return 1;
+    print_failure(best->name, std::string("error: ") + e.what());
+    return kExitFailure;
   }
 }
 

@@ -15,14 +15,12 @@
 namespace faultline::runtime {
 
 void ConvertConfig::validate() const {
-  if (output.empty()) throw ConfigError("bag convert: output = \"\": expected a file path");
+  if (output.empty()) throw ConfigError("output = \"\": expected a file path");
   if (!bag::compression_from_string(compression)) {
-    throw ConfigError("bag convert: compression = \"" + compression +
-                      "\": expected none, zstd or lz4");
+    throw ConfigError("compression = \"" + compression + "\": expected none, zstd or lz4");
   }
   if (output_prefix.empty() || output_prefix.front() != '/') {
-    throw ConfigError("bag convert: output_prefix = \"" + output_prefix +
-                      "\": expected a /namespace");
+    throw ConfigError("output_prefix = \"" + output_prefix + "\": expected a /namespace");
   }
 }
 

@@ -252,25 +252,22 @@ Result<BagCorruptCounts> Corrupter::run(const std::atomic<bool>& stop,
 namespace fs = std::filesystem;
 
 void BagCorruptConfig::validate() const {
-  if (input.empty()) throw ConfigError("bag corrupt: --in is required");
-  if (output.empty()) throw ConfigError("bag corrupt: --out is required");
+  if (input.empty()) throw ConfigError("--in is required");
+  if (output.empty()) throw ConfigError("--out is required");
   if (faults.empty())
-    throw ConfigError("bag corrupt: no faults (give --fault TOPIC=TYPE:LEVEL or --faults FILE)");
-  if (threads < 0)
-    throw ConfigError("bag corrupt: --threads = " + std::to_string(threads) + ": expected >= 0");
+    throw ConfigError("no faults (give --fault TOPIC=TYPE:LEVEL or --faults FILE)");
+  if (threads < 0) throw ConfigError("--threads = " + std::to_string(threads) + ": expected >= 0");
   if (jpeg_quality < 1 || jpeg_quality > 100) {
-    throw ConfigError("bag corrupt: --jpeg-quality = " + std::to_string(jpeg_quality) +
-                      ": expected 1..100");
+    throw ConfigError("--jpeg-quality = " + std::to_string(jpeg_quality) + ": expected 1..100");
   }
   if (faults_topic.empty() || faults_topic.front() != '/') {
-    throw ConfigError("bag corrupt: --faults-topic = '" + faults_topic +
-                      "': expected an absolute topic name");
+    throw ConfigError("--faults-topic = '" + faults_topic + "': expected an absolute topic name");
   }
   std::error_code in_ec, out_ec;
   const fs::path in_path = fs::weakly_canonical(input, in_ec),
                  out_path = fs::weakly_canonical(output, out_ec);
   if (!in_ec && !out_ec && in_path == out_path) {
-    throw ConfigError("bag corrupt: --out " + output + " is the input bag");
+    throw ConfigError("--out " + output + " is the input bag");
   }
 }
 
@@ -279,7 +276,7 @@ TopicFault parse_topic_fault(const std::string& text, corruption::RngMode rng) {
   const auto colon = text.find(':', eq == std::string::npos ? 0 : eq);
   if (eq == std::string::npos || eq == 0 || colon == std::string::npos ||
       colon + 1 == text.size()) {
-    throw ConfigError("bag corrupt: --fault " + text +
+    throw ConfigError("--fault " + text +
                       ": expected TOPIC=TYPE:LEVEL, e.g. /cam/image_raw=fog:mid");
   }
   TopicFault f;
@@ -295,7 +292,7 @@ TopicFault parse_topic_fault(const std::string& text, corruption::RngMode rng) {
   node["rng"] = corruption::to_string(rng);
   YAML::Node list(YAML::NodeType::Sequence);
   list.push_back(node);
-  f.spec = policy::parse_faults(list, "bag corrupt: --fault " + text).front();
+  f.spec = policy::parse_faults(list, "--fault " + text).front();
   return f;
 }
 

@@ -14,24 +14,21 @@
 namespace faultline::runtime {
 
 void Ros2ConvertConfig::validate() const {
-  if (output.empty()) throw ConfigError("bag convert: output = \"\": expected a bag directory");
+  if (output.empty()) throw ConfigError("output = \"\": expected a bag directory");
   if (output.size() > 5 && output.compare(output.size() - 5, 5, ".mcap") == 0) {
     throw ConfigError(
-        "bag convert: output = \"" + output +
+        "output = \"" + output +
         "\": --format ros2 writes a rosbag2 directory (metadata.yaml + <name>_0.mcap); give a "
         "directory name");
   }
   if (!bag::compression_from_string(compression)) {
-    throw ConfigError("bag convert: compression = \"" + compression +
-                      "\": expected none, zstd or lz4");
+    throw ConfigError("compression = \"" + compression + "\": expected none, zstd or lz4");
   }
   if (image_qos != "reliable" && image_qos != "best_effort") {
-    throw ConfigError("bag convert: image_qos = \"" + image_qos +
-                      "\": expected reliable or best_effort");
+    throw ConfigError("image_qos = \"" + image_qos + "\": expected reliable or best_effort");
   }
   if (output_prefix.empty() || output_prefix.front() != '/') {
-    throw ConfigError("bag convert: output_prefix = \"" + output_prefix +
-                      "\": expected a /namespace");
+    throw ConfigError("output_prefix = \"" + output_prefix + "\": expected a /namespace");
   }
 }
 

@@ -52,6 +52,22 @@ TEST(DispatchTest, UnknownCommandAndBareGroupExitTwo) {
   EXPECT_EQ(run({"bag", "no-such-subcommand"}), 2);
 }
 
+// A command returns its failure and dispatch prints it once, prefixed with the command's name.
+TEST(DispatchTest, PrintsAReturnedFailureOnceWithTheCommandName) {
+  const std::string missing = ::testing::TempDir() + "/faultline_no_such_robustness.json";
+  ::testing::internal::CaptureStderr();
+  EXPECT_EQ(run({"report", "--robustness", missing}), 1);
+  EXPECT_EQ(::testing::internal::GetCapturedStderr(),
+            "faultline report: " + missing + ": not found\n");
+}
+
+TEST(DispatchTest, PrintsAReturnedUsageErrorAndExitsTwo) {
+  ::testing::internal::CaptureStderr();
+  EXPECT_EQ(run({"bag record", "-o", "unused.mcap", "--all", "--meta", "no-equals-sign"}), 2);
+  EXPECT_EQ(::testing::internal::GetCapturedStderr(),
+            "faultline bag record: --meta no-equals-sign: expected KEY=VALUE\n");
+}
+
 // `keys generate` writes a pair the transport reads back, and refuses to replace it without
 // --force.
 TEST(DispatchTest, KeysGenerateWritesAPairAndKeepsAnExistingOne) {
