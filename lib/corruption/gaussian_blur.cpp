@@ -135,15 +135,12 @@ void subtract_dither(std::uint8_t* dst, const std::uint8_t* src, std::size_t pix
   }
 }
 
-}  // namespace
-
-cv::Mat gaussian_blur_fast(const cv::Mat& bgr, int severity) {
-  const double sigma = gaussian_blur_sigma(severity);
-  const int r = kernel_radius(sigma);
+// The dithered 8-bit blur with a kernel of radius r.
+cv::Mat dithered_blur(const cv::Mat& bgr, double sigma, int r) {
   // OpenCV's 8-bit Gaussian is fixed-point (16-bit weights and sums, the same taps and 'nearest'
   // border) and rounds, where the reference truncates: floor(x) = round(x - b) for 0 < b <= 1/2
   // wherever frac(x) < b + 1/2. A dither pattern of ones subtracted before the blur blurs to b =
-  // 0.45-0.49 for sigma >= 1 (a checkerboard, whose frequency the blur removes, thinned so that b
+  // 0.45-0.49 (a checkerboard, whose frequency the blur removes, thinned so that b
   // stays below 1/2 despite the fixed-point weights): flat areas keep their value, and a value is
   // one too high only where frac(x) >= b + 1/2 (a few %, never more than one level).
   cv::Mat shifted(bgr.size(), CV_8UC3), out;
@@ -154,6 +151,46 @@ cv::Mat gaussian_blur_fast(const cv::Mat& bgr, int severity) {
   cv::GaussianBlur(shifted, out, cv::Size(2 * r + 1, 2 * r + 1), sigma, sigma,
                    cv::BORDER_REPLICATE);
   return out;
+}
+
+// Blur at 1 / f resolution: f x f block means (cv::INTER_AREA), the dithered blur with the sigma
+// left after the blocks' variance (f^2 - 1) / 12 and the bilinear upsampling's (0.75 for f =
+// 2, 2.75 for f = 4, averaged over the output phases), then bilinear back to full size. Variances
+// add, so the whole is a Gaussian of `sigma` to within the shape of the small kernels; the blur
+// removes the frequencies the block means fold back (its response at the folding frequency 1 / (2
+// f), exp(-pi^2 sigma^2 / (2 f^2)), is at most 0.007 here). The low-resolution kernel stops at 3 of
+// its sigmas (0.3 % of its weight; OpenCV renormalises).
+cv::Mat reduced_blur(const cv::Mat& bgr, double sigma, int f) {
+  const double up_var = f == 2 ? 0.75 : 2.75;
+  const double low_sigma = std::sqrt(sigma * sigma - (f * f - 1) / 12.0 - up_var) / f;
+  cv::Mat low;
+  cv::resize(bgr, low, cv::Size((bgr.cols + 1) / 2, (bgr.rows + 1) / 2), 0, 0, cv::INTER_AREA);
+  if (f == 4) {
+    cv::resize(low, low, cv::Size((low.cols + 1) / 2, (low.rows + 1) / 2), 0, 0, cv::INTER_AREA);
+  }
+  // The dithered blur truncates at low resolution; the bilinear upsampling's rounding then keeps
+  // the truncated level on average.
+  cv::Mat out;
+  const int r = std::max(1, static_cast<int>(3.0 * low_sigma + 0.5));
+  cv::resize(dithered_blur(low, low_sigma, r), out, bgr.size(), 0, 0, cv::INTER_LINEAR);
+  return out;
+}
+
+}  // namespace
+
+cv::Mat dithered_gaussian_blur(const cv::Mat& bgr, double sigma) {
+  return dithered_blur(bgr, sigma, kernel_radius(sigma));
+}
+
+cv::Mat gaussian_blur_fast(const cv::Mat& bgr, int severity) {
+  const double sigma = gaussian_blur_sigma(severity);
+  // Reduced resolution from sigma 3, where the low-resolution sigma is at least 1.4 (below 1 the
+  // dither's checkerboard survives the blur and flat areas lose a level; sigma 2 stays at full
+  // resolution). Frames too small for 4 x 4 blocks of a few pixels each way keep the
+  // full-resolution blur (it costs little there).
+  const bool reduce = sigma >= 3.0 && bgr.rows >= 64 && bgr.cols >= 64;
+  if (!reduce) return dithered_gaussian_blur(bgr, sigma);
+  return reduced_blur(bgr, sigma, sigma >= 6.0 ? 4 : 2);
 }
 
 }  // namespace faultline::corruption
