@@ -168,7 +168,7 @@ cv::Mat dithered_blur(const cv::Mat& bgr, double sigma, int r) {
 // 2, 2.75 for f = 4, averaged over the output phases), then bilinear back to full size. Variances
 // add, so the whole is a Gaussian of `sigma` to within the shape of the small kernels; the blur
 // removes the frequencies the block means fold back (its response at the folding frequency 1 / (2
-// f), exp(-pi^2 sigma^2 / (2 f^2)), is at most 0.007 here). The low-resolution kernel stops at 3 of
+// f), exp(-pi^2 sigma^2 / (2 f^2)), is below 2e-5 here). The low-resolution kernel stops at 3 of
 // its sigmas (0.3 % of its weight; OpenCV renormalises).
 cv::Mat reduced_blur(const cv::Mat& bgr, double sigma, int f) {
   const double up_var = f == 2 ? 0.75 : 2.75;
