@@ -143,12 +143,11 @@ TEST(FastDeterministicTest, SaturateAndGaussianBlurWithinOneLevelOn1600x900) {
 }
 
 // gaussian_blur severities 3-5 (sigma 3, 4, 6) blur 2 x 2 (sigma 3, 4) or 4 x 4 (sigma 6) block
-// means and upsample bilinearly: the noisy frame with hard-edged flat shapes added (the worst case
-// for the folding and the small kernels' shapes) against numpy mode. Measured on this frame: PSNR
-// 52.1-54.0 dB; at least 4 sigma from the frame's edges max diff 3-4 and 0.2-2.6 % of values more
-// than one level off; mean +0.12 to +0.21 (the block means round half up). Within 4 sigma of an
-// edge the reference replicates the edge pixel where the block means replicate a block: up to 17
-// levels off on this noisy frame. Bounds with margin; flat areas keep their value exactly.
+// means of the frame with the reference's border added and upsample bilinearly: the noisy frame
+// with hard-edged flat shapes added (the worst case for the folding and the small kernels' shapes)
+// against numpy mode. Measured on this frame: PSNR 52.6-54.7 dB, max diff 3-4 (the same at least 4
+// sigma from the frame's edges), 0.2-2.5 % of values more than one level off, mean +0.12 to +0.21
+// (the block means round half up). Bounds with margin; flat areas keep their value exactly.
 TEST(FastDeterministicTest, GaussianBlurReducedResolutionCloseToNumpyModeOn1600x900) {
   cv::Mat in = frame_1600x900().clone();
   cv::rectangle(in, cv::Rect(200, 150, 500, 300), cv::Scalar(40, 90, 200), cv::FILLED);
@@ -166,7 +165,7 @@ TEST(FastDeterministicTest, GaussianBlurReducedResolutionCloseToNumpyModeOn1600x
     const double mean_diff = cv::mean(b.reshape(1))[0] - cv::mean(a.reshape(1))[0];
     EXPECT_GT(psnr(a, b), 50.0) << "sev " << sev;
     EXPECT_LE(cv::norm(diff, cv::NORM_INF), 6.0) << "sev " << sev;
-    EXPECT_LE(cv::norm(a, b, cv::NORM_INF), 24.0) << "sev " << sev;
+    EXPECT_LE(cv::norm(a, b, cv::NORM_INF), 6.0) << "sev " << sev;
     EXPECT_LT(far_share, 0.05) << "sev " << sev;
     EXPECT_NEAR(mean_diff, 0.0, 0.3) << "sev " << sev;
     // The inside of the flat rectangle, well away from its edges, is its colour exactly.
@@ -175,9 +174,10 @@ TEST(FastDeterministicTest, GaussianBlurReducedResolutionCloseToNumpyModeOn1600x
         0.0)
         << "sev " << sev;
     std::printf(
-        "gaussian_blur sev %d: PSNR %.2f dB, inner max diff %.0f, %.3f %% more than 1 "
-        "off, mean %+.3f\n",
-        sev, psnr(a, b), cv::norm(diff, cv::NORM_INF), 100 * far_share, mean_diff);
+        "gaussian_blur sev %d: PSNR %.2f dB, inner max diff %.0f, max diff %.0f, %.3f %% more "
+        "than 1 off, mean %+.3f\n",
+        sev, psnr(a, b), cv::norm(diff, cv::NORM_INF), cv::norm(a, b, cv::NORM_INF),
+        100 * far_share, mean_diff);
   }
 }
 
