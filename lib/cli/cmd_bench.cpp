@@ -70,6 +70,9 @@ int run_corrupt(int argc, char** argv) {
   app.add_option("--height", o.height, "frame height");
   app.add_option("--seed", o.seed, "seed for the random corruptions");
   app.add_option("--only", o.only, "restrict to these corruption types");
+  app.add_option("--severities", o.severities,
+                 "time fast mode only, at these severities (1..5) instead of easy/mid/hard (rows "
+                 "s1..s5; no numpy mode, no fidelity)");
   app.add_flag("--json", o.json, "print a JSON array");
   app.add_flag("--fidelity", o.fidelity,
                "also compute PSNR / max abs diff of fast mode against numpy mode");
@@ -77,6 +80,18 @@ int run_corrupt(int argc, char** argv) {
   FAULTLINE_PARSE(app, argc, argv);
   if (o.reps < 1 || o.width < 1 || o.height < 1) {
     std::fprintf(stderr, "faultline bench corrupt: --reps, --width and --height must be >= 1\n");
+    return 2;
+  }
+  for (const int s : o.severities) {
+    if (s < 1 || s > 5) {
+      std::fprintf(stderr, "faultline bench corrupt: --severities %d: expected 1..5\n", s);
+      return 2;
+    }
+  }
+  if (!o.severities.empty() && (o.fidelity || !o.out_path.empty())) {
+    std::fprintf(stderr,
+                 "faultline bench corrupt: --severities times fast mode only: it "
+                 "cannot be combined with --fidelity or --out\n");
     return 2;
   }
   return bench::run_corrupt(o);

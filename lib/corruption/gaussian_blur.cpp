@@ -120,40 +120,94 @@ cv::Mat gaussian_blur_weights(const cv::Mat& bgr, const std::vector<double>& w) 
 
 namespace {
 
-// dst = src - 1 (saturating at 0) where the dither pattern of row y holds a one: the pixels whose
-// x + y is even, except two in every 8 x 8 tile, (0, 0) and (4, 4) (30 ones per 64 pixels).
-FAULTLINE_CLONES("avx2")
-void subtract_dither(std::uint8_t* dst, const std::uint8_t* src, std::size_t pixels, int y) {
+// The dither pattern: a one at the pixels whose x + y is even, except two in every 8 x 8 tile, (0,
+// 0) and (4, 4) (30 ones per 64 pixels); row phase y & 7, all three channels of a pixel alike.
+std::vector<std::uint8_t> dither_row(std::size_t pixels, int phase) {
+  std::vector<std::uint8_t> row(3 * pixels);
   for (std::size_t x = 0; x < pixels; ++x) {
     const auto xi = static_cast<int>(x & 7u);
-    const int yi = y & 7;
-    const bool one = ((xi + yi) & 1) == 0 && !(xi == yi && (xi & 3) == 0);
-    for (std::size_t c = 0; c < 3; ++c) {
-      const std::uint8_t v = src[3 * x + c];
-      dst[3 * x + c] = static_cast<std::uint8_t>(v - std::min<std::uint8_t>(v, one ? 1 : 0));
-    }
+    const bool one = ((xi + phase) & 1) == 0 && !(xi == phase && (xi & 3) == 0);
+    for (std::size_t c = 0; c < 3; ++c) row[3 * x + c] = one ? 1 : 0;
   }
+  return row;
+}
+
+// dst = src - pattern, saturating at 0.
+FAULTLINE_CLONES("avx2")
+void subtract_saturating(std::uint8_t* dst, const std::uint8_t* src, const std::uint8_t* pattern,
+                         std::size_t n) {
+  for (std::size_t i = 0; i < n; ++i) {
+    dst[i] = static_cast<std::uint8_t>(src[i] - std::min(src[i], pattern[i]));
+  }
+}
+
+// The dithered 8-bit blur with a kernel of radius r.
+cv::Mat dithered_blur(const cv::Mat& bgr, double sigma, int r) {
+  // OpenCV's 8-bit Gaussian is fixed-point (16-bit weights and sums, the same taps and 'nearest'
+  // border) and rounds, where the reference truncates: floor(x) = round(x - b) for 0 < b <= 1/2
+  // wherever frac(x) < b + 1/2. A dither pattern of ones subtracted before the blur blurs to b =
+  // 0.45-0.49 (a checkerboard, whose frequency the blur removes, thinned so that b
+  // stays below 1/2 despite the fixed-point weights): flat areas keep their value, and a value is
+  // one too high only where frac(x) >= b + 1/2 (a few %, never more than one level).
+  const auto pixels = static_cast<std::size_t>(bgr.cols);
+  std::vector<std::vector<std::uint8_t>> pattern;
+  for (int phase = 0; phase < 8; ++phase) pattern.push_back(dither_row(pixels, phase));
+  cv::Mat shifted(bgr.size(), CV_8UC3), out;
+  for (int y = 0; y < bgr.rows; ++y) {
+    subtract_saturating(shifted.ptr<std::uint8_t>(y), bgr.ptr<std::uint8_t>(y),
+                        pattern[static_cast<std::size_t>(y & 7)].data(), 3 * pixels);
+  }
+  // Not in place: OpenCV 4.6 then leaves its fixed-point path (5x slower at sigma 1).
+  cv::GaussianBlur(shifted, out, cv::Size(2 * r + 1, 2 * r + 1), sigma, sigma,
+                   cv::BORDER_REPLICATE);
+  return out;
+}
+
+// Blur at 1 / f resolution: f x f block means (cv::INTER_AREA), the dithered blur with the sigma
+// left after the blocks' variance (f^2 - 1) / 12 and the bilinear upsampling's (0.75 for f =
+// 2, 2.75 for f = 4, averaged over the output phases), then bilinear back to full size. Variances
+// add, so the whole is a Gaussian of `sigma` to within the shape of the small kernels; the blur
+// removes the frequencies the block means fold back (its response at the folding frequency 1 / (2
+// f), exp(-pi^2 sigma^2 / (2 f^2)), is below 2e-5 here). The low-resolution kernel stops at 3 of
+// its sigmas (0.3 % of its weight; OpenCV renormalises).
+cv::Mat reduced_blur(const cv::Mat& bgr, double sigma, int f) {
+  const double up_var = f == 2 ? 0.75 : 2.75;
+  const double low_sigma = std::sqrt(sigma * sigma - (f * f - 1) / 12.0 - up_var) / f;
+  // The frame first gets the reference's border ('nearest': the edge pixel repeated) for the
+  // kernel's reach, a whole number of blocks wide; block means of the border alone would repeat
+  // the edge block instead, tens of levels off near a high-contrast edge.
+  const int pad = (kernel_radius(sigma) + f - 1) / f * f;
+  cv::Mat low;
+  cv::copyMakeBorder(bgr, low, pad, pad, pad, pad, cv::BORDER_REPLICATE);
+  cv::resize(low, low, cv::Size((low.cols + 1) / 2, (low.rows + 1) / 2), 0, 0, cv::INTER_AREA);
+  if (f == 4) {
+    cv::resize(low, low, cv::Size((low.cols + 1) / 2, (low.rows + 1) / 2), 0, 0, cv::INTER_AREA);
+  }
+  // The dithered blur truncates at low resolution; the bilinear upsampling's rounding then keeps
+  // the truncated level on average. (Upsampling only the frame's own blocks, a view, took OpenCV's
+  // resize off its fast path: 3x slower.)
+  const int r = std::max(1, static_cast<int>(3.0 * low_sigma + 0.5));
+  const cv::Mat blurred = dithered_blur(low, low_sigma, r);
+  cv::Mat up;
+  cv::resize(blurred, up, cv::Size(blurred.cols * f, blurred.rows * f), 0, 0, cv::INTER_LINEAR);
+  return up(cv::Rect(pad, pad, bgr.cols, bgr.rows)).clone();
 }
 
 }  // namespace
 
+cv::Mat dithered_gaussian_blur(const cv::Mat& bgr, double sigma) {
+  return dithered_blur(bgr, sigma, kernel_radius(sigma));
+}
+
 cv::Mat gaussian_blur_fast(const cv::Mat& bgr, int severity) {
   const double sigma = gaussian_blur_sigma(severity);
-  const int r = kernel_radius(sigma);
-  // OpenCV's 8-bit Gaussian is fixed-point (16-bit weights and sums, the same taps and 'nearest'
-  // border) and rounds, where the reference truncates: floor(x) = round(x - b) for 0 < b <= 1/2
-  // wherever frac(x) < b + 1/2. A dither pattern of ones subtracted before the blur blurs to b =
-  // 0.45-0.49 for sigma >= 1 (a checkerboard, whose frequency the blur removes, thinned so that b
-  // stays below 1/2 despite the fixed-point weights): flat areas keep their value, and a value is
-  // one too high only where frac(x) >= b + 1/2 (a few %, never more than one level).
-  cv::Mat shifted(bgr.size(), CV_8UC3), out;
-  for (int y = 0; y < bgr.rows; ++y) {
-    subtract_dither(shifted.ptr<std::uint8_t>(y), bgr.ptr<std::uint8_t>(y),
-                    static_cast<std::size_t>(bgr.cols), y);
-  }
-  cv::GaussianBlur(shifted, out, cv::Size(2 * r + 1, 2 * r + 1), sigma, sigma,
-                   cv::BORDER_REPLICATE);
-  return out;
+  // Reduced resolution from sigma 3, where the low-resolution sigma is at least 1.4 (below 1 the
+  // dither's checkerboard survives the blur and flat areas lose a level; sigma 2 stays at full
+  // resolution). Frames too small for 4 x 4 blocks of a few pixels each way keep the
+  // full-resolution blur (it costs little there).
+  const bool reduce = sigma >= 3.0 && bgr.rows >= 64 && bgr.cols >= 64;
+  if (!reduce) return dithered_gaussian_blur(bgr, sigma);
+  return reduced_blur(bgr, sigma, sigma >= 6.0 ? 4 : 2);
 }
 
 }  // namespace faultline::corruption

@@ -60,18 +60,18 @@ FastBlur fast_blur(double sigma) {
   return b;
 }
 
+// Axis 0 straight from the 8-bit rows (each pair summed in float, exact for integers, so the same
+// sums as from float rows, at a quarter of the memory traffic).
 FAULTLINE_CLONES("avx2")
-void to_float(float* dst, const std::uint8_t* src, std::size_t n) {
-  for (std::size_t i = 0; i < n; ++i) dst[i] = src[i];
-}
-
-FAULTLINE_CLONES("avx2")
-void blur_rows(float* out, const float* const* rows, const float* w, int r, std::size_t n) {
-  for (std::size_t i = 0; i < n; ++i) out[i] = rows[r][i] * w[0];
+void blur_rows(float* out, const std::uint8_t* const* rows, const float* w, int r, std::size_t n) {
+  const std::uint8_t* mid = rows[r];
+  for (std::size_t i = 0; i < n; ++i) out[i] = static_cast<float>(mid[i]) * w[0];
   for (int k = r; k >= 1; --k) {
-    const float* a = rows[r - k];
-    const float* b = rows[r + k];
-    for (std::size_t i = 0; i < n; ++i) out[i] += (a[i] + b[i]) * w[k];
+    const std::uint8_t* a = rows[r - k];
+    const std::uint8_t* b = rows[r + k];
+    for (std::size_t i = 0; i < n; ++i) {
+      out[i] += (static_cast<float>(a[i]) + static_cast<float>(b[i])) * w[k];
+    }
   }
 }
 
@@ -101,22 +101,16 @@ void blur_cols(std::uint8_t* dst, std::uint8_t* near, float* acc, const float* e
 }
 
 cv::Mat blur_fast(const cv::Mat& bgr, const FastBlur& b) {
-  const int r = b.r, rows = bgr.rows, slots = 2 * r + 1;
+  const int r = b.r, rows = bgr.rows;
   const auto n = static_cast<std::size_t>(bgr.cols) * 3;
-  std::vector<float> ring(static_cast<std::size_t>(slots) * n),
-      line(n + 6 * static_cast<std::size_t>(r)), acc(n);
+  std::vector<float> line(n + 6 * static_cast<std::size_t>(r)), acc(n);
   std::vector<std::uint8_t> near(n);
-  std::vector<const float*> taps(static_cast<std::size_t>(slots));
-  auto slot = [&](int j) { return ring.data() + static_cast<std::size_t>(j % slots) * n; };
+  std::vector<const std::uint8_t*> taps(static_cast<std::size_t>(2 * r + 1));
   float* mid = line.data() + 3 * r;
-  int loaded = -1;
   cv::Mat out(bgr.size(), CV_8UC3);
   for (int i = 0; i < rows; ++i) {
-    for (; loaded < std::min(i + r, rows - 1); ++loaded) {
-      to_float(slot(loaded + 1), bgr.ptr<std::uint8_t>(loaded + 1), n);
-    }
     for (int k = -r; k <= r; ++k) {
-      taps[static_cast<std::size_t>(k + r)] = slot(std::clamp(i + k, 0, rows - 1));
+      taps[static_cast<std::size_t>(k + r)] = bgr.ptr<std::uint8_t>(std::clamp(i + k, 0, rows - 1));
     }
     blur_rows(mid, taps.data(), b.w.data(), r, n);
     for (int k = 1; k <= r; ++k) {
@@ -132,6 +126,64 @@ cv::Mat blur_fast(const cv::Mat& bgr, const FastBlur& b) {
     }
   }
   return out;
+}
+
+// fast mode's offsets: four to a 64-bit draw, 16 bits each, scaled to [-d, d) by multiply and
+// shift (uniform for d = 1, 2, 4; for d = 3 four of the six values are 1 / 10922 more likely than
+// the other two, far below anything the output shows). Drawn a row at a time, in the walk's order.
+class OffsetStream {
+ public:
+  OffsetStream(rng::FastRng& rng, int delta)
+      : rng_(rng), delta_(delta), span_(static_cast<std::uint64_t>(2 * delta)) {}
+  void fill(std::int8_t* out, std::size_t n) {
+    std::size_t i = 0;
+    for (; i < n && left_ > 0; ++i) out[i] = take();
+    for (; i + 4 <= n; i += 4) {
+      const std::uint64_t w = rng_.next_u64();
+      for (std::size_t k = 0; k < 4; ++k) out[i + k] = map(w >> (16 * k));
+    }
+    for (; i < n; ++i) out[i] = take();
+  }
+
+ private:
+  std::int8_t map(std::uint64_t chunk) const {
+    return static_cast<std::int8_t>(static_cast<int>(((chunk & 0xFFFFu) * span_) >> 16) - delta_);
+  }
+  std::int8_t take() {
+    if (left_ == 0) word_ = rng_.next_u64(), left_ = 4;
+    const std::int8_t v = map(word_);
+    word_ >>= 16, --left_;
+    return v;
+  }
+  rng::FastRng& rng_;
+  int delta_;
+  std::uint64_t span_;
+  std::uint64_t word_ = 0;
+  int left_ = 0;
+};
+
+// shuffle_pixels with OffsetStream's draws (dx, then dy, per pixel), a row's offsets drawn and
+// turned into byte offsets before its serial copy loop (a copy may read a pixel the walk wrote).
+void walk_fast(cv::Mat& img, const GlassParams& p, rng::FastRng& rng) {
+  const int d = p.delta;
+  if (img.cols - 2 * d <= 0) return;
+  const auto count = static_cast<std::size_t>(img.cols - 2 * d);
+  std::vector<std::int8_t> draws(2 * count);
+  std::vector<std::ptrdiff_t> offset(count);
+  const auto step = static_cast<std::ptrdiff_t>(img.step[0]);
+  OffsetStream stream(rng, d);
+  for (int it = 0; it < p.iterations; ++it) {
+    for (int h = img.rows - d; h > d; --h) {
+      stream.fill(draws.data(), draws.size());
+      for (std::size_t k = 0; k < count; ++k)
+        offset[k] = draws[2 * k + 1] * step + 3 * draws[2 * k];
+      unsigned char* px = img.ptr<unsigned char>(h) + 3 * (img.cols - d);  // w = cols - d first
+      for (std::size_t k = 0; k < count; ++k, px -= 3) {
+        const unsigned char* src = px + offset[k];
+        px[0] = src[0], px[1] = src[1], px[2] = src[2];
+      }
+    }
+  }
 }
 
 }  // namespace
@@ -153,25 +205,16 @@ cv::Mat glass_blur_numpy(const cv::Mat& bgr, int severity, rng::NumpyRandomState
 
 cv::Mat glass_blur_fast(const cv::Mat& bgr, int severity, rng::FastRng& rng) {
   const GlassParams p = glass_params(severity);
-  // Below sigma 1 (severities 1 and 2: 7 and 9 taps) the float32 blur misses the reference on ~5
-  // % of values of a linear ramp (whose float64 sums land on or a hair below integers without
-  // being flat), so those take numpy mode's float64 blur; from sigma 1 it differs on ~0.1 %.
+  // The float32 blur at every severity: below sigma 1 (severities 1 and 2: 7 and 9 taps) it misses
+  // numpy mode's float64 blur on ~5 % of the values of a linear ramp (whose float64 sums land on or
+  // a hair below integers without being flat), by one level; from sigma 1 on ~0.1 %.
+  // (gaussian_blur's dithered 8-bit blur, a third of the cost, was tried: it keeps flat areas at
+  // their level where the reference's float64 sums truncate some levels one down, and the
+  // histogram moves ten times as far from numpy mode's as another seed's does.)
   const FastBlur blur = fast_blur(p.sigma);
-  const bool exact = p.sigma < 1.0;
-  cv::Mat img = exact ? nd::gaussian_blur_u8(bgr, p.sigma) : blur_fast(bgr, blur);
-  // The same walk, its offsets four to a 64-bit draw: 16 bits each, scaled to [0, 2d) by multiply
-  // and shift (uniform for d = 1, 2, 4; for d = 3 four of the six values are 1 / 10922 more
-  // likely than the other two, far below anything the output shows).
-  const auto span = static_cast<std::uint64_t>(2 * p.delta);
-  std::uint64_t word = 0;
-  int left = 0;
-  shuffle_pixels(img, p, [&] {
-    if (left == 0) word = rng.next_u64(), left = 4;
-    const auto chunk = word & 0xFFFFu;
-    word >>= 16, --left;
-    return static_cast<int>((chunk * span) >> 16) - p.delta;
-  });
-  return exact ? nd::gaussian_blur_u8(img, p.sigma) : blur_fast(img, blur);
+  cv::Mat img = blur_fast(bgr, blur);
+  walk_fast(img, p, rng);
+  return blur_fast(img, blur);
 }
 
 }  // namespace faultline::corruption

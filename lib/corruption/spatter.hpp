@@ -30,8 +30,12 @@ SpatterParams spatter_params(int severity);
 // reference calls them.
 cv::Mat spatter_numpy(const cv::Mat& bgr, int severity, rng::NumpyRandomState& rng);
 
-// fast mode: FastRng normals (eight-lane ziggurat) and OpenCV's float32 Gaussian for the smoothing;
-// the water is numpy mode's code, the mud is blended in float32 from the float32 field.
+// fast mode: FastRng normals (eight-lane ziggurat) and OpenCV's float32 Gaussian (to 3 sigma) for
+// the smoothing; the mud is blended in float32 from the float32 field; the water takes numpy mode's
+// steps from the float32 field, except the distance to the Canny edges: exact Euclidean distance
+// capped at 20 (a column sweep and a 41-tap row minimum) where the reference's 5 x 5 chamfer
+// approximates it, with its 3 x 3 mean fused in; statistical tolerance as before
+// (tests/corruption/fast_mode_ext_spatial_test.cpp).
 cv::Mat spatter_fast(const cv::Mat& bgr, int severity, rng::FastRng& rng);
 
 // The stages after the smoothing, given the smoothed liquid field (CV_64F, H x W): shared by both

@@ -110,6 +110,33 @@ TEST(BenchRunTest, CorruptRunsOnRealisticFramesByDefaultAndNoisyOnRequest) {
   fs::remove_all(root);
 }
 
+// `bench corrupt --severities` times fast mode only, one row per listed severity (level s1..s5),
+// and refuses a severity outside 1..5 or a combination with --fidelity, naming the problem.
+TEST(BenchRunTest, CorruptSeveritiesGivesOneFastRowPerSeverity) {
+  const fs::path root = scratch_dir("corrupt_sev");
+  const fs::path log_path = root / "sev.log";
+  const int rc = run_faultline(
+      "bench corrupt --json --reps 1 --only contrast saturate --severities 1 4 5", log_path);
+  const std::string log = read_text(log_path);
+  ASSERT_EQ(rc, 0) << log;
+  rapidjson::Document d;
+  d.Parse(log.c_str() + log.find('['));
+  ASSERT_FALSE(d.HasParseError()) << log;
+  ASSERT_EQ(d.Size(), 7u);  // 2 corruptions x 3 severities, then the decode
+  const char* const levels[] = {"s1", "s4", "s5"};
+  for (rapidjson::SizeType i = 0; i < 6; ++i) {
+    EXPECT_STREQ(d[i]["type"].GetString(), i < 3 ? "contrast" : "saturate") << i;
+    EXPECT_STREQ(d[i]["level"].GetString(), levels[i % 3]) << i;
+    EXPECT_STREQ(d[i]["mode"].GetString(), "fast") << i;
+  }
+  EXPECT_STREQ(d[6]["type"].GetString(), "jpeg_decode");
+  EXPECT_EQ(run_faultline("bench corrupt --severities 0", root / "bad_sev.log"), 2);
+  EXPECT_NE(read_text(root / "bad_sev.log").find("--severities 0"), std::string::npos);
+  EXPECT_EQ(run_faultline("bench corrupt --severities 2 --fidelity", root / "bad_fid.log"), 2);
+  EXPECT_NE(read_text(root / "bad_fid.log").find("--fidelity"), std::string::npos);
+  fs::remove_all(root);
+}
+
 TEST(BenchRunTest, ExportJsonHasEveryConditionWithConsistentRatiosAndHours) {
   using exporter::condition_from_string;
   using exporter::reference_end_to_end_ms;

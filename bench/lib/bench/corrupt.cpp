@@ -91,10 +91,10 @@ struct Row {
   double reference_ms = 0;
 };
 
-Row make_row(Corruption c, Level l, const char* mode) {
+Row make_row(Corruption c, const std::string& level, const char* mode) {
   Row r;
   r.type = corruption::to_string(c);
-  r.level = corruption::to_string(l);
+  r.level = level;
   r.mode = mode;
   return r;
 }
@@ -102,10 +102,9 @@ Row make_row(Corruption c, Level l, const char* mode) {
 // The row of one mode: `reps` timed runs of the corruption, each with a fresh Rng(seed); the last
 // run's output in `out`.
 template <typename Rng>
-Row timed_row(const cv::Mat& frame, Corruption c, Level l, const char* mode, int reps,
-              std::uint32_t seed, cv::Mat& out) {
-  Row row = make_row(c, l, mode);
-  const int sev = corruption::severity_for(c, l);
+Row timed_row(const cv::Mat& frame, Corruption c, int sev, const std::string& level,
+              const char* mode, int reps, std::uint32_t seed, cv::Mat& out) {
+  Row row = make_row(c, level, mode);
   // rolling_shutter needs motion to skew by: a brisk turn, 0.5 rad/s (29 deg/s), focal 0.8 x width.
   corruption::CorruptOptions options;
   if (c == Corruption::RollingShutter) options.yaw_rate_rad_s = 0.5;
@@ -192,7 +191,7 @@ std::optional<cv::Mat> fast_with_injected_field(const cv::Mat& img, Corruption c
 // warm-up frame), at 12 Hz frame times, and for glare with a pose that turns 0.5 degrees a frame so
 // its light layer is redrawn every frame (the worst case; a still camera reuses it).
 Row stream_row(const cv::Mat& frame, Corruption c, Level l, int reps, std::uint32_t seed) {
-  Row row = make_row(c, l, "stream");
+  Row row = make_row(c, corruption::to_string(l), "stream");
   corruption::CoherentConfig cfg;
   cfg.type = c;
   cfg.severity = corruption::severity_for(c, l);
@@ -213,6 +212,23 @@ Row stream_row(const cv::Mat& frame, Corruption c, Level l, int reps, std::uint3
   row.ms = t.wall_ms;
   row.cpu_ms = t.cpu_ms;
   return row;
+}
+
+// --severities: fast mode only, at each listed severity (1..5) of each selected corruption, in
+// the table's order; the level column reads s1..s5.
+std::vector<Row> severity_rows(const cv::Mat& frame, const CorruptOptions& o) {
+  std::vector<Row> rows;
+  for (Corruption c : corruption::kAllCorruptions) {
+    if (!o.only.empty() &&
+        std::find(o.only.begin(), o.only.end(), corruption::to_string(c)) == o.only.end())
+      continue;
+    for (const int sev : o.severities) {
+      cv::Mat out;
+      rows.push_back(timed_row<rng::FastRng>(frame, c, sev, "s" + std::to_string(sev), "fast",
+                                             o.reps, o.seed, out));
+    }
+  }
+  return rows;
 }
 
 std::string num(std::optional<double> v, int prec = 4) {
@@ -277,15 +293,19 @@ int run_corrupt(const CorruptOptions& o) {
       image_path.empty() && o.frames == FrameKind::kRealistic ? kRealisticQuality : 95;
 
   std::vector<Row> rows;
+  if (!o.severities.empty()) rows = severity_rows(frame, o);
   for (Corruption c : corruption::kAllCorruptions) {
+    if (!o.severities.empty()) break;
     if (!only.empty() &&
         std::find(only.begin(), only.end(), corruption::to_string(c)) == only.end())
       continue;
     for (Level l : corruption::kAllLevels) {
       const int sev = corruption::severity_for(c, l);
       cv::Mat numpy_out, numpy_other, fast_out;
-      Row fast_row = timed_row<rng::FastRng>(frame, c, l, "fast", reps, seed, fast_out);
-      Row numpy_row = timed_row<rng::NumpyRandomState>(frame, c, l, "numpy", reps, seed, numpy_out);
+      const std::string level = corruption::to_string(l);
+      Row fast_row = timed_row<rng::FastRng>(frame, c, sev, level, "fast", reps, seed, fast_out);
+      Row numpy_row =
+          timed_row<rng::NumpyRandomState>(frame, c, sev, level, "numpy", reps, seed, numpy_out);
       fast_row.reference_ms = numpy_row.reference_ms = reference_ms(c, l);
       if (fidelity) {
         numpy_row.fidelity = "reference";

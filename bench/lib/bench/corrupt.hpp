@@ -19,9 +19,10 @@ struct CorruptOptions {
   int width = 1600, height = 900;            // pixels of the built-in frame
   std::uint32_t seed = 130;                  // seed of the random corruptions
   std::vector<std::string> only;             // corruption types to run; empty = all
-  bool json = false;                         // print a JSON array instead of the table
-  bool fidelity = false;  // also PSNR / max abs diff of fast mode against numpy mode
-  std::string out_path;   // also write the JSON array (with fidelity) here; "" = none
+  std::vector<int> severities;  // fast mode only at these severities (1..5); empty = the levels
+  bool json = false;            // print a JSON array instead of the table
+  bool fidelity = false;        // also PSNR / max abs diff of fast mode against numpy mode
+  std::string out_path;         // also write the JSON array (with fidelity) here; "" = none
 };
 
 // Prints the table (or the JSON array) on stdout. Returns the exit code: 0, or 1 (message on
