@@ -136,19 +136,6 @@ ConditionResult run_one(const BenchmarkOptions& o, const RunSpec& run,
   return r;
 }
 
-launch::ChildSpec node_child(const std::string& bin_dir, const std::string& name,
-                             std::vector<std::string> params, bool required) {
-  launch::ChildSpec c;
-  c.name = name;
-  c.required = required;
-  c.argv = {(fs::path(bin_dir) / name).string(), "--name", name};
-  for (auto& p : params) {
-    c.argv.push_back("-p");
-    c.argv.push_back(std::move(p));
-  }
-  return c;
-}
-
 std::string injector_corruption_name(const std::string& robobev_name) {
   const std::string c = scoring::canonical_corruption(robobev_name);
   if (c == "low_light") return "dark";

@@ -103,10 +103,6 @@ Result<BenchmarkResult> run_benchmark(const BenchmarkOptions& opts, const std::a
 // The partial summary.json written after each run of a local benchmark (no robustness yet).
 std::string summary_json(const BenchmarkOptions& opts, const BenchmarkResult& result);
 
-// One node process: `<bin_dir>/<name> --name <name> -p k:=v ...`.
-launch::ChildSpec node_child(const std::string& bin_dir, const std::string& name,
-                             std::vector<std::string> params, bool required);
-
 // The injector's corruption name for a RoboBEV name (low_light -> dark).
 std::string injector_corruption_name(const std::string& robobev_name);
 

@@ -1,8 +1,7 @@
-// The processes of one benchmark run, built from a launch file (launch/benchmark.yaml, compiled in,
-// or the user's
-// `--pipeline FILE`) rather than from parameter lists in code: the topology is written once,
-// readable, and a run folder keeps the exact parameters each node ran with
-// (<run>/params/<node>.yaml).
+// The processes of a campaign's run, built from a launch file rather than from parameter lists in
+// code: one benchmark run (launch/benchmark.yaml) and the soak (launch/soak.yaml), each compiled in
+// or the user's `--pipeline FILE`. The topology is written once, readable, and the output folder
+// keeps the exact parameters each node ran with (<dir>/params/<node>.yaml).
 #pragma once
 
 #include <map>
@@ -16,9 +15,11 @@ namespace faultline::campaign {
 
 struct BenchmarkOptions;
 struct RunSpec;
+struct SoakOptions;
 
-// launch/benchmark.yaml as built into the tool.
+// launch/benchmark.yaml and launch/soak.yaml as built into the tool.
 std::string_view builtin_benchmark_pipeline();
+std::string_view builtin_soak_pipeline();
 
 // The variables a pipeline file may use for a run (see launch/benchmark.yaml): FAULTLINE_SOCKETS,
 // FAULTLINE_RUN_DIR, DATAROOT, VERSION, EVAL_SET, SEED, CONDITION, DETECTOR.
@@ -26,6 +27,11 @@ std::map<std::string, std::string> pipeline_variables(const BenchmarkOptions& op
                                                       const RunSpec& run,
                                                       const std::string& sockets,
                                                       const std::string& run_dir);
+
+// The variables of a soak's pipeline file (see launch/soak.yaml): FAULTLINE_SOCKETS, DATAROOT,
+// VERSION, RATE, SEED.
+std::map<std::string, std::string> soak_variables(const SoakOptions& opts,
+                                                  const std::string& sockets);
 
 struct RunPipeline {
   std::vector<launch::ChildSpec> children;
@@ -39,5 +45,11 @@ struct RunPipeline {
 // unknown node in an override, a node missing that the run needs).
 RunPipeline run_pipeline(const BenchmarkOptions& opts, const RunSpec& run,
                          const std::string& sockets, const std::string& run_dir);
+
+// The soak's children, likewise: the soak's variables, then its overrides (injector corruption,
+// detector parameters, player scenes); its --faults file is the injector's first --params (the
+// pipeline's parameters win over it); every node is required. Parameters are written to
+// <out_dir>/params/<node>.yaml. Throws ConfigError as run_pipeline does.
+RunPipeline soak_pipeline(const SoakOptions& opts, const std::string& sockets);
 
 }  // namespace faultline::campaign

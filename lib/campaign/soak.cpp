@@ -15,8 +15,9 @@
 #include <unordered_map>
 
 #include "camera_frame.pb.h"
-#include "campaign/benchmark.hpp"
+#include "campaign/pipeline.hpp"
 #include "campaign/soak_report.hpp"
+#include "common/config.hpp"
 #include "detection.pb.h"
 #include "launch/supervisor.hpp"
 #include "scoring/evaluate.hpp"
@@ -135,61 +136,6 @@ std::string camera_of(const std::string& topic) {
   return topic.substr(at + 1, end == std::string::npos ? std::string::npos : end - at - 1);
 }
 
-std::vector<launch::ChildSpec> soak_children(const SoakOptions& o, const std::string& player,
-                                             const std::string& frames, const std::string& det) {
-  // In a soak every node must survive: each is required, so an exit ends the run and is reported.
-  auto node = [&](const char* name, std::vector<std::string> params) {
-    return node_child(o.bin_dir, name, std::move(params), true);
-  };
-  std::vector<launch::ChildSpec> children;
-  // The injector waits for the detector (the soak listens to its /statistics only).
-  std::vector<std::string> inj = {"input_endpoints:=[" + player + "]",
-                                  "output_endpoint:=" + frames,
-                                  "input_hwm:=48",
-                                  "output_hwm:=16",
-                                  "decode:=true",
-                                  "wait_subscribers:=1",
-                                  "wait_timeout_ms:=60000",
-                                  "seed:=" + std::to_string(o.seed),
-                                  "stats_log_period_s:=60"};
-  if (!o.corruption.empty()) inj.push_back("corruption:=" + o.corruption);
-  auto injector = node("fault_injector", inj);
-  if (!o.injector_params_file.empty()) {
-    injector.argv.insert(injector.argv.begin() + 3, {"--params", o.injector_params_file});
-  }
-  children.push_back(injector);
-  if (o.detector_cmd.empty()) {
-    // Real time, no lockstep: half-resolution input keeps up on one core, and a short queue bounds
-    // latency.
-    std::vector<std::string> dp = {"input_endpoints:=[" + frames + "]", "sink_endpoint:=" + det,
-                                   "input_hwm:=16", "scale:=0.5"};
-    for (const auto& p : o.detector_params) dp.push_back(p);
-    children.push_back(node("detector", dp));
-  } else {
-    launch::ChildSpec c;
-    c.name = "detector";
-    c.required = true;
-    c.argv = {"/bin/sh", "-c", o.detector_cmd};
-    children.push_back(c);
-  }
-  std::vector<std::string> pp = {"dataroot:=" + o.dataroot,
-                                 "version:=" + o.version,
-                                 "endpoint:=" + player,
-                                 "rate:=" + fmt(o.rate, 3),
-                                 "loop:=true",
-                                 "hwm:=48",
-                                 "wait_subscribers:=2",
-                                 "wait_timeout_ms:=60000",
-                                 "stats_log_period_s:=60"};
-  if (!o.scenes.empty()) {
-    std::string list = "scenes:=[";
-    for (std::size_t i = 0; i < o.scenes.size(); ++i) list += (i ? "," : "") + o.scenes[i];
-    pp.push_back(list + "]");
-  }
-  children.push_back(node("nusc_player", pp));
-  return children;
-}
-
 // Accumulates one reporting period.
 struct PeriodAccumulator {
   SoakPeriod row;
@@ -211,7 +157,14 @@ class SoakRun {
     if (ec_) return Status(StatusCode::kIoError, o_.out_dir + ": cannot create: " + ec_.message());
     if (Status s = load_split(); !s) return s;
     if (Status s = open_sockets(); !s) return s;
-    start_nodes();
+    RunPipeline pipeline;
+    try {
+      pipeline = soak_pipeline(o_, sock_);
+    } catch (const ConfigError& e) {
+      fs::remove_all(sock_, ec_);
+      return Status(StatusCode::kInvalidArgument, e.what());
+    }
+    start_nodes(std::move(pipeline));
     monitor();
     const double end_s = elapsed_s();
     if (acc_.row.samples_published || acc_.row.detection_arrays) finish_period(end_s);
@@ -292,10 +245,11 @@ class SoakRun {
   }
 
   // The nodes under a supervisor on its own thread; their output goes to nodes.log.
-  void start_nodes() {
+  void start_nodes(RunPipeline pipeline) {
     node_log_.open(fs::path(o_.out_dir) / "nodes.log");
     launch::SupervisorOptions so;
     so.grace_ns = 3 * kNsPerSec;
+    so.env = std::move(pipeline.env);
     so.env["FAULTLINE_FRAMES"] = frames_;
     so.env["FAULTLINE_DETECTIONS"] = det_;
     so.sink = [this](const std::string& node, std::string_view line, launch::OutputStream) {
@@ -310,7 +264,7 @@ class SoakRun {
                                     : " exited with code " + std::to_string(c.exit_code)));
       }
     };
-    sup_ = std::make_unique<launch::Supervisor>(soak_children(o_, player_, frames_, det_), so);
+    sup_ = std::make_unique<launch::Supervisor>(std::move(pipeline.children), so);
     sup_thread_ = std::thread([this] {
       launch_result_ = sup_->run(sup_stop_);
       sup_done_.store(true);

@@ -1,10 +1,11 @@
 // `faultline soak`: the pipeline in real time for a long while, watched. Player (rate 1.0, looping,
 // no lockstep) -> injector (a corruption and/or a fault schedule) -> detector run as launched
-// processes; the soak process itself is the sink. It listens to the player's and the injector's
-// /statistics and sample boundaries (small messages, no images) and pulls the detections, and
-// reports per period: frames in and out per camera, unintended drops, end-to-end latency (player's
-// sample boundary -> detections received), detector output rate, track continuity, resident memory
-// of every node, and the NDS of every completed loop over the scenes.
+// processes (launch/soak.yaml, campaign/pipeline.hpp); the soak process itself is the sink. It
+// listens to the player's and the injector's /statistics and sample boundaries (small messages, no
+// images) and pulls the detections, and reports per period: frames in and out per camera,
+// unintended drops, end-to-end latency (player's sample boundary -> detections received), detector
+// output rate, track continuity, resident memory of every node, and the NDS of every completed loop
+// over the scenes.
 #pragma once
 
 #include <atomic>
@@ -19,7 +20,7 @@
 namespace faultline::campaign {
 
 struct SoakOptions {
-  std::string out_dir;  // soak.json, minutes.csv, loops/, nodes.log
+  std::string out_dir;  // soak.json, periods.csv, loops/, params/, nodes.log
   std::string dataroot;
   std::string version = "v1.0-mini";
   std::string eval_set = "mini_val";  // split each loop is scored on
@@ -33,6 +34,7 @@ struct SoakOptions {
   std::string detector_cmd;  // external detector (sh -c) instead of Faultline's
   std::vector<std::string> detector_params;  // key:=value for Faultline's detector
   std::string bin_dir;                       // node executables
+  std::string pipeline_file;  // the nodes (a launch file); "" = launch/soak.yaml built in
   std::uint64_t seed = 1;
 };
 

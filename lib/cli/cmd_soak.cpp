@@ -25,7 +25,8 @@ int run(int argc, char** argv) {
       "detector output "
       "rate, track continuity, resident memory of every node, and the NDS of every loop over the "
       "scenes. "
-      "Writes soak.json, periods.csv, loops/*.json and nodes.log. Exit code 1 when a node failed "
+      "Writes soak.json, periods.csv, loops/*.json, params/*.yaml and nodes.log. Exit code 1 when "
+      "a node failed "
       "or "
       "memory grew by more than --max-rss-growth."};
   campaign::SoakOptions o;
@@ -56,6 +57,10 @@ int run(int argc, char** argv) {
   app.add_option("--detector-param", o.detector_params,
                  "key:=value for Faultline's detector (repeatable)");
   app.add_option("--seed", o.seed, "injector seed")->capture_default_str();
+  app.add_option("--pipeline", o.pipeline_file,
+                 "launch file of the soak's nodes (default: launch/soak.yaml, built in) with the "
+                 "same variables and node names; each node's parameters go to <out>/params/")
+      ->check(CLI::ExistingFile);
   app.add_option("--max-rss-growth", max_growth_mb, "MB a node may grow from period 2 to the end")
       ->capture_default_str();
   app.add_option("--synth-dir", synth_dir,

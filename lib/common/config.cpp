@@ -1,5 +1,6 @@
 #include "common/config.hpp"
 
+#include <algorithm>
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
@@ -75,20 +76,39 @@ std::string ParamSource::origin_of(const std::string& key) const {
 }
 
 void Loader::finish() const {
-  for (const auto& kv : source_.root()) {
+  if (!source_) return;  // a list entry's keys were checked before it was read
+  for (const auto& kv : root_) {
     const std::string key = kv.first.Scalar();  // merge and apply_override store string keys only
     if (!used_.count(key)) {
       std::string known;
       for (const auto& k : used_) known += (known.empty() ? "" : ", ") + k;
-      throw ConfigError(source_.origin_of(key) + ": " + key + " = " + yaml_to_string(kv.second) +
+      throw ConfigError(source_->origin_of(key) + ": " + key + " = " + yaml_to_string(kv.second) +
                         ": unknown parameter (known: " + known + ")");
     }
   }
 }
 
 void Loader::fail(const std::string& key, const YAML::Node& value, const std::string& why) const {
-  throw ConfigError(source_.origin_of(key) + ": " + key + " = " + yaml_to_string(value) + ": " +
-                    why);
+  const std::string place = source_ ? source_->origin_of(key) + ": " + key : where_ + "." + key;
+  throw ConfigError(place + " = " + yaml_to_string(value) + ": " + why);
+}
+
+void check_entry_keys(const YAML::Node& entry, const std::string& where,
+                      const std::vector<std::string>& keys) {
+  for (const auto& kv : entry) {
+    // A list or mapping as key (YAML's `? [a, b] : v`): as<std::string> would throw yaml-cpp's own
+    // error, which names neither the entry nor the key.
+    if (!kv.first.IsScalar()) {
+      throw ConfigError(where + ".(key) = " + yaml_to_string(kv.first) +
+                        ": a key must be a string");
+    }
+    const std::string& key = kv.first.Scalar();
+    if (std::find(keys.begin(), keys.end(), key) != keys.end()) continue;
+    std::string expected;
+    for (const auto& k : keys) expected += (expected.empty() ? "" : ", ") + k;
+    throw ConfigError(where + "." + key + " = " + yaml_to_string(kv.second) +
+                      ": unknown key (expected " + expected + ")");
+  }
 }
 
 void HelpPrinter::add(const std::string& key, const std::string& type, const std::string& def,

@@ -1,7 +1,9 @@
 // Node parameters: one plain struct per node with a visit() that names every field once. The same
 // visit() loads YAML (unknown keys and wrong types are errors naming file, key and value), applies
 // `-p key:=value` overrides, prints --help and describes the resolved parameters for the start
-// line.
+// line. Entries of a list parameter (a fault of the injector's `faults` schedule) are read the same
+// way with load_entry(), or key by key with load_field(); an optional field (std::optional) tells
+// "not given" from any value.
 //
 //   struct PlayerConfig {
 //     double rate = 1.0;  // replay speed factor; 0 = as fast as possible
@@ -15,10 +17,12 @@
 #include <cstdint>
 #include <cstdlib>
 #include <map>
+#include <optional>
 #include <set>
 #include <stdexcept>
 #include <string>
 #include <type_traits>
+#include <utility>
 #include <vector>
 
 namespace faultline {
@@ -50,8 +54,24 @@ class ParamSource {
 std::string yaml_to_string(const YAML::Node& node);
 
 template <typename T>
+struct is_optional : std::false_type {};
+template <typename T>
+struct is_optional<std::optional<T>> : std::true_type {};
+
+// A field of its own type names itself in errors and --help with `static constexpr const char*
+// kTypeName` (and reads itself through a YAML::convert specialisation).
+template <typename T, typename = void>
+struct has_type_name : std::false_type {};
+template <typename T>
+struct has_type_name<T, std::void_t<decltype(T::kTypeName)>> : std::true_type {};
+
+template <typename T>
 const char* type_name() {
-  if constexpr (std::is_same_v<T, bool>)
+  if constexpr (is_optional<T>::value)
+    return type_name<typename T::value_type>();
+  else if constexpr (has_type_name<T>::value)
+    return T::kTypeName;
+  else if constexpr (std::is_same_v<T, bool>)
     return "bool";
   else if constexpr (std::is_integral_v<T> && std::is_unsigned_v<T>)
     return "unsigned integer";
@@ -73,16 +93,47 @@ const char* type_name() {
     return "YAML node";
 }
 
-// Visitor that reads fields from a ParamSource; finish() rejects keys no field claimed.
+// A field's value as YAML; an unset optional is null.
+template <typename T>
+YAML::Node to_yaml(const T& field) {
+  YAML::Node n;
+  if constexpr (is_optional<T>::value) {
+    if (field) n = *field;
+  } else {
+    n = field;
+  }
+  return n;
+}
+
+// Visitor that reads fields. From a ParamSource (a node's parameters) a null value keeps the
+// default, errors read "<origin>: key = value: why" and finish() rejects keys no field claimed.
+// From one entry of a list (load_entry) a null is a value like any other and errors read
+// "<where>.key = value: why".
 class Loader {
  public:
-  explicit Loader(const ParamSource& source) : source_(source) {}
+  explicit Loader(const ParamSource& source) : root_(source.root()), source_(&source) {}
+  Loader(const YAML::Node& entry, std::string where) : root_(entry), where_(std::move(where)) {}
 
   template <typename T>
   void operator()(const char* key, T& field, const char* /*help*/) {
-    const YAML::Node node = source_.root()[key];
+    const YAML::Node node = root_[key];
     used_.insert(key);
-    if (!node.IsDefined() || node.IsNull()) return;
+    if (!node.IsDefined() || (source_ && node.IsNull())) return;
+    if constexpr (is_optional<T>::value) {
+      typename T::value_type value{};
+      read(key, node, value);
+      field = std::move(value);
+    } else {
+      read(key, node, field);
+    }
+  }
+  void finish() const;  // throws ConfigError for the first unknown key (ParamSource only)
+  [[noreturn]] void fail(const std::string& key, const YAML::Node& value,
+                         const std::string& why) const;
+
+ private:
+  template <typename T>
+  void read(const char* key, const YAML::Node& node, T& field) const {
     if constexpr (std::is_same_v<T, YAML::Node>) {
       field = YAML::Clone(node);
     } else {
@@ -98,24 +149,66 @@ class Loader {
       }
     }
   }
-  void finish() const;  // throws ConfigError for the first unknown key
-  [[noreturn]] void fail(const std::string& key, const YAML::Node& value,
-                         const std::string& why) const;
 
- private:
-  const ParamSource& source_;
+  const YAML::Node root_;
+  const ParamSource* source_ = nullptr;  // null: reading one list entry
+  std::string where_;                    // the entry ("fault_injector: faults[2]")
   std::set<std::string> used_;
 };
+
+// Visitor that lists the keys in visit order.
+class KeyLister {
+ public:
+  template <typename T>
+  void operator()(const char* key, const T& /*field*/, const char* /*help*/) {
+    keys_.push_back(key);
+  }
+  const std::vector<std::string>& keys() const { return keys_; }
+
+ private:
+  std::vector<std::string> keys_;
+};
+
+// Refuses a key that is not a string or not in `keys`, in the entry's order, before any value is
+// read: "<where>.colour = red: unknown key (expected type, level, ...)".
+void check_entry_keys(const YAML::Node& entry, const std::string& where,
+                      const std::vector<std::string>& keys);
+
+template <typename Fields>
+void check_entry_keys(const YAML::Node& entry, const std::string& where) {
+  KeyLister keys;
+  Fields().visit(keys);
+  check_entry_keys(entry, where, keys.keys());
+}
+
+// One entry of a list parameter (a mapping; the caller says what else it expects) read into a
+// struct with a visit(): unknown keys first, then wrong types, as ConfigErrors naming `where`.
+template <typename Fields>
+Fields load_entry(const YAML::Node& entry, const std::string& where) {
+  check_entry_keys<Fields>(entry, where);
+  Fields fields;
+  Loader loader(entry, where);
+  fields.visit(loader);
+  return fields;
+}
+
+// Reads only the field named `key` of `fields`: an entry whose values are checked one by one, each
+// before the next is read (so the first error reported is the first in reading order).
+template <typename Fields>
+void load_field(Loader& loader, Fields& fields, const std::string& key) {
+  auto one = [&](const char* name, auto& field, const char* help) {
+    if (key == name) loader(name, field, help);
+  };
+  fields.visit(one);
+}
 
 // Visitor that renders "key=value" pairs for the start-up line.
 class Describer {
  public:
   template <typename T>
   void operator()(const char* key, const T& field, const char* /*help*/) {
-    YAML::Node n;
-    n = field;
     if (!out_.empty()) out_ += " ";
-    out_ += std::string(key) + "=" + yaml_to_string(n);
+    out_ += std::string(key) + "=" + yaml_to_string(to_yaml(field));
   }
   const std::string& str() const { return out_; }
 
@@ -123,14 +216,13 @@ class Describer {
   std::string out_;
 };
 
-// Visitor that renders the --help table: key, type, default, help.
+// Visitor that renders the --help table: key, type, default ("none" for an unset optional), help.
 class HelpPrinter {
  public:
   template <typename T>
   void operator()(const char* key, const T& field, const char* help) {
-    YAML::Node n;
-    n = field;
-    add(key, type_name<T>(), yaml_to_string(n), help);
+    const YAML::Node n = to_yaml(field);
+    add(key, type_name<T>(), n.IsNull() ? "none" : yaml_to_string(n), help);
   }
   void add(const std::string& key, const std::string& type, const std::string& def,
            const std::string& help);
@@ -139,6 +231,14 @@ class HelpPrinter {
  private:
   std::string out_;
 };
+
+// The --help table of a struct with a visit().
+template <typename Cfg>
+std::string help_table(const Cfg& cfg) {
+  HelpPrinter printer;
+  const_cast<Cfg&>(cfg).visit(printer);
+  return printer.str();
+}
 
 template <typename Cfg>
 std::string describe(const Cfg& cfg) {
@@ -167,6 +267,13 @@ ParamSource build_source(const NodeOptions& options);
 void print_node_help(const std::string& name, const std::string& summary,
                      const std::string& params);
 
+// A config may add text after its --help table with `static std::string help_notes()` (the keys of
+// a list parameter's entries, say).
+template <typename T, typename = void>
+struct has_help_notes : std::false_type {};
+template <typename T>
+struct has_help_notes<T, std::void_t<decltype(T::help_notes())>> : std::true_type {};
+
 // Loads a config struct for a node. Prints --help and exits 0 when asked.
 template <typename Cfg>
 Cfg load_node(int argc, char** argv, const std::string& default_name, NodeOptions* options_out,
@@ -174,9 +281,9 @@ Cfg load_node(int argc, char** argv, const std::string& default_name, NodeOption
   NodeOptions options = parse_node_args(argc, argv, default_name);
   Cfg cfg;
   if (options.help) {
-    HelpPrinter printer;
-    cfg.visit(printer);
-    print_node_help(default_name, summary, printer.str());
+    std::string params = help_table(cfg);
+    if constexpr (has_help_notes<Cfg>::value) params += "\n" + Cfg::help_notes();
+    print_node_help(default_name, summary, params);
     std::exit(0);
   }
   const ParamSource source = build_source(options);

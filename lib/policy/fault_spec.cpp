@@ -4,7 +4,9 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
-#include <set>
+#include <optional>
+#include <string>
+#include <vector>
 
 #include "common/config.hpp"
 #include "corruption/sensor_fault.hpp"
@@ -13,28 +15,50 @@
 namespace faultline::policy {
 namespace {
 
-constexpr double kMaxStaleMs = 10'000;
+// `cameras:` as written: one word (all, or a camera name) or a list of camera names.
+struct CameraSelection {
+  static constexpr const char* kTypeName = "all or a list of camera names";
+  bool one_word = true;
+  std::vector<std::string> names{"all"};
+};
 
-const std::set<std::string> kKeys = {"type",     "level",  "severity", "cameras", "rng",
-                                     "coherent", "mode",   "delay_ms", "start_s", "duration_s",
-                                     "ramp_s",   "frames", "offset_ms"};
+}  // namespace
+}  // namespace faultline::policy
+
+namespace YAML {
+template <>
+struct convert<faultline::policy::CameraSelection> {
+  static Node encode(const faultline::policy::CameraSelection& c) {
+    Node n;
+    if (c.one_word)
+      n = c.names.front();
+    else
+      n = c.names;
+    return n;
+  }
+  static bool decode(const Node& node, faultline::policy::CameraSelection& c) {
+    c.names.clear();
+    c.one_word = node.IsScalar();
+    if (c.one_word) {
+      c.names.push_back(node.Scalar());
+      return true;
+    }
+    if (!node.IsSequence()) return false;
+    // Elements read as as<std::string> does: a null element is the name "null".
+    for (const auto& item : node) c.names.push_back(item.as<std::string>());
+    return true;
+  }
+};
+}  // namespace YAML
+
+namespace faultline::policy {
+namespace {
+
+constexpr double kMaxStaleMs = 10'000;
 
 [[noreturn]] void fail(const std::string& where, const std::string& key, const std::string& value,
                        const std::string& why) {
   throw ConfigError(where + "." + key + " = " + value + ": " + why);
-}
-
-template <typename T>
-T read(const YAML::Node& node, const std::string& where, const std::string& key,
-       const char* expected) {
-  try {
-    if constexpr (std::is_same_v<T, bool>) {
-      if (!node.IsScalar()) throw YAML::Exception(YAML::Mark::null_mark(), "not a scalar");
-    }
-    return node.as<T>();
-  } catch (const YAML::Exception&) {
-    fail(where, key, config::yaml_to_string(node), std::string("expected ") + expected);
-  }
 }
 
 struct TypeName {
@@ -85,155 +109,238 @@ int level_severity(const FaultSpec& spec, corruption::Level level) {
                                             : temporal_severity(level);
 }
 
+// A fault as written in the `faults` list: every key once, with its description (also the table
+// of fault_keys_help()). Optional keys tell "not given" from a value where the default depends on
+// the type; EntryResolver reads them and checks the values.
+struct FaultEntry {
+  std::optional<std::string> type;
+  std::optional<std::string> level;
+  std::optional<int> severity;
+  std::optional<CameraSelection> cameras;
+  std::string rng = "fast";
+  std::optional<bool> coherent;
+  std::optional<std::string> mode;
+  std::optional<double> delay_ms;
+  double start_s = 0;
+  std::optional<double> duration_s;
+  double ramp_s = 0;
+  std::string frames = "all";
+  std::optional<double> offset_ms;
+
+  template <class V>
+  void visit(V& v) {
+    v("type", type,
+      "required: an image corruption (fog, snow, ...: docs/faults.md) or camera_crash, "
+      "frame_lost, black, freeze, drop, delay, calibration_drift, timestamp_skew, stale_frames");
+    v("level", level, "easy|mid|hard, the type's severity for that level (not with severity)");
+    v("severity", severity,
+      "1..5, the ramp's top; none = the level's, else mid's (1 for black, freeze, drop, delay)");
+    v("cameras", cameras, "camera names (CAM_FRONT, CAM_FRONT_RIGHT, ...) or all; none = all");
+    v("rng", rng, "fast|numpy: numpy draws the reference's random stream (bit-exact)");
+    v("coherent", coherent,
+      "one lasting fault per camera, image corruptions with rng fast only; none = on for the "
+      "sensor faults (soiling, water_drops, glare, exposure_flicker)");
+    v("mode", mode, "camera_crash and frame_lost output: black|drop|freeze|delay; none = black");
+    v("delay_ms", delay_ms,
+      "ms >= 0: how long mode delay and type delay hold a frame (none = 200); stale_frames: the "
+      "lag, at most 10000 (none = the severity's)");
+    v("start_s", start_s, "window start, s >= 0 after the first frame's capture time");
+    v("duration_s", duration_s, "window length, s >= 0; none = until the end");
+    v("ramp_s", ramp_s, "s >= 0 of a linear severity ramp from 1 up to severity");
+    v("frames", frames, "key|all: key frames only (nuScenes-C) or every frame incl. sweeps");
+    v("offset_ms", offset_ms,
+      "timestamp_skew only: stamp offset in ms, either sign, within +-1e6; none = the severity's");
+  }
+};
+
+// Reads one entry key by key, each value checked before the next is read, in the order errors
+// have always been reported: type, level/severity, cameras, rng, coherent, mode, delay_ms,
+// start_s, ramp_s, duration_s, offset_ms, frames. Unknown keys were refused before.
+class EntryResolver {
+ public:
+  EntryResolver(const YAML::Node& entry, const std::string& where)
+      : loader_(entry, where), entry_(entry), where_(where) {}
+
+  FaultSpec resolve() {
+    resolve_type();
+    resolve_severity();
+    resolve_cameras();
+    resolve_coherence();
+    resolve_mode();
+    resolve_timing();
+    return spec_;
+  }
+
+ private:
+  void read(const char* key) { config::load_field(loader_, e_, key); }
+
+  [[noreturn]] void fail_as_written(const char* key, const std::string& why) const {
+    fail(where_, key, config::yaml_to_string(entry_[key]), why);
+  }
+
+  void resolve_type() {
+    read("type");
+    if (!e_.type) fail(where_, "type", "(missing)", "every fault needs a type");
+    if (!set_type(spec_, *e_.type)) {
+      fail(where_, "type", *e_.type,
+           "expected " + corruption::corruption_names("|") +
+               "|camera_crash|frame_lost|black|freeze|drop|delay|calibration_drift"
+               "|timestamp_skew|stale_frames");
+    }
+  }
+
+  void resolve_severity() {
+    if (entry_["level"] && entry_["severity"])
+      fail_as_written("level", "give level or severity, not both");
+    read("level");
+    read("severity");
+    // Scripted actions (black, freeze, drop, delay) have no strength: severity 1 unless given.
+    const FaultKind k = spec_.kind;
+    const bool graded = k == FaultKind::Corruption || k == FaultKind::CameraCrash ||
+                        k == FaultKind::FrameLost || k == FaultKind::CalibrationDrift ||
+                        k == FaultKind::TimestampSkew || k == FaultKind::StaleFrames;
+    spec_.severity = graded ? level_severity(spec_, corruption::Level::Mid) : 1;
+    if (e_.level) {
+      const auto level = corruption::level_from_string(*e_.level);
+      if (!level) fail(where_, "level", *e_.level, "expected easy|mid|hard");
+      spec_.severity = level_severity(spec_, *level);
+    }
+    if (e_.severity) {
+      spec_.severity = *e_.severity;
+      if (spec_.severity < 1 || spec_.severity > 5)
+        fail(where_, "severity", std::to_string(spec_.severity), "expected 1..5");
+    }
+  }
+
+  void resolve_cameras() {
+    read("cameras");
+    if (!e_.cameras) return;
+    const CameraSelection& cams = *e_.cameras;
+    if (cams.one_word) {
+      const std::string& text = cams.names.front();
+      if (text == "all") return;
+      const int idx = camera_index(text);
+      if (idx < 0)
+        fail(where_, "cameras", text, "expected all, a camera name or a list of camera names");
+      spec_.cameras.push_back(idx);
+      return;
+    }
+    for (const auto& name : cams.names) {
+      const int idx = camera_index(name);
+      if (idx < 0)
+        fail(where_, "cameras", name, "unknown camera (expected CAM_FRONT, CAM_FRONT_RIGHT, ...)");
+      if (std::find(spec_.cameras.begin(), spec_.cameras.end(), idx) == spec_.cameras.end())
+        spec_.cameras.push_back(idx);
+    }
+    if (spec_.cameras.empty())
+      fail(where_, "cameras", "[]", "expected at least one camera (or all)");
+  }
+
+  void resolve_coherence() {
+    read("rng");
+    const auto mode = corruption::rng_mode_from_string(e_.rng);
+    if (!mode) fail(where_, "rng", e_.rng, "expected fast|numpy");
+    spec_.rng = *mode;
+    // A sensor fault's cause (dirt, drops, a light source, a hunting exposure loop) persists:
+    // coherent by default in fast mode; `coherent: false` (or rng: numpy) redraws it for every
+    // frame instead.
+    read("coherent");
+    if (e_.coherent) {
+      spec_.coherent = *e_.coherent;
+    } else {
+      spec_.coherent = spec_.kind == FaultKind::Corruption &&
+                       corruption::is_sensor_fault(spec_.corruption) &&
+                       spec_.rng == corruption::RngMode::Fast;
+    }
+    if (!spec_.coherent) return;
+    if (spec_.rng == corruption::RngMode::Numpy)
+      fail(where_, "coherent", "true", "coherent needs rng: fast");
+    if (spec_.kind != FaultKind::Corruption)
+      fail(where_, "coherent", "true", "only image corruptions are coherent");
+    if (spec_.corruption == corruption::Corruption::RollingShutter) {
+      fail(where_, "coherent", "true",
+           "rolling_shutter follows the ego poses of the stream and keeps no other state");
+    }
+  }
+
+  void resolve_mode() {
+    read("mode");
+    if (!e_.mode) return;
+    const std::string& text = *e_.mode;
+    if (spec_.kind != FaultKind::CameraCrash && spec_.kind != FaultKind::FrameLost)
+      fail(where_, "mode", text, "only camera_crash and frame_lost take a mode");
+    if (text == "black")
+      spec_.mode = OutputMode::Black;
+    else if (text == "drop")
+      spec_.mode = OutputMode::Drop;
+    else if (text == "freeze")
+      spec_.mode = OutputMode::Freeze;
+    else if (text == "delay")
+      spec_.mode = OutputMode::Delay;
+    else
+      fail(where_, "mode", text, "expected black|drop|freeze|delay");
+  }
+
+  void check_non_negative(const char* key, double value) const {
+    if (!(value >= 0) || !std::isfinite(value)) fail_as_written(key, "expected a number >= 0");
+  }
+
+  void resolve_timing() {
+    read("delay_ms");
+    if (e_.delay_ms) {
+      check_non_negative("delay_ms", *e_.delay_ms);
+      spec_.delay_ms = *e_.delay_ms;
+      if (spec_.kind == FaultKind::StaleFrames) {
+        // The lag is held in memory (every frame of the camera within it): a bound keeps a typo
+        // from holding minutes of images.
+        if (spec_.delay_ms > kMaxStaleMs)
+          fail_as_written("delay_ms", "stale_frames lags at most 10000 ms");
+        spec_.lag_ms = spec_.delay_ms;
+      }
+    }
+    read("start_s");
+    check_non_negative("start_s", e_.start_s);
+    spec_.start_s = e_.start_s;
+    read("ramp_s");
+    check_non_negative("ramp_s", e_.ramp_s);
+    spec_.ramp_s = e_.ramp_s;
+    read("duration_s");
+    if (e_.duration_s) {
+      check_non_negative("duration_s", *e_.duration_s);
+      spec_.duration_s = *e_.duration_s;
+    }
+    read("offset_ms");
+    if (e_.offset_ms) {
+      const double ms = *e_.offset_ms;
+      if (spec_.kind != FaultKind::TimestampSkew)
+        fail_as_written("offset_ms", "only timestamp_skew takes offset_ms");
+      if (!std::isfinite(ms) || std::abs(ms) > 1e6)
+        fail_as_written("offset_ms", "expected a finite number of ms within +-1e6");
+      spec_.offset_ms = ms;
+    }
+    read("frames");
+    if (e_.frames == "key")
+      spec_.frames = FrameSet::Key;
+    else if (e_.frames == "all")
+      spec_.frames = FrameSet::All;
+    else
+      fail(where_, "frames", e_.frames, "expected key|all");
+  }
+
+  config::Loader loader_;
+  const YAML::Node& entry_;
+  const std::string& where_;
+  FaultEntry e_;
+  FaultSpec spec_;
+};
+
 FaultSpec parse_one(const YAML::Node& node, const std::string& where) {
   if (!node.IsMap()) {
     throw ConfigError(where + " = " + config::yaml_to_string(node) +
                       ": expected a mapping with at least `type`");
   }
-  for (const auto& kv : node) {
-    // A list or mapping as key (YAML's `? [a, b] : v`): as<std::string> would throw yaml-cpp's own
-    // error.
-    if (!kv.first.IsScalar())
-      fail(where, "(key)", config::yaml_to_string(kv.first), "a key must be a string");
-    const auto key = kv.first.Scalar();
-    if (!kKeys.count(key)) {
-      fail(where, key, config::yaml_to_string(kv.second),
-           "unknown key (expected type, level, severity, cameras, rng, coherent, mode, delay_ms, "
-           "start_s, "
-           "duration_s, ramp_s, frames, offset_ms)");
-    }
-  }
-  FaultSpec spec;
-  if (!node["type"]) fail(where, "type", "(missing)", "every fault needs a type");
-  const auto type = read<std::string>(node["type"], where, "type", "string");
-  if (!set_type(spec, type)) {
-    fail(where, "type", type,
-         "expected " + corruption::corruption_names("|") +
-             "|camera_crash|frame_lost|black|freeze|drop|delay|calibration_drift|timestamp_skew"
-             "|stale_frames");
-  }
-  if (node["level"] && node["severity"])
-    fail(where, "level", config::yaml_to_string(node["level"]), "give level or severity, not both");
-  // Scripted actions (black, freeze, drop, delay) have no strength: severity 1 unless given.
-  const bool graded = spec.kind == FaultKind::Corruption || spec.kind == FaultKind::CameraCrash ||
-                      spec.kind == FaultKind::FrameLost ||
-                      spec.kind == FaultKind::CalibrationDrift ||
-                      spec.kind == FaultKind::TimestampSkew || spec.kind == FaultKind::StaleFrames;
-  spec.severity = graded ? level_severity(spec, corruption::Level::Mid) : 1;
-  if (node["level"]) {
-    const auto text = read<std::string>(node["level"], where, "level", "string");
-    const auto level = corruption::level_from_string(text);
-    if (!level) fail(where, "level", text, "expected easy|mid|hard");
-    spec.severity = level_severity(spec, *level);
-  }
-  if (node["severity"]) {
-    spec.severity = read<int>(node["severity"], where, "severity", "integer");
-    if (spec.severity < 1 || spec.severity > 5)
-      fail(where, "severity", std::to_string(spec.severity), "expected 1..5");
-  }
-  if (const auto cams = node["cameras"]) {
-    if (cams.IsScalar()) {
-      const auto text = cams.as<std::string>();
-      if (text != "all") {
-        const int idx = camera_index(text);
-        if (idx < 0)
-          fail(where, "cameras", text, "expected all, a camera name or a list of camera names");
-        spec.cameras.push_back(idx);
-      }
-    } else {
-      for (const auto& name : read<std::vector<std::string>>(cams, where, "cameras",
-                                                             "all or a list of camera names")) {
-        const int idx = camera_index(name);
-        if (idx < 0)
-          fail(where, "cameras", name, "unknown camera (expected CAM_FRONT, CAM_FRONT_RIGHT, ...)");
-        if (std::find(spec.cameras.begin(), spec.cameras.end(), idx) == spec.cameras.end())
-          spec.cameras.push_back(idx);
-      }
-      if (spec.cameras.empty())
-        fail(where, "cameras", "[]", "expected at least one camera (or all)");
-    }
-  }
-  if (node["rng"]) {
-    const auto text = read<std::string>(node["rng"], where, "rng", "string");
-    const auto mode = corruption::rng_mode_from_string(text);
-    if (!mode) fail(where, "rng", text, "expected fast|numpy");
-    spec.rng = *mode;
-  }
-  if (node["coherent"]) spec.coherent = read<bool>(node["coherent"], where, "coherent", "bool");
-  // A sensor fault's cause (dirt, drops, a light source, a hunting exposure loop) persists:
-  // coherent by default in fast mode; `coherent: false` (or rng: numpy) redraws it for every frame
-  // instead.
-  if (!node["coherent"] && spec.kind == FaultKind::Corruption &&
-      corruption::is_sensor_fault(spec.corruption) && spec.rng == corruption::RngMode::Fast) {
-    spec.coherent = true;
-  }
-  if (spec.coherent && spec.rng == corruption::RngMode::Numpy)
-    fail(where, "coherent", "true", "coherent needs rng: fast");
-  if (spec.coherent && spec.kind != FaultKind::Corruption)
-    fail(where, "coherent", "true", "only image corruptions are coherent");
-  if (spec.coherent && spec.corruption == corruption::Corruption::RollingShutter) {
-    fail(where, "coherent", "true",
-         "rolling_shutter follows the ego poses of the stream and keeps no other state");
-  }
-  if (node["mode"]) {
-    const auto text = read<std::string>(node["mode"], where, "mode", "string");
-    if (spec.kind != FaultKind::CameraCrash && spec.kind != FaultKind::FrameLost) {
-      fail(where, "mode", text, "only camera_crash and frame_lost take a mode");
-    }
-    if (text == "black")
-      spec.mode = OutputMode::Black;
-    else if (text == "drop")
-      spec.mode = OutputMode::Drop;
-    else if (text == "freeze")
-      spec.mode = OutputMode::Freeze;
-    else if (text == "delay")
-      spec.mode = OutputMode::Delay;
-    else
-      fail(where, "mode", text, "expected black|drop|freeze|delay");
-  }
-  auto non_negative = [&](const char* key, double& field) {
-    if (!node[key]) return;
-    field = read<double>(node[key], where, key, "number");
-    if (!(field >= 0) || !std::isfinite(field))
-      fail(where, key, config::yaml_to_string(node[key]), "expected a number >= 0");
-  };
-  non_negative("delay_ms", spec.delay_ms);
-  if (node["delay_ms"] && spec.kind == FaultKind::StaleFrames) {
-    // The lag is held in memory (every frame of the camera within it): a bound keeps a typo from
-    // holding minutes of images.
-    if (spec.delay_ms > kMaxStaleMs)
-      fail(where, "delay_ms", config::yaml_to_string(node["delay_ms"]),
-           "stale_frames lags at most 10000 ms");
-    spec.lag_ms = spec.delay_ms;
-  }
-  non_negative("start_s", spec.start_s);
-  non_negative("ramp_s", spec.ramp_s);
-  if (node["duration_s"]) {
-    double d = 0;
-    non_negative("duration_s", d);
-    spec.duration_s = d;
-  }
-  if (node["offset_ms"]) {
-    const double ms = read<double>(node["offset_ms"], where, "offset_ms", "number");
-    if (spec.kind != FaultKind::TimestampSkew)
-      fail(where, "offset_ms", config::yaml_to_string(node["offset_ms"]),
-           "only timestamp_skew takes offset_ms");
-    if (!std::isfinite(ms) || std::abs(ms) > 1e6) {
-      fail(where, "offset_ms", config::yaml_to_string(node["offset_ms"]),
-           "expected a finite number of ms within +-1e6");
-    }
-    spec.offset_ms = ms;
-  }
-  if (node["frames"]) {
-    const auto text = read<std::string>(node["frames"], where, "frames", "string");
-    if (text == "key")
-      spec.frames = FrameSet::Key;
-    else if (text == "all")
-      spec.frames = FrameSet::All;
-    else
-      fail(where, "frames", text, "expected key|all");
-  }
-  return spec;
+  config::check_entry_keys<FaultEntry>(node, where);
+  return EntryResolver(node, where).resolve();
 }
 
 }  // namespace
@@ -275,6 +382,8 @@ const char* to_string(OutputMode mode) {
   }
   return "black";
 }
+
+std::string fault_keys_help() { return config::help_table(FaultEntry{}); }
 
 std::vector<FaultSpec> parse_faults(const YAML::Node& faults, const std::string& origin) {
   std::vector<FaultSpec> out;

@@ -61,6 +61,9 @@ struct FaultSpec {
 // no faults.
 std::vector<FaultSpec> parse_faults(const YAML::Node& faults, const std::string& origin);
 
+// The keys of one `faults` entry as a --help table: key, type, default, description.
+std::string fault_keys_help();
+
 // "fog/mid", "fog/3", "camera_crash/hard" or "" (none): one fault on all cameras, fast mode, every
 // frame.
 std::optional<FaultSpec> parse_corruption_shorthand(const std::string& text,

@@ -7,6 +7,7 @@
 #include <mutex>
 
 #include "common/config.hpp"
+#include "policy/fault_spec.hpp"
 #include "runtime/injector_pipeline.hpp"
 #include "runtime/stats_reporter.hpp"
 #include "transport/drop_counter.hpp"
@@ -35,6 +36,10 @@ std::int64_t thread_cpu_ns() {
 enum class Next { Continue, Finished, Stop };
 
 }  // namespace
+
+std::string InjectorConfig::help_notes() {
+  return "Keys of each `faults` entry:\n" + policy::fault_keys_help();
+}
 
 void InjectorConfig::validate() const {
   auto fail = [](const std::string& key, const std::string& value, const std::string& why) {

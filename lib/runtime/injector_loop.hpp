@@ -90,8 +90,7 @@ struct InjectorConfig {
     v("stats_window_s", stats_window_s, "statistics window (s)");
     v("stats_log_period_s", stats_log_period_s, "info log period of statistics (s)");
     v("remap", remap, "topic remaps from -> to");
-    v("faults", faults,
-      "fault schedule: list of {type, level|severity, cameras, rng, coherent, mode, ...}");
+    v("faults", faults, "fault schedule: a list of faults (their keys are listed below)");
     v("corruption", corruption, "shorthand for one fault on all cameras, e.g. fog/mid");
     v("seed", seed, "run seed of the fault draws");
     v("jpeg_quality", jpeg_quality,
@@ -117,7 +116,8 @@ struct InjectorConfig {
       "largest frame a slot holds (bytes); larger frames are refused and counted");
     access.visit(v);
   }
-  void validate() const;  // throws ConfigError
+  void validate() const;            // throws ConfigError
+  static std::string help_notes();  // the keys of a `faults` entry, for --help
 };
 
 struct InjectorCounts {

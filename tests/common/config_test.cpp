@@ -21,6 +21,17 @@ struct DemoConfig {
   }
 };
 
+// One entry of a list parameter: optional fields tell "not given" from a value.
+struct DemoEntry {
+  std::optional<int> count;
+  std::string name = "x";
+  template <class V>
+  void visit(V& v) {
+    v("count", count, "how many; none = as many as there are");
+    v("name", name, "what");
+  }
+};
+
 DemoConfig Load(const ParamSource& source) {
   DemoConfig cfg;
   Loader loader(source);
@@ -150,6 +161,36 @@ TEST(ConfigTest, DescribeListsResolvedValues) {
   DemoConfig cfg;
   cfg.rate = 3;
   EXPECT_NE(describe(cfg).find("rate=3"), std::string::npos);
+}
+
+TEST(ConfigTest, ListEntryReadsOptionalsAndNamesTheEntryInErrors) {
+  const auto given = load_entry<DemoEntry>(YAML::Load("{count: 3}"), "demo: items[0]");
+  ASSERT_TRUE(given.count.has_value());
+  EXPECT_EQ(*given.count, 3);
+  EXPECT_EQ(given.name, "x");
+  EXPECT_FALSE(load_entry<DemoEntry>(YAML::Load("{name: y}"), "w").count.has_value());
+  auto error_of = [](const std::string& yaml) -> std::string {
+    try {
+      (void)load_entry<DemoEntry>(YAML::Load(yaml), "demo: items[1]");
+    } catch (const ConfigError& e) {
+      return e.what();
+    }
+    return "";
+  };
+  // A null is a value here (a node parameter's null keeps the default).
+  EXPECT_EQ(error_of("{count: ~}"), "demo: items[1].count = ~: expected integer");
+  EXPECT_EQ(error_of("{count: x, size: 2}"),
+            "demo: items[1].size = 2: unknown key (expected count, name)");
+  EXPECT_EQ(error_of("{name: [a]}"), "demo: items[1].name = [a]: expected string");
+}
+
+TEST(ConfigTest, HelpTableShowsAnUnsetOptionalAsNone) {
+  const std::string help = help_table(DemoEntry{});
+  EXPECT_NE(help.find("count"), std::string::npos);
+  EXPECT_NE(help.find("integer"), std::string::npos) << help;
+  EXPECT_NE(help.find("default none"), std::string::npos) << help;
+  EXPECT_NE(help.find("how many; none = as many as there are"), std::string::npos) << help;
+  EXPECT_NE(help.find("default x"), std::string::npos) << help;
 }
 
 }  // namespace

@@ -3,6 +3,8 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+
 #include "common/config.hpp"
 
 namespace faultline::policy {
@@ -110,6 +112,64 @@ TEST(FaultSpecTest, ErrorsNameTheKeyAndTheValue) {
   EXPECT_NE(ErrorOf("{type: fog}").find("faults = "), std::string::npos);
   EXPECT_NE(ErrorOf("[{type: fog, rng: numpy, coherent: true}]").find("coherent"),
             std::string::npos);
+}
+
+// The entry is read through config::load_entry: unknown and non-string keys are refused first, in
+// the entry's order, with the keys listed in their documented order; a null is a value, not "use
+// the default".
+TEST(FaultSpecTest, KeyErrorsComeFirstAndListTheKeysInOrder) {
+  EXPECT_EQ(ErrorOf("[{severity: abc, colour: red}]"),
+            "fault_injector: faults[0].colour = red: unknown key (expected type, level, severity, "
+            "cameras, rng, coherent, mode, delay_ms, start_s, duration_s, ramp_s, frames, "
+            "offset_ms)");
+  EXPECT_EQ(ErrorOf("[{type: fog, ? [a, b] : 1}]"),
+            "fault_injector: faults[0].(key) = [a, b]: a key must be a string");
+  EXPECT_EQ(ErrorOf("[{type: fog, severity: ~}]"),
+            "fault_injector: faults[0].severity = ~: expected integer");
+  EXPECT_EQ(ErrorOf("[{type: fog, cameras: ~}]"),
+            "fault_injector: faults[0].cameras = ~: expected all or a list of camera names");
+  EXPECT_EQ(ErrorOf("[{type: fog, cameras: {CAM_FRONT: 1}}]"),
+            "fault_injector: faults[0].cameras = {CAM_FRONT: 1}: expected all or a list of camera "
+            "names");
+  EXPECT_EQ(ErrorOf("[{type: fog, cameras: []}]"),
+            "fault_injector: faults[0].cameras = []: expected at least one camera (or all)");
+  EXPECT_NE(ErrorOf("[{type: ~}]").find("faults[0].type = null: expected "), std::string::npos);
+  EXPECT_EQ(ErrorOf("[{severity: 3}]"),
+            "fault_injector: faults[0].type = (missing): every fault needs a type");
+  EXPECT_EQ(ErrorOf("[{type: fog, level: mid, severity: 2}]"),
+            "fault_injector: faults[0].level = mid: give level or severity, not both");
+  EXPECT_EQ(ErrorOf("[{type: stale_frames, delay_ms: 2e4}]"),
+            "fault_injector: faults[0].delay_ms = 2e4: stale_frames lags at most 10000 ms");
+  EXPECT_EQ(ErrorOf("[5]"),
+            "fault_injector: faults[0] = 5: expected a mapping with at least `type`");
+}
+
+TEST(FaultSpecTest, OneWordCamerasAndDuplicatesInAList) {
+  EXPECT_EQ(Parse("[{type: fog, cameras: CAM_BACK}]")[0].cameras, (std::vector<int>{3}));
+  EXPECT_EQ(Parse("[{type: fog, cameras: [CAM_BACK, CAM_FRONT, CAM_BACK]}]")[0].cameras,
+            (std::vector<int>{3, 0}));
+  EXPECT_EQ(ErrorOf("[{type: fog, cameras: CAM_TOP}]"),
+            "fault_injector: faults[0].cameras = CAM_TOP: expected all, a camera name or a list of "
+            "camera names");
+}
+
+// fault_keys_help() (the injector's --help) lists every key once, with its type, default and
+// description, from the same visit() the parser reads with.
+TEST(FaultSpecTest, KeysHelpListsEveryKeyOnce) {
+  const std::string help = fault_keys_help();
+  for (const char* key : {"type", "level", "severity", "cameras", "rng", "coherent", "mode",
+                          "delay_ms", "start_s", "duration_s", "ramp_s", "frames", "offset_ms"}) {
+    const std::string line_start = std::string("\n  ") + key + " ";
+    const std::string text = "\n" + help;
+    const auto at = text.find(line_start);
+    ASSERT_NE(at, std::string::npos) << key << "\n" << help;
+    EXPECT_EQ(text.find(line_start, at + 1), std::string::npos) << key;
+  }
+  EXPECT_EQ(std::count(help.begin(), help.end(), '\n'), 13);
+  EXPECT_NE(help.find("all or a list of camera names"), std::string::npos) << help;
+  EXPECT_NE(help.find("default fast"), std::string::npos) << help;  // rng
+  EXPECT_NE(help.find("default none"), std::string::npos) << help;  // the optional keys
+  EXPECT_NE(help.find("stale_frames: the lag"), std::string::npos) << help;
 }
 
 TEST(FaultSpecTest, CorruptionShorthandIsOneFaultOnAllCameras) {
