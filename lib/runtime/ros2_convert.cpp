@@ -155,19 +155,52 @@ struct Ros2BagConverter::Impl {
     return camera_channels.emplace(image_topic, c).first->second;
   }
 
+  // What a faulted frame says about itself where message faults changed it: its stamp offset
+  // (timestamp_skew), and with calibration_drift its K and its TF frame.
+  struct FrameClaims {
+    DurationNs stamp_offset_ns = 0;
+    std::string frame_id;                               // "" = the camera's own frame (its channel)
+    const std::array<double, 9>* intrinsics = nullptr;  // null = the record's K
+  };
+
   // Image + CameraInfo of one frame under `ns` ("" or the faulted prefix), logged at log_ns,
-  // stamped at its capture time + stamp_offset_ns (timestamp_skew).
+  // stamped at its capture time + the claimed offset.
   void write_camera(const std::string& ns, const dataset::CameraFrameRecord& f,
-                    std::string_view jpeg, StampNs log_ns, DurationNs stamp_offset_ns = 0) {
+                    std::string_view jpeg, StampNs log_ns, const FrameClaims& claims) {
     CameraChannels& ch = channels_for(ns + ros2::nuscenes_image_topic(f.channel),
                                       ns + ros2::nuscenes_camera_info_topic(f.channel));
-    const ros2::Header header{ros2::time_from_ns(f.timestamp_us * 1000 + stamp_offset_ns),
-                              f.channel};
+    const ros2::Header header{ros2::time_from_ns(f.timestamp_us * 1000 + claims.stamp_offset_ns),
+                              claims.frame_id.empty() ? f.channel : claims.frame_id};
     prefix = ros2::compressed_image_prefix(header, "jpeg", jpeg.size());
     check(writer->write_parts(ch.image, log_ns, {prefix, jpeg}));
-    const auto info = ros2::camera_info_from_k(header, static_cast<std::uint32_t>(f.width),
-                                               static_cast<std::uint32_t>(f.height), f.intrinsics);
+    const auto info = ros2::camera_info_from_k(
+        header, static_cast<std::uint32_t>(f.width), static_cast<std::uint32_t>(f.height),
+        claims.intrinsics != nullptr ? *claims.intrinsics : f.intrinsics);
     check(writer->write(ch.info, log_ns, ros2::serialize(info)));
+  }
+
+  // calibration_drift on a ROS 2 frame: K goes into its CameraInfo; the drifted extrinsic belongs
+  // to a TF frame of its own, "<channel>_drifted" on /tf_static (republished when the drift
+  // changes, as for a new scene), so the clean camera frame keeps the true one.
+  void claim_drifted_calibration(const policy::CalibrationDrift& drift,
+                                 const dataset::CameraFrameRecord& f, StampNs log_ns,
+                                 FrameClaims& claims, std::array<double, 9>& k) {
+    policy::Calibration c;
+    c.intrinsics = f.intrinsics;
+    c.rotation_wxyz = f.sensor_to_ego.rotation;
+    c.translation_m = f.sensor_to_ego.translation;
+    policy::apply_drift(drift, c);
+    k = c.intrinsics;
+    claims.intrinsics = &k;
+    claims.frame_id = f.channel + "_drifted";
+    dataset::Pose drifted;
+    drifted.rotation = c.rotation_wxyz;
+    drifted.translation = c.translation_m;
+    const auto it = calibration.find(claims.frame_id);
+    if (it == calibration.end() || !same_pose(it->second, drifted)) {
+      calibration[claims.frame_id] = drifted;
+      write_tf_static(log_ns);
+    }
   }
 
   void write_tf_static(StampNs log_ns) {
@@ -210,8 +243,14 @@ struct Ros2BagConverter::Impl {
       ++counts.changed_frames;
     }
     const StampNs out_log = log_ns + (d.action == msgs::FAULT_ACTION_DELAY ? d.delay_ns : 0);
-    write_camera(cfg.clean_frames ? cfg.output_prefix : "", f, jpeg, out_log,
-                 d.edit.stamp_offset_ns);
+    FrameClaims claims;
+    claims.stamp_offset_ns = d.edit.stamp_offset_ns;
+    std::array<double, 9> drifted_k{};
+    if (d.edit.calibration) {
+      claim_drifted_calibration(*d.edit.calibration, f, out_log, claims, drifted_k);
+      ++counts.drifted_frames;
+    }
+    write_camera(cfg.clean_frames ? cfg.output_prefix : "", f, jpeg, out_log, claims);
     ++counts.faulted_frames;
   }
 };
@@ -309,7 +348,7 @@ Result<Ros2ConvertCounts> Ros2BagConverter::run(const std::atomic<bool>& stop,
                                   (*image)->size());
       m.counts.image_bytes += jpeg.size();
       m.write_ego(f, log_ns);
-      if (!m.policy || m.cfg.clean_frames) m.write_camera("", f, jpeg, log_ns);
+      if (!m.policy || m.cfg.clean_frames) m.write_camera("", f, jpeg, log_ns, Impl::FrameClaims{});
       if (m.policy) m.inject(f, *image, log_ns);
       ++m.counts.frames;
     }

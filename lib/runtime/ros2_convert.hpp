@@ -64,6 +64,7 @@ struct Ros2ConvertCounts {
   std::uint64_t faulted_frames = 0;  // faulted frames written (after injected drops)
   std::uint64_t injected_drops = 0;
   std::uint64_t changed_frames = 0;  // faulted frames whose bytes differ from the source
+  std::uint64_t drifted_frames = 0;  // faulted frames under calibration_drift (own TF frame)
   std::uint64_t fault_reports = 0;   // DiagnosticArray messages
   std::uint64_t messages = 0;        // messages written (all topics)
   std::uint64_t image_bytes = 0;     // source JPEG bytes read

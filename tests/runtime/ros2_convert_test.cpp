@@ -9,6 +9,7 @@
 #include <spdlog/spdlog.h>
 #include <unistd.h>
 
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -342,6 +343,64 @@ TEST_F(Ros2ConvertTest, TimestampSkewMovesTheFaultedHeaderStamps) {
   // A stamp moved, the pixels kept: each frame's report is a pass (level OK).
   ASSERT_EQ(c.faults.size(), counts->frames);
   for (const auto& f : c.faults) EXPECT_EQ(f.status.at(0).level, ros2::DiagnosticStatus::kOk);
+}
+
+// calibration_drift severity 5: focal length off by 4 %, rotation 2 degrees, translation 20 cm
+// (policy/message_faults.hpp). The faulted CameraInfo carries the drifted K; the faulted images
+// name their own TF frame, whose /tf_static extrinsic is the drifted one, so the clean camera
+// frame keeps the true extrinsic.
+TEST_F(Ros2ConvertTest, CalibrationDriftGoesIntoCameraInfoAndTheFaultedTfFrame) {
+  const std::string dir = out("drift_ros2");
+  auto counts = convert(dir, {"calibration_drift/5"});
+  ASSERT_TRUE(counts.is_ok()) << counts.status().to_string();
+  EXPECT_EQ(counts->drifted_frames, counts->frames);
+  const Ros2Content c = read_ros2((fs::path(dir) / "drift_ros2_0.mcap").string());
+  std::map<std::string, ros2::Transform> latest;  // child frame -> last /tf_static transform
+  for (const auto& m : c.tf_static) {
+    for (const auto& t : m.transforms) latest[t.child_frame_id] = t.transform;
+  }
+  std::uint64_t infos = 0;
+  for (const auto& [topic, list] : c.infos) {
+    if (topic.rfind("/faulty/", 0) != 0) continue;
+    const auto& clean = c.infos.at(topic.substr(7));
+    ASSERT_EQ(list.size(), clean.size()) << topic;
+    for (std::size_t i = 0; i < list.size(); ++i) {
+      const double s = list[i].k[0] / clean[i].k[0];
+      EXPECT_NEAR(std::abs(s - 1.0), 0.04, 1e-12) << topic;
+      EXPECT_DOUBLE_EQ(list[i].k[4] / clean[i].k[4], s) << topic;
+      EXPECT_EQ(list[i].k[2], clean[i].k[2]) << topic;  // principal point kept
+      EXPECT_EQ(list[i].k[5], clean[i].k[5]) << topic;
+      EXPECT_EQ(list[i].header.frame_id, clean[i].header.frame_id + "_drifted") << topic;
+    }
+    infos += list.size();
+  }
+  EXPECT_EQ(infos, counts->frames);
+  std::uint64_t images = 0;
+  for (const auto& [topic, imgs] : c.images) {
+    if (topic.rfind("/faulty/", 0) != 0) continue;
+    const auto& clean = c.images.at(topic.substr(7));
+    ASSERT_EQ(imgs.size(), clean.size()) << topic;
+    for (std::size_t i = 0; i < imgs.size(); ++i) {
+      EXPECT_EQ(imgs[i].data, clean[i].data) << topic;  // pixels untouched
+      const std::string& camera = clean[i].header.frame_id;
+      ASSERT_EQ(imgs[i].header.frame_id, camera + "_drifted");
+      ASSERT_EQ(latest.count(camera), 1u);
+      ASSERT_EQ(latest.count(camera + "_drifted"), 1u);
+    }
+    images += imgs.size();
+    // The drifted extrinsic against the true one: 20 cm of translation, and 2 degrees of rotation
+    // to within 0.01 (the error composes Rz Ry Rx of the axis' components, exact to first order).
+    const std::string camera = clean.front().header.frame_id;
+    const ros2::Transform& a = latest.at(camera);
+    const ros2::Transform& b = latest.at(camera + "_drifted");
+    const double dot = a.rotation.x * b.rotation.x + a.rotation.y * b.rotation.y +
+                       a.rotation.z * b.rotation.z + a.rotation.w * b.rotation.w;
+    EXPECT_NEAR(2.0 * std::acos(std::min(1.0, std::abs(dot))) * 180.0 / M_PI, 2.0, 0.01) << camera;
+    const double dx = b.translation.x - a.translation.x, dy = b.translation.y - a.translation.y,
+                 dz = b.translation.z - a.translation.z;
+    EXPECT_NEAR(std::sqrt(dx * dx + dy * dy + dz * dz), 0.20, 1e-9) << camera;
+  }
+  EXPECT_EQ(images, counts->frames);
 }
 
 TEST_F(Ros2ConvertTest, FaultsMatchTheFoxgloveConvertAndRerunsAreByteIdentical) {
