@@ -102,6 +102,7 @@ void HandshakeTracker::failed(const std::string& endpoint, std::uint16_t event,
   if (refused) ++refused_by_peer_;
   EndpointState& state = endpoints_[endpoint];
   state.closing = true;
+  state.refused = refused;
   // The errno of an unspecified failure may differ between failures of one cause: not a new cause.
   const std::uint64_t cause =
       (std::uint64_t{event} << 32) | (event == ZMQ_EVENT_HANDSHAKE_FAILED_NO_DETAIL ? 0 : value);
@@ -122,6 +123,12 @@ void HandshakeTracker::succeeded(const std::string& endpoint) {
   if (it == endpoints_.end()) return;
   log_->info("handshake with {} succeeded after an earlier failure", endpoint);
   endpoints_.erase(it);
+}
+
+std::size_t HandshakeTracker::refused_endpoints() const {
+  std::size_t n = 0;
+  for (const auto& [endpoint, state] : endpoints_) n += state.refused ? 1 : 0;
+  return n;
 }
 
 bool HandshakeTracker::closes_failed_handshake(const std::string& endpoint) {

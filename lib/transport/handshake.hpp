@@ -47,6 +47,9 @@ class HandshakeTracker {
   // Connecting socket: handshakes the peer's ZAP handler refused (its allowed-clients list does
   // not hold this socket's key).
   std::uint64_t refused_by_peer() const { return refused_by_peer_; }
+  // Connecting socket: endpoints whose last handshake the peer refused (no success since). libzmq
+  // does not retry such a handshake, so nothing sent through that connection can arrive.
+  std::size_t refused_endpoints() const;
 
   // The cause of one failure, as logged (no side effects).
   std::string describe(const std::string& endpoint, std::uint16_t event, std::uint32_t value) const;
@@ -56,6 +59,7 @@ class HandshakeTracker {
     bool logged = false;             // a failure of this endpoint was logged at error
     std::uint64_t logged_cause = 0;  // its event and value (errno left out)
     bool closing = false;            // a handshake failed: the next DISCONNECTED is its close
+    bool refused = false;            // the last failure was the peer's refusal (connecting socket)
   };
   bool connecting_;
   bool curve_;

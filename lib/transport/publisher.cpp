@@ -74,6 +74,7 @@ Publisher& Publisher::operator=(Publisher&& other) noexcept {
   subscriptions_ = std::move(other.subscriptions_);
   would_block_ = other.would_block_;
   oversize_refused_ = other.oversize_refused_;
+  refused_sends_ = other.refused_sends_;
   zap_domain_ = std::move(other.zap_domain_);
   monitor_ = std::move(other.monitor_);
   handshakes_ = std::move(other.handshakes_);
@@ -114,6 +115,14 @@ Status Publisher::send_first(zmq::message_t& topic_frame) {
     }
     (void)zmq::poll(items, 2, std::chrono::milliseconds(wait_ms));  // throws as send would
     if (items[1].revents & ZMQ_POLLIN) read_monitor();
+    if (!(items[0].revents & ZMQ_POLLOUT) && handshakes_->refused_endpoints() > 0) {
+      // The only receiver refused this node and libzmq will not ask again: waiting (forever, by
+      // default) could never end. The refusal itself was logged with its cause.
+      ++refused_sends_;
+      return {StatusCode::kIoError, config_.endpoint +
+                                        " refused this node's CURVE handshake; not sent (" +
+                                        std::to_string(refused_sends_) + " so far)"};
+    }
     // A peer can take it: this send does not block (it only fails if that peer just left).
     if ((items[0].revents & ZMQ_POLLOUT) &&
         socket_.send(topic_frame, zmq::send_flags::sndmore | zmq::send_flags::dontwait)) {

@@ -12,7 +12,8 @@
 // list, a wrong server key, CURVE on one side only) is logged once per endpoint, naming it and this
 // node's key, and counted (handshake_failures(), refused_by_peer()); libzmq does not retry it. The
 // monitor is read on every send, and a PushPull send waits for a peer with zmq_poll over the socket
-// and the monitor, so that a refusal is reported while the sender waits.
+// and the monitor, so that a refusal is reported while the sender waits, and such a send then fails
+// at once (refused_sends()) rather than waiting for a peer that cannot come.
 //
 // Framing: image topics [topic][header][payload], other topics [topic][body]. LINGER is 0.
 // A Publisher belongs to one thread.
@@ -94,6 +95,9 @@ class Publisher {
   std::uint64_t would_block_count() const { return would_block_; }
   // Messages refused because one part exceeded max_msg_bytes (never sent).
   std::uint64_t oversize_refused() const { return oversize_refused_; }
+  // PushPull sends that failed at once (kIoError) because the receiver refused this node's
+  // handshake: never sent, instead of waiting for a peer that cannot come.
+  std::uint64_t refused_sends() const { return refused_sends_; }
   // CURVE clients refused because their key is not in access.curve_allowed_clients_file (each
   // logged).
   std::uint64_t auth_refused() const;
@@ -119,6 +123,7 @@ class Publisher {
   std::map<std::string, int> subscriptions_;  // prefix -> live subscriptions (XPUB_VERBOSE)
   std::uint64_t would_block_ = 0;
   std::uint64_t oversize_refused_ = 0;
+  std::uint64_t refused_sends_ = 0;
   std::string zap_domain_;  // set when a CURVE server checks an allowed-clients list
   SocketMonitor monitor_;   // connecting publishers only; stopped before it closes
   std::optional<HandshakeTracker> handshakes_;  // set with monitor_

@@ -6,11 +6,13 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <atomic>
 #include <cstdio>
 #include <fstream>
 #include <functional>
 #include <memory>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "common/config.hpp"
@@ -245,11 +247,19 @@ TEST_F(CurveTest, APushPublisherRefusedByTheSinkSaysSoOnceAndCountsIt) {
   ASSERT_TRUE(testing::eventually(
       [&] {
         (void)sink.receive(10 * kNsPerMs);
-        EXPECT_EQ(detector.send("/detections", "d").code(), StatusCode::kWouldBlock);
+        const StatusCode code = detector.send("/detections", "d").code();
+        EXPECT_TRUE(code == StatusCode::kWouldBlock || code == StatusCode::kIoError);
         return sink.auth_refused() >= 1 && detector.refused_by_peer() >= 1;
       },
       30 * kNsPerSec));
-  EXPECT_EQ(detector.send("/detections", "d").code(), StatusCode::kWouldBlock);
+  // Once refused, a send fails at once and says why, instead of waiting for its timeout.
+  const std::uint64_t refused_before = detector.refused_sends();
+  const Status refused = detector.send("/detections", "d");
+  EXPECT_EQ(refused.code(), StatusCode::kIoError);
+  EXPECT_NE(refused.message().find(sink.endpoints()[0] + " refused this node's CURVE handshake"),
+            std::string::npos)
+      << refused.message();
+  EXPECT_EQ(detector.refused_sends(), refused_before + 1);
   EXPECT_EQ(sink.receive(100 * kNsPerMs).status().code(), StatusCode::kWouldBlock);
   EXPECT_EQ(detector.refused_by_peer(), 1u);
   EXPECT_EQ(detector.handshake_failures(), 1u);
@@ -260,6 +270,37 @@ TEST_F(CurveTest, APushPublisherRefusedByTheSinkSaysSoOnceAndCountsIt) {
                       read_curve_key(dir_ + "/bad.public")),
             1)
       << log.all();
+}
+
+// The same refusal with the default send timeout (wait for ever for a peer): the send returns once
+// the refusal is known, since libzmq never retries it, rather than blocking the detector for good.
+TEST_F(CurveTest, AForeverPushSendToARefusingSinkReturnsOnceRefused) {
+  SubscriberConfig sc;
+  sc.endpoints = {"tcp://127.0.0.1:*"};
+  sc.bind = true;
+  sc.pattern = Pattern::PushPull;
+  sc.access = Server();
+  RawSubscriber sink(sc);
+  testing::LogCapture log;
+  PublisherConfig pc;
+  pc.endpoint = sink.endpoints()[0];
+  pc.bind = false;
+  pc.pattern = Pattern::PushPull;
+  pc.access = Client("bad");
+  ASSERT_LT(pc.send_timeout_ns, 0);  // the default: no timeout
+  Publisher detector(pc);
+  // The sink's ZAP handler answers only while the sink is being read.
+  std::atomic<bool> done{false};
+  std::thread reader([&] {
+    while (!done.load()) (void)sink.receive(10 * kNsPerMs);
+  });
+  const Status s = detector.send("/detections", "d");  // before the fix: blocked for ever
+  done = true;
+  reader.join();
+  EXPECT_EQ(s.code(), StatusCode::kIoError) << s.to_string();
+  EXPECT_EQ(detector.refused_sends(), 1u);
+  EXPECT_EQ(detector.refused_by_peer(), 1u);
+  EXPECT_EQ(sink.auth_refused(), 1u);
 }
 
 TEST_F(CurveTest, KeyFileErrorsNameTheFile) {
