@@ -71,6 +71,7 @@ struct DetectorLoop::Impl {
   transport::Publisher push;
   Detector detector;
   transport::LogLimiter bad_limiter;
+  transport::LogLimiter send_limiter;
   transport::DropCounter
       boundary_seqs;  // boundaries lost in transport show as gaps in the publisher's seq
   // Single-frame mode: per camera, the latest frame of the current sample (key frames preferred),
@@ -209,10 +210,14 @@ struct DetectorLoop::Impl {
     d.mutable_header()->set_capture_clock(b.header().capture_clock());
     d.mutable_header()->set_publish_stamp_ns(realtime_now_ns());
     d.mutable_header()->set_publish_mono_ns(monotonic_now_ns());
-    if (transport::send_message(push, cfg.detections_topic, d).is_ok()) {
+    if (const Status s = transport::send_message(push, cfg.detections_topic, d); s.is_ok()) {
       ++counts.arrays_sent;
     } else {
-      ++counts.send_failures;
+      ++counts.send_failures;  // the sample's detections are lost: say so, not only at the end
+      if (send_limiter.allow()) {
+        log->warn("detections of sample {} not sent: {} ({} send failures so far)",
+                  b.sample_token(), s.message(), counts.send_failures);
+      }
     }
     sample_processing_ns = 0;
     first_capture_ns = 0;
@@ -269,6 +274,8 @@ DetectorLoop::DetectorLoop(DetectorLoopConfig config, std::string node,
 }
 
 DetectorLoop::~DetectorLoop() = default;
+
+std::uint64_t DetectorLoop::refused_by_peer() { return impl_->push.refused_by_peer(); }
 
 int DetectorLoop::run(const std::atomic<bool>& stop) {
   Impl& m = *impl_;

@@ -77,6 +77,8 @@ class DetectorLoop {
   // Runs until `stop` (0), last_in_run with exit_on_last (0) or context termination (0).
   int run(const std::atomic<bool>& stop);
   const DetectorLoopCounts& counts() const { return counts_; }
+  // Handshakes the sink refused (its CURVE allowed-clients list): why sends may have failed.
+  std::uint64_t refused_by_peer();
 
  private:
   struct Impl;

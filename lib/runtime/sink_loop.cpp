@@ -35,6 +35,7 @@ struct SinkLoop::Impl {
   ResultsStore store;
   StatsReporter stats;
   transport::LogLimiter bad_limiter;
+  transport::LogLimiter ack_limiter;
   std::uint64_t refusals_logged = 0;  // refusal lines at warn so far (see log_refusal)
   std::string detections_topic, sync_topic;
   std::uint64_t ack_seq = 0;
@@ -215,7 +216,15 @@ struct SinkLoop::Impl {
       h->set_publisher(node);
       h->set_publish_stamp_ns(realtime_now_ns());
       h->set_publish_mono_ns(monotonic_now_ns());
-      if (transport::send_message(*acks, "/sync/ack", ack).is_ok()) ++counts->acks_sent;
+      if (const Status s = transport::send_message(*acks, "/sync/ack", ack); s.is_ok()) {
+        ++counts->acks_sent;
+      } else {  // the lockstep player waits for it until its ack timeout: say why
+        ++counts->ack_send_failures;
+        if (ack_limiter.allow()) {
+          log->warn("ack of sample {} not sent: {} ({} ack send failures so far)", d.sample_token(),
+                    s.message(), counts->ack_send_failures);
+        }
+      }
     }
   }
 
@@ -341,14 +350,13 @@ int SinkLoop::run(const std::atomic<bool>& stop) {
   m.stats.log_totals(monotonic_now_ns());
   counts_.malformed = m.malformed_total();
   m.log->info(
-      "sink done: {} detection arrays, {} boxes, {} boundaries, {} acks, {} malformed, {} boxes "
-      "and {} "
-      "arrays refused, {} boundaries refused, {} bad journal lines, {} duplicate arrays, {} "
-      "unanswered samples",
+      "sink done: {} detection arrays, {} boxes, {} boundaries, {} acks ({} ack send failures, "
+      "{} refused by the player), {} malformed, {} boxes and {} arrays refused, {} boundaries "
+      "refused, {} bad journal lines, {} duplicate arrays, {} unanswered samples",
       counts_.detection_arrays, counts_.boxes, counts_.boundaries, counts_.acks_sent,
-      counts_.malformed, counts_.rejected_boxes, counts_.rejected_arrays,
-      counts_.rejected_boundaries, counts_.bad_journal_lines, counts_.duplicate_arrays,
-      counts_.unanswered_samples);
+      counts_.ack_send_failures, m.acks ? m.acks->refused_by_peer() : 0, counts_.malformed,
+      counts_.rejected_boxes, counts_.rejected_arrays, counts_.rejected_boundaries,
+      counts_.bad_journal_lines, counts_.duplicate_arrays, counts_.unanswered_samples);
   return 0;
 }
 

@@ -85,6 +85,7 @@ struct SinkCounts {
   std::uint64_t boxes = 0;
   std::uint64_t boundaries = 0;
   std::uint64_t acks_sent = 0;
+  std::uint64_t ack_send_failures = 0;  // lockstep acks not sent (logged with the cause)
   std::uint64_t malformed = 0;
   std::uint64_t recovered_lines = 0;
   std::uint64_t rejected_boxes = 0;   // refused by the scorer's rules (the rest of the array kept)

@@ -14,12 +14,12 @@ int main(int argc, char** argv) {
         const int rc = loop.run(stop);
         const auto& c = loop.counts();
         log->info(
-            "done: {} frames, {} samples sent, {} malformed, {} undecodable, {} boundaries lost, "
-            "{} "
-            "incomplete samples ({} key frames missing), {} stream breaks, {} shm frames "
-            "overwritten",
-            c.frames, c.arrays_sent, c.malformed, c.undecodable, c.boundaries_lost,
-            c.incomplete_samples, c.key_frames_missing, c.stream_breaks, c.shm_overwritten);
+            "done: {} frames, {} samples sent, {} send failures ({} refused by the sink), {} "
+            "malformed, {} undecodable, {} boundaries lost, {} incomplete samples ({} key frames "
+            "missing), {} stream breaks, {} shm frames overwritten",
+            c.frames, c.arrays_sent, c.send_failures, loop.refused_by_peer(), c.malformed,
+            c.undecodable, c.boundaries_lost, c.incomplete_samples, c.key_frames_missing,
+            c.stream_breaks, c.shm_overwritten);
         return rc;
       });
 }

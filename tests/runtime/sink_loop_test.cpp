@@ -12,6 +12,7 @@
 #include <fstream>
 #include <future>
 #include <sstream>
+#include <thread>
 
 #include "common/config.hpp"
 #include "detection.pb.h"
@@ -200,6 +201,34 @@ TEST_F(SinkLoopTest, ASecondArrayForASampleReplacesTheFirstAndIsCounted) {
   EXPECT_EQ(doc["results"]["s1"].Size(), 2u);
   EXPECT_EQ(doc["meta"]["faultline_sink_duplicate_arrays"].GetUint64(), 1u);
   EXPECT_EQ(Lines("second DetectionArray for sample s1: it replaces the first").size(), 1u);
+}
+
+// A lockstep ack that cannot be sent (no player bound to the ack endpoint) is counted and logged
+// with its cause, and the closing line says so: the player waiting for it learns nothing otherwise.
+TEST_F(SinkLoopTest, AnAckThatCannotBeSentIsCountedAndLogged) {
+  SinkLoop sink(config_, "detection_sink", log_);  // nothing binds config_.ack_endpoint
+  transport::PublisherConfig pc;
+  pc.endpoint = sink.detections_endpoint();
+  pc.pattern = transport::Pattern::PushPull;
+  pc.bind = false;
+  pc.send_timeout_ns = 10 * kNsPerSec;
+  transport::Publisher push(pc);
+  std::atomic<bool> stop{false};
+  auto rc = std::async(std::launch::async, [&] { return sink.run(stop); });
+  ASSERT_TRUE(transport::send_message(push, "/detections", Array("s1", 1)).is_ok());
+  bool logged = false;  // polled: the sink's ack send gives up after its 100 ms timeout
+  for (int i = 0; i < 3000 && !logged; ++i) {
+    logged = Lines("ack of sample s1 not sent").size() == 1;
+    if (!logged) std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  stop = true;
+  ASSERT_EQ(rc.wait_for(std::chrono::seconds(30)), std::future_status::ready);
+  EXPECT_EQ(rc.get(), 0);
+  ASSERT_TRUE(logged);
+  EXPECT_EQ(sink.counts().acks_sent, 0u);
+  EXPECT_EQ(sink.counts().ack_send_failures, 1u);
+  EXPECT_EQ(Lines("1 acks (1 ack send failures, 0 refused by the player)").size(), 0u);
+  EXPECT_EQ(Lines("0 acks (1 ack send failures, 0 refused by the player)").size(), 1u);
 }
 
 // Samples announced by a boundary whose detections never came are written as empty and named.
