@@ -9,6 +9,7 @@
 #include <thread>
 
 #include "codec/jpeg.hpp"
+#include "common/hash.hpp"
 #include "dataset/synth_render.hpp"
 #include "dataset/synth_world.hpp"
 
@@ -51,11 +52,10 @@ struct ImageJob {
 };
 
 // The noise seed of one image: the dataset seed and the image's file name, so that files do not
-// depend on the order the workers take them in (FNV-1a of the name).
+// depend on the order the workers take them in (FNV-1a of the name from the legacy basis mixed with
+// the seed, which every synthetic dataset already written was made with).
 std::uint64_t noise_seed(std::uint64_t seed, const std::string& path) {
-  std::uint64_t h = 1469598103934665603ULL ^ seed;
-  for (unsigned char c : path) h = (h ^ c) * 1099511628211ULL;
-  return h;
+  return fnv1a64(path, Fnv1a64Basis{kFnv1a64LegacyBasis.value ^ seed});
 }
 
 // Renders and encodes the images of one scene on `threads` workers; the files do not depend on the
