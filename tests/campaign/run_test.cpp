@@ -61,9 +61,11 @@ TEST_F(RunTest, SoakReportsEveryPeriodAndScoresEveryLoop) {
   EXPECT_EQ(first_full["frames_out"].MemberCount(), 6u);
   EXPECT_GT(samples, 20u);
   EXPECT_GT(detections, 0u);
-  // 6 s of scenes per loop: several loops in 24 s, each scored by the official metric.
+  // 6 s of scenes per loop, each scored by the official metric: about four loops in 24 s on an idle
+  // machine, but how many complete depends on its speed (one under ASan beside a build), so only
+  // the first is required.
   const auto& loops = d["loops"];
-  ASSERT_GE(loops.Size(), 2u) << read_text(root_ / "soak.log");
+  ASSERT_GE(loops.Size(), 1u) << read_text(root_ / "soak.log");
   // The soak runs in real time: on a loaded machine the detector may miss a loop's samples, and NDS
   // then is whatever the detections that did arrive give (0 when none did). What cannot depend on
   // the load: every loop is scored, and a loop whose every sample got detections scores above 0.

@@ -58,8 +58,12 @@ cv::Mat synthetic_frame(const FrameSpec& spec) {
   for (int b = 0; b < 14; ++b) {
     const int x0 = b * width / 14, w = width / 14 - 8;
     const int h = 150 + static_cast<int>(rng.next_u32() % 250);
-    const cv::Scalar c(60 + rng.next_u32() % 120, 60 + rng.next_u32() % 120,
-                       60 + rng.next_u32() % 120);
+    // Drawn last channel first, in named steps: the order of a call's argument evaluation is
+    // unspecified (gcc, which made the frames the figures were measured on, went right to left;
+    // clang goes left to right).
+    const double red = 60 + rng.next_u32() % 120, green = 60 + rng.next_u32() % 120,
+                 blue = 60 + rng.next_u32() % 120;
+    const cv::Scalar c(blue, green, red);
     cv::rectangle(img, cv::Rect(x0, height / 2 - h, w, h), c, cv::FILLED);
     for (int wy = height / 2 - h + 10; wy < height / 2 - 20; wy += 30) {
       for (int wx = x0 + 8; wx < x0 + w - 16; wx += 24) {
