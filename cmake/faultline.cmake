@@ -1,9 +1,16 @@
 # Small helpers that keep the per-directory CMakeLists short.
 include(${CMAKE_CURRENT_LIST_DIR}/gtest_suites.cmake)
 
-# Warnings for our own targets; generated protobuf code is compiled without them.
+# Warnings for our own targets; generated protobuf code is compiled without them. PRODUCT (libraries, nodes, the
+# tool) adds gcc's -Wconversion: an implicit narrowing (double to int, 64 to 32 bits, int to uint8) in the product is
+# written as a cast that says it is meant. Tests are left without it (gtest's comparisons of literals would drown
+# it), and so is clang, whose -Wconversion also holds every sign conversion.
 function(faultline_warnings target)
+  cmake_parse_arguments(ARG "PRODUCT" "" "" ${ARGN})
   target_compile_options(${target} PRIVATE -Wall -Wextra -Wpedantic -Wshadow)
+  if(ARG_PRODUCT)
+    target_compile_options(${target} PRIVATE $<$<CXX_COMPILER_ID:GNU>:-Wconversion>)
+  endif()
   if(FAULTLINE_WERROR)
     target_compile_options(${target} PRIVATE -Werror)
   endif()
@@ -20,7 +27,7 @@ function(faultline_add_library concern)
   target_include_directories(faultline_${concern} PUBLIC ${PROJECT_SOURCE_DIR}/lib)
   target_compile_features(faultline_${concern} PUBLIC cxx_std_17)
   target_link_libraries(faultline_${concern} PUBLIC ${ARG_LIBS})
-  faultline_warnings(faultline_${concern})
+  faultline_warnings(faultline_${concern} PRODUCT)
 endfunction()
 
 # faultline_add_test(<name> SOURCES ... LIBS ... [LABELS ...] [RESOURCE_LOCK <lock>] [SCALAR_TOO]): one GoogleTest
@@ -53,5 +60,5 @@ function(faultline_add_node name)
   cmake_parse_arguments(ARG "" "" "LIBS" ${ARGN})
   add_executable(${name} ${CMAKE_CURRENT_SOURCE_DIR}/${name}/main.cpp)
   target_link_libraries(${name} PRIVATE ${ARG_LIBS})
-  faultline_warnings(${name})
+  faultline_warnings(${name} PRODUCT)
 endfunction()

@@ -142,7 +142,8 @@ int run_bag(const BagOptions& o) {
     raws.emplace_back(reinterpret_cast<const char*>(decoded.data), decoded.total() * 3);
   }
   double jpeg_mean = 0;
-  for (const auto& j : jpegs) jpeg_mean += static_cast<double>(j.size()) / jpegs.size();
+  for (const auto& j : jpegs)
+    jpeg_mean += static_cast<double>(j.size()) / static_cast<double>(jpegs.size());
   std::printf(
       "payloads: 12 %s 1600x900 frames; JPEG mean %.0f KB; raw bgr8 (decoded JPEG) %zu KB\n",
       to_string(o.frames), jpeg_mean / 1024, raws[0].size() / 1024);
