@@ -9,6 +9,7 @@
 #include "cli/parse.hpp"
 #include "cli/topic_tools.hpp"
 #include "common/shutdown.hpp"
+#include "transport/message_text.hpp"
 #include "transport/subscriber.hpp"
 
 namespace faultline::cli {
@@ -20,11 +21,11 @@ void print_message(const transport::ReceivedMessage& m, const std::string& type)
   std::printf("--- %.*s\n", static_cast<int>(m.topic().size()), m.topic().data());
   // An image message's header frame is a CameraFrame whatever the registry says about the topic.
   const std::string effective = m.has_payload() && type.empty() ? kCameraFrameType : type;
-  std::string text = effective.empty() ? "" : topic::decode_to_text(effective, m.header());
+  std::string text = effective.empty() ? "" : transport::message_to_text(effective, m.header());
   if (text.empty()) {
     msgs::Header h;
-    if (topic::extract_header(m.header(), &h))
-      text = topic::decode_to_text("faultline.msgs.Header", h.SerializeAsString());
+    if (transport::extract_header(m.header(), &h))
+      text = transport::message_to_text("faultline.msgs.Header", h.SerializeAsString());
     std::printf(
         "(%s; body %zu bytes; header only)\n",
         effective.empty() ? "type unknown, pass --type" : ("cannot decode as " + effective).c_str(),
@@ -35,7 +36,7 @@ void print_message(const transport::ReceivedMessage& m, const std::string& type)
   }
   if (m.has_payload()) {
     std::printf("payload: <%zu bytes, fnv1a64 %016" PRIx64 ">\n", m.payload_size(),
-                topic::digest(m.payload_data(), m.payload_size()));
+                transport::payload_digest(m.payload_data(), m.payload_size()));
   }
   std::fflush(stdout);
 }

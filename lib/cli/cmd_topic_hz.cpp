@@ -9,6 +9,7 @@
 #include "cli/topic_tools.hpp"
 #include "common/shutdown.hpp"
 #include "stats/topic_meter.hpp"
+#include "transport/message_text.hpp"
 #include "transport/subscriber.hpp"
 
 namespace faultline::cli {
@@ -64,7 +65,7 @@ int run_probe_command(int argc, char** argv, ProbeKind kind) {
     stats::ProbeSample s{r->receive_mono_ns(), r->size_bytes(), stats::kNoDelay};
     if (kind == ProbeKind::Delay) {
       msgs::Header h;
-      const bool ok = extract_header(r->header(), &h);
+      const bool ok = transport::extract_header(r->header(), &h);
       const StampNs sent = stamp == "publish" ? h.publish_stamp_ns() : h.capture_stamp_ns();
       if (ok && sent > 0) s.delay_ns = r->receive_realtime_ns() - sent;
     }

@@ -9,6 +9,7 @@
 #include "cli/parse.hpp"
 #include "cli/topic_tools.hpp"
 #include "common/shutdown.hpp"
+#include "transport/message_text.hpp"
 #include "transport/subscriber.hpp"
 
 namespace faultline::cli {
@@ -28,7 +29,7 @@ ExitStatus probe_first_message(const std::string& topic, const std::vector<std::
     if (r.status().code() == StatusCode::kCancelled) break;
     if (!r.is_ok() || r->topic() != topic) continue;
     msgs::Header h;
-    const bool has_header = topic::extract_header(r->header(), &h);
+    const bool has_header = transport::extract_header(r->header(), &h);
     std::printf("Frames: %d (%s)\n", r->has_payload() ? 3 : 2,
                 r->has_payload() ? "[topic][header][payload]" : "[topic][body]");
     std::printf("Header frame: %zu bytes\n", r->header().size());
