@@ -127,7 +127,7 @@ void mud_row(std::uint8_t* out, const std::uint8_t* in, const float* mask, std::
 // fast mode's mud: the mask straight from the float32 field (liquid > threshold), blurred in
 // float32.
 cv::Mat mud_blend_fast(const cv::Mat& bgr, const cv::Mat& field, const SpatterParams& p) {
-  thread_local cv::Mat mask;  // scratch (see spatter_fast)
+  cv::Mat mask;
   cv::threshold(field, mask, p.threshold, 1.0, cv::THRESH_BINARY);
   cv::GaussianBlur(mask, mask, cv::Size(), p.intensity, p.intensity, cv::BORDER_REPLICATE);
   cv::Mat out(bgr.size(), CV_8UC3);
@@ -216,13 +216,11 @@ void mean3_row(std::uint8_t* out, float* sum, const float* a, const float* b, co
 }
 
 // floor of the 3 x 3 mean (cv::blur's default reflect-101 border) of the distance to the nearest
-// Canny edge pixel, capped at 20 (CV_8U), three rows of distances at a time, into `out`.
-void edge_distance_u8(const cv::Mat& edges, cv::Mat& out) {
+// Canny edge pixel, capped at 20 (CV_8U), three rows of distances at a time.
+cv::Mat edge_distance_u8(const cv::Mat& edges) {
   const int rows = edges.rows;
   const auto n = static_cast<std::size_t>(edges.cols);
-  thread_local cv::Mat dv;  // scratch (see spatter_fast)
-  dv.create(edges.size(), CV_8U);
-  dv.setTo(cv::Scalar(kCap + 1));
+  cv::Mat dv(edges.size(), CV_8U, cv::Scalar(kCap + 1));
   for (int y = 0; y < rows; ++y) {
     column_step(dv.ptr<std::uint8_t>(y), y ? dv.ptr<std::uint8_t>(y - 1) : nullptr,
                 edges.ptr<std::uint8_t>(y), n, y == 0);
@@ -242,7 +240,7 @@ void edge_distance_u8(const cv::Mat& edges, cv::Mat& out) {
   auto reflect = [rows](int y) {
     return y < 0 ? std::min(1, rows - 1) : (y >= rows ? std::max(rows - 2, 0) : y);
   };
-  out.create(edges.size(), CV_8U);
+  cv::Mat out(edges.size(), CV_8U);
   int done = -1;
   for (int y = 0; y < rows; ++y) {
     for (; done < std::min(y + 1, rows - 1); ++done) distances(done + 1);
@@ -251,6 +249,7 @@ void edge_distance_u8(const cv::Mat& edges, cv::Mat& out) {
     const float* c = ring.data() + static_cast<std::size_t>(reflect(y + 1) % 3) * n;
     mean3_row(out.ptr<std::uint8_t>(y), sum.data(), a, b, c, n);
   }
+  return out;
 }
 
 // out = clip(in + k * colour, 0, 255) truncated, k = liquid8 * strength * scale.
@@ -278,15 +277,14 @@ int row_max_product(const std::uint8_t* liquid, const std::uint8_t* strength, st
 }
 
 cv::Mat water_blend_fast(const cv::Mat& bgr, const cv::Mat& field, const SpatterParams& p) {
-  thread_local cv::Mat liquid8, edges, dist8;  // scratch (see spatter_fast)
-  liquid8.create(field.size(), CV_8U);
+  cv::Mat liquid8(field.size(), CV_8U), edges;
   const auto n = static_cast<std::size_t>(field.cols);
   for (int y = 0; y < field.rows; ++y) {
     liquid_row(liquid8.ptr<std::uint8_t>(y), field.ptr<float>(y), static_cast<float>(p.threshold),
                n);
   }
   cv::Canny(liquid8, edges, 50, 150);
-  edge_distance_u8(edges, dist8);
+  cv::Mat dist8 = edge_distance_u8(edges);
   cv::equalizeHist(dist8, dist8);
   const cv::Mat_<int> emboss = (cv::Mat_<int>(3, 3) << -2, -1, 0, -1, 1, 1, 0, 1, 2);
   cv::filter2D(dist8, dist8, CV_8U, emboss);
@@ -341,10 +339,7 @@ cv::Mat spatter_fast(const cv::Mat& bgr, int severity, rng::FastRng& rng) {
   // (Drawing the field at half resolution and upsampling it was tried: it smooths away the weak
   // edges Canny finds inside the liquid, and the tint's histogram moves twice as far from numpy
   // mode's as another seed's does.)
-  // The intermediate images are scratch, one set per thread (the same size frame after frame): a
-  // fresh cv::Mat per stage cost a few ms of page faults per frame.
-  thread_local cv::Mat field;
-  field.create(bgr.size(), CV_32F);
+  cv::Mat field(bgr.size(), CV_32F);
   rng::LaneRng lanes(rng);
   rng::fill_normals(field.ptr<float>(), field.total(), p.loc, p.scale, lanes, rng);
   const int r = static_cast<int>(std::ceil(3.0 * p.sigma));
