@@ -177,6 +177,9 @@ int run_injector(int argc, char** argv) {
       "injector worker threads; several counts (--workers 1 2) run side by side per corruption "
       "and report the fps ratio (0 = the injector's default, cores - 1)");
   app.add_option("--level", o.level, "easy|mid|hard");
+  app.add_option("--severity", o.severity,
+                 "run each corruption at this severity (1..5) instead of --level")
+      ->check(CLI::Range(1, 5));
   app.add_option("--types", o.types, "corruptions to run (\"none\" = decode only)");
   app.add_flag("--coherent", o.coherent,
                "also run each corruption as a coherent fault (coherent: true, per-camera state), "

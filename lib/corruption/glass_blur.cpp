@@ -5,6 +5,7 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <vector>
 
 #include "common/simd.hpp"
@@ -60,18 +61,57 @@ FastBlur fast_blur(double sigma) {
   return b;
 }
 
-// Axis 0 straight from the 8-bit rows (each pair summed in float, exact for integers, so the same
-// sums as from float rows, at a quarter of the memory traffic).
+// The tap sums with the radius known at compile time (3, 4 and 6 at severities 1-5): each output's
+// sum stays in a register, where a loop per tap over the row stored and reloaded it at every tap.
+// The order of the additions is the generic loops', so the sums are the same bit for bit.
+template <int R>
+[[gnu::always_inline]] inline void rows_fixed(float* out, const std::uint8_t* const* rows,
+                                              const float* w, std::size_t n) {
+  const std::uint8_t* p[2 * R + 1];
+  float wk[R + 1];
+  for (int k = 0; k <= 2 * R; ++k) p[k] = rows[k];
+  for (int k = 0; k <= R; ++k) wk[k] = w[k];
+#pragma GCC ivdep
+  for (std::size_t i = 0; i < n; ++i) {
+    float s = static_cast<float>(p[R][i]) * wk[0];
+    for (int k = R; k >= 1; --k) s += static_cast<float>(p[R - k][i] + p[R + k][i]) * wk[k];
+    out[i] = s;
+  }
+}
+
+template <int R>
+[[gnu::always_inline]] inline void cols_fixed(float* acc, const float* ext, const float* w,
+                                              std::size_t n) {
+  float wk[R + 1];
+  for (int k = 0; k <= R; ++k) wk[k] = w[k];
+#pragma GCC ivdep
+  for (std::size_t i = 0; i < n; ++i) {
+    float s = ext[i] * wk[0];
+    for (int k = R; k >= 1; --k) s += (ext[i - 3 * k] + ext[i + 3 * k]) * wk[k];
+    acc[i] = s;
+  }
+}
+
+// Axis 0 straight from the 8-bit rows (each pair summed as integers, exact, so the same sums as
+// from float rows, at a quarter of the memory traffic).
 FAULTLINE_CLONES("avx2")
 void blur_rows(float* out, const std::uint8_t* const* rows, const float* w, int r, std::size_t n) {
+  switch (r) {
+    case 3:
+      return rows_fixed<3>(out, rows, w, n);
+    case 4:
+      return rows_fixed<4>(out, rows, w, n);
+    case 6:
+      return rows_fixed<6>(out, rows, w, n);
+    default:
+      break;
+  }
   const std::uint8_t* mid = rows[r];
   for (std::size_t i = 0; i < n; ++i) out[i] = static_cast<float>(mid[i]) * w[0];
   for (int k = r; k >= 1; --k) {
     const std::uint8_t* a = rows[r - k];
     const std::uint8_t* b = rows[r + k];
-    for (std::size_t i = 0; i < n; ++i) {
-      out[i] += (static_cast<float>(a[i]) + static_cast<float>(b[i])) * w[k];
-    }
+    for (std::size_t i = 0; i < n; ++i) out[i] += static_cast<float>(a[i] + b[i]) * w[k];
   }
 }
 
@@ -80,11 +120,23 @@ void blur_rows(float* out, const std::uint8_t* const* rows, const float* w, int 
 FAULTLINE_CLONES("avx2")
 void blur_cols(std::uint8_t* dst, std::uint8_t* near, float* acc, const float* ext, const float* w,
                int r, std::size_t n) {
-  for (std::size_t i = 0; i < n; ++i) acc[i] = ext[i] * w[0];
-  for (int k = r; k >= 1; --k) {
-    const float* a = ext - 3 * k;
-    const float* b = ext + 3 * k;
-    for (std::size_t i = 0; i < n; ++i) acc[i] += (a[i] + b[i]) * w[k];
+  switch (r) {
+    case 3:
+      cols_fixed<3>(acc, ext, w, n);
+      break;
+    case 4:
+      cols_fixed<4>(acc, ext, w, n);
+      break;
+    case 6:
+      cols_fixed<6>(acc, ext, w, n);
+      break;
+    default:
+      for (std::size_t i = 0; i < n; ++i) acc[i] = ext[i] * w[0];
+      for (int k = r; k >= 1; --k) {
+        const float* a = ext - 3 * k;
+        const float* b = ext + 3 * k;
+        for (std::size_t i = 0; i < n; ++i) acc[i] += (a[i] + b[i]) * w[k];
+      }
   }
   // Separate loops with int32 conversions, so that each vectorises.
   // (Sums are never below -2e-3, so the conversion truncates like floor; clamping the integer
@@ -100,14 +152,32 @@ void blur_cols(std::uint8_t* dst, std::uint8_t* near, float* acc, const float* e
   }
 }
 
-cv::Mat blur_fast(const cv::Mat& bgr, const FastBlur& b) {
+// o[x] = flat[o[x]] where near[x]: 32 flags at a time tested as four words first (few are set, and
+// a byte-wise branch mispredicted often enough to cost a tenth of the corruption).
+void fix_flat(std::uint8_t* o, const std::uint8_t* near, const std::array<std::uint8_t, 256>& flat,
+              std::size_t n) {
+  std::size_t x0 = 0;
+  for (; x0 + 32 <= n; x0 += 32) {
+    std::uint64_t w[4];
+    std::memcpy(w, near + x0, sizeof w);
+    if ((w[0] | w[1] | w[2] | w[3]) == 0) continue;
+    for (std::size_t x = x0; x < x0 + 32; ++x) {
+      if (near[x]) o[x] = flat[o[x]];
+    }
+  }
+  for (std::size_t x = x0; x < n; ++x) {
+    if (near[x]) o[x] = flat[o[x]];
+  }
+}
+
+void blur_fast(const cv::Mat& bgr, const FastBlur& b, cv::Mat& out) {
   const int r = b.r, rows = bgr.rows;
   const auto n = static_cast<std::size_t>(bgr.cols) * 3;
   std::vector<float> line(n + 6 * static_cast<std::size_t>(r)), acc(n);
   std::vector<std::uint8_t> near(n);
   std::vector<const std::uint8_t*> taps(static_cast<std::size_t>(2 * r + 1));
   float* mid = line.data() + 3 * r;
-  cv::Mat out(bgr.size(), CV_8UC3);
+  out.create(bgr.size(), CV_8UC3);
   for (int i = 0; i < rows; ++i) {
     for (int k = -r; k <= r; ++k) {
       taps[static_cast<std::size_t>(k + r)] = bgr.ptr<std::uint8_t>(std::clamp(i + k, 0, rows - 1));
@@ -121,11 +191,17 @@ cv::Mat blur_fast(const cv::Mat& bgr, const FastBlur& b) {
     }
     std::uint8_t* o = out.ptr<std::uint8_t>(i);
     blur_cols(o, near.data(), acc.data(), mid, b.w.data(), r, n);
-    for (std::size_t x = 0; x < n; ++x) {
-      if (near[x]) o[x] = b.flat[o[x]];
-    }
+    fix_flat(o, near.data(), b.flat, n);
   }
-  return out;
+}
+
+// out[i] = (chunk[i] * span) >> 16 - delta: OffsetStream's map, eight or sixteen at a time.
+FAULTLINE_CLONES("avx2")
+void map_chunks(std::int8_t* out, const std::uint16_t* chunk, std::size_t n, std::uint32_t span,
+                int delta) {
+  for (std::size_t i = 0; i < n; ++i) {
+    out[i] = static_cast<std::int8_t>(static_cast<int>((chunk[i] * span) >> 16) - delta);
+  }
 }
 
 // fast mode's offsets: four to a 64-bit draw, 16 bits each, scaled to [-d, d) by multiply and
@@ -138,10 +214,16 @@ class OffsetStream {
   void fill(std::int8_t* out, std::size_t n) {
     std::size_t i = 0;
     for (; i < n && left_ > 0; ++i) out[i] = take();
-    for (; i + 4 <= n; i += 4) {
+    // The whole words' chunks first (the draws are serial), then mapped in one vector loop.
+    const std::size_t words = (n - i) / 4;
+    chunks_.resize(4 * words);
+    for (std::size_t j = 0; j < words; ++j) {
       const std::uint64_t w = rng_.next_u64();
-      for (std::size_t k = 0; k < 4; ++k) out[i + k] = map(w >> (16 * k));
+      for (std::size_t k = 0; k < 4; ++k)
+        chunks_[4 * j + k] = static_cast<std::uint16_t>(w >> (16 * k));
     }
+    map_chunks(out + i, chunks_.data(), chunks_.size(), static_cast<std::uint32_t>(span_), delta_);
+    i += chunks_.size();
     for (; i < n; ++i) out[i] = take();
   }
 
@@ -160,6 +242,7 @@ class OffsetStream {
   std::uint64_t span_;
   std::uint64_t word_ = 0;
   int left_ = 0;
+  std::vector<std::uint16_t> chunks_;
 };
 
 // shuffle_pixels with OffsetStream's draws (dx, then dy, per pixel), a row's offsets drawn and
@@ -179,8 +262,13 @@ void walk_fast(cv::Mat& img, const GlassParams& p, rng::FastRng& rng) {
         offset[k] = draws[2 * k + 1] * step + 3 * draws[2 * k];
       unsigned char* px = img.ptr<unsigned char>(h) + 3 * (img.cols - d);  // w = cols - d first
       for (std::size_t k = 0; k < count; ++k, px -= 3) {
+        // Two loads and two stores where three of each did it (src is px or a whole pixel away).
         const unsigned char* src = px + offset[k];
-        px[0] = src[0], px[1] = src[1], px[2] = src[2];
+        std::uint16_t first;
+        std::memcpy(&first, src, 2);
+        const unsigned char last = src[2];
+        std::memcpy(px, &first, 2);
+        px[2] = last;
       }
     }
   }
@@ -212,9 +300,14 @@ cv::Mat glass_blur_fast(const cv::Mat& bgr, int severity, rng::FastRng& rng) {
   // their level where the reference's float64 sums truncate some levels one down, and the
   // histogram moves ten times as far from numpy mode's as another seed's does.)
   const FastBlur blur = fast_blur(p.sigma);
-  cv::Mat img = blur_fast(bgr, blur);
+  // The first blur's image is scratch, one per thread (the same size frame after frame: no fresh
+  // 4 MB of pages per frame).
+  thread_local cv::Mat img;
+  blur_fast(bgr, blur, img);
   walk_fast(img, p, rng);
-  return blur_fast(img, blur);
+  cv::Mat out;
+  blur_fast(img, blur, out);
+  return out;
 }
 
 }  // namespace faultline::corruption

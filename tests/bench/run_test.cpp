@@ -77,6 +77,34 @@ TEST(BenchRunTest, InjectorStreamsGivenImagesAndNamesAMissingOne) {
   fs::remove_all(root);
 }
 
+// `bench injector --severity` runs each corruption at that severity instead of --level's
+// (glass_blur severity 3, its most expensive one, is no level's), with --coherent too; 0 is
+// refused.
+TEST(BenchRunTest, InjectorRunsAGivenSeverity) {
+  const fs::path root = scratch_dir("injector_severity");
+  const int rc = run_faultline(
+      "bench injector --json --seconds 1 --rate-hz 4 --coherent --severity 3 --types glass_blur "
+      "soiling",
+      root / "sev.log");
+  const std::string log = read_text(root / "sev.log");
+  ASSERT_EQ(rc, 0) << log;
+  const auto json_at = log.find('[');
+  ASSERT_NE(json_at, std::string::npos) << log;
+  rapidjson::Document d;
+  d.Parse(log.c_str() + json_at);
+  ASSERT_FALSE(d.HasParseError()) << log;
+  ASSERT_EQ(d.Size(), 4u);
+  for (const auto& row : d.GetArray()) {
+    EXPECT_EQ(row["severity"].GetInt(), 3) << row["corruption"].GetString();
+    EXPECT_EQ(row["received"].GetUint64(), 24u);
+  }
+  EXPECT_EQ(d[0]["coherent"].GetBool(), false);
+  EXPECT_EQ(d[1]["coherent"].GetBool(), true);
+  EXPECT_NE(run_faultline("bench injector --severity 0 --types glass_blur", root / "sev0.log"), 0);
+  EXPECT_NE(read_text(root / "sev0.log").find("--severity"), std::string::npos);
+  fs::remove_all(root);
+}
+
 // `bench corrupt` measures the realistic frame by default (a q90 JPEG in nuScenes' 130-165 KB) and
 // the noisy road scene on request (q95, several times heavier); its JSON says which, and an unknown
 // --frames value is refused.

@@ -118,20 +118,26 @@ std::uint64_t send_frames(transport::Publisher& source, const std::vector<Frame>
   return sent;
 }
 
-// The fault schedule of a coherent run: the shorthand's corruption and level with `coherent: true`.
-YAML::Node coherent_faults(const std::string& type, const std::string& level) {
+// The fault schedule of a run given as faults: the corruption at the level (or at `severity` when
+// it is 1..5), `coherent` as given.
+YAML::Node faults_for(const std::string& type, const std::string& level, int severity,
+                      bool coherent) {
   YAML::Node fault;
   fault["type"] = type;
-  fault["level"] = level;
-  fault["coherent"] = true;
+  if (severity > 0) {
+    fault["severity"] = severity;
+  } else {
+    fault["level"] = level;
+  }
+  fault["coherent"] = coherent;
   YAML::Node faults;
   faults.push_back(fault);
   return faults;
 }
 
-Row run_one(const std::string& type, const std::string& level, bool coherent, double seconds,
-            double rate_hz, bool decode, int workers, const std::vector<Frame>& frames,
-            const std::string& dir, int run_index) {
+Row run_one(const std::string& type, const std::string& level, int severity, bool coherent,
+            double seconds, double rate_hz, bool decode, int workers,
+            const std::vector<Frame>& frames, const std::string& dir, int run_index) {
   Row row;
   row.corruption = type;
   row.coherent = coherent;
@@ -151,9 +157,10 @@ Row run_one(const std::string& type, const std::string& level, bool coherent, do
   ic.wait_subscribers = 1;
   ic.workers = workers;
   const std::string shorthand = type == "none" ? "" : type + "/" + level;
-  auto policy =
-      coherent ? runtime::make_frame_policy(coherent_faults(type, level), "", 7, "bench --coherent")
-               : runtime::make_frame_policy(YAML::Node(), shorthand, 7, "bench");
+  auto policy = coherent || (severity > 0 && type != "none")
+                    ? runtime::make_frame_policy(faults_for(type, level, severity, coherent), "", 7,
+                                                 coherent ? "bench --coherent" : "bench --severity")
+                    : runtime::make_frame_policy(YAML::Node(), shorthand, 7, "bench");
   if (auto* ep = dynamic_cast<runtime::EnginePolicy*>(policy.get()))
     row.severity = ep->engine().config().faults[0].severity;
   runtime::InjectorLoop injector(ic, "fault_injector", std::move(policy), log);
@@ -374,8 +381,8 @@ int run_injector(const InjectorOptions& o) {
         const std::size_t first = rows.size();
         for (const int workers : o.workers) {
           // "none" with bgr8 output still decodes; with jpeg output it is a pure passthrough.
-          rows.push_back(run_one(t, level, coherent, seconds, rate_hz, output == "bgr8", workers,
-                                 frames, dir, index++));
+          rows.push_back(run_one(t, level, o.severity, coherent, seconds, rate_hz, output == "bgr8",
+                                 workers, frames, dir, index++));
           if (!json) print_row(rows.back(), o.workers.size() > 1 ? &rows[first] : nullptr);
         }
       }

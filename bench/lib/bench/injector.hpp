@@ -18,6 +18,7 @@ struct InjectorOptions {
   std::vector<int> workers = {
       1};                     // injector worker threads, one run each (0 = the injector's default)
   std::string level = "mid";  // easy | mid | hard
+  int severity = 0;           // 1..5: this severity instead of `level` (0 = use `level`)
   std::string output = "bgr8";  // bgr8 (republish decoded) or jpeg (re-encode q95)
   bool json = false;            // print a JSON array (the frames line then goes to stderr)
   // Corruptions, one run each; "none" = decode only.
