@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "bag/writer.hpp"
+#include "common/clock.hpp"
 #include "transport/access.hpp"
 #include "transport/drop_counter.hpp"
 
@@ -67,7 +68,11 @@ struct RecorderCounts {
 
 class BagRecorder {
  public:
+  // `clock` times the run (duration, discovery, stop drain) and gives started_ns; it must outlive
+  // the recorder. Record log times are the transport's receive stamps. The first form uses the
+  // system clock.
   BagRecorder(RecorderConfig config, std::shared_ptr<spdlog::logger> log);
+  BagRecorder(RecorderConfig config, std::shared_ptr<spdlog::logger> log, Clock& clock);
   ~BagRecorder();
   // 0 on a clean stop, 1 when the bag could not be opened or written.
   int run(const std::atomic<bool>& stop);

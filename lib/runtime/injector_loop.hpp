@@ -148,8 +148,8 @@ std::string faulted_topic(const InjectorConfig& config, const std::string& input
 class InjectorLoop {
  public:
   // Binds the output now; the input is subscribed in run() once downstream subscribers joined.
-  // `clock` (the monotonic time of stamps, latencies, delays and statistics) must outlive the loop;
-  // the first form uses the system clock.
+  // `clock` (the time of stamps, latencies, delays and statistics) must outlive the loop; the first
+  // form uses the system clock.
   InjectorLoop(InjectorConfig config, std::string node, std::unique_ptr<FramePolicy> policy,
                std::shared_ptr<spdlog::logger> log);
   InjectorLoop(InjectorConfig config, std::string node, std::unique_ptr<FramePolicy> policy,

@@ -90,6 +90,9 @@ struct PlayerCounts {
 
 class PlayerLoop {
  public:
+  // `clock` paces the run, times the lockstep wait and stamps every message (publish_mono_ns and
+  // the statistics windows in now_ns(), publish_stamp_ns in realtime_ns()); it must outlive the
+  // loop.
   PlayerLoop(PlayerConfig config, std::string node, std::unique_ptr<FrameSource> source,
              Clock& clock, std::shared_ptr<spdlog::logger> log);
   ~PlayerLoop();

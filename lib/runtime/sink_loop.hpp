@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "common/clock.hpp"
 #include "runtime/remap.hpp"
 #include "stats/topic_stats.hpp"
 #include "transport/access.hpp"
@@ -99,7 +100,10 @@ struct SinkCounts {
 
 class SinkLoop {
  public:
+  // `clock` times the finalize grace and the statistics windows and stamps the acks; it must
+  // outlive the loop. The first form uses the system clock.
   SinkLoop(SinkConfig config, std::string node, std::shared_ptr<spdlog::logger> log);
+  SinkLoop(SinkConfig config, std::string node, std::shared_ptr<spdlog::logger> log, Clock& clock);
   ~SinkLoop();
   std::string detections_endpoint() const;  // as bound
   // Runs until `stop` (finalize, 0), a completed run with exit_on_last (0) or a fatal error (1).
