@@ -1,10 +1,10 @@
 #include "runtime/bag_player.hpp"
 
+#include <spdlog/fmt/fmt.h>
+
 #include <algorithm>
 #include <cctype>
 #include <regex>
-
-#include <spdlog/fmt/fmt.h>
 
 #include "bag/reader.hpp"
 #include "camera_frame.pb.h"
@@ -56,9 +56,9 @@ struct BagPlayer::Impl {
   bool waited = false;
   StampNs first_log_ns = -1;                   // first replayable message of the bag
   StampNs base_log_ns = -1, base_wall_ns = 0;  // pacing anchor of the current pass
-  StampNs last_progress_ns = -1;  // clock time of the last report; -1 = none yet
-  StampNs prev_log_ns = -1;  // last message sent (gap detection)
-  double total_s = 0.0;      // bag duration from the summaries (progress reports)
+  StampNs last_progress_ns = -1;               // clock time of the last report; -1 = none yet
+  StampNs prev_log_ns = -1;                    // last message sent (gap detection)
+  double total_s = 0.0;                        // bag duration from the summaries (progress reports)
 
   // Applies one text command; false for an unknown one.
   static bool apply_command(std::string_view text, std::atomic<bool>& paused,
