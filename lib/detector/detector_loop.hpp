@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "common/clock.hpp"
 #include "transport/access.hpp"
 
 namespace faultline::detector {
@@ -70,8 +71,12 @@ struct DetectorLoopCounts {
 
 class DetectorLoop {
  public:
-  // Connects now, so a publisher waiting for subscribers sees this node.
+  // Connects now, so a publisher waiting for subscribers sees this node. `clock` stamps the
+  // DetectionArrays and times processing_ns; it must outlive the loop. The first form uses the
+  // system clock.
   DetectorLoop(DetectorLoopConfig config, std::string node, std::shared_ptr<spdlog::logger> log);
+  DetectorLoop(DetectorLoopConfig config, std::string node, std::shared_ptr<spdlog::logger> log,
+               Clock& clock);
   ~DetectorLoop();
   // Runs until `stop` (0), last_in_run with exit_on_last (0) or context termination (0).
   int run(const std::atomic<bool>& stop);
