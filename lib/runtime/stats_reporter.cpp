@@ -36,7 +36,7 @@ StatsReporter::StatsReporter(std::string node, std::shared_ptr<spdlog::logger> l
     : node_(std::move(node)),
       log_(std::move(log)),
       clock_(clock),
-      collector_(window_ns),
+      collector_(window_ns, clock.now_ns()),
       log_period_ns_(log_period_ns),
       last_log_ns_(clock.now_ns()),
       stats_topic_(std::move(stats_topic)) {}

@@ -19,7 +19,8 @@ msgs::TopicStats to_proto(const stats::TopicWindow& w);
 
 class StatsReporter {
  public:
-  // `clock` stamps the TopicStats messages and starts the log period; it must outlive the reporter.
+  // `clock` starts the first window and the log period and stamps the TopicStats messages; it must
+  // outlive the reporter.
   StatsReporter(std::string node, std::shared_ptr<spdlog::logger> log, const Clock& clock,
                 DurationNs window_ns, DurationNs log_period_ns,
                 std::string stats_topic = "/statistics");

@@ -57,7 +57,8 @@ class PlayerLoopClockTest : public ::testing::Test {
     frames_.push_back(f);
   }
 
-  // Plays every frame at `rate` and returns what a subscriber received, up to the StreamEnd.
+  // Plays every frame at `rate` and returns what a subscriber received, up to the statistics that
+  // follow the StreamEnd.
   std::vector<Received> Play(double rate) {
     PlayerConfig pc;
     pc.rate = rate;
@@ -81,7 +82,9 @@ class PlayerLoopClockTest : public ::testing::Test {
       EXPECT_TRUE(any.ParseFromArray(r->header().data(), static_cast<int>(r->header().size())));
       got.push_back({std::string(r->topic()), any.header().publish_mono_ns(),
                      any.header().publish_stamp_ns()});
-      if (got.back().topic == "/sync/end") break;
+      if (got.back().topic == "/statistics" && got.size() > 1 &&
+          got[got.size() - 2].topic == "/sync/end")
+        break;
     }
     EXPECT_EQ(rc.get(), 0);
     counts_ = player.counts();
@@ -123,8 +126,12 @@ TEST_F(PlayerLoopClockTest, PacesByTheClockAndStampsWithIt) {
     frames_and_boundaries.emplace_back(r.topic, r.mono_ns);
   }
   EXPECT_EQ(frames_and_boundaries, expected);
-  ASSERT_FALSE(got.empty());
-  EXPECT_EQ(got.back().topic, "/sync/end");
+  ASSERT_GE(got.size(), 2u);
+  // The end of the run: the StreamEnd, then the last statistics window (its start and end on the
+  // clock too), one TopicStats for the camera topic.
+  EXPECT_EQ(got[got.size() - 2].topic, "/sync/end");
+  EXPECT_EQ(got.back().topic, "/statistics");
+  EXPECT_EQ(got.size(), expected.size() + 2);
   EXPECT_EQ(counts_.frames_sent, 4u);
   EXPECT_EQ(counts_.boundaries_sent, 2u);
 }
