@@ -29,6 +29,7 @@
 #include <string>
 #include <vector>
 
+#include "common/clock.hpp"
 #include "transport/access.hpp"
 
 namespace faultline::ros2dds {
@@ -113,8 +114,12 @@ std::string faultline_topic(const InBridgeConfig& config, const std::string& ros
 
 class InBridge {
  public:
-  // Creates the DDS participant and binds the ZeroMQ output now (ConfigError on failure).
+  // Creates the DDS participant and binds the ZeroMQ output now (ConfigError on failure). `clock`
+  // stamps the frames and times the counts log; it must outlive the bridge. The first form uses
+  // the system clock.
   InBridge(InBridgeConfig config, std::string node, std::shared_ptr<spdlog::logger> log);
+  InBridge(InBridgeConfig config, std::string node, std::shared_ptr<spdlog::logger> log,
+           Clock& clock);
   ~InBridge();
   std::string endpoint() const;
   // CURVE clients refused by access.curve_allowed_clients_file (each logged); safe from any thread.

@@ -29,6 +29,7 @@
 #include <string>
 #include <vector>
 
+#include "common/clock.hpp"
 #include "transport/access.hpp"
 
 namespace faultline::ros2dds {
@@ -130,8 +131,11 @@ std::string ros_frame_id_for(const OutBridgeConfig& config, const std::string& f
 
 class OutBridge {
  public:
-  // Creates the DDS participant and connects the ZeroMQ input (ConfigError on failure).
+  // Creates the DDS participant and connects the ZeroMQ input (ConfigError on failure). `clock`
+  // times the counts log; it must outlive the bridge. The first form uses the system clock.
   OutBridge(OutBridgeConfig config, std::string node, std::shared_ptr<spdlog::logger> log);
+  OutBridge(OutBridgeConfig config, std::string node, std::shared_ptr<spdlog::logger> log,
+            Clock& clock);
   ~OutBridge();
   // Runs until `stop` (0), a StreamEnd with exit_on_end or max_frames (0, after the readers
   // acknowledged), or a fatal socket error (1).
