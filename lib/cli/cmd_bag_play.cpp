@@ -5,6 +5,7 @@
 
 #include <CLI/CLI.hpp>
 #include <atomic>
+#include <cstdio>
 #include <thread>
 
 #include "cli/access_options.hpp"
@@ -70,7 +71,7 @@ ExitStatus run(int argc, char** argv) {
       "waits\n"
       "for the first resume or step."};
   runtime::BagPlayerConfig cfg;
-  cfg.progress = true;
+  bool progress = true;
   std::vector<std::string> remaps;
   app.add_option("files", cfg.files, "bag file(s), played in order (split parts)")
       ->required()
@@ -94,7 +95,7 @@ ExitStatus run(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--ack-timeout-ms", cfg.ack_timeout_ms, "lockstep ack timeout (0 = forever)")
       ->capture_default_str();
-  app.add_flag("!--no-progress", cfg.progress, "no progress line");
+  app.add_flag("!--no-progress", progress, "no progress line");
   app.add_flag("--start-paused", cfg.start_paused,
                "wait for resume (SPACE, or bag control ... resume) or step");
   app.add_option(
@@ -124,7 +125,14 @@ ExitStatus run(int argc, char** argv) {
         cfg.control_endpoint.empty() ? "" : " (control on " + player.control_endpoint() + ")");
     std::unique_ptr<KeyControl> key_control;
     if (keys) key_control = std::make_unique<KeyControl>(player);
-    rc = player.run(shutdown_requested());
+    // One line on stderr, rewritten in place and ended with the run.
+    runtime::BagPlayProgressFn show;
+    if (progress) {
+      show = [](const runtime::BagPlayProgress& p) {
+        std::fprintf(stderr, "\r%s%s", runtime::format_progress(p).c_str(), p.finished ? "\n" : "");
+      };
+    }
+    rc = player.run(shutdown_requested(), show);
   }
   transport::terminate_context();
   return rc;

@@ -15,6 +15,11 @@ StampNs read_clock(clockid_t id) {
 StampNs realtime_now_ns() { return read_clock(CLOCK_REALTIME); }
 StampNs monotonic_now_ns() { return read_clock(CLOCK_MONOTONIC); }
 
+Clock& system_clock() {
+  static SystemClock clock;
+  return clock;
+}
+
 void SystemClock::sleep_until_ns(StampNs deadline) {
   timespec ts{};
   ts.tv_sec = deadline / kNsPerSec;

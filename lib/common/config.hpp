@@ -6,7 +6,7 @@
 // "not given" from any value.
 //
 //   struct PlayerConfig {
-//     double rate = 1.0;  // replay speed factor; 0 = as fast as possible
+//     double rate = 1.0;  // described once, in visit(): --help prints it
 //     template <class V> void visit(V& v) { v("rate", rate, "replay speed factor; 0 = unpaced"); }
 //     void validate() const;  // throws ConfigError
 //   };

@@ -1,6 +1,5 @@
 #include "detector/detector_loop.hpp"
 
-#include <chrono>
 #include <map>
 #include <utility>
 
@@ -66,6 +65,7 @@ struct DetectorLoop::Impl {
   DetectorLoopConfig cfg;
   std::string node;
   std::shared_ptr<spdlog::logger> log;
+  Clock& clock;
   transport::RawSubscriber sub;
   transport::ShmCameraReader shm;  // frames whose pixels are in a publisher's shared-memory ring
   transport::Publisher push;
@@ -128,10 +128,11 @@ struct DetectorLoop::Impl {
     }
   }
 
-  Impl(DetectorLoopConfig c, std::string n, std::shared_ptr<spdlog::logger> l)
+  Impl(DetectorLoopConfig c, std::string n, std::shared_ptr<spdlog::logger> l, Clock& cl)
       : cfg(std::move(c)),
         node(std::move(n)),
         log(std::move(l)),
+        clock(cl),
         sub([&] {
           transport::SubscriberConfig s;
           s.endpoints = cfg.input_endpoints;
@@ -191,25 +192,23 @@ struct DetectorLoop::Impl {
     pending.clear();
   }
 
-  // Finishes sample b and pushes its DetectionArray (header seq `seq`); `t0` is when the boundary
-  // arrived.
-  void publish_detections(const msgs::SampleBoundary& b, std::uint64_t seq,
-                          std::chrono::steady_clock::time_point t0, DetectorLoopCounts& counts) {
+  // Finishes sample b and pushes its DetectionArray (header seq `seq`); `t0_ns` is when the
+  // boundary arrived (clock time).
+  void publish_detections(const msgs::SampleBoundary& b, std::uint64_t seq, StampNs t0_ns,
+                          DetectorLoopCounts& counts) {
     const auto boxes = detector.finish_sample(b.timestamp_us());
     msgs::DetectionArray d;
     d.set_sample_token(b.sample_token());
     d.set_detector(detector.config().describe());
     for (const auto& box : boxes) to_detection(box, d.add_detections());
-    d.set_processing_ns(sample_processing_ns + std::chrono::duration_cast<std::chrono::nanoseconds>(
-                                                   std::chrono::steady_clock::now() - t0)
-                                                   .count());
+    d.set_processing_ns(sample_processing_ns + (clock.now_ns() - t0_ns));
     d.set_first_frame_capture_ns(first_capture_ns);
     d.mutable_header()->set_seq(seq);
     d.mutable_header()->set_publisher(node);
     d.mutable_header()->set_capture_stamp_ns(b.timestamp_us() * 1000);
     d.mutable_header()->set_capture_clock(b.header().capture_clock());
-    d.mutable_header()->set_publish_stamp_ns(realtime_now_ns());
-    d.mutable_header()->set_publish_mono_ns(monotonic_now_ns());
+    d.mutable_header()->set_publish_stamp_ns(clock.realtime_ns());
+    d.mutable_header()->set_publish_mono_ns(clock.now_ns());
     if (const Status s = transport::send_message(push, cfg.detections_topic, d); s.is_ok()) {
       ++counts.arrays_sent;
     } else {
@@ -227,7 +226,7 @@ struct DetectorLoop::Impl {
   void add_frame_now(const transport::ReceivedMessage& r, const transport::CameraFrameView& view,
                      const std::string& topic, DetectorLoopCounts& counts) {
     const msgs::CameraFrame& h = view.header;
-    const auto t0 = std::chrono::steady_clock::now();
+    const StampNs t0_ns = clock.now_ns();
     auto in = to_input(h, view.payload, view.payload_size);
     if (!r.has_payload() &&
         !shm.intact(view)) {  // overwritten while decoding: the pixels may be torn
@@ -241,9 +240,7 @@ struct DetectorLoop::Impl {
       return;
     }
     detector.add_frame(*in);
-    sample_processing_ns +=
-        std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now() - t0)
-            .count();
+    sample_processing_ns += clock.now_ns() - t0_ns;
     const std::int64_t cap = h.header().capture_stamp_ns();
     if (first_capture_ns == 0 || cap < first_capture_ns) first_capture_ns = cap;
   }
@@ -268,9 +265,13 @@ struct DetectorLoop::Impl {
 };
 
 DetectorLoop::DetectorLoop(DetectorLoopConfig config, std::string node,
-                           std::shared_ptr<spdlog::logger> log) {
+                           std::shared_ptr<spdlog::logger> log)
+    : DetectorLoop(std::move(config), std::move(node), std::move(log), system_clock()) {}
+
+DetectorLoop::DetectorLoop(DetectorLoopConfig config, std::string node,
+                           std::shared_ptr<spdlog::logger> log, Clock& clock) {
   config.validate();
-  impl_ = std::make_unique<Impl>(std::move(config), std::move(node), std::move(log));
+  impl_ = std::make_unique<Impl>(std::move(config), std::move(node), std::move(log), clock);
 }
 
 DetectorLoop::~DetectorLoop() = default;
@@ -280,7 +281,6 @@ std::uint64_t DetectorLoop::refused_by_peer() { return impl_->push.refused_by_pe
 int DetectorLoop::run(const std::atomic<bool>& stop) {
   Impl& m = *impl_;
   std::uint64_t seq = 0;
-  using Clock = std::chrono::steady_clock;
   while (!stop.load()) {
     auto r = m.sub.receive(50 * kNsPerMs);
     if (!r.is_ok()) {
@@ -297,9 +297,9 @@ int DetectorLoop::run(const std::atomic<bool>& stop) {
       ++counts_.boundaries;
       m.count_lost_boundaries(b, topic, counts_);
       m.check_complete(b, counts_);
-      const auto t0 = Clock::now();
+      const StampNs t0_ns = m.clock.now_ns();
       if (!m.cfg.temporal) m.add_pending_frames(b, counts_);
-      m.publish_detections(b, ++seq, t0, counts_);
+      m.publish_detections(b, ++seq, t0_ns, counts_);
       if (b.last_in_run() && m.cfg.exit_on_last) return 0;
       continue;
     }

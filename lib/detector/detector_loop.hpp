@@ -11,39 +11,39 @@
 #include <string>
 #include <vector>
 
+#include "common/clock.hpp"
 #include "transport/access.hpp"
 
 namespace faultline::detector {
 
 struct DetectorLoopConfig {
-  std::vector<std::string> input_endpoints{"tcp://127.0.0.1:5601"};  // injector PUB
-  std::string input_prefix = "/faulty/";               // camera topics to subscribe to
-  std::string sync_topic = "/sync/sample";             // SampleBoundary topic
-  int input_hwm = 64;                                  // receive queue (messages)
-  std::string sink_endpoint = "tcp://127.0.0.1:5602";  // sink PULL address (we connect and PUSH)
-  std::string detections_topic = "/detections";        // DetectionArray topic
-  double scale = 1.0;                                  // input scale: 1.0, 0.5 or 0.25
-  bool temporal = true;                                // track over every frame vs single key frame
-  bool normalise = true;     // exposure/contrast normalisation (docs/detector.md)
-  bool exit_on_last = true;  // stop after the last_in_run boundary
-  int linger_ms = 2000;      // time to deliver the last DetectionArrays
-
-  transport::AccessConfig
-      access;  // allow_remote and CURVE keys of every socket (transport/access.hpp)
+  std::vector<std::string> input_endpoints{"tcp://127.0.0.1:5601"};
+  std::string input_prefix = "/faulty/";
+  std::string sync_topic = "/sync/sample";
+  int input_hwm = 64;
+  std::string sink_endpoint = "tcp://127.0.0.1:5602";
+  std::string detections_topic = "/detections";
+  double scale = 1.0;
+  bool temporal = true;
+  bool normalise = true;
+  bool exit_on_last = true;
+  int linger_ms = 2000;
+  transport::AccessConfig access;
 
   template <class V>
   void visit(V& v) {
-    v("input_endpoints", input_endpoints, "camera publishers to subscribe to");
-    v("input_prefix", input_prefix, "camera topic prefix");
+    v("input_endpoints", input_endpoints, "camera publishers to subscribe to (the injector's PUB)");
+    v("input_prefix", input_prefix, "prefix of the camera topics to subscribe to");
     v("sync_topic", sync_topic, "SampleBoundary topic");
     v("input_hwm", input_hwm, "receive queue (messages)");
-    v("sink_endpoint", sink_endpoint, "detection sink PULL address");
+    v("sink_endpoint", sink_endpoint,
+      "detection sink PULL address (the detector connects and PUSHes)");
     v("detections_topic", detections_topic, "DetectionArray topic");
     v("scale", scale, "input scale 1.0, 0.5 or 0.25");
     v("temporal", temporal, "track over every frame (true) or single key frame (false)");
     v("normalise", normalise,
       "exposure and contrast normalisation before segmentation (docs/detector.md)");
-    v("exit_on_last", exit_on_last, "stop after the last sample");
+    v("exit_on_last", exit_on_last, "stop after the last_in_run boundary");
     v("linger_ms", linger_ms, "end of run: time to deliver queued detections (ms)");
     access.visit(v);
   }
@@ -71,8 +71,12 @@ struct DetectorLoopCounts {
 
 class DetectorLoop {
  public:
-  // Connects now, so a publisher waiting for subscribers sees this node.
+  // Connects now, so a publisher waiting for subscribers sees this node. `clock` stamps the
+  // DetectionArrays and times processing_ns; it must outlive the loop. The first form uses the
+  // system clock.
   DetectorLoop(DetectorLoopConfig config, std::string node, std::shared_ptr<spdlog::logger> log);
+  DetectorLoop(DetectorLoopConfig config, std::string node, std::shared_ptr<spdlog::logger> log,
+               Clock& clock);
   ~DetectorLoop();
   // Runs until `stop` (0), last_in_run with exit_on_last (0) or context termination (0).
   int run(const std::atomic<bool>& stop);

@@ -1,17 +1,17 @@
 // Launch files: one YAML per scenario listing the nodes to start, their parameters and remaps.
 //
-//   env: {FAULTLINE_RUN_DIR: /tmp/run1}          # optional; set for every child (wins over the
-//   launcher's env) nodes:
-//     - name: nusc_player                         # required, unique
-//       exec: nusc_player                         # bare name: next to the faultline binary, then
-//       PATH; or a path required: true                            # the launch ends when this node
-//       exits (default true) params: {dataroot: data/synth, rate: 1.0} # written to a temp YAML
-//       passed as --params remap: {/a: /b}                           # optional; passed to the node
-//       as its `remap` parameter args: []                                  # optional extra
-//       command-line arguments respawn: false                            # start it again when it
-//       fails (killed, non-zero exit) respawn_delay: 0.0                        # seconds between
-//       its end and the new start respawn_max_retries: 3                    # respawns allowed over
-//       the launch (0..1000)
+//   env: {FAULTLINE_RUN_DIR: /tmp/run1}   # optional; set for every child, over the launcher's env
+//   nodes:
+//     - name: nusc_player                  # required, unique
+//       exec: nusc_player                  # bare name: beside the faultline binary, then PATH;
+//                                          # or a path
+//       required: true                     # the launch ends when this node exits (default true)
+//       params: {dataroot: data/synth}     # written to a temporary YAML, passed as --params
+//       remap: {/a: /b}                    # optional; passed as the node's `remap` parameter
+//       args: []                           # optional extra command-line arguments
+//       respawn: false                     # start it again when it fails (killed, non-zero exit)
+//       respawn_delay: 0.0                 # seconds between its end and the new start
+//       respawn_max_retries: 3             # respawns allowed over the launch (0..1000)
 //
 // Every scalar may use ${VAR} or ${VAR:-default}; VAR is looked up in `env:` first, then in the
 // launcher's environment. Unknown keys, a missing exec, a duplicate name or an unset variable

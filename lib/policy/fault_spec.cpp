@@ -138,12 +138,12 @@ struct FaultEntry {
     v("cameras", cameras, "camera names (CAM_FRONT, CAM_FRONT_RIGHT, ...) or all; none = all");
     v("rng", rng, "fast|numpy: numpy draws the reference's random stream (bit-exact)");
     v("coherent", coherent,
-      "one lasting fault per camera, image corruptions with rng fast only; none = on for the "
-      "sensor faults (soiling, water_drops, glare, exposure_flicker)");
+      "one lasting fault per camera, image corruptions with rng fast only; "
+      "none = on for the sensor faults (soiling, water_drops, glare, exposure_flicker)");
     v("mode", mode, "camera_crash and frame_lost output: black|drop|freeze|delay; none = black");
     v("delay_ms", delay_ms,
-      "ms >= 0: how long mode delay and type delay hold a frame (none = 200); stale_frames: the "
-      "lag, at most 10000 (none = the severity's)");
+      "ms >= 0: how long mode delay and type delay hold a frame (none = 200); stale_frames: "
+      "the lag, at most 10000 (none = the severity's)");
     v("start_s", start_s, "window start, s >= 0 after the first frame's capture time");
     v("duration_s", duration_s, "window length, s >= 0; none = until the end");
     v("ramp_s", ramp_s, "s >= 0 of a linear severity ramp from 1 up to severity");

@@ -143,6 +143,7 @@ struct InBridge::Impl {
   InBridgeConfig cfg;
   std::string node;
   std::shared_ptr<spdlog::logger> log;
+  Clock& clock;
   Participant participant;
   transport::Publisher pub;
   transport::TopicRegistry registry;
@@ -163,10 +164,12 @@ struct InBridge::Impl {
     return pc;
   }
 
-  Impl(InBridgeConfig config, std::string node_name, std::shared_ptr<spdlog::logger> logger)
+  Impl(InBridgeConfig config, std::string node_name, std::shared_ptr<spdlog::logger> logger,
+       Clock& clk)
       : cfg(std::move(config)),
         node(std::move(node_name)),
         log(std::move(logger)),
+        clock(clk),
         participant(resolve_domain_id(cfg.domain_id, std::getenv("ROS_DOMAIN_ID")), cfg.dds_config),
         pub(publisher_config(cfg)),
         registry(node),
@@ -290,8 +293,8 @@ struct InBridge::Impl {
     h.mutable_header()->set_seq(++cam.seq);
     h.mutable_header()->set_capture_stamp_ns(
         ns_from_time({ros_header.stamp.sec, ros_header.stamp.nanosec}));
-    h.mutable_header()->set_publish_stamp_ns(realtime_now_ns());
-    h.mutable_header()->set_publish_mono_ns(monotonic_now_ns());
+    h.mutable_header()->set_publish_stamp_ns(clock.realtime_ns());
+    h.mutable_header()->set_publish_mono_ns(clock.now_ns());
     const std::string frame_id = ros_header.frame_id ? ros_header.frame_id : "";
     h.mutable_header()->set_frame_id(frame_id);
     h.mutable_header()->set_publisher(node);
@@ -413,7 +416,11 @@ struct InBridge::Impl {
 };
 
 InBridge::InBridge(InBridgeConfig config, std::string node, std::shared_ptr<spdlog::logger> log)
-    : impl_(std::make_unique<Impl>(std::move(config), std::move(node), std::move(log))) {}
+    : InBridge(std::move(config), std::move(node), std::move(log), system_clock()) {}
+
+InBridge::InBridge(InBridgeConfig config, std::string node, std::shared_ptr<spdlog::logger> log,
+                   Clock& clock)
+    : impl_(std::make_unique<Impl>(std::move(config), std::move(node), std::move(log), clock)) {}
 
 InBridge::~InBridge() = default;
 
@@ -441,7 +448,7 @@ int InBridge::run(const std::atomic<bool>& stop) {
                 cam.info_topic.empty() ? "none" : cam.info_topic);
   }
   const auto period = static_cast<DurationNs>(m.cfg.stats_log_period_s * 1e9);
-  StampNs next_log = monotonic_now_ns() + period;
+  StampNs next_log = m.clock.now_ns() + period;
   int rc = 0;
   while (!stop.load()) {
     (void)m.waitset.wait(100 * kNsPerMs);
@@ -453,7 +460,7 @@ int InBridge::run(const std::atomic<bool>& stop) {
     }
     m.check_qos();
     m.check_losses();
-    if (period > 0 && monotonic_now_ns() >= next_log) {
+    if (period > 0 && m.clock.now_ns() >= next_log) {
       m.log->info(
           "frames_in={} frames_out={} bad_images={} camera_infos={} type_mismatch={} "
           "incompatible_qos={} "
@@ -461,7 +468,7 @@ int InBridge::run(const std::atomic<bool>& stop) {
           c.frames_in.load(), c.frames_out.load(), c.bad_images.load(), c.camera_infos.load(),
           c.type_mismatch.load(), c.incompatible_qos.load(), c.history_replaced.load(),
           c.dds_lost.load());
-      next_log = monotonic_now_ns() + period;
+      next_log = m.clock.now_ns() + period;
     }
     if (m.cfg.max_frames > 0 && c.frames_out >= static_cast<std::uint64_t>(m.cfg.max_frames)) break;
   }

@@ -29,53 +29,54 @@
 #include <string>
 #include <vector>
 
+#include "common/clock.hpp"
 #include "transport/access.hpp"
 
 namespace faultline::ros2dds {
 
 struct InBridgeConfig {
-  int domain_id = -1;               // -1 = $ROS_DOMAIN_ID, else 0
-  std::string dds_config;           // Cyclone XML; "" = CYCLONEDDS_URI as under rmw_cyclonedds
-  std::vector<std::string> topics;  // ROS image topics to subscribe (at least one)
-  std::string qos = "default";  // image and CameraInfo QoS: default | sensor_data | reliable,10 ...
-  std::map<std::string, std::string> topic_qos;  // per-topic QoS overrides (ROS topic -> spec)
-  std::map<std::string, std::string>
-      channels;  // nuScenes camera name per image topic (default: see above)
-  std::map<std::string, std::string>
-      camera_info;        // CameraInfo topic per image topic ("" = none; default sibling)
-  bool tf_static = true;  // read /tf_static for extrinsics
-  std::string base_frame = "base_link";           // extrinsics are camera -> base_frame
-  int jpeg_quality = 95;                          // raw Image -> JPEG (1..100)
-  std::string endpoint = "tcp://127.0.0.1:5600";  // ZeroMQ PUB bind address
-  int hwm = 48;                                   // send queue per subscriber (messages)
-  std::string output_prefix = "/ros2";       // Faultline topic = prefix + ROS topic (then remap)
-  std::map<std::string, std::string> remap;  // Faultline topic remaps (from -> to)
-  int max_frames = 0;               // stop after this many frames in total; 0 = run until SIGINT
-  int wait_subscribers = 0;         // before subscribing, wait for this many ZeroMQ subscribers
-  int wait_timeout_ms = 10000;      // ... at most this long
-  double stats_log_period_s = 5.0;  // info log of counts every this many s
-  transport::AccessConfig
-      access;  // allow_remote and CURVE keys of the ZeroMQ socket (transport/access.hpp)
+  int domain_id = -1;
+  std::string dds_config;
+  std::vector<std::string> topics;
+  std::string qos = "default";
+  std::map<std::string, std::string> topic_qos;
+  std::map<std::string, std::string> channels;
+  std::map<std::string, std::string> camera_info;
+  bool tf_static = true;
+  std::string base_frame = "base_link";
+  int jpeg_quality = 95;
+  std::string endpoint = "tcp://127.0.0.1:5600";
+  int hwm = 48;
+  std::string output_prefix = "/ros2";
+  std::map<std::string, std::string> remap;
+  int max_frames = 0;
+  int wait_subscribers = 0;
+  int wait_timeout_ms = 10000;
+  double stats_log_period_s = 5.0;
+  transport::AccessConfig access;
 
   template <class V>
   void visit(V& v) {
     v("domain_id", domain_id, "DDS domain; -1 = $ROS_DOMAIN_ID, else 0");
-    v("dds_config", dds_config, "Cyclone DDS XML; empty = $CYCLONEDDS_URI");
+    v("dds_config", dds_config,
+      "Cyclone DDS XML; empty = $CYCLONEDDS_URI, as under rmw_cyclonedds");
     v("topics", topics, "ROS 2 image topics (CompressedImage or Image, found by discovery)");
-    v("qos", qos, "QoS of the subscriptions: default | sensor_data | reliable|best_effort,<depth>");
+    v("qos", qos,
+      "QoS of the image and CameraInfo subscriptions: "
+      "default | sensor_data | reliable|best_effort,<depth>");
     v("topic_qos", topic_qos, "per-topic QoS (ROS topic -> spec)");
     v("channels", channels,
       "nuScenes camera name per image topic, e.g. CAM_FRONT (default: in topic order)");
     v("camera_info", camera_info,
       "CameraInfo topic per image topic (\"\" = none; default <ns>/camera_info)");
     v("tf_static", tf_static, "read /tf_static for the cameras' extrinsics");
-    v("base_frame", base_frame, "frame the extrinsics are expressed in");
+    v("base_frame", base_frame, "frame the extrinsics are expressed in (camera -> base_frame)");
     v("jpeg_quality", jpeg_quality, "JPEG quality for raw Image input (1..100)");
     v("endpoint", endpoint, "ZeroMQ PUB bind address");
     v("hwm", hwm, "send queue per subscriber (messages)");
     v("output_prefix", output_prefix, "Faultline topic = prefix + ROS topic");
     v("remap", remap, "Faultline topic remaps from -> to");
-    v("max_frames", max_frames, "stop after this many frames; 0 = until SIGINT");
+    v("max_frames", max_frames, "stop after this many frames in total; 0 = until SIGINT");
     v("wait_subscribers", wait_subscribers,
       "ZeroMQ subscribers to wait for before subscribing to ROS 2");
     v("wait_timeout_ms", wait_timeout_ms, "how long to wait for them (ms)");
@@ -113,8 +114,12 @@ std::string faultline_topic(const InBridgeConfig& config, const std::string& ros
 
 class InBridge {
  public:
-  // Creates the DDS participant and binds the ZeroMQ output now (ConfigError on failure).
+  // Creates the DDS participant and binds the ZeroMQ output now (ConfigError on failure). `clock`
+  // stamps the frames and times the counts log; it must outlive the bridge. The first form uses
+  // the system clock.
   InBridge(InBridgeConfig config, std::string node, std::shared_ptr<spdlog::logger> log);
+  InBridge(InBridgeConfig config, std::string node, std::shared_ptr<spdlog::logger> log,
+           Clock& clock);
   ~InBridge();
   std::string endpoint() const;
   // CURVE clients refused by access.curve_allowed_clients_file (each logged); safe from any thread.

@@ -134,6 +134,7 @@ struct OutBridge::Impl {
   OutBridgeConfig cfg;
   std::string node;
   std::shared_ptr<spdlog::logger> log;
+  Clock& clock;
   Participant participant;
   transport::RawSubscriber sub;
   transport::DropCounter drops;
@@ -161,10 +162,12 @@ struct OutBridge::Impl {
     return sc;
   }
 
-  Impl(OutBridgeConfig config, std::string node_name, std::shared_ptr<spdlog::logger> logger)
+  Impl(OutBridgeConfig config, std::string node_name, std::shared_ptr<spdlog::logger> logger,
+       Clock& clk)
       : cfg(std::move(config)),
         node(std::move(node_name)),
         log(std::move(logger)),
+        clock(clk),
         participant(resolve_domain_id(cfg.domain_id, std::getenv("ROS_DOMAIN_ID")), cfg.dds_config),
         sub(subscriber_config(cfg)) {
     if (!cfg.faults_topic.empty()) {
@@ -421,7 +424,11 @@ struct OutBridge::Impl {
 };
 
 OutBridge::OutBridge(OutBridgeConfig config, std::string node, std::shared_ptr<spdlog::logger> log)
-    : impl_(std::make_unique<Impl>(std::move(config), std::move(node), std::move(log))) {}
+    : OutBridge(std::move(config), std::move(node), std::move(log), system_clock()) {}
+
+OutBridge::OutBridge(OutBridgeConfig config, std::string node, std::shared_ptr<spdlog::logger> log,
+                     Clock& clock)
+    : impl_(std::make_unique<Impl>(std::move(config), std::move(node), std::move(log), clock)) {}
 
 OutBridge::~OutBridge() = default;
 
@@ -434,19 +441,19 @@ int OutBridge::run(const std::atomic<bool>& stop) {
   m.log->info("{} on DDS domain {}: {} -> ROS 2 ({})", m.node, m.participant.domain_id(),
               fmt::join(m.cfg.input_endpoints, ","), m.cfg.output);
   const auto period = static_cast<DurationNs>(m.cfg.stats_log_period_s * 1e9);
-  StampNs next_log = monotonic_now_ns() + period;
+  StampNs next_log = m.clock.now_ns() + period;
   int rc = 0;
   bool finished = false;
   while (!stop.load() && !finished) {
     auto r = m.sub.receive(100 * kNsPerMs);
-    if (period > 0 && monotonic_now_ns() >= next_log) {
+    if (period > 0 && m.clock.now_ns() >= next_log) {
       m.check_qos();
       m.log->info(
           "frames_in={} frames_out={} events={} malformed={} transport_drops={} write_failures={} "
           "incompatible_qos={}",
           c.frames_in.load(), c.frames_out.load(), c.events.load(), c.malformed.load(),
           c.transport_drops.load(), c.write_failures.load(), c.incompatible_qos.load());
-      next_log = monotonic_now_ns() + period;
+      next_log = m.clock.now_ns() + period;
     }
     if (!r) {
       if (r.status().code() == StatusCode::kWouldBlock) continue;

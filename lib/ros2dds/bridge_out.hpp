@@ -29,39 +29,39 @@
 #include <string>
 #include <vector>
 
+#include "common/clock.hpp"
 #include "transport/access.hpp"
 
 namespace faultline::ros2dds {
 
 struct OutBridgeConfig {
-  int domain_id = -1;      // -1 = $ROS_DOMAIN_ID, else 0
-  std::string dds_config;  // Cyclone XML; "" = CYCLONEDDS_URI
-  std::vector<std::string> input_endpoints{"tcp://127.0.0.1:5601"};  // the injector's output
-  std::vector<std::string> input_topics{"/faulty/"};                 // camera frame topic prefixes
-  std::vector<std::string>
-      advertise;       // Faultline camera topics whose ROS 2 writers exist from the start
-  int input_hwm = 48;  // receive queue (messages)
-  std::string strip_prefix = "/faulty";      // removed from the Faultline topic
-  std::string topic_suffix;                  // appended to the ROS topic ("/faulty" for a proxy)
-  std::map<std::string, std::string> remap;  // ROS topic remaps (from -> to), after the rule above
-  std::string names = "as_is";  // as_is | nuscenes: /CAM_FRONT/... topics and CAM_FRONT frame ids
-  std::string output = "compressed";  // compressed | raw
-  int jpeg_quality = 95;              // raw frames -> CompressedImage (1..100; nuScenes-C used 95)
-  std::string qos = "default";        // image, CameraInfo and diagnostics QoS
-  std::map<std::string, std::string> topic_qos;    // per ROS topic (after renaming)
-  bool camera_info = true;                         // publish CameraInfo next to each image topic
-  std::string faults_topic = "/faultline/faults";  // FaultEvents in ("" = not subscribed)
-  std::string diagnostics_topic = "/faultline/faults";  // DiagnosticArray out
-  bool publish_tf = false;  // /tf_static from sensor_to_ego, /tf from ego_pose
+  int domain_id = -1;
+  std::string dds_config;
+  std::vector<std::string> input_endpoints{"tcp://127.0.0.1:5601"};
+  std::vector<std::string> input_topics{"/faulty/"};
+  std::vector<std::string> advertise;
+  int input_hwm = 48;
+  std::string strip_prefix = "/faulty";
+  std::string topic_suffix;
+  std::map<std::string, std::string> remap;
+  std::string names = "as_is";
+  std::string output = "compressed";
+  int jpeg_quality = 95;
+  std::string qos = "default";
+  std::map<std::string, std::string> topic_qos;
+  bool camera_info = true;
+  std::string faults_topic = "/faultline/faults";
+  std::string diagnostics_topic = "/faultline/faults";
+  bool publish_tf = false;
   std::string base_frame = "base_link";
   std::string map_frame = "map";
-  std::string end_topic = "/sync/end";  // StreamEnd of a finite run (always subscribed)
-  bool exit_on_end = true;              // stop after a StreamEnd
-  int max_frames = 0;                   // stop after this many frames; 0 = no limit
-  int wait_readers = 0;  // before a writer's first sample, wait for this many matched readers
-  int wait_timeout_ms = 10000;      // ... at most this long per writer (then write anyway)
-  double stats_log_period_s = 5.0;  // info log of counts every this many s
-  transport::AccessConfig access;   // CURVE keys of the ZeroMQ input (transport/access.hpp)
+  std::string end_topic = "/sync/end";
+  bool exit_on_end = true;
+  int max_frames = 0;
+  int wait_readers = 0;
+  int wait_timeout_ms = 10000;
+  double stats_log_period_s = 5.0;
+  transport::AccessConfig access;
 
   template <class V>
   void visit(V& v) {
@@ -74,27 +74,30 @@ struct OutBridgeConfig {
       "Faultline camera topics to offer on ROS 2 from the start (else at their first frame)");
     v("strip_prefix", strip_prefix, "removed from the Faultline topic to make the ROS topic");
     v("topic_suffix", topic_suffix, "appended to the ROS topic (/faulty for a proxy)");
-    v("remap", remap, "ROS topic remaps from -> to");
+    v("remap", remap, "ROS topic remaps from -> to, after strip_prefix and topic_suffix");
     v("names", names,
       "as_is, or nuscenes: a nuScenes camera's topics and frame_id take its channel name "
-      "(/CAM_FRONT/..., CAM_FRONT) "
-      "as in bag convert --format ros2 and nuscenes2mcap");
+      "(/CAM_FRONT/..., CAM_FRONT) as in bag convert --format ros2 and nuscenes2mcap");
     v("output", output, "compressed (CompressedImage) or raw (Image bgr8)");
-    v("jpeg_quality", jpeg_quality, "JPEG quality when encoding raw frames (1..100)");
-    v("qos", qos, "QoS of the writers: default | sensor_data | reliable|best_effort,<depth>");
-    v("topic_qos", topic_qos, "per-topic QoS (ROS topic -> spec)");
+    v("jpeg_quality", jpeg_quality,
+      "JPEG quality when encoding raw frames to CompressedImage (1..100; nuScenes-C used 95)");
+    v("qos", qos,
+      "QoS of the image, CameraInfo and diagnostics writers: "
+      "default | sensor_data | reliable|best_effort,<depth>");
+    v("topic_qos", topic_qos, "per-topic QoS (ROS topic after renaming -> spec)");
     v("camera_info", camera_info, "publish CameraInfo next to each image topic");
     v("faults_topic", faults_topic, "Faultline FaultEvent topic (\"\" = none)");
     v("diagnostics_topic", diagnostics_topic, "ROS topic of the DiagnosticArray");
     v("publish_tf", publish_tf, "publish /tf_static (extrinsics) and /tf (ego pose)");
     v("base_frame", base_frame, "parent frame of the cameras, child of map_frame");
     v("map_frame", map_frame, "parent frame of the ego pose");
-    v("end_topic", end_topic, "StreamEnd topic");
+    v("end_topic", end_topic, "StreamEnd topic of a finite run (always subscribed)");
     v("exit_on_end", exit_on_end, "stop after a StreamEnd");
     v("max_frames", max_frames, "stop after this many frames; 0 = no limit");
     v("wait_readers", wait_readers,
       "matched DDS readers to wait for before a topic's first sample");
-    v("wait_timeout_ms", wait_timeout_ms, "how long to wait for them per topic (ms)");
+    v("wait_timeout_ms", wait_timeout_ms,
+      "how long to wait for them per topic (ms), then write anyway");
     v("stats_log_period_s", stats_log_period_s, "counts log period (s)");
     access.visit(v);
   }
@@ -128,8 +131,11 @@ std::string ros_frame_id_for(const OutBridgeConfig& config, const std::string& f
 
 class OutBridge {
  public:
-  // Creates the DDS participant and connects the ZeroMQ input (ConfigError on failure).
+  // Creates the DDS participant and connects the ZeroMQ input (ConfigError on failure). `clock`
+  // times the counts log; it must outlive the bridge. The first form uses the system clock.
   OutBridge(OutBridgeConfig config, std::string node, std::shared_ptr<spdlog::logger> log);
+  OutBridge(OutBridgeConfig config, std::string node, std::shared_ptr<spdlog::logger> log,
+            Clock& clock);
   ~OutBridge();
   // Runs until `stop` (0), a StreamEnd with exit_on_end or max_frames (0, after the readers
   // acknowledged), or a fatal socket error (1).

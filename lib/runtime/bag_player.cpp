@@ -1,10 +1,10 @@
 #include "runtime/bag_player.hpp"
 
+#include <spdlog/fmt/fmt.h>
+
 #include <algorithm>
 #include <cctype>
-#include <cstdio>
 #include <regex>
-#include <thread>
 
 #include "bag/reader.hpp"
 #include "camera_frame.pb.h"
@@ -37,9 +37,17 @@ void BagPlayerConfig::validate() const {
   }
 }
 
+std::string format_progress(const BagPlayProgress& p) {
+  return fmt::format("[play] bag time {:8.2f} / {:.2f} s  messages {}{}  ", p.bag_seconds,
+                     p.total_seconds, p.messages_sent, p.paused ? "  [paused]" : "          ");
+}
+
 struct BagPlayer::Impl {
+  explicit Impl(Clock& c) : clock(c) {}
   BagPlayerConfig cfg;
   std::shared_ptr<spdlog::logger> log;
+  Clock& clock;
+  BagPlayProgressFn progress;  // may be empty
   std::unique_ptr<transport::Publisher> pub;
   std::unique_ptr<transport::RawSubscriber> acks;
   std::unique_ptr<transport::RawSubscriber> control;
@@ -48,9 +56,9 @@ struct BagPlayer::Impl {
   bool waited = false;
   StampNs first_log_ns = -1;                   // first replayable message of the bag
   StampNs base_log_ns = -1, base_wall_ns = 0;  // pacing anchor of the current pass
-  StampNs last_progress_ns = 0;
-  StampNs prev_log_ns = -1;  // last message sent (gap detection)
-  double total_s = 0.0;      // bag duration from the summaries (progress line)
+  StampNs last_progress_ns = -1;               // clock time of the last report; -1 = none yet
+  StampNs prev_log_ns = -1;                    // last message sent (gap detection)
+  double total_s = 0.0;                        // bag duration from the summaries (progress reports)
 
   // Applies one text command; false for an unknown one.
   static bool apply_command(std::string_view text, std::atomic<bool>& paused,
@@ -85,7 +93,7 @@ struct BagPlayer::Impl {
   void poll_control(DurationNs timeout, std::atomic<bool>& paused, std::atomic<int>& steps,
                     BagPlayerCounts& counts) {
     if (!control) {
-      if (timeout > 0) std::this_thread::sleep_for(std::chrono::nanoseconds(timeout));
+      if (timeout > 0) clock.sleep_until_ns(clock.now_ns() + timeout);
       return;
     }
     for (auto r = control->receive(timeout); r.is_ok(); r = control->receive(0)) {
@@ -99,10 +107,15 @@ struct BagPlayer::Impl {
     }
   }
 
-  void print_progress(const BagPlayerCounts& counts, bool paused) const {
-    std::fprintf(stderr, "\r[play] bag time %8.2f / %.2f s  messages %llu%s  ", counts.bag_seconds,
-                 total_s, static_cast<unsigned long long>(counts.messages_sent),
-                 paused ? "  [paused]" : "          ");
+  void report_progress(const BagPlayerCounts& counts, bool paused, bool finished) const {
+    if (!progress) return;
+    BagPlayProgress p;
+    p.bag_seconds = counts.bag_seconds;
+    p.total_seconds = total_s;
+    p.messages_sent = counts.messages_sent;
+    p.paused = paused;
+    p.finished = finished;
+    progress(p);
   }
 
   bool wanted(const std::string& topic) const {
@@ -114,22 +127,21 @@ struct BagPlayer::Impl {
                        [&](const std::regex& re) { return std::regex_search(topic, re); });
   }
 
-  // Sleeps until `deadline` in short steps so a stop request is seen within 50 ms.
-  static bool sleep_until(StampNs deadline, const std::atomic<bool>& stop) {
+  // Sleeps until `deadline` (clock time) in short steps so a stop request is seen within 50 ms.
+  bool sleep_until(StampNs deadline, const std::atomic<bool>& stop) {
     while (!stop.load()) {
-      const StampNs now = monotonic_now_ns();
+      const StampNs now = clock.now_ns();
       if (now >= deadline) return true;
-      std::this_thread::sleep_for(
-          std::chrono::nanoseconds(std::min<StampNs>(deadline - now, 50 * kNsPerMs)));
+      clock.sleep_until_ns(std::min<StampNs>(deadline, now + 50 * kNsPerMs));
     }
     return false;
   }
 
   bool wait_ack(const std::string& token, const std::atomic<bool>& stop, BagPlayerCounts& counts) {
     const StampNs deadline =
-        monotonic_now_ns() + static_cast<DurationNs>(cfg.ack_timeout_ms) * kNsPerMs;
+        clock.now_ns() + static_cast<DurationNs>(cfg.ack_timeout_ms) * kNsPerMs;
     while (!stop.load()) {
-      if (cfg.ack_timeout_ms > 0 && monotonic_now_ns() >= deadline) {
+      if (cfg.ack_timeout_ms > 0 && clock.now_ns() >= deadline) {
         ++counts.ack_timeouts;
         log->warn("lockstep: no SampleAck for sample {} within {} ms, continuing", token,
                   cfg.ack_timeout_ms);
@@ -147,7 +159,7 @@ struct BagPlayer::Impl {
     return false;
   }
 
-  // The bag duration for the progress line, from the statistics of the indexed files.
+  // The bag duration for the progress reports, from the statistics of the indexed files.
   void add_up_duration() {
     for (const auto& file : cfg.files) {
       auto reader = bag::Reader::open(file);
@@ -192,7 +204,7 @@ struct BagPlayer::Impl {
     if (!paused.load()) return true;
     bool was_waiting = false;
     while (paused.load() && steps.load() == 0 && !stop.load()) {
-      if (cfg.progress && !was_waiting) print_progress(counts, true);
+      if (!was_waiting) report_progress(counts, true, false);
       was_waiting = true;
       poll_control(50 * kNsPerMs, paused, steps, counts);
     }
@@ -213,7 +225,7 @@ struct BagPlayer::Impl {
     if (cfg.rate <= 0) return true;
     if (base_log_ns < 0) {
       base_log_ns = log_time_ns;
-      base_wall_ns = monotonic_now_ns();
+      base_wall_ns = clock.now_ns();
     }
     const auto due = base_wall_ns + static_cast<StampNs>(
                                         static_cast<double>(log_time_ns - base_log_ns) / cfg.rate);
@@ -244,14 +256,17 @@ struct BagPlayer::Impl {
   void send_stream_end() {
     msgs::StreamEnd end;
     end.mutable_header()->set_publisher("bag_player");
-    end.mutable_header()->set_publish_stamp_ns(realtime_now_ns());
-    end.mutable_header()->set_publish_mono_ns(monotonic_now_ns());
+    end.mutable_header()->set_publish_stamp_ns(clock.realtime_ns());
+    end.mutable_header()->set_publish_mono_ns(clock.now_ns());
     if (transport::send_message(*pub, cfg.end_topic, end).is_ok()) log->debug("stream end sent");
   }
 };
 
 BagPlayer::BagPlayer(BagPlayerConfig config, std::shared_ptr<spdlog::logger> log)
-    : impl_(std::make_unique<Impl>()) {
+    : BagPlayer(std::move(config), std::move(log), system_clock()) {}
+
+BagPlayer::BagPlayer(BagPlayerConfig config, std::shared_ptr<spdlog::logger> log, Clock& clock)
+    : impl_(std::make_unique<Impl>(clock)) {
   config.validate();
   Impl& m = *impl_;
   m.cfg = std::move(config);
@@ -302,8 +317,9 @@ std::uint64_t BagPlayer::auth_refused() const {
          (m.control ? m.control->auth_refused() : 0);
 }
 
-int BagPlayer::run(const std::atomic<bool>& stop) {
+int BagPlayer::run(const std::atomic<bool>& stop, const BagPlayProgressFn& progress) {
   Impl& m = *impl_;
+  m.progress = progress;
   const StampNs offset_ns = static_cast<StampNs>(m.cfg.start_offset_s * kNsPerSec);
   const StampNs span_ns =
       m.cfg.duration_s > 0 ? static_cast<StampNs>(m.cfg.duration_s * kNsPerSec) : -1;
@@ -346,9 +362,10 @@ int BagPlayer::run(const std::atomic<bool>& stop) {
     if (is_boundary && boundary.last_in_run() && boundary.stream_end_follows()) end_owed = true;
     counts_.bytes_sent += v.data.size();
     counts_.bag_seconds = static_cast<double>(rel) / 1e9;
-    if (m.cfg.progress && monotonic_now_ns() - m.last_progress_ns > 200 * kNsPerMs) {
-      m.last_progress_ns = monotonic_now_ns();
-      m.print_progress(counts_, paused_.load());
+    if (m.progress &&
+        (m.last_progress_ns < 0 || m.clock.now_ns() - m.last_progress_ns > 200 * kNsPerMs)) {
+      m.last_progress_ns = m.clock.now_ns();
+      m.report_progress(counts_, paused_.load(), false);
     }
     if (m.cfg.lockstep && topic == m.cfg.sync_topic) {
       if (is_boundary && !m.wait_ack(boundary.sample_token(), stop, counts_)) return false;
@@ -380,7 +397,7 @@ int BagPlayer::run(const std::atomic<bool>& stop) {
   // Converted bags (and recordings without /sync/end, or played without it) announce a stream end
   // on their last boundary; this is it.
   if (!stop.load() && end_owed) m.send_stream_end();
-  if (m.cfg.progress) std::fprintf(stderr, "\n");
+  m.report_progress(counts_, paused_.load(), true);
   m.log->info(
       "played {} messages ({} bytes, {:.2f} s of bag time), {} send failures, {} ack timeouts",
       counts_.messages_sent, counts_.bytes_sent, counts_.bag_seconds, counts_.send_failures,

@@ -15,11 +15,13 @@
 
 #include <atomic>
 #include <cstdint>
+#include <functional>
 #include <map>
 #include <memory>
 #include <string>
 #include <vector>
 
+#include "common/clock.hpp"
 #include "transport/access.hpp"
 
 namespace faultline::runtime {
@@ -45,7 +47,6 @@ struct BagPlayerConfig {
   std::string ack_endpoint = "tcp://127.0.0.1:5603";  // PULL bind address for SampleAck
   int ack_timeout_ms = 30000;
   int linger_ms = 1000;
-  bool progress = false;         // a progress line on stderr
   double max_gap_s = 10.0;       // longer log-time gaps are skipped when pacing; 0 = never
   bool start_paused = false;     // wait for resume/step before the first message
   std::string control_endpoint;  // PULL bind address for pause/resume/step; "" = none
@@ -65,9 +66,28 @@ struct BagPlayerCounts {
   double bag_seconds = 0.0;            // bag time covered by what was sent
 };
 
+// Where playback stands, for a progress display.
+struct BagPlayProgress {
+  double bag_seconds = 0.0;    // bag time covered by what was sent
+  double total_seconds = 0.0;  // duration of the bags from their summaries (0 when unindexed)
+  std::uint64_t messages_sent = 0;
+  bool paused = false;
+  bool finished = false;  // the run's last report
+};
+// Called on the player's thread: at most every 200 ms of clock time while messages go out, once
+// when a pause starts waiting, and once at the end of the run (`finished`).
+using BagPlayProgressFn = std::function<void(const BagPlayProgress&)>;
+
+// "[play] bag time     1.25 / 2.00 s  messages 12", then "  [paused]" or as many blanks (so a
+// line rewritten in place erases the tag).
+std::string format_progress(const BagPlayProgress& progress);
+
 class BagPlayer {
  public:
-  BagPlayer(BagPlayerConfig config, std::shared_ptr<spdlog::logger> log);  // binds the sockets
+  // Binds the sockets. `clock` paces playback, times the lockstep and control waits and stamps the
+  // StreamEnd; it must outlive the player. The first form uses the system clock.
+  BagPlayer(BagPlayerConfig config, std::shared_ptr<spdlog::logger> log);
+  BagPlayer(BagPlayerConfig config, std::shared_ptr<spdlog::logger> log, Clock& clock);
   ~BagPlayer();
   std::string endpoint() const;
   std::string ack_endpoint() const;
@@ -83,8 +103,9 @@ class BagPlayer {
   bool paused() const { return paused_.load(); }
   // Messages sent so far; safe to read from another thread while run() works.
   std::uint64_t sent() const { return sent_.load(); }
-  // 0 at the end of the bag or on stop; 1 when a bag cannot be read.
-  int run(const std::atomic<bool>& stop);
+  // 0 at the end of the bag or on stop; 1 when a bag cannot be read. `progress` (may be empty)
+  // receives the progress reports.
+  int run(const std::atomic<bool>& stop, const BagPlayProgressFn& progress = {});
   const BagPlayerCounts& counts() const { return counts_; }
 
  private:

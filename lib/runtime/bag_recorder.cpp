@@ -64,8 +64,10 @@ struct TopicState {
 }  // namespace
 
 struct BagRecorder::Impl {
+  explicit Impl(Clock& c) : clock(c) {}
   RecorderConfig cfg;
   std::shared_ptr<spdlog::logger> log;
+  Clock& clock;
   std::unique_ptr<bag::Writer> writer;
   std::optional<std::regex> select_re;
   std::vector<std::regex> exclude_re;
@@ -242,7 +244,10 @@ struct BagRecorder::Impl {
 };
 
 BagRecorder::BagRecorder(RecorderConfig config, std::shared_ptr<spdlog::logger> log)
-    : impl_(std::make_unique<Impl>()), config_(std::move(config)) {
+    : BagRecorder(std::move(config), std::move(log), system_clock()) {}
+
+BagRecorder::BagRecorder(RecorderConfig config, std::shared_ptr<spdlog::logger> log, Clock& clock)
+    : impl_(std::make_unique<Impl>(clock)), config_(std::move(config)) {
   config_.validate();
   impl_->cfg = config_;
   impl_->log = std::move(log);
@@ -274,7 +279,7 @@ int BagRecorder::run(const std::atomic<bool>& stop) {
   m.writer = std::move(*w);
   bag::KeyValueMap run_meta = config_.run_metadata;
   run_meta["version"] = FAULTLINE_VERSION;
-  run_meta["started_ns"] = std::to_string(realtime_now_ns());
+  run_meta["started_ns"] = std::to_string(m.clock.realtime_ns());
   std::ostringstream sel;
   sel << (config_.all ? "all" : config_.regex.empty() ? "topics" : "regex:" + config_.regex);
   for (const auto& t : config_.topics) sel << ' ' << t;
@@ -290,12 +295,12 @@ int BagRecorder::run(const std::atomic<bool>& stop) {
   Status s = m.writer->write_metadata("faultline.run", run_meta);
   if (!s.is_ok()) m.log->warn("faultline.run metadata: {}", s.to_string());
 
-  const StampNs start = monotonic_now_ns();
+  const StampNs start = m.clock.now_ns();
   const StampNs end =
       config_.duration_s > 0 ? start + static_cast<StampNs>(config_.duration_s * kNsPerSec) : -1;
   StampNs next_discover = start + static_cast<StampNs>(config_.discover_period_s * kNsPerSec);
   while (!stop.load()) {
-    const StampNs now = monotonic_now_ns();
+    const StampNs now = m.clock.now_ns();
     if (end >= 0 && now >= end) break;
     if (config_.endpoints.empty() && now >= next_discover) {
       m.discover();
@@ -304,7 +309,7 @@ int BagRecorder::run(const std::atomic<bool>& stop) {
     std::vector<transport::RawSubscriber*> socks;
     for (auto& sp : m.subs) socks.push_back(sp.get());
     if (socks.empty()) {
-      SystemClock{}.sleep_until_ns(now + 50 * kNsPerMs);  // nothing to record yet
+      m.clock.sleep_until_ns(now + 50 * kNsPerMs);  // nothing to record yet
       continue;
     }
     if (transport::wait_readable(socks, 50 * kNsPerMs) < 0) continue;
@@ -315,8 +320,8 @@ int BagRecorder::run(const std::atomic<bool>& stop) {
     // until the sockets stay quiet for 20 ms, at most 300 ms, then finalise.
     std::vector<transport::RawSubscriber*> socks;
     for (auto& sp : m.subs) socks.push_back(sp.get());
-    const StampNs drain_end = monotonic_now_ns() + 300 * kNsPerMs;
-    while (!socks.empty() && monotonic_now_ns() < drain_end &&
+    const StampNs drain_end = m.clock.now_ns() + 300 * kNsPerMs;
+    while (!socks.empty() && m.clock.now_ns() < drain_end &&
            transport::wait_readable(socks, 20 * kNsPerMs) >= 0) {
       m.drain(counts_, drops_, recorded_);
     }

@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "bag/writer.hpp"
+#include "common/clock.hpp"
 #include "transport/access.hpp"
 #include "transport/drop_counter.hpp"
 
@@ -22,37 +23,38 @@ namespace faultline::runtime {
 
 struct RecorderConfig {
   std::string output = "bags/run.mcap";
-  std::vector<std::string> topics;     // exact topics to record
-  std::string regex;                   // ... or topics matching this ECMAScript regex
-  std::vector<std::string> exclude;    // regexes of topics never recorded
-  bool all = false;                    // ... or every topic
-  std::vector<std::string> endpoints;  // explicit publishers; empty = discover via the registry
-  double duration_s = 0.0;             // stop after this long; 0 = until stopped
-  std::uint64_t split_bytes = 0;       // new file past this size; 0 = never
-  double split_s = 0.0;                // new file after this log-time span; 0 = never
-  std::string compression =
-      "lz4";                  // none | zstd | lz4; lz4 is cheap, JPEG chunks are stored raw anyway
-  bool foxglove_view = true;  // also write CompressedImage/RawImage, calibration, /tf, markers
-  int hwm = 64;               // receive queue per socket (messages)
-  double discover_period_s = 0.5;                   // registry re-scan period for late publishers
-  std::map<std::string, std::string> run_metadata;  // extra faultline.run entries (seeds, config)
-  transport::AccessConfig access;  // CURVE keys of the subscribing sockets (transport/access.hpp)
+  std::vector<std::string> topics;
+  std::string regex;
+  std::vector<std::string> exclude;
+  bool all = false;
+  std::vector<std::string> endpoints;
+  double duration_s = 0.0;
+  std::uint64_t split_bytes = 0;
+  double split_s = 0.0;
+  std::string compression = "lz4";
+  bool foxglove_view = true;
+  int hwm = 64;
+  double discover_period_s = 0.5;
+  std::map<std::string, std::string> run_metadata;
+  transport::AccessConfig access;
 
   template <class V>
   void visit(V& v) {
     v("output", output, "bag path (.mcap); with splitting name_0.mcap, name_1.mcap, ...");
     v("topics", topics, "exact topics to record");
-    v("regex", regex, "record topics matching this regex");
+    v("regex", regex, "record topics matching this ECMAScript regex");
     v("exclude", exclude, "regexes of topics never recorded");
     v("all", all, "record every topic");
     v("endpoints", endpoints, "explicit publisher endpoints; empty = topic registry");
     v("duration_s", duration_s, "stop after this long (s); 0 = until SIGINT");
     v("split_bytes", split_bytes, "new file past this size (bytes); 0 = never");
-    v("split_s", split_s, "new file after this span (s); 0 = never");
-    v("compression", compression, "none | zstd | lz4");
-    v("foxglove_view", foxglove_view, "also write Foxglove image/calibration/tf/marker channels");
+    v("split_s", split_s, "new file after this log-time span (s); 0 = never");
+    v("compression", compression,
+      "none | zstd | lz4; lz4 is cheap, and JPEG chunks are stored raw anyway");
+    v("foxglove_view", foxglove_view,
+      "also write Foxglove channels: CompressedImage/RawImage, calibration, /tf, markers");
     v("hwm", hwm, "receive queue per socket (messages)");
-    v("discover_period_s", discover_period_s, "registry re-scan period (s)");
+    v("discover_period_s", discover_period_s, "registry re-scan period for late publishers (s)");
     v("run_metadata", run_metadata, "extra faultline.run metadata (seeds, config)");
     access.visit(v);
   }
@@ -67,7 +69,11 @@ struct RecorderCounts {
 
 class BagRecorder {
  public:
+  // `clock` times the run (duration, discovery, stop drain) and gives started_ns; it must outlive
+  // the recorder. Record log times are the transport's receive stamps. The first form uses the
+  // system clock.
   BagRecorder(RecorderConfig config, std::shared_ptr<spdlog::logger> log);
+  BagRecorder(RecorderConfig config, std::shared_ptr<spdlog::logger> log, Clock& clock);
   ~BagRecorder();
   // 0 on a clean stop, 1 when the bag could not be opened or written.
   int run(const std::atomic<bool>& stop);

@@ -146,7 +146,7 @@ struct InjectorLoop::Impl {
           pc.linger_ms = cfg.linger_ms;
           return pc;
         }()),
-        stats(node, log, static_cast<DurationNs>(cfg.stats_window_s * 1e9),
+        stats(node, log, clock, static_cast<DurationNs>(cfg.stats_window_s * 1e9),
               static_cast<DurationNs>(cfg.stats_log_period_s * 1e9)),
         registry(node),
         sync_out(remap_topic(cfg.remap, cfg.sync_topic)),
@@ -378,10 +378,7 @@ void InjectorLoop::Impl::finish(bool finished) {
 InjectorLoop::InjectorLoop(InjectorConfig config, std::string node,
                            std::unique_ptr<FramePolicy> policy, std::shared_ptr<spdlog::logger> log)
     : InjectorLoop(std::move(config), std::move(node), std::move(policy), std::move(log),
-                   []() -> Clock& {
-                     static SystemClock clock;
-                     return clock;
-                   }()) {}
+                   system_clock()) {}
 
 InjectorLoop::InjectorLoop(InjectorConfig config, std::string node,
                            std::unique_ptr<FramePolicy> policy, std::shared_ptr<spdlog::logger> log,

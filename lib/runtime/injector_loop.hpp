@@ -30,88 +30,85 @@
 namespace faultline::runtime {
 
 struct InjectorConfig {
-  std::vector<std::string> input_endpoints{"tcp://127.0.0.1:5600"};  // publishers to subscribe to
-  std::vector<std::string> input_topics{"/cam_", "/sync/sample"};  // topic prefixes to subscribe to
-  int input_hwm = 8;         // receive queue (messages); ~64 in lockstep
-  bool latest_only = false;  // keep only the newest queued frame per camera
-  std::string output_endpoint = "tcp://127.0.0.1:5601";  // PUB bind address
-  int output_hwm = 8;                                    // send queue per subscriber (messages)
-  std::string output_prefix = "/faulty";                 // faulted topic = prefix + input topic
-  bool decode = false;                                   // true: publish decoded bgr8 (image_raw)
-  std::string sync_topic = "/sync/sample";               // forwarded unchanged in name
-  std::string end_topic = "/sync/end";                   // StreamEnd: forwarded; always subscribed
-  std::string faults_topic = "/faultline/faults";        // FaultEvent per source frame
-  int wait_subscribers = 0;     // wait for this many subscribers of sync_topic
-  int wait_timeout_ms = 10000;  // ... at most this long before subscribing upstream
-  bool exit_on_last = true;     // stop at the end of the run (see run())
-  int linger_ms = 1000;         // end of run: time to deliver queued messages
-  std::int64_t max_msg_bytes =
-      transport::kDefaultMaxMessageBytes;    // ZMQ_MAXMSGSIZE on the input; -1 = none
-  double stats_window_s = 1.0;               // statistics window (s)
-  double stats_log_period_s = 5.0;           // info log of statistics every this many s
-  std::map<std::string, std::string> remap;  // topic remaps (from -> to), applied to outputs
-  YAML::Node faults;                         // fault schedule (policy/fault_spec.hpp); null = none
-  std::string corruption;                    // shorthand "fog/mid": one more fault on all cameras
-  std::uint64_t seed = 0;                    // run seed of every fault draw
-  int jpeg_quality = 95;                     // re-encoded faulted JPEG frames (nuScenes-C: 95)
-  int workers = 0;       // decode/fault/encode threads; 0 = cores available - 1, >= 1
-  int queue_frames = 0;  // frames in flight receive -> send; 0 = 4 x workers
-  // Shared-memory output (docs/protocol.md §16): camera frames go into a ring file under
-  // output_shm_dir and only a descriptor travels on the socket, so local subscribers map the pixels
-  // without a copy. Off by default.
+  std::vector<std::string> input_endpoints{"tcp://127.0.0.1:5600"};
+  std::vector<std::string> input_topics{"/cam_", "/sync/sample"};
+  int input_hwm = 8;
+  bool latest_only = false;
+  std::string output_endpoint = "tcp://127.0.0.1:5601";
+  int output_hwm = 8;
+  std::string output_prefix = "/faulty";
+  bool decode = false;
+  std::string sync_topic = "/sync/sample";
+  std::string end_topic = "/sync/end";
+  std::string faults_topic = "/faultline/faults";
+  int wait_subscribers = 0;
+  int wait_timeout_ms = 10000;
+  bool exit_on_last = true;
+  int linger_ms = 1000;
+  std::int64_t max_msg_bytes = transport::kDefaultMaxMessageBytes;
+  double stats_window_s = 1.0;
+  double stats_log_period_s = 5.0;
+  std::map<std::string, std::string> remap;
+  YAML::Node faults;
+  std::string corruption;
+  std::uint64_t seed = 0;
+  int jpeg_quality = 95;
+  int workers = 0;
+  int queue_frames = 0;
   bool output_shm = false;
-  std::string output_shm_dir = "/dev/shm";  // where the ring file is created (removed at exit)
-  int shm_slots = 32;  // ring slots: a frame is readable until this many more are sent
-  std::int64_t shm_slot_bytes =
-      static_cast<std::int64_t>(transport::kShmDefaultSlotBytes);  // largest frame
-
-  transport::AccessConfig
-      access;  // allow_remote and CURVE keys of every socket (transport/access.hpp)
+  std::string output_shm_dir = "/dev/shm";
+  int shm_slots = 32;
+  std::int64_t shm_slot_bytes = static_cast<std::int64_t>(transport::kShmDefaultSlotBytes);
+  transport::AccessConfig access;
 
   template <class V>
   void visit(V& v) {
     v("input_endpoints", input_endpoints, "publishers to subscribe to");
     v("input_topics", input_topics, "topic prefixes to subscribe to");
-    v("input_hwm", input_hwm, "receive queue (messages)");
+    v("input_hwm", input_hwm, "receive queue (messages); ~64 in lockstep");
     v("latest_only", latest_only, "keep only the newest queued frame per camera");
     v("output_endpoint", output_endpoint, "PUB bind address");
     v("output_hwm", output_hwm, "send queue per subscriber (messages)");
-    v("output_prefix", output_prefix, "namespace of the faulted topics");
+    v("output_prefix", output_prefix, "namespace of the faulted topics: prefix + input topic");
     v("decode", decode, "publish decoded bgr8 instead of the JPEG");
-    v("sync_topic", sync_topic, "SampleBoundary topic");
-    v("end_topic", end_topic, "StreamEnd topic (end of the source's run; always subscribed)");
-    v("faults_topic", faults_topic, "FaultEvent topic");
+    v("sync_topic", sync_topic, "SampleBoundary topic (forwarded under the same name)");
+    v("end_topic", end_topic,
+      "StreamEnd topic (end of the source's run; forwarded, always subscribed)");
+    v("faults_topic", faults_topic, "FaultEvent topic (one per source frame)");
     v("wait_subscribers", wait_subscribers, "subscribers of sync_topic to wait for");
-    v("wait_timeout_ms", wait_timeout_ms, "how long to wait for them (ms)");
+    v("wait_timeout_ms", wait_timeout_ms,
+      "how long to wait for them before subscribing upstream (ms)");
     v("exit_on_last", exit_on_last,
       "stop at the end of the run (StreamEnd, or last_in_run from sources without one)");
     v("linger_ms", linger_ms, "end of run: time to deliver queued messages (ms)");
-    v("max_msg_bytes", max_msg_bytes, "largest accepted input frame (bytes)");
+    v("max_msg_bytes", max_msg_bytes,
+      "largest accepted input frame (bytes; ZMQ_MAXMSGSIZE); -1 = no limit");
     v("stats_window_s", stats_window_s, "statistics window (s)");
     v("stats_log_period_s", stats_log_period_s, "info log period of statistics (s)");
-    v("remap", remap, "topic remaps from -> to");
-    v("faults", faults, "fault schedule: a list of faults (their keys are listed below)");
+    v("remap", remap, "topic remaps from -> to, applied to the outputs");
+    v("faults", faults,
+      "fault schedule (policy/fault_spec.hpp): a list of faults, their keys listed below; "
+      "none by default");
     v("corruption", corruption, "shorthand for one fault on all cameras, e.g. fog/mid");
     v("seed", seed, "run seed of the fault draws");
     v("jpeg_quality", jpeg_quality,
       "JPEG quality of faulted frames re-encoded in JPEG mode, 1..100 (nuScenes-C: 95)");
     v("workers", workers,
-      "threads that decode, corrupt and re-encode frames; 0 = the cores available minus one (at "
-      "least 1). The "
-      "output is byte-identical for any count");
+      "threads that decode, corrupt and re-encode frames; "
+      "0 = the cores available minus one (at least 1). The output is byte-identical for any count");
     v("queue_frames", queue_frames,
-      "frames in flight between receive and send (0 = 4 x workers); when full, receiving waits and "
-      "the input "
-      "queue (input_hwm) absorbs");
+      "frames in flight between receive and send (0 = 4 x workers); "
+      "when full, receiving waits and the input queue (input_hwm) absorbs");
     v("output_shm", output_shm,
-      "send camera frames through a shared-memory ring (local subscribers only; docs/protocol.md "
-      "§16): the pixels "
-      "are written once into the ring and a small descriptor goes on the socket");
+      "send camera frames through a shared-memory ring, local subscribers only "
+      "(docs/protocol.md §16). "
+      "The pixels are written once into the ring and a small descriptor goes on the socket, "
+      "so local subscribers map them without a copy");
     v("output_shm_dir", output_shm_dir,
       "directory of the ring file (tmpfs; the file is removed at exit)");
     v("shm_slots", shm_slots,
-      "ring slots (>= 2): a frame stays readable until this many more frames were sent; the "
-      "publisher never waits");
+      "ring slots (>= 2): a frame stays readable until this many more frames were sent; "
+      "the publisher never waits");
     v("shm_slot_bytes", shm_slot_bytes,
       "largest frame a slot holds (bytes); larger frames are refused and counted");
     access.visit(v);
@@ -148,8 +145,8 @@ std::string faulted_topic(const InjectorConfig& config, const std::string& input
 class InjectorLoop {
  public:
   // Binds the output now; the input is subscribed in run() once downstream subscribers joined.
-  // `clock` (the monotonic time of stamps, latencies, delays and statistics) must outlive the loop;
-  // the first form uses the system clock.
+  // `clock` (the time of stamps, latencies, delays and statistics) must outlive the loop; the first
+  // form uses the system clock.
   InjectorLoop(InjectorConfig config, std::string node, std::unique_ptr<FramePolicy> policy,
                std::shared_ptr<spdlog::logger> log);
   InjectorLoop(InjectorConfig config, std::string node, std::unique_ptr<FramePolicy> policy,

@@ -421,7 +421,7 @@ void InjectorPipeline::send_event(const msgs::CameraFrame& in, const msgs::Fault
 void InjectorPipeline::stamp(msgs::Header* h, const std::string& topic) {
   h->set_seq(++seq_[topic]);
   h->set_publisher(config_.node);
-  h->set_publish_stamp_ns(config_.realtime_now());
+  h->set_publish_stamp_ns(clock_.realtime_ns());
   h->set_publish_mono_ns(clock_.now_ns());
 }
 

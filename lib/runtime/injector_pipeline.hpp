@@ -75,8 +75,6 @@ struct PipelineConfig {
   bool decode = false;                             // publish decoded bgr8 instead of JPEG
   int workers = 1;                                 // worker threads, >= 1
   int queue_frames = 8;  // frames and control messages between receive and send, >= 1
-  std::function<StampNs()> realtime_now =
-      realtime_now_ns;  // wall clock of publish stamps (tests fix it)
 };
 
 // One received camera frame. `view.payload` must stay valid while `owner` lives.
@@ -105,8 +103,7 @@ class InjectorPipeline {
   using Control = std::variant<msgs::SampleBoundary, msgs::StreamEnd>;
 
   // Starts the worker and output threads. `policy`, `sink` and `clock` must outlive the pipeline;
-  // the clock (monotonic) is read from the output thread: publish stamps, latencies, delay due
-  // times.
+  // the clock is read from the output thread: publish stamps, latencies, delay due times.
   InjectorPipeline(PipelineConfig config, FramePolicy& policy, PipelineSink& sink,
                    const Clock& clock, std::shared_ptr<spdlog::logger> log);
   ~InjectorPipeline();  // finish(false) unless finish() was called

@@ -61,7 +61,7 @@ struct PlayerLoop::Impl {
           pc.linger_ms = cfg.linger_ms;
           return pc;
         }()),
-        stats(node, log, static_cast<DurationNs>(cfg.stats_window_s * 1e9),
+        stats(node, log, clock, static_cast<DurationNs>(cfg.stats_window_s * 1e9),
               static_cast<DurationNs>(cfg.stats_log_period_s * 1e9)),
         registry(node),
         sync_topic(remap_topic(cfg.remap, cfg.sync_topic)),
@@ -82,8 +82,8 @@ struct PlayerLoop::Impl {
   void stamp(msgs::Header* h, const std::string& topic) {
     h->set_seq(next_seq(topic));
     h->set_publisher(node);
-    h->set_publish_stamp_ns(realtime_now_ns());
-    h->set_publish_mono_ns(monotonic_now_ns());
+    h->set_publish_stamp_ns(clock.realtime_ns());
+    h->set_publish_mono_ns(clock.now_ns());
   }
 
   // Sleeps until `deadline` (clock time) in short slices so shutdown stays prompt.
@@ -116,10 +116,9 @@ struct PlayerLoop::Impl {
       stamp(end.mutable_header(), end_topic);
       if (transport::send_message(pub, end_topic, end).code() == StatusCode::kCancelled) return 0;
     }
-    // Statistics run on the wire's monotonic stamps (those of the samples), not on the pacing
-    // clock.
-    stats.tick(monotonic_now_ns() + static_cast<DurationNs>(cfg.stats_window_s * 1e9), &pub);
-    stats.log_totals(monotonic_now_ns());
+    // A tick one window ahead closes the last window.
+    stats.tick(clock.now_ns() + static_cast<DurationNs>(cfg.stats_window_s * 1e9), &pub);
+    stats.log_totals(clock.now_ns());
     if (stopped || stop.load()) pub.set_linger(0);  // shutdown: exit promptly, do not flush
     log->info("player done: {} frames, {} boundaries, {} missing images, {} ack timeouts{}",
               counts.frames_sent, counts.boundaries_sent, counts.missing_images,
@@ -314,7 +313,7 @@ struct PlayerLoop::Pass {
       if (step == Step::kOk) step = send_frame(frames[i]);
       if (step == Step::kOk && plan.boundary_after[i]) step = send_boundary(i);
       if (step != Step::kOk) return step;
-      m.stats.tick(monotonic_now_ns(), &m.pub);
+      m.stats.tick(m.clock.now_ns(), &m.pub);
     }
     return Step::kOk;
   }
@@ -351,7 +350,7 @@ int PlayerLoop::run(const std::atomic<bool>& stop) {
 }
 
 std::vector<stats::TopicWindow> PlayerLoop::stats_totals() const {
-  return impl_->stats.collector().totals(monotonic_now_ns());
+  return impl_->stats.collector().totals(impl_->clock.now_ns());
 }
 
 }  // namespace faultline::runtime

@@ -28,46 +28,47 @@
 namespace faultline::runtime {
 
 struct PlayerConfig {
-  std::string dataroot = "data/nuscenes";  // nuScenes root (holds <version>/, samples/, sweeps/)
-  std::string version = "v1.0-mini";       // table folder
-  std::vector<std::string> scenes;         // scene names; empty = all
-  double rate = 1.0;                       // replay speed factor; 0 = as fast as possible
-  bool loop = false;                       // start over at the end (last_in_run never sent)
-  double start_offset_s = 0.0;             // skip this much of the run's start (s)
-  std::string endpoint = "tcp://127.0.0.1:5600";  // PUB bind address
-  int hwm = 8;                              // send queue per subscriber (messages); ~64 in lockstep
-  std::string sync_topic = "/sync/sample";  // SampleBoundary topic
-  std::string end_topic = "/sync/end";      // StreamEnd topic, after the run's last frame
-  bool lockstep = false;                    // wait for a SampleAck per sample
-  std::string ack_endpoint = "tcp://127.0.0.1:5603";  // PULL bind address for SampleAck (lockstep)
-  int ack_timeout_ms = 30000;  // lockstep: give up waiting (warn) after this; 0 = never
-  int wait_subscribers = 0;  // before the first frame, wait for this many subscribers of sync_topic
-  int wait_timeout_ms = 10000;      // ... at most this long (then start anyway, warn)
-  int linger_ms = 1000;             // end of run: deliver queued messages for up to this (ms)
-  double stats_window_s = 1.0;      // statistics window (s)
-  double stats_log_period_s = 5.0;  // info log of statistics every this many s
-  std::map<std::string, std::string> remap;  // topic remaps (from -> to)
-
-  transport::AccessConfig
-      access;  // allow_remote and CURVE keys of every socket (transport/access.hpp)
+  std::string dataroot = "data/nuscenes";
+  std::string version = "v1.0-mini";
+  std::vector<std::string> scenes;
+  double rate = 1.0;
+  bool loop = false;
+  double start_offset_s = 0.0;
+  std::string endpoint = "tcp://127.0.0.1:5600";
+  int hwm = 8;
+  std::string sync_topic = "/sync/sample";
+  std::string end_topic = "/sync/end";
+  bool lockstep = false;
+  std::string ack_endpoint = "tcp://127.0.0.1:5603";
+  int ack_timeout_ms = 30000;
+  int wait_subscribers = 0;
+  int wait_timeout_ms = 10000;
+  int linger_ms = 1000;
+  double stats_window_s = 1.0;
+  double stats_log_period_s = 5.0;
+  std::map<std::string, std::string> remap;
+  transport::AccessConfig access;
 
   template <class V>
   void visit(V& v) {
-    v("dataroot", dataroot, "nuScenes root directory");
+    v("dataroot", dataroot, "nuScenes root directory (holds <version>/, samples/, sweeps/)");
     v("version", version, "table folder, e.g. v1.0-mini");
     v("scenes", scenes, "scene names; empty = all");
     v("rate", rate, "replay speed factor; 0 = as fast as possible");
-    v("loop", loop, "start over at the end");
+    v("loop", loop, "start over at the end (last_in_run is then never sent)");
     v("start_offset_s", start_offset_s, "skip the first seconds of the run");
     v("endpoint", endpoint, "PUB bind address");
-    v("hwm", hwm, "send queue per subscriber (messages)");
+    v("hwm", hwm, "send queue per subscriber (messages); ~64 in lockstep");
     v("sync_topic", sync_topic, "SampleBoundary topic");
     v("end_topic", end_topic, "StreamEnd topic (sent after the run's last frame)");
     v("lockstep", lockstep, "wait for the sink's SampleAck per sample");
     v("ack_endpoint", ack_endpoint, "PULL bind address for SampleAck");
-    v("ack_timeout_ms", ack_timeout_ms, "lockstep ack timeout (ms); 0 = wait forever");
-    v("wait_subscribers", wait_subscribers, "subscribers to wait for before publishing");
-    v("wait_timeout_ms", wait_timeout_ms, "how long to wait for them (ms)");
+    v("ack_timeout_ms", ack_timeout_ms,
+      "lockstep: give up waiting for a SampleAck after this (ms, warns); 0 = wait forever");
+    v("wait_subscribers", wait_subscribers,
+      "before the first frame, wait for this many subscribers of sync_topic");
+    v("wait_timeout_ms", wait_timeout_ms,
+      "how long to wait for them (ms), then start anyway (warns)");
     v("linger_ms", linger_ms, "end of run: time to deliver queued messages (ms)");
     v("stats_window_s", stats_window_s, "statistics window (s)");
     v("stats_log_period_s", stats_log_period_s, "info log period of statistics (s)");
@@ -90,6 +91,9 @@ struct PlayerCounts {
 
 class PlayerLoop {
  public:
+  // `clock` paces the run, times the lockstep wait and stamps every message (publish_mono_ns and
+  // the statistics windows in now_ns(), publish_stamp_ns in realtime_ns()); it must outlive the
+  // loop.
   PlayerLoop(PlayerConfig config, std::string node, std::unique_ptr<FrameSource> source,
              Clock& clock, std::shared_ptr<spdlog::logger> log);
   ~PlayerLoop();

@@ -29,6 +29,7 @@ struct SinkLoop::Impl {
   SinkConfig cfg;
   std::string node;
   std::shared_ptr<spdlog::logger> log;
+  Clock& clock;
   transport::RawSubscriber detections;
   std::unique_ptr<transport::RawSubscriber> sync;
   std::unique_ptr<transport::Publisher> acks;
@@ -40,10 +41,11 @@ struct SinkLoop::Impl {
   std::string detections_topic, sync_topic;
   std::uint64_t ack_seq = 0;
 
-  Impl(SinkConfig c, std::string n, std::shared_ptr<spdlog::logger> l)
+  Impl(SinkConfig c, std::string n, std::shared_ptr<spdlog::logger> l, Clock& cl)
       : cfg(std::move(c)),
         node(std::move(n)),
         log(std::move(l)),
+        clock(cl),
         detections([&] {
           transport::SubscriberConfig sc;
           sc.endpoints = {cfg.detections_endpoint};
@@ -54,7 +56,7 @@ struct SinkLoop::Impl {
           return sc;
         }()),
         store(cfg.output, cfg.journal.empty() ? cfg.output + ".journal" : cfg.journal),
-        stats(node, log, static_cast<DurationNs>(cfg.stats_window_s * 1e9),
+        stats(node, log, clock, static_cast<DurationNs>(cfg.stats_window_s * 1e9),
               static_cast<DurationNs>(cfg.stats_log_period_s * 1e9)),
         detections_topic(remap_topic(cfg.remap, cfg.detections_topic)),
         sync_topic(remap_topic(cfg.remap, cfg.sync_topic)) {
@@ -214,8 +216,8 @@ struct SinkLoop::Impl {
       auto* h = ack.mutable_header();
       h->set_seq(++ack_seq);
       h->set_publisher(node);
-      h->set_publish_stamp_ns(realtime_now_ns());
-      h->set_publish_mono_ns(monotonic_now_ns());
+      h->set_publish_stamp_ns(clock.realtime_ns());
+      h->set_publish_mono_ns(clock.now_ns());
       if (const Status s = transport::send_message(*acks, "/sync/ack", ack); s.is_ok()) {
         ++counts->acks_sent;
       } else {  // the lockstep player waits for it until its ack timeout: say why
@@ -258,7 +260,11 @@ struct SinkLoop::Impl {
 };
 
 SinkLoop::SinkLoop(SinkConfig config, std::string node, std::shared_ptr<spdlog::logger> log)
-    : impl_(std::make_unique<Impl>(std::move(config), std::move(node), std::move(log))) {
+    : SinkLoop(std::move(config), std::move(node), std::move(log), system_clock()) {}
+
+SinkLoop::SinkLoop(SinkConfig config, std::string node, std::shared_ptr<spdlog::logger> log,
+                   Clock& clock)
+    : impl_(std::make_unique<Impl>(std::move(config), std::move(node), std::move(log), clock)) {
   impl_->counts = &counts_;
 }
 
@@ -297,7 +303,7 @@ int SinkLoop::run(const std::atomic<bool>& stop) {
   StampNs finalize_deadline = 0;
   while (!stop.load()) {
     const int ready = transport::wait_readable(inputs, 50 * kNsPerMs);
-    m.stats.tick(monotonic_now_ns(), nullptr);
+    m.stats.tick(m.clock.now_ns(), nullptr);
     if (ready >= 0) {
       auto r = inputs[static_cast<std::size_t>(ready)]->receive(0);
       if (r.is_ok()) {
@@ -330,7 +336,7 @@ int SinkLoop::run(const std::atomic<bool>& stop) {
           if (b.last_in_run() && !last_seen) {
             last_seen = true;
             finalize_deadline =
-                monotonic_now_ns() + static_cast<DurationNs>(m.cfg.finalize_grace_ms) * kNsPerMs;
+                m.clock.now_ns() + static_cast<DurationNs>(m.cfg.finalize_grace_ms) * kNsPerMs;
           }
         }
       }
@@ -338,7 +344,7 @@ int SinkLoop::run(const std::atomic<bool>& stop) {
     if (last_seen && !complete) {
       bool all = true;
       for (const auto& t : m.store.boundary_samples()) all = all && m.store.answered(t);
-      if (all || monotonic_now_ns() >= finalize_deadline) {
+      if (all || m.clock.now_ns() >= finalize_deadline) {
         m.finalize(all ? "run complete" : "run complete, grace period over");
         (void)m.store.remove_journal();
         complete = true;
@@ -347,7 +353,7 @@ int SinkLoop::run(const std::atomic<bool>& stop) {
     }
   }
   if (!complete) m.finalize(stop.load() ? "shutdown" : "end");
-  m.stats.log_totals(monotonic_now_ns());
+  m.stats.log_totals(m.clock.now_ns());
   counts_.malformed = m.malformed_total();
   m.log->info(
       "sink done: {} detection arrays, {} boxes, {} boundaries, {} acks ({} ack send failures, "
@@ -361,7 +367,7 @@ int SinkLoop::run(const std::atomic<bool>& stop) {
 }
 
 std::vector<stats::TopicWindow> SinkLoop::stats_totals() const {
-  return impl_->stats.collector().totals(monotonic_now_ns());
+  return impl_->stats.collector().totals(impl_->clock.now_ns());
 }
 
 }  // namespace faultline::runtime

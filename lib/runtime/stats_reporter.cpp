@@ -31,13 +31,14 @@ msgs::TopicStats to_proto(const stats::TopicWindow& w) {
 }
 
 StatsReporter::StatsReporter(std::string node, std::shared_ptr<spdlog::logger> log,
-                             DurationNs window_ns, DurationNs log_period_ns,
+                             const Clock& clock, DurationNs window_ns, DurationNs log_period_ns,
                              std::string stats_topic)
     : node_(std::move(node)),
       log_(std::move(log)),
-      collector_(window_ns),
+      clock_(clock),
+      collector_(window_ns, clock.now_ns()),
       log_period_ns_(log_period_ns),
-      last_log_ns_(monotonic_now_ns()),
+      last_log_ns_(clock.now_ns()),
       stats_topic_(std::move(stats_topic)) {}
 
 void StatsReporter::tick(StampNs now_mono_ns, transport::Publisher* publisher) {
@@ -55,8 +56,8 @@ void StatsReporter::tick(StampNs now_mono_ns, transport::Publisher* publisher) {
     auto* h = m.mutable_header();
     h->set_seq(++seq_);
     h->set_publisher(node_);
-    h->set_publish_stamp_ns(realtime_now_ns());
-    h->set_publish_mono_ns(monotonic_now_ns());
+    h->set_publish_stamp_ns(clock_.realtime_ns());
+    h->set_publish_mono_ns(clock_.now_ns());
     (void)transport::send_message(*publisher, stats_topic_, m);
   }
 }

@@ -8,6 +8,7 @@
 #include <memory>
 #include <string>
 
+#include "common/clock.hpp"
 #include "stats.pb.h"
 #include "stats/topic_stats.hpp"
 #include "transport/publisher.hpp"
@@ -18,8 +19,11 @@ msgs::TopicStats to_proto(const stats::TopicWindow& w);
 
 class StatsReporter {
  public:
-  StatsReporter(std::string node, std::shared_ptr<spdlog::logger> log, DurationNs window_ns,
-                DurationNs log_period_ns, std::string stats_topic = "/statistics");
+  // `clock` starts the first window and the log period and stamps the TopicStats messages; it must
+  // outlive the reporter.
+  StatsReporter(std::string node, std::shared_ptr<spdlog::logger> log, const Clock& clock,
+                DurationNs window_ns, DurationNs log_period_ns,
+                std::string stats_topic = "/statistics");
 
   stats::TopicStatsCollector& collector() { return collector_; }
   const stats::TopicStatsCollector& collector() const { return collector_; }
@@ -33,6 +37,7 @@ class StatsReporter {
  private:
   std::string node_;
   std::shared_ptr<spdlog::logger> log_;
+  const Clock& clock_;
   stats::TopicStatsCollector collector_;
   DurationNs log_period_ns_;
   StampNs last_log_ns_;

@@ -34,25 +34,26 @@ inline constexpr std::size_t kMaxKeyFileBytes = 4096;
 inline constexpr std::size_t kMaxAllowedClientsFileBytes = std::size_t{1} << 20;
 
 struct AccessConfig {
-  bool allow_remote = false;          // bind beyond loopback; false: such a bind is a ConfigError
-  std::string curve_secret_key_file;  // this node's CURVE secret key (Z85); "" = no CURVE
-  std::string
-      curve_server_public_key_file;  // connecting sockets with CURVE: the binding peer's public key
-  std::string curve_allowed_clients_file;  // binding sockets with CURVE: allowed client public
-                                           // keys; "" = any
+  bool allow_remote = false;
+  std::string curve_secret_key_file;
+  std::string curve_server_public_key_file;
+  std::string curve_allowed_clients_file;
 
   bool curve() const { return !curve_secret_key_file.empty(); }
 
   template <class V>
   void visit(V& v) {
     v("allow_remote", allow_remote,
-      "allow binding beyond loopback (tcp://0.0.0.0, *, a LAN address)");
+      "allow binding beyond loopback (tcp://0.0.0.0, *, a LAN address); "
+      "without it such a bind is a config error");
     v("curve_secret_key_file", curve_secret_key_file,
-      "this node's CURVE secret key file (faultline keys generate); enables CURVE on every socket");
+      "this node's CURVE secret key file (Z85, faultline keys generate); "
+      "enables CURVE on every socket; empty = no CURVE");
     v("curve_server_public_key_file", curve_server_public_key_file,
       "CURVE: public key file of the binding peers this node connects to");
     v("curve_allowed_clients_file", curve_allowed_clients_file,
-      "CURVE: client public keys allowed to connect to this node's binding sockets, one per line");
+      "CURVE: client public keys allowed to connect to this node's binding sockets, "
+      "one per line; empty = any");
   }
 };
 

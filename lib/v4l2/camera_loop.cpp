@@ -113,8 +113,8 @@ int run_camera_node(const CameraNodeConfig& cfg, const std::string& node,
     h.mutable_header()->set_seq(++seq);
     h.mutable_header()->set_capture_stamp_ns(frame->capture_stamp_ns);
     h.mutable_header()->set_capture_clock(msgs::CAPTURE_CLOCK_REALTIME);
-    h.mutable_header()->set_publish_stamp_ns(realtime_now_ns());
-    h.mutable_header()->set_publish_mono_ns(monotonic_now_ns());
+    h.mutable_header()->set_publish_stamp_ns(clock.realtime_ns());
+    h.mutable_header()->set_publish_mono_ns(clock.now_ns());
     std::string frame_id = cal.channel;
     std::transform(frame_id.begin(), frame_id.end(), frame_id.begin(),
                    [](unsigned char ch) { return std::tolower(ch); });

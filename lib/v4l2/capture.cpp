@@ -69,7 +69,7 @@ Capture::Capture(CaptureConfig cfg, DeviceFactory factory, std::shared_ptr<spdlo
       log_(std::move(log)),
       clock_(clock),
       to_realtime_(std::move(monotonic_to_realtime_ns)) {
-  if (!to_realtime_) to_realtime_ = [] { return realtime_now_ns() - monotonic_now_ns(); };
+  if (!to_realtime_) to_realtime_ = [this] { return clock_.realtime_ns() - clock_.now_ns(); };
 }
 
 Capture::~Capture() { disconnect(); }
@@ -198,7 +198,7 @@ Result<CapturedFrame> Capture::convert(const Buffer& buf) {
   // Monotonic driver stamps are converted once, here; other clock sources get the receive time.
   f.capture_stamp_ns = buf.timestamp_monotonic && buf.timestamp_ns > 0
                            ? buf.timestamp_ns + to_realtime_()
-                           : realtime_now_ns();
+                           : clock_.realtime_ns();
   const bool raw = cfg_.output == "raw";
   const std::uint32_t stride = format_.bytes_per_line;
   Status s;

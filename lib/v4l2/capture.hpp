@@ -50,7 +50,9 @@ struct CaptureStats {
 class Capture {
  public:
   using DeviceFactory = std::function<std::unique_ptr<Device>()>;
-  // `monotonic_to_realtime_ns` returns the offset to add to a monotonic stamp (injected for tests).
+  // `clock` paces reconnects and stamps frames without a monotonic driver stamp; it must outlive
+  // the capture. `monotonic_to_realtime_ns` returns the offset to add to a monotonic driver stamp
+  // (default: the clock's realtime_ns() - now_ns()).
   Capture(CaptureConfig cfg, DeviceFactory factory, std::shared_ptr<spdlog::logger> log,
           Clock& clock, std::function<std::int64_t()> monotonic_to_realtime_ns = {});
   ~Capture();

@@ -1,5 +1,5 @@
 // The detector node's loop: a sample boundary lost in transport (#22 item 6) is counted, never
-// skipped silently.
+// skipped silently; DetectionArrays carry the loop clock's stamps and processing time.
 #include "detector/detector_loop.hpp"
 
 #include <gtest/gtest.h>
@@ -9,6 +9,7 @@
 
 #include "common/logging.hpp"
 #include "detection.pb.h"
+#include "manual_clock.hpp"  // tests/
 #include "transport/publisher.hpp"
 #include "transport/subscriber.hpp"
 #include "transport/typed.hpp"
@@ -32,7 +33,10 @@ TEST(DetectorLoopTest, BoundariesLostInTransportAreCountedFromTheSeqGap) {
   DetectorLoopConfig cfg;
   cfg.input_endpoints = {injector.endpoint()};
   cfg.sink_endpoint = sink.endpoints().front();
-  DetectorLoop loop(cfg, "detector", logging::make_node_logger("detector_loop_test", "error"));
+  constexpr StampNs kStart = 300 * kNsPerSec, kOffset = 1'700'000'000 * kNsPerSec;
+  ManualClock clock(kStart, kOffset);  // frozen: no processing time, every stamp kStart
+  DetectorLoop loop(cfg, "detector", logging::make_node_logger("detector_loop_test", "error"),
+                    clock);
   std::atomic<bool> stop{false};
   auto rc = std::async(std::launch::async, [&] { return loop.run(stop); });
   ASSERT_TRUE(injector.wait_for_subscribers("/sync/sample", 1, 20 * kNsPerSec).is_ok());
@@ -55,6 +59,9 @@ TEST(DetectorLoopTest, BoundariesLostInTransportAreCountedFromTheSeqGap) {
     msgs::DetectionArray d;
     ASSERT_TRUE(transport::parse_message(*r, &d).is_ok());
     tokens.push_back(d.sample_token());
+    EXPECT_EQ(d.header().publish_mono_ns(), kStart);
+    EXPECT_EQ(d.header().publish_stamp_ns(), kStart + kOffset);
+    EXPECT_EQ(d.processing_ns(), 0);
   }
   EXPECT_EQ(rc.get(), 0);
   EXPECT_EQ(tokens, (std::vector<std::string>{"sample-1", "sample-2", "sample-5"}));

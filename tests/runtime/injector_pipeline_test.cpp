@@ -32,6 +32,7 @@ constexpr StampNs kT0 = 1'600'000'000'000'000'000;
 class FixedClock final : public Clock {
  public:
   StampNs now_ns() const override { return 50 * kNsPerSec; }
+  StampNs realtime_ns() const override { return kT0 + 99 * kNsPerSec; }
   void sleep_until_ns(StampNs /*deadline*/) override {}
 };
 
@@ -149,7 +150,6 @@ std::vector<Sent> RunPipeline(const std::vector<Input>& inputs, int workers, boo
   pc.workers = workers;
   pc.decode = decode;
   pc.queue_frames = queue_frames;
-  pc.realtime_now = [] { return kT0 + 99 * kNsPerSec; };
   std::atomic<bool> stop{false};
   InjectorPipeline pipeline(pc, *policy, sink, clock,
                             logging::make_node_logger("pipeline_test", "warn"));

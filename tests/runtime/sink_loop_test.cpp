@@ -16,6 +16,7 @@
 
 #include "common/config.hpp"
 #include "detection.pb.h"
+#include "manual_clock.hpp"  // tests/
 #include "scoring/submission.hpp"
 #include "transport/context.hpp"
 #include "transport/publisher.hpp"
@@ -268,6 +269,61 @@ TEST_F(SinkLoopTest, AnnouncedSamplesWithoutDetectionsAreCountedAndNamed) {
   const auto doc = Results();
   EXPECT_EQ(doc["results"]["s2"].Size(), 0u);
   EXPECT_EQ(doc["meta"]["faultline_sink_unanswered_samples"].GetUint64(), 1u);
+}
+
+// The finalize grace runs on the sink's clock, not on real time: frozen, it never expires however
+// long the sockets take; once the clock passes it, the sink finalizes. Acks carry the clock's
+// stamps.
+TEST_F(SinkLoopTest, FinalizeGraceAndAckStampsFollowTheClock) {
+  constexpr StampNs kStart = 500 * kNsPerSec, kOffset = 1'700'000'000 * kNsPerSec;
+  ManualClock clock(kStart, kOffset);
+  transport::PublisherConfig sc;
+  sc.endpoint = "ipc://" + dir_ + "/sync.sock";
+  transport::Publisher sync(sc);
+  config_.sync_endpoints = {sync.endpoint()};
+  config_.finalize_grace_ms = 1000;
+  transport::SubscriberConfig ac;
+  ac.endpoints = {config_.ack_endpoint};
+  ac.pattern = transport::Pattern::PushPull;
+  ac.bind = true;
+  transport::RawSubscriber acks(ac);
+  SinkLoop sink(config_, "detection_sink", log_, clock);
+  transport::PublisherConfig pc;
+  pc.endpoint = sink.detections_endpoint();
+  pc.pattern = transport::Pattern::PushPull;
+  pc.bind = false;
+  pc.linger_ms = 200;
+  transport::Publisher push(pc);
+  std::atomic<bool> stop{false};
+  auto rc = std::async(std::launch::async, [&] { return sink.run(stop); });
+  ASSERT_TRUE(sync.wait_for_subscribers("/sync/sample", 1, 20 * kNsPerSec).is_ok());
+  ASSERT_TRUE(transport::send_message(push, "/detections", Array("s1", 1)).is_ok());
+  auto ack = acks.receive(10 * kNsPerSec);
+  ASSERT_TRUE(ack.is_ok()) << ack.status().message();
+  msgs::SampleAck a;
+  ASSERT_TRUE(a.ParseFromArray(ack->header().data(), static_cast<int>(ack->header().size())));
+  EXPECT_EQ(a.sample_token(), "s1");
+  EXPECT_EQ(a.header().publish_mono_ns(), kStart);
+  EXPECT_EQ(a.header().publish_stamp_ns(), kStart + kOffset);
+  for (const char* token : {"s1", "s2"}) {
+    msgs::SampleBoundary b;
+    b.set_sample_token(token);
+    b.set_last_in_run(std::string(token) == "s2");
+    ASSERT_TRUE(transport::send_message(sync, "/sync/sample", b).is_ok());
+  }
+  // s2 never gets detections: the sink waits for the grace period, which only the clock ends. It
+  // moves in 100 ms steps until the sink is done (each step waits at most 20 ms of real time).
+  int steps = 0;
+  while (rc.wait_for(std::chrono::milliseconds(20)) != std::future_status::ready && steps < 2000) {
+    clock.advance_by(100 * kNsPerMs);
+    ++steps;
+  }
+  if (steps == 2000) stop = true;  // watchdog
+  EXPECT_EQ(rc.get(), 0);
+  EXPECT_GE(clock.now_ns(), kStart + 1000 * kNsPerMs) << "finalized before the grace period ended";
+  EXPECT_EQ(sink.counts().unanswered_samples, 1u);
+  EXPECT_EQ(Lines("run complete, grace period over").size(), 1u);
+  EXPECT_EQ(Results()["results"]["s2"].Size(), 0u);
 }
 
 TEST_F(SinkLoopTest, AFivePartMessageIsCountedAsMalformedInTheMeta) {

@@ -29,6 +29,7 @@ constexpr int kInstants = 12;
 class StreamClock final : public Clock {
  public:
   StampNs now_ns() const override { return now_.load(); }
+  StampNs realtime_ns() const override { return kT0; }
   void sleep_until_ns(StampNs /*deadline*/) override {}
   void advance_to(StampNs t) { now_.store(std::max(now_.load(), t)); }
 
@@ -77,7 +78,6 @@ class StaleFramesPipelineTest : public ::testing::Test {
     PipelineConfig pc;
     pc.workers = 2;
     pc.queue_frames = 4;
-    pc.realtime_now = [] { return kT0; };
     pipeline_ = std::make_unique<InjectorPipeline>(
         pc, *policy_, sink_, clock_, logging::make_node_logger("stale_pipeline_test", "warn"));
   }

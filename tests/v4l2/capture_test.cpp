@@ -17,6 +17,7 @@ namespace {
 class ManualClock final : public Clock {
  public:
   StampNs now_ns() const override { return now_; }
+  StampNs realtime_ns() const override { return now_; }
   void sleep_until_ns(StampNs deadline) override { now_ = std::max(now_, deadline); }
   StampNs now_ = 1'000'000'000;
 };
