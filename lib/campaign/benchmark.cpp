@@ -1,5 +1,6 @@
 #include "campaign/benchmark.hpp"
 
+#include <fmt/format.h>
 #include <unistd.h>
 
 #include <chrono>
@@ -114,7 +115,10 @@ ConditionResult run_one(const BenchmarkOptions& o, const RunSpec& run,
   eo.eval_set = o.eval_set;
   eo.output_dir = (run_dir / "score").string();
   std::FILE* eval_log = std::fopen((run_dir / "score.log").c_str(), "w");
-  auto outcome = scoring::evaluate_detection(eo, eval_log);
+  // score.log is a report file of the run (the devkit's progress lines), not diagnostics.
+  auto outcome = scoring::evaluate_detection(eo, [eval_log](const std::string& line) {
+    if (eval_log) std::fprintf(eval_log, "%s\n", line.c_str());
+  });
   if (eval_log) std::fclose(eval_log);
   if (!outcome) {
     r.error = "scoring: " + outcome.status().message();
@@ -180,22 +184,16 @@ std::vector<RunSpec> plan_runs(const BenchmarkOptions& o) {
   return runs;
 }
 
-void print_run_line(std::FILE* log, std::size_t index, std::size_t count, const ConditionResult& r,
-                    double eta_s) {
+std::string run_line(std::size_t index, std::size_t count, const ConditionResult& r, double eta_s) {
   const std::string what = r.condition + (r.variant.empty() ? "" : " [" + r.variant + "]");
-  if (r.ok) {
-    std::fprintf(log, "[%zu/%zu] %-22s seed %d  NDS %.4f  mAP %.4f", index + 1, count, what.c_str(),
-                 r.seed, r.nds, r.map);
-    if (r.detector_ms_per_sample > 0)
-      std::fprintf(log, "  %.1f samples/s", 1000.0 / r.detector_ms_per_sample);
-    std::fprintf(log, "  (%.1f s", r.wall_s);
-    if (eta_s >= 0) std::fprintf(log, "; ETA %.0f s", eta_s);
-    std::fprintf(log, ")\n");
-  } else {
-    std::fprintf(log, "[%zu/%zu] %-22s seed %d  FAILED: %s\n", index + 1, count, what.c_str(),
-                 r.seed, r.error.c_str());
-  }
-  std::fflush(log);
+  std::string line = fmt::format("[{}/{}] {:<22} seed {}  ", index + 1, count, what, r.seed);
+  if (!r.ok) return line + "FAILED: " + r.error;
+  line += fmt::format("NDS {:.4f}  mAP {:.4f}", r.nds, r.map);
+  if (r.detector_ms_per_sample > 0)
+    line += fmt::format("  {:.1f} samples/s", 1000.0 / r.detector_ms_per_sample);
+  line += fmt::format("  ({:.1f} s", r.wall_s);
+  if (eta_s >= 0) line += fmt::format("; ETA {:.0f} s", eta_s);
+  return line + ")";
 }
 
 Status check_node_executables(const BenchmarkOptions& o) {
@@ -210,7 +208,7 @@ Status check_node_executables(const BenchmarkOptions& o) {
 }
 
 Result<BenchmarkResult> run_benchmark(const BenchmarkOptions& o, const std::atomic<bool>& stop,
-                                      std::FILE* log) {
+                                      const ProgressLine& progress) {
   if (Status s = check_node_executables(o); !s) return s;
   std::error_code ec;
   fs::create_directories(fs::path(o.out_dir) / "runs", ec);
@@ -225,13 +223,13 @@ Result<BenchmarkResult> run_benchmark(const BenchmarkOptions& o, const std::atom
         std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     const double eta =
         elapsed / static_cast<double>(i + 1) * static_cast<double>(plan.runs.size() - i - 1);
-    print_run_line(log, i, plan.runs.size(), r, eta);
+    if (progress) progress(run_line(i, plan.runs.size(), r, eta));
     b.runs.push_back(std::move(r));
     if (i + 1 < plan.runs.size()) {  // partial results survive
       (void)write_text_atomic((fs::path(o.out_dir) / "summary.json").string(), summary_json(o, b));
     }
   }
-  return finish_benchmark(o, std::move(b.runs), log);
+  return finish_benchmark(o, std::move(b.runs), progress);
 }
 
 }  // namespace faultline::campaign

@@ -6,10 +6,10 @@
 
 #include <array>
 #include <atomic>
-#include <cstdio>
 #include <string>
 #include <vector>
 
+#include "campaign/progress.hpp"
 #include "common/status.hpp"
 #include "launch/supervisor.hpp"
 #include "scoring/robustness.hpp"
@@ -76,9 +76,9 @@ struct RunSpec {
 // only) the detector-configuration runs. A pure function of the options.
 std::vector<RunSpec> plan_runs(const BenchmarkOptions& opts);
 
-// One progress line for run `index` of `count`; eta_s < 0 leaves the ETA out.
-void print_run_line(std::FILE* log, std::size_t index, std::size_t count, const ConditionResult& r,
-                    double eta_s = -1);
+// The progress line for run `index` of `count`; eta_s < 0 leaves the ETA out.
+std::string run_line(std::size_t index, std::size_t count, const ConditionResult& r,
+                     double eta_s = -1);
 
 // A missing node executable under opts.bin_dir is kNotFound naming it.
 Status check_node_executables(const BenchmarkOptions& opts);
@@ -92,13 +92,14 @@ ConditionResult run_one(const BenchmarkOptions& opts, const RunSpec& run,
 // report.html and summary.json in opts.out_dir. A local run and a collected cluster campaign both
 // end here, so the same results give the same files. Fails only on a bad --baseline manifest.
 Result<BenchmarkResult> finish_benchmark(const BenchmarkOptions& opts,
-                                         std::vector<ConditionResult> runs, std::FILE* log);
+                                         std::vector<ConditionResult> runs,
+                                         const ProgressLine& progress);
 
-// Runs the whole matrix; progress lines go to `log`. Fails only on setup problems (a missing node
-// executable, an unwritable output dir); a failing run is recorded and the matrix continues. Each
-// run also leaves its run.json record (benchmark_plan.hpp), as a cluster unit does.
+// Runs the whole matrix; progress lines go to `progress`. Fails only on setup problems (a missing
+// node executable, an unwritable output dir); a failing run is recorded and the matrix continues.
+// Each run also leaves its run.json record (benchmark_plan.hpp), as a cluster unit does.
 Result<BenchmarkResult> run_benchmark(const BenchmarkOptions& opts, const std::atomic<bool>& stop,
-                                      std::FILE* log);
+                                      const ProgressLine& progress);
 
 // The partial summary.json written after each run of a local benchmark (no robustness yet).
 std::string summary_json(const BenchmarkOptions& opts, const BenchmarkResult& result);

@@ -196,7 +196,8 @@ void write_tables_and_report(const BenchmarkOptions& o, const std::string& model
 }  // namespace
 
 Result<BenchmarkResult> finish_benchmark(const BenchmarkOptions& o,
-                                         std::vector<ConditionResult> runs, std::FILE* log) {
+                                         std::vector<ConditionResult> runs,
+                                         const ProgressLine& progress) {
   BenchmarkResult b;
   b.runs = std::move(runs);
   bool have_clean = false;
@@ -217,8 +218,8 @@ Result<BenchmarkResult> finish_benchmark(const BenchmarkOptions& o,
     b.robustness_error =
         !have_clean ? "the clean run did not complete" : "no corruption completed every level";
   }
-  if (!b.robustness_error.empty()) {
-    std::fprintf(log, "robustness not computed: %s\n", b.robustness_error.c_str());
+  if (!b.robustness_error.empty() && progress) {
+    progress("robustness not computed: " + b.robustness_error);
   }
   const std::string summary = (fs::path(o.out_dir) / "summary.json").string();
   if (Status s = write_text_atomic(summary, summary_json(o, b)); !s) return s;

@@ -1,5 +1,7 @@
 #include "campaign/cluster.hpp"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cerrno>
 #include <cstdio>
@@ -47,7 +49,7 @@ Result<int> resolve_unit_index(std::optional<int> flag, int count,
 
 Result<ConditionResult> run_unit(const BenchmarkPlan& plan, int index, const std::string& bin_dir,
                                  const std::string& tool_version, const std::atomic<bool>& stop,
-                                 std::FILE* log) {
+                                 const ProgressLine& progress) {
   if (index < 0 || index >= static_cast<int>(plan.runs.size())) {
     return Status(StatusCode::kInvalidArgument, "unit " + std::to_string(index) +
                                                     ": the plan has " +
@@ -66,15 +68,14 @@ Result<ConditionResult> run_unit(const BenchmarkPlan& plan, int index, const std
   fs::create_directories(fs::path(o.out_dir) / "runs", ec);
   if (ec) return Status(StatusCode::kIoError, o.out_dir + "/runs: " + ec.message());
   const RunSpec& spec = plan.runs[static_cast<std::size_t>(index)];
-  std::fprintf(log, "unit %d of %zu: runs/%s\n", index, plan.runs.size(), spec.name.c_str());
-  std::fflush(log);
+  if (progress) progress(fmt::format("unit {} of {}: runs/{}", index, plan.runs.size(), spec.name));
   ConditionResult r = run_one(o, spec, stop);
   if (Status s = write_run_record(plan, index, r); !s) return s;
-  print_run_line(log, static_cast<std::size_t>(index), plan.runs.size(), r);
+  if (progress) progress(run_line(static_cast<std::size_t>(index), plan.runs.size(), r));
   return r;
 }
 
-Result<CollectResult> collect_benchmark(const BenchmarkPlan& plan, std::FILE* log) {
+Result<CollectResult> collect_benchmark(const BenchmarkPlan& plan, const ProgressLine& progress) {
   CollectResult c;
   std::vector<ConditionResult> runs;
   for (int i = 0; i < static_cast<int>(plan.runs.size()); ++i) {
@@ -101,7 +102,7 @@ Result<CollectResult> collect_benchmark(const BenchmarkPlan& plan, std::FILE* lo
     c.missing_why.push_back(unit + ": " + why);
   }
   if (!c.missing.empty()) return c;
-  auto b = finish_benchmark(plan.options, std::move(runs), log);
+  auto b = finish_benchmark(plan.options, std::move(runs), progress);
   if (!b) return b.status();
   c.result = std::move(*b);
   c.finished = true;

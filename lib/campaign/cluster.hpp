@@ -4,7 +4,6 @@
 #pragma once
 
 #include <atomic>
-#include <cstdio>
 #include <functional>
 #include <optional>
 #include <string>
@@ -26,7 +25,7 @@ Result<int> resolve_unit_index(std::optional<int> flag, int count,
 // unwritable folder) are a Status; a run that fails is a result with ok = false and its record.
 Result<ConditionResult> run_unit(const BenchmarkPlan& plan, int index, const std::string& bin_dir,
                                  const std::string& tool_version, const std::atomic<bool>& stop,
-                                 std::FILE* log);
+                                 const ProgressLine& progress);
 
 struct CollectResult {
   std::vector<int> missing;              // no record: never ran, still running or killed
@@ -40,7 +39,7 @@ struct CollectResult {
 // report.html into the plan's output folder (finish_benchmark); otherwise writes nothing and lists
 // the missing units. A record of another plan (plan_id) counts as missing. Fails only on a bad
 // --baseline.
-Result<CollectResult> collect_benchmark(const BenchmarkPlan& plan, std::FILE* log);
+Result<CollectResult> collect_benchmark(const BenchmarkPlan& plan, const ProgressLine& progress);
 
 // "3,5,9-12": unit indices as Slurm's --array takes them.
 std::string index_ranges(const std::vector<int>& indices);

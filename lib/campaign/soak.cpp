@@ -1,6 +1,7 @@
 #include "campaign/soak.hpp"
 
 #include <dirent.h>
+#include <fmt/format.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -148,8 +149,8 @@ struct PeriodAccumulator {
 // publish, accumulated per period and scored per replay loop.
 class SoakRun {
  public:
-  SoakRun(const SoakOptions& o, const std::atomic<bool>& stop, std::FILE* log)
-      : o_(o), stop_(stop), log_(log) {}
+  SoakRun(const SoakOptions& o, const std::atomic<bool>& stop, const ProgressLine& progress)
+      : o_(o), stop_(stop), progress_(progress) {}
 
   Result<SoakResult> run() {
     if (Status s = check_nodes(); !s) return s;
@@ -401,11 +402,10 @@ class SoakRun {
         l.error = outcome.status().message();
       }
     }
-    if (log_) {
-      std::fprintf(log_, "loop %d: %zu/%zu samples with detections, NDS %s mAP %s%s\n", l.index,
-                   l.samples_with_detections, l.samples, fmt(l.nds, 4).c_str(),
-                   fmt(l.map, 4).c_str(), l.error.empty() ? "" : (" (" + l.error + ")").c_str());
-      std::fflush(log_);
+    if (progress_) {
+      progress_(fmt::format("loop {}: {}/{} samples with detections, NDS {} mAP {}{}", l.index,
+                            l.samples_with_detections, l.samples, fmt(l.nds, 4), fmt(l.map, 4),
+                            l.error.empty() ? "" : " (" + l.error + ")"));
     }
     result_.loops.push_back(l);
     loop_detections_.clear();
@@ -420,10 +420,7 @@ class SoakRun {
         acc_.continuity_n ? acc_.continuity_sum / static_cast<double>(acc_.continuity_n) : -1.0;
     p.malformed = detections_->malformed() + player_sub_->malformed() + injector_sub_->malformed();
     p.memory = child_processes(static_cast<int>(::getpid()));
-    if (log_) {
-      std::fprintf(log_, "%s\n", period_line(p).c_str());
-      std::fflush(log_);
-    }
+    if (progress_) progress_(period_line(p));
     result_.periods.push_back(p);
     const int next = p.index + 1;
     acc_ = PeriodAccumulator{};
@@ -444,7 +441,7 @@ class SoakRun {
 
   const SoakOptions& o_;
   const std::atomic<bool>& stop_;
-  std::FILE* log_;
+  const ProgressLine& progress_;
   std::error_code ec_;
   std::vector<std::string> split_samples_;
   std::set<std::string> in_split_;
@@ -473,8 +470,9 @@ class SoakRun {
 
 }  // namespace
 
-Result<SoakResult> run_soak(const SoakOptions& o, const std::atomic<bool>& stop, std::FILE* log) {
-  return SoakRun(o, stop, log).run();
+Result<SoakResult> run_soak(const SoakOptions& o, const std::atomic<bool>& stop,
+                            const ProgressLine& progress) {
+  return SoakRun(o, stop, progress).run();
 }
 
 }  // namespace faultline::campaign

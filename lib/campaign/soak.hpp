@@ -10,11 +10,11 @@
 
 #include <atomic>
 #include <cstdint>
-#include <cstdio>
 #include <map>
 #include <string>
 #include <vector>
 
+#include "campaign/progress.hpp"
 #include "common/status.hpp"
 
 namespace faultline::campaign {
@@ -78,9 +78,11 @@ struct SoakResult {
   std::string summary_path;
 };
 
-// Runs until `duration_s` elapses or `stop` is set; rows are printed to `log` as they complete and
-// written to out_dir. Fails only on setup errors (missing executable, unwritable folder).
-Result<SoakResult> run_soak(const SoakOptions& opts, const std::atomic<bool>& stop, std::FILE* log);
+// Runs until `duration_s` elapses or `stop` is set; each period's and loop's row goes to `progress`
+// as it completes (from the calling thread) and to out_dir. Fails only on setup errors (missing
+// executable, unwritable folder).
+Result<SoakResult> run_soak(const SoakOptions& opts, const std::atomic<bool>& stop,
+                            const ProgressLine& progress);
 
 // Share of `current` boxes (x, y, class) that continue one of `previous` (same class, within
 // `radius_m`).

@@ -1,4 +1,6 @@
 // `faultline benchmark`: the RoboBEV benchmark live through launched nodes, scored and reported.
+#include <fmt/format.h>
+
 #include <CLI/CLI.hpp>
 #include <cstdio>
 
@@ -12,7 +14,7 @@
 namespace faultline::cli {
 namespace {
 
-int run(int argc, char** argv) {
+ExitStatus run(int argc, char** argv) {
   CLI::App app{
       "Runs clean + corruption x level live through player -> injector -> detector -> sink in "
       "lockstep, "
@@ -33,15 +35,11 @@ int run(int argc, char** argv) {
   campaign::BenchmarkOptions& o = args.options;
   o.bin_dir = executable_dir();
   const auto& stop = shutdown_requested();
-  std::fprintf(stderr,
-               "benchmark: %zu corruption(s) x %zu level(s) x %d seed(s) + clean on %s (%s, %s)\n",
-               o.corruptions.size(), o.levels.size(), o.seeds, o.dataroot.c_str(),
-               o.version.c_str(), o.eval_set.c_str());
-  auto result = campaign::run_benchmark(o, stop, stderr);
-  if (!result) {
-    std::fprintf(stderr, "faultline benchmark: %s\n", result.status().message().c_str());
-    return 1;
-  }
+  show_progress(fmt::format(
+      "benchmark: {} corruption(s) x {} level(s) x {} seed(s) + clean on {} ({}, {})",
+      o.corruptions.size(), o.levels.size(), o.seeds, o.dataroot, o.version, o.eval_set));
+  auto result = campaign::run_benchmark(o, stop, show_progress);
+  if (!result) return failure(result.status().message());
   return print_benchmark_result(*result, o.out_dir, "benchmark", stop.load());
 }
 

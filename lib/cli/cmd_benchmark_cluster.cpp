@@ -1,6 +1,8 @@
 // `faultline benchmark plan|unit|collect`: the benchmark matrix as independent units for a cluster
 // scheduler (Slurm job arrays, Kubernetes Indexed Jobs; docs/cluster.md). The work is in
 // lib/campaign/cluster.hpp; these parse arguments and print.
+#include <fmt/format.h>
+
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <cstdio>
@@ -25,7 +27,7 @@ std::string absolute(const std::string& path) {
   return path.empty() ? path : fs::absolute(path).lexically_normal().string();
 }
 
-int plan(int argc, char** argv) {
+ExitStatus plan(int argc, char** argv) {
   CLI::App app{
       "Writes the benchmark matrix (the same options as `faultline benchmark`) as a plan of "
       "independent units, one run each, for a cluster scheduler: run unit I with `faultline "
@@ -46,16 +48,9 @@ int plan(int argc, char** argv) {
   if (plan_path.empty()) plan_path = (fs::path(o.out_dir) / "plan.json").string();
   std::error_code ec;
   fs::create_directories(o.out_dir, ec);
-  if (ec) {
-    std::fprintf(stderr, "faultline benchmark plan: %s: %s\n", o.out_dir.c_str(),
-                 ec.message().c_str());
-    return 1;
-  }
+  if (ec) return failure(o.out_dir + ": " + ec.message());
   const campaign::BenchmarkPlan p = campaign::make_plan(o, FAULTLINE_VERSION);
-  if (Status s = campaign::write_text_atomic(plan_path, campaign::plan_json(p)); !s) {
-    std::fprintf(stderr, "faultline benchmark plan: %s\n", s.message().c_str());
-    return 1;
-  }
+  if (Status s = campaign::write_text_atomic(plan_path, campaign::plan_json(p)); !s) return s;
   const std::size_t n = p.runs.size();
   std::printf("plan: %s (%zu units, plan_id %s)\n", plan_path.c_str(), n, p.plan_id.c_str());
   std::printf("run:  sbatch --array=0-%zu scripts/slurm/benchmark_array.sbatch %s\n", n - 1,
@@ -64,7 +59,7 @@ int plan(int argc, char** argv) {
   return 0;
 }
 
-int unit(int argc, char** argv) {
+ExitStatus unit(int argc, char** argv) {
   CLI::App app{
       "Runs one unit of a benchmark plan into <out>/runs/<name>/ (emptied first; run.json, written "
       "last, marks it complete). Without --index it takes $SLURM_ARRAY_TASK_ID, else "
@@ -81,30 +76,21 @@ int unit(int argc, char** argv) {
       "of them, so an array or Indexed Job of that many tasks runs exactly these");
   FAULTLINE_PARSE(app, argc, argv);
   auto p = campaign::read_plan(plan_path);
-  if (!p) {
-    std::fprintf(stderr, "faultline benchmark unit: %s\n", p.status().message().c_str());
-    return 2;
-  }
+  if (!p) return usage_error(p.status().message());
   Result<int> i =
       campaign::resolve_unit_index(index, static_cast<int>(p->runs.size()), std::getenv);
   if (!only.empty()) {
     auto list = campaign::parse_index_ranges(only, static_cast<int>(p->runs.size()));
     i = list ? campaign::resolve_unit_in(*list, index, std::getenv) : Result<int>(list.status());
   }
-  if (!i) {
-    std::fprintf(stderr, "faultline benchmark unit: %s\n", i.status().message().c_str());
-    return 2;
-  }
+  if (!i) return usage_error(i.status().message());
   const auto& stop = shutdown_requested();
-  auto r = campaign::run_unit(*p, *i, executable_dir(), FAULTLINE_VERSION, stop, stderr);
-  if (!r) {
-    std::fprintf(stderr, "faultline benchmark unit %d: %s\n", *i, r.status().message().c_str());
-    return 1;
-  }
+  auto r = campaign::run_unit(*p, *i, executable_dir(), FAULTLINE_VERSION, stop, show_progress);
+  if (!r) return failure("unit " + std::to_string(*i) + ": " + r.status().message());
   return r->ok ? 0 : 1;
 }
 
-int collect(int argc, char** argv) {
+ExitStatus collect(int argc, char** argv) {
   CLI::App app{
       "Merges the units' records of a benchmark plan into summary.json, robustness.{md,csv,json} "
       "and report.html in the plan's output folder, exactly as a local `faultline benchmark` of "
@@ -116,37 +102,32 @@ int collect(int argc, char** argv) {
   app.add_option("--plan", plan_path, "the plan written by `faultline benchmark plan`")->required();
   FAULTLINE_PARSE(app, argc, argv);
   auto p = campaign::read_plan(plan_path);
-  if (!p) {
-    std::fprintf(stderr, "faultline benchmark collect: %s\n", p.status().message().c_str());
-    return 2;
-  }
-  auto c = campaign::collect_benchmark(*p, stderr);
-  if (!c) {
-    std::fprintf(stderr, "faultline benchmark collect: %s\n", c.status().message().c_str());
-    return 1;
-  }
+  if (!p) return usage_error(p.status().message());
+  auto c = campaign::collect_benchmark(*p, show_progress);
+  if (!c) return c.status();
+  // One report of what is missing or failed and how to redo it: the failure dispatch prints when
+  // nothing was written, else a warning shown beside the written results.
+  std::string report;
   if (!c->finished) {
-    std::fprintf(stderr,
-                 "faultline benchmark collect: %zu of %zu units missing (%s), nothing written:\n",
-                 c->missing.size(), p->runs.size(), campaign::index_ranges(c->missing).c_str());
-    for (const auto& why : c->missing_why) std::fprintf(stderr, "  %s\n", why.c_str());
+    report += fmt::format("{} of {} units missing ({}), nothing written:\n", c->missing.size(),
+                          p->runs.size(), campaign::index_ranges(c->missing));
+    for (const auto& why : c->missing_why) report += "  " + why + "\n";
   }
   if (!c->failed.empty()) {
-    std::fprintf(
-        stderr,
-        "faultline benchmark collect: %zu of %zu units failed (%s; see their runs/*/run.json)\n",
-        c->failed.size(), p->runs.size(), campaign::index_ranges(c->failed).c_str());
+    report += fmt::format("{} of {} units failed ({}; see their runs/*/run.json)\n",
+                          c->failed.size(), p->runs.size(), campaign::index_ranges(c->failed));
   }
   std::vector<int> redo = c->missing;
   redo.insert(redo.end(), c->failed.begin(), c->failed.end());
   std::sort(redo.begin(), redo.end());
   if (!redo.empty()) {
-    std::fprintf(stderr,
-                 "re-run them, then collect again:\n  sbatch --array=%s "
-                 "scripts/slurm/benchmark_array.sbatch %s\n",
-                 campaign::index_ranges(redo).c_str(), plan_path.c_str());
+    report += fmt::format(
+        "re-run them, then collect again:\n  sbatch --array={} "
+        "scripts/slurm/benchmark_array.sbatch {}",
+        campaign::index_ranges(redo), plan_path);
   }
-  if (!c->finished) return 1;
+  if (!c->finished) return failure(report);
+  if (!report.empty()) show_progress("faultline benchmark collect: " + report);
   return print_benchmark_result(c->result, p->options.out_dir, "benchmark collect", false);
 }
 

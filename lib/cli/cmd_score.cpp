@@ -32,8 +32,10 @@ ExitStatus run(int argc, char** argv) {
   } catch (const CLI::ParseError& e) {
     return usage_exit(app, e);
   }
-  std::FILE* log = quiet ? nullptr : stdout;
-  auto outcome = scoring::evaluate_detection(opts, log);
+  // The devkit's progress lines are part of score's primary output on stdout, as in the devkit.
+  scoring::EvalProgress progress;
+  if (!quiet) progress = [](const std::string& line) { std::printf("%s\n", line.c_str()); };
+  auto outcome = scoring::evaluate_detection(opts, progress);
   if (!outcome) return outcome.status();
   if (!quiet) std::printf("Saving metrics to: %s\n", opts.output_dir.c_str());
   if (Status s = scoring::write_eval_outputs(*outcome, opts.output_dir); !s) return s;

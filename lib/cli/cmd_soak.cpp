@@ -1,6 +1,8 @@
 // `faultline soak`: the pipeline in real time for a long while, reported per period (see
 // campaign/soak.hpp).
 
+#include <fmt/format.h>
+
 #include <CLI/CLI.hpp>
 #include <cstdio>
 #include <filesystem>
@@ -15,7 +17,7 @@ namespace faultline::cli {
 namespace {
 namespace fs = std::filesystem;
 
-int run(int argc, char** argv) {
+ExitStatus run(int argc, char** argv) {
   CLI::App app{
       "Soak test for temporal fusion: replays the scenes in a loop in real time (no lockstep) "
       "through "
@@ -76,24 +78,15 @@ int run(int argc, char** argv) {
   if (o.dataroot.empty()) {
     o.dataroot = synth_dir;
     o.version = "v1.0-mini";
-    if (Status s = ensure_synth_dataset(synth_dir); !s) {
-      std::fprintf(stderr, "faultline soak: %s\n", s.message().c_str());
-      return 1;
-    }
+    if (Status s = ensure_synth_dataset(synth_dir); !s) return failure(s.message());
   }
   o.bin_dir = executable_dir();
-  std::fprintf(
-      stderr,
-      "soak: %.1f min on %s (%s), rate %.2f, corruption '%s', faults '%s'; rows every %.0f s\n",
-      minutes, o.dataroot.c_str(), o.version.c_str(), o.rate, o.corruption.c_str(),
-      o.injector_params_file.c_str(), period_s);
-  auto result = campaign::run_soak(o, shutdown_requested(), stderr);
-  if (!result) {
-    std::fprintf(stderr, "faultline soak: %s\n", result.status().message().c_str());
-    return 1;
-  }
-  for (const auto& f : result->node_failures)
-    std::fprintf(stderr, "faultline soak: node failure: %s\n", f.c_str());
+  show_progress(fmt::format(
+      "soak: {:.1f} min on {} ({}), rate {:.2f}, corruption '{}', faults '{}'; rows every {:.0f} s",
+      minutes, o.dataroot, o.version, o.rate, o.corruption, o.injector_params_file, period_s));
+  auto result = campaign::run_soak(o, shutdown_requested(), show_progress);
+  if (!result) return failure(result.status().message());
+  for (const auto& f : result->node_failures) show_progress("faultline soak: node failure: " + f);
   std::printf(
       "soak: %zu periods, %zu loops scored, RSS growth %.1f MB, node failures %zu\nsummary: %s\n",
       result->periods.size(), result->loops.size(), result->rss_growth_mb,

@@ -58,6 +58,13 @@ struct Command {
 
 const std::vector<const Command*>& all_commands();
 
+// Shows one live progress line of a long-running command (benchmark, soak) on stderr, flushed at
+// once: stdout keeps only the command's results, which scripts read, while a person watches.
+inline void show_progress(const std::string& line) {
+  std::fprintf(stderr, "%s\n", line.c_str());
+  std::fflush(stderr);
+}
+
 // Adapts a command function returning ExitStatus, Status or a plain exit code to Command::run.
 template <auto Fn>
 ExitStatus run_command(int argc, char** argv) {

@@ -16,11 +16,11 @@
 namespace faultline::scoring {
 namespace {
 
-void logf(std::FILE* log, const std::string& line) {
-  if (log) std::fprintf(log, "%s\n", line.c_str());
+void logf(const EvalProgress& progress, const std::string& line) {
+  if (progress) progress(line);
 }
 
-void log_counts(std::FILE* log, const FilterCounts& c) {
+void log_counts(const EvalProgress& log, const FilterCounts& c) {
   logf(log, "=> Original number of boxes: " + std::to_string(c.original));
   logf(log, "=> After distance based filtering: " + std::to_string(c.after_distance));
   logf(log, "=> After LIDAR and RADAR points based filtering: " + std::to_string(c.after_points));
@@ -135,7 +135,7 @@ Result<std::vector<std::string>> eval_set_samples(const std::string& dataroot,
   return split_sample_tokens(dataroot, version, *scenes);
 }
 
-Result<EvalOutcome> evaluate_detection(const EvalOptions& opts, std::FILE* log) {
+Result<EvalOutcome> evaluate_detection(const EvalOptions& opts, const EvalProgress& log) {
   const auto t0 = std::chrono::steady_clock::now();
   const bool predefined = is_predefined_split(opts.eval_set);
   SubmissionScope scope;

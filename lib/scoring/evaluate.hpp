@@ -9,7 +9,7 @@
 //    devkit may abort on an internal assertion.
 #pragma once
 
-#include <cstdio>
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -53,8 +53,13 @@ Result<std::vector<std::string>> eval_set_samples(const std::string& dataroot,
                                                   const std::string& version,
                                                   const std::string& eval_set);
 
-// Progress lines in the devkit's wording go to `log` (may be null). Nothing is written on failure.
-Result<EvalOutcome> evaluate_detection(const EvalOptions& opts, std::FILE* log);
+// Receives one progress line in the devkit's wording (no trailing newline), from the calling
+// thread, as each stage starts or ends; the caller decides where it goes (stdout, a log file).
+using EvalProgress = std::function<void(const std::string& line)>;
+
+// Runs the evaluation, reporting its stages to `progress` (may be empty). Nothing is written to
+// files or the console here; on failure the Status names the file or sample at fault.
+Result<EvalOutcome> evaluate_detection(const EvalOptions& opts, const EvalProgress& progress = {});
 
 // Writes metrics_summary.json and metrics_details.json into dir (created if needed).
 Status write_eval_outputs(const EvalOutcome& outcome, const std::string& dir);

@@ -53,7 +53,7 @@ TEST(BenchmarkReportTest, ReportShowsOneThumbnailPerCorruptionItRan) {
   for (const auto& c : o.corruptions) {
     for (const auto& l : o.levels) runs.push_back(result(c + "/" + l, 0.4));
   }
-  ASSERT_TRUE(finish_benchmark(o, runs, stderr));
+  ASSERT_TRUE(finish_benchmark(o, runs, {}));
   const std::string html = test_tool::read_text(dir / "report.html");
   const std::string prefix = "data:image/jpeg;base64,";
   int pictures = 0;
@@ -71,6 +71,37 @@ TEST(BenchmarkReportTest, ReportShowsOneThumbnailPerCorruptionItRan) {
   EXPECT_NE(html.find("low_light (dark): easy (2), hard (4)"), std::string::npos);
   EXPECT_NE(html.find("camera_crash: drops or damages whole frames"), std::string::npos);
   fs::remove_all(dir);
+}
+
+// Progress goes to the caller's callback, never to the console: a finish without a clean run says
+// why robustness is missing there, and a run's line reads as the benchmark prints it.
+TEST(BenchmarkReportTest, FinishReportsMissingRobustnessToTheProgressCallback) {
+  const fs::path dir =
+      fs::temp_directory_path() / ("faultline_benchmark_noclean_" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  BenchmarkOptions o;
+  o.out_dir = dir.string();
+  o.corruptions = {"fog"};
+  o.levels = {"easy"};
+  std::vector<std::string> lines;
+  auto b = finish_benchmark(o, {result("fog/easy", 0.4)},
+                            [&lines](const std::string& line) { lines.push_back(line); });
+  ASSERT_TRUE(b) << b.status().message();
+  EXPECT_EQ(lines,
+            (std::vector<std::string>{"robustness not computed: the clean run did not complete"}));
+  fs::remove_all(dir);
+}
+
+TEST(BenchmarkReportTest, RunLineShowsScoresOrTheFailure) {
+  ConditionResult r = result("fog/easy", 0.41234);
+  r.map = 0.3;
+  r.wall_s = 12.34;
+  EXPECT_EQ(run_line(1, 9, r, 70.4),
+            "[2/9] fog/easy               seed 1  NDS 0.4123  mAP 0.3000  (12.3 s; ETA 70 s)");
+  r.ok = false;
+  r.error = "detector exited 3";
+  EXPECT_EQ(run_line(1, 9, r), "[2/9] fog/easy               seed 1  FAILED: detector exited 3");
 }
 
 }  // namespace

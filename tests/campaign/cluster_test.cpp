@@ -187,7 +187,7 @@ TEST_F(ClusterTest, CollectListsMissingUnitsAndWritesNothing) {
   ASSERT_EQ(p.runs.size(), 9u);
   for (int i : {0, 1, 2, 4, 5, 6, 7}) Finish(p, i, true, 0.5);
   fs::create_directories(fs::path(run_record_path(p, 8)).parent_path());  // started, then killed
-  auto c = collect_benchmark(p, stderr);
+  auto c = collect_benchmark(p, {});
   ASSERT_TRUE(c) << c.status().message();
   EXPECT_FALSE(c->finished);
   EXPECT_EQ(c->missing, (std::vector<int>{3, 8}));
@@ -202,7 +202,7 @@ TEST_F(ClusterTest, CollectListsMissingUnitsAndWritesNothing) {
   const BenchmarkPlan other = make_plan(other_opts);
   ASSERT_EQ(other.runs[3].name, p.runs[3].name);
   Finish(other, 3, true, 0.9);
-  c = collect_benchmark(p, stderr);
+  c = collect_benchmark(p, {});
   ASSERT_TRUE(c);
   EXPECT_EQ(c->missing, (std::vector<int>{3, 8}));
   EXPECT_NE(c->missing_why[0].find("another plan"), std::string::npos) << c->missing_why[0];
@@ -215,7 +215,7 @@ TEST_F(ClusterTest, CollectWritesWhatALocalFinishWrites) {
     Finish(p, i, i != 4, 0.5 - 0.01 * i);
     runs.push_back(read_run_record(run_record_path(p, i))->result);
   }
-  auto c = collect_benchmark(p, stderr);
+  auto c = collect_benchmark(p, {});
   ASSERT_TRUE(c) << c.status().message();
   ASSERT_TRUE(c->finished);
   EXPECT_TRUE(c->missing.empty());
@@ -225,7 +225,7 @@ TEST_F(ClusterTest, CollectWritesWhatALocalFinishWrites) {
   ASSERT_FALSE(collected.empty());
   // The same results through the local path's finish give the same bytes.
   fs::rename(out / "summary.json", dir_ / "collected.json");
-  ASSERT_TRUE(finish_benchmark(p.options, runs, stderr));
+  ASSERT_TRUE(finish_benchmark(p.options, runs, {}));
   EXPECT_EQ(read_text(out / "summary.json"), collected);
   rapidjson::Document d;
   d.Parse(collected.c_str());

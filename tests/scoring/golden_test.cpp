@@ -92,6 +92,31 @@ std::vector<std::size_t> log_counts(const std::string& log_text) {
   return counts;
 }
 
+std::vector<std::string> read_lines(const std::string& path) {
+  std::vector<std::string> lines;
+  std::istringstream in(read_text(path));
+  for (std::string line; std::getline(in, line);) lines.push_back(line);
+  return lines;
+}
+
+// The evaluation's progress lines, from "Initializing" to "Calculating metrics...", with the
+// results path cut out of "Loaded results from <path>. Found ..." (the devkit ran with a relative
+// path).
+std::vector<std::string> eval_stages(const std::vector<std::string>& lines) {
+  std::vector<std::string> stages;
+  bool inside = false;
+  for (const auto& line : lines) {
+    inside = inside || line == "Initializing nuScenes detection evaluation";
+    if (!inside) continue;
+    const auto found = line.find(". Found detections for ");
+    stages.push_back(line.rfind("Loaded results from ", 0) == 0 && found != std::string::npos
+                         ? "Loaded results" + line.substr(found)
+                         : line);
+    if (line == "Calculating metrics...") break;
+  }
+  return stages;
+}
+
 // The 19 cases of predictions/cases.json, named here so that listing the tests reads no file; the
 // set test below fails if cases.json and this list ever differ.
 const std::vector<std::string>& case_names() {
@@ -120,7 +145,9 @@ TEST_P(GoldenCaseTest, MatchesDevkit) {
   opts.version = "v1.0-mini";
   opts.eval_set = c["eval_set"].GetString();
   opts.output_dir = out.str() + "/run";
-  auto outcome = evaluate_detection(opts, nullptr);
+  std::vector<std::string> progress;
+  auto outcome =
+      evaluate_detection(opts, [&progress](const std::string& line) { progress.push_back(line); });
   const std::string ref_dir = golden_dir() + "/results/" + name;
   if (!c["expect_error"].IsNull()) {
     ASSERT_FALSE(outcome.is_ok()) << name << " must be rejected";
@@ -144,6 +171,8 @@ TEST_P(GoldenCaseTest, MatchesDevkit) {
                                         p.after_bike_rack, g.original,       g.after_distance,
                                         g.after_points,    g.after_bike_rack};
   EXPECT_EQ(got, expected) << name << ": filter counts differ from eval_log.txt";
+  EXPECT_EQ(eval_stages(progress), eval_stages(read_lines(ref_dir + "/eval_log.txt")))
+      << name << ": progress lines differ from the devkit's eval_log.txt";
 }
 
 INSTANTIATE_TEST_SUITE_P(NuscEval, GoldenCaseTest, ::testing::ValuesIn(case_names()),
