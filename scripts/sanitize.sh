@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Sanitizer builds of the tests (docs/reliability.md, "Fuzzing and sanitizers"), with Debian's clang, -O1 -g and
 # assertions on. Exit status is non-zero when a build fails, a sanitizer reports or a test fails.
-# Usage: scripts/sanitize.sh asan [all] | tsan           (SANITIZE_BUILD_JOBS sets the build's -j; default nproc)
+# Usage: scripts/sanitize.sh asan [all] | tsan           (SANITIZE_BUILD_JOBS sets the build's -j; default nproc;
+#                                                       SANITIZE_SUITE_TIMEOUT a suite's limit, default 900 s)
 #   asan      build-fuzz/, the clang tree shared with scripts/fuzz.sh (scripts/clang-tree.sh: every library, node
 #             and test built with -fsanitize=fuzzer-no-link,address,undefined, UB fatal, leaks reported at exit):
 #             the suites of the libraries that read outside bytes (common, transport, codec, dataset, scoring,
@@ -25,7 +26,11 @@ run_suites() {  # run_suites <dir> <gtest filter> <test executable>...
   shift 2
   for t in "$@"; do
     echo "sanitize.sh: $mode $t"
-    "$dir/bin/$t" --gtest_brief=1 --gtest_filter="$filter"
+    # A hang fails this suite (as ctest's --timeout does in stage 1) instead of using up CI's time.
+    if ! timeout -k 10 "${SANITIZE_SUITE_TIMEOUT:-900}" "$dir/bin/$t" --gtest_brief=1 --gtest_filter="$filter"; then
+      echo "sanitize.sh: $mode $t failed (or ran over ${SANITIZE_SUITE_TIMEOUT:-900} s)" >&2
+      return 1
+    fi
   done
 }
 

@@ -113,6 +113,9 @@ Status Publisher::send_first(zmq::message_t& topic_frame) {
       const DurationNs left = deadline - monotonic_now_ns();
       wait_ms = left <= 0 ? 0 : static_cast<long>((left + kNsPerMs - 1) / kNsPerMs);
     }
+    // A refusal read before this poll (above, or by an earlier call) brings no new monitor event:
+    // only look whether a peer can take the message, never wait for one.
+    if (handshakes_->refused_endpoints() > 0) wait_ms = 0;
     (void)zmq::poll(items, 2, std::chrono::milliseconds(wait_ms));  // throws as send would
     if (items[1].revents & ZMQ_POLLIN) read_monitor();
     if (!(items[0].revents & ZMQ_POLLOUT) && handshakes_->refused_endpoints() > 0) {

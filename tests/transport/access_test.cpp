@@ -303,6 +303,37 @@ TEST_F(CurveTest, AForeverPushSendToARefusingSinkReturnsOnceRefused) {
   EXPECT_EQ(sink.auth_refused(), 1u);
 }
 
+// The order that hung a CI run under TSan: the refusal is read from the monitor (here by
+// refused_by_peer) before the send, so no monitor event is left to wake a send waiting for ever.
+TEST_F(CurveTest, AForeverPushSendAfterTheRefusalWasReadReturnsAtOnce) {
+  SubscriberConfig sc;
+  sc.endpoints = {"tcp://127.0.0.1:*"};
+  sc.bind = true;
+  sc.pattern = Pattern::PushPull;
+  sc.access = Server();
+  RawSubscriber sink(sc);
+  testing::LogCapture log;
+  PublisherConfig pc;
+  pc.endpoint = sink.endpoints()[0];
+  pc.bind = false;
+  pc.pattern = Pattern::PushPull;
+  pc.access = Client("bad");
+  ASSERT_LT(pc.send_timeout_ns, 0);
+  Publisher detector(pc);
+  std::atomic<bool> done{false};
+  std::thread reader([&] {
+    while (!done.load()) (void)sink.receive(10 * kNsPerMs);
+  });
+  const bool refused =
+      testing::eventually([&] { return detector.refused_by_peer() >= 1; }, 30 * kNsPerSec);
+  done = true;
+  reader.join();
+  ASSERT_TRUE(refused);
+  const Status s = detector.send("/detections", "d");  // before the fix: blocked for ever
+  EXPECT_EQ(s.code(), StatusCode::kIoError) << s.to_string();
+  EXPECT_EQ(detector.refused_sends(), 1u);
+}
+
 TEST_F(CurveTest, KeyFileErrorsNameTheFile) {
   EXPECT_NE(ThrownMessage([&] { (void)read_curve_key(dir_ + "/missing"); }).find(dir_ + "/missing"),
             std::string::npos);
