@@ -5,7 +5,9 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -70,24 +72,122 @@ Coeffs box_coeffs(int in_size, int out_size) {
   return c;
 }
 
+// BOX taps of a downscale: each output's non-zero weights are alike (1 / taps in fixed point) and
+// its taps follow the previous output's, so an output is a lookup of its taps' sum: Pillow's sum
+// of products, rounded and clipped, exactly.
+struct UniformTaps {
+  int start = 0;                                  // first tap of output 0
+  std::vector<int> count;                         // taps of each output
+  std::vector<const std::uint8_t*> table;         // sum -> output value, per output
+  std::vector<std::vector<std::uint8_t>> tables;  // one per distinct (count, weight)
+};
+
+// nullopt when the non-zero weights are not of that form (the general loop then runs).
+std::optional<UniformTaps> uniform_taps(const Coeffs& c) {
+  UniformTaps u;
+  std::vector<std::pair<int, int>> kinds;  // (count, weight) of u.tables
+  int next = -1;
+  for (std::size_t xx = 0; xx < c.first.size(); ++xx) {
+    const int* k = &c.k[xx * static_cast<std::size_t>(c.ksize)];
+    int first = -1, n = 0, w = 0;
+    for (int x = 0; x < c.count[xx]; ++x) {
+      if (k[x] == 0) continue;
+      if (first < 0) first = x, w = k[x];
+      if (k[x] != w || x != first + n) return std::nullopt;
+      ++n;
+    }
+    if (n == 0) return std::nullopt;
+    const int begin = c.first[xx] + first;
+    if (xx == 0) u.start = begin;
+    if (xx > 0 && begin != next) return std::nullopt;
+    next = begin + n;
+    const auto kind = std::make_pair(n, w);
+    auto it = std::find(kinds.begin(), kinds.end(), kind);
+    if (it == kinds.end()) {
+      std::vector<std::uint8_t> t(static_cast<std::size_t>(255 * n + 1));
+      for (std::size_t sum = 0; sum < t.size(); ++sum) {
+        t[sum] = clip8((1 << (kPrecisionBits - 1)) + static_cast<int>(sum) * w);
+      }
+      kinds.push_back(kind);
+      u.tables.push_back(std::move(t));
+      it = kinds.end() - 1;
+    }
+    u.count.push_back(n);
+    u.table.push_back(nullptr);  // set below, once u.tables stops growing
+  }
+  for (std::size_t xx = 0; xx < u.count.size(); ++xx) {
+    const int* k = &c.k[xx * static_cast<std::size_t>(c.ksize)];
+    const int w = *std::find_if(k, k + c.count[xx], [](int v) { return v != 0; });
+    const auto at = std::find(kinds.begin(), kinds.end(), std::make_pair(u.count[xx], w));
+    u.table[xx] = u.tables[static_cast<std::size_t>(at - kinds.begin())].data();
+  }
+  return u;
+}
+
+// One row of the horizontal pass with uniform taps.
+void box_row_uniform(std::uint8_t* dst, const std::uint8_t* src, const UniformTaps& t) {
+  const std::uint8_t* p = src + 3 * t.start;
+  const std::size_t outs = t.count.size();
+  for (std::size_t xx = 0; xx < outs; ++xx, dst += 3) {
+    const int n = t.count[xx];
+    int s0 = p[0], s1 = p[1], s2 = p[2];
+    // Unrolled for the 1-5 taps of the pixelate factors (a loop here is vectorised for long counts,
+    // and its set-up costs more than the few taps).
+    switch (n) {
+      case 5:
+        s0 += p[12], s1 += p[13], s2 += p[14];
+        [[fallthrough]];
+      case 4:
+        s0 += p[9], s1 += p[10], s2 += p[11];
+        [[fallthrough]];
+      case 3:
+        s0 += p[6], s1 += p[7], s2 += p[8];
+        [[fallthrough]];
+      case 2:
+        s0 += p[3], s1 += p[4], s2 += p[5];
+        [[fallthrough]];
+      case 1:
+        break;
+      default:
+        for (int x = 1; x < n; ++x) s0 += p[3 * x], s1 += p[3 * x + 1], s2 += p[3 * x + 2];
+    }
+    const std::uint8_t* table = t.table[xx];
+    dst[0] = table[s0];
+    dst[1] = table[s1];
+    dst[2] = table[s2];
+    p += 3 * n;
+  }
+}
+
+// One row of the horizontal pass, any weights: Pillow's loop.
+void box_row_general(std::uint8_t* dst, const std::uint8_t* src, const Coeffs& h) {
+  const auto outs = h.first.size();
+  for (std::size_t xx = 0; xx < outs; ++xx) {
+    const int* k = &h.k[xx * static_cast<std::size_t>(h.ksize)];
+    const int xmin = h.first[xx];
+    int ss[3] = {1 << (kPrecisionBits - 1), 1 << (kPrecisionBits - 1), 1 << (kPrecisionBits - 1)};
+    for (int x = 0; x < h.count[xx]; ++x) {
+      for (int ch = 0; ch < 3; ++ch) ss[ch] += src[(x + xmin) * 3 + ch] * k[x];
+    }
+    for (int ch = 0; ch < 3; ++ch) dst[xx * 3 + ch] = clip8(ss[ch]);
+  }
+}
+
 // ImagingResample with BOX: horizontal pass over the source rows the vertical pass needs, then the
 // vertical pass; both round to 8 bits.
 cv::Mat pil_box_resize(const cv::Mat& in, int out_w, int out_h) {
   const Coeffs h = box_coeffs(in.cols, out_w), v = box_coeffs(in.rows, out_h);
+  const std::optional<UniformTaps> uniform = uniform_taps(h);
   const int y_first = v.first.front();
   const int y_last = v.first.back() + v.count.back();
   cv::Mat tmp(y_last - y_first, out_w, CV_8UC3);
   for (int yy = 0; yy < tmp.rows; ++yy) {
     const std::uint8_t* src = in.ptr<std::uint8_t>(yy + y_first);
     std::uint8_t* dst = tmp.ptr<std::uint8_t>(yy);
-    for (int xx = 0; xx < out_w; ++xx) {
-      const int* k = &h.k[static_cast<std::size_t>(xx * h.ksize)];
-      const int xmin = h.first[static_cast<std::size_t>(xx)];
-      int ss[3] = {1 << (kPrecisionBits - 1), 1 << (kPrecisionBits - 1), 1 << (kPrecisionBits - 1)};
-      for (int x = 0; x < h.count[static_cast<std::size_t>(xx)]; ++x) {
-        for (int ch = 0; ch < 3; ++ch) ss[ch] += src[(x + xmin) * 3 + ch] * k[x];
-      }
-      for (int ch = 0; ch < 3; ++ch) dst[xx * 3 + ch] = clip8(ss[ch]);
+    if (uniform) {
+      box_row_uniform(dst, src, *uniform);
+    } else {
+      box_row_general(dst, src, h);
     }
   }
   // Vertical pass, tap by tap over whole rows (a loop that vectorises), with the same integer sums.
@@ -125,7 +225,13 @@ std::vector<int> nearest_map(int in_size, int out_size) {
 
 cv::Mat pil_nearest_resize(const cv::Mat& in, int out_w, int out_h) {
   const std::vector<int> xs = nearest_map(in.cols, out_w), ys = nearest_map(in.rows, out_h);
-  cv::Mat out(out_h, out_w, CV_8UC3, cv::Scalar::all(0));
+  const auto inside = [](const std::vector<int>& m) {
+    return std::all_of(m.begin(), m.end(), [](int i) { return i >= 0; });
+  };
+  // Pillow's fill is needed only where a position falls outside the source (never for pixelate).
+  const bool xs_inside = inside(xs);
+  cv::Mat out(out_h, out_w, CV_8UC3);
+  if (!xs_inside || !inside(ys)) out.setTo(cv::Scalar::all(0));
   const std::size_t row_bytes = static_cast<std::size_t>(out_w) * 3;
   for (int y = 0; y < out_h; ++y) {
     const int sy = ys[static_cast<std::size_t>(y)];
@@ -138,9 +244,26 @@ cv::Mat pil_nearest_resize(const cv::Mat& in, int out_w, int out_h) {
       continue;
     }
     const auto* src = in.ptr<cv::Vec3b>(sy);
-    for (int x = 0; x < out_w; ++x) {
-      if (xs[static_cast<std::size_t>(x)] >= 0) dst[x] = src[xs[static_cast<std::size_t>(x)]];
+    if (!xs_inside || out_w < 1) {
+      for (int x = 0; x < out_w; ++x) {
+        if (xs[static_cast<std::size_t>(x)] >= 0) dst[x] = src[xs[static_cast<std::size_t>(x)]];
+      }
+      continue;
     }
+    // Four bytes per pixel, the fourth overwritten by the next pixel: one load and one store each
+    // (the last pixel, and any from the row's last source pixel, copy three).
+    auto* out_bytes = out.ptr<std::uint8_t>(y);
+    const auto* in_bytes = in.ptr<std::uint8_t>(sy);
+    const int last_in = in.cols - 1;
+    for (int x = 0; x + 1 < out_w; ++x) {
+      const int sx = xs[static_cast<std::size_t>(x)];
+      if (sx < last_in) {
+        std::memcpy(out_bytes + 3 * x, in_bytes + 3 * sx, 4);
+      } else {
+        std::memcpy(out_bytes + 3 * x, in_bytes + 3 * sx, 3);
+      }
+    }
+    std::memcpy(out_bytes + 3 * (out_w - 1), in_bytes + 3 * xs.back(), 3);
   }
   return out;
 }
