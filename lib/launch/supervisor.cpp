@@ -33,7 +33,7 @@ struct Child {
   ChildOutcome outcome;
   Pipe out, err;
   int reap_order = -1;
-  StampNs respawn_at_ns = -1;  // >= 0: ended, to be started again at this monotonic time
+  StampNs respawn_at_ns = -1;  // >= 0: ended, to be started again at this clock time
 };
 
 void close_fd(int& fd) {
@@ -144,7 +144,8 @@ std::string describe_end(const ChildOutcome& o) {
 
 class Loop {
  public:
-  Loop(std::vector<ChildSpec> specs, const SupervisorOptions& options) : options_(options) {
+  Loop(std::vector<ChildSpec> specs, const SupervisorOptions& options, const Clock& clock)
+      : options_(options), clock_(clock) {
     for (auto& s : specs) {
       Child c;
       c.outcome.name = s.name;
@@ -175,7 +176,7 @@ class Loop {
       poll_output();
       reap();
       start_due_respawns();
-      if (stopping_ && !killed_ && monotonic_now_ns() >= kill_deadline_ns_) kill_remaining();
+      if (stopping_ && !killed_ && clock_.now_ns() >= kill_deadline_ns_) kill_remaining();
     }
     if (!stopping_) result_.cause = StopCause::AllExited;
     return finish();
@@ -199,7 +200,7 @@ class Loop {
 
   void start_due_respawns() {
     for (auto& c : children_) {
-      if (c.respawn_at_ns < 0 || monotonic_now_ns() < c.respawn_at_ns) continue;
+      if (c.respawn_at_ns < 0 || clock_.now_ns() < c.respawn_at_ns) continue;
       c.respawn_at_ns = -1;
       close_fd(
           c.out.read_fd);  // a grandchild may still hold the old pipes; the new start gets new ones
@@ -241,7 +242,7 @@ class Loop {
       c.outcome.signalled_by_us = true;
       ::kill(-c.outcome.pid, sig);
     }
-    kill_deadline_ns_ = monotonic_now_ns() + options_.grace_ns;
+    kill_deadline_ns_ = clock_.now_ns() + options_.grace_ns;
   }
 
   void kill_remaining() {
@@ -322,7 +323,7 @@ class Loop {
       c.outcome.will_respawn = should_respawn(c);
       finish_child(c);
       if (c.outcome.will_respawn) {
-        c.respawn_at_ns = monotonic_now_ns() + c.spec.respawn_delay_ns;
+        c.respawn_at_ns = clock_.now_ns() + c.spec.respawn_delay_ns;
         note("respawning " + c.spec.name + " in " +
              std::to_string(c.spec.respawn_delay_ns / kNsPerMs) + " ms (respawn " +
              std::to_string(c.outcome.respawns + 1) + " of at most " +
@@ -335,7 +336,7 @@ class Loop {
 
   void finish_child(Child& c) {
     c.reap_order = next_reap_++;
-    c.outcome.end_ns = monotonic_now_ns();
+    c.outcome.end_ns = clock_.now_ns();
     note(c.spec.name + " " + describe_end(c.outcome) + (c.outcome.failed() ? " (failed)" : ""));
     if (options_.on_exit) options_.on_exit(c.outcome);
   }
@@ -376,6 +377,7 @@ class Loop {
   }
 
   SupervisorOptions options_;
+  const Clock& clock_;
   LineSink sink_;
   std::vector<std::string> env_;  // every child's environment (respawns too)
   std::vector<Child> children_;
@@ -444,10 +446,14 @@ LineSink make_prefix_sink(bool color) {
 }
 
 Supervisor::Supervisor(std::vector<ChildSpec> children, SupervisorOptions options)
-    : specs_(std::move(children)), options_(std::move(options)) {}
+    : Supervisor(std::move(children), std::move(options), system_clock()) {}
+
+Supervisor::Supervisor(std::vector<ChildSpec> children, SupervisorOptions options,
+                       const Clock& clock)
+    : specs_(std::move(children)), options_(std::move(options)), clock_(clock) {}
 
 LaunchResult Supervisor::run(const std::atomic<bool>& stop) {
-  return Loop(specs_, options_).run(stop);
+  return Loop(specs_, options_, clock_).run(stop);
 }
 
 }  // namespace faultline::launch

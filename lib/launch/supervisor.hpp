@@ -55,7 +55,7 @@ struct ChildOutcome {
   int term_signal = 0;              // when it died from a signal
   bool signalled_by_us = false;     // the supervisor had sent it a signal before it ended
   bool killed_after_grace = false;  // needed SIGKILL
-  StampNs end_ns = 0;               // monotonic time it was reaped
+  StampNs end_ns = 0;               // the clock's now_ns() when it was reaped
   int respawns = 0;           // times it was started again (this outcome is of the last start)
   bool will_respawn = false;  // in on_exit: this end is followed by a respawn
   bool failed() const;        // non-zero exit, failed start, or a signal we did not send
@@ -90,7 +90,11 @@ LineSink make_prefix_sink(bool color);
 
 class Supervisor {
  public:
+  // `clock` times the grace period and the respawn delays and stamps ChildOutcome::end_ns; it must
+  // outlive the supervisor. The poll wait for output stays real (poll_ns). The first form uses the
+  // system clock.
   Supervisor(std::vector<ChildSpec> children, SupervisorOptions options);
+  Supervisor(std::vector<ChildSpec> children, SupervisorOptions options, const Clock& clock);
   // Starts all children and supervises until all have ended. `stop` requests a shutdown (e.g.
   // SIGINT).
   LaunchResult run(const std::atomic<bool>& stop);
@@ -98,6 +102,7 @@ class Supervisor {
  private:
   std::vector<ChildSpec> specs_;
   SupervisorOptions options_;
+  const Clock& clock_;
 };
 
 }  // namespace faultline::launch

@@ -12,7 +12,7 @@
 #include "common/config.hpp"
 #include "detection.pb.h"
 #include "runtime/bag_layout.hpp"
-#include "transport/publisher.hpp"
+#include "runtime/node_output.hpp"
 #include "transport/subscriber.hpp"
 #include "transport/typed.hpp"
 
@@ -47,8 +47,8 @@ struct BagPlayer::Impl {
   BagPlayerConfig cfg;
   std::shared_ptr<spdlog::logger> log;
   Clock& clock;
-  BagPlayProgressFn progress;  // may be empty
-  std::unique_ptr<transport::Publisher> pub;
+  BagPlayProgressFn progress;          // may be empty
+  std::unique_ptr<NodeOutput> output;  // publisher only: no registry entry, no statistics
   std::unique_ptr<transport::RawSubscriber> acks;
   std::unique_ptr<transport::RawSubscriber> control;
   std::vector<std::regex> include_re, exclude_re;
@@ -189,9 +189,9 @@ struct BagPlayer::Impl {
   void wait_subscribers_once(const std::string& topic, const std::atomic<bool>& stop) {
     if (waited || cfg.wait_subscribers <= 0) return;
     waited = true;
-    const Status w =
-        pub->wait_for_subscribers(topic, cfg.wait_subscribers,
-                                  static_cast<DurationNs>(cfg.wait_timeout_ms) * kNsPerMs, &stop);
+    const Status w = output->publisher().wait_for_subscribers(
+        topic, cfg.wait_subscribers, static_cast<DurationNs>(cfg.wait_timeout_ms) * kNsPerMs,
+        &stop);
     if (!w.is_ok())
       log->warn("starting without {} subscriber(s) on {}: {}", cfg.wait_subscribers, topic,
                 w.to_string());
@@ -232,13 +232,13 @@ struct BagPlayer::Impl {
     return sleep_until(due, stop);
   }
 
-  // Publishes one message as recorded: multipart (`frames` 3) or single-frame; `sent` is the
-  // publisher's outcome. False (counted as malformed, nothing sent) when a multipart record does
-  // not decode.
+  // Publishes one message as recorded (the recorded bytes, as they are): multipart (`frames` 3) or
+  // single-frame; `sent` is the publisher's outcome. False (counted as malformed, nothing sent)
+  // when a multipart record does not decode.
   bool send(int frames, const std::string& topic, std::string_view data, BagPlayerCounts& counts,
             Status& sent) {
     if (frames != 3) {
-      sent = pub->send(topic, data);
+      sent = output->publisher().send(topic, data);
       return true;
     }
     auto mp = decode_multipart(data);
@@ -249,16 +249,14 @@ struct BagPlayer::Impl {
     transport::Payload p;
     p.data = reinterpret_cast<const std::uint8_t*>(mp->payload.data());
     p.size_bytes = mp->payload.size();
-    sent = pub->send(topic, mp->header, p);
+    sent = output->publisher().send(topic, mp->header, p);
     return true;
   }
 
   void send_stream_end() {
     msgs::StreamEnd end;
-    end.mutable_header()->set_publisher("bag_player");
-    end.mutable_header()->set_publish_stamp_ns(clock.realtime_ns());
-    end.mutable_header()->set_publish_mono_ns(clock.now_ns());
-    if (transport::send_message(*pub, cfg.end_topic, end).is_ok()) log->debug("stream end sent");
+    output->stamp_unnumbered(end.mutable_header());  // seq 0: not part of the recorded streams
+    if (output->send(cfg.end_topic, end).is_ok()) log->debug("stream end sent");
   }
 };
 
@@ -273,13 +271,14 @@ BagPlayer::BagPlayer(BagPlayerConfig config, std::shared_ptr<spdlog::logger> log
   m.log = std::move(log);
   for (const auto& e : m.cfg.include) m.include_re.emplace_back(e);
   for (const auto& e : m.cfg.exclude) m.exclude_re.emplace_back(e);
-  transport::PublisherConfig pc;
-  pc.endpoint = m.cfg.endpoint;
-  pc.snd_hwm = m.cfg.hwm;
-  pc.zero_copy = false;  // the bag buffer only lives during the read callback
-  pc.linger_ms = m.cfg.linger_ms;
-  pc.access = m.cfg.access;
-  m.pub = std::make_unique<transport::Publisher>(pc);
+  NodeOutputConfig oc;
+  oc.publisher.emplace();
+  oc.publisher->endpoint = m.cfg.endpoint;
+  oc.publisher->snd_hwm = m.cfg.hwm;
+  oc.publisher->zero_copy = false;  // the bag buffer only lives during the read callback
+  oc.publisher->linger_ms = m.cfg.linger_ms;
+  oc.publisher->access = m.cfg.access;
+  m.output = std::make_unique<NodeOutput>("bag_player", oc, m.clock, m.log);
   if (m.cfg.lockstep) {
     transport::SubscriberConfig sc;
     sc.endpoints = {m.cfg.ack_endpoint};
@@ -304,7 +303,7 @@ BagPlayer::BagPlayer(BagPlayerConfig config, std::shared_ptr<spdlog::logger> log
 
 BagPlayer::~BagPlayer() = default;
 
-std::string BagPlayer::endpoint() const { return impl_->pub->endpoint(); }
+std::string BagPlayer::endpoint() const { return impl_->output->endpoint(); }
 std::string BagPlayer::ack_endpoint() const {
   return impl_->acks ? impl_->acks->endpoints().front() : "";
 }
@@ -313,7 +312,7 @@ std::string BagPlayer::control_endpoint() const {
 }
 std::uint64_t BagPlayer::auth_refused() const {
   const Impl& m = *impl_;
-  return m.pub->auth_refused() + (m.acks ? m.acks->auth_refused() : 0) +
+  return m.output->publisher().auth_refused() + (m.acks ? m.acks->auth_refused() : 0) +
          (m.control ? m.control->auth_refused() : 0);
 }
 

@@ -4,15 +4,13 @@
 #include <ctime>
 #include <limits>
 #include <map>
-#include <mutex>
 
 #include "common/config.hpp"
 #include "policy/fault_spec.hpp"
 #include "runtime/injector_pipeline.hpp"
-#include "runtime/stats_reporter.hpp"
+#include "runtime/node_output.hpp"
 #include "transport/drop_counter.hpp"
 #include "transport/log_limiter.hpp"
-#include "transport/registry.hpp"
 
 namespace faultline::runtime {
 
@@ -34,6 +32,24 @@ std::int64_t thread_cpu_ns() {
 
 // What run() does after a handler.
 enum class Next { Continue, Finished, Stop };
+
+NodeOutputConfig output_config(const InjectorConfig& cfg) {
+  NodeOutputConfig oc;
+  oc.publisher.emplace();
+  oc.publisher->endpoint = cfg.output_endpoint;
+  oc.publisher->access = cfg.access;
+  oc.publisher->snd_hwm = cfg.output_hwm;
+  oc.publisher->linger_ms = cfg.linger_ms;
+  if (cfg.output_shm) {
+    oc.shm.emplace();
+    oc.shm->dir = cfg.output_shm_dir;
+    oc.shm->slot_count = static_cast<std::uint32_t>(cfg.shm_slots);
+    oc.shm->slot_bytes = static_cast<std::uint64_t>(cfg.shm_slot_bytes);
+  }
+  oc.stats_window_s = cfg.stats_window_s;
+  oc.stats_log_period_s = cfg.stats_log_period_s;
+  return oc;
+}
 
 }  // namespace
 
@@ -71,22 +87,16 @@ std::string faulted_topic(const InjectorConfig& config, const std::string& input
   return remap_topic(config.remap, topic);
 }
 
-// The loop's I/O holder: the sockets, the statistics and the registry, shared by the handlers below
-// and by the pipeline's output thread through Sink (statistics under stats_mutex; the publisher
-// only on that thread while the pipeline runs).
+// The loop's state, shared by the handlers below and, through Sink, by the pipeline's output
+// thread: while the pipeline runs only that thread sends on `output`, whose statistics lock
+// themselves.
 struct InjectorLoop::Impl {
   InjectorConfig cfg;
-  std::string node;
   std::unique_ptr<FramePolicy> policy;
   std::shared_ptr<spdlog::logger> log;
   Clock& clock;
-  transport::Publisher pub;
-  std::unique_ptr<transport::ShmRingWriter>
-      ring;  // output_shm: the camera frames' pixels (output thread only)
+  NodeOutput output;
   std::unique_ptr<transport::RawSubscriber> sub;
-  StatsReporter stats;
-  std::mutex stats_mutex;
-  transport::TopicRegistry registry;
   transport::DropCounter drops;
   std::map<std::string, std::uint64_t>
       frames_from;                                // camera frames received per upstream publisher
@@ -102,30 +112,23 @@ struct InjectorLoop::Impl {
     explicit Sink(Impl& impl) : m(impl) {}
     Status send_frame(const std::string& topic, msgs::CameraFrame& h,
                       const transport::Payload& p) override {
-      if (m.ring) return transport::send_camera_frame_shm(m.pub, *m.ring, topic, h, p);
-      return transport::send_camera_frame(m.pub, topic, h, p);
+      return m.output.send_camera_frame(topic, h, p);
     }
     Status send_message(const std::string& topic,
                         const google::protobuf::MessageLite& message) override {
-      return transport::send_message(m.pub, topic, message);
+      return m.output.send(topic, message);
     }
     void frame_sent(const std::string& /*input_topic*/, const std::string& topic,
                     const stats::Sample& s) override {
-      std::lock_guard<std::mutex> lock(m.stats_mutex);
-      m.stats.collector().record(topic, m.node, s);
+      m.output.stats()->record(topic, m.output.node(), s);
     }
     void injected_drop(const std::string& input_topic) override {
-      std::lock_guard<std::mutex> lock(m.stats_mutex);
-      m.stats.collector().add_injected_drops(input_topic, 1);
+      m.output.stats()->add_injected_drops(input_topic, 1);
     }
     void undecodable(const std::string& input_topic) override {
-      std::lock_guard<std::mutex> lock(m.stats_mutex);
-      m.stats.collector().add_malformed(input_topic, 1);
+      m.output.stats()->add_malformed(input_topic, 1);
     }
-    void idle(StampNs now_mono_ns) override {
-      std::lock_guard<std::mutex> lock(m.stats_mutex);
-      m.stats.tick(now_mono_ns, &m.pub);
-    }
+    void idle(StampNs now_mono_ns) override { m.output.tick_stats(now_mono_ns); }
     Impl& m;
   };
   Sink sink{*this};
@@ -134,48 +137,21 @@ struct InjectorLoop::Impl {
   Impl(InjectorConfig c, std::string n, std::unique_ptr<FramePolicy> p,
        std::shared_ptr<spdlog::logger> l, Clock& clk, InjectorCounts& out_counts)
       : cfg(std::move(c)),
-        node(std::move(n)),
         policy(std::move(p)),
         log(std::move(l)),
         clock(clk),
-        pub([&] {
-          transport::PublisherConfig pc;
-          pc.endpoint = cfg.output_endpoint;
-          pc.access = cfg.access;
-          pc.snd_hwm = cfg.output_hwm;
-          pc.linger_ms = cfg.linger_ms;
-          return pc;
-        }()),
-        stats(node, log, clock, static_cast<DurationNs>(cfg.stats_window_s * 1e9),
-              static_cast<DurationNs>(cfg.stats_log_period_s * 1e9)),
-        registry(node),
+        output(std::move(n), output_config(cfg), clock, log),
         sync_out(remap_topic(cfg.remap, cfg.sync_topic)),
         end_out(remap_topic(cfg.remap, cfg.end_topic)),
         faults_topic(remap_topic(cfg.remap, cfg.faults_topic)),
-        counts(out_counts) {
-    if (cfg.output_shm) {
-      transport::ShmRingConfig rc;
-      rc.path = transport::shm_ring_path(cfg.output_shm_dir, node, pub.endpoint());
-      rc.slot_count = static_cast<std::uint32_t>(cfg.shm_slots);
-      rc.slot_bytes = static_cast<std::uint64_t>(cfg.shm_slot_bytes);
-      ring = std::make_unique<transport::ShmRingWriter>(rc);
-      log->info("camera frames through shared memory: {} ({} slots of {} bytes)", rc.path,
-                rc.slot_count, rc.slot_bytes);
-    }
-  }
-
-  template <class F>
-  void with_stats(F&& f) {
-    std::lock_guard<std::mutex> lock(stats_mutex);
-    f(stats.collector());
-  }
+        counts(out_counts) {}
 
   const std::string& output_topic(const std::string& in) {
     auto it = out_topics.find(in);
     if (it != out_topics.end()) return it->second;
-    const std::string out = faulted_topic(cfg, in);
-    (void)registry.advertise(out, "faultline.msgs.CameraFrame", pub.endpoint());
-    return out_topics.emplace(in, out).first->second;
+    const std::string topic = faulted_topic(cfg, in);
+    output.announce(topic, "faultline.msgs.CameraFrame");
+    return out_topics.emplace(in, topic).first->second;
   }
 
   Status start(const std::atomic<bool>& stop);
@@ -190,14 +166,14 @@ struct InjectorLoop::Impl {
 // Advertises, waits for downstream subscribers, then subscribes upstream. kCancelled when stopped
 // while waiting.
 Status InjectorLoop::Impl::start(const std::atomic<bool>& stop) {
-  (void)registry.advertise(sync_out, "faultline.msgs.SampleBoundary", pub.endpoint());
-  (void)registry.advertise(end_out, "faultline.msgs.StreamEnd", pub.endpoint());
-  (void)registry.advertise(faults_topic, "faultline.msgs.FaultEvent", pub.endpoint());
-  (void)registry.advertise(stats.stats_topic(), "faultline.msgs.TopicStats", pub.endpoint());
+  output.announce(sync_out, "faultline.msgs.SampleBoundary");
+  output.announce(end_out, "faultline.msgs.StreamEnd");
+  output.announce(faults_topic, "faultline.msgs.FaultEvent");
+  output.announce_stats();
   if (cfg.wait_subscribers > 0) {
-    const Status s =
-        pub.wait_for_subscribers(sync_out, cfg.wait_subscribers,
-                                 static_cast<DurationNs>(cfg.wait_timeout_ms) * kNsPerMs, &stop);
+    const Status s = output.publisher().wait_for_subscribers(
+        sync_out, cfg.wait_subscribers, static_cast<DurationNs>(cfg.wait_timeout_ms) * kNsPerMs,
+        &stop);
     if (s.code() == StatusCode::kCancelled) return s;
     if (!s.is_ok()) log->warn("{}; subscribing upstream anyway", s.message());
   }
@@ -217,7 +193,7 @@ Status InjectorLoop::Impl::start(const std::atomic<bool>& stop) {
   sc.max_msg_bytes = cfg.max_msg_bytes;
   sub = std::make_unique<transport::RawSubscriber>(sc);
   PipelineConfig pc;
-  pc.node = node;
+  pc.node = output.node();
   pc.faults_topic = faults_topic;
   pc.decode = cfg.decode;
   pc.workers = cfg.workers > 0 ? cfg.workers : default_worker_count();
@@ -232,7 +208,7 @@ Status InjectorLoop::Impl::start(const std::atomic<bool>& stop) {
 void InjectorLoop::Impl::count_superseded(const std::string& in_topic) {
   if (sub->superseded() == superseded_seen) return;
   const std::uint64_t n = sub->superseded() - superseded_seen;
-  with_stats([&](stats::TopicStatsCollector& c) { c.add_superseded(in_topic, n); });
+  output.stats()->add_superseded(in_topic, n);
   counts.superseded += n;
   superseded_seen = sub->superseded();
 }
@@ -242,7 +218,7 @@ bool InjectorLoop::Impl::parse_control(const transport::ReceivedMessage& msg,
                                        google::protobuf::MessageLite* out) {
   if (transport::parse_message(msg, out).is_ok()) return true;
   ++counts.malformed;
-  with_stats([&](stats::TopicStatsCollector& c) { c.add_malformed(std::string(msg.topic()), 1); });
+  output.stats()->add_malformed(std::string(msg.topic()), 1);
   return false;
 }
 
@@ -279,9 +255,7 @@ Next InjectorLoop::Impl::on_stream_end(const transport::ReceivedMessage& msg,
   if (e.frames_sent() > accounted) {
     const std::uint64_t lost = e.frames_sent() - accounted;
     counts.transport_drops += lost;
-    with_stats([&](stats::TopicStatsCollector& c) {
-      c.add_transport_drops(std::string(msg.topic()), lost);
-    });
+    output.stats()->add_transport_drops(std::string(msg.topic()), lost);
     log->warn(
         "stream end: {} of the {} frames {} sent never arrived and left no seq gap (lost at the "
         "end "
@@ -306,7 +280,7 @@ Next InjectorLoop::Impl::on_frame(std::shared_ptr<transport::ReceivedMessage> ms
   if (!view) {
     ++counts.malformed;
     sub->count_malformed();
-    with_stats([&](stats::TopicStatsCollector& c) { c.add_malformed(in_topic, 1); });
+    output.stats()->add_malformed(in_topic, 1);
     if (counts.malformed <= 20 || bad_limiter.allow()) {
       log->warn("malformed message on {} dropped: {} ({} so far)", in_topic,
                 view.status().message(), counts.malformed);
@@ -327,10 +301,11 @@ Next InjectorLoop::Impl::on_frame(std::shared_ptr<transport::ReceivedMessage> ms
   sample.capture_stamp_ns = transport::wall_clock_capture_ns(in.header());
   sample.publish_mono_ns = in.header().publish_mono_ns();
   sample.size_bytes = msg->size_bytes();
-  with_stats([&](stats::TopicStatsCollector& c) {
-    c.record(in_topic, publisher, sample);
-    if (gap) c.add_transport_drops(in_topic, gap);
-  });
+  {
+    auto collector = output.stats();  // one lock for both
+    collector->record(in_topic, publisher, sample);
+    if (gap) collector->add_transport_drops(in_topic, gap);
+  }
   InputFrame frame;
   frame.topic = in_topic;
   frame.out_topic = output_topic(in_topic);
@@ -354,10 +329,9 @@ void InjectorLoop::Impl::finish(bool finished) {
     counts.output_cpu_ns = p.output_cpu_ns;
   }
   // The pipeline's threads have ended: the publisher is this thread's again.
-  stats.tick(clock.now_ns() + static_cast<DurationNs>(cfg.stats_window_s * 1e9), &pub);
-  stats.log_totals(clock.now_ns());
-  if (!finished) pub.set_linger(0);  // shutdown: exit promptly
-  counts.oversize_refused = pub.oversize_refused() + (ring ? ring->oversize_refused() : 0);
+  output.close_stats();
+  if (!finished) output.publisher().set_linger(0);  // shutdown: exit promptly
+  counts.oversize_refused = output.oversize_refused();
   const std::uint64_t handled = std::max<std::uint64_t>(1, counts.frames_in);
   log->info(
       "injector done: in {} out {} boundaries {} injected_drops {} corrupt_jpeg {} malformed {} "
@@ -388,11 +362,9 @@ InjectorLoop::InjectorLoop(InjectorConfig config, std::string node,
 
 InjectorLoop::~InjectorLoop() = default;
 
-std::string InjectorLoop::output_endpoint() const { return impl_->pub.endpoint(); }
+std::string InjectorLoop::output_endpoint() const { return impl_->output.endpoint(); }
 
-std::string InjectorLoop::output_shm_path() const {
-  return impl_->ring ? impl_->ring->path() : std::string();
-}
+std::string InjectorLoop::output_shm_path() const { return impl_->output.shm_path(); }
 
 int InjectorLoop::run(const std::atomic<bool>& stop) {
   Impl& m = *impl_;
@@ -435,7 +407,7 @@ int InjectorLoop::run(const std::atomic<bool>& stop) {
 }
 
 std::vector<stats::TopicWindow> InjectorLoop::stats_totals() const {
-  return impl_->stats.collector().totals(impl_->clock.now_ns());
+  return impl_->output.stats_totals();
 }
 
 }  // namespace faultline::runtime

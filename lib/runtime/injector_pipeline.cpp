@@ -84,7 +84,8 @@ InjectorPipeline::InjectorPipeline(PipelineConfig config, FramePolicy& policy, P
       policy_(policy),
       sink_(sink),
       clock_(clock),
-      log_(std::move(log)) {
+      log_(std::move(log)),
+      stamper_(config_.node, clock) {
   if (log_) keep_frame_buffers_in_the_heap(*log_);
   config_.workers = std::max(1, config_.workers);
   config_.queue_frames = std::max(1, config_.queue_frames);
@@ -324,7 +325,7 @@ void InjectorPipeline::emit_control(Slot& slot) {
   if (slot.flush_delayed_first) flush_delayed(std::numeric_limits<StampNs>::max());
   Status s = std::visit(
       [&](auto& m) {
-        stamp(m.mutable_header(), slot.topic);
+        stamper_.stamp(m.mutable_header(), slot.topic);
         return sink_.send_message(slot.topic, m);
       },
       slot.control);
@@ -379,7 +380,7 @@ void InjectorPipeline::emit_frame(Slot& slot) {
 bool InjectorPipeline::send_frame(const std::string& out_topic, const std::string& in_topic,
                                   msgs::CameraFrame& h, const transport::Payload& payload,
                                   StampNs receive_mono_ns) {
-  stamp(h.mutable_header(), out_topic);
+  stamper_.stamp(h.mutable_header(), out_topic);
   h.mutable_fault()->set_injector_latency_ns(h.header().publish_mono_ns() - receive_mono_ns);
   const Status s = sink_.send_frame(out_topic, h, payload);
   if (s.code() ==
@@ -409,20 +410,13 @@ void InjectorPipeline::send_event(const msgs::CameraFrame& in, const msgs::Fault
   e.mutable_header()->set_capture_stamp_ns(in.header().capture_stamp_ns());
   e.mutable_header()->set_capture_clock(in.header().capture_clock());
   e.mutable_header()->set_frame_id(in.header().frame_id());
-  stamp(e.mutable_header(), config_.faults_topic);
+  stamper_.stamp(e.mutable_header(), config_.faults_topic);
   e.set_camera(in.camera());
   e.set_source_seq(in.source_seq() != 0 ? in.source_seq() : in.header().seq());
   e.set_sample_data_token(in.sample_data_token());
   e.set_sample_token(in.sample_token());
   *e.mutable_state() = state;
   (void)sink_.send_message(config_.faults_topic, e);
-}
-
-void InjectorPipeline::stamp(msgs::Header* h, const std::string& topic) {
-  h->set_seq(++seq_[topic]);
-  h->set_publisher(config_.node);
-  h->set_publish_stamp_ns(clock_.realtime_ns());
-  h->set_publish_mono_ns(clock_.now_ns());
 }
 
 void InjectorPipeline::flush_delayed(StampNs now_ns) {

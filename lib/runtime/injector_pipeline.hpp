@@ -37,6 +37,7 @@
 #include "common/status.hpp"
 #include "runtime/delay_queue.hpp"
 #include "runtime/frame_policy.hpp"
+#include "runtime/header_stamper.hpp"
 #include "stats/topic_stats.hpp"
 #include "transport/log_limiter.hpp"
 #include "transport/payload.hpp"
@@ -143,7 +144,6 @@ class InjectorPipeline {
                   msgs::CameraFrame& header, const transport::Payload& payload,
                   StampNs receive_mono_ns);
   void send_event(const msgs::CameraFrame& in, const msgs::FaultState& state);
-  void stamp(msgs::Header* header, const std::string& topic);
   void flush_delayed(StampNs now_ns);
   void fail(const Status& s);
 
@@ -172,7 +172,7 @@ class InjectorPipeline {
   std::map<int, std::uint64_t> lane_next_ticket_;
   // Output thread only.
   PipelineCounts out_counts_;
-  std::map<std::string, std::uint64_t> seq_;  // injector's seq per output topic
+  HeaderStamper stamper_;  // the injector's seq per output topic
   DelayQueue<Delayed> delayed_;
   transport::LogLimiter limiter_;
 

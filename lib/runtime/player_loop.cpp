@@ -6,9 +6,8 @@
 
 #include "common/config.hpp"
 #include "detection.pb.h"
-#include "runtime/stats_reporter.hpp"
+#include "runtime/node_output.hpp"
 #include "transport/log_limiter.hpp"
-#include "transport/registry.hpp"
 #include "transport/typed.hpp"
 
 namespace faultline::runtime {
@@ -31,17 +30,29 @@ std::string camera_topic(const std::string& channel) {
   return "/" + lower + "/image_rect_compressed";
 }
 
+namespace {
+
+NodeOutputConfig output_config(const PlayerConfig& cfg) {
+  NodeOutputConfig oc;
+  oc.publisher.emplace();
+  oc.publisher->endpoint = cfg.endpoint;
+  oc.publisher->access = cfg.access;
+  oc.publisher->snd_hwm = cfg.hwm;
+  oc.publisher->linger_ms = cfg.linger_ms;
+  oc.stats_window_s = cfg.stats_window_s;
+  oc.stats_log_period_s = cfg.stats_log_period_s;
+  return oc;
+}
+
+}  // namespace
+
 struct PlayerLoop::Impl {
   PlayerConfig cfg;
-  std::string node;
   std::unique_ptr<FrameSource> source;
   Clock& clock;
   std::shared_ptr<spdlog::logger> log;
-  transport::Publisher pub;
+  NodeOutput output;
   std::unique_ptr<transport::RawSubscriber> acks;
-  StatsReporter stats;
-  transport::TopicRegistry registry;
-  std::map<std::string, std::uint64_t> seq;  // per topic
   transport::LogLimiter missing_limiter;
   std::string sync_topic;
   std::string end_topic;
@@ -49,21 +60,10 @@ struct PlayerLoop::Impl {
   Impl(PlayerConfig c, std::string n, std::unique_ptr<FrameSource> s, Clock& cl,
        std::shared_ptr<spdlog::logger> l)
       : cfg(std::move(c)),
-        node(std::move(n)),
         source(std::move(s)),
         clock(cl),
         log(std::move(l)),
-        pub([&] {
-          transport::PublisherConfig pc;
-          pc.endpoint = cfg.endpoint;
-          pc.access = cfg.access;
-          pc.snd_hwm = cfg.hwm;
-          pc.linger_ms = cfg.linger_ms;
-          return pc;
-        }()),
-        stats(node, log, clock, static_cast<DurationNs>(cfg.stats_window_s * 1e9),
-              static_cast<DurationNs>(cfg.stats_log_period_s * 1e9)),
-        registry(node),
+        output(std::move(n), output_config(cfg), clock, log),
         sync_topic(remap_topic(cfg.remap, cfg.sync_topic)),
         end_topic(remap_topic(cfg.remap, cfg.end_topic)) {
     if (cfg.lockstep) {
@@ -77,15 +77,6 @@ struct PlayerLoop::Impl {
     }
   }
 
-  std::uint64_t next_seq(const std::string& topic) { return ++seq[topic]; }
-
-  void stamp(msgs::Header* h, const std::string& topic) {
-    h->set_seq(next_seq(topic));
-    h->set_publisher(node);
-    h->set_publish_stamp_ns(clock.realtime_ns());
-    h->set_publish_mono_ns(clock.now_ns());
-  }
-
   // Sleeps until `deadline` (clock time) in short slices so shutdown stays prompt.
   bool sleep_until(StampNs deadline, const std::atomic<bool>& stop) {
     for (;;) {
@@ -97,11 +88,10 @@ struct PlayerLoop::Impl {
   }
 
   void advertise(const std::set<std::string>& camera_topics) {
-    for (const auto& t : camera_topics)
-      (void)registry.advertise(t, "faultline.msgs.CameraFrame", pub.endpoint());
-    (void)registry.advertise(sync_topic, "faultline.msgs.SampleBoundary", pub.endpoint());
-    (void)registry.advertise(end_topic, "faultline.msgs.StreamEnd", pub.endpoint());
-    (void)registry.advertise(stats.stats_topic(), "faultline.msgs.TopicStats", pub.endpoint());
+    for (const auto& t : camera_topics) output.announce(t, "faultline.msgs.CameraFrame");
+    output.announce(sync_topic, "faultline.msgs.SampleBoundary");
+    output.announce(end_topic, "faultline.msgs.StreamEnd");
+    output.announce_stats();
   }
 
   // End of run: the stream end (a run that was neither looped nor stopped), the last statistics and
@@ -113,13 +103,12 @@ struct PlayerLoop::Impl {
       msgs::StreamEnd end;
       end.set_frames_sent(counts.frames_sent);
       end.set_boundaries_sent(static_cast<std::uint32_t>(counts.boundaries_sent));
-      stamp(end.mutable_header(), end_topic);
-      if (transport::send_message(pub, end_topic, end).code() == StatusCode::kCancelled) return 0;
+      output.stamp(end.mutable_header(), end_topic);
+      if (output.send(end_topic, end).code() == StatusCode::kCancelled) return 0;
     }
-    // A tick one window ahead closes the last window.
-    stats.tick(clock.now_ns() + static_cast<DurationNs>(cfg.stats_window_s * 1e9), &pub);
-    stats.log_totals(clock.now_ns());
-    if (stopped || stop.load()) pub.set_linger(0);  // shutdown: exit promptly, do not flush
+    output.close_stats();
+    if (stopped || stop.load())
+      output.publisher().set_linger(0);  // shutdown: exit promptly, do not flush
     log->info("player done: {} frames, {} boundaries, {} missing images, {} ack timeouts{}",
               counts.frames_sent, counts.boundaries_sent, counts.missing_images,
               counts.ack_timeouts, stopped ? " (stopped)" : "");
@@ -158,7 +147,7 @@ PlayerLoop::PlayerLoop(PlayerConfig config, std::string node, std::unique_ptr<Fr
 
 PlayerLoop::~PlayerLoop() = default;
 
-std::string PlayerLoop::endpoint() const { return impl_->pub.endpoint(); }
+std::string PlayerLoop::endpoint() const { return impl_->output.endpoint(); }
 std::string PlayerLoop::ack_endpoint() const {
   return impl_->acks ? impl_->acks->endpoints().front() : "";
 }
@@ -248,9 +237,9 @@ struct PlayerLoop::Pass {
     }
     const std::string topic = remap_topic(m.cfg.remap, camera_topic(f.channel));
     msgs::CameraFrame h = camera_frame_header(f);
-    m.stamp(h.mutable_header(), topic);
+    m.output.stamp(h.mutable_header(), topic);
     h.set_source_seq(h.header().seq());
-    const Status s = transport::send_camera_frame(m.pub, topic, h, transport::Payload::of(*image));
+    const Status s = m.output.send_camera_frame(topic, h, transport::Payload::of(*image));
     if (s.code() == StatusCode::kCancelled) return Step::kCancelled;
     if (s.code() == StatusCode::kInvalidArgument) {
       // Over max_msg_bytes: refused and counted; the run goes on, and the unused seq is a gap
@@ -271,7 +260,7 @@ struct PlayerLoop::Pass {
     sample.receive_mono_ns = h.header().publish_mono_ns();
     sample.receive_realtime_ns = h.header().publish_stamp_ns();
     sample.size_bytes = (*image)->size();
-    m.stats.collector().record(topic, m.node, sample);
+    m.output.stats()->record(topic, m.output.node(), sample);
     m.log->trace("sent {} seq={} sample_data={}", topic, h.header().seq(), f.sample_data_token);
     return Step::kOk;
   }
@@ -291,9 +280,8 @@ struct PlayerLoop::Pass {
     b.mutable_header()->set_capture_stamp_ns(sample_us * 1000);
     b.mutable_header()->set_capture_clock(msgs::CAPTURE_CLOCK_DATASET);
     b.mutable_header()->set_frame_id("base_link");
-    m.stamp(b.mutable_header(), m.sync_topic);
-    if (transport::send_message(m.pub, m.sync_topic, b).code() == StatusCode::kCancelled)
-      return Step::kCancelled;
+    m.output.stamp(b.mutable_header(), m.sync_topic);
+    if (m.output.send(m.sync_topic, b).code() == StatusCode::kCancelled) return Step::kCancelled;
     ++counts.boundaries_sent;
     m.log->debug("boundary sample={} frames_sent={} last={}", b.sample_token(), b.frames_sent(),
                  b.last_in_run());
@@ -313,7 +301,7 @@ struct PlayerLoop::Pass {
       if (step == Step::kOk) step = send_frame(frames[i]);
       if (step == Step::kOk && plan.boundary_after[i]) step = send_boundary(i);
       if (step != Step::kOk) return step;
-      m.stats.tick(m.clock.now_ns(), &m.pub);
+      m.output.tick_stats(m.clock.now_ns());
     }
     return Step::kOk;
   }
@@ -330,7 +318,7 @@ int PlayerLoop::run(const std::atomic<bool>& stop) {
   m.advertise(plan.topics);
   if (m.cfg.wait_subscribers > 0) {
     // Every consumer that matters (injector, sink, detectors) subscribes to the boundaries.
-    const Status s = m.pub.wait_for_subscribers(
+    const Status s = m.output.publisher().wait_for_subscribers(
         m.sync_topic, m.cfg.wait_subscribers,
         static_cast<DurationNs>(m.cfg.wait_timeout_ms) * kNsPerMs, &stop);
     if (s.code() == StatusCode::kCancelled) return 0;
@@ -350,7 +338,7 @@ int PlayerLoop::run(const std::atomic<bool>& stop) {
 }
 
 std::vector<stats::TopicWindow> PlayerLoop::stats_totals() const {
-  return impl_->stats.collector().totals(impl_->clock.now_ns());
+  return impl_->output.stats_totals();
 }
 
 }  // namespace faultline::runtime

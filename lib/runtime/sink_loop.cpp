@@ -6,8 +6,8 @@
 #include <unordered_set>
 
 #include "common/config.hpp"
+#include "runtime/node_output.hpp"
 #include "runtime/results_store.hpp"
-#include "runtime/stats_reporter.hpp"
 #include "scoring/evaluate.hpp"
 #include "transport/log_limiter.hpp"
 #include "transport/typed.hpp"
@@ -25,25 +25,44 @@ void SinkConfig::validate() const {
   if (stats_window_s <= 0) fail("stats_window_s", std::to_string(stats_window_s), "expected > 0");
 }
 
+namespace {
+
+// The sink publishes only its lockstep acks: a PUSH connected to the player's PULL.
+NodeOutputConfig output_config(const SinkConfig& cfg) {
+  NodeOutputConfig oc;
+  if (cfg.lockstep) {
+    oc.publisher.emplace();
+    oc.publisher->endpoint = cfg.ack_endpoint;
+    oc.publisher->access = cfg.access;
+    oc.publisher->bind = false;
+    oc.publisher->pattern = transport::Pattern::PushPull;
+    oc.publisher->snd_hwm = 1000;
+    oc.publisher->send_timeout_ns = 100 * kNsPerMs;
+  }
+  oc.stats_window_s = cfg.stats_window_s;
+  oc.stats_log_period_s = cfg.stats_log_period_s;
+  return oc;
+}
+
+const std::string kAckTopic = "/sync/ack";
+
+}  // namespace
+
 struct SinkLoop::Impl {
   SinkConfig cfg;
-  std::string node;
   std::shared_ptr<spdlog::logger> log;
   Clock& clock;
   transport::RawSubscriber detections;
   std::unique_ptr<transport::RawSubscriber> sync;
-  std::unique_ptr<transport::Publisher> acks;
   ResultsStore store;
-  StatsReporter stats;
+  NodeOutput output;  // acks (lockstep) and statistics (logged only)
   transport::LogLimiter bad_limiter;
   transport::LogLimiter ack_limiter;
   std::uint64_t refusals_logged = 0;  // refusal lines at warn so far (see log_refusal)
   std::string detections_topic, sync_topic;
-  std::uint64_t ack_seq = 0;
 
   Impl(SinkConfig c, std::string n, std::shared_ptr<spdlog::logger> l, Clock& cl)
       : cfg(std::move(c)),
-        node(std::move(n)),
         log(std::move(l)),
         clock(cl),
         detections([&] {
@@ -56,8 +75,7 @@ struct SinkLoop::Impl {
           return sc;
         }()),
         store(cfg.output, cfg.journal.empty() ? cfg.output + ".journal" : cfg.journal),
-        stats(node, log, clock, static_cast<DurationNs>(cfg.stats_window_s * 1e9),
-              static_cast<DurationNs>(cfg.stats_log_period_s * 1e9)),
+        output(std::move(n), output_config(cfg), clock, log),
         detections_topic(remap_topic(cfg.remap, cfg.detections_topic)),
         sync_topic(remap_topic(cfg.remap, cfg.sync_topic)) {
     store.set_run_identity(cfg.run);
@@ -79,16 +97,6 @@ struct SinkLoop::Impl {
       sc.rcv_hwm = 1000;
       sync = std::make_unique<transport::RawSubscriber>(sc);
     }
-    if (cfg.lockstep) {
-      transport::PublisherConfig pc;
-      pc.endpoint = cfg.ack_endpoint;
-      pc.access = cfg.access;
-      pc.bind = false;
-      pc.pattern = transport::Pattern::PushPull;
-      pc.snd_hwm = 1000;
-      pc.send_timeout_ns = 100 * kNsPerMs;
-      acks = std::make_unique<transport::Publisher>(pc);
-    }
   }
 
   // Each refusal (box, array or boundary) is logged once with the scorer's reason: the first
@@ -105,7 +113,7 @@ struct SinkLoop::Impl {
       log->warn(
           "{} refusals logged; further ones at debug level (SPDLOG_LEVEL={}=debug), counted "
           "in the closing line and the results meta",
-          kRefusalsAtWarn, node);
+          kRefusalsAtWarn, output.node());
     }
   }
 
@@ -173,7 +181,7 @@ struct SinkLoop::Impl {
     msgs::DetectionArray d;
     if (!transport::parse_message(r, &d).is_ok()) {
       ++counts->malformed;
-      stats.collector().add_malformed(topic, 1);
+      output.stats()->add_malformed(topic, 1);
       if (bad_limiter.allow())
         log->warn("malformed DetectionArray dropped ({} so far)", counts->malformed);
       return;
@@ -181,7 +189,7 @@ struct SinkLoop::Impl {
     sample.capture_stamp_ns =
         d.header().capture_clock() == msgs::CAPTURE_CLOCK_REALTIME ? d.first_frame_capture_ns() : 0;
     sample.publish_mono_ns = d.header().publish_mono_ns();
-    stats.collector().record(topic, d.header().publisher(), sample);
+    output.stats()->record(topic, d.header().publisher(), sample);
     if (d.processing_ns() > 0) {
       processing_ns_sum += d.processing_ns();
       ++processing_n;
@@ -210,15 +218,11 @@ struct SinkLoop::Impl {
       log_refusal(added.array_rejected ? "DetectionArray" : "box", reason);
     }
     log->debug("detections sample={} boxes={}", d.sample_token(), d.detections_size());
-    if (acks) {
+    if (output.has_publisher()) {
       msgs::SampleAck ack;
       ack.set_sample_token(d.sample_token());
-      auto* h = ack.mutable_header();
-      h->set_seq(++ack_seq);
-      h->set_publisher(node);
-      h->set_publish_stamp_ns(clock.realtime_ns());
-      h->set_publish_mono_ns(clock.now_ns());
-      if (const Status s = transport::send_message(*acks, "/sync/ack", ack); s.is_ok()) {
+      output.stamp(ack.mutable_header(), kAckTopic);
+      if (const Status s = output.send(kAckTopic, ack); s.is_ok()) {
         ++counts->acks_sent;
       } else {  // the lockstep player waits for it until its ack timeout: say why
         ++counts->ack_send_failures;
@@ -303,7 +307,7 @@ int SinkLoop::run(const std::atomic<bool>& stop) {
   StampNs finalize_deadline = 0;
   while (!stop.load()) {
     const int ready = transport::wait_readable(inputs, 50 * kNsPerMs);
-    m.stats.tick(m.clock.now_ns(), nullptr);
+    m.output.tick_stats(m.clock.now_ns());
     if (ready >= 0) {
       auto r = inputs[static_cast<std::size_t>(ready)]->receive(0);
       if (r.is_ok()) {
@@ -318,12 +322,12 @@ int SinkLoop::run(const std::atomic<bool>& stop) {
           msgs::SampleBoundary b;
           if (!transport::parse_message(*r, &b).is_ok()) {
             ++counts_.malformed;
-            m.stats.collector().add_malformed(topic, 1);
+            m.output.stats()->add_malformed(topic, 1);
             continue;
           }
           sample.capture_stamp_ns = transport::wall_clock_capture_ns(b.header());
           sample.publish_mono_ns = b.header().publish_mono_ns();
-          m.stats.collector().record(topic, b.header().publisher(), sample);
+          m.output.stats()->record(topic, b.header().publisher(), sample);
           ++counts_.boundaries;
           if (Status s = m.store.add_sample(b.sample_token()); !s.is_ok()) {
             if (s.code() == StatusCode::kInvalidArgument) {
@@ -353,21 +357,22 @@ int SinkLoop::run(const std::atomic<bool>& stop) {
     }
   }
   if (!complete) m.finalize(stop.load() ? "shutdown" : "end");
-  m.stats.log_totals(m.clock.now_ns());
+  m.output.log_stats_totals();
   counts_.malformed = m.malformed_total();
   m.log->info(
       "sink done: {} detection arrays, {} boxes, {} boundaries, {} acks ({} ack send failures, "
       "{} refused by the player), {} malformed, {} boxes and {} arrays refused, {} boundaries "
       "refused, {} bad journal lines, {} duplicate arrays, {} unanswered samples",
       counts_.detection_arrays, counts_.boxes, counts_.boundaries, counts_.acks_sent,
-      counts_.ack_send_failures, m.acks ? m.acks->refused_by_peer() : 0, counts_.malformed,
+      counts_.ack_send_failures,
+      m.output.has_publisher() ? m.output.publisher().refused_by_peer() : 0, counts_.malformed,
       counts_.rejected_boxes, counts_.rejected_arrays, counts_.rejected_boundaries,
       counts_.bad_journal_lines, counts_.duplicate_arrays, counts_.unanswered_samples);
   return 0;
 }
 
 std::vector<stats::TopicWindow> SinkLoop::stats_totals() const {
-  return impl_->stats.collector().totals(impl_->clock.now_ns());
+  return impl_->output.stats_totals();
 }
 
 }  // namespace faultline::runtime

@@ -33,13 +33,12 @@ msgs::TopicStats to_proto(const stats::TopicWindow& w) {
 StatsReporter::StatsReporter(std::string node, std::shared_ptr<spdlog::logger> log,
                              const Clock& clock, DurationNs window_ns, DurationNs log_period_ns,
                              std::string stats_topic)
-    : node_(std::move(node)),
-      log_(std::move(log)),
-      clock_(clock),
+    : log_(std::move(log)),
       collector_(window_ns, clock.now_ns()),
       log_period_ns_(log_period_ns),
       last_log_ns_(clock.now_ns()),
-      stats_topic_(std::move(stats_topic)) {}
+      stats_topic_(std::move(stats_topic)),
+      stamper_(std::move(node), clock) {}
 
 void StatsReporter::tick(StampNs now_mono_ns, transport::Publisher* publisher) {
   if (!collector_.window_elapsed(now_mono_ns)) return;
@@ -53,11 +52,7 @@ void StatsReporter::tick(StampNs now_mono_ns, transport::Publisher* publisher) {
     }
     if (!publisher) continue;
     msgs::TopicStats m = to_proto(w);
-    auto* h = m.mutable_header();
-    h->set_seq(++seq_);
-    h->set_publisher(node_);
-    h->set_publish_stamp_ns(clock_.realtime_ns());
-    h->set_publish_mono_ns(clock_.now_ns());
+    stamper_.stamp(m.mutable_header(), stats_topic_);
     (void)transport::send_message(*publisher, stats_topic_, m);
   }
 }

@@ -9,6 +9,7 @@
 #include <string>
 
 #include "common/clock.hpp"
+#include "runtime/header_stamper.hpp"
 #include "stats.pb.h"
 #include "stats/topic_stats.hpp"
 #include "transport/publisher.hpp"
@@ -35,14 +36,12 @@ class StatsReporter {
   const std::string& stats_topic() const { return stats_topic_; }
 
  private:
-  std::string node_;
   std::shared_ptr<spdlog::logger> log_;
-  const Clock& clock_;
   stats::TopicStatsCollector collector_;
   DurationNs log_period_ns_;
   StampNs last_log_ns_;
   std::string stats_topic_;
-  std::uint64_t seq_ = 0;
+  HeaderStamper stamper_;  // the TopicStats messages' own seq
 };
 
 }  // namespace faultline::runtime

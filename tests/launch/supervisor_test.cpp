@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <atomic>
 #include <csignal>
 #include <cstdlib>
 #include <tuple>
@@ -93,6 +94,46 @@ TEST_F(SupervisorTest, NodeIgnoringSigtermIsKilledAfterGrace) {
   EXPECT_EQ(s.term_signal, SIGKILL);
   EXPECT_FALSE(s.failed());  // we sent the KILL
   EXPECT_EQ(r.exit_code, 0);
+}
+
+// A clock one step further on at every reading, so the supervisor's deadlines depend on how often
+// it read the clock, never on real time.
+class SteppingClock final : public Clock {
+ public:
+  explicit SteppingClock(DurationNs step_ns) : step_ns_(step_ns) {}
+  StampNs now_ns() const override { return now_.fetch_add(step_ns_) + step_ns_; }
+  StampNs realtime_ns() const override { return now_.load(); }
+  void sleep_until_ns(StampNs /*deadline*/) override {}
+  StampNs last_reading() const { return now_.load(); }
+
+ private:
+  const DurationNs step_ns_;
+  mutable std::atomic<StampNs> now_{0};
+};
+
+TEST_F(SupervisorTest, GracePeriodIsMeasuredOnTheGivenClock) {
+  // One second per reading and ten of grace: the real clock would leave the child its 30 s.
+  SteppingClock clock(kNsPerSec);
+  options_.grace_ns = 10 * kNsPerSec;
+  StampNs stop_noted = -1, kill_noted = -1;
+  const LineSink record = options_.sink;
+  options_.sink = [&](const std::string& node, std::string_view line, OutputStream stream) {
+    if (line.find("stopping (stop requested)") == 0) stop_noted = clock.last_reading();
+    if (line.find("did not stop within the grace period") != std::string_view::npos)
+      kill_noted = clock.last_reading();
+    record(node, line, stream);
+  };
+  Add("stubborn", "trap '' TERM; echo ready; exec sleep 30");  // sleep inherits the ignored TERM
+  StopWhen("stubborn", "ready");
+  const auto r = Supervisor(children_, options_, clock).run(stop_);
+  const auto& s = Of(r, "stubborn");
+  EXPECT_TRUE(s.killed_after_grace);
+  EXPECT_EQ(s.term_signal, SIGKILL);
+  ASSERT_GE(stop_noted, 0);
+  // The deadline is the reading after the stop note plus the grace; each loop then reads the clock
+  // once, and the SIGKILL goes at the first reading that reaches the deadline.
+  EXPECT_EQ(kill_noted, stop_noted + kNsPerSec + options_.grace_ns);
+  EXPECT_EQ(s.end_ns, kill_noted + kNsPerSec);  // the next reading: the reap
 }
 
 TEST_F(SupervisorTest, NonRequiredNodeExitDoesNotStopTheLaunch) {
