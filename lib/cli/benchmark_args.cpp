@@ -92,7 +92,7 @@ void add_benchmark_options(CLI::App& app, BenchmarkArgs& args) {
       ->capture_default_str();
 }
 
-int resolve_benchmark_options(BenchmarkArgs& args, const char* command) {
+ExitStatus resolve_benchmark_options(BenchmarkArgs& args) {
   campaign::BenchmarkOptions& o = args.options;
   o.variants = !args.no_variants;
   if (args.suite == "robodrive18") {
@@ -111,17 +111,13 @@ int resolve_benchmark_options(BenchmarkArgs& args, const char* command) {
       if (canon == "stale_frames") {
         // Its lag is wall-clock time in the injector, which the lockstep benchmark does not keep:
         // the score would depend on how fast the machine ran.
-        std::fprintf(stderr,
-                     "faultline %s: --corruptions: stale_frames delays frames in wall-clock time, "
-                     "which the lockstep benchmark does not follow (the score would depend on the "
-                     "machine's speed); use it in the injector or bag convert --corrupt\n",
-                     command);
-        return 2;
+        return usage_error(
+            "--corruptions: stale_frames delays frames in wall-clock time, which the lockstep "
+            "benchmark does not follow (the score would depend on the machine's speed); use it in "
+            "the injector or bag convert --corrupt");
       }
       if (!known) {
-        std::fprintf(stderr, "faultline %s: --corruptions: unknown corruption '%s'\n", command,
-                     c.c_str());
-        return 2;
+        return usage_error("--corruptions: unknown corruption '" + c + "'");
       }
       o.corruptions.push_back(canon);
     }
@@ -131,24 +127,19 @@ int resolve_benchmark_options(BenchmarkArgs& args, const char* command) {
                                  : split_commas(args.levels);
   for (const auto& l : o.levels) {
     if (scoring::severity_index(l) < 0) {
-      std::fprintf(stderr, "faultline %s: --levels: unknown level '%s' (easy, mid, hard)\n",
-                   command, l.c_str());
-      return 2;
+      return usage_error("--levels: unknown level '" + l + "' (easy, mid, hard)");
     }
   }
   if (o.dataroot.empty()) {
     o.dataroot = args.synth_dir;
     o.version = "v1.0-mini";
-    if (Status s = ensure_synth_dataset(args.synth_dir); !s) {
-      std::fprintf(stderr, "faultline %s: %s\n", command, s.message().c_str());
-      return 1;
-    }
+    if (Status s = ensure_synth_dataset(args.synth_dir); !s) return s;
   }
   return 0;
 }
 
-int print_benchmark_result(const campaign::BenchmarkResult& result, const std::string& out_dir,
-                           const char* command, bool stopped) {
+ExitStatus print_benchmark_result(const campaign::BenchmarkResult& result,
+                                  const std::string& out_dir, bool stopped) {
   int failed = 0;
   for (const auto& r : result.runs) failed += r.ok ? 0 : 1;
   if (result.robustness_ok) {
@@ -156,17 +147,15 @@ int print_benchmark_result(const campaign::BenchmarkResult& result, const std::s
   }
   std::printf("summary: %s\n", (std::filesystem::path(out_dir) / "summary.json").c_str());
   if (!result.report_path.empty()) std::printf("report:  %s\n", result.report_path.c_str());
-  if (failed) {
-    std::fprintf(stderr, "faultline %s: %d run(s) failed (see runs/*/nodes.log)\n", command,
-                 failed);
-  }
+  std::string problem;
+  if (failed) problem = std::to_string(failed) + " run(s) failed (see runs/*/nodes.log)";
   // Asked for corruptions but got no mCE/mRR (e.g. clean NDS 0): the benchmark did not do its job.
   if (!result.robustness_error.empty()) {
-    std::fprintf(stderr,
-                 "faultline %s: robustness not computed: %s (no robustness.* or report.html)\n",
-                 command, result.robustness_error.c_str());
+    problem += (problem.empty() ? "" : "; ") + std::string("robustness not computed: ") +
+               result.robustness_error + " (no robustness.* or report.html)";
   }
-  return failed || stopped || !result.robustness_error.empty() ? 1 : 0;
+  if (!problem.empty()) return failure(problem);
+  return stopped ? kExitFailure : 0;
 }
 
 }  // namespace faultline::cli

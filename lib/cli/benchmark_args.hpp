@@ -6,6 +6,7 @@
 #include <string>
 
 #include "campaign/benchmark.hpp"
+#include "cli/command.hpp"
 
 namespace faultline::cli {
 
@@ -20,14 +21,12 @@ struct BenchmarkArgs {
 void add_benchmark_options(CLI::App& app, BenchmarkArgs& args);
 
 // After parsing: corruption and level lists checked, defaults applied, the synthetic dataset made
-// if it is the dataroot. Returns 0, or the exit code after printing the problem as "faultline
-// <command>: ...".
-int resolve_benchmark_options(BenchmarkArgs& args, const char* command);
+// if it is the dataroot. Returns exit 0, or the problem for dispatch to print (2 for a bad list).
+ExitStatus resolve_benchmark_options(BenchmarkArgs& args);
 
-// Prints the robustness table and where summary.json and the report are, and on stderr the failed
-// runs and a missing robustness. Returns the exit code: 1 when a run failed, `stopped` or
-// robustness was asked for and not computed; else 0.
-int print_benchmark_result(const campaign::BenchmarkResult& result, const std::string& out_dir,
-                           const char* command, bool stopped);
+// Prints the robustness table and where summary.json and the report are. Returns exit 1 with the
+// failed runs and a missing robustness as the message, or 1 alone when `stopped`; else 0.
+ExitStatus print_benchmark_result(const campaign::BenchmarkResult& result,
+                                  const std::string& out_dir, bool stopped);
 
 }  // namespace faultline::cli

@@ -55,7 +55,7 @@ int run_bag(int argc, char** argv) {
   return bench::run_bag(o);
 }
 
-int run_corrupt(int argc, char** argv) {
+ExitStatus run_corrupt(int argc, char** argv) {
   CLI::App app{
       "Benchmark the corruptions (single-threaded) against a TurboJPEG decode of the same frame.",
       argv[0]};
@@ -79,25 +79,21 @@ int run_corrupt(int argc, char** argv) {
   app.add_option("--out", o.out_path, "also write the JSON array (with fidelity) to this file");
   FAULTLINE_PARSE(app, argc, argv);
   if (o.reps < 1 || o.width < 1 || o.height < 1) {
-    std::fprintf(stderr, "faultline bench corrupt: --reps, --width and --height must be >= 1\n");
-    return 2;
+    return usage_error("--reps, --width and --height must be >= 1");
   }
   for (const int s : o.severities) {
     if (s < 1 || s > 5) {
-      std::fprintf(stderr, "faultline bench corrupt: --severities %d: expected 1..5\n", s);
-      return 2;
+      return usage_error("--severities " + std::to_string(s) + ": expected 1..5");
     }
   }
   if (!o.severities.empty() && (o.fidelity || !o.out_path.empty())) {
-    std::fprintf(stderr,
-                 "faultline bench corrupt: --severities times fast mode only: it "
-                 "cannot be combined with --fidelity or --out\n");
-    return 2;
+    return usage_error(
+        "--severities times fast mode only: it cannot be combined with --fidelity or --out");
   }
   return bench::run_corrupt(o);
 }
 
-int run_dataset(int argc, char** argv) {
+ExitStatus run_dataset(int argc, char** argv) {
   CLI::App app{
       "Benchmark: load one scene's camera frames with the streaming reader vs a naive full DOM "
       "load of the same tables (wall time, peak RSS per forked child; medians over --repeat "
@@ -117,8 +113,7 @@ int run_dataset(int argc, char** argv) {
   app.add_flag("--skip-dom", o.skip_dom, "measure the streaming reader only");
   FAULTLINE_PARSE(app, argc, argv);
   if (o.make_dir.empty() && o.dataroot.empty()) {
-    std::fprintf(stderr, "bench dataset: give a dataroot or --make DIR\n");
-    return 2;
+    return usage_error("give a dataroot or --make DIR");
   }
   return bench::run_dataset(o);
 }
@@ -157,7 +152,7 @@ int run_export(int argc, char** argv) {
   return bench::run_export(o);
 }
 
-int run_injector(int argc, char** argv) {
+ExitStatus run_injector(int argc, char** argv) {
   CLI::App app{
       "Injector benchmark: 6 cameras x 12 Hz of 1600x900 JPEGs, decode + one corruption, per "
       "worker count.",
@@ -190,13 +185,11 @@ int run_injector(int argc, char** argv) {
   app.add_flag("--json", o.json, "print a JSON array");
   FAULTLINE_PARSE(app, argc, argv);
   if (o.seconds <= 0 || o.rate_hz < 0) {
-    std::fprintf(stderr, "faultline bench injector: --seconds must be > 0 and --rate-hz >= 0\n");
-    return 2;
+    return usage_error("--seconds must be > 0 and --rate-hz >= 0");
   }
   for (const int w : o.workers) {
     if (w < 0) {
-      std::fprintf(stderr, "faultline bench injector: --workers %d: expected >= 0\n", w);
-      return 2;
+      return usage_error("--workers " + std::to_string(w) + ": expected >= 0");
     }
   }
   return bench::run_injector(o);
@@ -236,7 +229,7 @@ int run_python_client(int argc, char** argv) {
   return bench::run_python_client(o);
 }
 
-int run_ros2(int argc, char** argv) {
+ExitStatus run_ros2(int argc, char** argv) {
   CLI::App app{
       "ROS 2 proxy benchmark: N cameras x 12 Hz of 1600x900 JPEG CompressedImages over Cyclone DDS "
       "(loopback) "
@@ -281,8 +274,7 @@ int run_ros2(int argc, char** argv) {
   app.add_flag("--json", o.json, "print a JSON object");
   FAULTLINE_PARSE(app, argc, argv);
   if (o.seconds <= 0 || o.rate_hz <= 0) {
-    std::fprintf(stderr, "faultline bench ros2: --seconds and --rate-hz must be > 0\n");
-    return 2;
+    return usage_error("--seconds and --rate-hz must be > 0");
   }
   return bench::run_ros2(o);
 }

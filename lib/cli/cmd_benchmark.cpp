@@ -31,7 +31,7 @@ ExitStatus run(int argc, char** argv) {
   } catch (const CLI::ParseError& e) {
     return usage_exit(app, e);
   }
-  if (int rc = resolve_benchmark_options(args, "benchmark"); rc != 0) return rc;
+  if (ExitStatus rc = resolve_benchmark_options(args); rc.exit_code() != 0) return rc;
   campaign::BenchmarkOptions& o = args.options;
   o.bin_dir = executable_dir();
   const auto& stop = shutdown_requested();
@@ -40,7 +40,7 @@ ExitStatus run(int argc, char** argv) {
       o.corruptions.size(), o.levels.size(), o.seeds, o.dataroot, o.version, o.eval_set));
   auto result = campaign::run_benchmark(o, stop, show_progress);
   if (!result) return failure(result.status().message());
-  return print_benchmark_result(*result, o.out_dir, "benchmark", stop.load());
+  return print_benchmark_result(*result, o.out_dir, stop.load());
 }
 
 }  // namespace

@@ -39,7 +39,7 @@ ExitStatus plan(int argc, char** argv) {
   std::string plan_path;
   app.add_option("-o,--plan", plan_path, "where to write the plan (default: <out>/plan.json)");
   FAULTLINE_PARSE(app, argc, argv);
-  if (int rc = resolve_benchmark_options(args, "benchmark plan"); rc != 0) return rc;
+  if (ExitStatus rc = resolve_benchmark_options(args); rc.exit_code() != 0) return rc;
   campaign::BenchmarkOptions& o = args.options;
   o.out_dir = absolute(o.out_dir);
   o.dataroot = absolute(o.dataroot);
@@ -128,7 +128,7 @@ ExitStatus collect(int argc, char** argv) {
   }
   if (!c->finished) return failure(report);
   if (!report.empty()) show_progress("faultline benchmark collect: " + report);
-  return print_benchmark_result(c->result, p->options.out_dir, "benchmark collect", false);
+  return print_benchmark_result(c->result, p->options.out_dir, false);
 }
 
 }  // namespace

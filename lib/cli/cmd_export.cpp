@@ -73,8 +73,10 @@ ExitStatus run(int argc, char** argv) {
   }
 
   exporter::ExportProgressFn progress;
-  if (!no_progress)
-    progress = exporter::make_progress_printer(::isatty(STDERR_FILENO) != 0, stderr);
+  if (!no_progress) {
+    const bool tty = ::isatty(STDERR_FILENO) != 0;
+    progress = exporter::make_progress_printer(tty, progress_on_stderr(tty));
+  }
   auto summary = exporter::run_export(cfg, progress);
   if (!summary) return failure(summary.status().to_string());
   print_export_summary(*summary);

@@ -103,8 +103,10 @@ ExitStatus unit(int argc, char** argv) {
   }
   if (!i) return usage_error(i.status().message());
   exporter::ExportProgressFn progress;
-  if (!no_progress)
-    progress = exporter::make_progress_printer(::isatty(STDERR_FILENO) != 0, stderr);
+  if (!no_progress) {
+    const bool tty = ::isatty(STDERR_FILENO) != 0;
+    progress = exporter::make_progress_printer(tty, progress_on_stderr(tty));
+  }
   std::fprintf(stderr, "export unit %d of %zu: %zu scene(s)\n", *i, p->units.size(),
                p->units[static_cast<std::size_t>(*i)].size());
   auto summary = exporter::run_export_unit(*p, *i, threads, FAULTLINE_VERSION, progress);

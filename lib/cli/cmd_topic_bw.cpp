@@ -4,7 +4,7 @@
 
 namespace faultline::cli {
 namespace {
-int run(int argc, char** argv) {
+ExitStatus run(int argc, char** argv) {
   return topic::run_probe_command(argc, argv, topic::ProbeKind::Bw);
 }
 }  // namespace

@@ -15,7 +15,7 @@
 namespace faultline::cli {
 namespace topic {
 
-int run_probe_command(int argc, char** argv, ProbeKind kind) {
+ExitStatus run_probe_command(int argc, char** argv, ProbeKind kind) {
   const char* what =
       kind == ProbeKind::Hz ? "Measure a topic's message rate from receive times."
       : kind == ProbeKind::Bw
@@ -85,21 +85,21 @@ int run_probe_command(int argc, char** argv, ProbeKind kind) {
   };
   const stats::ProbeResult result =
       stats::run_probe(receive, options, shutdown_requested(), report);
-  if (result.end == stats::ProbeEnd::ReceiveError)
-    std::fprintf(stderr, "receive error: %s\n", result.error.c_str());
   std::printf("%s malformed=%llu end=\"%s\"\n",
               stats::format_summary(target.topic, result.total).c_str(),
               static_cast<unsigned long long>(sub.malformed()), stats::to_string(result.end));
   if (kind == ProbeKind::Delay && result.total.count > 0 && result.total.delay_ms.count == 0) {
     std::fprintf(stderr, "no message carried header.%s_stamp_ns\n", stamp.c_str());
   }
-  return result.total.count > 0 && result.end != stats::ProbeEnd::ReceiveError ? 0 : 1;
+  // A receive error ends the probe: dispatch prints it after the summary, which scripts read.
+  if (result.end == stats::ProbeEnd::ReceiveError) return failure("receive error: " + result.error);
+  return result.total.count > 0 ? 0 : kExitFailure;
 }
 
 }  // namespace topic
 
 namespace {
-int run(int argc, char** argv) {
+ExitStatus run(int argc, char** argv) {
   return topic::run_probe_command(argc, argv, topic::ProbeKind::Hz);
 }
 }  // namespace

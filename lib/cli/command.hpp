@@ -6,6 +6,8 @@
 // the longest.
 #pragma once
 
+#include <cstdio>
+#include <functional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -63,6 +65,16 @@ const std::vector<const Command*>& all_commands();
 inline void show_progress(const std::string& line) {
   std::fprintf(stderr, "%s\n", line.c_str());
   std::fflush(stderr);
+}
+
+// Shows progress text on stderr: redrawn in place ("\r" before, the line ended after the `last`
+// one) when `redraw`, else as show_progress lines. For exporter::make_progress_printer.
+inline std::function<void(const std::string&, bool)> progress_on_stderr(bool redraw) {
+  return [redraw](const std::string& text, bool last) {
+    if (!redraw) return show_progress(text);
+    std::fprintf(stderr, "\r%s%s", text.c_str(), last ? "\n" : "");
+    std::fflush(stderr);
+  };
 }
 
 // Adapts a command function returning ExitStatus, Status or a plain exit code to Command::run.

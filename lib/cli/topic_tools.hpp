@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "cli/command.hpp"
 #include "transport/registry.hpp"
 
 namespace faultline::cli::topic {
@@ -23,6 +24,7 @@ Target resolve(const std::string& topic, const std::vector<std::string>& endpoin
                const std::string& type);
 
 enum class ProbeKind { Hz, Bw, Delay };
-int run_probe_command(int argc, char** argv, ProbeKind kind);
+// Returns the receive error, if one ended the probe, for dispatch to print after the summary.
+ExitStatus run_probe_command(int argc, char** argv, ProbeKind kind);
 
 }  // namespace faultline::cli::topic

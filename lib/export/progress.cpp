@@ -1,7 +1,9 @@
 #include "export/progress.hpp"
 
+#include <cstdio>
 #include <memory>
 #include <string_view>
+#include <utility>
 
 namespace faultline::exporter {
 
@@ -21,10 +23,10 @@ std::string_view format_duration(double seconds, char* buf, std::size_t size) {
 }
 
 std::function<void(std::int64_t, std::int64_t, double)> make_progress_printer(
-    bool tty, std::FILE* out, double log_interval_s) {
+    bool tty, ProgressText show, double log_interval_s) {
   auto last_log = std::make_shared<double>(-1e9);
-  return [tty, out, log_interval_s, last_log](std::int64_t done, std::int64_t total,
-                                              double elapsed) {
+  return [tty, show = std::move(show), log_interval_s, last_log](
+             std::int64_t done, std::int64_t total, double elapsed) {
     const double rate = elapsed > 0 ? static_cast<double>(done) / elapsed : 0;
     const double eta = rate > 0 ? static_cast<double>(total - done) / rate : -1;
     char eta_buf[32], el_buf[32];
@@ -37,19 +39,21 @@ std::function<void(std::int64_t, std::int64_t, double)> make_progress_printer(
       const int filled = static_cast<int>(frac * kWidth);
       for (int i = 0; i < kWidth; ++i) bar[i] = i < filled ? '#' : '.';
       bar[kWidth] = '\0';
-      std::fprintf(out, "\r[%s] %lld/%lld %5.1f%% %.1f img/s ETA %s   ", bar,
-                   static_cast<long long>(done), static_cast<long long>(total), frac * 100, rate,
-                   eta_buf);
-      if (done >= total) std::fprintf(out, "\n");
-      std::fflush(out);
+      char text[160];
+      std::snprintf(text, sizeof text, "[%s] %lld/%lld %5.1f%% %.1f img/s ETA %s   ", bar,
+                    static_cast<long long>(done), static_cast<long long>(total), frac * 100, rate,
+                    eta_buf);
+      show(text, done >= total);
       return;
     }
     if (elapsed - *last_log < log_interval_s && done < total) return;
     *last_log = elapsed;
-    std::fprintf(out, "export: %lld/%lld outputs (%.1f%%), %.1f img/s, elapsed %s, ETA %s\n",
-                 static_cast<long long>(done), static_cast<long long>(total), frac * 100, rate,
-                 el_buf, eta_buf);
-    std::fflush(out);
+    char text[160];
+    std::snprintf(text, sizeof text,
+                  "export: %lld/%lld outputs (%.1f%%), %.1f img/s, elapsed %s, ETA %s",
+                  static_cast<long long>(done), static_cast<long long>(total), frac * 100, rate,
+                  el_buf, eta_buf);
+    show(text, done >= total);
   };
 }
 

@@ -20,9 +20,7 @@ namespace faultline::cli {
 namespace {
 
 namespace fs = std::filesystem;
-using ::testing::internal::CaptureStderr;
 using ::testing::internal::CaptureStdout;
-using ::testing::internal::GetCapturedStderr;
 using ::testing::internal::GetCapturedStdout;
 
 std::vector<char*> Argv(std::vector<std::string>& args) {
@@ -32,15 +30,15 @@ std::vector<char*> Argv(std::vector<std::string>& args) {
 }
 
 // Parses `extra` after --out/--dataroot (a dataroot given: nothing is generated) and resolves.
-// Returns the exit code; the corruptions land in `args`.
-int Resolve(std::vector<std::string> extra, BenchmarkArgs& args) {
+// Returns the exit status; the corruptions land in `args`.
+ExitStatus Resolve(std::vector<std::string> extra, BenchmarkArgs& args) {
   CLI::App app{"test"};
   add_benchmark_options(app, args);
   std::vector<std::string> all = {"benchmark", "--out", "/tmp/unused", "--dataroot", "/tmp/none"};
   all.insert(all.end(), extra.begin(), extra.end());
   auto argv = Argv(all);
   app.parse(static_cast<int>(argv.size()), argv.data());  // throws CLI::ParseError
-  return resolve_benchmark_options(args, "benchmark");
+  return resolve_benchmark_options(args);
 }
 
 TEST(BenchmarkArgsTest, CorruptionsAcceptEveryCorruptionType) {
@@ -50,31 +48,32 @@ TEST(BenchmarkArgsTest, CorruptionsAcceptEveryCorruptionType) {
   std::string joined;
   for (const auto& n : names) {
     BenchmarkArgs args;
-    EXPECT_EQ(Resolve({"--corruptions", n}, args), 0) << n;
+    EXPECT_EQ(Resolve({"--corruptions", n}, args).exit_code(), 0) << n;
     EXPECT_EQ(args.options.corruptions, std::vector<std::string>{n});
     joined += (joined.empty() ? "" : ",") + n;
   }
   BenchmarkArgs all;
-  ASSERT_EQ(Resolve({"--corruptions", joined}, all), 0);
+  ASSERT_EQ(Resolve({"--corruptions", joined}, all).exit_code(), 0);
   EXPECT_EQ(all.options.corruptions, names);
   EXPECT_EQ(names.size(), 5u + std::size(corruption::kAllCorruptions));
 }
 
 TEST(BenchmarkArgsTest, RefusesUnknownNamesAndStaleFramesSayingWhy) {
   BenchmarkArgs a;
-  CaptureStderr();
-  EXPECT_EQ(Resolve({"--corruptions", "fog,mud"}, a), 2);
-  EXPECT_NE(GetCapturedStderr().find("--corruptions: unknown corruption 'mud'"), std::string::npos);
+  const ExitStatus mud = Resolve({"--corruptions", "fog,mud"}, a);
+  EXPECT_EQ(mud.exit_code(), 2);
+  EXPECT_EQ(mud.message(), "--corruptions: unknown corruption 'mud'");
   BenchmarkArgs b;
-  CaptureStderr();
-  EXPECT_EQ(Resolve({"--corruptions", "stale_frames"}, b), 2);
-  const std::string err = GetCapturedStderr();
-  EXPECT_NE(err.find("stale_frames delays frames in wall-clock time"), std::string::npos) << err;
+  const ExitStatus stale = Resolve({"--corruptions", "stale_frames"}, b);
+  EXPECT_EQ(stale.exit_code(), 2);
+  EXPECT_NE(stale.message().find("--corruptions: stale_frames delays frames in wall-clock time"),
+            std::string::npos)
+      << stale.message();
 }
 
 TEST(BenchmarkArgsTest, SuiteRoboDrive18ExpandsToItsEighteenInOrder) {
   BenchmarkArgs args;
-  ASSERT_EQ(Resolve({"--suite", "robodrive18"}, args), 0);
+  ASSERT_EQ(Resolve({"--suite", "robodrive18"}, args).exit_code(), 0);
   const std::vector<std::string> expected = {"brightness",
                                              "dark",
                                              "fog",
@@ -124,7 +123,7 @@ TEST(BenchmarkArgsTest, PlanListsTheSuiteAfterTheCleanRun) {
   ASSERT_EQ(plan->runs.size(), 37u);
   EXPECT_EQ(plan->runs[0].name, "clean");
   BenchmarkArgs suite;
-  ASSERT_EQ(Resolve({"--suite", "robodrive18"}, suite), 0);
+  ASSERT_EQ(Resolve({"--suite", "robodrive18"}, suite).exit_code(), 0);
   for (std::size_t i = 0; i < 18; ++i) {
     EXPECT_EQ(plan->runs[1 + 2 * i].corruption, suite.options.corruptions[i]);
     EXPECT_EQ(plan->runs[1 + 2 * i].level, "easy");

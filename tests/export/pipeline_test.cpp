@@ -7,6 +7,8 @@
 #include <cstdlib>
 #include <fstream>
 #include <memory>
+#include <string>
+#include <vector>
 
 #include "export/export_fixture.hpp"  // tests/export/
 #include "export/progress.hpp"
@@ -125,53 +127,55 @@ TEST_F(SplitTest, CommandLineSplitValMatchesTheLibrary) {
 // --- progress
 // ---------------------------------------------------------------------------------------------------
 
-std::string captured(const std::function<void(std::FILE*)>& body) {
-  std::unique_ptr<std::FILE, int (*)(std::FILE*)> f(std::tmpfile(), &std::fclose);
-  body(f.get());
-  std::fflush(f.get());
-  std::rewind(f.get());
-  std::string text;
-  char buf[4096];
-  std::size_t n = 0;
-  while ((n = std::fread(buf, 1, sizeof buf, f.get())) > 0) text.append(buf, n);
-  return text;
-}
-
 std::size_t count_of(const std::string& text, const std::string& what) {
   std::size_t n = 0;
   for (auto pos = text.find(what); pos != std::string::npos; pos = text.find(what, pos + 1)) ++n;
   return n;
 }
 
+// One progress text as the printer passed it, with its `last` mark.
+struct ShownText {
+  std::string text;
+  bool last;
+};
+
 TEST(ExportProgressTest, LogLinesAreThrottledWhenNotATerminal) {
-  const std::string text = captured([](std::FILE* f) {
-    auto p = make_progress_printer(false, f, 10.0);
-    p(0, 100, 0.0);     // first call: a line
-    p(10, 100, 4.0);    // < 10 s later: nothing
-    p(30, 100, 12.0);   // a line
-    p(40, 100, 15.0);   // nothing
-    p(100, 100, 20.0);  // the end always prints
-  });
-  EXPECT_EQ(count_of(text, "\n"), 3u) << text;
-  EXPECT_EQ(count_of(text, "\r"), 0u) << text;
-  EXPECT_NE(text.find("export: 30/100 outputs (30.0%), 2.5 img/s, elapsed 12s, ETA 28s\n"),
-            std::string::npos)
-      << text;
-  EXPECT_NE(text.find("100/100"), std::string::npos) << text;
+  std::vector<ShownText> shown;
+  auto p = make_progress_printer(
+      false,
+      [&](const std::string& text, bool last) {
+        shown.push_back({text, last});
+      },
+      10.0);
+  p(0, 100, 0.0);     // first call: a line
+  p(10, 100, 4.0);    // < 10 s later: nothing
+  p(30, 100, 12.0);   // a line
+  p(40, 100, 15.0);   // nothing
+  p(100, 100, 20.0);  // the end always prints
+  ASSERT_EQ(shown.size(), 3u);
+  EXPECT_EQ(shown[1].text, "export: 30/100 outputs (30.0%), 2.5 img/s, elapsed 12s, ETA 28s");
+  EXPECT_FALSE(shown[1].last);
+  EXPECT_NE(shown[2].text.find("100/100"), std::string::npos) << shown[2].text;
+  EXPECT_TRUE(shown[2].last);
+  for (const auto& s : shown) EXPECT_EQ(s.text.find_first_of("\r\n"), std::string::npos) << s.text;
 }
 
 TEST(ExportProgressTest, TerminalGetsARedrawnBarWithRateAndEta) {
-  const std::string text = captured([](std::FILE* f) {
-    auto p = make_progress_printer(true, f);
-    p(25, 100, 5.0);
-    p(100, 100, 20.0);
+  std::vector<ShownText> shown;
+  auto p = make_progress_printer(true, [&](const std::string& text, bool last) {
+    shown.push_back({text, last});
   });
-  EXPECT_EQ(count_of(text, "\r"), 2u) << text;
-  EXPECT_NE(text.find("[#######.......................] 25/100  25.0% 5.0 img/s ETA 15s"),
-            std::string::npos)
-      << text;
-  EXPECT_EQ(text.back(), '\n');  // the finished bar ends its line
-  EXPECT_EQ(count_of(text, "\n"), 1u) << text;
+  p(25, 100, 5.0);
+  p(100, 100, 20.0);
+  ASSERT_EQ(shown.size(), 2u);  // every call redraws the bar
+  EXPECT_EQ(
+      shown[0].text.rfind("[#######.......................] 25/100  25.0% 5.0 img/s ETA 15s", 0),
+      0u)
+      << shown[0].text;
+  EXPECT_FALSE(shown[0].last);
+  EXPECT_EQ(shown[1].text.rfind("[##############################] 100/100", 0), 0u)
+      << shown[1].text;
+  EXPECT_TRUE(shown[1].last);  // the finished bar ends its line
 }
 
 TEST_F(ExportTest, ProgressReportsEveryOutputAndEndsAtTheTotal) {
