@@ -5,21 +5,17 @@
 // severities 1-5 on one frame (report/gallery.hpp), the pictures of docs/faults.md.
 #include <CLI/CLI.hpp>
 #include <algorithm>
-#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
 #include <iterator>
-#include <opencv2/imgcodecs.hpp>
 #include <optional>
 #include <string>
 #include <vector>
 
 #include "cli/command.hpp"
 #include "cli/parse.hpp"
-#include "codec/jpeg.hpp"
-#include "common/bounded_read.hpp"
+#include "codec/image_file.hpp"
 #include "corruption/corrupt.hpp"
 #include "policy/fault_spec.hpp"
 #include "report/gallery.hpp"
@@ -43,32 +39,6 @@ struct CorruptArgs {
   int thumb_width = report::GalleryOptions{}.thumb_width;
 };
 
-// Reads the input image. A JPEG goes through TurboJPEG first, which notices a truncated or corrupt
-// file that OpenCV would silently render half grey; `allow_partial` then keeps OpenCV's partial
-// rendering, with a warning.
-Result<cv::Mat> read_input(const std::string& path, bool allow_partial) {
-  auto read = read_file_bounded(path, kMaxImageFileBytes, "input image");
-  if (!read.is_ok()) return read.status();
-  const std::vector<std::uint8_t> bytes(read->begin(), read->end());
-  const bool is_jpeg = bytes.size() >= 2 && bytes[0] == 0xFF && bytes[1] == 0xD8;
-  if (is_jpeg) {
-    auto decoded = codec::decode_jpeg(bytes.data(), bytes.size());
-    if (decoded) return decoded;
-    if (!allow_partial) {
-      return Status(decoded.status().code(),
-                    "input image '" + path + "': " + decoded.status().message() +
-                        " (--allow-partial corrupts what a decoder renders of it)");
-    }
-    std::fprintf(stderr,
-                 "faultline corrupt: warning: input image '%s': %s; using the partial decode\n",
-                 path.c_str(), decoded.status().message().c_str());
-  }
-  cv::Mat image = cv::imdecode(bytes, cv::IMREAD_COLOR);
-  if (image.empty())
-    return Status(StatusCode::kCorruptData, "cannot decode input image '" + path + "'");
-  return image;
-}
-
 // "brightness, dark, ... or spatter": every corruption's name.
 std::string type_names() {
   std::string names;
@@ -78,32 +48,6 @@ std::string type_names() {
     names += i + 2 < n ? ", " : (i + 1 < n ? " or " : "");
   }
   return names;
-}
-
-// Frost textures from a directory: every .png/.jpg/.jpeg in it, in name order, read as BGR.
-Result<std::vector<cv::Mat>> read_frost_textures(const std::string& dir) {
-  std::error_code ec;
-  std::vector<std::string> paths;
-  for (const auto& entry : std::filesystem::directory_iterator(dir, ec)) {
-    std::string ext = entry.path().extension().string();
-    std::transform(ext.begin(), ext.end(), ext.begin(),
-                   [](unsigned char c) { return std::tolower(c); });
-    if (entry.is_regular_file() && (ext == ".png" || ext == ".jpg" || ext == ".jpeg")) {
-      paths.push_back(entry.path().string());
-    }
-  }
-  if (ec) return Status(StatusCode::kNotFound, "--frost-dir '" + dir + "': " + ec.message());
-  std::sort(paths.begin(), paths.end());
-  if (paths.empty())
-    return Status(StatusCode::kNotFound, "--frost-dir '" + dir + "': no .png or .jpg textures");
-  std::vector<cv::Mat> textures;
-  for (const auto& p : paths) {
-    cv::Mat t = cv::imread(p, cv::IMREAD_COLOR);
-    if (t.empty())
-      return Status(StatusCode::kCorruptData, "--frost-dir: cannot decode texture '" + p + "'");
-    textures.push_back(t);
-  }
-  return textures;
 }
 
 // The options of one corruption of one file.
@@ -183,29 +127,6 @@ Result<int> resolve_severity(const CorruptArgs& a, corruption::Corruption type) 
   return severity;
 }
 
-// Writes the corrupted image: TurboJPEG for .jpg/.jpeg, OpenCV otherwise.
-Status write_output(const std::string& path, const cv::Mat& image, int jpeg_quality) {
-  std::string ext = path.substr(std::min(path.size(), path.rfind('.') + 1));
-  std::transform(ext.begin(), ext.end(), ext.begin(),
-                 [](unsigned char c) { return std::tolower(c); });
-  const std::string what = "cannot write output image '" + path + "'";
-  if (path.find('.') != std::string::npos && (ext == "jpg" || ext == "jpeg")) {
-    auto jpeg = codec::encode_jpeg(image, jpeg_quality);
-    if (!jpeg) return Status(StatusCode::kIoError, what + ": " + jpeg.status().message());
-    std::ofstream file(path, std::ios::binary | std::ios::trunc);
-    file.write(reinterpret_cast<const char*>(jpeg->data()),
-               static_cast<std::streamsize>(jpeg->size()));
-    file.close();
-    return file ? Status::ok() : Status(StatusCode::kIoError, what);
-  }
-  try {
-    if (cv::imwrite(path, image)) return Status::ok();
-  } catch (const cv::Exception& e) {
-    return Status(StatusCode::kIoError, what + ": " + e.what());
-  }
-  return Status(StatusCode::kIoError, what);
-}
-
 // The CorruptOptions of the flags; frost textures are read into `frost` (which must outlive them).
 Result<corruption::CorruptOptions> corrupt_options(const CorruptArgs& a,
                                                    std::vector<cv::Mat>& frost) {
@@ -214,8 +135,8 @@ Result<corruption::CorruptOptions> corrupt_options(const CorruptArgs& a,
   if (a.yaw_rate_deg_s) options.yaw_rate_rad_s = *a.yaw_rate_deg_s * M_PI / 180.0;
   options.focal_px = a.focal_px;
   if (!a.frost_dir.empty()) {
-    auto t = read_frost_textures(a.frost_dir);
-    if (!t) return t.status();
+    auto t = codec::read_image_dir(a.frost_dir);
+    if (!t) return Status(t.status().code(), "--frost-dir " + t.status().message());
     frost = std::move(*t);
     options.frost_textures = &frost;
   }
@@ -245,8 +166,10 @@ ExitStatus run_single(const CorruptArgs& a, corruption::RngMode mode) {
     return usage_error("--angle must be a finite number of degrees, got " +
                        std::to_string(*a.angle_deg));
   }
-  const auto input = read_input(a.in_path, a.allow_partial);
+  const auto input = codec::read_image_file(a.in_path, a.allow_partial);
   if (!input) return input.status();
+  if (!input->warning.empty())  // a warning: the command goes on
+    std::fprintf(stderr, "faultline corrupt: warning: %s\n", input->warning.c_str());
   if (*type == corruption::Corruption::RollingShutter && !a.yaw_rate_deg_s && *severity > 0)
     std::fprintf(stderr,
                  "faultline corrupt: rolling_shutter without --yaw-rate: no motion, image "
@@ -254,9 +177,11 @@ ExitStatus run_single(const CorruptArgs& a, corruption::RngMode mode) {
   std::vector<cv::Mat> frost;
   auto options = corrupt_options(a, frost);
   if (!options) return usage_error(options.status().message());
-  auto out = corruption::corrupt_seeded(*input, *type, *severity, mode, a.seed, *options);
+  auto out = corruption::corrupt_seeded(input->bgr, *type, *severity, mode, a.seed, *options);
   if (!out) return failure(out.status().to_string());
-  if (Status s = write_output(a.out_path, *out, a.jpeg_quality.value_or(95)); !s) return s;
+  if (Status s = codec::write_image_file(a.out_path, *out, a.jpeg_quality.value_or(95)); !s) {
+    return s;
+  }
   return 0;
 }
 
@@ -279,9 +204,9 @@ ExitStatus run_gallery(const CorruptArgs& a, corruption::RngMode mode, const std
   if (a.in_path.empty()) {
     frame = report::gallery_frame();
   } else {
-    auto input = read_input(a.in_path, false);
+    auto input = codec::read_image_file(a.in_path, false);
     if (!input) return input.status();
-    frame = std::move(*input);
+    frame = std::move(input->bgr);
     g.frame_label = "the frame `" + std::filesystem::path(a.in_path).filename().string() + "`";
   }
   auto progress = [](std::size_t i, std::size_t n, corruption::Corruption t) {
