@@ -16,24 +16,12 @@
 #include "corruption/fog.hpp"
 #include "corruption/frost.hpp"
 #include "corruption/noise.hpp"
+#include "corruption/run_corruption.hpp"
 #include "corruption/spatter.hpp"
 #include "corruption/test_images.hpp"
 
 namespace faultline::corruption {
 namespace {
-
-cv::Mat run(const cv::Mat& in, Corruption c, int sev, RngMode mode, std::uint32_t seed) {
-  if (mode == RngMode::Numpy) {
-    rng::NumpyRandomState rng(seed);
-    auto r = corrupt(in, c, sev, rng);
-    EXPECT_TRUE(r.is_ok()) << r.status().to_string();
-    return r.is_ok() ? *r : cv::Mat();
-  }
-  rng::FastRng rng(seed);
-  auto r = corrupt(in, c, sev, rng);
-  EXPECT_TRUE(r.is_ok()) << r.status().to_string();
-  return r.is_ok() ? *r : cv::Mat();
-}
 
 // Degenerate frames: tiny, odd-sized, smaller than any blur kernel, constant, all black, all white.
 class DegenerateFrameTest : public ::testing::TestWithParam<std::tuple<Corruption, RngMode>> {};

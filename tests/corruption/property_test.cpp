@@ -16,6 +16,7 @@
 #include "corruption/fog.hpp"
 #include "corruption/frost.hpp"
 #include "corruption/noise.hpp"
+#include "corruption/run_corruption.hpp"
 #include "corruption/spatter.hpp"
 #include "corruption/test_images.hpp"
 
@@ -23,19 +24,6 @@ namespace faultline::corruption {
 namespace {
 
 using Param = std::tuple<Corruption, int, RngMode>;
-
-cv::Mat run(const cv::Mat& in, Corruption c, int sev, RngMode mode, std::uint32_t seed) {
-  if (mode == RngMode::Numpy) {
-    rng::NumpyRandomState rng(seed);
-    auto r = corrupt(in, c, sev, rng);
-    EXPECT_TRUE(r.is_ok()) << r.status().to_string();
-    return r.is_ok() ? *r : cv::Mat();
-  }
-  rng::FastRng rng(seed);
-  auto r = corrupt(in, c, sev, rng);
-  EXPECT_TRUE(r.is_ok()) << r.status().to_string();
-  return r.is_ok() ? *r : cv::Mat();
-}
 
 double psnr_db(const cv::Mat& a, const cv::Mat& b) {
   const double mse = cv::norm(a, b, cv::NORM_L2SQR) / static_cast<double>(a.total() * a.channels());
