@@ -100,6 +100,22 @@ class CurveTest : public ::testing::Test {
     sc.access = std::move(access);
     return sc;
   }
+  // A CURVE sink binding a PULL socket on loopback, with the allowed-clients list.
+  SubscriberConfig BindingSink() const {
+    SubscriberConfig sc = Sub("tcp://127.0.0.1:*", Server());
+    sc.bind = true;
+    sc.pattern = Pattern::PushPull;
+    return sc;
+  }
+  // A detector's PUSH to `endpoint` with the key the sink does not allow.
+  PublisherConfig RefusedPush(const std::string& endpoint) const {
+    PublisherConfig pc;
+    pc.endpoint = endpoint;
+    pc.bind = false;
+    pc.pattern = Pattern::PushPull;
+    pc.access = Client("bad");
+    return pc;
+  }
 
   std::string dir_;
 };
@@ -230,18 +246,9 @@ TEST_F(CurveTest, PushPullToABindingSinkWithCurve) {
 // does not hold is told, as a refused subscriber is: once in its log, naming the endpoint and its
 // key, and counted; not retried, nothing arrives, and a send waiting for the sink says so too.
 TEST_F(CurveTest, APushPublisherRefusedByTheSinkSaysSoOnceAndCountsIt) {
-  SubscriberConfig sc;
-  sc.endpoints = {"tcp://127.0.0.1:*"};
-  sc.bind = true;
-  sc.pattern = Pattern::PushPull;
-  sc.access = Server();
-  RawSubscriber sink(sc);
+  RawSubscriber sink(BindingSink());
   testing::LogCapture log;
-  PublisherConfig pc;
-  pc.endpoint = sink.endpoints()[0];
-  pc.bind = false;
-  pc.pattern = Pattern::PushPull;
-  pc.access = Client("bad");
+  PublisherConfig pc = RefusedPush(sink.endpoints()[0]);
   pc.send_timeout_ns = 20 * kNsPerMs;
   Publisher detector(pc);
   ASSERT_TRUE(testing::eventually(
@@ -275,18 +282,9 @@ TEST_F(CurveTest, APushPublisherRefusedByTheSinkSaysSoOnceAndCountsIt) {
 // The same refusal with the default send timeout (wait for ever for a peer): the send returns once
 // the refusal is known, since libzmq never retries it, rather than blocking the detector for good.
 TEST_F(CurveTest, AForeverPushSendToARefusingSinkReturnsOnceRefused) {
-  SubscriberConfig sc;
-  sc.endpoints = {"tcp://127.0.0.1:*"};
-  sc.bind = true;
-  sc.pattern = Pattern::PushPull;
-  sc.access = Server();
-  RawSubscriber sink(sc);
+  RawSubscriber sink(BindingSink());
   testing::LogCapture log;
-  PublisherConfig pc;
-  pc.endpoint = sink.endpoints()[0];
-  pc.bind = false;
-  pc.pattern = Pattern::PushPull;
-  pc.access = Client("bad");
+  PublisherConfig pc = RefusedPush(sink.endpoints()[0]);
   ASSERT_LT(pc.send_timeout_ns, 0);  // the default: no timeout
   Publisher detector(pc);
   // The sink's ZAP handler answers only while the sink is being read.
@@ -306,18 +304,9 @@ TEST_F(CurveTest, AForeverPushSendToARefusingSinkReturnsOnceRefused) {
 // The order that hung a CI run under TSan: the refusal is read from the monitor (here by
 // refused_by_peer) before the send, so no monitor event is left to wake a send waiting for ever.
 TEST_F(CurveTest, AForeverPushSendAfterTheRefusalWasReadReturnsAtOnce) {
-  SubscriberConfig sc;
-  sc.endpoints = {"tcp://127.0.0.1:*"};
-  sc.bind = true;
-  sc.pattern = Pattern::PushPull;
-  sc.access = Server();
-  RawSubscriber sink(sc);
+  RawSubscriber sink(BindingSink());
   testing::LogCapture log;
-  PublisherConfig pc;
-  pc.endpoint = sink.endpoints()[0];
-  pc.bind = false;
-  pc.pattern = Pattern::PushPull;
-  pc.access = Client("bad");
+  PublisherConfig pc = RefusedPush(sink.endpoints()[0]);
   ASSERT_LT(pc.send_timeout_ns, 0);
   Publisher detector(pc);
   std::atomic<bool> done{false};
