@@ -1,7 +1,7 @@
-// The shared shape of every node's main(): parse the command line and YAML into the node's config
-// (exit 2 on a config error, 1 on any other fatal error), make the node's logger, run the body
-// until it returns or a signal asks it to stop, then shut ZeroMQ down so that queued messages are
-// still delivered (linger).
+// The shared shape of every node's main(): keep freed frame buffers (common/heap.hpp), parse the
+// command line and YAML into the node's config (exit 2 on a config error, 1 on any other fatal
+// error), make the node's logger, run the body until it returns or a signal asks it to stop, then
+// shut ZeroMQ down so that queued messages are still delivered (linger).
 #pragma once
 
 #include <spdlog/spdlog.h>
@@ -11,6 +11,7 @@
 #include <memory>
 
 #include "common/config.hpp"
+#include "common/heap.hpp"
 #include "common/logging.hpp"
 #include "common/shutdown.hpp"
 #include "transport/context.hpp"
@@ -22,6 +23,7 @@ namespace faultline::runtime {
 // context terminates.
 template <class Config, class Body>
 int run_node(int argc, char** argv, const char* node, const char* description, Body body) {
+  keep_freed_memory();  // frame buffers are reused, not faulted in afresh each frame
   try {
     const auto& stop = shutdown_requested();
     config::NodeOptions opts;
