@@ -47,19 +47,15 @@ cv::Mat gaussian_blur_weights(const cv::Mat& bgr, const std::vector<double>& w);
 std::vector<double> normalized_kernel(const std::vector<double>& phi);
 }  // namespace detail
 
-// fast mode: OpenCV's fixed-point 8-bit Gaussian (replicated border) of the frame minus a thinned
-// checkerboard of ones, which turns OpenCV's rounding into the reference's truncation. Severities
-// 1-2 (sigma 1, 2) blur at full resolution: within one level of the exact output on under 10 % of
-// the values. From sigma 3 the same blur runs on the frame averaged in 2 x 2 blocks (sigma 3, 4) or
-// 4 x 4 blocks (sigma 6), with the sigma left after the blocks' and the bilinear upsampling's own
-// variance (the frame first padded with the reference's 'nearest' border), then bilinear back to
-// full size: a few levels off at hard edges, PSNR > 50 dB and the mean within 0.3 of numpy mode
-// (tests/corruption/fast_ext_test.cpp; a side that is not a multiple of the block stretches the
-// blocks' grid slightly: up to 18 levels at a 333x197 chart's edges).
+// fast mode: the fixed-point blur (fixed_point_blur.hpp: exact integer sums, truncated like the
+// reference). Severities 1-2 (sigma 1, 2) blur at full resolution: within one level of the exact
+// output on a few % of the values. From sigma 3 the same blur runs on the frame averaged in 2 x 2
+// blocks (sigma 3, 4) or 4 x 4 blocks (sigma 6), with the sigma left after the blocks' and the
+// bilinear upsampling's own variance (the frame first padded with the reference's 'nearest'
+// border), then bilinear back to full size: a few levels off at hard edges, PSNR > 50 dB and the
+// mean within 0.3 of numpy mode (tests/corruption/fast_ext_test.cpp; a side that is not a multiple
+// of the block stretches the blocks' grid slightly: up to 18 levels at a 333x197 chart's edges).
 cv::Mat gaussian_blur_fast(const cv::Mat& bgr, int severity);
-// The full-resolution fast blur above at any sigma > 0 (kernel radius int(4 sigma + 0.5), as the
-// reference's): glass_blur's fast mode uses it too.
-cv::Mat dithered_gaussian_blur(const cv::Mat& bgr, double sigma);
 
 // pixelate: PIL resize to (int(W * c), int(H * c)) with BOX (Pillow 9.4's fixed-point two-pass
 // resampler), then back with NEAREST (Pillow's affine scale), c = .6 .5 .4 .3 .25. Bit-exact. Sizes

@@ -3,11 +3,13 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <opencv2/imgproc.hpp>
 #include <vector>
 
 #include "common/simd.hpp"
 #include "corruption/digital.hpp"
+#include "corruption/fixed_point_blur.hpp"
 #include "corruption/ndimage.hpp"
 
 namespace faultline::corruption {
@@ -120,56 +122,157 @@ cv::Mat gaussian_blur_weights(const cv::Mat& bgr, const std::vector<double>& w) 
 
 namespace {
 
-// The dither pattern: a one at the pixels whose x + y is even, except two in every 8 x 8 tile, (0,
-// 0) and (4, 4) (30 ones per 64 pixels); row phase y & 7, all three channels of a pixel alike.
-std::vector<std::uint8_t> dither_row(std::size_t pixels, int phase) {
-  std::vector<std::uint8_t> row(3 * pixels);
-  for (std::size_t x = 0; x < pixels; ++x) {
-    const auto xi = static_cast<int>(x & 7u);
-    const bool one = ((xi + phase) & 1) == 0 && !(xi == phase && (xi & 3) == 0);
-    for (std::size_t c = 0; c < 3; ++c) row[3 * x + c] = one ? 1 : 0;
-  }
-  return row;
+// The reference's radius int(4 sigma + 0.5) less its outermost tap when it is even: the
+// fixed-point blur sums its taps in pairs, the centre with the first, so an odd radius costs no
+// more than the even one below it, and an even radius pays a whole pair for the outermost tap,
+// whose weight is below exp(-8) of the centre's (1.3e-4 of the total at sigma 1, 6.7e-5 at 2).
+int odd_radius(double sigma) {
+  const int r = kernel_radius(sigma);
+  return r % 2 == 0 && r > 1 ? r - 1 : r;
 }
 
-// dst = src - pattern, saturating at 0.
+// An exact f x bilinear upscale samples the low image at (x + 0.5) / f - 0.5 (OpenCV's and PIL's
+// pixel centres). Output phase q (x = f i + q) blends low pixels i + first and i + first + 1 with
+// weights in units of 1 / (2 f).
+struct PhaseTaps {
+  int first;
+  int w_first;
+  int w_next;
+};
+
+PhaseTaps phase_taps(int q, int f) {
+  const int offset = 2 * q + 1 - f;  // the sample's offset from low pixel i, in 1 / (2 f)
+  if (offset < 0) return {-1, -offset, 2 * f + offset};
+  return {0, 2 * f - offset, offset};
+}
+
+// v[i] = a[i] wa + b[i] wb: one phase of a low row, values scaled by 2 f.
 FAULTLINE_CLONES("avx2")
-void subtract_saturating(std::uint8_t* dst, const std::uint8_t* src, const std::uint8_t* pattern,
-                         std::size_t n) {
+void blend_pixels(std::uint16_t* v, const std::uint8_t* a, const std::uint8_t* b, std::uint16_t wa,
+                  std::uint16_t wb, std::size_t n) {
   for (std::size_t i = 0; i < n; ++i) {
-    dst[i] = static_cast<std::uint8_t>(src[i] - std::min(src[i], pattern[i]));
+    v[i] = static_cast<std::uint16_t>(static_cast<std::uint16_t>(a[i] * wa) +
+                                      static_cast<std::uint16_t>(b[i] * wb));
   }
 }
 
-// The dithered 8-bit blur with a kernel of radius r.
-cv::Mat dithered_blur(const cv::Mat& bgr, double sigma, int r) {
-  // OpenCV's 8-bit Gaussian is fixed-point (16-bit weights and sums, the same taps and 'nearest'
-  // border) and rounds, where the reference truncates: floor(x) = round(x - b) for 0 < b <= 1/2
-  // wherever frac(x) < b + 1/2. A dither pattern of ones subtracted before the blur blurs to b =
-  // 0.45-0.49 (a checkerboard, whose frequency the blur removes, thinned so that b
-  // stays below 1/2 despite the fixed-point weights): flat areas keep their value, and a value is
-  // one too high only where frac(x) >= b + 1/2 (a few %, never more than one level).
-  const auto pixels = static_cast<std::size_t>(bgr.cols);
-  std::vector<std::vector<std::uint8_t>> pattern;
-  for (int phase = 0; phase < 8; ++phase) pattern.push_back(dither_row(pixels, phase));
-  cv::Mat shifted(bgr.size(), CV_8UC3), out;
-  for (int y = 0; y < bgr.rows; ++y) {
-    subtract_saturating(shifted.ptr<std::uint8_t>(y), bgr.ptr<std::uint8_t>(y),
-                        pattern[static_cast<std::size_t>(y & 7)].data(), 3 * pixels);
+// out[i] = (a[i] wa + b[i] wb + offset) >> Shift, in 16 bits (the sums stay below 2^14 + offset;
+// a constant shift keeps the vector loop in 16-bit lanes).
+template <int Shift>
+[[gnu::always_inline]] inline void blend_rows(std::uint8_t* out, const std::uint16_t* a,
+                                              const std::uint16_t* b, std::uint16_t wa,
+                                              std::uint16_t wb, std::uint16_t offset,
+                                              std::size_t n) {
+  for (std::size_t i = 0; i < n; ++i) {
+    const auto sum = static_cast<std::uint16_t>(static_cast<std::uint16_t>(a[i] * wa) +
+                                                static_cast<std::uint16_t>(b[i] * wb) + offset);
+    out[i] = static_cast<std::uint8_t>(sum >> Shift);
   }
-  // Not in place: OpenCV 4.6 then leaves its fixed-point path (5x slower at sigma 1).
-  cv::GaussianBlur(shifted, out, cv::Size(2 * r + 1, 2 * r + 1), sigma, sigma,
-                   cv::BORDER_REPLICATE);
+}
+
+// blend_rows for f = 2 ((2 f)^2 = 2^4) and f = 4 (2^6).
+FAULTLINE_CLONES("avx2")
+void blend_rows_2x(std::uint8_t* out, const std::uint16_t* a, const std::uint16_t* b,
+                   std::uint16_t wa, std::uint16_t wb, std::uint16_t offset, std::size_t n) {
+  blend_rows<4>(out, a, b, wa, wb, offset, n);
+}
+
+FAULTLINE_CLONES("avx2")
+void blend_rows_4x(std::uint8_t* out, const std::uint16_t* a, const std::uint16_t* b,
+                   std::uint16_t wa, std::uint16_t wb, std::uint16_t offset, std::size_t n) {
+  blend_rows<6>(out, a, b, wa, wb, offset, n);
+}
+
+// Low rows upscaled f x along the row for output columns pad .. pad + cols - 1: each phase q
+// blended with blend_pixels, then interleaved (output pixel x = f i + q is phase q's pixel i).
+// The two most recent are kept: consecutive output rows share them.
+class WideRows {
+ public:
+  WideRows(int f, int pad, int cols, int ch)
+      : f_(f),
+        base_(pad / f),
+        cols_(cols),
+        ch_(ch),
+        low_pixels_(static_cast<std::size_t>((cols + f - 1) / f)),
+        phase_(static_cast<std::size_t>(f) * (low_pixels_ + 1) * static_cast<std::size_t>(ch)) {
+    for (auto& row : rows_)
+      row.resize(static_cast<std::size_t>(cols) * static_cast<std::size_t>(ch) + 1);
+  }
+
+  const std::uint16_t* row(const cv::Mat& low, int j) {
+    for (std::size_t k = 0; k < 2; ++k) {
+      if (index_[k] == j) return rows_[k].data();
+    }
+    const std::size_t k = index_[0] < index_[1] ? 0 : 1;  // the older one
+    widen(low.ptr<std::uint8_t>(j), rows_[k].data());
+    index_[k] = j;
+    return rows_[k].data();
+  }
+
+ private:
+  void widen(const std::uint8_t* src, std::uint16_t* out) {
+    const auto ch = static_cast<std::size_t>(ch_);
+    const std::size_t n = low_pixels_ * ch, stride = (low_pixels_ + 1) * ch;
+    for (int q = 0; q < f_; ++q) {
+      const PhaseTaps t = phase_taps(q, f_);
+      const std::uint8_t* a = src + static_cast<std::ptrdiff_t>((base_ + t.first) * ch_);
+      blend_pixels(phase_.data() + static_cast<std::size_t>(q) * stride, a, a + ch,
+                   static_cast<std::uint16_t>(t.w_first), static_cast<std::uint16_t>(t.w_next), n);
+    }
+    // Three channels go as 8-byte copies (three values and the next pixel's first) in increasing
+    // x, each rewritten by the next pixel's own copy; the last pixel copies its three alone.
+    int x = 0;
+    for (std::size_t i = 0; x < cols_; ++i) {
+      for (int q = 0; q < f_ && x < cols_; ++q, ++x) {
+        const std::uint16_t* p = phase_.data() + static_cast<std::size_t>(q) * stride + i * ch;
+        std::uint16_t* o = out + static_cast<std::size_t>(x) * ch;
+        if (ch == 3 && x + 1 < cols_) {
+          std::memcpy(o, p, 8);
+        } else {
+          std::copy(p, p + ch, o);
+        }
+      }
+    }
+  }
+
+  int f_, base_, cols_, ch_;
+  std::size_t low_pixels_;
+  std::vector<std::uint16_t> phase_;  // f rows of low_pixels_ + 1 pixels
+  std::vector<std::uint16_t> rows_[2];
+  int index_[2] = {-1, -1};
+};
+
+// The region (pad, pad, cols, rows) of `low` upscaled f x bilinearly (pad a multiple of f, at least
+// f, so every sample has both neighbours): the crop of cv::resize(low, f x) computed alone, without
+// the full-size intermediate and the copy out of it. The values are rounded 1/8 of a level low
+// for f = 2 and 1/4 for f = 4 (exact values stay exact): that takes back, on average, what the
+// block means' rounding half up added (1/8 of a level per halving).
+cv::Mat upscale_crop(const cv::Mat& low, int f, int pad, int cols, int rows) {
+  // (2 f)^2 = 2^shift; the offset is half of it less the bias.
+  const auto offset = static_cast<std::uint16_t>(f == 2 ? 8 - 2 : 32 - 16);
+  const auto n = static_cast<std::size_t>(cols) * static_cast<std::size_t>(low.channels());
+  WideRows wide(f, pad, cols, low.channels());
+  cv::Mat out(rows, cols, low.type());
+  for (int y = 0; y < rows; ++y) {
+    const PhaseTaps t = phase_taps(y % f, f);
+    const int a = y / f + pad / f + t.first;
+    const std::uint16_t* above = wide.row(low, a);
+    const std::uint16_t* below = wide.row(low, a + 1);
+    const auto wa = static_cast<std::uint16_t>(t.w_first),
+               wb = static_cast<std::uint16_t>(t.w_next);
+    std::uint8_t* o = out.ptr<std::uint8_t>(y);
+    (f == 2 ? blend_rows_2x : blend_rows_4x)(o, above, below, wa, wb, offset, n);
+  }
   return out;
 }
 
-// Blur at 1 / f resolution: f x f block means (cv::INTER_AREA), the dithered blur with the sigma
-// left after the blocks' variance (f^2 - 1) / 12 and the bilinear upsampling's (0.75 for f =
-// 2, 2.75 for f = 4, averaged over the output phases), then bilinear back to full size. Variances
-// add, so the whole is a Gaussian of `sigma` to within the shape of the small kernels; the blur
-// removes the frequencies the block means fold back (its response at the folding frequency 1 / (2
-// f), exp(-pi^2 sigma^2 / (2 f^2)), is below 2e-5 here). The low-resolution kernel stops at 3 of
-// its sigmas (0.3 % of its weight; OpenCV renormalises).
+// Blur at 1 / f resolution: f x f block means (cv::INTER_AREA), the fixed-point blur with the
+// sigma left after the blocks' variance (f^2 - 1) / 12 and the bilinear upsampling's (0.75 for
+// f = 2, 2.75 for f = 4, averaged over the output phases), then bilinear back to full size.
+// Variances add, so the whole is a Gaussian of `sigma` to within the shape of the small
+// kernels; the blur removes the frequencies the block means fold back (its response at the
+// folding frequency 1 / (2 f), exp(-pi^2 sigma^2 / (2 f^2)), is below 2e-5 here). The
+// low-resolution kernel stops at 3 of its sigmas (0.3 % of its weight, renormalised).
 cv::Mat reduced_blur(const cv::Mat& bgr, double sigma, int f) {
   const double up_var = f == 2 ? 0.75 : 2.75;
   const double low_sigma = std::sqrt(sigma * sigma - (f * f - 1) / 12.0 - up_var) / f;
@@ -183,30 +286,26 @@ cv::Mat reduced_blur(const cv::Mat& bgr, double sigma, int f) {
   if (f == 4) {
     cv::resize(low, low, cv::Size((low.cols + 1) / 2, (low.rows + 1) / 2), 0, 0, cv::INTER_AREA);
   }
-  // The dithered blur truncates at low resolution; the bilinear upsampling's rounding then keeps
-  // the truncated level on average. (Upsampling only the frame's own blocks, a view, took OpenCV's
-  // resize off its fast path: 3x slower.)
-  const int r = std::max(1, static_cast<int>(3.0 * low_sigma + 0.5));
-  const cv::Mat blurred = dithered_blur(low, low_sigma, r);
-  cv::Mat up;
-  cv::resize(blurred, up, cv::Size(blurred.cols * f, blurred.rows * f), 0, 0, cv::INTER_LINEAR);
-  return up(cv::Rect(pad, pad, bgr.cols, bgr.rows)).clone();
+  // The blur truncates at low resolution; the bilinear upsampling's rounding then keeps the
+  // truncated level on average.
+  const int r = std::max(1, static_cast<int>(3.0 * low_sigma + 0.5)) | 1;  // see odd_radius
+  cv::Mat blurred;
+  fixed_point_blur(low, fixed_point_gaussian(low_sigma, r), blurred);
+  return upscale_crop(blurred, f, pad, bgr.cols, bgr.rows);
 }
 
 }  // namespace
 
-cv::Mat dithered_gaussian_blur(const cv::Mat& bgr, double sigma) {
-  return dithered_blur(bgr, sigma, kernel_radius(sigma));
-}
-
 cv::Mat gaussian_blur_fast(const cv::Mat& bgr, int severity) {
   const double sigma = gaussian_blur_sigma(severity);
-  // Reduced resolution from sigma 3, where the low-resolution sigma is at least 1.4 (below 1 the
-  // dither's checkerboard survives the blur and flat areas lose a level; sigma 2 stays at full
-  // resolution). Frames too small for 4 x 4 blocks of a few pixels each way keep the
-  // full-resolution blur (it costs little there).
+  // Reduced resolution from sigma 3 (sigma 2 stays at full resolution). Frames too small for 4 x
+  // 4 blocks of a few pixels each way keep the full-resolution blur (it costs little there).
   const bool reduce = sigma >= 3.0 && bgr.rows >= 64 && bgr.cols >= 64;
-  if (!reduce) return dithered_gaussian_blur(bgr, sigma);
+  if (!reduce) {
+    cv::Mat out;
+    fixed_point_blur(bgr, fixed_point_gaussian(sigma, odd_radius(sigma)), out);
+    return out;
+  }
   return reduced_blur(bgr, sigma, sigma >= 6.0 ? 4 : 2);
 }
 
