@@ -31,13 +31,22 @@ void column_pass(std::int16_t* mid, const std::uint8_t* const* rows, const std::
   }
 }
 
+// Sums whose fraction is below this (1/512 of a level) count as landing on their integer.
+constexpr std::int32_t kOnLevel = 1 << (kOutShift - 9);
+
+std::uint8_t store(std::int32_t s, const std::uint8_t* flat) {
+  const auto v = static_cast<std::uint8_t>(std::min(s >> kOutShift, 255));
+  return flat && (s & ((1 << kOutShift) - 1)) < kOnLevel ? flat[v] : v;
+}
+
 void row_pass(std::uint8_t* out, const std::int16_t* mid, std::ptrdiff_t step,
-              const std::int16_t* w, int r, std::size_t from, std::size_t n) {
+              const std::int16_t* w, int r, const std::uint8_t* flat, std::size_t from,
+              std::size_t n) {
   for (std::size_t i = from; i < n; ++i) {
     const std::int16_t* c = mid + i;
     std::int32_t s = w[0] * c[0];
     for (int k = 1; k <= r; ++k) s += w[k] * (c[-step * k] + c[step * k]);
-    out[i] = static_cast<std::uint8_t>(std::min(s >> kOutShift, 255));
+    out[i] = store(s, flat);
   }
 }
 
@@ -54,6 +63,7 @@ struct RowJob {
   int radius;
   const std::int16_t* weight;
   const PairWeights* pairs;
+  const std::uint8_t* flat;  // or nullptr
 };
 
 // The first and last pixel repeated r times beyond the row.
@@ -68,7 +78,7 @@ void fill_border(const RowJob& job) {
 void blur_row(const RowJob& job) {
   column_pass(job.mid, job.rows, job.weight, job.radius, 0, job.n);
   fill_border(job);
-  row_pass(job.out, job.mid, job.step, job.weight, job.radius, 0, job.n);
+  row_pass(job.out, job.mid, job.step, job.weight, job.radius, job.flat, 0, job.n);
 }
 
 using BlurRow = void (*)(const RowJob&);
@@ -146,10 +156,29 @@ inline std::size_t column_pass_avx2(std::int16_t* mid, const std::uint8_t* const
   return j;
 }
 
+// The values of a 16-value block whose sums land on their integer (see kOnLevel) become flat[v].
+// Their lanes come from lo (values 0-3 and 8-11) and hi (4-7 and 12-15), as madd_pair left them.
+FAULTLINE_TARGET_INLINE("avx2")
+inline void apply_flat(std::uint8_t* out, __m256i lo, __m256i hi, const std::uint8_t* flat) {
+  const __m256i fraction = _mm256_set1_epi32((1 << kOutShift) - 1);
+  const __m256i on_level = _mm256_set1_epi32(kOnLevel);
+  const __m256i lo_on = _mm256_cmpgt_epi32(on_level, _mm256_and_si256(lo, fraction));
+  const __m256i hi_on = _mm256_cmpgt_epi32(on_level, _mm256_and_si256(hi, fraction));
+  const int lo_bits = _mm256_movemask_ps(_mm256_castsi256_ps(lo_on));
+  const int hi_bits = _mm256_movemask_ps(_mm256_castsi256_ps(hi_on));
+  if ((lo_bits | hi_bits) == 0) return;
+  static constexpr int kLoValue[8] = {0, 1, 2, 3, 8, 9, 10, 11};
+  for (int b = 0; b < 8; ++b) {
+    if (lo_bits >> b & 1) out[kLoValue[b]] = flat[out[kLoValue[b]]];
+    if (hi_bits >> b & 1) out[kLoValue[b] + 4] = flat[out[kLoValue[b] + 4]];
+  }
+}
+
 template <int R>
 FAULTLINE_TARGET_INLINE("avx2")
-inline std::size_t row_pass_avx2(std::uint8_t* out, const std::int16_t* mid, std::ptrdiff_t step,
-                                 const PairWeights& pw, int radius, std::size_t n) {
+inline std::size_t
+    row_pass_avx2(std::uint8_t* out, const std::int16_t* mid, std::ptrdiff_t step,
+                  const PairWeights& pw, int radius, const std::uint8_t* flat, std::size_t n) {
   const int r = R > 0 ? R : radius;
   const int pairs = R > 0 ? R / 2 + 1 : pw.pairs;
   std::size_t j = 0;
@@ -164,6 +193,7 @@ inline std::size_t row_pass_avx2(std::uint8_t* out, const std::int16_t* mid, std
     // Bytes 0-7 in the low lane and 8-15 in the high one (each twice): gather quadwords 0 and 2.
     const __m256i bytes = _mm256_permute4x64_epi64(_mm256_packus_epi16(words, words), 0x08);
     _mm_storeu_si128(reinterpret_cast<__m128i*>(out + j), _mm256_castsi256_si128(bytes));
+    if (flat) apply_flat(out + j, lo, hi, flat);
   }
   return j;
 }
@@ -177,8 +207,8 @@ void blur_row_avx2(const RowJob& job) {
   std::size_t j = column_pass_avx2<R>(job.mid, job.rows, *job.pairs, job.radius, n);
   column_pass(job.mid, job.rows, job.weight, job.radius, j, n);
   fill_border(job);
-  j = row_pass_avx2<R>(job.out, job.mid, job.step, *job.pairs, job.radius, n);
-  row_pass(job.out, job.mid, job.step, job.weight, job.radius, j, n);
+  j = row_pass_avx2<R>(job.out, job.mid, job.step, *job.pairs, job.radius, job.flat, n);
+  row_pass(job.out, job.mid, job.step, job.weight, job.radius, job.flat, j, n);
 }
 
 BlurRow blur_row_for(int radius) {
@@ -229,11 +259,12 @@ FixedPointKernel fixed_point_gaussian(double sigma, int radius) {
   return fixed_point_kernel(nd::gaussian_kernel(sigma, radius));
 }
 
-void fixed_point_blur(const cv::Mat& in, const FixedPointKernel& k, cv::Mat& out) {
+void fixed_point_blur(const cv::Mat& in, const FixedPointKernel& k, cv::Mat& out,
+                      const std::array<std::uint8_t, 256>* flat) {
   CV_Assert(in.depth() == CV_8U && in.dims == 2);
   if (!in.empty() && out.data == in.data) {  // the column pass reads rows the output replaced
     cv::Mat separate;
-    fixed_point_blur(in, k, separate);
+    fixed_point_blur(in, k, separate, flat);
     out = separate;
     return;
   }
@@ -244,7 +275,8 @@ void fixed_point_blur(const cv::Mat& in, const FixedPointKernel& k, cv::Mat& out
   const auto n = static_cast<std::size_t>(in.cols) * static_cast<std::size_t>(step);
   std::vector<const std::uint8_t*> taps(static_cast<std::size_t>(2 * r + 1));
   std::vector<std::int16_t> line(n + 2 * static_cast<std::size_t>(r * step));
-  RowJob job{taps.data(), line.data() + r * step, nullptr, step, n, r, k.weight.data(), nullptr};
+  RowJob job{taps.data(), line.data() + r * step,       nullptr, step, n, r, k.weight.data(),
+             nullptr,     flat ? flat->data() : nullptr};
   BlurRow blur = blur_row;
 #if FAULTLINE_X86_SIMD
   PairWeights pw;

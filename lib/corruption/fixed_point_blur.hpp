@@ -2,6 +2,7 @@
 // float64 blurs (np.uint8(x), x >= 0), at about a third of the cost of OpenCV's 8-bit Gaussian.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <opencv2/core.hpp>
 #include <vector>
@@ -26,7 +27,10 @@ FixedPointKernel fixed_point_gaussian(double sigma, int radius);
 // for the row pass (at most 1/128 off), which sums exactly again. So a flat neighbourhood keeps its
 // value, and elsewhere the result is the true blur's floor except within ~1/100 of a level of an
 // integer. `in` is CV_8UC(n); `out` is (re)allocated. The AVX2 and portable paths give the same
-// bytes.
-void fixed_point_blur(const cv::Mat& in, const FixedPointKernel& k, cv::Mat& out);
+// bytes. With `flat`, a value whose sum lands on its integer v (within 1/512 of a level above it,
+// as every flat neighbourhood's does) is flat[v] instead: a reference whose float64 sums truncate
+// some flat levels one down gives that level's result there.
+void fixed_point_blur(const cv::Mat& in, const FixedPointKernel& k, cv::Mat& out,
+                      const std::array<std::uint8_t, 256>* flat = nullptr);
 
 }  // namespace faultline::corruption

@@ -26,8 +26,7 @@ cv::Mat glass_blur_numpy(const cv::Mat& bgr, int severity, rng::NumpyRandomState
 
 // fast mode: the same pixel walk with FastRng offsets (four per 64-bit draw; the walk, one Python
 // iteration per pixel, is what makes the reference take minutes; drawn a row at a time), and the
-// blurs in float32 at every severity (axis 0 straight from the 8-bit rows), with the reference's
-// truncation of flat areas.
+// blurs in exact fixed point (fixed_point_blur.hpp), with the reference's truncation of flat areas.
 cv::Mat glass_blur_fast(const cv::Mat& bgr, int severity, rng::FastRng& rng);
 
 }  // namespace faultline::corruption

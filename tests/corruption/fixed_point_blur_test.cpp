@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
@@ -17,8 +18,10 @@
 namespace faultline::corruption {
 namespace {
 
-// The documented sums, one value at a time: column pass in Q15 rounded to Q6, row pass, floor.
-cv::Mat restated_blur(const cv::Mat& in, const FixedPointKernel& k) {
+// The documented sums, one value at a time: column pass in Q15 rounded to Q6, row pass, floor (and
+// flat[v] where the sum is within 1/512 of a level above v).
+cv::Mat restated_blur(const cv::Mat& in, const FixedPointKernel& k,
+                      const std::array<std::uint8_t, 256>* flat = nullptr) {
   const int r = k.radius, rows = in.rows, cols = in.cols, ch = in.channels();
   cv::Mat mid(rows, cols, CV_32SC(ch)), out(in.size(), in.type());
   for (int y = 0; y < rows; ++y) {
@@ -39,7 +42,9 @@ cv::Mat restated_blur(const cv::Mat& in, const FixedPointKernel& k) {
           s += k.weight[static_cast<std::size_t>(std::abs(t))] *
                mid.ptr<std::int32_t>(y)[std::clamp(x + t, 0, cols - 1) * ch + c];
         }
-        out.ptr<std::uint8_t>(y)[x * ch + c] = static_cast<std::uint8_t>(std::min(s >> 21, 255LL));
+        auto v = static_cast<std::uint8_t>(std::min(s >> 21, 255LL));
+        if (flat && (s & ((1 << 21) - 1)) < (1 << 12)) v = (*flat)[v];
+        out.ptr<std::uint8_t>(y)[x * ch + c] = v;
       }
     }
   }
@@ -85,6 +90,28 @@ TEST(FixedPointBlurTest, EqualsTheDocumentedSumsOnRandomFrames) {
         EXPECT_EQ(cv::norm(out, restated_blur(in, k), cv::NORM_INF), 0.0)
             << cols << " cols, type " << type << ", sigma " << sigma;
       }
+    }
+  }
+}
+
+// Frames with flat patches (whose sums land on their levels) and noise, so that blocks of 16 values
+// mix values that take the table and values that do not.
+TEST(FixedPointBlurTest, TakesTheFlatTableWhereTheSumLandsOnALevel) {
+  std::array<std::uint8_t, 256> halves{};
+  for (std::size_t v = 0; v < 256; ++v) halves[v] = static_cast<std::uint8_t>(v / 2);
+  for (const int cols : {7, 40}) {
+    cv::Mat in = random_frame(30, cols, CV_8UC3, cols);
+    in(cv::Rect(1, 2, cols / 2, 20)).setTo(cv::Scalar(90, 91, 92));
+    const FixedPointKernel k = fixed_point_gaussian(1.0, 4);
+    cv::Mat out;
+    fixed_point_blur(in, k, out, &halves);
+    EXPECT_EQ(cv::norm(out, restated_blur(in, k, &halves), cv::NORM_INF), 0.0) << cols;
+    // Inside the patch, beyond the kernel's reach of its edges, every value is its level's entry.
+    if (cols == 40) {
+      const cv::Mat inner = out(cv::Rect(6, 7, cols / 2 - 10, 10)).clone();
+      EXPECT_EQ(
+          cv::norm(inner, cv::Mat(inner.size(), CV_8UC3, cv::Scalar(45, 45, 46)), cv::NORM_INF),
+          0.0);
     }
   }
 }
