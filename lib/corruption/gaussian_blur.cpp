@@ -219,19 +219,29 @@ class WideRows {
       blend_pixels(phase_.data() + static_cast<std::size_t>(q) * stride, a, a + ch,
                    static_cast<std::uint16_t>(t.w_first), static_cast<std::uint16_t>(t.w_next), n);
     }
-    // Three channels go as 8-byte copies (three values and the next pixel's first) in increasing
-    // x, each rewritten by the next pixel's own copy; the last pixel copies its three alone.
+    if (ch == 3 && f_ == 2) return interleave_bgr<2>(out, stride);
+    if (ch == 3 && f_ == 4) return interleave_bgr<4>(out, stride);
     int x = 0;
     for (std::size_t i = 0; x < cols_; ++i) {
       for (int q = 0; q < f_ && x < cols_; ++q, ++x) {
         const std::uint16_t* p = phase_.data() + static_cast<std::size_t>(q) * stride + i * ch;
-        std::uint16_t* o = out + static_cast<std::size_t>(x) * ch;
-        if (ch == 3 && x + 1 < cols_) {
-          std::memcpy(o, p, 8);
-        } else {
-          std::copy(p, p + ch, o);
-        }
+        std::copy(p, p + ch, out + static_cast<std::size_t>(x) * ch);
       }
+    }
+  }
+
+  // Three channels as 8-byte copies (three values and the next pixel's first) in increasing x,
+  // each rewritten by the next pixel's own copy; the last pixel copies its three alone.
+  template <int F>
+  void interleave_bgr(std::uint16_t* out, std::size_t stride) const {
+    const std::uint16_t* p[F];
+    for (int q = 0; q < F; ++q) p[q] = phase_.data() + static_cast<std::size_t>(q) * stride;
+    const auto groups = static_cast<std::size_t>((cols_ - 1) / F);  // all before the last pixel
+    for (std::size_t i = 0; i < groups; ++i) {
+      for (int q = 0; q < F; ++q) std::memcpy(out + 3 * (F * i + q), p[q] + 3 * i, 8);
+    }
+    for (auto x = static_cast<std::size_t>(F) * groups; x < static_cast<std::size_t>(cols_); ++x) {
+      std::copy(p[x % F] + 3 * (x / F), p[x % F] + 3 * (x / F) + 3, out + 3 * x);
     }
   }
 
