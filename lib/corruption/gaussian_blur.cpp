@@ -288,13 +288,16 @@ cv::Mat reduced_blur(const cv::Mat& bgr, double sigma, int f) {
   const double low_sigma = std::sqrt(sigma * sigma - (f * f - 1) / 12.0 - up_var) / f;
   // The frame first gets the reference's border ('nearest': the edge pixel repeated) for the
   // kernel's reach, a whole number of blocks wide; block means of the border alone would repeat
-  // the edge block instead, tens of levels off near a high-contrast edge.
+  // the edge block instead, tens of levels off near a high-contrast edge. A side that is not a
+  // multiple of f gets up to f - 1 more border after its end, so that every block is whole: a
+  // stretched block grid shifts the frame by up to a few pixels at its far side (44 levels at a
+  // 333 x 197 chart's edges).
   const int pad = (kernel_radius(sigma) + f - 1) / f * f;
+  const int extra_x = (f - bgr.cols % f) % f, extra_y = (f - bgr.rows % f) % f;
   cv::Mat low;
-  cv::copyMakeBorder(bgr, low, pad, pad, pad, pad, cv::BORDER_REPLICATE);
-  cv::resize(low, low, cv::Size((low.cols + 1) / 2, (low.rows + 1) / 2), 0, 0, cv::INTER_AREA);
-  if (f == 4) {
-    cv::resize(low, low, cv::Size((low.cols + 1) / 2, (low.rows + 1) / 2), 0, 0, cv::INTER_AREA);
+  cv::copyMakeBorder(bgr, low, pad, pad + extra_y, pad, pad + extra_x, cv::BORDER_REPLICATE);
+  for (int halving = f; halving > 1; halving /= 2) {
+    cv::resize(low, low, cv::Size(low.cols / 2, low.rows / 2), 0, 0, cv::INTER_AREA);
   }
   // The blur truncates at low resolution; the bilinear upsampling's rounding then keeps the
   // truncated level on average.
