@@ -12,6 +12,8 @@
 #include "common/simd.hpp"
 #include "corruption/fixed_point_blur.hpp"
 #include "corruption/ndimage.hpp"
+#include "rng/lane_rng.hpp"
+#include "rng/lane_rng_avx2.hpp"
 
 namespace faultline::corruption {
 
@@ -62,71 +64,56 @@ FastBlur fast_blur(double sigma) {
   return b;
 }
 
-// out[i] = (chunk[i] * span) >> 16 - delta: OffsetStream's map, eight or sixteen at a time.
-FAULTLINE_CLONES("avx2")
-void map_chunks(std::int8_t* out, const std::uint16_t* chunk, std::size_t n, std::uint32_t span,
-                int delta) {
-  for (std::size_t i = 0; i < n; ++i) {
-    out[i] = static_cast<std::int8_t>(static_cast<int>((chunk[i] * span) >> 16) - delta);
+// fast mode's offsets: one 32-bit LaneRng value per pixel, dx from its low 16 bits and dy from its
+// high 16, each scaled to [-d, d) by multiply and shift (uniform for d = 1, 2, 4; for d = 3 four of
+// the six values are 1 / 10922 more likely than the other two, far below anything the output
+// shows), turned into the byte offset dy * row_step + 3 dx (detail::glass_row_offsets).
+struct OffsetMap {
+  std::int32_t span, delta, row_step;
+  std::int32_t operator()(std::uint32_t v) const {
+    const auto dx =
+        static_cast<std::int32_t>(((v & 0xFFFFu) * static_cast<std::uint32_t>(span)) >> 16);
+    const auto dy = static_cast<std::int32_t>(((v >> 16) * static_cast<std::uint32_t>(span)) >> 16);
+    return (dy - delta) * row_step + 3 * (dx - delta);
   }
-}
-
-// fast mode's offsets: four to a 64-bit draw, 16 bits each, scaled to [-d, d) by multiply and
-// shift (uniform for d = 1, 2, 4; for d = 3 four of the six values are 1 / 10922 more likely than
-// the other two, far below anything the output shows). Drawn a row at a time, in the walk's order.
-class OffsetStream {
- public:
-  OffsetStream(rng::FastRng& rng, int delta)
-      : rng_(rng), delta_(delta), span_(static_cast<std::uint64_t>(2 * delta)) {}
-  void fill(std::int8_t* out, std::size_t n) {
-    std::size_t i = 0;
-    for (; i < n && left_ > 0; ++i) out[i] = take();
-    // The whole words' chunks first (the draws are serial), then mapped in one vector loop.
-    const std::size_t words = (n - i) / 4;
-    chunks_.resize(4 * words);
-    for (std::size_t j = 0; j < words; ++j) {
-      const std::uint64_t w = rng_.next_u64();
-      for (std::size_t k = 0; k < 4; ++k)
-        chunks_[4 * j + k] = static_cast<std::uint16_t>(w >> (16 * k));
-    }
-    map_chunks(out + i, chunks_.data(), chunks_.size(), static_cast<std::uint32_t>(span_), delta_);
-    i += chunks_.size();
-    for (; i < n; ++i) out[i] = take();
-  }
-
- private:
-  std::int8_t map(std::uint64_t chunk) const {
-    return static_cast<std::int8_t>(static_cast<int>(((chunk & 0xFFFFu) * span_) >> 16) - delta_);
-  }
-  std::int8_t take() {
-    if (left_ == 0) word_ = rng_.next_u64(), left_ = 4;
-    const std::int8_t v = map(word_);
-    word_ >>= 16, --left_;
-    return v;
-  }
-  rng::FastRng& rng_;
-  int delta_;
-  std::uint64_t span_;
-  std::uint64_t word_ = 0;
-  int left_ = 0;
-  std::vector<std::uint16_t> chunks_;
 };
 
-// shuffle_pixels with OffsetStream's draws (dx, then dy, per pixel), a row's offsets drawn and
-// turned into byte offsets before its serial copy loop (a copy may read a pixel the walk wrote).
+#if FAULTLINE_X86_SIMD
+FAULTLINE_TARGET_INLINE("avx2") inline __m256i map_offsets(__m256i v, const OffsetMap& m) {
+  const __m256i low = _mm256_set1_epi32(0xFFFF), span = _mm256_set1_epi32(m.span);
+  const __m256i delta = _mm256_set1_epi32(m.delta);
+  const __m256i dx = _mm256_srli_epi32(_mm256_mullo_epi32(_mm256_and_si256(v, low), span), 16);
+  const __m256i dy = _mm256_srli_epi32(_mm256_mullo_epi32(_mm256_srli_epi32(v, 16), span), 16);
+  const __m256i x3 = _mm256_mullo_epi32(_mm256_sub_epi32(dx, delta), _mm256_set1_epi32(3));
+  const __m256i y = _mm256_mullo_epi32(_mm256_sub_epi32(dy, delta), _mm256_set1_epi32(m.row_step));
+  return _mm256_add_epi32(y, x3);
+}
+
+FAULTLINE_TARGET("avx2")
+void row_offsets_avx2(std::int32_t* out, std::size_t steps, rng::LaneRng& lanes,
+                      const OffsetMap& m) {
+  rng::avx2::Xoshiro4 a = rng::avx2::load_half(lanes, 0), b = rng::avx2::load_half(lanes, 1);
+  for (std::size_t s = 0; s < steps; ++s, out += 16) {
+    _mm256_storeu_si256(reinterpret_cast<__m256i*>(out), map_offsets(rng::avx2::step(a), m));
+    _mm256_storeu_si256(reinterpret_cast<__m256i*>(out + 8), map_offsets(rng::avx2::step(b), m));
+  }
+  rng::avx2::store_half(a, lanes, 0);
+  rng::avx2::store_half(b, lanes, 1);
+}
+#endif
+
+// shuffle_pixels with glass_row_offsets' draws, a row's offsets drawn before its serial copy loop
+// (a copy may read a pixel the walk wrote).
 void walk_fast(cv::Mat& img, const GlassParams& p, rng::FastRng& rng) {
   const int d = p.delta;
   if (img.cols - 2 * d <= 0) return;
   const auto count = static_cast<std::size_t>(img.cols - 2 * d);
-  std::vector<std::int8_t> draws(2 * count);
-  std::vector<std::ptrdiff_t> offset(count);
-  const auto step = static_cast<std::ptrdiff_t>(img.step[0]);
-  OffsetStream stream(rng, d);
+  std::vector<std::int32_t> offset((count + 15) / 16 * 16);
+  const auto row_step = static_cast<std::int32_t>(img.step[0]);
+  rng::LaneRng lanes(rng);
   for (int it = 0; it < p.iterations; ++it) {
     for (int h = img.rows - d; h > d; --h) {
-      stream.fill(draws.data(), draws.size());
-      for (std::size_t k = 0; k < count; ++k)
-        offset[k] = draws[2 * k + 1] * step + 3 * draws[2 * k];
+      detail::glass_row_offsets(offset.data(), count, lanes, d, row_step);
       unsigned char* px = img.ptr<unsigned char>(h) + 3 * (img.cols - d);  // w = cols - d first
       for (std::size_t k = 0; k < count; ++k, px -= 3) {
         // Two loads and two stores where three of each did it (src is px or a whole pixel away).
@@ -142,6 +129,26 @@ void walk_fast(cv::Mat& img, const GlassParams& p, rng::FastRng& rng) {
 }
 
 }  // namespace
+
+namespace detail {
+
+void glass_row_offsets(std::int32_t* out, std::size_t count, rng::LaneRng& lanes, int delta,
+                       std::int32_t row_step, bool allow_simd) {
+  const OffsetMap m{2 * delta, delta, row_step};
+  const std::size_t steps = (count + 15) / 16;
+#if FAULTLINE_X86_SIMD
+  if (allow_simd && common::cpu_has_avx2()) return row_offsets_avx2(out, steps, lanes, m);
+#else
+  (void)allow_simd;
+#endif
+  std::uint32_t v[rng::LaneRng::kValuesPerStep];
+  for (std::size_t s = 0; s < steps; ++s, out += 16) {
+    lanes.next_values(v);
+    for (std::size_t i = 0; i < 16; ++i) out[i] = m(v[i]);
+  }
+}
+
+}  // namespace detail
 
 GlassParams glass_params(int severity) {
   static constexpr GlassParams kParams[] = {
