@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "common/simd.hpp"
+#include "corruption/edge_canny.hpp"
 #include "corruption/ndimage.hpp"
 #include "rng/lane_rng.hpp"
 #include "rng/lane_rng_avx2.hpp"
@@ -451,10 +452,8 @@ int row_max_product(const std::uint8_t* liquid, const std::uint8_t* strength, st
 }
 
 cv::Mat water_blend_fast(const cv::Mat& bgr, const cv::Mat& liquid8, const SpatterParams& p) {
-  cv::Mat edges;
   const auto n = static_cast<std::size_t>(liquid8.cols);
-  cv::Canny(liquid8, edges, 50, 150);
-  cv::Mat dist8 = edge_distance_u8(edges);
+  cv::Mat dist8 = edge_distance_u8(canny_l1(liquid8, 50, 150));
   cv::equalizeHist(dist8, dist8);
   const cv::Mat_<int> emboss = (cv::Mat_<int>(3, 3) << -2, -1, 0, -1, 1, 1, 0, 1, 2);
   cv::filter2D(dist8, dist8, CV_8U, emboss);

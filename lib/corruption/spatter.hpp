@@ -30,11 +30,13 @@ SpatterParams spatter_params(int severity);
 // reference calls them.
 cv::Mat spatter_numpy(const cv::Mat& bgr, int severity, rng::NumpyRandomState& rng);
 
-// fast mode: FastRng normals (eight-lane ziggurat) and OpenCV's float32 Gaussian (to 3 sigma) for
-// the smoothing; the mud is blended in float32 from the float32 field; the water takes numpy mode's
-// steps from the float32 field, except the distance to the Canny edges: exact Euclidean distance
-// capped at 20 (a column sweep and a 41-tap row minimum) where the reference's 5 x 5 chamfer
-// approximates it, with its 3 x 3 mean fused in; statistical tolerance as before
+// fast mode: the field smoothed in float32 with the Gaussian to 3 sigma. Mud: FastRng normals
+// (eight-lane ziggurat), OpenCV's Gaussian, the blend in float32. Water: triangular draws (see
+// spatter.cpp: same mean and variance, the smoothed field's kurtosis within 0.03 of normal)
+// smoothed a row at a time straight into the 8-bit liquid, then numpy mode's steps, with OpenCV's
+// Canny computed by canny_l1 (edge_canny.hpp, the same edges) and the distance to the edges exact
+// (Euclidean, capped at 20: a column sweep and a 41-tap row minimum) where the reference's 5 x 5
+// chamfer approximates it, with its 3 x 3 mean fused in; statistical tolerance as before
 // (tests/corruption/fast_mode_ext_spatial_test.cpp).
 cv::Mat spatter_fast(const cv::Mat& bgr, int severity, rng::FastRng& rng);
 
