@@ -1,0 +1,322 @@
+// fast mode's water: the liquid field streamed row by row into liquid8, and the strength from its
+// edges (Canny, exact capped distance, the 8-bit filters fused into one pass).
+#include "corruption/spatter_water.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <opencv2/imgproc.hpp>
+#include <vector>
+
+#include "common/simd.hpp"
+#include "corruption/edge_canny.hpp"
+#include "rng/lane_rng.hpp"
+#include "rng/lane_rng_avx2.hpp"
+
+namespace faultline::corruption {
+
+namespace {
+
+// The water's field is drawn and smoothed a row at a time, straight into liquid8 (the float field
+// itself is never stored). Its draws are triangular, not normal: after the Gaussian (sigma 2-4)
+// each field value is a weighted sum of >= 2 pi sigma^2 ~ 25-100 effective draws, whose excess
+// kurtosis is the draw's (-0.6) times sum w^4 / (sum w^2)^2 = 1 / (2 pi sigma^2): -0.024, -0.011
+// and -0.006 at sigma 2, 3, 4 (0 for normal draws), which moves the liquid fraction above the
+// threshold (~1.1-1.4 sd) by < 0.001 of ~0.1-0.15. Two 16-bit halves of one 32-bit draw: no
+// ziggurat, no table gather, no rejection.
+constexpr double kTriangularSd = 26754.0;  // sqrt((2^32 - 1) / 6): sd of lo16 + hi16 - 65535
+
+// n draws lo16 + hi16 - 65535 (exact in float), value i % 16 of lane step i / 16; a row of n takes
+// ceil(n / 16) steps (a partial step's leftover values are dropped), on every CPU.
+#if FAULTLINE_X86_SIMD
+FAULTLINE_TARGET_INLINE("avx2") inline __m256 triangular8(__m256i v) {
+  const __m256i lo = _mm256_and_si256(v, _mm256_set1_epi32(0xFFFF));
+  const __m256i sum = _mm256_add_epi32(lo, _mm256_srli_epi32(v, 16));
+  return _mm256_cvtepi32_ps(_mm256_sub_epi32(sum, _mm256_set1_epi32(65535)));
+}
+
+FAULTLINE_TARGET("avx2")
+std::size_t triangular_avx2(float* dst, std::size_t n, rng::LaneRng& lanes) {
+  rng::avx2::Xoshiro4 a = rng::avx2::load_half(lanes, 0), b = rng::avx2::load_half(lanes, 1);
+  std::size_t i = 0;
+  for (; i + 16 <= n; i += 16) {
+    _mm256_storeu_ps(dst + i, triangular8(rng::avx2::step(a)));
+    _mm256_storeu_ps(dst + i + 8, triangular8(rng::avx2::step(b)));
+  }
+  rng::avx2::store_half(a, lanes, 0);
+  rng::avx2::store_half(b, lanes, 1);
+  return i;
+}
+#endif
+
+void triangular_row(float* dst, std::size_t n, rng::LaneRng& lanes, bool simd) {
+  std::size_t i = 0;
+#if FAULTLINE_X86_SIMD
+  if (simd) i = triangular_avx2(dst, n, lanes);
+#else
+  (void)simd;
+#endif
+  std::uint32_t v[rng::LaneRng::kValuesPerStep];
+  for (; i < n; i += rng::LaneRng::kValuesPerStep) {
+    lanes.next_values(v);
+    for (std::size_t j = 0; j < rng::LaneRng::kValuesPerStep && i + j < n; ++j) {
+      const auto t = static_cast<std::int32_t>((v[j] & 0xFFFFu) + (v[j] >> 16)) - 65535;
+      dst[i + j] = static_cast<float>(t);
+    }
+  }
+}
+
+// The Gaussian's passes: out = w0 c + sum_{k=1..r} w_k (lo_k + hi_k), summed in this order (no
+// FMA), so the AVX2 bodies and the portable ones give the same floats. A row pass reads in[x +- k]
+// (in padded by r each side); a column pass reads centre[+-k][x] (row pointers).
+float blur_tap_sum(const float* in, const float* w, int r, std::size_t x) {
+  float acc = w[0] * in[x];
+  for (int k = 1; k <= r; ++k)
+    acc += w[k] * (in[x - static_cast<std::size_t>(k)] + in[x + static_cast<std::size_t>(k)]);
+  return acc;
+}
+
+float column_tap_sum(const float* const* centre, const float* w, int r, std::size_t x) {
+  float acc = w[0] * centre[0][x];
+  for (int k = 1; k <= r; ++k) acc += w[k] * (centre[-k][x] + centre[k][x]);
+  return acc;
+}
+
+// liquid8 = uint8(field * 255) (numpy's wrap) where field = loc + sum >= threshold, else 0.
+std::uint8_t liquid_value(float sum, float loc, float threshold) {
+  const float f = loc + sum;
+  const float v = f >= threshold ? f * 255.f : 0.f;
+  return static_cast<std::uint8_t>(static_cast<std::int32_t>(v) & 0xFF);
+}
+
+#if FAULTLINE_X86_SIMD
+FAULTLINE_TARGET("avx2")
+std::size_t blur_row_avx2(float* out, const float* in, const float* w, int r, std::size_t n) {
+  std::size_t x = 0;
+  for (; x + 8 <= n; x += 8) {
+    __m256 acc = _mm256_mul_ps(_mm256_set1_ps(w[0]), _mm256_loadu_ps(in + x));
+    for (int k = 1; k <= r; ++k) {
+      const __m256 pair = _mm256_add_ps(_mm256_loadu_ps(in + x - k), _mm256_loadu_ps(in + x + k));
+      acc = _mm256_add_ps(acc, _mm256_mul_ps(_mm256_set1_ps(w[k]), pair));
+    }
+    _mm256_storeu_ps(out + x, acc);
+  }
+  return x;
+}
+
+FAULTLINE_TARGET_INLINE("avx2")
+inline __m256i liquid8x8(const float* const* centre, const float* w, int r, __m256 loc,
+                         __m256 threshold, std::size_t x) {
+  __m256 acc = _mm256_mul_ps(_mm256_set1_ps(w[0]), _mm256_loadu_ps(centre[0] + x));
+  for (int k = 1; k <= r; ++k) {
+    const __m256 pair =
+        _mm256_add_ps(_mm256_loadu_ps(centre[-k] + x), _mm256_loadu_ps(centre[k] + x));
+    acc = _mm256_add_ps(acc, _mm256_mul_ps(_mm256_set1_ps(w[k]), pair));
+  }
+  const __m256 f = _mm256_add_ps(loc, acc);
+  const __m256 v = _mm256_and_ps(_mm256_cmp_ps(f, threshold, _CMP_GE_OQ),
+                                 _mm256_mul_ps(f, _mm256_set1_ps(255.f)));
+  return _mm256_and_si256(_mm256_cvttps_epi32(v), _mm256_set1_epi32(0xFF));
+}
+
+FAULTLINE_TARGET("avx2")
+std::size_t column_liquid_avx2(std::uint8_t* out, const float* const* centre, const float* w, int r,
+                               float loc, float threshold, std::size_t n) {
+  const __m256 locv = _mm256_set1_ps(loc), thr = _mm256_set1_ps(threshold);
+  std::size_t x = 0;
+  for (; x + 16 <= n; x += 16) {
+    const __m256i a = liquid8x8(centre, w, r, locv, thr, x);
+    const __m256i b = liquid8x8(centre, w, r, locv, thr, x + 8);
+    const __m256i words = _mm256_permute4x64_epi64(_mm256_packus_epi32(a, b), 0xD8);
+    const __m128i bytes =
+        _mm_packus_epi16(_mm256_castsi256_si128(words), _mm256_extracti128_si256(words, 1));
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(out + x), bytes);
+  }
+  return x;
+}
+#endif
+
+void blur_row(float* out, const float* in, const float* w, int r, std::size_t n, bool simd) {
+  std::size_t x = 0;
+#if FAULTLINE_X86_SIMD
+  if (simd) x = blur_row_avx2(out, in, w, r, n);
+#else
+  (void)simd;
+#endif
+  for (; x < n; ++x) out[x] = blur_tap_sum(in, w, r, x);
+}
+
+void column_liquid_row(std::uint8_t* out, const float* const* centre, const float* w, int r,
+                       float loc, float threshold, std::size_t n, bool simd) {
+  std::size_t x = 0;
+#if FAULTLINE_X86_SIMD
+  if (simd) x = column_liquid_avx2(out, centre, w, r, loc, threshold, n);
+#else
+  (void)simd;
+#endif
+  for (; x < n; ++x) out[x] = liquid_value(column_tap_sum(centre, w, r, x), loc, threshold);
+}
+
+// Vertical distance to the nearest edge pixel in the column, capped at kCap + 1, from the row above
+// (prev) or below: d = edge ? 0 : min(prev + 1, kCap + 1).
+constexpr int kCap = 20;
+FAULTLINE_CLONES("avx2")
+void column_step(std::uint8_t* d, const std::uint8_t* prev, const std::uint8_t* edge, std::size_t n,
+                 bool first) {
+  for (std::size_t x = 0; x < n; ++x) {
+    const int from = first ? kCap + 1 : std::min(prev[x] + 1, kCap + 1);
+    d[x] = static_cast<std::uint8_t>(edge[x] ? 0 : std::min<int>(d[x], from));
+  }
+}
+
+// One row of squared distances: min over |k| <= kCap of k^2 + dv(x + k)^2, from dv^2 padded by kCap
+// values of (kCap + 1)^2 each side (`q` at the first real one).
+FAULTLINE_CLONES("avx2")
+void row_min(std::uint16_t* out, const std::uint16_t* q, std::size_t n) {
+  for (std::size_t x = 0; x < n; ++x) out[x] = q[x];
+  for (int k = 1; k <= kCap; ++k) {
+    const auto kk = static_cast<std::uint16_t>(k * k);
+    const std::uint16_t* lo = q - k;
+    const std::uint16_t* hi = q + k;
+    for (std::size_t x = 0; x < n; ++x) {
+      const std::uint16_t a = static_cast<std::uint16_t>(std::min(lo[x], hi[x]) + kk);
+      out[x] = std::min(out[x], a);
+    }
+  }
+}
+
+// d = min(sqrt(d2), 20), from a table of the (kCap + 1)^2 + 1 possible d2 (a vectorised sqrt
+// would need -fno-math-errno).
+void sqrt_row(float* d, const std::uint16_t* d2, std::size_t n) {
+  static const std::vector<float> table = [] {
+    std::vector<float> t((kCap + 1) * (kCap + 1) + 1);
+    for (std::size_t i = 0; i < t.size(); ++i) {
+      t[i] = std::min(std::sqrt(static_cast<float>(i)), static_cast<float>(kCap));
+    }
+    return t;
+  }();
+  for (std::size_t x = 0; x < n; ++x) d[x] = table[d2[x]];
+}
+
+// out = floor(3 x 3 mean) of the rows a, b, c, columns reflected (reflect-101) at both ends.
+FAULTLINE_CLONES("avx2")
+void mean3_row(std::uint8_t* out, float* sum, const float* a, const float* b, const float* c,
+               std::size_t n) {
+  for (std::size_t x = 0; x < n; ++x) sum[x] = a[x] + b[x] + c[x];
+  const auto at = [&](std::ptrdiff_t x) {
+    const auto last = static_cast<std::ptrdiff_t>(n) - 1;
+    return sum[static_cast<std::size_t>(
+        x < 0 ? std::min<std::ptrdiff_t>(1, last)
+              : (x > last ? std::max<std::ptrdiff_t>(last - 1, 0) : x))];
+  };
+  out[0] = static_cast<std::uint8_t>(static_cast<std::int32_t>((at(-1) + at(0) + at(1)) / 9.f));
+  for (std::size_t x = 1; x + 1 < n; ++x) {
+    out[x] = static_cast<std::uint8_t>(
+        static_cast<std::int32_t>((sum[x - 1] + sum[x] + sum[x + 1]) * (1.f / 9.f)));
+  }
+  if (n > 1) {
+    const auto l = static_cast<std::ptrdiff_t>(n) - 1;
+    out[n - 1] =
+        static_cast<std::uint8_t>(static_cast<std::int32_t>((at(l - 1) + at(l) + at(l + 1)) / 9.f));
+  }
+}
+
+// floor of the 3 x 3 mean (cv::blur's default reflect-101 border) of the distance to the nearest
+// Canny edge pixel, capped at 20 (CV_8U), three rows of distances at a time.
+cv::Mat edge_distance_u8(const cv::Mat& edges) {
+  const int rows = edges.rows;
+  const auto n = static_cast<std::size_t>(edges.cols);
+  cv::Mat dv(edges.size(), CV_8U, cv::Scalar(kCap + 1));
+  for (int y = 0; y < rows; ++y) {
+    column_step(dv.ptr<std::uint8_t>(y), y ? dv.ptr<std::uint8_t>(y - 1) : nullptr,
+                edges.ptr<std::uint8_t>(y), n, y == 0);
+  }
+  for (int y = rows - 2; y >= 0; --y) {
+    column_step(dv.ptr<std::uint8_t>(y), dv.ptr<std::uint8_t>(y + 1), edges.ptr<std::uint8_t>(y), n,
+                false);
+  }
+  std::vector<std::uint16_t> q(n + 2 * kCap, (kCap + 1) * (kCap + 1)), d2(n);
+  std::vector<float> ring(3 * n), sum(n);
+  auto distances = [&](int y) {  // row y's distances into ring slot y % 3
+    const std::uint8_t* v = dv.ptr<std::uint8_t>(y);
+    for (std::size_t x = 0; x < n; ++x) q[x + kCap] = static_cast<std::uint16_t>(v[x] * v[x]);
+    row_min(d2.data(), q.data() + kCap, n);
+    sqrt_row(ring.data() + static_cast<std::size_t>(y % 3) * n, d2.data(), n);
+  };
+  auto reflect = [rows](int y) {
+    return y < 0 ? std::min(1, rows - 1) : (y >= rows ? std::max(rows - 2, 0) : y);
+  };
+  cv::Mat out(edges.size(), CV_8U);
+  int done = -1;
+  for (int y = 0; y < rows; ++y) {
+    for (; done < std::min(y + 1, rows - 1); ++done) distances(done + 1);
+    const float* a = ring.data() + static_cast<std::size_t>(reflect(y - 1) % 3) * n;
+    const float* b = ring.data() + static_cast<std::size_t>(y % 3) * n;
+    const float* c = ring.data() + static_cast<std::size_t>(reflect(y + 1) % 3) * n;
+    mean3_row(out.ptr<std::uint8_t>(y), sum.data(), a, b, c, n);
+  }
+  return out;
+}
+
+}  // namespace
+
+// fast mode's liquid8 for the water: draws, then the Gaussian to 3 sigma (replicate border) as a
+// row pass into a ring of 2r + 1 rows and a column pass per output row, with the draws' scale in
+// the column taps.
+cv::Mat water_liquid8(cv::Size size, const SpatterParams& p, rng::FastRng& rng) {
+  const int r = static_cast<int>(std::ceil(3.0 * p.sigma));
+  std::vector<double> taps(static_cast<std::size_t>(r) + 1);
+  double total = 0;
+  for (int k = 0; k <= r; ++k) {
+    taps[static_cast<std::size_t>(k)] = std::exp(-0.5 * k * k / (p.sigma * p.sigma));
+    total += (k ? 2 : 1) * taps[static_cast<std::size_t>(k)];
+  }
+  std::vector<float> row_w(taps.size()), col_w(taps.size());
+  for (std::size_t k = 0; k < taps.size(); ++k) {
+    row_w[k] = static_cast<float>(taps[k] / total);
+    col_w[k] = static_cast<float>(taps[k] / total * p.scale / kTriangularSd);
+  }
+  const auto n = static_cast<std::size_t>(size.width);
+  const auto ur = static_cast<std::size_t>(r);
+  const int ring_rows = std::min(2 * r + 1, size.height);
+  std::vector<float> padded(n + 2 * ur), ring(static_cast<std::size_t>(ring_rows) * n);
+  std::vector<const float*> window(2 * ur + 1);
+  auto ring_row = [&](int y) { return ring.data() + static_cast<std::size_t>(y % ring_rows) * n; };
+  rng::LaneRng lanes(rng);
+  const bool simd = common::cpu_has_avx2();
+  cv::Mat liquid8(size, CV_8U);
+  int drawn = 0;
+  for (int y = 0; y < size.height; ++y) {
+    for (; drawn <= std::min(y + r, size.height - 1); ++drawn) {
+      triangular_row(padded.data() + ur, n, lanes, simd);
+      std::fill(padded.begin(), padded.begin() + r, padded[ur]);
+      std::fill(padded.end() - r, padded.end(), padded[ur + n - 1]);
+      blur_row(ring_row(drawn), padded.data() + ur, row_w.data(), r, n, simd);
+    }
+    for (int k = -r; k <= r; ++k) {
+      window[static_cast<std::size_t>(k + r)] = ring_row(std::clamp(y + k, 0, size.height - 1));
+    }
+    column_liquid_row(liquid8.ptr<std::uint8_t>(y), window.data() + r, col_w.data(), r,
+                      static_cast<float>(p.loc), static_cast<float>(p.threshold), n, simd);
+  }
+  return liquid8;
+}
+
+cv::Mat water_strength_fast(const cv::Mat& liquid8, int& max_product) {
+  cv::Mat dist8 = edge_distance_u8(canny_l1(liquid8, 50, 150));
+  cv::equalizeHist(dist8, dist8);
+  const cv::Mat_<int> emboss = (cv::Mat_<int>(3, 3) << -2, -1, 0, -1, 1, 1, 0, 1, 2);
+  cv::filter2D(dist8, dist8, CV_8U, emboss);
+  cv::blur(dist8, dist8, cv::Size(3, 3));
+  const auto n = static_cast<std::size_t>(liquid8.cols);
+  max_product = 0;
+  for (int y = 0; y < liquid8.rows; ++y) {
+    const std::uint8_t* l = liquid8.ptr<std::uint8_t>(y);
+    const std::uint8_t* d = dist8.ptr<std::uint8_t>(y);
+    for (std::size_t x = 0; x < n; ++x) max_product = std::max(max_product, l[x] * d[x]);
+  }
+  return dist8;
+}
+
+}  // namespace faultline::corruption
