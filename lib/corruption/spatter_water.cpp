@@ -170,33 +170,102 @@ void column_step(std::uint8_t* d, const std::uint8_t* prev, const std::uint8_t* 
   }
 }
 
-// One row of squared distances: min over |k| <= kCap of k^2 + dv(x + k)^2, from dv^2 padded by kCap
-// values of (kCap + 1)^2 each side (`q` at the first real one).
-FAULTLINE_CLONES("avx2")
-void row_min(std::uint16_t* out, const std::uint16_t* q, std::size_t n) {
-  for (std::size_t x = 0; x < n; ++x) out[x] = q[x];
+// One row of distances: d = min(sqrt(d2), kCap) with d2 = min over |k| <= kCap of
+// k^2 + dv(x + k)^2, from dv^2 padded by kCap values of (kCap + 1)^2 each side (`q` at the first
+// real one). The square roots are correctly rounded in both bodies (vsqrtps and std::sqrt).
+float distance_value(const std::uint16_t* q, std::size_t x) {
+  int d2 = q[x];
   for (int k = 1; k <= kCap; ++k) {
-    const auto kk = static_cast<std::uint16_t>(k * k);
-    const std::uint16_t* lo = q - k;
-    const std::uint16_t* hi = q + k;
-    for (std::size_t x = 0; x < n; ++x) {
-      const std::uint16_t a = static_cast<std::uint16_t>(std::min(lo[x], hi[x]) + kk);
-      out[x] = std::min(out[x], a);
-    }
+    d2 = std::min(
+        d2,
+        std::min(q[x - static_cast<std::size_t>(k)], q[x + static_cast<std::size_t>(k)]) + k * k);
   }
+  return std::min(std::sqrt(static_cast<float>(d2)), static_cast<float>(kCap));
 }
 
-// d = min(sqrt(d2), 20), from a table of the (kCap + 1)^2 + 1 possible d2 (a vectorised sqrt
-// would need -fno-math-errno).
-void sqrt_row(float* d, const std::uint16_t* d2, std::size_t n) {
-  static const std::vector<float> table = [] {
-    std::vector<float> t((kCap + 1) * (kCap + 1) + 1);
-    for (std::size_t i = 0; i < t.size(); ++i) {
-      t[i] = std::min(std::sqrt(static_cast<float>(i)), static_cast<float>(kCap));
+#if FAULTLINE_X86_SIMD
+FAULTLINE_TARGET_INLINE("avx2") inline __m256i load16(const std::uint16_t* p) {
+  return _mm256_loadu_si256(reinterpret_cast<const __m256i*>(p));
+}
+
+FAULTLINE_TARGET("avx2")
+std::size_t distance_avx2(float* d, const std::uint16_t* q, std::size_t n) {
+  static_assert(kCap >= 4, "the window loads below cover x - kCap .. x + 15 + kCap");
+  const __m256 cap = _mm256_set1_ps(static_cast<float>(kCap));
+  std::size_t x = 0;
+  const __m256i far = _mm256_set1_epi16((kCap + 1) * (kCap + 1));
+  for (; x + 16 <= n; x += 16) {
+    // No edge within kCap columns of the 16 (their window x - kCap .. x + 15 + kCap all at the
+    // cap): every distance is kCap, as the loop below would find (most blocks away from liquid).
+    const __m256i window =
+        _mm256_min_epu16(_mm256_min_epu16(load16(q + x - kCap), load16(q + x - 4)),
+                         _mm256_min_epu16(load16(q + x + 12), load16(q + x + kCap)));
+    if (_mm256_movemask_epi8(_mm256_cmpeq_epi16(window, far)) == -1) {
+      _mm256_storeu_ps(d + x, cap);
+      _mm256_storeu_ps(d + x + 8, cap);
+      continue;
     }
-    return t;
-  }();
-  for (std::size_t x = 0; x < n; ++x) d[x] = table[d2[x]];
+    __m256i d2 = load16(q + x);
+    for (int k = 1; k <= kCap; ++k) {
+      const __m256i pair = _mm256_min_epu16(load16(q + x - k), load16(q + x + k));
+      d2 = _mm256_min_epu16(
+          d2, _mm256_add_epi16(pair, _mm256_set1_epi16(static_cast<std::int16_t>(k * k))));
+    }
+    const __m256 lo = _mm256_cvtepi32_ps(_mm256_cvtepu16_epi32(_mm256_castsi256_si128(d2)));
+    const __m256 hi = _mm256_cvtepi32_ps(_mm256_cvtepu16_epi32(_mm256_extracti128_si256(d2, 1)));
+    _mm256_storeu_ps(d + x, _mm256_min_ps(_mm256_sqrt_ps(lo), cap));
+    _mm256_storeu_ps(d + x + 8, _mm256_min_ps(_mm256_sqrt_ps(hi), cap));
+  }
+  return x;
+}
+#endif
+
+void distance_row(float* d, const std::uint16_t* q, std::size_t n, bool simd) {
+  std::size_t x = 0;
+#if FAULTLINE_X86_SIMD
+  if (simd) x = distance_avx2(d, q, n);
+#else
+  (void)simd;
+#endif
+  for (; x < n; ++x) d[x] = distance_value(q, x);
+}
+
+// hist[v] += the count of v in the row, for v = 0..kCap (the only values of the strength's
+// distances). AVX2: per value, byte counters (cmpeq subtracted) over at most 255 vectors, summed
+// by vpsadbw.
+#if FAULTLINE_X86_SIMD
+FAULTLINE_TARGET("avx2")
+std::size_t count_avx2(int* hist, const std::uint8_t* d, std::size_t n) {
+  const std::size_t vectors = n / 32;
+  for (int v = 0; v <= kCap; ++v) {
+    const __m256i value = _mm256_set1_epi8(static_cast<char>(v));
+    std::int64_t total = 0;
+    for (std::size_t i = 0; i < vectors;) {
+      const std::size_t end = std::min(vectors, i + 255);
+      __m256i counts = _mm256_setzero_si256();
+      for (; i < end; ++i) {
+        const __m256i bytes = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(d + 32 * i));
+        counts = _mm256_sub_epi8(counts, _mm256_cmpeq_epi8(bytes, value));
+      }
+      const __m256i sums = _mm256_sad_epu8(counts, _mm256_setzero_si256());
+      alignas(32) std::int64_t lanes[4];
+      _mm256_store_si256(reinterpret_cast<__m256i*>(lanes), sums);
+      total += lanes[0] + lanes[1] + lanes[2] + lanes[3];
+    }
+    hist[v] += static_cast<int>(total);
+  }
+  return 32 * vectors;
+}
+#endif
+
+void count_row(int* hist, const std::uint8_t* d, std::size_t n, bool simd) {
+  std::size_t x = 0;
+#if FAULTLINE_X86_SIMD
+  if (simd) x = count_avx2(hist, d, n);
+#else
+  (void)simd;
+#endif
+  for (; x < n; ++x) ++hist[d[x]];
 }
 
 // out = floor(3 x 3 mean) of the rows a, b, c, columns reflected (reflect-101) at both ends.
@@ -236,13 +305,13 @@ cv::Mat edge_distance_u8(const cv::Mat& edges) {
     column_step(dv.ptr<std::uint8_t>(y), dv.ptr<std::uint8_t>(y + 1), edges.ptr<std::uint8_t>(y), n,
                 false);
   }
-  std::vector<std::uint16_t> q(n + 2 * kCap, (kCap + 1) * (kCap + 1)), d2(n);
+  std::vector<std::uint16_t> q(n + 2 * kCap, (kCap + 1) * (kCap + 1));
+  const bool simd = common::cpu_has_avx2();
   std::vector<float> ring(3 * n), sum(n);
   auto distances = [&](int y) {  // row y's distances into ring slot y % 3
     const std::uint8_t* v = dv.ptr<std::uint8_t>(y);
     for (std::size_t x = 0; x < n; ++x) q[x + kCap] = static_cast<std::uint16_t>(v[x] * v[x]);
-    row_min(d2.data(), q.data() + kCap, n);
-    sqrt_row(ring.data() + static_cast<std::size_t>(y % 3) * n, d2.data(), n);
+    distance_row(ring.data() + static_cast<std::size_t>(y % 3) * n, q.data() + kCap, n, simd);
   };
   auto reflect = [rows](int y) {
     return y < 0 ? std::min(1, rows - 1) : (y >= rows ? std::max(rows - 2, 0) : y);
@@ -257,6 +326,103 @@ cv::Mat edge_distance_u8(const cv::Mat& edges) {
     mean3_row(out.ptr<std::uint8_t>(y), sum.data(), a, b, c, n);
   }
   return out;
+}
+
+// cv::equalizeHist's table for a histogram of `total` values: 0 from the lowest value present,
+// then round(255 cumulative / (total - its count)) in float; a single value maps to itself.
+std::array<std::uint8_t, 256> equalize_table(const std::array<int, 256>& hist, int total) {
+  std::array<std::uint8_t, 256> table{};
+  std::size_t i = 0;
+  while (i < 255 && hist[i] == 0) ++i;
+  if (hist[i] == total) {
+    table.fill(static_cast<std::uint8_t>(i));
+    return table;
+  }
+  const float scale = 255.f / static_cast<float>(total - hist[i]);
+  int sum = 0;
+  for (table[i++] = 0; i < 256; ++i) {
+    sum += hist[i];
+    const long v = std::lrint(static_cast<float>(sum) * scale);
+    table[i] = static_cast<std::uint8_t>(std::clamp(v, 0L, 255L));
+  }
+  return table;
+}
+
+// Reflect-101 (OpenCV's default border) of row or column index i in [0, size).
+int reflect101(int i, int size) {
+  if (size == 1) return 0;
+  return i < 0 ? -i : (i >= size ? 2 * size - 2 - i : i);
+}
+
+// One row of the emboss kernel (-2 -1 0 / -1 1 1 / 0 1 2, correlated) over the rows a, b, c
+// (index 0 is column -1), clipped to 0..255 as filter2D's 8-bit output.
+FAULTLINE_CLONES("avx2")
+void emboss_row(std::int16_t* __restrict out, const std::int16_t* a, const std::int16_t* b,
+                const std::int16_t* c, std::size_t n) {
+  for (std::size_t x = 0; x < n; ++x) {
+    const int v = -2 * a[x] - a[x + 1] - b[x] + b[x + 1] + b[x + 2] + c[x + 1] + 2 * c[x + 2];
+    out[x] = static_cast<std::int16_t>(std::min(std::max(v, 0), 255));
+  }
+}
+
+// One row of the 3 x 3 mean, rounded, over the rows a, b, c (index 0 is column -1), and the
+// largest liquid * mean of the row.
+FAULTLINE_CLONES("avx2")
+int mean_row(std::uint8_t* __restrict out, std::int16_t* __restrict sum, const std::int16_t* a,
+             const std::int16_t* b, const std::int16_t* c, const std::uint8_t* liquid,
+             std::size_t n) {
+  for (std::size_t x = 0; x < n + 2; ++x) sum[x] = static_cast<std::int16_t>(a[x] + b[x] + c[x]);
+  int best = 0;
+  for (std::size_t x = 0; x < n; ++x) {
+    const int mean = (sum[x] + sum[x + 1] + sum[x + 2] + 4) / 9;
+    out[x] = static_cast<std::uint8_t>(mean);
+    best = std::max(best, liquid[x] * mean);
+  }
+  return best;
+}
+
+// In place: strength = blur3(emboss(table[strength])), both filters with the reflect-101 border,
+// row by row through rings of three padded rows (row y is written after rows up to y + 2 are
+// read); max_product = the largest liquid8 * strength.
+void filter_strength(cv::Mat& strength, const cv::Mat& liquid8,
+                     const std::array<std::uint8_t, 256>& table, int& max_product) {
+  const int rows = strength.rows, cols = strength.cols;
+  const auto n = static_cast<std::size_t>(cols);
+  const std::size_t stride = n + 2;
+  std::vector<std::int16_t> mapped(3 * stride), embossed(3 * stride), sum(stride);
+  auto slot = [stride](std::vector<std::int16_t>& ring, int y) {
+    return ring.data() + static_cast<std::size_t>(y % 3) * stride;
+  };
+  auto pad = [&](std::int16_t* row) {  // index 0 is column -1
+    row[0] = row[1 + reflect101(-1, cols)];
+    row[n + 1] = row[1 + reflect101(cols, cols)];
+  };
+  auto map_row = [&](int y) {
+    std::int16_t* row = slot(mapped, y);
+    const std::uint8_t* d = strength.ptr<std::uint8_t>(y);
+    for (std::size_t x = 0; x < n; ++x) row[x + 1] = table[d[x]];
+    pad(row);
+  };
+  auto emboss = [&](int y) {
+    std::int16_t* row = slot(embossed, y);
+    emboss_row(row + 1, slot(mapped, reflect101(y - 1, rows)), slot(mapped, y),
+               slot(mapped, reflect101(y + 1, rows)), n);
+    pad(row);
+  };
+  max_product = 0;
+  int mapped_to = 0, embossed_to = 0;  // rows done
+  for (int y = 0; y < rows; ++y) {
+    const int emboss_need = std::min(y + 1, rows - 1);
+    for (; embossed_to <= emboss_need; ++embossed_to) {
+      for (; mapped_to <= std::min(embossed_to + 1, rows - 1); ++mapped_to) map_row(mapped_to);
+      emboss(embossed_to);
+    }
+    const int best =
+        mean_row(strength.ptr<std::uint8_t>(y), sum.data(), slot(embossed, reflect101(y - 1, rows)),
+                 slot(embossed, y), slot(embossed, reflect101(y + 1, rows)),
+                 liquid8.ptr<std::uint8_t>(y), n);
+    max_product = std::max(max_product, best);
+  }
 }
 
 }  // namespace
@@ -304,19 +470,16 @@ cv::Mat water_liquid8(cv::Size size, const SpatterParams& p, rng::FastRng& rng) 
 }
 
 cv::Mat water_strength_fast(const cv::Mat& liquid8, int& max_product) {
-  cv::Mat dist8 = edge_distance_u8(canny_l1(liquid8, 50, 150));
-  cv::equalizeHist(dist8, dist8);
-  const cv::Mat_<int> emboss = (cv::Mat_<int>(3, 3) << -2, -1, 0, -1, 1, 1, 0, 1, 2);
-  cv::filter2D(dist8, dist8, CV_8U, emboss);
-  cv::blur(dist8, dist8, cv::Size(3, 3));
-  const auto n = static_cast<std::size_t>(liquid8.cols);
-  max_product = 0;
-  for (int y = 0; y < liquid8.rows; ++y) {
-    const std::uint8_t* l = liquid8.ptr<std::uint8_t>(y);
-    const std::uint8_t* d = dist8.ptr<std::uint8_t>(y);
-    for (std::size_t x = 0; x < n; ++x) max_product = std::max(max_product, l[x] * d[x]);
+  std::array<int, 256> hist{};
+  cv::Mat strength = edge_distance_u8(canny_l1(liquid8, 50, 150));
+  const bool simd = common::cpu_has_avx2();
+  for (int y = 0; y < strength.rows; ++y) {
+    count_row(hist.data(), strength.ptr<std::uint8_t>(y), static_cast<std::size_t>(strength.cols),
+              simd);
   }
-  return dist8;
+  filter_strength(strength, liquid8, equalize_table(hist, static_cast<int>(strength.total())),
+                  max_product);
+  return strength;
 }
 
 }  // namespace faultline::corruption
