@@ -183,11 +183,19 @@ void hysteresis(std::vector<std::uint8_t>& map, std::size_t stride) {
 }  // namespace
 
 cv::Mat canny_l1(const cv::Mat& src, int low, int high, bool allow_simd) {
+  cv::Mat edges;
+  std::vector<std::uint8_t> map;
+  canny_l1(src, low, high, edges, map, allow_simd);
+  return edges;
+}
+
+void canny_l1(const cv::Mat& src, int low, int high, cv::Mat& edges, std::vector<std::uint8_t>& map,
+              bool allow_simd) {
   const int rows = src.rows;
   const auto n = static_cast<std::size_t>(src.cols);
   const std::size_t stride = n + 2;
   // map: (rows + 2) x (n + 2), its frame 1 (no edge) so the hysteresis needs no bounds checks.
-  std::vector<std::uint8_t> map(stride * static_cast<std::size_t>(rows + 2), 1);
+  map.assign(stride * static_cast<std::size_t>(rows + 2), 1);
   std::vector<std::int16_t> pixels(3 * stride), grads(6 * n), mags(3 * stride, 0);
   std::vector<std::int16_t> zero(stride, 0);
   auto pixel_row = [&](int y) { return pixels.data() + static_cast<std::size_t>(y % 3) * stride; };
@@ -218,13 +226,12 @@ cv::Mat canny_l1(const cv::Mat& src, int low, int high, bool allow_simd) {
                  simd);
   }
   hysteresis(map, stride);
-  cv::Mat edges(src.size(), CV_8U);
+  edges.create(src.size(), CV_8U);
   for (int y = 0; y < rows; ++y) {
     const std::uint8_t* m = map.data() + static_cast<std::size_t>(y + 1) * stride + 1;
     std::uint8_t* e = edges.ptr<std::uint8_t>(y);
     for (std::size_t x = 0; x < n; ++x) e[x] = static_cast<std::uint8_t>((m[x] >> 1) * 255);
   }
-  return edges;
 }
 
 }  // namespace faultline::corruption

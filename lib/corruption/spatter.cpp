@@ -163,10 +163,13 @@ void water_row(std::uint8_t* __restrict out, const std::uint8_t* in, const std::
   }
 }
 
-cv::Mat water_blend_fast(const cv::Mat& bgr, const cv::Mat& liquid8, const SpatterParams& p) {
+cv::Mat water_blend_fast(const cv::Mat& bgr, const SpatterParams& p, rng::FastRng& rng) {
+  thread_local WaterScratch scratch;
+  water_liquid8(bgr.size(), p, rng, scratch);
+  const int max_value = water_strength_fast(scratch);
+  const cv::Mat& liquid8 = scratch.liquid8;
+  const cv::Mat& dist8 = scratch.strength;
   const auto n = static_cast<std::size_t>(liquid8.cols);
-  int max_value = 0;
-  const cv::Mat dist8 = water_strength_fast(liquid8, max_value);
   if (max_value == 0) return bgr.clone();  // no liquid: see the header
   const auto scale = static_cast<float>(p.intensity / max_value);
   cv::Mat out(bgr.size(), CV_8UC3);
@@ -213,7 +216,7 @@ cv::Mat spatter_fast(const cv::Mat& bgr, int severity, rng::FastRng& rng) {
   // (Drawing the field at half resolution and upsampling it was tried: it smooths away the weak
   // edges Canny finds inside the liquid, and the tint's histogram moves twice as far from numpy
   // mode's as another seed's does.)
-  if (!p.mud) return water_blend_fast(bgr, water_liquid8(bgr.size(), p, rng), p);
+  if (!p.mud) return water_blend_fast(bgr, p, rng);
   cv::Mat field(bgr.size(), CV_32F);
   rng::LaneRng lanes(rng);
   rng::fill_normals(field.ptr<float>(), field.total(), p.loc, p.scale, lanes, rng);

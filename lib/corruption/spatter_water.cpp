@@ -158,16 +158,23 @@ void column_liquid_row(std::uint8_t* out, const float* const* centre, const floa
   for (; x < n; ++x) out[x] = liquid_value(column_tap_sum(centre, w, r, x), loc, threshold);
 }
 
-// Vertical distance to the nearest edge pixel in the column, capped at kCap + 1, from the row above
-// (prev) or below: d = edge ? 0 : min(prev + 1, kCap + 1).
+// Vertical distance to the nearest edge pixel in the column, capped at kCap + 1: from the row
+// above, d = edge ? 0 : min(above + 1, kCap + 1) (kCap + 1 on the first row: above = nullptr),
+// then from the row below, d = min(d, below + 1).
 constexpr int kCap = 20;
 FAULTLINE_CLONES("avx2")
-void column_step(std::uint8_t* d, const std::uint8_t* prev, const std::uint8_t* edge, std::size_t n,
-                 bool first) {
+void column_down(std::uint8_t* __restrict d, const std::uint8_t* above, const std::uint8_t* edge,
+                 std::size_t n) {
   for (std::size_t x = 0; x < n; ++x) {
-    const int from = first ? kCap + 1 : std::min(prev[x] + 1, kCap + 1);
-    d[x] = static_cast<std::uint8_t>(edge[x] ? 0 : std::min<int>(d[x], from));
+    const int from = above ? std::min(above[x] + 1, kCap + 1) : kCap + 1;
+    d[x] = static_cast<std::uint8_t>(edge[x] ? 0 : from);
   }
+}
+
+FAULTLINE_CLONES("avx2")
+void column_up(std::uint8_t* __restrict d, const std::uint8_t* below, std::size_t n) {
+  for (std::size_t x = 0; x < n; ++x)
+    d[x] = static_cast<std::uint8_t>(std::min<int>(d[x], below[x] + 1));
 }
 
 // One row of distances: d = min(sqrt(d2), kCap) with d2 = min over |k| <= kCap of
@@ -291,19 +298,18 @@ void mean3_row(std::uint8_t* out, float* sum, const float* a, const float* b, co
   }
 }
 
-// floor of the 3 x 3 mean (cv::blur's default reflect-101 border) of the distance to the nearest
-// Canny edge pixel, capped at 20 (CV_8U), three rows of distances at a time.
-cv::Mat edge_distance_u8(const cv::Mat& edges) {
+// out = floor of the 3 x 3 mean (cv::blur's default reflect-101 border) of the distance to the
+// nearest Canny edge pixel, capped at 20 (CV_8U), three rows of distances at a time; dv: scratch.
+void edge_distance_u8(const cv::Mat& edges, cv::Mat& dv, cv::Mat& out) {
   const int rows = edges.rows;
   const auto n = static_cast<std::size_t>(edges.cols);
-  cv::Mat dv(edges.size(), CV_8U, cv::Scalar(kCap + 1));
+  dv.create(edges.size(), CV_8U);
   for (int y = 0; y < rows; ++y) {
-    column_step(dv.ptr<std::uint8_t>(y), y ? dv.ptr<std::uint8_t>(y - 1) : nullptr,
-                edges.ptr<std::uint8_t>(y), n, y == 0);
+    column_down(dv.ptr<std::uint8_t>(y), y ? dv.ptr<std::uint8_t>(y - 1) : nullptr,
+                edges.ptr<std::uint8_t>(y), n);
   }
   for (int y = rows - 2; y >= 0; --y) {
-    column_step(dv.ptr<std::uint8_t>(y), dv.ptr<std::uint8_t>(y + 1), edges.ptr<std::uint8_t>(y), n,
-                false);
+    column_up(dv.ptr<std::uint8_t>(y), dv.ptr<std::uint8_t>(y + 1), n);
   }
   std::vector<std::uint16_t> q(n + 2 * kCap, (kCap + 1) * (kCap + 1));
   const bool simd = common::cpu_has_avx2();
@@ -316,7 +322,7 @@ cv::Mat edge_distance_u8(const cv::Mat& edges) {
   auto reflect = [rows](int y) {
     return y < 0 ? std::min(1, rows - 1) : (y >= rows ? std::max(rows - 2, 0) : y);
   };
-  cv::Mat out(edges.size(), CV_8U);
+  out.create(edges.size(), CV_8U);
   int done = -1;
   for (int y = 0; y < rows; ++y) {
     for (; done < std::min(y + 1, rows - 1); ++done) distances(done + 1);
@@ -325,7 +331,6 @@ cv::Mat edge_distance_u8(const cv::Mat& edges) {
     const float* c = ring.data() + static_cast<std::size_t>(reflect(y + 1) % 3) * n;
     mean3_row(out.ptr<std::uint8_t>(y), sum.data(), a, b, c, n);
   }
-  return out;
 }
 
 // cv::equalizeHist's table for a histogram of `total` values: 0 from the lowest value present,
@@ -430,7 +435,7 @@ void filter_strength(cv::Mat& strength, const cv::Mat& liquid8,
 // fast mode's liquid8 for the water: draws, then the Gaussian to 3 sigma (replicate border) as a
 // row pass into a ring of 2r + 1 rows and a column pass per output row, with the draws' scale in
 // the column taps.
-cv::Mat water_liquid8(cv::Size size, const SpatterParams& p, rng::FastRng& rng) {
+void water_liquid8(cv::Size size, const SpatterParams& p, rng::FastRng& rng, WaterScratch& s) {
   const int r = static_cast<int>(std::ceil(3.0 * p.sigma));
   std::vector<double> taps(static_cast<std::size_t>(r) + 1);
   double total = 0;
@@ -451,7 +456,8 @@ cv::Mat water_liquid8(cv::Size size, const SpatterParams& p, rng::FastRng& rng) 
   auto ring_row = [&](int y) { return ring.data() + static_cast<std::size_t>(y % ring_rows) * n; };
   rng::LaneRng lanes(rng);
   const bool simd = common::cpu_has_avx2();
-  cv::Mat liquid8(size, CV_8U);
+  cv::Mat& liquid8 = s.liquid8;
+  liquid8.create(size, CV_8U);
   int drawn = 0;
   for (int y = 0; y < size.height; ++y) {
     for (; drawn <= std::min(y + r, size.height - 1); ++drawn) {
@@ -466,20 +472,21 @@ cv::Mat water_liquid8(cv::Size size, const SpatterParams& p, rng::FastRng& rng) 
     column_liquid_row(liquid8.ptr<std::uint8_t>(y), window.data() + r, col_w.data(), r,
                       static_cast<float>(p.loc), static_cast<float>(p.threshold), n, simd);
   }
-  return liquid8;
 }
 
-cv::Mat water_strength_fast(const cv::Mat& liquid8, int& max_product) {
+int water_strength_fast(WaterScratch& s) {
+  canny_l1(s.liquid8, 50, 150, s.edges, s.canny_map);
+  edge_distance_u8(s.edges, s.distance, s.strength);
   std::array<int, 256> hist{};
-  cv::Mat strength = edge_distance_u8(canny_l1(liquid8, 50, 150));
   const bool simd = common::cpu_has_avx2();
-  for (int y = 0; y < strength.rows; ++y) {
-    count_row(hist.data(), strength.ptr<std::uint8_t>(y), static_cast<std::size_t>(strength.cols),
-              simd);
+  for (int y = 0; y < s.strength.rows; ++y) {
+    count_row(hist.data(), s.strength.ptr<std::uint8_t>(y),
+              static_cast<std::size_t>(s.strength.cols), simd);
   }
-  filter_strength(strength, liquid8, equalize_table(hist, static_cast<int>(strength.total())),
+  int max_product = 0;
+  filter_strength(s.strength, s.liquid8, equalize_table(hist, static_cast<int>(s.strength.total())),
                   max_product);
-  return strength;
+  return max_product;
 }
 
 }  // namespace faultline::corruption
