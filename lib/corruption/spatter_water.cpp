@@ -91,33 +91,61 @@ std::uint8_t liquid_value(float sum, float loc, float threshold) {
 }
 
 #if FAULTLINE_X86_SIMD
+// Each output's taps are summed in a chain of dependent adds: blocks of 8 outputs side by side
+// keep that many chains in flight.
+template <int kBlocks>
 FAULTLINE_TARGET("avx2")
-std::size_t blur_row_avx2(float* out, const float* in, const float* w, int r, std::size_t n) {
-  std::size_t x = 0;
-  for (; x + 8 <= n; x += 8) {
-    __m256 acc = _mm256_mul_ps(_mm256_set1_ps(w[0]), _mm256_loadu_ps(in + x));
-    for (int k = 1; k <= r; ++k) {
-      const __m256 pair = _mm256_add_ps(_mm256_loadu_ps(in + x - k), _mm256_loadu_ps(in + x + k));
-      acc = _mm256_add_ps(acc, _mm256_mul_ps(_mm256_set1_ps(w[k]), pair));
+std::size_t blur_row_avx2(float* out, const float* in, const float* w, int r, std::size_t x,
+                          std::size_t n) {
+  for (; x + 8 * kBlocks <= n; x += 8 * kBlocks) {
+    __m256 acc[kBlocks];
+    for (int b = 0; b < kBlocks; ++b) {
+      acc[b] = _mm256_mul_ps(_mm256_set1_ps(w[0]), _mm256_loadu_ps(in + x + 8 * b));
     }
-    _mm256_storeu_ps(out + x, acc);
+    for (int k = 1; k <= r; ++k) {
+      const __m256 wk = _mm256_set1_ps(w[k]);
+      for (int b = 0; b < kBlocks; ++b) {
+        const float* at = in + x + 8 * b;
+        const __m256 pair = _mm256_add_ps(_mm256_loadu_ps(at - k), _mm256_loadu_ps(at + k));
+        acc[b] = _mm256_add_ps(acc[b], _mm256_mul_ps(wk, pair));
+      }
+    }
+    for (int b = 0; b < kBlocks; ++b) _mm256_storeu_ps(out + x + 8 * b, acc[b]);
   }
   return x;
 }
 
+// liquid8 of the outputs x .. x + 8 kBlocks - 1 as int32 lanes (the column pass, then the
+// threshold and the wrap).
+template <int kBlocks>
 FAULTLINE_TARGET_INLINE("avx2")
-inline __m256i liquid8x8(const float* const* centre, const float* w, int r, __m256 loc,
-                         __m256 threshold, std::size_t x) {
-  __m256 acc = _mm256_mul_ps(_mm256_set1_ps(w[0]), _mm256_loadu_ps(centre[0] + x));
-  for (int k = 1; k <= r; ++k) {
-    const __m256 pair =
-        _mm256_add_ps(_mm256_loadu_ps(centre[-k] + x), _mm256_loadu_ps(centre[k] + x));
-    acc = _mm256_add_ps(acc, _mm256_mul_ps(_mm256_set1_ps(w[k]), pair));
+inline void liquid_blocks(__m256i (&value)[kBlocks], const float* const* centre, const float* w,
+                          int r, __m256 loc, __m256 threshold, std::size_t x) {
+  __m256 acc[kBlocks];
+  for (int b = 0; b < kBlocks; ++b) {
+    acc[b] = _mm256_mul_ps(_mm256_set1_ps(w[0]), _mm256_loadu_ps(centre[0] + x + 8 * b));
   }
-  const __m256 f = _mm256_add_ps(loc, acc);
-  const __m256 v = _mm256_and_ps(_mm256_cmp_ps(f, threshold, _CMP_GE_OQ),
-                                 _mm256_mul_ps(f, _mm256_set1_ps(255.f)));
-  return _mm256_and_si256(_mm256_cvttps_epi32(v), _mm256_set1_epi32(0xFF));
+  for (int k = 1; k <= r; ++k) {
+    const __m256 wk = _mm256_set1_ps(w[k]);
+    const float* lo = centre[-k] + x;
+    const float* hi = centre[k] + x;
+    for (int b = 0; b < kBlocks; ++b) {
+      const __m256 pair = _mm256_add_ps(_mm256_loadu_ps(lo + 8 * b), _mm256_loadu_ps(hi + 8 * b));
+      acc[b] = _mm256_add_ps(acc[b], _mm256_mul_ps(wk, pair));
+    }
+  }
+  for (int b = 0; b < kBlocks; ++b) {
+    const __m256 f = _mm256_add_ps(loc, acc[b]);
+    const __m256 v = _mm256_and_ps(_mm256_cmp_ps(f, threshold, _CMP_GE_OQ),
+                                   _mm256_mul_ps(f, _mm256_set1_ps(255.f)));
+    value[b] = _mm256_and_si256(_mm256_cvttps_epi32(v), _mm256_set1_epi32(0xFF));
+  }
+}
+
+// 16 int32 lanes (each 0..255) to 16 bytes in order.
+FAULTLINE_TARGET_INLINE("avx2") inline __m128i pack16(__m256i a, __m256i b) {
+  const __m256i words = _mm256_permute4x64_epi64(_mm256_packus_epi32(a, b), 0xD8);
+  return _mm_packus_epi16(_mm256_castsi256_si128(words), _mm256_extracti128_si256(words, 1));
 }
 
 FAULTLINE_TARGET("avx2")
@@ -125,13 +153,16 @@ std::size_t column_liquid_avx2(std::uint8_t* out, const float* const* centre, co
                                float loc, float threshold, std::size_t n) {
   const __m256 locv = _mm256_set1_ps(loc), thr = _mm256_set1_ps(threshold);
   std::size_t x = 0;
+  for (; x + 32 <= n; x += 32) {
+    __m256i v[4];
+    liquid_blocks<4>(v, centre, w, r, locv, thr, x);
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(out + x), pack16(v[0], v[1]));
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(out + x + 16), pack16(v[2], v[3]));
+  }
   for (; x + 16 <= n; x += 16) {
-    const __m256i a = liquid8x8(centre, w, r, locv, thr, x);
-    const __m256i b = liquid8x8(centre, w, r, locv, thr, x + 8);
-    const __m256i words = _mm256_permute4x64_epi64(_mm256_packus_epi32(a, b), 0xD8);
-    const __m128i bytes =
-        _mm_packus_epi16(_mm256_castsi256_si128(words), _mm256_extracti128_si256(words, 1));
-    _mm_storeu_si128(reinterpret_cast<__m128i*>(out + x), bytes);
+    __m256i v[2];
+    liquid_blocks<2>(v, centre, w, r, locv, thr, x);
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(out + x), pack16(v[0], v[1]));
   }
   return x;
 }
@@ -140,7 +171,7 @@ std::size_t column_liquid_avx2(std::uint8_t* out, const float* const* centre, co
 void blur_row(float* out, const float* in, const float* w, int r, std::size_t n, bool simd) {
   std::size_t x = 0;
 #if FAULTLINE_X86_SIMD
-  if (simd) x = blur_row_avx2(out, in, w, r, n);
+  if (simd) x = blur_row_avx2<1>(out, in, w, r, blur_row_avx2<4>(out, in, w, r, 0, n), n);
 #else
   (void)simd;
 #endif
