@@ -417,6 +417,43 @@ int mean_row(std::uint8_t* __restrict out, std::int16_t* __restrict sum, const s
   return best;
 }
 
+// out = table[d] widened to int16, for d <= kCap (< 32): AVX2 looks the 32 entries up as two
+// 16-byte shuffles.
+#if FAULTLINE_X86_SIMD
+FAULTLINE_TARGET("avx2")
+std::size_t lookup_avx2(std::int16_t* out, const std::uint8_t* d,
+                        const std::array<std::uint8_t, 256>& table, std::size_t n) {
+  static_assert(kCap < 32, "two 16-entry shuffles");
+  const __m256i low =
+      _mm256_broadcastsi128_si256(_mm_loadu_si128(reinterpret_cast<const __m128i*>(table.data())));
+  const __m256i high = _mm256_broadcastsi128_si256(
+      _mm_loadu_si128(reinterpret_cast<const __m128i*>(table.data() + 16)));
+  std::size_t x = 0;
+  for (; x + 32 <= n; x += 32) {
+    const __m256i v = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(d + x));
+    const __m256i mapped =
+        _mm256_blendv_epi8(_mm256_shuffle_epi8(low, v), _mm256_shuffle_epi8(high, v),
+                           _mm256_cmpgt_epi8(v, _mm256_set1_epi8(15)));
+    _mm256_storeu_si256(reinterpret_cast<__m256i*>(out + x),
+                        _mm256_cvtepu8_epi16(_mm256_castsi256_si128(mapped)));
+    _mm256_storeu_si256(reinterpret_cast<__m256i*>(out + x + 16),
+                        _mm256_cvtepu8_epi16(_mm256_extracti128_si256(mapped, 1)));
+  }
+  return x;
+}
+#endif
+
+void lookup_row(std::int16_t* out, const std::uint8_t* d,
+                const std::array<std::uint8_t, 256>& table, std::size_t n, bool simd) {
+  std::size_t x = 0;
+#if FAULTLINE_X86_SIMD
+  if (simd) x = lookup_avx2(out, d, table, n);
+#else
+  (void)simd;
+#endif
+  for (; x < n; ++x) out[x] = table[d[x]];
+}
+
 // In place: strength = blur3(emboss(table[strength])), both filters with the reflect-101 border,
 // row by row through rings of three padded rows (row y is written after rows up to y + 2 are
 // read); max_product = the largest liquid8 * strength.
@@ -425,6 +462,7 @@ void filter_strength(cv::Mat& strength, const cv::Mat& liquid8,
   const int rows = strength.rows, cols = strength.cols;
   const auto n = static_cast<std::size_t>(cols);
   const std::size_t stride = n + 2;
+  const bool simd = common::cpu_has_avx2();
   std::vector<std::int16_t> mapped(3 * stride), embossed(3 * stride), sum(stride);
   auto slot = [stride](std::vector<std::int16_t>& ring, int y) {
     return ring.data() + static_cast<std::size_t>(y % 3) * stride;
@@ -436,7 +474,7 @@ void filter_strength(cv::Mat& strength, const cv::Mat& liquid8,
   auto map_row = [&](int y) {
     std::int16_t* row = slot(mapped, y);
     const std::uint8_t* d = strength.ptr<std::uint8_t>(y);
-    for (std::size_t x = 0; x < n; ++x) row[x + 1] = table[d[x]];
+    lookup_row(row + 1, d, table, n, simd);
     pad(row);
   };
   auto emboss = [&](int y) {
