@@ -141,26 +141,82 @@ cv::Mat mud_blend_fast(const cv::Mat& bgr, const cv::Mat& field, const SpatterPa
 
 // fast mode's water: liquid8 and the tint's strength from spatter_water.cpp, the blend here.
 
-// out = clip(in + k * colour, 0, 255) truncated, k = liquid8 * strength * scale: k per pixel,
-// then k * colour interleaved like the pixels, then one flat pass (each vectorisable).
-FAULTLINE_CLONES("avx2")
-void water_row(std::uint8_t* __restrict out, const std::uint8_t* in, const std::uint8_t* liquid,
-               const std::uint8_t* strength, float scale, float* __restrict k,
-               float* __restrict add, std::size_t pixels) {
-  constexpr float kColour[3] = {175.f, 238.f, 238.f};
-  for (std::size_t x = 0; x < pixels; ++x) {
-    k[x] = static_cast<float>(liquid[x] * strength[x]) * scale;
+// The water's blend: v = min(v + trunc(k colour), 255), k = liquid8 * strength * scale (<= the
+// intensity, so each tint is < 256). (numpy mode truncates v + k colour as a whole: it differs
+// where that float sum rounds up to the next integer, by one level.)
+constexpr float kWaterColour[3] = {175.f, 238.f, 238.f};
+
+void water_pixel(std::uint8_t* out, const std::uint8_t* in, int product, float scale) {
+  const float k = static_cast<float>(product) * scale;
+  for (int c = 0; c < 3; ++c) {
+    const int tint = std::min(static_cast<int>(k * kWaterColour[c]), 255);
+    out[c] = static_cast<std::uint8_t>(std::min(in[c] + tint, 255));
   }
-  for (std::size_t x = 0; x < pixels; ++x) {
-    add[3 * x] = k[x] * kColour[0];
-    add[3 * x + 1] = k[x] * kColour[1];
-    add[3 * x + 2] = k[x] * kColour[2];
+}
+
+#if FAULTLINE_X86_SIMD
+// The byte shuffles that spread 16 per-pixel tints over the 48 bytes of 16 BGR pixels: chunk c,
+// byte j is pixel (16 c + j) / 3's channel (16 c + j) % 3, taken from the channel-0 tints (first)
+// or the channel-1/2 tints (second, the colour's two 238s); -128 leaves a zero.
+struct TintShuffles {
+  alignas(16) std::int8_t first[3][16];
+  alignas(16) std::int8_t second[3][16];
+  TintShuffles() {
+    for (int i = 0; i < 48; ++i) {
+      const auto pixel = static_cast<std::int8_t>(i / 3);
+      first[i / 16][i % 16] = i % 3 == 0 ? pixel : std::int8_t{-128};
+      second[i / 16][i % 16] = i % 3 == 0 ? std::int8_t{-128} : pixel;
+    }
   }
-  for (std::size_t i = 0; i < 3 * pixels; ++i) {
-    std::int32_t t = static_cast<std::int32_t>(static_cast<float>(in[i]) + add[i]);
-    t = t < 0 ? 0 : t;
-    out[i] = static_cast<std::uint8_t>(t > 255 ? 255 : t);
+};
+
+FAULTLINE_TARGET("avx2")
+std::size_t water_avx2(std::uint8_t* out, const std::uint8_t* in, const std::uint8_t* liquid,
+                       const std::uint8_t* strength, float scale, std::size_t pixels) {
+  static const TintShuffles shuffles;
+  const __m256 scalev = _mm256_set1_ps(scale);
+  const __m256 colour0 = _mm256_set1_ps(kWaterColour[0]), colour1 = _mm256_set1_ps(kWaterColour[1]);
+  auto tints = [&](__m256 klo, __m256 khi, __m256 colour) FAULTLINE_TARGET_INLINE("avx2") {
+    const __m256i lo = _mm256_cvttps_epi32(_mm256_mul_ps(klo, colour));
+    const __m256i hi = _mm256_cvttps_epi32(_mm256_mul_ps(khi, colour));
+    const __m256i words = _mm256_permute4x64_epi64(_mm256_packus_epi32(lo, hi), 0xD8);
+    return _mm_packus_epi16(_mm256_castsi256_si128(words), _mm256_extracti128_si256(words, 1));
+  };
+  std::size_t x = 0;
+  for (; x + 16 <= pixels; x += 16) {
+    const __m256i l =
+        _mm256_cvtepu8_epi16(_mm_loadu_si128(reinterpret_cast<const __m128i*>(liquid + x)));
+    const __m256i s =
+        _mm256_cvtepu8_epi16(_mm_loadu_si128(reinterpret_cast<const __m128i*>(strength + x)));
+    const __m256i product = _mm256_mullo_epi16(l, s);  // <= 255^2: read as unsigned below
+    const __m256 klo = _mm256_mul_ps(
+        _mm256_cvtepi32_ps(_mm256_cvtepu16_epi32(_mm256_castsi256_si128(product))), scalev);
+    const __m256 khi = _mm256_mul_ps(
+        _mm256_cvtepi32_ps(_mm256_cvtepu16_epi32(_mm256_extracti128_si256(product, 1))), scalev);
+    const __m128i t0 = tints(klo, khi, colour0), t1 = tints(klo, khi, colour1);
+    for (int c = 0; c < 3; ++c) {
+      const __m128i tint = _mm_or_si128(
+          _mm_shuffle_epi8(t0, _mm_load_si128(reinterpret_cast<const __m128i*>(shuffles.first[c]))),
+          _mm_shuffle_epi8(t1,
+                           _mm_load_si128(reinterpret_cast<const __m128i*>(shuffles.second[c]))));
+      const std::size_t at = 3 * x + 16 * static_cast<std::size_t>(c);
+      const __m128i v = _mm_loadu_si128(reinterpret_cast<const __m128i*>(in + at));
+      _mm_storeu_si128(reinterpret_cast<__m128i*>(out + at), _mm_adds_epu8(v, tint));
+    }
   }
+  return x;
+}
+#endif
+
+void water_row(std::uint8_t* out, const std::uint8_t* in, const std::uint8_t* liquid,
+               const std::uint8_t* strength, float scale, std::size_t pixels, bool simd) {
+  std::size_t x = 0;
+#if FAULTLINE_X86_SIMD
+  if (simd) x = water_avx2(out, in, liquid, strength, scale, pixels);
+#else
+  (void)simd;
+#endif
+  for (; x < pixels; ++x) water_pixel(out + 3 * x, in + 3 * x, liquid[x] * strength[x], scale);
 }
 
 cv::Mat water_blend_fast(const cv::Mat& bgr, const SpatterParams& p, rng::FastRng& rng) {
@@ -173,10 +229,10 @@ cv::Mat water_blend_fast(const cv::Mat& bgr, const SpatterParams& p, rng::FastRn
   if (max_value == 0) return bgr.clone();  // no liquid: see the header
   const auto scale = static_cast<float>(p.intensity / max_value);
   cv::Mat out(bgr.size(), CV_8UC3);
-  std::vector<float> k(n), add(3 * n);
+  const bool simd = common::cpu_has_avx2();
   for (int y = 0; y < bgr.rows; ++y) {
     water_row(out.ptr<std::uint8_t>(y), bgr.ptr<std::uint8_t>(y), liquid8.ptr<std::uint8_t>(y),
-              dist8.ptr<std::uint8_t>(y), scale, k.data(), add.data(), n);
+              dist8.ptr<std::uint8_t>(y), scale, n, simd);
   }
   return out;
 }
