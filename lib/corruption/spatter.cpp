@@ -110,20 +110,28 @@ cv::Mat mud_blend(const cv::Mat& bgr, const cv::Mat& liquid, const SpatterParams
 }
 
 // Blends one row of mud: where m >= 0.8 the value becomes v (1 - m) + colour m, elsewhere it is
-// kept (numpy mode's float32/float64 mix in float32: within a level where it differs).
+// kept (numpy mode's float32/float64 mix in float32: within a level where it differs). In flat
+// passes over the row's values (each vectorisable): m per pixel, spread over its three values,
+// then the blend with the colour row `colour` (the colour repeated per pixel).
 FAULTLINE_CLONES("avx2")
-void mud_row(std::uint8_t* out, const std::uint8_t* in, const float* mask, std::size_t pixels) {
-  constexpr float kColour[3] = {63.f, 42.f, 20.f};
+void mud_row(std::uint8_t* __restrict out, const std::uint8_t* in, const float* mask,
+             const float* colour, float* __restrict spread, std::size_t pixels) {
   for (std::size_t x = 0; x < pixels; ++x) {
     const float m = mask[x] < 0.8f ? 0.f : mask[x];
-    for (std::size_t c = 0; c < 3; ++c) {
-      const float v = static_cast<float>(in[3 * x + c]) * (1.f - m) + kColour[c] * m;
-      std::int32_t k = static_cast<std::int32_t>(v);  // truncation; clamped after it, branch-free
-      k = k < 0 ? 0 : k;
-      out[3 * x + c] = static_cast<std::uint8_t>(k > 255 ? 255 : k);
-    }
+    spread[3 * x] = m;
+    spread[3 * x + 1] = m;
+    spread[3 * x + 2] = m;
+  }
+  for (std::size_t i = 0; i < 3 * pixels; ++i) {
+    const float m = spread[i];
+    const float v = static_cast<float>(in[i]) * (1.f - m) + colour[i] * m;
+    std::int32_t k = static_cast<std::int32_t>(v);  // truncation; clamped after it, branch-free
+    k = k < 0 ? 0 : k;
+    out[i] = static_cast<std::uint8_t>(k > 255 ? 255 : k);
   }
 }
+
+constexpr float kMudColour[3] = {63.f, 42.f, 20.f};
 
 // fast mode's mud: the mask straight from the float32 field (liquid > threshold), blurred in
 // float32.
@@ -131,10 +139,13 @@ cv::Mat mud_blend_fast(const cv::Mat& bgr, const cv::Mat& field, const SpatterPa
   cv::Mat mask;
   cv::threshold(field, mask, p.threshold, 1.0, cv::THRESH_BINARY);
   cv::GaussianBlur(mask, mask, cv::Size(), p.intensity, p.intensity, cv::BORDER_REPLICATE);
+  const auto n = static_cast<std::size_t>(bgr.cols);
+  std::vector<float> colour(3 * n), spread(3 * n);
+  for (std::size_t i = 0; i < 3 * n; ++i) colour[i] = kMudColour[i % 3];
   cv::Mat out(bgr.size(), CV_8UC3);
   for (int y = 0; y < bgr.rows; ++y) {
-    mud_row(out.ptr<std::uint8_t>(y), bgr.ptr<std::uint8_t>(y), mask.ptr<float>(y),
-            static_cast<std::size_t>(bgr.cols));
+    mud_row(out.ptr<std::uint8_t>(y), bgr.ptr<std::uint8_t>(y), mask.ptr<float>(y), colour.data(),
+            spread.data(), n);
   }
   return out;
 }
