@@ -29,4 +29,9 @@ void water_liquid8(cv::Size size, const SpatterParams& p, rng::FastRng& rng, Wat
 // liquid8 * strength.
 int water_strength_fast(WaterScratch& s);
 
+// Its last steps, in place: dist8 (CV_8U, values 0..20) = blur(filter2D(equalizeHist(dist8),
+// emboss)) with the values OpenCV gives (8-bit, reflect-101 borders, the emboss kernel -2 -1 0 /
+// -1 1 1 / 0 1 2). Returns the largest liquid8 * result (liquid8: CV_8U, the same size).
+int equalize_emboss_blur(cv::Mat& dist8, const cv::Mat& liquid8);
+
 }  // namespace faultline::corruption
