@@ -278,12 +278,13 @@ cv::Mat spatter_numpy(const cv::Mat& bgr, int severity, rng::NumpyRandomState& r
 
 cv::Mat spatter_fast(const cv::Mat& bgr, int severity, rng::FastRng& rng) {
   const SpatterParams p = spatter_params(severity);
-  // The field's normals eight lanes at a time (the vectorised ziggurat), the smoothing in float32
-  // with the kernel to 3 sigma (OpenCV's default for float goes to 4; 0.3 % of the weight).
-  // (Drawing the field at half resolution and upsampling it was tried: it smooths away the weak
-  // edges Canny finds inside the liquid, and the tint's histogram moves twice as far from numpy
-  // mode's as another seed's does.)
+  // The field smoothed in float32 with the kernel to 3 sigma (OpenCV's default for float goes to
+  // 4; 0.3 % of the weight). (Drawing the water's field at half resolution and upsampling it was
+  // tried: it smooths away the weak edges Canny finds inside the liquid, and the tint's histogram
+  // moves twice as far from numpy mode's as another seed's does.)
   if (!p.mud) return water_blend_fast(bgr, p, rng);
+  // Mud (sigma 1: too few draws per value for other draws than normals): the normals eight lanes
+  // at a time (the vectorised ziggurat), OpenCV's Gaussian.
   cv::Mat field(bgr.size(), CV_32F);
   rng::LaneRng lanes(rng);
   rng::fill_normals(field.ptr<float>(), field.total(), p.loc, p.scale, lanes, rng);
