@@ -9,6 +9,7 @@
 
 #include "common/simd.hpp"
 #include "corruption/ndimage.hpp"
+#include "corruption/spatter_water.hpp"
 #include "rng/lane_rng.hpp"
 
 namespace faultline::corruption {
@@ -109,20 +110,28 @@ cv::Mat mud_blend(const cv::Mat& bgr, const cv::Mat& liquid, const SpatterParams
 }
 
 // Blends one row of mud: where m >= 0.8 the value becomes v (1 - m) + colour m, elsewhere it is
-// kept (numpy mode's float32/float64 mix in float32: within a level where it differs).
+// kept (numpy mode's float32/float64 mix in float32: within a level where it differs). In flat
+// passes over the row's values (each vectorisable): m per pixel, spread over its three values,
+// then the blend with the colour row `colour` (the colour repeated per pixel).
 FAULTLINE_CLONES("avx2")
-void mud_row(std::uint8_t* out, const std::uint8_t* in, const float* mask, std::size_t pixels) {
-  constexpr float kColour[3] = {63.f, 42.f, 20.f};
+void mud_row(std::uint8_t* __restrict out, const std::uint8_t* in, const float* mask,
+             const float* colour, float* __restrict spread, std::size_t pixels) {
   for (std::size_t x = 0; x < pixels; ++x) {
     const float m = mask[x] < 0.8f ? 0.f : mask[x];
-    for (std::size_t c = 0; c < 3; ++c) {
-      const float v = static_cast<float>(in[3 * x + c]) * (1.f - m) + kColour[c] * m;
-      std::int32_t k = static_cast<std::int32_t>(v);  // truncation; clamped after it, branch-free
-      k = k < 0 ? 0 : k;
-      out[3 * x + c] = static_cast<std::uint8_t>(k > 255 ? 255 : k);
-    }
+    spread[3 * x] = m;
+    spread[3 * x + 1] = m;
+    spread[3 * x + 2] = m;
+  }
+  for (std::size_t i = 0; i < 3 * pixels; ++i) {
+    const float m = spread[i];
+    const float v = static_cast<float>(in[i]) * (1.f - m) + colour[i] * m;
+    std::int32_t k = static_cast<std::int32_t>(v);  // truncation; clamped after it, branch-free
+    k = k < 0 ? 0 : k;
+    out[i] = static_cast<std::uint8_t>(k > 255 ? 255 : k);
   }
 }
+
+constexpr float kMudColour[3] = {63.f, 42.f, 20.f};
 
 // fast mode's mud: the mask straight from the float32 field (liquid > threshold), blurred in
 // float32.
@@ -130,176 +139,111 @@ cv::Mat mud_blend_fast(const cv::Mat& bgr, const cv::Mat& field, const SpatterPa
   cv::Mat mask;
   cv::threshold(field, mask, p.threshold, 1.0, cv::THRESH_BINARY);
   cv::GaussianBlur(mask, mask, cv::Size(), p.intensity, p.intensity, cv::BORDER_REPLICATE);
+  const auto n = static_cast<std::size_t>(bgr.cols);
+  std::vector<float> colour(3 * n), spread(3 * n);
+  for (std::size_t i = 0; i < 3 * n; ++i) colour[i] = kMudColour[i % 3];
   cv::Mat out(bgr.size(), CV_8UC3);
   for (int y = 0; y < bgr.rows; ++y) {
-    mud_row(out.ptr<std::uint8_t>(y), bgr.ptr<std::uint8_t>(y), mask.ptr<float>(y),
-            static_cast<std::size_t>(bgr.cols));
+    mud_row(out.ptr<std::uint8_t>(y), bgr.ptr<std::uint8_t>(y), mask.ptr<float>(y), colour.data(),
+            spread.data(), n);
   }
   return out;
 }
 
-// fast mode's water, from the float32 field: the same stages as water_strength and water_blend,
-// with the distance transform computed exactly (Euclidean, capped at 20, where OpenCV's 5 x 5
-// chamfer approximates it at ~20 ms a frame), the 3 x 3 means and the blend in vectorisable rows.
+// fast mode's water: liquid8 and the tint's strength from spatter_water.cpp, the blend here.
 
-// liquid8 = uint8(liquid * 255) with liquid = field where field >= threshold, else 0.
-FAULTLINE_CLONES("avx2")
-void liquid_row(std::uint8_t* out, const float* field, float threshold, std::size_t n) {
-  for (std::size_t x = 0; x < n; ++x) {
-    const float v = field[x] < threshold ? 0.f : field[x] * 255.f;
-    out[x] = static_cast<std::uint8_t>(static_cast<std::int32_t>(v));  // numpy's wrap
+// The water's blend: v = min(v + trunc(k colour), 255), k = liquid8 * strength * scale (<= the
+// intensity, so each tint is < 256). (numpy mode truncates v + k colour as a whole: it differs
+// where that float sum rounds up to the next integer, by one level.)
+constexpr float kWaterColour[3] = {175.f, 238.f, 238.f};
+
+void water_pixel(std::uint8_t* out, const std::uint8_t* in, int product, float scale) {
+  const float k = static_cast<float>(product) * scale;
+  for (int c = 0; c < 3; ++c) {
+    const int tint = std::min(static_cast<int>(k * kWaterColour[c]), 255);
+    out[c] = static_cast<std::uint8_t>(std::min(in[c] + tint, 255));
   }
 }
 
-// Vertical distance to the nearest edge pixel in the column, capped at kCap + 1, from the row above
-// (prev) or below: d = edge ? 0 : min(prev + 1, kCap + 1).
-constexpr int kCap = 20;
-FAULTLINE_CLONES("avx2")
-void column_step(std::uint8_t* d, const std::uint8_t* prev, const std::uint8_t* edge, std::size_t n,
-                 bool first) {
-  for (std::size_t x = 0; x < n; ++x) {
-    const int from = first ? kCap + 1 : std::min(prev[x] + 1, kCap + 1);
-    d[x] = static_cast<std::uint8_t>(edge[x] ? 0 : std::min<int>(d[x], from));
-  }
-}
-
-// One row of squared distances: min over |k| <= kCap of k^2 + dv(x + k)^2, from dv^2 padded by kCap
-// values of (kCap + 1)^2 each side (`q` at the first real one).
-FAULTLINE_CLONES("avx2")
-void row_min(std::uint16_t* out, const std::uint16_t* q, std::size_t n) {
-  for (std::size_t x = 0; x < n; ++x) out[x] = q[x];
-  for (int k = 1; k <= kCap; ++k) {
-    const auto kk = static_cast<std::uint16_t>(k * k);
-    const std::uint16_t* lo = q - k;
-    const std::uint16_t* hi = q + k;
-    for (std::size_t x = 0; x < n; ++x) {
-      const std::uint16_t a = static_cast<std::uint16_t>(std::min(lo[x], hi[x]) + kk);
-      out[x] = std::min(out[x], a);
+#if FAULTLINE_X86_SIMD
+// The byte shuffles that spread 16 per-pixel tints over the 48 bytes of 16 BGR pixels: chunk c,
+// byte j is pixel (16 c + j) / 3's channel (16 c + j) % 3, taken from the channel-0 tints (first)
+// or the channel-1/2 tints (second, the colour's two 238s); -128 leaves a zero.
+struct TintShuffles {
+  alignas(16) std::int8_t first[3][16];
+  alignas(16) std::int8_t second[3][16];
+  TintShuffles() {
+    for (int i = 0; i < 48; ++i) {
+      const auto pixel = static_cast<std::int8_t>(i / 3);
+      first[i / 16][i % 16] = i % 3 == 0 ? pixel : std::int8_t{-128};
+      second[i / 16][i % 16] = i % 3 == 0 ? std::int8_t{-128} : pixel;
     }
   }
-}
+};
 
-// d = min(sqrt(d2), 20), from a table of the (kCap + 1)^2 + 1 possible d2 (a vectorised sqrt
-// would need -fno-math-errno).
-void sqrt_row(float* d, const std::uint16_t* d2, std::size_t n) {
-  static const std::vector<float> table = [] {
-    std::vector<float> t((kCap + 1) * (kCap + 1) + 1);
-    for (std::size_t i = 0; i < t.size(); ++i) {
-      t[i] = std::min(std::sqrt(static_cast<float>(i)), static_cast<float>(kCap));
+FAULTLINE_TARGET("avx2")
+std::size_t water_avx2(std::uint8_t* out, const std::uint8_t* in, const std::uint8_t* liquid,
+                       const std::uint8_t* strength, float scale, std::size_t pixels) {
+  static const TintShuffles shuffles;
+  const __m256 scalev = _mm256_set1_ps(scale);
+  const __m256 colour0 = _mm256_set1_ps(kWaterColour[0]), colour1 = _mm256_set1_ps(kWaterColour[1]);
+  auto tints = [&](__m256 klo, __m256 khi, __m256 colour) FAULTLINE_TARGET_INLINE("avx2") {
+    const __m256i lo = _mm256_cvttps_epi32(_mm256_mul_ps(klo, colour));
+    const __m256i hi = _mm256_cvttps_epi32(_mm256_mul_ps(khi, colour));
+    const __m256i words = _mm256_permute4x64_epi64(_mm256_packus_epi32(lo, hi), 0xD8);
+    return _mm_packus_epi16(_mm256_castsi256_si128(words), _mm256_extracti128_si256(words, 1));
+  };
+  std::size_t x = 0;
+  for (; x + 16 <= pixels; x += 16) {
+    const __m256i l =
+        _mm256_cvtepu8_epi16(_mm_loadu_si128(reinterpret_cast<const __m128i*>(liquid + x)));
+    const __m256i s =
+        _mm256_cvtepu8_epi16(_mm_loadu_si128(reinterpret_cast<const __m128i*>(strength + x)));
+    const __m256i product = _mm256_mullo_epi16(l, s);  // <= 255^2: read as unsigned below
+    const __m256 klo = _mm256_mul_ps(
+        _mm256_cvtepi32_ps(_mm256_cvtepu16_epi32(_mm256_castsi256_si128(product))), scalev);
+    const __m256 khi = _mm256_mul_ps(
+        _mm256_cvtepi32_ps(_mm256_cvtepu16_epi32(_mm256_extracti128_si256(product, 1))), scalev);
+    const __m128i t0 = tints(klo, khi, colour0), t1 = tints(klo, khi, colour1);
+    for (int c = 0; c < 3; ++c) {
+      const __m128i tint = _mm_or_si128(
+          _mm_shuffle_epi8(t0, _mm_load_si128(reinterpret_cast<const __m128i*>(shuffles.first[c]))),
+          _mm_shuffle_epi8(t1,
+                           _mm_load_si128(reinterpret_cast<const __m128i*>(shuffles.second[c]))));
+      const std::size_t at = 3 * x + 16 * static_cast<std::size_t>(c);
+      const __m128i v = _mm_loadu_si128(reinterpret_cast<const __m128i*>(in + at));
+      _mm_storeu_si128(reinterpret_cast<__m128i*>(out + at), _mm_adds_epu8(v, tint));
     }
-    return t;
-  }();
-  for (std::size_t x = 0; x < n; ++x) d[x] = table[d2[x]];
+  }
+  return x;
 }
+#endif
 
-// out = floor(3 x 3 mean) of the rows a, b, c, columns reflected (reflect-101) at both ends.
-FAULTLINE_CLONES("avx2")
-void mean3_row(std::uint8_t* out, float* sum, const float* a, const float* b, const float* c,
-               std::size_t n) {
-  for (std::size_t x = 0; x < n; ++x) sum[x] = a[x] + b[x] + c[x];
-  const auto at = [&](std::ptrdiff_t x) {
-    const auto last = static_cast<std::ptrdiff_t>(n) - 1;
-    return sum[static_cast<std::size_t>(
-        x < 0 ? std::min<std::ptrdiff_t>(1, last)
-              : (x > last ? std::max<std::ptrdiff_t>(last - 1, 0) : x))];
-  };
-  out[0] = static_cast<std::uint8_t>(static_cast<std::int32_t>((at(-1) + at(0) + at(1)) / 9.f));
-  for (std::size_t x = 1; x + 1 < n; ++x) {
-    out[x] = static_cast<std::uint8_t>(
-        static_cast<std::int32_t>((sum[x - 1] + sum[x] + sum[x + 1]) * (1.f / 9.f)));
-  }
-  if (n > 1) {
-    const auto l = static_cast<std::ptrdiff_t>(n) - 1;
-    out[n - 1] =
-        static_cast<std::uint8_t>(static_cast<std::int32_t>((at(l - 1) + at(l) + at(l + 1)) / 9.f));
-  }
-}
-
-// floor of the 3 x 3 mean (cv::blur's default reflect-101 border) of the distance to the nearest
-// Canny edge pixel, capped at 20 (CV_8U), three rows of distances at a time.
-cv::Mat edge_distance_u8(const cv::Mat& edges) {
-  const int rows = edges.rows;
-  const auto n = static_cast<std::size_t>(edges.cols);
-  cv::Mat dv(edges.size(), CV_8U, cv::Scalar(kCap + 1));
-  for (int y = 0; y < rows; ++y) {
-    column_step(dv.ptr<std::uint8_t>(y), y ? dv.ptr<std::uint8_t>(y - 1) : nullptr,
-                edges.ptr<std::uint8_t>(y), n, y == 0);
-  }
-  for (int y = rows - 2; y >= 0; --y) {
-    column_step(dv.ptr<std::uint8_t>(y), dv.ptr<std::uint8_t>(y + 1), edges.ptr<std::uint8_t>(y), n,
-                false);
-  }
-  std::vector<std::uint16_t> q(n + 2 * kCap, (kCap + 1) * (kCap + 1)), d2(n);
-  std::vector<float> ring(3 * n), sum(n);
-  auto distances = [&](int y) {  // row y's distances into ring slot y % 3
-    const std::uint8_t* v = dv.ptr<std::uint8_t>(y);
-    for (std::size_t x = 0; x < n; ++x) q[x + kCap] = static_cast<std::uint16_t>(v[x] * v[x]);
-    row_min(d2.data(), q.data() + kCap, n);
-    sqrt_row(ring.data() + static_cast<std::size_t>(y % 3) * n, d2.data(), n);
-  };
-  auto reflect = [rows](int y) {
-    return y < 0 ? std::min(1, rows - 1) : (y >= rows ? std::max(rows - 2, 0) : y);
-  };
-  cv::Mat out(edges.size(), CV_8U);
-  int done = -1;
-  for (int y = 0; y < rows; ++y) {
-    for (; done < std::min(y + 1, rows - 1); ++done) distances(done + 1);
-    const float* a = ring.data() + static_cast<std::size_t>(reflect(y - 1) % 3) * n;
-    const float* b = ring.data() + static_cast<std::size_t>(y % 3) * n;
-    const float* c = ring.data() + static_cast<std::size_t>(reflect(y + 1) % 3) * n;
-    mean3_row(out.ptr<std::uint8_t>(y), sum.data(), a, b, c, n);
-  }
-  return out;
-}
-
-// out = clip(in + k * colour, 0, 255) truncated, k = liquid8 * strength * scale.
-FAULTLINE_CLONES("avx2")
 void water_row(std::uint8_t* out, const std::uint8_t* in, const std::uint8_t* liquid,
-               const std::uint8_t* strength, float scale, std::size_t pixels) {
-  constexpr float kColour[3] = {175.f, 238.f, 238.f};
-  for (std::size_t x = 0; x < pixels; ++x) {
-    const float k = static_cast<float>(liquid[x] * strength[x]) * scale;
-    for (std::size_t c = 0; c < 3; ++c) {
-      const float v = static_cast<float>(in[3 * x + c]) + k * kColour[c];
-      std::int32_t t = static_cast<std::int32_t>(v);
-      t = t < 0 ? 0 : t;
-      out[3 * x + c] = static_cast<std::uint8_t>(t > 255 ? 255 : t);
-    }
-  }
+               const std::uint8_t* strength, float scale, std::size_t pixels, bool simd) {
+  std::size_t x = 0;
+#if FAULTLINE_X86_SIMD
+  if (simd) x = water_avx2(out, in, liquid, strength, scale, pixels);
+#else
+  (void)simd;
+#endif
+  for (; x < pixels; ++x) water_pixel(out + 3 * x, in + 3 * x, liquid[x] * strength[x], scale);
 }
 
-// The largest liquid8 * strength of a row.
-FAULTLINE_CLONES("avx2")
-int row_max_product(const std::uint8_t* liquid, const std::uint8_t* strength, std::size_t n) {
-  int m = 0;
-  for (std::size_t x = 0; x < n; ++x) m = std::max(m, liquid[x] * strength[x]);
-  return m;
-}
-
-cv::Mat water_blend_fast(const cv::Mat& bgr, const cv::Mat& field, const SpatterParams& p) {
-  cv::Mat liquid8(field.size(), CV_8U), edges;
-  const auto n = static_cast<std::size_t>(field.cols);
-  for (int y = 0; y < field.rows; ++y) {
-    liquid_row(liquid8.ptr<std::uint8_t>(y), field.ptr<float>(y), static_cast<float>(p.threshold),
-               n);
-  }
-  cv::Canny(liquid8, edges, 50, 150);
-  cv::Mat dist8 = edge_distance_u8(edges);
-  cv::equalizeHist(dist8, dist8);
-  const cv::Mat_<int> emboss = (cv::Mat_<int>(3, 3) << -2, -1, 0, -1, 1, 1, 0, 1, 2);
-  cv::filter2D(dist8, dist8, CV_8U, emboss);
-  cv::blur(dist8, dist8, cv::Size(3, 3));
-  int max_value = 0;
-  for (int y = 0; y < field.rows; ++y) {
-    max_value = std::max(
-        max_value, row_max_product(liquid8.ptr<std::uint8_t>(y), dist8.ptr<std::uint8_t>(y), n));
-  }
+cv::Mat water_blend_fast(const cv::Mat& bgr, const SpatterParams& p, rng::FastRng& rng) {
+  thread_local WaterScratch scratch;
+  water_liquid8(bgr.size(), p, rng, scratch);
+  const int max_value = water_strength_fast(scratch);
+  const cv::Mat& liquid8 = scratch.liquid8;
+  const cv::Mat& dist8 = scratch.strength;
+  const auto n = static_cast<std::size_t>(liquid8.cols);
   if (max_value == 0) return bgr.clone();  // no liquid: see the header
   const auto scale = static_cast<float>(p.intensity / max_value);
   cv::Mat out(bgr.size(), CV_8UC3);
+  const bool simd = common::cpu_has_avx2();
   for (int y = 0; y < bgr.rows; ++y) {
     water_row(out.ptr<std::uint8_t>(y), bgr.ptr<std::uint8_t>(y), liquid8.ptr<std::uint8_t>(y),
-              dist8.ptr<std::uint8_t>(y), scale, n);
+              dist8.ptr<std::uint8_t>(y), scale, n, simd);
   }
   return out;
 }
@@ -334,19 +278,20 @@ cv::Mat spatter_numpy(const cv::Mat& bgr, int severity, rng::NumpyRandomState& r
 
 cv::Mat spatter_fast(const cv::Mat& bgr, int severity, rng::FastRng& rng) {
   const SpatterParams p = spatter_params(severity);
-  // The field's normals eight lanes at a time (the vectorised ziggurat), the smoothing in float32
-  // with the kernel to 3 sigma (OpenCV's default for float goes to 4; 0.3 % of the weight).
-  // (Drawing the field at half resolution and upsampling it was tried: it smooths away the weak
-  // edges Canny finds inside the liquid, and the tint's histogram moves twice as far from numpy
-  // mode's as another seed's does.)
+  // The field smoothed in float32 with the kernel to 3 sigma (OpenCV's default for float goes to
+  // 4; 0.3 % of the weight). (Drawing the water's field at half resolution and upsampling it was
+  // tried: it smooths away the weak edges Canny finds inside the liquid, and the tint's histogram
+  // moves twice as far from numpy mode's as another seed's does.)
+  if (!p.mud) return water_blend_fast(bgr, p, rng);
+  // Mud (sigma 1: too few draws per value for other draws than normals): the normals eight lanes
+  // at a time (the vectorised ziggurat), OpenCV's Gaussian.
   cv::Mat field(bgr.size(), CV_32F);
   rng::LaneRng lanes(rng);
   rng::fill_normals(field.ptr<float>(), field.total(), p.loc, p.scale, lanes, rng);
   const int r = static_cast<int>(std::ceil(3.0 * p.sigma));
   cv::GaussianBlur(field, field, cv::Size(2 * r + 1, 2 * r + 1), p.sigma, p.sigma,
                    cv::BORDER_REPLICATE);
-  if (p.mud) return mud_blend_fast(bgr, field, p);
-  return water_blend_fast(bgr, field, p);
+  return mud_blend_fast(bgr, field, p);
 }
 
 }  // namespace faultline::corruption

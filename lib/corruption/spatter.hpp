@@ -30,12 +30,16 @@ SpatterParams spatter_params(int severity);
 // reference calls them.
 cv::Mat spatter_numpy(const cv::Mat& bgr, int severity, rng::NumpyRandomState& rng);
 
-// fast mode: FastRng normals (eight-lane ziggurat) and OpenCV's float32 Gaussian (to 3 sigma) for
-// the smoothing; the mud is blended in float32 from the float32 field; the water takes numpy mode's
-// steps from the float32 field, except the distance to the Canny edges: exact Euclidean distance
-// capped at 20 (a column sweep and a 41-tap row minimum) where the reference's 5 x 5 chamfer
-// approximates it, with its 3 x 3 mean fused in; statistical tolerance as before
-// (tests/corruption/fast_mode_ext_spatial_test.cpp).
+// fast mode: the field smoothed in float32 with the Gaussian to 3 sigma. Mud: FastRng normals
+// (eight-lane ziggurat), OpenCV's Gaussian, the blend in float32. Water (spatter_water.hpp):
+// triangular draws (same mean and variance; the smoothed field's excess kurtosis within 0.025 of
+// normal's 0) smoothed a row at a time straight into the 8-bit liquid, then numpy mode's steps with
+// the same values, OpenCV's Canny computed by canny_l1 (edge_canny.hpp), except the distance to
+// the edges, exact (Euclidean, capped at 20: a column sweep and a 41-tap row minimum) where the
+// reference's 5 x 5 chamfer approximates it, and the blend, which adds trunc(k colour) per channel
+// (one level below numpy's where its float sum rounds up); statistical tolerance as before
+// (tests/corruption/fast_mode_ext_spatial_test.cpp). The water keeps its frame-sized buffers per
+// thread (~7 MB at 1600 x 900).
 cv::Mat spatter_fast(const cv::Mat& bgr, int severity, rng::FastRng& rng);
 
 // The stages after the smoothing, given the smoothed liquid field (CV_64F, H x W): shared by both
