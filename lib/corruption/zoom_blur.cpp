@@ -126,10 +126,12 @@ std::array<double, 4> cascade_factors(int severity) {
 
 namespace {
 
-// a = (a + b + up) >> 1: the mean of two 8-bit layers, rounded down (up = 0) or up (up = 1).
+// dst = (a + b + up) >> 1: the mean of two 8-bit layers, rounded down (up = 0) or up (up = 1); dst
+// may be a.
 FAULTLINE_CLONES("avx2")
-void average_row(std::uint8_t* a, const std::uint8_t* b, std::size_t n, int up) {
-  for (std::size_t i = 0; i < n; ++i) a[i] = static_cast<std::uint8_t>((a[i] + b[i] + up) >> 1);
+void average_row(std::uint8_t* dst, const std::uint8_t* a, const std::uint8_t* b, std::size_t n,
+                 int up) {
+  for (std::size_t i = 0; i < n; ++i) dst[i] = static_cast<std::uint8_t>((a[i] + b[i] + up) >> 1);
 }
 
 }  // namespace
@@ -145,7 +147,8 @@ cv::Mat zoom_blur_fast(const cv::Mat& bgr, int severity) {
   // pixel from step to step, and a cv::Mat reallocated at each step (4 MB, fresh pages) cost more
   // than the resize.
   thread_local std::vector<std::uint8_t> buffer;
-  cv::Mat out = bgr.clone();
+  // The first step reads the frame itself (no copy of it): A is the frame, then out.
+  cv::Mat out(bgr.size(), CV_8UC3);
   const std::array<double, 4> factors = cascade_factors(severity);
   for (std::size_t step = 0; step < factors.size(); ++step) {
     const Crop c = crop_for(rows, cols, factors[step]);
@@ -155,7 +158,8 @@ cv::Mat zoom_blur_fast(const cv::Mat& bgr, int severity) {
     buffer.resize(std::max(buffer.size(), static_cast<std::size_t>(c.out_rows) *
                                               static_cast<std::size_t>(c.out_cols) * 3));
     cv::Mat layer(c.out_rows, c.out_cols, CV_8UC3, buffer.data());
-    cv::resize(out(roi), layer, layer.size(), 0, 0, cv::INTER_LINEAR);
+    const cv::Mat& a = step == 0 ? bgr : out;
+    cv::resize(a(roi), layer, layer.size(), 0, 0, cv::INTER_LINEAR);
     // out_rows = round(ceil(rows / z) * z) >= rows, so the layer covers the frame (as in the
     // reference, which crops it back); a smaller one would leave the rest averaged with 0.
     const int h = std::min(rows, layer.rows);
@@ -163,11 +167,12 @@ cv::Mat zoom_blur_fast(const cv::Mat& bgr, int severity) {
     const auto all = static_cast<std::size_t>(cols) * 3;
     for (int y = 0; y < rows; ++y) {
       std::uint8_t* o = out.ptr<std::uint8_t>(y);
-      if (y < h) average_row(o, layer.ptr<std::uint8_t>(y), w, kRoundUp[step]);
+      const std::uint8_t* in = a.ptr<std::uint8_t>(y);
+      if (y < h) average_row(o, in, layer.ptr<std::uint8_t>(y), w, kRoundUp[step]);
       if (y >= h || w < all) {
         const std::size_t from = y < h ? w : 0;
         std::vector<std::uint8_t> pad(all - from, 0);
-        average_row(o + from, pad.data(), pad.size(), kRoundUp[step]);
+        average_row(o + from, in + from, pad.data(), pad.size(), kRoundUp[step]);
       }
     }
   }
