@@ -15,10 +15,10 @@ std::vector<double> zoom_blur_factors(int severity);
 // numpy mode: exact.
 cv::Mat zoom_blur_exact(const cv::Mat& bgr, int severity);
 
-// fast mode: 16 layers from four cascaded zooms (A <- (A + zoom(A)) / 2, OpenCV's 8-bit bilinear,
-// the reference's crop geometry per factor), the four factors fitted so that the layers' log
-// scales follow the reference's; an approximation: PSNR > 35 dB against numpy mode, mean within
-// 0.25, values off by tens of levels at high-contrast edges far from the centre.
+// fast mode: 16 layers from four cascaded zooms (A <- (A + zoom(A)) / 2 in one 8-bit pass each,
+// zoom_average.hpp, the reference's crop geometry per factor), the four factors fitted so that the
+// layers' log scales follow the reference's; an approximation: PSNR > 35 dB against numpy mode,
+// mean within 0.25, values off by tens of levels at high-contrast edges far from the centre.
 cv::Mat zoom_blur_fast(const cv::Mat& bgr, int severity);
 
 }  // namespace faultline::corruption
