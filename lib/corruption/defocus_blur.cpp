@@ -76,10 +76,10 @@ cv::Mat defocus_blur_exact(const cv::Mat& bgr, int severity) {
 
 namespace {
 
-// fast mode's decomposition of the kernel: the binary disk (summed as vertical runs from column
-// prefix sums, exact in integers) smoothed by the separable anti-aliasing Gaussian, plus the few
-// taps where the reference's kernel differs from that (its 17 x 17 / 21 x 21 grid cuts the smoothed
-// rim off and reflect-101 folds it back in at severities 4 and 5).
+// fast mode's decomposition of the kernel: the binary disk (its sums exact in integers) smoothed by
+// the separable anti-aliasing Gaussian, plus the few taps where the reference's kernel differs from
+// that (its 17 x 17 / 21 x 21 grid cuts the smoothed rim off and reflect-101 folds it back in at
+// severities 4 and 5).
 struct DiskPlan {
   int radius = 0, half = 0, smooth = 0;  // disk radius, kernel half-size, Gaussian half-size
   std::vector<int> run;                  // run[dx + radius]: the disk covers |dy| <= run at dx
@@ -154,9 +154,10 @@ DiskPlan disk_plan(int severity) {
     const int across = static_cast<int>(std::lround(side.across / side.mass));
     const int spread =
         static_cast<int>(std::lround(std::sqrt(std::max(side.along2 / side.mass, 0.0) * 1.5)));
+    // Always three taps of a third each (the same tap thrice at spread 0): the rows sum a side's
+    // three pixels in integers and weigh them once.
     for (const int along : {-spread, 0, spread}) {
-      const float w = static_cast<float>(side.mass / (spread == 0 ? 1.0 : 3.0));
-      if (spread == 0 && along != 0) continue;
+      const auto w = static_cast<float>(side.mass / 3.0);
       plan.residual.push_back(k < 2 ? DiskPlan::Tap{across, along, w}
                                     : DiskPlan::Tap{along, across, w});
     }
@@ -169,48 +170,156 @@ DiskPlan disk_plan(int severity) {
 }
 
 FAULTLINE_CLONES("avx2")
-void add_row(std::int32_t* next, const std::int32_t* prev, const std::uint8_t* row, std::size_t n) {
-  for (std::size_t i = 0; i < n; ++i) next[i] = prev[i] + row[i];
+void add_u8(std::int32_t* acc, const std::uint8_t* row, std::size_t n) {
+  for (std::size_t i = 0; i < n; ++i) acc[i] += row[i];
 }
 
-FAULTLINE_CLONES("avx2")
-void add_run(std::int32_t* acc, const std::int32_t* below, const std::int32_t* above,
-             std::size_t n) {
-  for (std::size_t i = 0; i < n; ++i) acc[i] += below[i] - above[i];
-}
-
-// out[i] = sum_t w[t] * src[i + t * step] for t = 0..taps-1.
-FAULTLINE_CLONES("avx2")
-void smooth_int(float* out, const std::int32_t* src, const float* w, int taps, std::ptrdiff_t step,
-                std::size_t n) {
-  for (std::size_t i = 0; i < n; ++i) out[i] = w[0] * static_cast<float>(src[i]);
-  for (int t = 1; t < taps; ++t) {
-    const std::int32_t* s = src + t * step;
-    for (std::size_t i = 0; i < n; ++i) out[i] += w[t] * static_cast<float>(s[i]);
+// The disk's move down one row: per value, the pixels entering below the disk's 2 r + 1 columns
+// minus those leaving above them. Up to 2 r + 1 <= 127 pixels each way, so the change fits 16
+// bits: it is summed 16 values to a vector, then added to the 32-bit sums. Integers: the portable
+// loop gives the same sums.
+void disk_step_portable(std::int32_t* disk, const std::uint8_t* const* enter,
+                        const std::uint8_t* const* leave, int columns, std::size_t from,
+                        std::size_t n) {
+  for (std::size_t i = from; i < n; ++i) {
+    std::int32_t change = 0;
+    for (int c = 0; c < columns; ++c) change += enter[c][i] - leave[c][i];
+    disk[i] += change;
   }
 }
 
-FAULTLINE_CLONES("avx2")
-void axpy_rows(float* out, const float* const* rows, const float* w, int taps, std::size_t n) {
-  for (std::size_t i = 0; i < n; ++i) out[i] = w[0] * rows[0][i];
-  for (int t = 1; t < taps; ++t) {
-    for (std::size_t i = 0; i < n; ++i) out[i] += w[t] * rows[t][i];
+#if FAULTLINE_X86_SIMD
+FAULTLINE_TARGET("avx2")
+std::size_t disk_step_avx2(std::int32_t* disk, const std::uint8_t* const* enter,
+                           const std::uint8_t* const* leave, int columns, std::size_t n) {
+  std::size_t i = 0;
+  for (; i + 16 <= n; i += 16) {
+    __m256i change = _mm256_setzero_si256();
+    for (int c = 0; c < columns; ++c) {
+      const __m256i in =
+          _mm256_cvtepu8_epi16(_mm_loadu_si128(reinterpret_cast<const __m128i*>(enter[c] + i)));
+      const __m256i out =
+          _mm256_cvtepu8_epi16(_mm_loadu_si128(reinterpret_cast<const __m128i*>(leave[c] + i)));
+      change = _mm256_add_epi16(change, _mm256_sub_epi16(in, out));
+    }
+    auto* d = reinterpret_cast<__m256i*>(disk + i);
+    _mm256_storeu_si256(d, _mm256_add_epi32(_mm256_loadu_si256(d),
+                                            _mm256_cvtepi16_epi32(_mm256_castsi256_si128(change))));
+    _mm256_storeu_si256(
+        d + 1, _mm256_add_epi32(_mm256_loadu_si256(d + 1),
+                                _mm256_cvtepi16_epi32(_mm256_extracti128_si256(change, 1))));
+  }
+  return i;
+}
+#endif
+
+void disk_step(std::int32_t* disk, const std::uint8_t* const* enter,
+               const std::uint8_t* const* leave, int columns, std::size_t n) {
+  std::size_t from = 0;
+#if FAULTLINE_X86_SIMD
+  if (common::cpu_has_avx2()) from = disk_step_avx2(disk, enter, leave, columns, n);
+#endif
+  disk_step_portable(disk, enter, leave, columns, from, n);
+}
+
+// The two row passes after the disk sums, one value at a time in a fixed order (no fused
+// multiply-adds), so the AVX2 bodies, which keep the sums in registers across the taps, give the
+// same floats as the portable loops.
+//   h[i] = sum_t w[t] * disk[i + 3 t] (the anti-aliasing Gaussian across, over the disk's count);
+//   out[i] = trunc(sum_t g[t] rows[t][i] + sum_k residual_w[k] (the sum of residual[3 k .. 3 k + 2]
+//            at i) + bias), clamped.
+struct FinishTaps {
+  const float* const* rows;
+  const float* g;
+  int taps;
+  const std::uint8_t* const* residual;
+  const float* residual_w;
+  int residuals;  // sides: three pixels each
+  float bias;
+};
+
+void smooth_portable(float* h, const std::int32_t* disk, const float* w, int taps, std::size_t from,
+                     std::size_t n) {
+  for (std::size_t i = from; i < n; ++i) {
+    float v = w[0] * static_cast<float>(disk[i]);
+    for (int t = 1; t < taps; ++t) v += w[t] * static_cast<float>(disk[i + 3 * t]);
+    h[i] = v;
   }
 }
 
-FAULTLINE_CLONES("avx2")
-void axpy_u8(float* out, const std::uint8_t* src, float w, std::size_t n) {
-  for (std::size_t i = 0; i < n; ++i) out[i] += w * static_cast<float>(src[i]);
+void finish_portable(std::uint8_t* out, const FinishTaps& f, std::size_t from, std::size_t n) {
+  for (std::size_t i = from; i < n; ++i) {
+    float v = f.g[0] * f.rows[0][i];
+    for (int t = 1; t < f.taps; ++t) v += f.g[t] * f.rows[t][i];
+    for (int k = 0; k < f.residuals; ++k) {
+      const std::uint8_t* const* p = f.residual + 3 * k;
+      v += f.residual_w[k] * static_cast<float>(p[0][i] + p[1][i] + p[2][i]);
+    }
+    // Clamped after the int32 conversion (truncation toward zero).
+    const std::int32_t q = static_cast<std::int32_t>(v + f.bias);
+    out[i] = static_cast<std::uint8_t>(std::min(std::max(q, 0), 255));
+  }
 }
 
-FAULTLINE_CLONES("avx2")
-void store_truncated_f(std::uint8_t* dst, const float* src, float bias, std::size_t n) {
-  for (std::size_t i = 0; i < n; ++i) {
-    // Clamped after the int32 conversion (truncation toward zero): no branches, so it vectorises.
-    std::int32_t v = static_cast<std::int32_t>(src[i] + bias);
-    v = v < 0 ? 0 : v;
-    dst[i] = static_cast<std::uint8_t>(v > 255 ? 255 : v);
+#if FAULTLINE_X86_SIMD
+FAULTLINE_TARGET("avx2")
+std::size_t smooth_avx2(float* h, const std::int32_t* disk, const float* w, int taps,
+                        std::size_t n) {
+  std::size_t i = 0;
+  for (; i + 8 <= n; i += 8) {
+    auto tap = [&](int t) FAULTLINE_TARGET_INLINE("avx2") {
+      const __m256i d = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(disk + i + 3 * t));
+      return _mm256_mul_ps(_mm256_set1_ps(w[t]), _mm256_cvtepi32_ps(d));
+    };
+    __m256 v = tap(0);
+    for (int t = 1; t < taps; ++t) v = _mm256_add_ps(v, tap(t));
+    _mm256_storeu_ps(h + i, v);
   }
+  return i;
+}
+
+FAULTLINE_TARGET("avx2")
+std::size_t finish_avx2(std::uint8_t* out, const FinishTaps& f, std::size_t n) {
+  auto eight = [&](std::size_t i) FAULTLINE_TARGET_INLINE("avx2") {
+    __m256 v = _mm256_mul_ps(_mm256_set1_ps(f.g[0]), _mm256_loadu_ps(f.rows[0] + i));
+    for (int t = 1; t < f.taps; ++t)
+      v = _mm256_add_ps(v, _mm256_mul_ps(_mm256_set1_ps(f.g[t]), _mm256_loadu_ps(f.rows[t] + i)));
+    for (int k = 0; k < f.residuals; ++k) {
+      auto load = [&](int j) FAULTLINE_TARGET_INLINE("avx2") {
+        return _mm256_cvtepu8_epi32(
+            _mm_loadl_epi64(reinterpret_cast<const __m128i*>(f.residual[3 * k + j] + i)));
+      };
+      const __m256i sum = _mm256_add_epi32(_mm256_add_epi32(load(0), load(1)), load(2));
+      v = _mm256_add_ps(v, _mm256_mul_ps(_mm256_set1_ps(f.residual_w[k]), _mm256_cvtepi32_ps(sum)));
+    }
+    return _mm256_cvttps_epi32(_mm256_add_ps(v, _mm256_set1_ps(f.bias)));
+  };
+  std::size_t i = 0;
+  for (; i + 16 <= n; i += 16) {
+    // packs saturate to [0, 255]: the clamp.
+    const __m256i words = _mm256_packs_epi32(eight(i), eight(i + 8));
+    const __m128i bytes =
+        _mm_packus_epi16(_mm256_castsi256_si128(words), _mm256_extracti128_si256(words, 1));
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(out + i), _mm_shuffle_epi32(bytes, 0xD8));
+  }
+  return i;
+}
+#endif
+
+void smooth_row(float* h, const std::int32_t* disk, const float* w, int taps, std::size_t n) {
+  std::size_t from = 0;
+#if FAULTLINE_X86_SIMD
+  if (common::cpu_has_avx2()) from = smooth_avx2(h, disk, w, taps, n);
+#endif
+  smooth_portable(h, disk, w, taps, from, n);
+}
+
+void finish_row(std::uint8_t* out, const FinishTaps& f, std::size_t n) {
+  std::size_t from = 0;
+#if FAULTLINE_X86_SIMD
+  if (common::cpu_has_avx2()) from = finish_avx2(out, f, n);
+#endif
+  finish_portable(out, f, from, n);
 }
 
 // Frames too small to pad by the kernel: OpenCV's float32 correlation with the whole kernel.
@@ -243,52 +352,58 @@ cv::Mat defocus_blur_fast(const cv::Mat& bgr, int severity) {
   cv::copyMakeBorder(bgr, padded, pad, pad, pad, pad, cv::BORDER_REFLECT_101);
   const auto width = static_cast<std::size_t>(bgr.cols) * 3;       // output row
   const auto ext_width = width + 6 * static_cast<std::size_t>(s);  // disk sums, s more each side
-  const auto padded_width = static_cast<std::size_t>(padded.cols) * 3;
-  // Column prefix sums of the padded frame, row k = sum of padded rows < k, in a ring of the 2 half
-  // + 2 rows one output row of disk sums reads.
-  const int q_slots = 2 * plan.half + 2;
-  std::vector<std::int32_t> q(static_cast<std::size_t>(q_slots) * padded_width, 0);
-  auto q_row = [&](int k) {
-    return q.data() + static_cast<std::size_t>(k % q_slots) * padded_width;
+  // Disk sums at extended position (ye, xe), centred on padded (ye + half, xe + half): per column
+  // dx the run of rows ye + half - run .. ye + half + run. The first row's summed outright, each
+  // next one moved down a row (exact integers either way).
+  std::vector<std::int32_t> disk(ext_width, 0);
+  const int columns = 2 * plan.radius + 1;
+  std::vector<const std::uint8_t*> enter(static_cast<std::size_t>(columns)), leave(enter);
+  auto column_at = [&](int row, int dx) {
+    return padded.ptr<std::uint8_t>(row) + static_cast<std::size_t>(plan.half + dx) * 3;
   };
-  int q_done = 0;  // rows 0..q_done computed (row 0 is zeros)
-  std::vector<std::int32_t> disk(ext_width);
-  std::vector<float> h_ring(static_cast<std::size_t>(taps) * width), acc(width);
+  for (int dx = -plan.radius; dx <= plan.radius; ++dx) {
+    const int run = plan.run[static_cast<std::size_t>(dx + plan.radius)];
+    for (int dy = -run; dy <= run; ++dy)
+      add_u8(disk.data(), column_at(plan.half + dy, dx), ext_width);
+  }
+  std::vector<float> h_ring(static_cast<std::size_t>(taps) * width);
   std::vector<float> g(plan.g);
   std::vector<float> gh(plan.g);
   for (float& w : gh) w *= plan.inv_count;
   std::vector<const float*> v_rows(static_cast<std::size_t>(taps));
+  std::vector<const std::uint8_t*> residual(plan.residual.size());
+  std::vector<float> residual_w;
+  for (std::size_t k = 0; k < plan.residual.size(); k += 3)
+    residual_w.push_back(plan.residual[k].w);
+  const FinishTaps finish{v_rows.data(),   g.data(),          taps,
+                          residual.data(), residual_w.data(), static_cast<int>(residual_w.size()),
+                          plan.bias};
   cv::Mat out(bgr.size(), CV_8UC3);
   const int ext_rows = bgr.rows + 2 * s;
   for (int ye = 0; ye < ext_rows; ++ye) {
-    for (; q_done < ye + 2 * plan.half + 1; ++q_done) {
-      add_row(q_row(q_done + 1), q_row(q_done), padded.ptr<std::uint8_t>(q_done), padded_width);
-    }
-    // Disk sum at extended position (ye, xe), centred on padded (ye + half, xe + half): per column
-    // dx the run of rows ye + half - run .. ye + half + run.
-    std::fill(disk.begin(), disk.end(), 0);
-    for (int dx = -plan.radius; dx <= plan.radius; ++dx) {
-      const int run = plan.run[static_cast<std::size_t>(dx + plan.radius)];
-      const std::size_t col = static_cast<std::size_t>(plan.half + dx) * 3;
-      add_run(disk.data(), q_row(ye + plan.half + run + 1) + col, q_row(ye + plan.half - run) + col,
-              ext_width);
+    if (ye > 0) {
+      const int centre = ye + plan.half;  // the disk's centre row in the padded frame
+      for (int dx = -plan.radius; dx <= plan.radius; ++dx) {
+        const auto c = static_cast<std::size_t>(dx + plan.radius);
+        enter[c] = column_at(centre + plan.run[c], dx);
+        leave[c] = column_at(centre - plan.run[c] - 1, dx);
+      }
+      disk_step(disk.data(), enter.data(), leave.data(), columns, ext_width);
     }
     float* h = h_ring.data() + static_cast<std::size_t>(ye % taps) * width;
-    smooth_int(h, disk.data(), gh.data(), taps, 3, width);
+    smooth_row(h, disk.data(), gh.data(), taps, width);
     if (ye < 2 * s) continue;
     const int y = ye - 2 * s;
     for (int t = 0; t < taps; ++t) {
       v_rows[static_cast<std::size_t>(t)] =
           h_ring.data() + static_cast<std::size_t>((y + t) % taps) * width;
     }
-    axpy_rows(acc.data(), v_rows.data(), g.data(), taps, width);
-    for (const DiskPlan::Tap& tap : plan.residual) {
-      axpy_u8(
-          acc.data(),
-          padded.ptr<std::uint8_t>(y + pad + tap.dy) + static_cast<std::size_t>(pad + tap.dx) * 3,
-          tap.w, width);
+    for (std::size_t k = 0; k < plan.residual.size(); ++k) {
+      const DiskPlan::Tap& tap = plan.residual[k];
+      residual[k] =
+          padded.ptr<std::uint8_t>(y + pad + tap.dy) + static_cast<std::size_t>(pad + tap.dx) * 3;
     }
-    store_truncated_f(out.ptr<std::uint8_t>(y), acc.data(), plan.bias, width);
+    finish_row(out.ptr<std::uint8_t>(y), finish, width);
   }
   return out;
 }

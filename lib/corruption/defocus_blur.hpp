@@ -24,9 +24,9 @@ cv::Mat defocus_kernel(int severity);
 // numpy mode: float64 per channel, as the reference; exact.
 cv::Mat defocus_blur_exact(const cv::Mat& bgr, int severity);
 
-// fast mode: the disk as vertical runs of column prefix sums (exact integers), then the
-// anti-aliasing Gaussian in float32, plus three taps per side for the rim the grid folds back in
-// (severities 4, 5); the cost hardly grows with the radius. Within 1 of numpy mode on < 1 % of
+// fast mode: the disk's sums in exact integers, each row's from the one above (2 r + 1 pixels in
+// and out per value), then the anti-aliasing Gaussian in float32, plus three taps per side for the
+// rim the grid folds back in (severities 4, 5). Within 1 of numpy mode on < 1 % of
 // values (tests/corruption/fast_mode_ext_spatial_test.cpp).
 cv::Mat defocus_blur_fast(const cv::Mat& bgr, int severity);
 

@@ -74,7 +74,7 @@ using Case = std::tuple<Corruption, int>;
 
 class FastDeterministicTest : public ::testing::TestWithParam<Case> {};
 
-// Defocus: the disk as vertical runs of column prefix sums (exact integers), the anti-aliasing
+// Defocus: the disk's sums in exact integers (moved down a row at a time), the anti-aliasing
 // Gaussian after it in float32, and at severities 4 and 5 three taps per side for the rim the
 // reference's grid folds back in (a value differs where the float64 sum truncates the other way).
 TEST_P(FastDeterministicTest, CloseToNumpyModeValueForValue) {
