@@ -99,7 +99,10 @@ void GlareModel::render_layer() {
       double add[3];
       for (int ch = 0; ch < 3; ++ch) add[ch] = light * kSunTint[ch];
       for (int k = 0; k < params_.ghosts; ++k) {
-        const double d = std::hypot(px - gp[k].x, py - gp[k].y);
+        // Outside its radius a ghost adds nothing (the smoothstep is 1): skip the distance there.
+        const double gx = px - gp[k].x, gy = py - gp[k].y;
+        if (gx * gx + gy * gy >= gr[k] * gr[k] * (1 + 1e-9)) continue;
+        const double d = std::hypot(gx, gy);
         const double disc =
             params_.ghost_strength * ghost_gain_[k] * (1.0 - smoothstep(0.7 * gr[k], gr[k], d));
         for (int ch = 0; ch < 3 && disc > 0; ++ch)
@@ -145,8 +148,9 @@ cv::Mat GlareModel::apply(const cv::Mat& bgr, const std::optional<CameraGeometry
   cv::Mat out(bgr.size(), bgr.type());
   const int n = bgr.cols * 3;
   std::vector<uchar> light(static_cast<std::size_t>(n));
+  up_.set_grid(layer_);
   for (int y = 0; y < bgr.rows; ++y) {
-    up_.row(layer_, y, 0, bgr.cols, light.data());
+    up_.row(y, 0, bgr.cols, light.data());
     const uchar* s = bgr.ptr<uchar>(y);
     const uchar* l = light.data();
     uchar* o = out.ptr<uchar>(y);

@@ -125,10 +125,11 @@ cv::Mat SoilingModel::apply(const cv::Mat& bgr) const {
                           t + (1 - t) * kDirtTint[2]),
                small);
   GridUpsampler up(small.size(), bgr.size());
+  up.set_grid(small);
   std::vector<uchar> behind(static_cast<std::size_t>(3 * bgr.cols));
   for (int y = box_.y; y < box_.y + box_.height; ++y) {
     const auto [first, last] = spans_[static_cast<std::size_t>(y)];
-    up.row(small, y, first, last, behind.data());
+    up.row(y, first, last, behind.data());
     const uchar* a = alpha_.ptr<uchar>(y);
     const uchar* s = bgr.ptr<uchar>(y);
     uchar* o = out.ptr<uchar>(y);
