@@ -4,6 +4,9 @@
 #include <algorithm>
 #include <cmath>
 #include <opencv2/imgproc.hpp>
+#include <vector>
+
+#include "common/simd.hpp"
 
 namespace faultline::corruption {
 namespace {
@@ -13,49 +16,72 @@ constexpr double kMagnify = 1.8;   // a drop shows the scene within 1.8 of its r
 constexpr double kRimDark = 0.45;  // light lost at the rim
 constexpr double kMerge = 0.9;     // drops merge when their centres are closer than 0.9 (r1 + r2)
 
-double smoothstep(double lo, double hi, double v) {
-  const double t = std::clamp((v - lo) / (hi - lo), 0.0, 1.0);
-  return t * t * (3.0 - 2.0 * t);
+// The drop's pixels in columns [from, to) of one row outside its inner disc: darkened towards the
+// rim (1 - 0.45 smoothstep(0.7, 1, rho)), blended in over the outer tenth (alpha = 1 - smoothstep(
+// 0.9, 1, rho)), untouched outside it (alpha 0). Float32 in two flat passes: the weights per
+// value, then the blend (which vectorises).
+FAULTLINE_CLONES("avx2")
+void rim_span(uchar* o, const uchar* seen, int from, int to, float cx, float dy2, float inv_r2,
+              std::vector<float>& weights) {
+  if (from >= to) return;
+  const auto n = static_cast<std::size_t>(to - from);
+  weights.resize(6 * n);
+  float* kept = weights.data();  // 1 - alpha, per value
+  float* shown = kept + 3 * n;   // alpha * shade, per value
+  for (std::size_t i = 0; i < n; ++i) {
+    const float dx = static_cast<float>(from + static_cast<int>(i)) - cx;
+    const float rho2 = (dx * dx + dy2) * inv_r2;
+    const float rho = std::sqrt(std::min(rho2, 1.0f));
+    const float t1 = std::min(std::max((rho - 0.7f) * (1.0f / 0.3f), 0.0f), 1.0f);
+    const float t2 = std::min(std::max((rho - 0.9f) * 10.0f, 0.0f), 1.0f);
+    const float shade = 1.0f - static_cast<float>(kRimDark) * t1 * t1 * (3.0f - 2.0f * t1);
+    const float inside = static_cast<float>(rho2 < 1.0f);
+    const float alpha = inside * (1.0f - t2 * t2 * (3.0f - 2.0f * t2));
+    for (int c = 0; c < 3; ++c) kept[3 * i + c] = 1.0f - alpha, shown[3 * i + c] = alpha * shade;
+  }
+  uchar* out = o + 3 * from;
+  const uchar* view = seen + 3 * from;
+  for (std::size_t i = 0; i < 3 * n; ++i) {
+    const float val = kept[i] * out[i] + shown[i] * view[i];
+    out[i] = static_cast<uchar>(std::min(255.0f, val + 0.5f));
+  }
 }
 
 // One drop: each pixel inside it shows the blurred copy at the point opposite the centre, kMagnify
 // times as far (an inverted, wider view), darkened towards the rim and blended into the frame over
-// the outer tenth of the radius.
+// the outer tenth of the radius. That view is an affine map of the pixel, so it is one warpAffine
+// of the copy (OpenCV's fixed-point bilinear, the edge repeated) into a patch the drop's size; the
+// inner 70 % of the radius, neither darkened nor blended, is the patch itself.
 void render_drop(const Drop& d, const cv::Mat& low, double sx, double sy, cv::Mat& out) {
   const int x0 = std::max(0, static_cast<int>(std::floor(d.x - d.r)));
   const int x1 = std::min(out.cols, static_cast<int>(std::ceil(d.x + d.r)) + 1);
   const int y0 = std::max(0, static_cast<int>(std::floor(d.y - d.r)));
   const int y1 = std::min(out.rows, static_cast<int>(std::ceil(d.y + d.r)) + 1);
+  if (x0 >= x1 || y0 >= y1) return;
+  // Patch pixel (i, j) is frame pixel (x0 + i, y0 + j): u = (d.x - k (x0 + i + 0.5 - d.x)) sx -
+  // 0.5.
+  const cv::Matx23d view(-kMagnify * sx, 0, (d.x - kMagnify * (x0 + 0.5 - d.x)) * sx - 0.5, 0,
+                         -kMagnify * sy, (d.y - kMagnify * (y0 + 0.5 - d.y)) * sy - 0.5);
+  thread_local cv::Mat patch;
+  cv::warpAffine(low, patch, view, cv::Size(x1 - x0, y1 - y0),
+                 cv::INTER_LINEAR | cv::WARP_INVERSE_MAP, cv::BORDER_REPLICATE);
   const float inv_r2 = static_cast<float>(1.0 / (d.r * d.r));
-  const float umax = static_cast<float>(low.cols - 1), vmax = static_cast<float>(low.rows - 1);
+  thread_local std::vector<float> weights;
   for (int y = y0; y < y1; ++y) {
     uchar* o = out.ptr<uchar>(y);
+    const uchar* seen = patch.ptr<uchar>(y - y0) - 3 * x0;  // indexed by frame column
     const float dy = static_cast<float>(y + 0.5 - d.y);
-    const float v = std::clamp(static_cast<float>((d.y - kMagnify * dy) * sy - 0.5), 0.0f, vmax);
-    const int v0 = static_cast<int>(v), v1 = std::min(v0 + 1, low.rows - 1);
-    const float fv = v - static_cast<float>(v0);
-    const uchar* top = low.ptr<uchar>(v0);
-    const uchar* bottom = low.ptr<uchar>(v1);
-    for (int x = x0; x < x1; ++x) {
-      const float dx = static_cast<float>(x + 0.5 - d.x);
-      const float rho2 = (dx * dx + dy * dy) * inv_r2;
-      if (rho2 >= 1.0f) continue;
-      float shade = 1.0f, alpha = 1.0f;
-      if (rho2 > 0.49f) {  // the outer 30 %: rim darkening and the soft edge
-        const float rho = std::sqrt(rho2);
-        shade = static_cast<float>(1.0 - kRimDark * smoothstep(0.7, 1.0, rho));
-        alpha = static_cast<float>(1.0 - smoothstep(0.9, 1.0, rho));
-      }
-      const float u = std::clamp(static_cast<float>((d.x - kMagnify * dx) * sx - 0.5), 0.0f, umax);
-      const int u0 = static_cast<int>(u), u1 = std::min(u0 + 1, low.cols - 1);
-      const float fu = u - static_cast<float>(u0);
-      for (int c = 0; c < 3; ++c) {
-        const float seen = (top[3 * u0 + c] * (1 - fu) + top[3 * u1 + c] * fu) * (1 - fv) +
-                           (bottom[3 * u0 + c] * (1 - fu) + bottom[3 * u1 + c] * fu) * fv;
-        const float val = (1 - alpha) * o[3 * x + c] + alpha * shade * seen;
-        o[3 * x + c] = static_cast<uchar>(std::min(255.0f, val + 0.5f));
-      }
+    // The inner disc's span on this row, one pixel in from where rho = 0.7 (copied as it is).
+    const double half = std::sqrt(std::max(0.0, 0.49 * d.r * d.r - double(dy) * dy)) - 1.0;
+    int in0 = x1, in1 = x1;
+    if (half > 0) {
+      in0 = std::clamp(static_cast<int>(std::ceil(d.x - half - 0.5)), x0, x1);
+      in1 = std::clamp(static_cast<int>(std::floor(d.x + half - 0.5)) + 1, in0, x1);
+      std::copy(seen + 3 * in0, seen + 3 * in1, o + 3 * in0);
     }
+    const float cx = static_cast<float>(d.x - 0.5), dy2 = dy * dy;
+    rim_span(o, seen, x0, in0, cx, dy2, inv_r2, weights);
+    rim_span(o, seen, in1, x1, cx, dy2, inv_r2, weights);
   }
 }
 
