@@ -16,13 +16,14 @@ constexpr double kMagnify = 1.8;   // a drop shows the scene within 1.8 of its r
 constexpr double kRimDark = 0.45;  // light lost at the rim
 constexpr double kMerge = 0.9;     // drops merge when their centres are closer than 0.9 (r1 + r2)
 
-// The drop's pixels in columns [from, to) of one row outside its inner disc: darkened towards the
+// The drop's pixels in columns [from, to) of one row outside its inner disc (view_row: the view
+// through the drop from column x0 on): darkened towards the
 // rim (1 - 0.45 smoothstep(0.7, 1, rho)), blended in over the outer tenth (alpha = 1 - smoothstep(
 // 0.9, 1, rho)), untouched outside it (alpha 0). Float32 in two flat passes: the weights per
 // value, then the blend (which vectorises).
 FAULTLINE_CLONES("avx2")
-void rim_span(uchar* o, const uchar* seen, int from, int to, float cx, float dy2, float inv_r2,
-              std::vector<float>& weights) {
+void rim_span(uchar* o, const uchar* view_row, int x0, int from, int to, float cx, float dy2,
+              float inv_r2, std::vector<float>& weights) {
   if (from >= to) return;
   const auto n = static_cast<std::size_t>(to - from);
   weights.resize(6 * n);
@@ -40,7 +41,7 @@ void rim_span(uchar* o, const uchar* seen, int from, int to, float cx, float dy2
     for (int c = 0; c < 3; ++c) kept[3 * i + c] = 1.0f - alpha, shown[3 * i + c] = alpha * shade;
   }
   uchar* out = o + 3 * from;
-  const uchar* view = seen + 3 * from;
+  const uchar* view = view_row + 3 * (from - x0);
   for (std::size_t i = 0; i < 3 * n; ++i) {
     const float val = kept[i] * out[i] + shown[i] * view[i];
     out[i] = static_cast<uchar>(std::min(255.0f, val + 0.5f));
@@ -69,7 +70,7 @@ void render_drop(const Drop& d, const cv::Mat& low, double sx, double sy, cv::Ma
   thread_local std::vector<float> weights;
   for (int y = y0; y < y1; ++y) {
     uchar* o = out.ptr<uchar>(y);
-    const uchar* seen = patch.ptr<uchar>(y - y0) - 3 * x0;  // indexed by frame column
+    const uchar* seen = patch.ptr<uchar>(y - y0);  // column x0 first
     const float dy = static_cast<float>(y + 0.5 - d.y);
     // The inner disc's span on this row, one pixel in from where rho = 0.7 (copied as it is).
     const double half = std::sqrt(std::max(0.0, 0.49 * d.r * d.r - double(dy) * dy)) - 1.0;
@@ -77,11 +78,11 @@ void render_drop(const Drop& d, const cv::Mat& low, double sx, double sy, cv::Ma
     if (half > 0) {
       in0 = std::clamp(static_cast<int>(std::ceil(d.x - half - 0.5)), x0, x1);
       in1 = std::clamp(static_cast<int>(std::floor(d.x + half - 0.5)) + 1, in0, x1);
-      std::copy(seen + 3 * in0, seen + 3 * in1, o + 3 * in0);
+      std::copy(seen + 3 * (in0 - x0), seen + 3 * (in1 - x0), o + 3 * in0);
     }
     const float cx = static_cast<float>(d.x - 0.5), dy2 = dy * dy;
-    rim_span(o, seen, x0, in0, cx, dy2, inv_r2, weights);
-    rim_span(o, seen, in1, x1, cx, dy2, inv_r2, weights);
+    rim_span(o, seen, x0, x0, in0, cx, dy2, inv_r2, weights);
+    rim_span(o, seen, x0, in1, x1, cx, dy2, inv_r2, weights);
   }
 }
 
