@@ -1,0 +1,52 @@
+// fast mode's mud for spatter (spatter.cpp, severities 4-5), streamed a row at a time: the normal
+// field's rows, its Gaussian (float32) and the threshold into a 0/1 mask row, the mask's Gaussian
+// (exact integers) and the blend, so no frame-sized intermediate is written.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <opencv2/core.hpp>
+
+#include "corruption/spatter.hpp"
+#include "rng/fast_rng.hpp"
+
+namespace faultline::corruption {
+
+// numpy mode's mud with FastRng normals (fill_normals row by row: for a width that is a multiple
+// of 16, the draws of one call for the frame, in the same order), the field smoothed with OpenCV's
+// float32 kernel of p.sigma to 3 sigma and thresholded (> p.threshold), the mask smoothed with
+// OpenCV's kernel of p.intensity (13 taps at 1.5) in exact integers, and the blend where the
+// smoothed mask m >= 0.8 (mud_level_blend_row). Replicated borders. Keeps ~50 rows of buffers per
+// thread.
+cv::Mat mud_blend_fast(const cv::Mat& bgr, const SpatterParams& p, rng::FastRng& rng);
+
+namespace detail {
+
+// The kernels: an AVX2 body for whole blocks and a portable loop for the rest (or all, without
+// `simd`, AVX2 or under FAULTLINE_SCALAR), with the same arithmetic, so the same values. n values
+// per row; the weights are a symmetric kernel's, for offsets 0..radius (radius 1..8).
+
+// mask[x] = 1 if the blur at x > threshold, else 0. rows[0..2 radius] are the source rows
+// y - radius .. y + radius. In float32, in this order: the column sum c = w0 r0 + w1 (r-1 + r1)
+// + ... + wr (r-r + rr) (each step a product, then a sum), then the same over c along the row
+// (the edge c repeated). `scratch` holds n + 2 radius floats.
+void mud_field_mask_row(std::uint8_t* mask, const float* const* rows, const float* weight,
+                        int radius, float threshold, float* scratch, std::size_t n, bool simd);
+
+// The smoothed mask of the 0/1 rows (as above) in exact integers: the column sums with `column`
+// (Q13, summing to 2^13), then the row sums of those with `row` (Q15, summing to 2^15; the edge
+// value repeated): level = m 2^28. Then the blend of the row's BGR pixels: where level >= the
+// cut (0.8f 2^28), each value v becomes C + floor((v - C) u / 2^16), u = ceil((2^28 - level) /
+// 2^12) (1 - m in Q16, at most 13107), C the mud colour (63, 42, 20 in stored order); elsewhere v
+// (numpy mode's trunc(v (1 - m) + C m), with m to 1/65536). `scratch` holds pixels + 2 radius.
+void mud_level_blend_row(std::uint8_t* out, const std::uint8_t* in, const std::uint8_t* const* rows,
+                         const std::int16_t* column, const std::int16_t* row, int radius,
+                         std::int16_t* scratch, std::size_t pixels, bool simd);
+
+constexpr int kMaxRadius = 8;
+constexpr std::int32_t kMudLevelCut = 214748368;  // 0.8f * 2^28, exactly
+constexpr std::int32_t kMudColour[3] = {63, 42, 20};
+
+}  // namespace detail
+
+}  // namespace faultline::corruption
