@@ -4,12 +4,14 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <opencv2/imgproc.hpp>
 #include <stdexcept>
 #include <vector>
 
 #include "common/simd.hpp"
 #include "rng/lane_rng.hpp"
+#include "rng/lane_rng_avx2.hpp"
 
 namespace faultline::corruption {
 
@@ -61,6 +63,52 @@ void level_blend(std::uint8_t* out, const std::uint8_t* in, const std::int16_t* 
   }
 }
 
+// Box-Muller from one lane step's 16 values: v[i] (i < 8) gives the radius, v[8 + i] the angle
+// of the pair (dst[i], dst[8 + i]). u = ((v >> 8) + 0.5) 2^-24 in (0, 1), r = sqrt(-2 ln u)
+// (ln u = e ln 2 + ln m, m in [sqrt(1/2), sqrt(2)) by the series 2 atanh t, t = (m - 1) / (m + 1),
+// to t^9: |t| < 0.172, error < 1e-8); the angle: an octant's phi = (w & (2^29 - 1)) 2^-29 pi / 4
+// (Taylor to phi^9 and phi^10), the pair (cos phi, sin phi) swapped by bit 29 and signed by bits
+// 31 and 30 (the point on the circle is then uniform). Every operation is a float32 product, sum,
+// quotient or square root, in the same order on both paths.
+constexpr float kLn2 = 0.693147180559945f, kSqrt2 = 1.41421356237310f,
+                kPiQuarter = 0.785398163397448f;
+
+float ln_unit(float u) {
+  std::uint32_t bits = 0;
+  std::memcpy(&bits, &u, 4);
+  int e = static_cast<int>(bits >> 23) - 127;
+  const std::uint32_t mbits = (bits & 0x7FFFFFu) | 0x3F800000u;
+  float m = 0;
+  std::memcpy(&m, &mbits, 4);
+  if (m > kSqrt2) {
+    m = m * 0.5f;
+    e = e + 1;
+  }
+  const float t = (m - 1.f) / (m + 1.f), t2 = t * t;
+  const float series = 1.f + t2 * (1.f / 3 + t2 * (1.f / 5 + t2 * (1.f / 7 + t2 * (1.f / 9))));
+  return static_cast<float>(e) * kLn2 + (t + t) * series;
+}
+
+void normals_step(float* dst, const std::uint32_t* v, float loc, float scale) {
+  for (int i = 0; i < 8; ++i) {
+    const float u = (static_cast<float>(static_cast<std::int32_t>(v[i] >> 8)) + 0.5f) * 0x1p-24f;
+    const float r = std::sqrt(std::max(-2.f * ln_unit(u), 0.f));
+    const std::uint32_t w = v[8 + i];
+    const float phi =
+        static_cast<float>(static_cast<std::int32_t>(w & 0x1FFFFFFFu)) * 0x1p-29f * kPiQuarter;
+    const float p2 = phi * phi;
+    const float sin_phi =
+        phi * (1.f + p2 * (-1.f / 6 + p2 * (1.f / 120 + p2 * (-1.f / 5040 + p2 * (1.f / 362880)))));
+    const float cos_phi =
+        1.f + p2 * (-0.5f + p2 * (1.f / 24 +
+                                  p2 * (-1.f / 720 + p2 * (1.f / 40320 + p2 * (-1.f / 3628800)))));
+    const bool swap = (w >> 29 & 1u) != 0;
+    const float a = r * (swap ? sin_phi : cos_phi), b = r * (swap ? cos_phi : sin_phi);
+    dst[i] = loc + scale * ((w >> 31) != 0 ? -a : a);
+    dst[8 + i] = loc + scale * ((w >> 30 & 1u) != 0 ? -b : b);
+  }
+}
+
 // The edge value repeated r times beyond each end of the row col[0..n).
 template <typename T>
 void fill_border(T* col, int r, std::size_t n) {
@@ -71,6 +119,65 @@ void fill_border(T* col, int r, std::size_t n) {
 }
 
 #if FAULTLINE_X86_SIMD
+FAULTLINE_TARGET_INLINE("avx2") inline __m256 f(float x) { return _mm256_set1_ps(x); }
+FAULTLINE_TARGET_INLINE("avx2") inline __m256 add(__m256 a, __m256 b) {
+  return _mm256_add_ps(a, b);
+}
+FAULTLINE_TARGET_INLINE("avx2") inline __m256 mul(__m256 a, __m256 b) {
+  return _mm256_mul_ps(a, b);
+}
+
+// The same for eight pairs: the operations above, lane by lane.
+FAULTLINE_TARGET("avx2")
+std::size_t normals_avx2(float* dst, std::size_t n, float loc, float scale, rng::LaneRng& lanes) {
+  rng::avx2::Xoshiro4 ga = rng::avx2::load_half(lanes, 0), gb = rng::avx2::load_half(lanes, 1);
+  const __m256i mantissa = _mm256_set1_epi32(0x7FFFFF), one_bits = _mm256_set1_epi32(0x3F800000);
+  std::size_t i = 0;
+  for (; i + 16 <= n; i += 16) {
+    const __m256i v = rng::avx2::step(ga), w = rng::avx2::step(gb);
+    const __m256 u = mul(add(_mm256_cvtepi32_ps(_mm256_srli_epi32(v, 8)), f(0.5f)), f(0x1p-24f));
+    const __m256i bits = _mm256_castps_si256(u);
+    __m256i e = _mm256_sub_epi32(_mm256_srli_epi32(bits, 23), _mm256_set1_epi32(127));
+    __m256 m = _mm256_castsi256_ps(_mm256_or_si256(_mm256_and_si256(bits, mantissa), one_bits));
+    const __m256 big = _mm256_cmp_ps(m, f(kSqrt2), _CMP_GT_OQ);
+    m = _mm256_blendv_ps(m, mul(m, f(0.5f)), big);
+    e = _mm256_sub_epi32(e, _mm256_castps_si256(big));  // + 1 where big (-1 in the mask)
+    const __m256 t = _mm256_div_ps(_mm256_sub_ps(m, f(1.f)), add(m, f(1.f))), t2 = mul(t, t);
+    const __m256 series =
+        add(f(1.f),
+            mul(t2, add(f(1.f / 3),
+                        mul(t2, add(f(1.f / 5), mul(t2, add(f(1.f / 7), mul(t2, f(1.f / 9)))))))));
+    const __m256 ln = add(mul(_mm256_cvtepi32_ps(e), f(kLn2)), mul(add(t, t), series));
+    const __m256 r = _mm256_sqrt_ps(_mm256_max_ps(mul(f(-2.f), ln), _mm256_setzero_ps()));
+    const __m256 phi = mul(
+        mul(_mm256_cvtepi32_ps(_mm256_and_si256(w, _mm256_set1_epi32(0x1FFFFFFF))), f(0x1p-29f)),
+        f(kPiQuarter));
+    const __m256 p2 = mul(phi, phi);
+    const __m256 sin_phi = mul(
+        phi, add(f(1.f),
+                 mul(p2, add(f(-1.f / 6),
+                             mul(p2, add(f(1.f / 120), mul(p2, add(f(-1.f / 5040),
+                                                                   mul(p2, f(1.f / 362880))))))))));
+    const __m256 cos_phi = add(
+        f(1.f), mul(p2, add(f(-0.5f),
+                            mul(p2, add(f(1.f / 24),
+                                        mul(p2, add(f(-1.f / 720),
+                                                    mul(p2, add(f(1.f / 40320),
+                                                                mul(p2, f(-1.f / 3628800)))))))))));
+    const __m256 swap = _mm256_castsi256_ps(_mm256_slli_epi32(w, 2));  // bit 29 as the sign
+    const __m256 a = mul(r, _mm256_blendv_ps(cos_phi, sin_phi, swap));
+    const __m256 b = mul(r, _mm256_blendv_ps(sin_phi, cos_phi, swap));
+    const __m256i sign = _mm256_set1_epi32(static_cast<int>(0x80000000u));
+    const __m256 sa = _mm256_castsi256_ps(_mm256_and_si256(w, sign));
+    const __m256 sb = _mm256_castsi256_ps(_mm256_and_si256(_mm256_slli_epi32(w, 1), sign));
+    _mm256_storeu_ps(dst + i, add(f(loc), mul(f(scale), _mm256_xor_ps(a, sa))));
+    _mm256_storeu_ps(dst + i + 8, add(f(loc), mul(f(scale), _mm256_xor_ps(b, sb))));
+  }
+  rng::avx2::store_half(ga, lanes, 0);
+  rng::avx2::store_half(gb, lanes, 1);
+  return i;
+}
+
 template <int R>
 FAULTLINE_TARGET("avx2")
 std::size_t field_columns_avx2(float* col, const float* const* rows, const float* w, int radius,
@@ -231,6 +338,21 @@ void check_radius(int radius) {
 
 }  // namespace
 
+void mud_normals_row(float* dst, std::size_t n, float loc, float scale, rng::LaneRng& lanes,
+                     bool simd) {
+  std::size_t i = 0;
+#if FAULTLINE_X86_SIMD
+  if (use_avx2(simd)) i = normals_avx2(dst, n, loc, scale, lanes);
+#endif
+  std::uint32_t v[rng::LaneRng::kValuesPerStep];
+  float z[rng::LaneRng::kValuesPerStep];
+  for (; i < n; i += rng::LaneRng::kValuesPerStep) {
+    lanes.next_values(v);
+    normals_step(z, v, loc, scale);
+    std::copy(z, z + std::min<std::size_t>(n - i, rng::LaneRng::kValuesPerStep), dst + i);
+  }
+}
+
 void mud_field_mask_row(std::uint8_t* mask, const float* const* rows, const float* weight,
                         int radius, float threshold, float* scratch, std::size_t n, bool simd) {
   check_radius(radius);
@@ -338,11 +460,12 @@ cv::Mat mud_blend_fast(const cv::Mat& bgr, const SpatterParams& p, rng::FastRng&
   auto mask_row = [&](int y) { return s.mask.data() + (clamp_row(y) % (2 * rm + 1)) * n; };
   rng::LaneRng lanes(rng);
   const auto threshold = static_cast<float>(p.threshold);
+  const auto loc = static_cast<float>(p.loc), scale = static_cast<float>(p.scale);
   int normals_done = 0, masks_done = 0;
   auto next_mask_row = [&] {
     const int y = masks_done++;
     for (; normals_done <= std::min(y + rf, rows - 1); ++normals_done)
-      rng::fill_normals(normal_row(normals_done), n, p.loc, p.scale, lanes, rng);
+      detail::mud_normals_row(normal_row(normals_done), n, loc, scale, lanes, true);
     const float* src[2 * detail::kMaxRadius + 1];
     for (int k = -rf; k <= rf; ++k) src[k + rf] = normal_row(y + k);
     detail::mud_field_mask_row(mask_row(y), src, wf.data(), rf, threshold, s.field_scratch.data(),

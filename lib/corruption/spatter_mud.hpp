@@ -9,6 +9,7 @@
 
 #include "corruption/spatter.hpp"
 #include "rng/fast_rng.hpp"
+#include "rng/lane_rng.hpp"
 
 namespace faultline::corruption {
 
@@ -25,6 +26,12 @@ namespace detail {
 // The kernels: an AVX2 body for whole blocks and a portable loop for the rest (or all, without
 // `simd`, AVX2 or under FAULTLINE_SCALAR), with the same arithmetic, so the same values. n values
 // per row; the weights are a symmetric kernel's, for offsets 0..radius (radius 1..8).
+
+// dst[i] = loc + scale z for i < n, z standard normal by Box-Muller (no table, no rejection; see
+// spatter_mud.cpp): one lane step gives 16 values, the first 8 the radii and the last 8 the
+// angles of dst[0..8) and dst[8..16) (a partial step's leftover values are dropped).
+void mud_normals_row(float* dst, std::size_t n, float loc, float scale, rng::LaneRng& lanes,
+                     bool simd);
 
 // mask[x] = 1 if the blur at x > threshold, else 0. rows[0..2 radius] are the source rows
 // y - radius .. y + radius. In float32, in this order: the column sum c = w0 r0 + w1 (r-1 + r1)
