@@ -242,8 +242,8 @@ cv::Mat spatter_fast(const cv::Mat& bgr, int severity, rng::FastRng& rng) {
   // tried: it smooths away the weak edges Canny finds inside the liquid, and the tint's histogram
   // moves twice as far from numpy mode's as another seed's does.)
   if (!p.mud) return water_blend_fast(bgr, p, rng);
-  // Mud (sigma 1: too few draws per value for other draws than normals): the normals eight lanes
-  // at a time (the vectorised ziggurat), the rest streamed by rows (spatter_mud.hpp).
+  // Mud (sigma 1: too few draws per value for other draws than normals, e.g. the water's
+  // triangular ones): Box-Muller normals, everything streamed by rows (spatter_mud.hpp).
   return mud_blend_fast(bgr, p, rng);
 }
 

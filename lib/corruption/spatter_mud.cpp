@@ -64,7 +64,8 @@ void level_blend(std::uint8_t* out, const std::uint8_t* in, const std::int16_t* 
 }
 
 // Box-Muller from one lane step's 16 values: v[i] (i < 8) gives the radius, v[8 + i] the angle
-// of the pair (dst[i], dst[8 + i]). u = ((v >> 8) + 0.5) 2^-24 in (0, 1), r = sqrt(-2 ln u)
+// of the pair (dst[i], dst[8 + i]). u = ((v >> 8) | 1) 2^-24 (the odd multiples of 2^-24 in
+// (0, 1), exact in float32: r is at most 5.77), r = sqrt(-2 ln u)
 // (ln u = e ln 2 + ln m, m in [sqrt(1/2), sqrt(2)) by the series 2 atanh t, t = (m - 1) / (m + 1),
 // to t^9: |t| < 0.172, error < 1e-8); the angle: an octant's phi = (w & (2^29 - 1)) 2^-29 pi / 4
 // (Taylor to phi^9 and phi^10), the pair (cos phi, sin phi) swapped by bit 29 and signed by bits
@@ -91,7 +92,7 @@ float ln_unit(float u) {
 
 void normals_step(float* dst, const std::uint32_t* v, float loc, float scale) {
   for (int i = 0; i < 8; ++i) {
-    const float u = (static_cast<float>(static_cast<std::int32_t>(v[i] >> 8)) + 0.5f) * 0x1p-24f;
+    const float u = static_cast<float>(static_cast<std::int32_t>(v[i] >> 8 | 1u)) * 0x1p-24f;
     const float r = std::sqrt(std::max(-2.f * ln_unit(u), 0.f));
     const std::uint32_t w = v[8 + i];
     const float phi =
@@ -135,7 +136,8 @@ std::size_t normals_avx2(float* dst, std::size_t n, float loc, float scale, rng:
   std::size_t i = 0;
   for (; i + 16 <= n; i += 16) {
     const __m256i v = rng::avx2::step(ga), w = rng::avx2::step(gb);
-    const __m256 u = mul(add(_mm256_cvtepi32_ps(_mm256_srli_epi32(v, 8)), f(0.5f)), f(0x1p-24f));
+    const __m256i odd = _mm256_or_si256(_mm256_srli_epi32(v, 8), _mm256_set1_epi32(1));
+    const __m256 u = mul(_mm256_cvtepi32_ps(odd), f(0x1p-24f));
     const __m256i bits = _mm256_castps_si256(u);
     __m256i e = _mm256_sub_epi32(_mm256_srli_epi32(bits, 23), _mm256_set1_epi32(127));
     __m256 m = _mm256_castsi256_ps(_mm256_or_si256(_mm256_and_si256(bits, mantissa), one_bits));

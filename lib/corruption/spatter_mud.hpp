@@ -13,12 +13,12 @@
 
 namespace faultline::corruption {
 
-// numpy mode's mud with FastRng normals (fill_normals row by row: for a width that is a multiple
-// of 16, the draws of one call for the frame, in the same order), the field smoothed with OpenCV's
-// float32 kernel of p.sigma to 3 sigma and thresholded (> p.threshold), the mask smoothed with
-// OpenCV's kernel of p.intensity (13 taps at 1.5) in exact integers, and the blend where the
-// smoothed mask m >= 0.8 (mud_level_blend_row). Replicated borders. Keeps ~50 rows of buffers per
-// thread.
+// numpy mode's mud with normals drawn by Box-Muller from LaneRng lanes seeded by `rng` (row by
+// row, mud_normals_row), the field smoothed with OpenCV's float32 kernel of p.sigma to 3 sigma and
+// thresholded (> p.threshold), the mask smoothed with OpenCV's kernel of p.intensity (13 taps at
+// 1.5) in exact integers, and the blend where the smoothed mask m >= 0.8 (mud_level_blend_row).
+// Replicated borders. Within a level of the same steps in OpenCV's float32 (all but ~5e-5 of the
+// values; tests/corruption/spatter_mud_test.cpp). Keeps ~25 rows of buffers per thread.
 cv::Mat mud_blend_fast(const cv::Mat& bgr, const SpatterParams& p, rng::FastRng& rng);
 
 namespace detail {
