@@ -18,7 +18,8 @@ namespace faultline::corruption {
 // thresholded (> p.threshold), the mask smoothed with OpenCV's kernel of p.intensity (13 taps at
 // 1.5) in exact integers, and the blend where the smoothed mask m >= 0.8 (mud_level_blend_row).
 // Replicated borders. Within a level of the same steps in OpenCV's float32 (all but ~5e-5 of the
-// values; tests/corruption/spatter_mud_test.cpp). Keeps ~25 rows of buffers per thread.
+// values; tests/corruption/spatter_mud_test.cpp). Keeps its row rings per thread (~70 KB at
+// 1600 wide).
 cv::Mat mud_blend_fast(const cv::Mat& bgr, const SpatterParams& p, rng::FastRng& rng);
 
 namespace detail {
