@@ -9,8 +9,8 @@
 
 #include "common/simd.hpp"
 #include "corruption/ndimage.hpp"
+#include "corruption/spatter_mud.hpp"
 #include "corruption/spatter_water.hpp"
-#include "rng/lane_rng.hpp"
 
 namespace faultline::corruption {
 
@@ -105,47 +105,6 @@ cv::Mat mud_blend(const cv::Mat& bgr, const cv::Mat& liquid, const SpatterParams
         o[3 * x + c] = static_cast<unsigned char>(std::min(std::max(v, 0.0), 1.0) * 255.0);
       }
     }
-  }
-  return out;
-}
-
-// Blends one row of mud: where m >= 0.8 the value becomes v (1 - m) + colour m, elsewhere it is
-// kept (numpy mode's float32/float64 mix in float32: within a level where it differs). In flat
-// passes over the row's values (each vectorisable): m per pixel, spread over its three values,
-// then the blend with the colour row `colour` (the colour repeated per pixel).
-FAULTLINE_CLONES("avx2")
-void mud_row(std::uint8_t* __restrict out, const std::uint8_t* in, const float* mask,
-             const float* colour, float* __restrict spread, std::size_t pixels) {
-  for (std::size_t x = 0; x < pixels; ++x) {
-    const float m = mask[x] < 0.8f ? 0.f : mask[x];
-    spread[3 * x] = m;
-    spread[3 * x + 1] = m;
-    spread[3 * x + 2] = m;
-  }
-  for (std::size_t i = 0; i < 3 * pixels; ++i) {
-    const float m = spread[i];
-    const float v = static_cast<float>(in[i]) * (1.f - m) + colour[i] * m;
-    std::int32_t k = static_cast<std::int32_t>(v);  // truncation; clamped after it, branch-free
-    k = k < 0 ? 0 : k;
-    out[i] = static_cast<std::uint8_t>(k > 255 ? 255 : k);
-  }
-}
-
-constexpr float kMudColour[3] = {63.f, 42.f, 20.f};
-
-// fast mode's mud: the mask straight from the float32 field (liquid > threshold), blurred in
-// float32.
-cv::Mat mud_blend_fast(const cv::Mat& bgr, const cv::Mat& field, const SpatterParams& p) {
-  cv::Mat mask;
-  cv::threshold(field, mask, p.threshold, 1.0, cv::THRESH_BINARY);
-  cv::GaussianBlur(mask, mask, cv::Size(), p.intensity, p.intensity, cv::BORDER_REPLICATE);
-  const auto n = static_cast<std::size_t>(bgr.cols);
-  std::vector<float> colour(3 * n), spread(3 * n);
-  for (std::size_t i = 0; i < 3 * n; ++i) colour[i] = kMudColour[i % 3];
-  cv::Mat out(bgr.size(), CV_8UC3);
-  for (int y = 0; y < bgr.rows; ++y) {
-    mud_row(out.ptr<std::uint8_t>(y), bgr.ptr<std::uint8_t>(y), mask.ptr<float>(y), colour.data(),
-            spread.data(), n);
   }
   return out;
 }
@@ -283,15 +242,9 @@ cv::Mat spatter_fast(const cv::Mat& bgr, int severity, rng::FastRng& rng) {
   // tried: it smooths away the weak edges Canny finds inside the liquid, and the tint's histogram
   // moves twice as far from numpy mode's as another seed's does.)
   if (!p.mud) return water_blend_fast(bgr, p, rng);
-  // Mud (sigma 1: too few draws per value for other draws than normals): the normals eight lanes
-  // at a time (the vectorised ziggurat), OpenCV's Gaussian.
-  cv::Mat field(bgr.size(), CV_32F);
-  rng::LaneRng lanes(rng);
-  rng::fill_normals(field.ptr<float>(), field.total(), p.loc, p.scale, lanes, rng);
-  const int r = static_cast<int>(std::ceil(3.0 * p.sigma));
-  cv::GaussianBlur(field, field, cv::Size(2 * r + 1, 2 * r + 1), p.sigma, p.sigma,
-                   cv::BORDER_REPLICATE);
-  return mud_blend_fast(bgr, field, p);
+  // Mud (sigma 1: too few draws per value for other draws than normals, e.g. the water's
+  // triangular ones): Box-Muller normals, everything streamed by rows (spatter_mud.hpp).
+  return mud_blend_fast(bgr, p, rng);
 }
 
 }  // namespace faultline::corruption

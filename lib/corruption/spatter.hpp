@@ -30,8 +30,9 @@ SpatterParams spatter_params(int severity);
 // reference calls them.
 cv::Mat spatter_numpy(const cv::Mat& bgr, int severity, rng::NumpyRandomState& rng);
 
-// fast mode: the field smoothed in float32 with the Gaussian to 3 sigma. Mud: FastRng normals
-// (eight-lane ziggurat), OpenCV's Gaussian, the blend in float32. Water (spatter_water.hpp):
+// fast mode: the field smoothed in float32 with the Gaussian to 3 sigma. Mud (spatter_mud.hpp):
+// Box-Muller normals, the field's Gaussian and threshold, the mask's Gaussian in integers and the
+// blend, streamed by rows. Water (spatter_water.hpp):
 // triangular draws (same mean and variance; the smoothed field's excess kurtosis within 0.025 of
 // normal's 0) smoothed a row at a time straight into the 8-bit liquid, then numpy mode's steps with
 // the same values, OpenCV's Canny computed by canny_l1 (edge_canny.hpp), except the distance to
