@@ -17,7 +17,7 @@ struct RecompressionParams {
 };
 
 // Severity 1..5: quality 30/20/12/8/5 for 1/2/2/3/3 generations (4:2:0, fast integer DCT as
-// embedded encoders use).
+// embedded encoders use; between generations the frame stays in 4:2:0 YCbCr, as in a transcoder).
 RecompressionParams recompression_params(int severity);
 
 // CV_8UC3 BGR in, same size and type out; severity 1..5 (callers check). kInternal if TurboJPEG
