@@ -74,7 +74,7 @@ void triangular_row(float* dst, std::size_t n, rng::LaneRng& lanes, bool simd) {
 float blur_tap_sum(const float* in, const float* w, int r, std::size_t x) {
   float acc = w[0] * in[x];
   for (int k = 1; k <= r; ++k)
-    acc += w[k] * (in[x - static_cast<std::size_t>(k)] + in[x + static_cast<std::size_t>(k)]);
+    acc += w[k] * (in[static_cast<std::ptrdiff_t>(x) - k] + in[x + static_cast<std::size_t>(k)]);
   return acc;
 }
 
@@ -216,8 +216,8 @@ float distance_value(const std::uint16_t* q, std::size_t x) {
   int d2 = q[x];
   for (int k = 1; k <= kCap && k * k < d2; ++k) {  // k^2 >= d2: no farther column is nearer
     d2 = std::min(
-        d2,
-        std::min(q[x - static_cast<std::size_t>(k)], q[x + static_cast<std::size_t>(k)]) + k * k);
+        d2, std::min(q[static_cast<std::ptrdiff_t>(x) - k], q[x + static_cast<std::size_t>(k)]) +
+                k * k);
   }
   return std::min(std::sqrt(static_cast<float>(d2)), static_cast<float>(kCap));
 }
