@@ -12,7 +12,6 @@ namespace faultline::corruption {
 
 namespace {
 
-constexpr int kOne = 1 << 15;  // Q15
 // The column pass's Q15 sums become Q6 (at most 255 * 64 = 16 320, so a pair of them still fits
 // a signed 16-bit lane); the row pass's Q6 x Q15 sums (< 2^30) are shifted by 6 + 15.
 constexpr int kMidShift = 9;
@@ -237,18 +236,20 @@ BlurRow blur_row_for(int radius) {
 
 }  // namespace
 
-FixedPointKernel fixed_point_kernel(const std::vector<double>& half) {
+FixedPointKernel fixed_point_kernel(const std::vector<double>& half, int bits) {
   if (half.empty()) throw std::invalid_argument("fixed_point_kernel: empty kernel");
+  if (bits < 1 || bits > 15) throw std::invalid_argument("fixed_point_kernel: bits must be 1..15");
+  const int one = 1 << bits;
   FixedPointKernel k;
   k.radius = static_cast<int>(half.size()) - 1;
   k.weight.resize(half.size());
   int sides = 0;
   for (std::size_t i = 1; i < half.size(); ++i) {
-    k.weight[i] = static_cast<std::int16_t>(std::lround(half[i] * kOne));
+    k.weight[i] = static_cast<std::int16_t>(std::lround(std::ldexp(half[i], bits)));
     sides += 2 * k.weight[i];
   }
-  const int centre = kOne - sides;
-  if (centre < 0 || centre >= kOne) {
+  const int centre = one - sides;
+  if (centre < 0 || centre >= one) {
     throw std::invalid_argument("fixed_point_kernel: the centre weight must be in [0, 1)");
   }
   k.weight[0] = static_cast<std::int16_t>(centre);

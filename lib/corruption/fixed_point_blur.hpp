@@ -16,9 +16,10 @@ struct FixedPointKernel {
   std::vector<std::int16_t> weight;
 };
 
-// From a normalised symmetric kernel's weights for offsets 0..radius (half[0] the centre). The
+// From a normalised symmetric kernel's weights for offsets 0..radius (half[0] the centre), with
+// `bits` fraction bits (Q15 for fixed_point_blur; other fixed-point passes may want fewer). The
 // centre takes the rounding remainder, so it must stay below 1 (any kernel of sigma >= 0.45).
-FixedPointKernel fixed_point_kernel(const std::vector<double>& half);
+FixedPointKernel fixed_point_kernel(const std::vector<double>& half, int bits = 15);
 // scipy.ndimage's Gaussian of sigma with the given radius (nd::gaussian_kernel), in Q15.
 FixedPointKernel fixed_point_gaussian(double sigma, int radius);
 

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "common/simd.hpp"
+#include "corruption/fixed_point_blur.hpp"
 #include "rng/lane_rng.hpp"
 #include "rng/lane_rng_avx2.hpp"
 
@@ -429,19 +430,13 @@ std::vector<float> field_weights(double sigma, int radius) {
   return w;
 }
 
-// The same in fixed point with `bits` fraction bits, the centre taking the rounding remainder
-// (the weights sum to exactly 2^bits).
+// The same (in float64) in fixed point with `bits` fraction bits, the centre taking the rounding
+// remainder (the weights sum to exactly 2^bits).
 std::vector<std::int16_t> level_weights(double sigma, int radius, int bits) {
   const cv::Mat k = cv::getGaussianKernel(2 * radius + 1, sigma, CV_64F);
-  std::vector<std::int16_t> w(static_cast<std::size_t>(radius) + 1);
-  int sides = 0;
-  for (int i = 1; i <= radius; ++i) {
-    w[static_cast<std::size_t>(i)] =
-        static_cast<std::int16_t>(std::lround(std::ldexp(k.at<double>(radius + i), bits)));
-    sides += 2 * w[static_cast<std::size_t>(i)];
-  }
-  w[0] = static_cast<std::int16_t>((1 << bits) - sides);
-  return w;
+  std::vector<double> half(static_cast<std::size_t>(radius) + 1);
+  for (int i = 0; i <= radius; ++i) half[static_cast<std::size_t>(i)] = k.at<double>(radius + i);
+  return fixed_point_kernel(half, bits).weight;
 }
 
 // Rings of 2 r + 1 rows (the normals for the field's blur, the mask for the mask's) and the
